@@ -1,0 +1,152 @@
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <thread>
+
+#include "app/commands.hpp"
+#include "app/discretize.hpp"
+#include "app/json_writer.hpp"
+#include "cases/geometries.hpp"
+#include "solver/input_error.hpp"
+#include "solver/poisson_solver.hpp"
+
+namespace knotwork {
+
+namespace {
+
+struct BenchResult {
+  int degree = 0, elements = 0;
+  long dofs = 0, free_dofs = 0, matrix_nonzeros = 0;
+  double factor_nonzeros = 0, flops = 0;
+  double setup = 0, assembly = 0, analysis = 0, factorization = 0, solve = 0, errors = 0, total = 0;
+  double cholmod_peak_bytes = 0, l2 = 0;
+  long peak_rss_kb = 0;
+};
+
+// The benchmark problem: unit square, u = sin(pi x) sin(pi y), homogeneous Dirichlet.
+BenchResult run_one(int p, int n, Ordering ordering, bool with_errors) {
+  CaseDescription c;
+  c.path = "bench";
+  c.geometry = rectangle_patch(0, 0, 1, 1);
+  c.space.degree = {p, p};
+  c.space.elements_per_span = {n, n};
+  c.problem.exact = differentiate_exact_solution(Expression::parse("sin(pi*x)*sin(pi*y)", "bench"));
+  c.problem.source = c.problem.exact->minus_laplacian;
+  c.problem.boundary.assign(4, BoundaryCondition{});
+  const auto t0 = std::chrono::steady_clock::now();
+  const Discretization d = discretize(c);
+  const double t_space = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  PoissonSolveOptions so;
+  so.ordering = ordering;
+  so.compute_errors = with_errors;
+  const PoissonSolution s = solve_poisson(d.mesh(), *d.geometry, c.problem, so);
+  BenchResult r;
+  r.degree = p;
+  r.elements = n;
+  r.dofs = s.num_functions;
+  r.free_dofs = s.num_free;
+  r.matrix_nonzeros = s.matrix_nonzeros;
+  r.factor_nonzeros = s.cholesky.factor_nonzeros;
+  r.flops = s.cholesky.flops;
+  r.setup = s.timings.setup + t_space;
+  r.assembly = s.timings.assembly;
+  r.analysis = s.timings.analysis;
+  r.factorization = s.timings.factorization;
+  r.solve = s.timings.solve;
+  r.errors = s.timings.errors;
+  r.total = r.setup + r.assembly + r.analysis + r.factorization + r.solve + r.errors;
+  r.cholmod_peak_bytes = s.cholesky.peak_bytes;
+  r.l2 = s.errors ? s.errors->l2 : NAN;
+  return r;
+}
+
+// Each configuration runs in a child process so that its peak memory is its own.
+BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors) {
+  int fds[2];
+  if (pipe(fds) != 0) throw std::runtime_error("bench: pipe failed");
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("bench: fork failed");
+  if (pid == 0) {
+    close(fds[0]);
+    BenchResult r;
+    int code = 0;
+    try {
+      r = run_one(p, n, ordering, with_errors);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "knotwork bench: p=%d n=%d failed: %s\n", p, n, e.what());
+      code = 1;
+    }
+    if (write(fds[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) code = 1;
+    close(fds[1]);
+    _exit(code);
+  }
+  close(fds[1]);
+  BenchResult r;
+  const ssize_t got = read(fds[0], &r, sizeof r);
+  close(fds[0]);
+  int status = 0;
+  struct rusage usage;
+  wait4(pid, &status, 0, &usage);
+  if (got != static_cast<ssize_t>(sizeof r) || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error("bench: configuration p=" + std::to_string(p) + " n=" + std::to_string(n) + " failed");
+  r.peak_rss_kb = usage.ru_maxrss;
+  return r;
+}
+
+}  // namespace
+
+int bench_command(const BenchOptions& o) {
+  std::vector<std::pair<int, int>> configs;
+  std::vector<std::string> specs = o.configs;
+  if (specs.empty())
+    specs = o.quick ? std::vector<std::string>{"2:64", "2:128", "4:32", "4:64"}
+                    : std::vector<std::string>{"2:128", "2:512", "2:1024", "4:64", "4:256", "4:512"};
+  for (const auto& s : specs) {
+    int p = 0, n = 0;
+    char extra;
+    if (std::sscanf(s.c_str(), "%d:%d%c", &p, &n, &extra) != 2 || p < 1 || p > 10 || n < 1 || n > 4096)
+      throw InputError("--config: '" + s + "' is not DEGREE:ELEMENTS (degree 1..10, elements 1..4096), e.g. 2:512");
+    configs.emplace_back(p, n);
+  }
+  const Ordering ordering = parse_ordering(o.ordering);
+  std::vector<BenchResult> results;
+  if (!o.json)
+    std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, ordering %s\n"
+                "%3s %6s %9s %10s %11s %8s %8s %8s %8s %7s %7s %8s %9s %9s\n",
+                std::thread::hardware_concurrency(), o.ordering.c_str(), "p", "n", "dofs", "nnz(A)", "nnz(L)",
+                "setup", "assemb", "analyze", "factor", "solve", "errors", "total", "CHOLMOD", "peak RSS");
+  for (const auto& [p, n] : configs) {
+    const BenchResult r = run_isolated(p, n, ordering, o.with_errors);
+    results.push_back(r);
+    if (!o.json) {
+      std::printf("%3d %6d %9ld %10ld %11.0f %8.3f %8.3f %8.3f %8.3f %7.3f %7.3f %8.3f %7.0f MB %6.0f MB\n", r.degree,
+                  r.elements, r.dofs, r.matrix_nonzeros, r.factor_nonzeros, r.setup, r.assembly, r.analysis,
+                  r.factorization, r.solve, r.errors, r.total, r.cholmod_peak_bytes / 1e6, r.peak_rss_kb / 1e3);
+      std::fflush(stdout);
+    }
+  }
+  if (o.json) {
+    Json arr = Json::array();
+    for (const auto& r : results) {
+      Json j = Json::object();
+      j.set("degree", r.degree).set("elements", r.elements).set("dofs", r.dofs).set("free_dofs", r.free_dofs)
+          .set("matrix_nonzeros", r.matrix_nonzeros).set("factor_nonzeros", r.factor_nonzeros).set("flops", r.flops)
+          .set("setup", r.setup).set("assembly", r.assembly).set("analysis", r.analysis)
+          .set("factorization", r.factorization).set("solve", r.solve).set("errors", r.errors).set("total", r.total)
+          .set("cholmod_peak_bytes", r.cholmod_peak_bytes).set("peak_rss_bytes", r.peak_rss_kb * 1024.0)
+          .set("l2_error", r.l2);
+      arr.push(j);
+    }
+    Json root = Json::object();
+    root.set("ordering", o.ordering).set("threads", static_cast<int>(std::thread::hardware_concurrency()))
+        .set("results", arr);
+    std::printf("%s\n", root.dump().c_str());
+  }
+  return 0;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,38 @@
+#pragma once
+#include <string>
+#include <vector>
+
+namespace knotwork {
+
+struct CommonOptions {
+  bool json = false;
+  bool quiet = false;
+  std::string out;             // overrides [output] directory
+  int degree = 0;              // 0: as in the case
+  int elements = 0;            // 0: as in the case
+  std::string ordering = "metis";
+};
+
+struct RunOptions : CommonOptions {
+  std::string case_file;
+  bool no_output = false;
+};
+
+struct ConvergeOptions : CommonOptions {
+  std::string case_file;
+  int levels = 4;
+};
+
+struct BenchOptions {
+  std::vector<std::string> configs;  // "P:N" (degree P, N x N elements)
+  bool quick = false;
+  bool json = false;
+  std::string ordering = "metis";
+  bool with_errors = true;
+};
+
+int run_command(const RunOptions& o);
+int converge_command(const ConvergeOptions& o);
+int bench_command(const BenchOptions& o);
+
+}  // namespace knotwork

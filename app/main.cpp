@@ -1,0 +1,70 @@
+// The knotwork command line: run a case, study convergence, benchmark the pipeline.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <new>
+
+#include "app/commands.hpp"
+#include "solver/input_error.hpp"
+
+namespace {
+
+void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
+  cmd->add_option("--degree", o.degree, "Polynomial degree in both directions (overrides [space] degree)");
+  cmd->add_option("--elements", o.elements, "Elements per geometry knot span and direction (overrides [space] elements)");
+  cmd->add_option("--out", o.out, "Output directory (overrides [output] directory; default results/<case name>)");
+  cmd->add_option("--ordering", o.ordering, "Fill-reducing ordering for CHOLMOD: metis, amd or nesdis")
+      ->capture_default_str();
+  cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of the summary");
+  cmd->add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"knotwork: isogeometric Poisson solver (B-splines/NURBS -> Bezier extraction -> CHOLMOD -> ParaView)"};
+  app.set_version_flag("--version", "knotwork 0.1.0");
+  app.require_subcommand(1);
+
+  knotwork::RunOptions run;
+  CLI::App* run_cmd = app.add_subcommand("run", "Solve one case and write ParaView files");
+  run_cmd->add_option("case", run.case_file, "Case file (TOML), e.g. cases/square_sinsin.toml")->required();
+  add_common(run_cmd, run);
+  run_cmd->add_flag("--no-output", run.no_output, "Write no files (timing and errors only)");
+
+  knotwork::ConvergeOptions conv;
+  CLI::App* conv_cmd = app.add_subcommand("converge", "Uniform h-refinement study: errors and observed rates per level");
+  conv_cmd->add_option("case", conv.case_file, "Case file (TOML) with [problem] exact")->required();
+  conv_cmd->add_option("--levels", conv.levels, "Number of levels; level l has elements * 2^l per span")
+      ->capture_default_str();
+  add_common(conv_cmd, conv);
+
+  knotwork::BenchOptions bench;
+  CLI::App* bench_cmd = app.add_subcommand("bench", "Benchmark setup, assembly, CHOLMOD and error norms (unit square, sin*sin)");
+  bench_cmd->add_option("--config", bench.configs,
+                        "DEGREE:ELEMENTS, repeatable (default 2:128 2:512 2:1024 4:64 4:256 4:512)");
+  bench_cmd->add_flag("--quick", bench.quick, "Small configurations only (2:64 2:128 4:32 4:64)");
+  bench_cmd->add_option("--ordering", bench.ordering, "metis, amd or nesdis")->capture_default_str();
+  bench_cmd->add_flag("--json", bench.json, "Print JSON instead of the table");
+  bench_cmd->add_flag("!--no-errors", bench.with_errors, "Skip the error norms");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (*run_cmd) return knotwork::run_command(run);
+    if (*conv_cmd) return knotwork::converge_command(conv);
+    if (*bench_cmd) return knotwork::bench_command(bench);
+  } catch (const knotwork::InputError& e) {
+    std::fprintf(stderr, "knotwork: error: %s\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "knotwork: error: out of memory (try fewer elements or a lower degree)\n");
+    return 3;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "knotwork: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

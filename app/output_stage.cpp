@@ -1,0 +1,54 @@
+#include "app/output_stage.hpp"
+
+#include <unistd.h>
+
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace fs = std::filesystem;
+
+OutputStage::OutputStage(const std::string& directory) : directory_(directory) {
+  std::error_code ec;
+  if (fs::exists(directory_, ec) && !fs::is_directory(directory_, ec))
+    throw InputError(directory + ": output directory is not writable (it exists and is not a directory)");
+  if (!fs::exists(directory_, ec)) {
+    fs::create_directories(directory_, ec);
+    if (ec) throw InputError(directory + ": output directory is not writable (" + ec.message() + ")");
+    created_directory_ = true;
+  }
+  staging_ = directory_ / (".knotwork-staging-" + std::to_string(::getpid()));
+  fs::create_directory(staging_, ec);
+  if (ec || ::access(staging_.c_str(), W_OK) != 0) {
+    fs::remove_all(staging_, ec);
+    if (created_directory_) fs::remove(directory_, ec);
+    throw InputError(directory + ": output directory is not writable (" +
+                     (ec ? ec.message() : std::string("permission denied")) + ")");
+  }
+}
+
+OutputStage::~OutputStage() {
+  std::error_code ec;
+  fs::remove_all(staging_, ec);
+  if (!committed_ && created_directory_ && fs::is_empty(directory_, ec)) fs::remove(directory_, ec);
+}
+
+std::string OutputStage::stage(const std::string& name) {
+  names_.push_back(name);
+  return (staging_ / name).string();
+}
+
+std::vector<std::string> OutputStage::commit() {
+  std::vector<std::string> finals;
+  for (const auto& name : names_) {
+    const fs::path target = directory_ / name;
+    std::error_code ec;
+    fs::rename(staging_ / name, target, ec);
+    if (ec) throw std::runtime_error(target.string() + ": could not move output into place (" + ec.message() + ")");
+    finals.push_back(target.string());
+  }
+  committed_ = true;
+  return finals;
+}
+
+}  // namespace knotwork

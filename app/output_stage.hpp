@@ -1,0 +1,28 @@
+#pragma once
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace knotwork {
+
+// Output files are written into a hidden staging folder inside the output directory and
+// moved into place only by commit(): a run that fails leaves no partial output behind.
+class OutputStage {
+ public:
+  // Creates the directory if needed; throws InputError if it cannot be written.
+  explicit OutputStage(const std::string& directory);
+  ~OutputStage();
+  OutputStage(const OutputStage&) = delete;
+  OutputStage& operator=(const OutputStage&) = delete;
+  // Path to write `name` to (inside the staging folder); remembers it for commit().
+  std::string stage(const std::string& name);
+  // Moves every staged file into the directory; returns their final paths.
+  std::vector<std::string> commit();
+
+ private:
+  std::filesystem::path directory_, staging_;
+  std::vector<std::string> names_;
+  bool created_directory_ = false, committed_ = false;
+};
+
+}  // namespace knotwork

@@ -1,0 +1,68 @@
+#pragma once
+#include <Eigen/Core>
+#include <array>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace knotwork {
+
+// Side order of a cell, counter-clockwise in its parameter box [u0,u1]x[v0,v1].
+enum CellSide { kSideBottom = 0, kSideRight = 1, kSideTop = 2, kSideLeft = 3 };
+
+struct BezierCell {
+  int patch = 0;
+  int index_u = 0, index_v = 0;  // position of the element in its patch (tensor bases)
+  double u0 = 0, u1 = 1, v0 = 0, v1 = 1;  // parameter box (for reporting; maps use [0,1]^2)
+  int degree_u = 1, degree_v = 1;
+  std::array<int, 4> boundary{-1, -1, -1, -1};  // boundary id per CellSide, -1 if interior
+};
+
+// The contract between every spline construction and the solver: cell by cell, which
+// global functions are alive and which combination of the cell's Bernstein polynomials
+// each one is (N_active = C_e * B, B ordered a + (p+1)*c with a along u).
+// Rational spaces add one positive weight per global function: R_i = w_i N_i / sum_j w_j N_j.
+// Extraction matrices live in a pool so that identical ones (most interior cells of
+// uniform tensor meshes) are stored once.
+class BezierMesh {
+ public:
+  int add_extraction(Eigen::MatrixXd matrix);
+  void add_cell(const BezierCell& cell, std::span<const int> functions, int extraction);
+  void set_num_functions(int n) { num_functions_ = n; }
+  void set_weights(Eigen::VectorXd weights) { weights_ = std::move(weights); }
+  void set_boundary_names(std::vector<std::string> names) { boundary_names_ = std::move(names); }
+
+  int num_functions() const { return num_functions_; }
+  int num_cells() const { return static_cast<int>(cells_.size()); }
+  const BezierCell& cell(int c) const { return cells_[c]; }
+  std::span<const int> functions(int c) const {
+    return {ids_.data() + offsets_[c], static_cast<size_t>(offsets_[c + 1] - offsets_[c])};
+  }
+  const Eigen::MatrixXd& extraction(int c) const { return pool_[extraction_of_cell_[c]]; }
+  int num_distinct_extractions() const { return static_cast<int>(pool_.size()); }
+  bool is_rational() const { return weights_.size() > 0; }
+  const Eigen::VectorXd& weights() const { return weights_; }
+  const std::vector<std::string>& boundary_names() const { return boundary_names_; }
+  int max_functions_per_cell() const { return max_active_; }
+  int max_degree() const { return max_degree_; }
+
+ private:
+  std::vector<BezierCell> cells_;
+  std::vector<int> extraction_of_cell_;
+  std::vector<Eigen::MatrixXd> pool_;
+  std::vector<int> offsets_{0};
+  std::vector<int> ids_;
+  Eigen::VectorXd weights_;
+  std::vector<std::string> boundary_names_;
+  int num_functions_ = 0;
+  int max_active_ = 0;
+  int max_degree_ = 0;
+};
+
+// Bernstein weights of a rational cell and the extraction that acts on the rational
+// Bernstein polynomials wb_b B_b / W: R_active = C_hat * (wb .* B / W).
+// For polynomial meshes wb = 1 and C_hat = C_e.
+void rational_cell_extraction(const BezierMesh& mesh, int cell, Eigen::VectorXd& bernstein_weights,
+                              Eigen::MatrixXd& extraction);
+
+}  // namespace knotwork

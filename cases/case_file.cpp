@@ -1,0 +1,434 @@
+#include "cases/case_file.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "cases/geometries.hpp"
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+constexpr int kMaxDegree = 10;
+constexpr long kMaxCells = 1L << 26;  // ~67M cells: beyond any machine this runs on
+
+const std::vector<std::string> kSides = {"bottom", "right", "top", "left"};
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string closest(const std::string& key, const std::vector<std::string>& valid) {
+  std::string best;
+  size_t best_d = 1000;
+  for (const auto& v : valid) {
+    const size_t d = edit_distance(key, v);
+    if (d < best_d) { best_d = d; best = v; }
+  }
+  std::string all;
+  for (const auto& v : valid) all += (all.empty() ? "" : ", ") + v;
+  return best_d <= std::max<size_t>(2, key.size() / 2) ? "did you mean '" + best + "'?"
+                                                        : "valid keys: " + all;
+}
+
+// Reads one case file, prefixing every message with the file and the field.
+class Reader {
+ public:
+  explicit Reader(std::string path) : path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const std::string& field, const std::string& what) const {
+    throw InputError(path_ + ": " + field + ": " + what);
+  }
+
+  void check_keys(const toml::table& t, const std::string& section,
+                  const std::vector<std::string>& valid) const {
+    for (const auto& [k, v] : t) {
+      const std::string key(k.str());
+      if (std::find(valid.begin(), valid.end(), key) == valid.end())
+        fail(section.empty() ? key : "[" + section + "] " + key,
+             "unknown key (" + closest(key, valid) + ")");
+    }
+  }
+
+  const toml::table& table(const toml::table& t, const std::string& key, bool required) const {
+    static const toml::table empty;
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail("[" + key + "]", "missing section");
+      return empty;
+    }
+    if (!n->is_table()) fail(key, "must be a table ([" + key + "])");
+    return *n->as_table();
+  }
+
+  double number(const toml::node& n, const std::string& field) const {
+    double v;
+    if (auto i = n.value_exact<int64_t>()) v = static_cast<double>(*i);
+    else if (auto d = n.value_exact<double>()) v = *d;
+    else if (auto s = n.value_exact<std::string>()) v = rational_string(*s, field);
+    else fail(field, "must be a number");
+    if (!std::isfinite(v)) fail(field, "must be a finite number (got nan or inf)");
+    return v;
+  }
+
+  double rational_string(const std::string& s, const std::string& field) const {
+    // Exact rational such as "-1/3" (used by geometries written from exact data).
+    const auto slash = s.find('/');
+    try {
+      size_t used = 0;
+      if (slash == std::string::npos) {
+        const double v = std::stod(s, &used);
+        if (used == s.size()) return v;
+      } else {
+        const double a = std::stod(s.substr(0, slash), &used);
+        if (used == slash) {
+          size_t used2 = 0;
+          const double b = std::stod(s.substr(slash + 1), &used2);
+          if (used2 == s.size() - slash - 1 && b != 0) return a / b;
+        }
+      }
+    } catch (const std::exception&) {
+    }
+    fail(field, "\"" + s + "\" is not a number");
+  }
+
+  long integer(const toml::node& n, const std::string& field) const {
+    if (auto i = n.value_exact<int64_t>()) return static_cast<long>(*i);
+    fail(field, "must be an integer");
+  }
+
+  std::array<long, 2> integer_pair(const toml::node& n, const std::string& field) const {
+    if (auto a = n.as_array()) {
+      if (a->size() != 2) fail(field, "must be an integer or a pair [u, v]");
+      return {integer(*a->get(0), field), integer(*a->get(1), field)};
+    }
+    const long v = integer(n, field);
+    return {v, v};
+  }
+
+  std::vector<double> numbers(const toml::node& n, const std::string& field) const {
+    const toml::array* a = n.as_array();
+    if (!a) fail(field, "must be an array of numbers");
+    std::vector<double> r;
+    for (size_t i = 0; i < a->size(); ++i)
+      r.push_back(number(*a->get(i), field + "[" + std::to_string(i) + "]"));
+    return r;
+  }
+
+  Eigen::MatrixX2d points(const toml::node& n, const std::string& field) const {
+    const toml::array* a = n.as_array();
+    if (!a) fail(field, "must be an array of [x, y] points");
+    Eigen::MatrixX2d p(a->size(), 2);
+    for (size_t i = 0; i < a->size(); ++i) {
+      const std::string f = field + "[" + std::to_string(i) + "]";
+      const auto xy = numbers(*a->get(i), f);
+      if (xy.size() != 2) fail(f, "must be a point [x, y]");
+      p(i, 0) = xy[0];
+      p(i, 1) = xy[1];
+    }
+    return p;
+  }
+
+  std::string string(const toml::node& n, const std::string& field) const {
+    if (auto s = n.value_exact<std::string>()) return *s;
+    fail(field, "must be a string");
+  }
+
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+toml::table parse_toml(const std::string& path) {
+  std::ifstream probe(path);
+  if (!probe) {
+    const std::string why = std::filesystem::exists(path) ? "cannot be read" : "no such file";
+    throw InputError(path + ": cannot open case file (" + why + ")");
+  }
+  if (std::filesystem::is_directory(path)) throw InputError(path + ": is a directory, not a case file");
+  try {
+    return toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream s;
+    s << path << ":" << e.source().begin.line << ":" << e.source().begin.column
+      << ": TOML syntax error: " << e.description();
+    throw InputError(s.str());
+  }
+}
+
+NurbsPatch read_nurbs(const Reader& r, const toml::table& g, const std::string& section) {
+  r.check_keys(g, section, {"type", "degrees", "knots_u", "knots_v", "control_points", "weights", "file"});
+  const toml::table* src = &g;
+  toml::table from_file;
+  std::string field_prefix = "[" + section + "] ";
+  if (const toml::node* f = g.get("file")) {
+    std::filesystem::path file = r.string(*f, field_prefix + "file");
+    if (file.is_relative()) file = std::filesystem::path(r.path()).parent_path() / file;
+    from_file = parse_toml(file.string());
+    Reader(file.string()).check_keys(from_file, "", {"degrees", "knots_u", "knots_v", "control_points", "weights"});
+    src = &from_file;
+    field_prefix = "(file " + file.string() + ") ";
+  }
+  auto need = [&](const char* key) -> const toml::node& {
+    const toml::node* n = src->get(key);
+    if (!n) r.fail(field_prefix + key, "missing required key for a nurbs geometry");
+    return *n;
+  };
+  const auto deg = r.integer_pair(need("degrees"), field_prefix + "degrees");
+  for (long d : deg)
+    if (d < 1 || d > kMaxDegree) r.fail(field_prefix + "degrees", "must be in [1, 10]");
+  NurbsPatch p;
+  try {
+    p.basis_u = BSplineBasis1D(static_cast<int>(deg[0]), r.numbers(need("knots_u"), field_prefix + "knots_u"));
+  } catch (const std::invalid_argument& e) { r.fail(field_prefix + "knots_u", e.what()); }
+  try {
+    p.basis_v = BSplineBasis1D(static_cast<int>(deg[1]), r.numbers(need("knots_v"), field_prefix + "knots_v"));
+  } catch (const std::invalid_argument& e) { r.fail(field_prefix + "knots_v", e.what()); }
+  p.control_points = r.points(need("control_points"), field_prefix + "control_points");
+  if (const toml::node* w = src->get("weights")) {
+    const auto ws = r.numbers(*w, field_prefix + "weights");
+    p.weights = Eigen::Map<const Eigen::VectorXd>(ws.data(), ws.size());
+  } else {
+    p.weights.setOnes(p.control_points.rows());
+  }
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const std::string field = what.rfind("weight", 0) == 0 ? "weights"
+                              : what.rfind("knots_u", 0) == 0 ? "knots_u"
+                              : what.rfind("knots_v", 0) == 0 ? "knots_v" : "control_points";
+    r.fail(field_prefix + field, what);
+  }
+  return p;
+}
+
+void read_geometry(const Reader& r, const toml::table& g, CaseDescription& c) {
+  const toml::node* type = g.get("type");
+  if (!type) r.fail("[geometry] type", "missing (rectangle, quarter_annulus, lshape or nurbs)");
+  c.geometry_type = r.string(*type, "[geometry] type");
+  if (c.geometry_type == "rectangle") {
+    r.check_keys(g, "geometry", {"type", "corners"});
+    Eigen::MatrixX2d corners(2, 2);
+    corners << 0, 0, 1, 1;
+    if (const toml::node* n = g.get("corners")) corners = r.points(*n, "[geometry] corners");
+    if (corners.rows() != 2) r.fail("[geometry] corners", "must be [[x0, y0], [x1, y1]]");
+    if (!(corners(1, 0) > corners(0, 0) && corners(1, 1) > corners(0, 1)))
+      r.fail("[geometry] corners", "need x1 > x0 and y1 > y0");
+    c.geometry = rectangle_patch(corners(0, 0), corners(0, 1), corners(1, 0), corners(1, 1));
+  } else if (c.geometry_type == "quarter_annulus") {
+    r.check_keys(g, "geometry", {"type", "inner_radius", "outer_radius"});
+    const double ri = g.get("inner_radius") ? r.number(*g.get("inner_radius"), "[geometry] inner_radius") : 1.0;
+    const double ro = g.get("outer_radius") ? r.number(*g.get("outer_radius"), "[geometry] outer_radius") : 2.0;
+    if (!(ri > 0)) r.fail("[geometry] inner_radius", "must be > 0");
+    if (!(ro > ri)) r.fail("[geometry] outer_radius", "must be > inner_radius");
+    c.geometry = quarter_annulus_patch(ri, ro);
+  } else if (c.geometry_type == "lshape") {
+    r.check_keys(g, "geometry", {"type"});
+    c.geometry = lshape_patch();
+  } else if (c.geometry_type == "nurbs") {
+    c.geometry = read_nurbs(r, g, "geometry");
+  } else {
+    r.fail("[geometry] type", "unknown geometry '" + c.geometry_type + "' (" +
+                                  closest(c.geometry_type, {"rectangle", "quarter_annulus", "lshape", "nurbs"}) + ")");
+  }
+}
+
+void check_degree(const Reader& r, const std::array<long, 2>& d, const std::string& field) {
+  for (long v : d)
+    if (v < 1 || v > kMaxDegree) r.fail(field, "must be in [1, 10], got " + std::to_string(v));
+}
+
+void check_elements(const Reader& r, const std::array<long, 2>& e, const std::string& field) {
+  for (long v : e)
+    if (v < 1) r.fail(field, "must be >= 1, got " + std::to_string(v));
+  if (e[0] * e[1] > kMaxCells || e[0] > kMaxCells || e[1] > kMaxCells)
+    r.fail(field, "too many elements (more than 2^26 cells)");
+}
+
+void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
+  r.check_keys(s, "space", {"family", "degree", "elements", "continuity", "rational",
+                            "quadrature_points", "error_quadrature_points"});
+  if (const toml::node* f = s.get("family")) {
+    const std::string fam = r.string(*f, "[space] family");
+    if (fam != "tensor")
+      r.fail("[space] family", "'" + fam + "' is not available (this version builds \"tensor\")");
+  }
+  const toml::node* d = s.get("degree");
+  if (!d) r.fail("[space] degree", "missing required key");
+  const auto deg = r.integer_pair(*d, "[space] degree");
+  check_degree(r, deg, "[space] degree");
+  c.space.degree = {static_cast<int>(deg[0]), static_cast<int>(deg[1])};
+  const toml::node* e = s.get("elements");
+  if (!e) r.fail("[space] elements", "missing required key");
+  const auto el = r.integer_pair(*e, "[space] elements");
+  check_elements(r, el, "[space] elements");
+  c.space.elements_per_span = {static_cast<int>(el[0]), static_cast<int>(el[1])};
+  if (const toml::node* k = s.get("continuity")) {
+    const auto cont = r.integer_pair(*k, "[space] continuity");
+    for (int i = 0; i < 2; ++i)
+      if (cont[i] < 0 || cont[i] > deg[i] - 1)
+        r.fail("[space] continuity", "must be in [0, degree-1], got " + std::to_string(cont[i]));
+    c.space.continuity = {static_cast<int>(cont[0]), static_cast<int>(cont[1])};
+  }
+  if (const toml::node* k = s.get("rational")) {
+    auto b = k->value_exact<bool>();
+    if (!b) r.fail("[space] rational", "must be true or false");
+    c.space.rational = *b;
+  }
+  auto read_points = [&](const char* key, int& pu, int& pv) {
+    if (const toml::node* k = s.get(key)) {
+      const auto q = r.integer_pair(*k, std::string("[space] ") + key);
+      for (long v : q)
+        if (v < 1 || v > 30) r.fail(std::string("[space] ") + key, "must be in [1, 30]");
+      pu = static_cast<int>(q[0]);
+      pv = static_cast<int>(q[1]);
+    }
+  };
+  read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
+  read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
+}
+
+int side_index(const Reader& r, const std::string& side, const std::string& field) {
+  for (size_t i = 0; i < kSides.size(); ++i)
+    if (kSides[i] == side) return static_cast<int>(i);
+  r.fail(field, "unknown side '" + side + "' (" + closest(side, kSides) + "; sides are bottom, right, top, left)");
+}
+
+void read_problem(const Reader& r, const toml::table& t, CaseDescription& c) {
+  r.check_keys(t, "problem", {"exact", "source", "dirichlet", "neumann"});
+  PoissonProblem& pb = c.problem;
+  const std::string& f = r.path();
+  if (const toml::node* e = t.get("exact")) {
+    const Expression u = Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact");
+    pb.exact = differentiate_exact_solution(u);
+  }
+  if (const toml::node* s = t.get("source"))
+    pb.source = Expression::parse(r.string(*s, "[problem] source"), f + ": [problem] source");
+  else if (pb.exact)
+    pb.source = pb.exact->minus_laplacian;
+  else
+    r.fail("[problem] source", "missing: give `source`, or `exact` to derive it from");
+
+  pb.boundary.assign(4, BoundaryCondition{});
+  std::set<int> neumann;
+  if (const toml::node* n = t.get("neumann")) {
+    if (const toml::array* a = n->as_array()) {
+      for (size_t i = 0; i < a->size(); ++i) {
+        const int s = side_index(r, r.string(*a->get(i), "[problem] neumann"), "[problem] neumann");
+        pb.boundary[s].kind = BoundaryKind::kNeumann;
+        neumann.insert(s);
+      }
+    } else if (const toml::table* nt = n->as_table()) {
+      for (const auto& [k, v] : *nt) {
+        const std::string field = "[problem] neumann." + std::string(k.str());
+        const int s = side_index(r, std::string(k.str()), field);
+        const std::string val = r.string(v, field);
+        pb.boundary[s].kind = BoundaryKind::kNeumann;
+        if (val != "exact") {
+          pb.boundary[s].from_exact = false;
+          pb.boundary[s].value = Expression::parse(val, f + ": " + field);
+        }
+        neumann.insert(s);
+      }
+    } else {
+      r.fail("[problem] neumann", "must be a list of sides or a table side = \"flux expression\"");
+    }
+  }
+  if (neumann.size() == 4)
+    r.fail("[problem] neumann", "every side is Neumann: the solution would only be defined up to a "
+                                "constant; keep at least one Dirichlet side");
+  if (const toml::node* d = t.get("dirichlet")) {
+    if (auto s = d->value_exact<std::string>()) {
+      const Expression g = Expression::parse(*s, f + ": [problem] dirichlet");
+      for (auto& bc : pb.boundary)
+        if (bc.kind == BoundaryKind::kDirichlet) { bc.from_exact = false; bc.value = g; }
+    } else if (const toml::table* dt = d->as_table()) {
+      for (const auto& [k, v] : *dt) {
+        const std::string field = "[problem] dirichlet." + std::string(k.str());
+        const int s = side_index(r, std::string(k.str()), field);
+        if (neumann.count(s)) r.fail(field, "side is also listed under neumann");
+        const std::string val = r.string(v, field);
+        if (val != "exact") {
+          pb.boundary[s].from_exact = false;
+          pb.boundary[s].value = Expression::parse(val, f + ": " + field);
+        }
+      }
+    } else {
+      r.fail("[problem] dirichlet", "must be an expression or a table side = \"expression\"");
+    }
+  }
+  for (size_t s = 0; s < 4; ++s)
+    if (pb.boundary[s].from_exact && !pb.exact)
+      r.fail("[problem] " + std::string(pb.boundary[s].kind == BoundaryKind::kDirichlet ? "dirichlet" : "neumann"),
+             "side '" + kSides[s] + "' takes its data from the exact solution, but [problem] exact is not given");
+}
+
+void read_output(const Reader& r, const toml::table& t, CaseDescription& c) {
+  r.check_keys(t, "output", {"directory", "bezier", "sampled", "samples"});
+  if (const toml::node* d = t.get("directory")) c.output_directory = r.string(*d, "[output] directory");
+  auto flag = [&](const char* key, bool& out) {
+    if (const toml::node* n = t.get(key)) {
+      auto b = n->value_exact<bool>();
+      if (!b) r.fail(std::string("[output] ") + key, "must be true or false");
+      out = *b;
+    }
+  };
+  flag("bezier", c.write_bezier);
+  flag("sampled", c.write_sampled);
+  if (const toml::node* s = t.get("samples")) {
+    c.samples = static_cast<int>(r.integer(*s, "[output] samples"));
+    if (c.samples < 1 || c.samples > 64) r.fail("[output] samples", "must be in [1, 64]");
+  }
+}
+
+}  // namespace
+
+CaseDescription load_case(const std::string& path) {
+  const toml::table root = parse_toml(path);
+  Reader r(path);
+  r.check_keys(root, "", {"title", "description", "geometry", "space", "problem", "output"});
+  CaseDescription c;
+  c.path = path;
+  c.name = std::filesystem::path(path).stem().string();
+  c.output_directory = "results/" + c.name;
+  if (const toml::node* t = root.get("title")) c.title = r.string(*t, "title");
+  if (const toml::node* t = root.get("description")) r.string(*t, "description");
+  read_geometry(r, r.table(root, "geometry", true), c);
+  read_space(r, r.table(root, "space", true), c);
+  read_problem(r, r.table(root, "problem", true), c);
+  read_output(r, r.table(root, "output", false), c);
+  return c;
+}
+
+void override_degree(CaseDescription& c, int degree) {
+  if (degree < 1 || degree > kMaxDegree)
+    throw InputError("--degree: must be in [1, 10], got " + std::to_string(degree));
+  c.space.degree = {degree, degree};
+  for (int& r : c.space.continuity)
+    if (r > degree - 1) r = degree - 1;
+}
+
+void override_elements(CaseDescription& c, int elements) {
+  if (elements < 1) throw InputError("--elements: must be >= 1, got " + std::to_string(elements));
+  if (static_cast<long>(elements) * elements > kMaxCells)
+    throw InputError("--elements: too many elements (more than 2^26 cells)");
+  c.space.elements_per_span = {elements, elements};
+}
+
+}  // namespace knotwork

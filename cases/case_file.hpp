@@ -1,0 +1,34 @@
+#pragma once
+#include <string>
+#include <vector>
+
+#include "basis/tensor_patch.hpp"
+#include "solver/poisson_problem.hpp"
+
+namespace knotwork {
+
+// Everything a case file says, validated. See cases/README.md for the keys.
+struct CaseDescription {
+  std::string path;  // as given
+  std::string name;  // file name without extension
+  std::string title;
+  std::string geometry_type;
+  NurbsPatch geometry;
+  TensorSpaceOptions space;
+  QuadratureOptions quadrature;
+  PoissonProblem problem;
+  std::string output_directory;  // default results/<name>
+  bool write_bezier = true, write_sampled = true;
+  int samples = 4;  // linear sub-cells per cell and direction in the sampled output
+};
+
+// Reads and validates a case file. Throws InputError with a one-line message naming the
+// file and the field (TOML syntax errors with line and column; unknown keys with the
+// closest valid one).
+CaseDescription load_case(const std::string& path);
+
+// Applies --degree / --elements style overrides with the same validation as the file.
+void override_degree(CaseDescription& c, int degree);
+void override_elements(CaseDescription& c, int elements);
+
+}  // namespace knotwork

@@ -1,0 +1,22 @@
+#pragma once
+#include "basis/tensor_patch.hpp"
+
+namespace knotwork {
+
+// The built-in single-patch geometries. Each is positively oriented (det J > 0), and its
+// parameter sides are bottom (v=0), right (u=1), top (v=1), left (u=0).
+
+// [x0,x1] x [y0,y1], bilinear; u along x, v along y.
+NurbsPatch rectangle_patch(double x0, double y0, double x1, double y1);
+
+// { r_in <= r <= r_out, x >= 0, y >= 0 } as an exact NURBS: u radial (degree 1, from r_in
+// to r_out), v angular (degree 2, weights 1, 1/sqrt(2), 1, from the x- to the y-axis).
+NurbsPatch quarter_annulus_patch(double inner_radius, double outer_radius);
+
+// (-1,1)^2 minus [0,1]x[-1,0] as ONE patch folded with a C0 knot at u = 1/2: bottom side
+// (v=0) is the re-entrant polyline (0,-1) -> (0,0) -> (1,0); top side (v=1) the outer polyline
+// (-1,-1) -> (-1,1) -> (1,1); left side is y = -1, right side is x = 1. Bilinear on the two
+// convex quads either side of the diagonal (0,0)-(-1,1). The fold stays C0 under refinement.
+NurbsPatch lshape_patch();
+
+}  // namespace knotwork

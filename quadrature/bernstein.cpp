@@ -1,0 +1,84 @@
+#include "quadrature/bernstein.hpp"
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <tuple>
+#include <vector>
+
+namespace knotwork {
+
+void bernstein_values_and_derivatives(int p, double t, double* values, double* derivatives) {
+  // de Casteljau-style triangle: B^k_j = (1-t) B^{k-1}_j + t B^{k-1}_{j-1}.
+  std::vector<double> lower(p + 1, 0.0);
+  values[0] = 1.0;
+  for (int k = 1; k <= p; ++k) {
+    if (k == p) std::copy(values, values + k, lower.begin());  // degree p-1 values
+    double saved = 0.0;
+    for (int j = 0; j < k; ++j) {
+      const double v = values[j];
+      values[j] = saved + (1.0 - t) * v;
+      saved = t * v;
+    }
+    values[k] = saved;
+  }
+  if (p == 0) {
+    derivatives[0] = 0.0;
+    return;
+  }
+  // d/dt B^p_j = p (B^{p-1}_{j-1} - B^{p-1}_j)
+  for (int j = 0; j <= p; ++j) {
+    const double left = j > 0 ? lower[j - 1] : 0.0;
+    const double right = j < p ? lower[j] : 0.0;
+    derivatives[j] = p * (left - right);
+  }
+}
+
+namespace {
+
+BernsteinTable make_table(int p, int q, int nu, int nv) {
+  BernsteinTable t;
+  t.p = p;
+  t.q = q;
+  t.rule_u = gauss_legendre(nu);
+  t.rule_v = gauss_legendre(nv);
+  const int np = nu * nv, nb = (p + 1) * (q + 1);
+  t.point_u.resize(np);
+  t.point_v.resize(np);
+  t.weight.resize(np);
+  t.value.resize(np, nb);
+  t.d_u.resize(np, nb);
+  t.d_v.resize(np, nb);
+  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
+  for (int j = 0; j < nv; ++j) {
+    bernstein_values_and_derivatives(q, t.rule_v.nodes[j], bv.data(), dv.data());
+    for (int i = 0; i < nu; ++i) {
+      bernstein_values_and_derivatives(p, t.rule_u.nodes[i], bu.data(), du.data());
+      const int k = i + nu * j;
+      t.point_u[k] = t.rule_u.nodes[i];
+      t.point_v[k] = t.rule_v.nodes[j];
+      t.weight[k] = t.rule_u.weights[i] * t.rule_v.weights[j];
+      for (int c = 0; c <= q; ++c)
+        for (int a = 0; a <= p; ++a) {
+          const int b = a + (p + 1) * c;
+          t.value(k, b) = bu[a] * bv[c];
+          t.d_u(k, b) = du[a] * bv[c];
+          t.d_v(k, b) = bu[a] * dv[c];
+        }
+    }
+  }
+  return t;
+}
+
+}  // namespace
+
+const BernsteinTable& bernstein_table(int p, int q, int nu, int nv) {
+  static std::mutex mutex;
+  static std::map<std::tuple<int, int, int, int>, std::unique_ptr<BernsteinTable>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[{p, q, nu, nv}];
+  if (!slot) slot = std::make_unique<BernsteinTable>(make_table(p, q, nu, nv));
+  return *slot;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,269 @@
+#include "solver/assemble_poisson.hpp"
+
+#include <omp.h>
+
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "solver/cell_basis.hpp"
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+std::string describe_cell(const BezierMesh& mesh, int c) {
+  const BezierCell& cell = mesh.cell(c);
+  std::ostringstream s;
+  s << "cell " << c << " (u in [" << cell.u0 << ", " << cell.u1 << "], v in [" << cell.v0 << ", "
+    << cell.v1 << "])";
+  return s.str();
+}
+
+// Adds the element matrix into the lower-triangular CSC values: for each alive free
+// column, walk its sorted rows and the cell's sorted dofs together.
+void scatter(const int* outer, const int* inner, const std::vector<std::pair<int, int>>& order,
+             const Eigen::MatrixXd& Ke, double* values) {
+  const int m = static_cast<int>(order.size());
+  for (int k = 0; k < m; ++k) {
+    const int col = order[k].first, b = order[k].second;
+    int ptr = outer[col];
+    for (int l = k; l < m; ++l) {
+      const int row = order[l].first;
+      while (inner[ptr] < row) ++ptr;
+      values[ptr] += Ke(order[l].second, b);
+    }
+  }
+}
+
+}  // namespace
+
+void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const Expression& source,
+                      const DofLayout& layout, const Eigen::VectorXd& fixed_values,
+                      const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
+                      Eigen::VectorXd& rhs) {
+  const int nthreads = omp_get_max_threads();
+  const long nnz = matrix.nonZeros();
+  const int* outer = matrix.outerIndexPtr();
+  const int* inner = matrix.innerIndexPtr();
+  double* values = matrix.valuePtr();
+  std::fill(values, values + nnz, 0.0);
+  rhs.setZero(layout.num_free());
+  std::vector<std::vector<double>> thread_values(nthreads - 1, std::vector<double>());
+  std::vector<Eigen::VectorXd> thread_rhs(nthreads - 1);
+  int bad_cell = std::numeric_limits<int>::max(), bad_source_cell = bad_cell;
+  double bad_det = 0, bad_x = 0, bad_y = 0;
+
+#pragma omp parallel
+  {
+    const int tid = omp_get_thread_num();
+    double* my_values = values;
+    Eigen::VectorXd* my_rhs = &rhs;
+    if (tid > 0) {
+      thread_values[tid - 1].assign(nnz, 0.0);
+      thread_rhs[tid - 1].setZero(layout.num_free());
+      my_values = thread_values[tid - 1].data();
+      my_rhs = &thread_rhs[tid - 1];
+    }
+    ExpressionEvaluator f(source);
+    CellBasis cb;
+    Eigen::MatrixXd G, KB, Ke;
+    Eigen::VectorXd fq, FB, Fe, ulift;
+    std::vector<std::pair<int, int>> order;
+#pragma omp for schedule(dynamic, 64)
+    for (int c = 0; c < mesh.num_cells(); ++c) {
+      const BezierCell& cell = mesh.cell(c);
+      evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.points_u, cell.degree_u, 1),
+                          rule_points(quadrature.points_v, cell.degree_v, 1), cb);
+      if (!(cb.min_jacobian > 0)) {
+#pragma omp critical(knotwork_bad_cell)
+        if (c < bad_cell) { bad_cell = c; bad_det = cb.min_jacobian; }
+        continue;
+      }
+      const Eigen::Index nq = cb.measure.size(), nb = cb.value.cols();
+      fq.resize(nq);
+      for (Eigen::Index k = 0; k < nq; ++k) {
+        fq[k] = f(cb.geometry.x(k, 0), cb.geometry.x(k, 1));
+        if (!std::isfinite(fq[k])) {
+#pragma omp critical(knotwork_bad_cell)
+          if (c < bad_source_cell) { bad_source_cell = c; bad_x = cb.geometry.x(k, 0); bad_y = cb.geometry.x(k, 1); }
+          fq[k] = 0;
+        }
+      }
+      // K_B = sum_q m_q (grad B grad B^T): one dense product on stacked, scaled gradients.
+      const Eigen::ArrayXd root = cb.measure.array().sqrt();
+      G.resize(2 * nq, nb);
+      G.topRows(nq) = root.matrix().asDiagonal() * cb.grad_x;
+      G.bottomRows(nq) = root.matrix().asDiagonal() * cb.grad_y;
+      KB.noalias() = G.transpose() * G;
+      FB.noalias() = cb.value.transpose() * cb.measure.cwiseProduct(fq);
+      Ke.noalias() = cb.C * KB * cb.C.transpose();
+      Fe.noalias() = cb.C * FB;
+      const auto ids = mesh.functions(c);
+      order.clear();
+      bool lifted = false;
+      ulift.setZero(ids.size());
+      for (size_t a = 0; a < ids.size(); ++a) {
+        const int d = layout.dof[ids[a]];
+        if (d >= 0) order.emplace_back(d, static_cast<int>(a));
+        else { ulift[a] = fixed_values[ids[a]]; lifted = lifted || ulift[a] != 0.0; }
+      }
+      if (lifted) Fe.noalias() -= Ke * ulift;
+      std::sort(order.begin(), order.end());
+      for (const auto& [d, a] : order) (*my_rhs)[d] += Fe[a];
+      scatter(outer, inner, order, Ke, my_values);
+    }
+  }
+  for (int t = 0; t < nthreads - 1; ++t) {
+    if (thread_values[t].empty()) continue;
+    const double* src = thread_values[t].data();
+    double* dst = values;
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < nnz; ++i) dst[i] += src[i];
+    rhs += thread_rhs[t];
+  }
+  if (bad_cell != std::numeric_limits<int>::max()) {
+    std::ostringstream s;
+    s << "geometry has a non-positive Jacobian (det J = " << bad_det << ") at a quadrature point of "
+      << describe_cell(mesh, bad_cell) << ": the map folds over or is oriented clockwise";
+    throw GeometryError(s.str());
+  }
+  if (bad_source_cell != std::numeric_limits<int>::max()) {
+    std::ostringstream s;
+    s << "source \"" << source.text() << "\" is not a finite number at (x, y) = (" << bad_x << ", "
+      << bad_y << ") in " << describe_cell(mesh, bad_source_cell);
+    throw InputError(source.where() + ": " + s.str());
+  }
+}
+
+namespace {
+
+// Data g (Dirichlet) or h (Neumann) at the side's points.
+void boundary_data(const PoissonProblem& problem, const BoundaryCondition& bc, const CellBasis& cb,
+                   std::optional<ExpressionEvaluator>& value, std::optional<ExpressionEvaluator>& ux,
+                   std::optional<ExpressionEvaluator>& uy, Eigen::VectorXd& out) {
+  const Eigen::Index n = cb.measure.size();
+  out.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
+    if (bc.kind == BoundaryKind::kNeumann && bc.from_exact)
+      out[k] = (*ux)(x, y) * cb.normal(k, 0) + (*uy)(x, y) * cb.normal(k, 1);
+    else
+      out[k] = (*value)(x, y);
+    if (!std::isfinite(out[k])) {
+      std::ostringstream s;
+      const Expression& e = bc.from_exact ? problem.exact->u : bc.value;
+      s << e.where() << ": boundary data \"" << e.text() << "\" is not finite at (" << x << ", " << y << ")";
+      throw InputError(s.str());
+    }
+  }
+}
+
+void make_evaluators(const PoissonProblem& problem, const BoundaryCondition& bc,
+                     std::optional<ExpressionEvaluator>& value, std::optional<ExpressionEvaluator>& ux,
+                     std::optional<ExpressionEvaluator>& uy) {
+  if (bc.from_exact) {
+    if (!problem.exact) throw InputError("boundary data come from the exact solution, but none is given");
+    value.emplace(problem.exact->u);
+    ux.emplace(problem.exact->u_x);
+    uy.emplace(problem.exact->u_y);
+  } else {
+    value.emplace(bc.value);
+  }
+}
+
+int side_points(const QuadratureOptions& q, const BezierCell& cell) {
+  return std::max(rule_points(q.points_u, cell.degree_u, 1), rule_points(q.points_v, cell.degree_v, 1)) + 1;
+}
+
+}  // namespace
+
+void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
+                       const PoissonProblem& problem, const DofLayout& layout,
+                       const QuadratureOptions& quadrature, Eigen::VectorXd& rhs) {
+  CellBasis cb;
+  Eigen::VectorXd h, Fe;
+  for (size_t id = 0; id < problem.boundary.size(); ++id) {
+    const BoundaryCondition& bc = problem.boundary[id];
+    if (bc.kind != BoundaryKind::kNeumann) continue;
+    std::optional<ExpressionEvaluator> value, ux, uy;
+    make_evaluators(problem, bc, value, ux, uy);
+    for (int c = 0; c < mesh.num_cells(); ++c)
+      for (int s = 0; s < 4; ++s) {
+        if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
+        evaluate_side_basis(mesh, geometry, c, static_cast<CellSide>(s), side_points(quadrature, mesh.cell(c)), cb);
+        boundary_data(problem, bc, cb, value, ux, uy, h);
+        Fe.noalias() = cb.C * (cb.value.transpose() * cb.measure.cwiseProduct(h));
+        const auto ids = mesh.functions(c);
+        for (size_t a = 0; a < ids.size(); ++a)
+          if (layout.dof[ids[a]] >= 0) rhs[layout.dof[ids[a]]] += Fe[a];
+      }
+  }
+}
+
+Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap& geometry,
+                                       const PoissonProblem& problem,
+                                       const QuadratureOptions& quadrature, std::vector<bool>& fixed) {
+  const int nf = mesh.num_functions();
+  fixed.assign(nf, false);
+  auto is_dirichlet = [&](int id) {
+    return id >= 0 && problem.boundary.at(id).kind == BoundaryKind::kDirichlet;
+  };
+  // Functions whose trace on a Dirichlet side is not identically zero.
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    const BezierCell& cell = mesh.cell(c);
+    for (int s = 0; s < 4; ++s) {
+      if (!is_dirichlet(cell.boundary[s])) continue;
+      const Eigen::MatrixXd& C = mesh.extraction(c);
+      const auto ids = mesh.functions(c);
+      const double scale = C.cwiseAbs().maxCoeff();
+      for (int b : side_bernstein_indices(cell.degree_u, cell.degree_v, static_cast<CellSide>(s)))
+        for (Eigen::Index a = 0; a < C.rows(); ++a)
+          if (std::abs(C(a, b)) > 1e-12 * scale) fixed[ids[a]] = true;
+    }
+  }
+  std::vector<int> local(nf, -1);
+  int nd = 0;
+  for (int f = 0; f < nf; ++f)
+    if (fixed[f]) local[f] = nd++;
+  Eigen::VectorXd result = Eigen::VectorXd::Zero(nf);
+  if (nd == 0) return result;
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(nd), g;
+  CellBasis cb;
+  for (size_t id = 0; id < problem.boundary.size(); ++id) {
+    const BoundaryCondition& bc = problem.boundary[id];
+    if (bc.kind != BoundaryKind::kDirichlet) continue;
+    std::optional<ExpressionEvaluator> value, ux, uy;
+    make_evaluators(problem, bc, value, ux, uy);
+    for (int c = 0; c < mesh.num_cells(); ++c)
+      for (int s = 0; s < 4; ++s) {
+        if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
+        evaluate_side_basis(mesh, geometry, c, static_cast<CellSide>(s), side_points(quadrature, mesh.cell(c)), cb);
+        boundary_data(problem, bc, cb, value, ux, uy, g);
+        const Eigen::MatrixXd phi = cb.value * cb.C.transpose();  // points x alive functions
+        const Eigen::MatrixXd Me = phi.transpose() * cb.measure.asDiagonal() * phi;
+        const Eigen::VectorXd re = phi.transpose() * cb.measure.cwiseProduct(g);
+        const auto ids = mesh.functions(c);
+        for (size_t a = 0; a < ids.size(); ++a) {
+          if (local[ids[a]] < 0) continue;
+          r[local[ids[a]]] += re[a];
+          for (size_t b = 0; b < ids.size(); ++b)
+            if (local[ids[b]] >= 0) triplets.emplace_back(local[ids[a]], local[ids[b]], Me(a, b));
+        }
+      }
+  }
+  Eigen::SparseMatrix<double> M(nd, nd);
+  M.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(M);
+  if (ldlt.info() != Eigen::Success) throw std::runtime_error("Dirichlet projection: boundary mass matrix is singular");
+  const Eigen::VectorXd x = ldlt.solve(r);
+  for (int f = 0; f < nf; ++f)
+    if (local[f] >= 0) result[f] = x[local[f]];
+  return result;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,111 @@
+#include "solver/cell_basis.hpp"
+
+#include <cmath>
+
+#include "quadrature/bernstein.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// From Bernstein values/derivatives in reference coordinates to rational values and
+// physical gradients; fills measure with weight * det J.
+void finish(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Eigen::MatrixXd& Bv,
+            const Eigen::VectorXd& rule_weight, bool rational, CellBasis& out) {
+  const Eigen::VectorXd& wb = out.bernstein_weights;
+  Eigen::MatrixXd Ru, Rv;
+  if (rational) {
+    const Eigen::VectorXd W = B * wb, Wu = Bu * wb, Wv = Bv * wb;
+    const Eigen::VectorXd invW = W.cwiseInverse();
+    out.value = invW.asDiagonal() * B * wb.asDiagonal();
+    Ru = invW.asDiagonal() * (Bu * wb.asDiagonal()) - (Wu.cwiseProduct(invW)).asDiagonal() * out.value;
+    Rv = invW.asDiagonal() * (Bv * wb.asDiagonal()) - (Wv.cwiseProduct(invW)).asDiagonal() * out.value;
+  } else {
+    out.value = B;
+    Ru = Bu;
+    Rv = Bv;
+  }
+  const auto& J = out.geometry.jacobian;
+  const Eigen::ArrayXd det = J.col(0).array() * J.col(3).array() - J.col(1).array() * J.col(2).array();
+  out.min_jacobian = det.minCoeff();
+  const Eigen::ArrayXd inv = det.inverse();
+  out.grad_x = (J.col(3).array() * inv).matrix().asDiagonal() * Ru -
+               (J.col(2).array() * inv).matrix().asDiagonal() * Rv;
+  out.grad_y = (J.col(0).array() * inv).matrix().asDiagonal() * Rv -
+               (J.col(1).array() * inv).matrix().asDiagonal() * Ru;
+  out.measure = (rule_weight.array() * det.abs()).matrix();
+}
+
+}  // namespace
+
+void evaluate_cell_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu,
+                         int nv, CellBasis& out) {
+  const BezierCell& c = mesh.cell(cell);
+  const BernsteinTable& t = bernstein_table(c.degree_u, c.degree_v, nu, nv);
+  rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
+  geometry.evaluate_at_rule(cell, nu, nv, out.geometry);
+  finish(t.value, t.d_u, t.d_v, t.weight, mesh.is_rational(), out);
+}
+
+void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell,
+                         CellSide side, int n, CellBasis& out) {
+  const BezierCell& c = mesh.cell(cell);
+  const int p = c.degree_u, q = c.degree_v, nb = (p + 1) * (q + 1);
+  const QuadratureRule1D rule = gauss_legendre(n);
+  Eigen::VectorXd u(n), v(n), w(n);
+  for (int k = 0; k < n; ++k) {
+    const double t = rule.nodes[k];
+    w[k] = rule.weights[k];
+    switch (side) {
+      case kSideBottom: u[k] = t; v[k] = 0; break;
+      case kSideRight: u[k] = 1; v[k] = t; break;
+      case kSideTop: u[k] = t; v[k] = 1; break;
+      case kSideLeft: u[k] = 0; v[k] = t; break;
+    }
+  }
+  Eigen::MatrixXd B(n, nb), Bu(n, nb), Bv(n, nb);
+  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
+  for (int k = 0; k < n; ++k) {
+    bernstein_values_and_derivatives(p, u[k], bu.data(), du.data());
+    bernstein_values_and_derivatives(q, v[k], bv.data(), dv.data());
+    for (int cc = 0; cc <= q; ++cc)
+      for (int a = 0; a <= p; ++a) {
+        B(k, a + (p + 1) * cc) = bu[a] * bv[cc];
+        Bu(k, a + (p + 1) * cc) = du[a] * bv[cc];
+        Bv(k, a + (p + 1) * cc) = bu[a] * dv[cc];
+      }
+  }
+  rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
+  geometry.evaluate(cell, u, v, out.geometry);
+  finish(B, Bu, Bv, w, mesh.is_rational(), out);
+  // Counter-clockwise tangent of the side; outward normal is it turned clockwise.
+  const auto& J = out.geometry.jacobian;
+  out.normal.resize(n, 2);
+  for (int k = 0; k < n; ++k) {
+    double tx, ty;
+    switch (side) {
+      case kSideBottom: tx = J(k, 0); ty = J(k, 2); break;
+      case kSideRight: tx = J(k, 1); ty = J(k, 3); break;
+      case kSideTop: tx = -J(k, 0); ty = -J(k, 2); break;
+      default: tx = -J(k, 1); ty = -J(k, 3); break;
+    }
+    const double len = std::hypot(tx, ty);
+    out.normal(k, 0) = ty / len;
+    out.normal(k, 1) = -tx / len;
+    out.measure[k] = w[k] * len;
+  }
+}
+
+std::vector<int> side_bernstein_indices(int p, int q, CellSide side) {
+  std::vector<int> idx;
+  if (side == kSideBottom || side == kSideTop) {
+    const int c = side == kSideBottom ? 0 : q;
+    for (int a = 0; a <= p; ++a) idx.push_back(a + (p + 1) * c);
+  } else {
+    const int a = side == kSideLeft ? 0 : p;
+    for (int c = 0; c <= q; ++c) idx.push_back(a + (p + 1) * c);
+  }
+  return idx;
+}
+
+}  // namespace knotwork

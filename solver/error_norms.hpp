@@ -1,0 +1,28 @@
+#pragma once
+#include <Eigen/Core>
+
+#include "basis/bezier_mesh.hpp"
+#include "solver/expression.hpp"
+#include "solver/geometry_map.hpp"
+#include "solver/poisson_problem.hpp"
+
+namespace knotwork {
+
+struct ErrorNorms {
+  double l2 = 0;        // ||u - u_h||_L2
+  double h1_semi = 0;   // |u - u_h|_H1
+  double h1 = 0;        // full H1 norm: sqrt(l2^2 + h1_semi^2)
+};
+
+// Errors of the discrete solution (one coefficient per function) against the exact
+// solution, by Gauss quadrature per cell (error_points, default degree+2 per direction).
+ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
+                       const Eigen::VectorXd& coefficients, const ExactSolution& exact,
+                       const QuadratureOptions& quadrature);
+
+// u_h and its physical gradient at reference points (u, v) of one cell: (value, dx, dy) rows.
+Eigen::MatrixX3d evaluate_solution(const BezierMesh& mesh, const GeometryMap& geometry,
+                                   const Eigen::VectorXd& coefficients, int cell,
+                                   const Eigen::VectorXd& u, const Eigen::VectorXd& v);
+
+}  // namespace knotwork

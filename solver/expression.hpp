@@ -1,0 +1,47 @@
+#pragma once
+#include <memory>
+#include <string>
+
+namespace knotwork {
+
+// A scalar function of x and y written by the user, e.g. "sin(pi*x)*exp(-y^2)".
+// Operators + - * / ^, functions sin cos tan asin acos atan atan2 sinh cosh tanh
+// exp log (natural) sqrt abs pow, constants pi and e.
+class Expression {
+ public:
+  Expression() = default;
+  // Checks the syntax; throws InputError("<where>: ... at position N") if it does not parse.
+  // `where` names the file and field, e.g. "square.toml: [problem] exact".
+  static Expression parse(const std::string& text, const std::string& where);
+  static Expression constant(double value);
+  const std::string& text() const { return text_; }
+  const std::string& where() const { return where_; }
+  bool empty() const { return text_.empty(); }
+
+ private:
+  std::string text_, where_;
+};
+
+// Evaluates one expression fast (compiled bytecode). Not thread-safe: make one per thread.
+class ExpressionEvaluator {
+ public:
+  explicit ExpressionEvaluator(const Expression& e);
+  ~ExpressionEvaluator();
+  ExpressionEvaluator(ExpressionEvaluator&&) noexcept;
+  double operator()(double x, double y);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// u and what the solver needs from it, derived symbolically (GiNaC) so that nobody
+// differentiates by hand: -(u_xx + u_yy) for the source, u_x and u_y for norms and fluxes.
+struct ExactSolution {
+  Expression u, u_x, u_y, minus_laplacian;
+};
+// Throws InputError if u cannot be differentiated (unknown function, non-smooth parts GiNaC
+// rejects). The derived expressions are checked against GiNaC's own evaluation.
+ExactSolution differentiate_exact_solution(const Expression& u);
+
+}  // namespace knotwork

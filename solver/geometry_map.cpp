@@ -1,0 +1,146 @@
+#include "solver/geometry_map.hpp"
+
+#include "basis/bezier_ops.hpp"
+#include "quadrature/bernstein.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// x = (w x, w y) / w and its reference derivatives by the quotient rule.
+void dehomogenize(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, const Eigen::MatrixX3d& hv,
+                  GeometryAtPoints& out) {
+  const Eigen::Index n = h.rows();
+  out.x.resize(n, 2);
+  out.jacobian.resize(n, 4);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double w = h(k, 2);
+    const double x = h(k, 0) / w, y = h(k, 1) / w;
+    out.x(k, 0) = x;
+    out.x(k, 1) = y;
+    out.jacobian(k, 0) = (hu(k, 0) - x * hu(k, 2)) / w;
+    out.jacobian(k, 1) = (hv(k, 0) - x * hv(k, 2)) / w;
+    out.jacobian(k, 2) = (hu(k, 1) - y * hu(k, 2)) / w;
+    out.jacobian(k, 3) = (hv(k, 1) - y * hv(k, 2)) / w;
+  }
+}
+
+void bernstein_at_points(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                         Eigen::MatrixXd& B, Eigen::MatrixXd& Bu, Eigen::MatrixXd& Bv) {
+  const Eigen::Index n = u.size();
+  const int nb = (p + 1) * (q + 1);
+  B.resize(n, nb);
+  Bu.resize(n, nb);
+  Bv.resize(n, nb);
+  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    bernstein_values_and_derivatives(p, u[k], bu.data(), du.data());
+    bernstein_values_and_derivatives(q, v[k], bv.data(), dv.data());
+    for (int c = 0; c <= q; ++c)
+      for (int a = 0; a <= p; ++a) {
+        B(k, a + (p + 1) * c) = bu[a] * bv[c];
+        Bu(k, a + (p + 1) * c) = du[a] * bv[c];
+        Bv(k, a + (p + 1) * c) = bu[a] * dv[c];
+      }
+  }
+}
+
+}  // namespace
+
+NurbsGeometryMap::NurbsGeometryMap(const TensorDiscretization& d)
+    : pu_(d.geometry_u.degree()),
+      pv_(d.geometry_v.degree()),
+      nu_(d.geometry_u.num_functions()),
+      elements_u_(d.elements_u),
+      spans_u_(d.geometry_u.element_spans()),
+      spans_v_(d.geometry_v.element_spans()),
+      cu_(bezier_extraction(d.geometry_u)),
+      cv_(bezier_extraction(d.geometry_v)),
+      net_(d.geometry_homogeneous) {}
+
+void NurbsGeometryMap::homogeneous_bezier(int cell, Eigen::MatrixX3d& out) const {
+  const int iu = cell % elements_u_, iv = cell / elements_u_;
+  const int su = spans_u_[iu] - pu_, sv = spans_v_[iv] - pv_;
+  out.resize((pu_ + 1) * (pv_ + 1), 3);
+  Eigen::MatrixXd local(pu_ + 1, pv_ + 1);
+  for (int k = 0; k < 3; ++k) {
+    for (int av = 0; av <= pv_; ++av)
+      for (int au = 0; au <= pu_; ++au) local(au, av) = net_((su + au) + nu_ * (sv + av), k);
+    const Eigen::MatrixXd bez = cu_[iu].transpose() * local * cv_[iv];
+    out.col(k) = Eigen::Map<const Eigen::VectorXd>(bez.data(), bez.size());
+  }
+}
+
+void NurbsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
+  const BernsteinTable& t = bernstein_table(pu_, pv_, nu, nv);
+  Eigen::MatrixX3d bez;
+  homogeneous_bezier(cell, bez);
+  dehomogenize(t.value * bez, t.d_u * bez, t.d_v * bez, out);
+}
+
+void NurbsGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                GeometryAtPoints& out) const {
+  Eigen::MatrixXd B, Bu, Bv;
+  bernstein_at_points(pu_, pv_, u, v, B, Bu, Bv);
+  Eigen::MatrixX3d bez;
+  homogeneous_bezier(cell, bez);
+  dehomogenize(B * bez, Bu * bez, Bv * bez, out);
+}
+
+BezierGeometryCell NurbsGeometryMap::bezier_cell(int cell) const {
+  Eigen::MatrixX3d bez;
+  homogeneous_bezier(cell, bez);
+  BezierGeometryCell g;
+  g.degree_u = pu_;
+  g.degree_v = pv_;
+  g.weights = bez.col(2);
+  g.points = bez.leftCols<2>().array().colwise() / bez.col(2).array();
+  return g;
+}
+
+AnalyticGeometryMap::AnalyticGeometryMap(const BezierMesh& mesh, Function map)
+    : mesh_(mesh), map_(std::move(map)) {}
+
+void AnalyticGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                   GeometryAtPoints& out) const {
+  const BezierCell& c = mesh_.cell(cell);
+  const double hu = c.u1 - c.u0, hv = c.v1 - c.v0;
+  out.x.resize(u.size(), 2);
+  out.jacobian.resize(u.size(), 4);
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    double x[2], J[4];
+    map_(c.u0 + hu * u[k], c.v0 + hv * v[k], x, J);
+    out.x(k, 0) = x[0];
+    out.x(k, 1) = x[1];
+    out.jacobian(k, 0) = J[0] * hu;
+    out.jacobian(k, 1) = J[1] * hv;
+    out.jacobian(k, 2) = J[2] * hu;
+    out.jacobian(k, 3) = J[3] * hv;
+  }
+}
+
+void AnalyticGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
+  const BernsteinTable& t = bernstein_table(1, 1, nu, nv);
+  evaluate(cell, t.point_u, t.point_v, out);
+}
+
+BezierGeometryCell AnalyticGeometryMap::bezier_cell(int cell) const {
+  const BezierCell& c = mesh_.cell(cell);
+  BezierGeometryCell g;
+  g.degree_u = c.degree_u;
+  g.degree_v = c.degree_v;
+  const int n = (c.degree_u + 1) * (c.degree_v + 1);
+  Eigen::VectorXd u(n), v(n);
+  for (int j = 0; j <= c.degree_v; ++j)
+    for (int i = 0; i <= c.degree_u; ++i) {
+      u[i + (c.degree_u + 1) * j] = double(i) / c.degree_u;
+      v[i + (c.degree_u + 1) * j] = double(j) / c.degree_v;
+    }
+  GeometryAtPoints at;
+  evaluate(cell, u, v, at);
+  g.points = bernstein_interpolation_inverse(c.degree_u, c.degree_v) * at.x;
+  g.weights.setOnes(n);
+  return g;
+}
+
+}  // namespace knotwork

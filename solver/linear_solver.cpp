@@ -1,0 +1,79 @@
+#include "solver/linear_solver.hpp"
+
+#include <Eigen/CholmodSupport>
+#include <chrono>
+#include <vector>
+
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+Ordering parse_ordering(const std::string& name) {
+  if (name == "amd") return Ordering::kAmd;
+  if (name == "metis") return Ordering::kMetis;
+  if (name == "nesdis") return Ordering::kNesdis;
+  throw InputError("ordering: unknown value '" + name + "' (expected amd, metis or nesdis)");
+}
+
+std::string to_string(Ordering o) {
+  switch (o) {
+    case Ordering::kAmd: return "amd";
+    case Ordering::kMetis: return "metis";
+    default: return "nesdis";
+  }
+}
+
+struct SparseCholesky::Impl {
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+  std::vector<int> outer, inner;  // pattern of the last analysis
+};
+
+SparseCholesky::SparseCholesky(Ordering ordering) : impl_(std::make_unique<Impl>()) {
+  cholmod_common& cm = impl_->llt.cholmod();
+  cm.nmethods = 1;  // one ordering, chosen by measurement (docs/PERFORMANCE.md), not CHOLMOD's try-several default
+  cm.method[0].ordering = ordering == Ordering::kAmd     ? CHOLMOD_AMD
+                          : ordering == Ordering::kMetis ? CHOLMOD_METIS
+                                                         : CHOLMOD_NESDIS;
+  cm.postorder = 1;
+}
+
+SparseCholesky::~SparseCholesky() = default;
+
+void SparseCholesky::factorize(const Eigen::SparseMatrix<double>& A) {
+  using clock = std::chrono::steady_clock;
+  const int n = static_cast<int>(A.outerSize());
+  const bool same = impl_->outer.size() == static_cast<size_t>(n + 1) &&
+                    std::equal(impl_->outer.begin(), impl_->outer.end(), A.outerIndexPtr()) &&
+                    impl_->inner.size() == static_cast<size_t>(A.nonZeros()) &&
+                    std::equal(impl_->inner.begin(), impl_->inner.end(), A.innerIndexPtr());
+  if (!same) {
+    const auto t0 = clock::now();
+    impl_->llt.analyzePattern(A);
+    stats_.analyze_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+    stats_.analyses += 1;
+    impl_->outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + n + 1);
+    impl_->inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+  } else {
+    stats_.analyze_seconds = 0;
+  }
+  const auto t1 = clock::now();
+  impl_->llt.factorize(A);
+  stats_.factorize_seconds = std::chrono::duration<double>(clock::now() - t1).count();
+  if (impl_->llt.info() != Eigen::Success)
+    throw std::runtime_error(
+        "the stiffness matrix is not positive definite: CHOLMOD could not factor it "
+        "(a problem without Dirichlet conditions has no unique solution)");
+  const cholmod_common& cm = impl_->llt.cholmod();
+  stats_.factor_nonzeros = cm.lnz;
+  stats_.flops = cm.fl;
+  stats_.peak_bytes = static_cast<double>(cm.memory_usage);
+}
+
+Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Eigen::VectorXd x = impl_->llt.solve(b);
+  stats_.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return x;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,40 @@
+#pragma once
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <string>
+
+namespace knotwork {
+
+// Fill-reducing ordering for the Cholesky factorization (CHOLMOD's names).
+enum class Ordering { kAmd, kMetis, kNesdis };
+Ordering parse_ordering(const std::string& name);  // "amd" | "metis" | "nesdis"; throws InputError
+std::string to_string(Ordering o);
+
+struct CholeskyStats {
+  double analyze_seconds = 0, factorize_seconds = 0, solve_seconds = 0;
+  double factor_nonzeros = 0;  // nonzeros of L
+  double flops = 0;            // of the numeric factorization
+  double peak_bytes = 0;       // CHOLMOD's own peak memory
+  int analyses = 0;            // symbolic analyses performed so far
+};
+
+// SPD solve with SuiteSparse CHOLMOD's supernodal Cholesky, through Eigen's CholmodSupport.
+// The matrix is given by its lower triangle. The symbolic analysis (ordering, elimination
+// tree, supernodes) is kept and reused while the sparsity pattern stays the same.
+class SparseCholesky {
+ public:
+  explicit SparseCholesky(Ordering ordering = Ordering::kMetis);
+  ~SparseCholesky();
+  // Throws std::runtime_error if the matrix is not positive definite.
+  void factorize(const Eigen::SparseMatrix<double>& lower);
+  Eigen::VectorXd solve(const Eigen::VectorXd& b);
+  const CholeskyStats& stats() const { return stats_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  CholeskyStats stats_;
+};
+
+}  // namespace knotwork

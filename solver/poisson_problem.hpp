@@ -1,0 +1,32 @@
+#pragma once
+#include <optional>
+#include <vector>
+
+#include "solver/expression.hpp"
+
+namespace knotwork {
+
+enum class BoundaryKind { kDirichlet, kNeumann };
+
+// One condition per boundary id of the BezierMesh (for a single patch: bottom, right,
+// top, left). With from_exact the data come from the exact solution: u itself for
+// Dirichlet, its normal derivative grad(u).n for Neumann.
+struct BoundaryCondition {
+  BoundaryKind kind = BoundaryKind::kDirichlet;
+  bool from_exact = true;
+  Expression value;  // g (Dirichlet) or h = du/dn (Neumann) when not from_exact
+};
+
+// -Laplace(u) = f in the domain, with the boundary conditions above.
+struct PoissonProblem {
+  Expression source;
+  std::optional<ExactSolution> exact;
+  std::vector<BoundaryCondition> boundary;
+};
+
+struct QuadratureOptions {
+  int points_u = 0, points_v = 0;              // matrix and load; 0 means degree+1
+  int error_points_u = 0, error_points_v = 0;  // error norms; 0 means degree+2
+};
+
+}  // namespace knotwork

@@ -1,0 +1,216 @@
+#include "solver/vtk_output.hpp"
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkDoubleArray.h>
+#include <vtkHigherOrderQuadrilateral.h>
+#include <vtkIdTypeArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include <Eigen/LU>
+#include <fstream>
+#include <stdexcept>
+
+#include "basis/bezier_ops.hpp"
+#include "solver/error_norms.hpp"
+
+namespace knotwork {
+
+namespace {
+
+vtkSmartPointer<vtkDoubleArray> scalar_array(const char* name, vtkIdType n, int components = 1) {
+  auto a = vtkSmartPointer<vtkDoubleArray>::New();
+  a->SetName(name);
+  a->SetNumberOfComponents(components);
+  a->SetNumberOfTuples(n);
+  return a;
+}
+
+void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(grid);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  if (writer->Write() != 1) throw std::runtime_error(path + ": VTK could not write the file");
+}
+
+// Values at the equispaced nodes of each cell: solution (and exact) in the geometry's points.
+struct NodeValues {
+  Eigen::VectorXd u, exact;
+};
+
+NodeValues node_values(const BezierMesh& mesh, const GeometryMap& geometry, const Eigen::VectorXd& coeffs,
+                       const ExactSolution* exact, int cell, const Eigen::VectorXd& u,
+                       const Eigen::VectorXd& v, const Eigen::MatrixX2d& x, ExpressionEvaluator* ev) {
+  NodeValues r;
+  r.u = evaluate_solution(mesh, geometry, coeffs, cell, u, v).col(0);
+  if (exact) {
+    r.exact.resize(u.size());
+    for (Eigen::Index k = 0; k < u.size(); ++k) r.exact[k] = (*ev)(x(k, 0), x(k, 1));
+  }
+  return r;
+}
+
+}  // namespace
+
+void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
+                      const Eigen::VectorXd& coeffs, const ExactSolution* exact) {
+  vtkNew<vtkUnstructuredGrid> grid;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  const int nc = mesh.num_cells();
+  std::vector<BezierGeometryCell> cells(nc);
+  vtkIdType total = 0;
+  for (int c = 0; c < nc; ++c) {
+    cells[c] = geometry.bezier_cell(c);
+    total += cells[c].points.rows();
+  }
+  points->SetNumberOfPoints(total);
+  auto weights = scalar_array("RationalWeights", total);
+  auto degrees = scalar_array("HigherOrderDegrees", nc, 3);
+  auto solution = scalar_array("solution", total);
+  vtkSmartPointer<vtkDoubleArray> exact_a, error_a;
+  if (exact) {
+    exact_a = scalar_array("exact", total);
+    error_a = scalar_array("error", total);
+  }
+  std::optional<ExpressionEvaluator> ev;
+  if (exact) ev.emplace(exact->u);
+  grid->Allocate(nc);
+  vtkIdType offset = 0;
+  std::vector<vtkIdType> ids;
+  int last_p = -1, last_q = -1;
+  Eigen::MatrixXd inverse, collocation;
+  Eigen::VectorXd nu, nv;
+  for (int c = 0; c < nc; ++c) {
+    const BezierGeometryCell& g = cells[c];
+    const int p = g.degree_u, q = g.degree_v, nb = (p + 1) * (q + 1);
+    if (p != last_p || q != last_q) {
+      inverse = bernstein_interpolation_inverse(p, q);
+      collocation = inverse.inverse();
+      nu.resize(nb);
+      nv.resize(nb);
+      for (int j = 0; j <= q; ++j)
+        for (int i = 0; i <= p; ++i) {
+          nu[i + (p + 1) * j] = double(i) / p;
+          nv[i + (p + 1) * j] = double(j) / q;
+        }
+      last_p = p;
+      last_q = q;
+    }
+    // Field coefficients f with sum w_b B_b f_b / W = value at every node.
+    GeometryAtPoints at;
+    geometry.evaluate(c, nu, nv, at);
+    const NodeValues val = node_values(mesh, geometry, coeffs, exact, c, nu, nv, at.x, ev ? &*ev : nullptr);
+    const Eigen::VectorXd W = collocation * g.weights;
+    auto to_bezier = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
+      return (inverse * W.cwiseProduct(v)).cwiseQuotient(g.weights);
+    };
+    const Eigen::VectorXd fu = to_bezier(val.u);
+    Eigen::VectorXd fe;
+    if (exact) fe = to_bezier(val.exact);
+    const int order[2] = {p, q};
+    ids.assign(nb, 0);
+    for (int j = 0; j <= q; ++j)
+      for (int i = 0; i <= p; ++i) {
+        const int b = i + (p + 1) * j;
+        const vtkIdType id = offset + vtkHigherOrderQuadrilateral::PointIndexFromIJK(i, j, order);
+        ids[vtkHigherOrderQuadrilateral::PointIndexFromIJK(i, j, order)] = id;
+        points->SetPoint(id, g.points(b, 0), g.points(b, 1), 0.0);
+        weights->SetValue(id, g.weights[b]);
+        solution->SetValue(id, fu[b]);
+        if (exact) {
+          exact_a->SetValue(id, fe[b]);
+          error_a->SetValue(id, fu[b] - fe[b]);
+        }
+      }
+    grid->InsertNextCell(VTK_BEZIER_QUADRILATERAL, nb, ids.data());
+    const double deg[3] = {double(p), double(q), 1.0};
+    degrees->SetTuple(c, deg);
+    offset += nb;
+  }
+  grid->SetPoints(points);
+  grid->GetPointData()->SetRationalWeights(weights);
+  grid->GetCellData()->SetHigherOrderDegrees(degrees);
+  grid->GetPointData()->SetScalars(solution);
+  if (exact) {
+    grid->GetPointData()->AddArray(exact_a);
+    grid->GetPointData()->AddArray(error_a);
+  }
+  write_grid(path, grid);
+}
+
+void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
+                       const Eigen::VectorXd& coeffs, const ExactSolution* exact, int samples) {
+  const int s = samples, nc = mesh.num_cells(), per_cell = (s + 1) * (s + 1);
+  const vtkIdType total = static_cast<vtkIdType>(nc) * per_cell;
+  vtkNew<vtkUnstructuredGrid> grid;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(total);
+  auto solution = scalar_array("solution", total);
+  auto gradient = scalar_array("solution_gradient", total, 3);
+  vtkSmartPointer<vtkDoubleArray> exact_a, error_a;
+  if (exact) {
+    exact_a = scalar_array("exact", total);
+    error_a = scalar_array("error", total);
+  }
+  std::optional<ExpressionEvaluator> ev;
+  if (exact) ev.emplace(exact->u);
+  Eigen::VectorXd u(per_cell), v(per_cell);
+  for (int j = 0; j <= s; ++j)
+    for (int i = 0; i <= s; ++i) {
+      u[i + (s + 1) * j] = double(i) / s;
+      v[i + (s + 1) * j] = double(j) / s;
+    }
+  grid->Allocate(static_cast<vtkIdType>(nc) * s * s);
+  for (int c = 0; c < nc; ++c) {
+    GeometryAtPoints at;
+    geometry.evaluate(c, u, v, at);
+    const Eigen::MatrixX3d uh = evaluate_solution(mesh, geometry, coeffs, c, u, v);
+    const vtkIdType base = static_cast<vtkIdType>(c) * per_cell;
+    for (int k = 0; k < per_cell; ++k) {
+      points->SetPoint(base + k, at.x(k, 0), at.x(k, 1), 0.0);
+      solution->SetValue(base + k, uh(k, 0));
+      const double grad[3] = {uh(k, 1), uh(k, 2), 0.0};
+      gradient->SetTuple(base + k, grad);
+      if (exact) {
+        const double e = (*ev)(at.x(k, 0), at.x(k, 1));
+        exact_a->SetValue(base + k, e);
+        error_a->SetValue(base + k, uh(k, 0) - e);
+      }
+    }
+    for (int j = 0; j < s; ++j)
+      for (int i = 0; i < s; ++i) {
+        const vtkIdType q[4] = {base + i + (s + 1) * j, base + i + 1 + (s + 1) * j,
+                                base + i + 1 + (s + 1) * (j + 1), base + i + (s + 1) * (j + 1)};
+        grid->InsertNextCell(VTK_QUAD, 4, q);
+      }
+  }
+  grid->SetPoints(points);
+  grid->GetPointData()->SetScalars(solution);
+  grid->GetPointData()->AddArray(gradient);
+  if (exact) {
+    grid->GetPointData()->AddArray(exact_a);
+    grid->GetPointData()->AddArray(error_a);
+  }
+  write_grid(path, grid);
+}
+
+void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries) {
+  std::ofstream out(path);
+  out << "<?xml version=\"1.0\"?>\n"
+         "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+  for (const auto& [time, file] : entries)
+    out << "    <DataSet timestep=\"" << time << "\" group=\"\" part=\"0\" file=\"" << file << "\"/>\n";
+  out << "  </Collection>\n</VTKFile>\n";
+  if (!out) throw std::runtime_error(path + ": could not write the collection file");
+}
+
+}  // namespace knotwork
