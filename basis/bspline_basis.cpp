@@ -1,6 +1,7 @@
 #include "basis/bspline_basis.hpp"
 
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -248,55 +249,60 @@ BSplineBasis1D elevate_degree(const BSplineBasis1D& basis, Eigen::MatrixXd& coef
   return fine;
 }
 
+namespace {
+
+// Degree elevation matrix (elevated.num_functions() x coarse.num_functions()): the Bezier
+// coefficients of every coarse function, elevated exactly, then fitted by least squares
+// with the elevated basis' Bezier coefficients over ALL elements at once. The fit is exact
+// (the functions lie in the elevated space), and unlike inverting one element's extraction
+// it stays well conditioned on strongly graded knot vectors (B-splines are uniformly well
+// conditioned, whatever the knot spacing).
+Eigen::MatrixXd elevation_matrix(const BSplineBasis1D& coarse, const BSplineBasis1D& elevated) {
+  const int pc = coarse.degree(), pf = elevated.degree();
+  const auto Cc = bezier_extraction(coarse);
+  const auto Cf = bezier_extraction(elevated);
+  const auto sc = coarse.element_spans(), sf = elevated.element_spans();
+  const Eigen::MatrixXd E = degree_elevation_matrix(pc, pf - pc);
+  const Eigen::Index rows = static_cast<Eigen::Index>(sc.size()) * (pf + 1);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, elevated.num_functions());
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(rows, coarse.num_functions());
+  for (size_t e = 0; e < sc.size(); ++e) {
+    const Eigen::Index r0 = static_cast<Eigen::Index>(e) * (pf + 1);
+    A.block(r0, sf[e] - pf, pf + 1, pf + 1) = Cf[e].transpose();
+    B.block(r0, sc[e] - pc, pf + 1, pc + 1) = E * Cc[e].transpose();
+  }
+  return A.colPivHouseholderQr().solve(B);
+}
+
+}  // namespace
+
 Eigen::SparseMatrix<double> refinement_matrix(const BSplineBasis1D& coarse,
                                               const BSplineBasis1D& fine) {
   const int pc = coarse.degree(), pf = fine.degree();
   if (pf < pc) throw std::invalid_argument("refinement_matrix: fine degree below coarse degree");
   if (coarse.domain_begin() != fine.domain_begin() || coarse.domain_end() != fine.domain_end())
     throw std::invalid_argument("refinement_matrix: the two bases have different domains");
-  {  // nestedness: each coarse breakpoint with multiplicity m needs m + (pf - pc) in fine
-    const auto bc = coarse.breakpoints();
-    const auto mc = coarse.multiplicities();
-    const auto& Uf = fine.knots();
-    for (size_t i = 1; i + 1 < bc.size(); ++i) {
-      const int mf = static_cast<int>(std::count(Uf.begin(), Uf.end(), bc[i]));
-      if (mf < mc[i] + (pf - pc))
-        throw std::invalid_argument("refinement_matrix: the fine space does not contain the "
-                                    "coarse one at knot " + num(bc[i]));
-    }
-  }
-  const auto Cc = bezier_extraction(coarse);
-  const auto Cf = bezier_extraction(fine);
-  const auto spans_c = coarse.element_spans();
-  const auto spans_f = fine.element_spans();
-  const auto& Uc = coarse.knots();
+  // 1. Elevate on the coarse mesh; 2. insert the missing knots by Boehm's algorithm.
+  const BSplineBasis1D mid = elevated_basis(coarse, pf - pc);
+  Eigen::MatrixXd T = pf > pc ? elevation_matrix(coarse, mid)
+                              : Eigen::MatrixXd::Identity(coarse.num_functions(), coarse.num_functions());
+  std::vector<double> L = mid.knots();
   const auto& Uf = fine.knots();
-  const Eigen::MatrixXd E = degree_elevation_matrix(pc, pf - pc);
-  std::vector<bool> row_done(fine.num_functions(), false);
-  std::vector<Eigen::Triplet<double>> triplets;
-  int ec = 0;
-  for (size_t ef = 0; ef < spans_f.size(); ++ef) {
-    const int kf = spans_f[ef];
-    const double a = Uf[kf], b = Uf[kf + 1], mid = 0.5 * (a + b);
-    while (Uc[spans_c[ec] + 1] <= mid) ++ec;
-    const int kc = spans_c[ec];
-    const double ca = Uc[kc], cb = Uc[kc + 1];
-    const Eigen::MatrixXd S = subdivision_matrix(pc, (a - ca) / (cb - ca), (b - ca) / (cb - ca));
-    // coarse active coeffs -> Bernstein on the coarse element -> on [a,b] -> degree pf
-    // -> fine active coeffs (inverse of the fine extraction, transposed).
-    const Eigen::MatrixXd bern = E * S * Cc[ec].transpose();
-    const Eigen::MatrixXd M = Cf[ef].transpose().partialPivLu().solve(bern);
-    for (int i = 0; i <= pf; ++i) {
-      const int row = kf - pf + i;
-      if (row_done[row]) continue;
-      row_done[row] = true;
-      for (int j = 0; j <= pc; ++j)
-        if (M(i, j) != 0.0) triplets.emplace_back(row, kc - pc + j, M(i, j));
-    }
+  for (double k : L)
+    if (std::count(Uf.begin(), Uf.end(), k) < std::count(L.begin(), L.end(), k))
+      throw std::invalid_argument("refinement_matrix: the fine space does not contain the coarse one at knot " +
+                                  num(k));
+  for (size_t i = 0; i < Uf.size();) {
+    size_t j = i;
+    while (j < Uf.size() && Uf[j] == Uf[i]) ++j;
+    const long have = std::count(L.begin(), L.end(), Uf[i]);
+    if (have > static_cast<long>(j - i))
+      throw std::invalid_argument("refinement_matrix: the fine space does not contain the coarse one at knot " +
+                                  num(Uf[i]));
+    for (long k = have; k < static_cast<long>(j - i); ++k) boehm(L, T, pf, Uf[i]);
+    i = j;
   }
-  Eigen::SparseMatrix<double> T(fine.num_functions(), coarse.num_functions());
-  T.setFromTriplets(triplets.begin(), triplets.end());
-  return T;
+  return T.sparseView(0.0, 0.0);
 }
 
 }  // namespace knotwork

@@ -60,6 +60,8 @@ Expression Expression::parse(const std::string& text, const std::string& where) 
   } catch (mu::Parser::exception_type& e) {
     std::string msg = e.GetMsg();
     while (!msg.empty() && (msg.back() == '.' || msg.back() == ' ')) msg.pop_back();
+    if (msg.find("position") == std::string::npos && e.GetPos() >= 0)
+      msg += " at position " + std::to_string(e.GetPos());
     throw InputError(where + ": cannot parse \"" + text + "\": " + msg +
                      " (variables are x and y; constants pi and e)");
   }

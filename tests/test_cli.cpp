@@ -1,0 +1,196 @@
+// Runs the real `knotwork` binary: good runs produce what they promise, bad input gets
+// one line on stderr naming the file and the field, a non-zero exit code and no files.
+#include <catch2/catch.hpp>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class Sandbox {
+ public:
+  Sandbox() {
+    char tmpl[] = "/tmp/knotwork-test-cli-XXXXXX";
+    dir_ = mkdtemp(tmpl);
+  }
+  ~Sandbox() { fs::remove_all(dir_); }
+  fs::path file(const std::string& name, const std::string& text) const {
+    std::ofstream(dir_ / name) << text;
+    return dir_ / name;
+  }
+  Result run(const std::string& args) const {
+    const std::string cmd = "cd " + dir_.string() + " && " + KNOTWORK_BINARY + " " + args + " > stdout.txt 2> stderr.txt";
+    const int status = std::system(cmd.c_str());
+    return {WEXITSTATUS(status), slurp(dir_ / "stdout.txt"), slurp(dir_ / "stderr.txt")};
+  }
+  const fs::path& dir() const { return dir_; }
+
+ private:
+  fs::path dir_;
+};
+
+const std::string kGood = R"TOML(
+[geometry]
+type = "rectangle"
+[space]
+degree = 2
+elements = 4
+[problem]
+exact = "sin(pi*x)*sin(pi*y)"
+)TOML";
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  REQUIRE(at != std::string::npos);
+  return s.replace(at, from.size(), to);
+}
+
+const std::string kNurbs = R"TOML(
+[geometry]
+type = "nurbs"
+degrees = [1, 1]
+knots_u = [0, 0, 1, 1]
+knots_v = [0, 0, 1, 1]
+control_points = [[0, 0], [1, 0], [0, 1], [1, 1]]
+weights = [1, 1, 1, 1]
+[space]
+degree = 2
+elements = 2
+[problem]
+exact = "x*y"
+)TOML";
+
+void expect_rejected(const Sandbox& box, const std::string& case_text, const std::vector<std::string>& mentions,
+                     const std::string& extra_args = "") {
+  const fs::path f = box.file("bad.toml", case_text);
+  const fs::path out = box.dir() / "out";
+  const Result r = box.run("run -q bad.toml --out " + out.string() + " " + extra_args);
+  INFO("stderr: " << r.err);
+  REQUIRE(r.code != 0);
+  REQUIRE(r.code < 128);  // an error exit, not a signal
+  REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  for (const auto& m : mentions) REQUIRE(r.err.find(m) != std::string::npos);
+  REQUIRE(!fs::exists(out));
+}
+
+}  // namespace
+
+TEST_CASE("run --json reports errors, timings and the files it wrote", "[cli]") {
+  Sandbox box;
+  box.file("good.toml", kGood);
+  const Result r = box.run("run good.toml --json -q --out res");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* key : {"\"dofs\"", "\"cells\"", "\"l2_error\"", "\"h1_seminorm_error\"", "\"h1_error\"",
+                          "\"timings\"", "\"assembly\"", "\"factorization\"", "\"outputs\""})
+    REQUIRE(r.out.find(key) != std::string::npos);
+  REQUIRE(r.out.find("\"dofs\": 36") != std::string::npos);  // (4 + 2)^2
+  REQUIRE(fs::exists(box.dir() / "res/solution.vtu"));
+  REQUIRE(fs::exists(box.dir() / "res/solution_sampled.vtu"));
+  REQUIRE(r.err.empty());  // --quiet
+  // Nothing is left of the staging folder.
+  for (const auto& e : fs::directory_iterator(box.dir() / "res"))
+    REQUIRE(e.path().filename().string().rfind(".knotwork", 0) != 0);
+}
+
+TEST_CASE("converge writes table, JSON, plot and collection", "[cli]") {
+  Sandbox box;
+  box.file("good.toml", kGood);
+  const Result r = box.run("converge good.toml --levels 3 --out conv --json -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* f : {"convergence.csv", "convergence.json", "convergence.svg", "convergence.pvd", "level_2.vtu"})
+    REQUIRE(fs::exists(box.dir() / "conv" / f));
+  REQUIRE(r.out.find("\"l2_rate\"") != std::string::npos);
+  REQUIRE(r.out.find("\"h1_rate\"") != std::string::npos);
+  const std::string csv = slurp(box.dir() / "conv/convergence.csv");
+  REQUIRE(std::count(csv.begin(), csv.end(), '\n') == 4);
+}
+
+TEST_CASE("every subcommand has --help", "[cli]") {
+  Sandbox box;
+  for (const char* c : {"--help", "run --help", "converge --help", "bench --help"}) {
+    const Result r = box.run(c);
+    REQUIRE(r.code == 0);
+    REQUIRE(r.out.find("Usage") != std::string::npos);
+  }
+  REQUIRE(box.run("").code != 0);
+  REQUIRE(box.run("frobnicate").code != 0);
+}
+
+TEST_CASE("bad input: files and TOML", "[cli][bad-input]") {
+  Sandbox box;
+  {
+    const Result r = box.run("run -q missing.toml --out o");
+    REQUIRE(r.code != 0);
+    REQUIRE(r.err.find("missing.toml") != std::string::npos);
+    REQUIRE(r.err.find("no such file") != std::string::npos);
+    REQUIRE(!fs::exists(box.dir() / "o"));
+  }
+  expect_rejected(box, "[geometry]\ntype = \"rectangle\"\n[space\ndegree = 2\n", {"bad.toml:3:", "TOML syntax error"});
+  expect_rejected(box, replace(kGood, "degree = 2", "degre = 2"), {"bad.toml", "[space] degre", "did you mean 'degree'"});
+  expect_rejected(box, replace(kGood, "degree = 2\n", ""), {"bad.toml", "[space] degree", "missing"});
+}
+
+TEST_CASE("bad input: degrees, elements, numbers", "[cli][bad-input]") {
+  Sandbox box;
+  expect_rejected(box, replace(kGood, "degree = 2", "degree = 0"), {"bad.toml", "[space] degree", "[1, 10]"});
+  expect_rejected(box, replace(kGood, "degree = 2", "degree = 11"), {"bad.toml", "[space] degree"});
+  expect_rejected(box, replace(kGood, "elements = 4", "elements = 0"), {"bad.toml", "[space] elements", ">= 1"});
+  expect_rejected(box, replace(kGood, "type = \"rectangle\"", "type = \"rectangle\"\ncorners = [[0, 0], [nan, 1]]"),
+                  {"bad.toml", "[geometry] corners", "finite"});
+  expect_rejected(box, kGood, {"--degree", "[1, 10]"}, "--degree 12");
+  expect_rejected(box, kGood, {"--elements"}, "--elements -3");
+}
+
+TEST_CASE("bad input: NURBS data", "[cli][bad-input]") {
+  Sandbox box;
+  expect_rejected(box, replace(kNurbs, "knots_u = [0, 0, 1, 1]", "knots_u = [0, 0, 0.7, 0.5, 1, 1]"),
+                  {"bad.toml", "knots_u", "not non-decreasing"});
+  expect_rejected(box, replace(kNurbs, "knots_u = [0, 0, 1, 1]", "knots_u = [0, 0, 0.5, 0.5, 0.5, 1, 1]"),
+                  {"bad.toml", "knots_u", "multiplicity 3"});
+  expect_rejected(box, replace(kNurbs, "[0, 1], [1, 1]]", "[0, 1]]"), {"bad.toml", "control_points", "need 2 x 2"});
+  expect_rejected(box, replace(kNurbs, "weights = [1, 1, 1, 1]", "weights = [1, 1, 0, 1]"),
+                  {"bad.toml", "weights", "positive"});
+  expect_rejected(box, replace(kNurbs, "weights = [1, 1, 1, 1]", "weights = [1, inf, 1, 1]"),
+                  {"bad.toml", "weights", "finite"});
+  // Control points swapped: the map is oriented clockwise.
+  expect_rejected(box, replace(kNurbs, "[[0, 0], [1, 0], [0, 1], [1, 1]]", "[[0, 0], [0, 1], [1, 0], [1, 1]]"),
+                  {"bad.toml", "[geometry]", "non-positive Jacobian", "cell 0"});
+}
+
+TEST_CASE("bad input: expressions and output directory", "[cli][bad-input]") {
+  Sandbox box;
+  expect_rejected(box, replace(kGood, "sin(pi*x)*sin(pi*y)", "sin(pi*x)*sin(pi*y"),
+                  {"bad.toml", "[problem] exact", "position"});
+  expect_rejected(box, replace(kGood, "exact = \"sin(pi*x)*sin(pi*y)\"", "source = \"1\"\ndirichlet = \"x + q\""),
+                  {"bad.toml", "[problem] dirichlet", "position"});
+  expect_rejected(box, replace(kGood, "exact = \"sin(pi*x)*sin(pi*y)\"", "source = \"log(x - 2)\"\ndirichlet = \"0\""),
+                  {"bad.toml", "[problem] source", "not a finite number"});
+  expect_rejected(box, replace(kGood, "[problem]", "[problem]\nneumann = [\"left\", \"right\", \"top\", \"bottom\"]"),
+                  {"bad.toml", "[problem] neumann", "Dirichlet"});
+  // An output "directory" that is a regular file cannot be written, even by root.
+  box.file("good.toml", kGood);
+  box.file("occupied", "not a directory");
+  const Result r = box.run("run -q good.toml --out occupied");
+  REQUIRE(r.code != 0);
+  REQUIRE(r.err.find("occupied") != std::string::npos);
+  REQUIRE(r.err.find("not writable") != std::string::npos);
+  REQUIRE(slurp(box.dir() / "occupied") == "not a directory");
+}

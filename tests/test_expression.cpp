@@ -1,0 +1,45 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "solver/expression.hpp"
+#include "solver/input_error.hpp"
+
+using namespace knotwork;
+
+TEST_CASE("Expressions evaluate with the documented functions and constants", "[expression]") {
+  ExpressionEvaluator e(Expression::parse("sin(pi*x)*exp(y) + log(e) + atan2(y, x) + x^2", "test"));
+  const double x = 0.3, y = -0.7;
+  REQUIRE(std::abs(e(x, y) - (std::sin(M_PI * x) * std::exp(y) + 1.0 + std::atan2(y, x) + x * x)) < 1e-14);
+  ExpressionEvaluator neg(Expression::parse("-x^2", "test"));
+  REQUIRE(neg(3, 0) == Approx(-9.0));
+}
+
+TEST_CASE("Syntax errors name the place and the position", "[expression]") {
+  REQUIRE_THROWS_AS(Expression::parse("sin(x", "case.toml: [problem] exact"), InputError);
+  REQUIRE_THROWS_WITH(Expression::parse("sin(x", "case.toml: [problem] exact"),
+                      Catch::Contains("case.toml: [problem] exact") && Catch::Contains("position"));
+  REQUIRE_THROWS_WITH(Expression::parse("x + z", "f"), Catch::Contains("position 4"));
+  REQUIRE_THROWS_WITH(Expression::parse("  ", "f"), Catch::Contains("empty"));
+}
+
+TEST_CASE("Symbolic derivatives agree with finite differences", "[expression]") {
+  for (const char* text : {"sin(pi*x)*sin(pi*y)", "exp(x)*sin(y)", "-(x^2+y^2-1)*(x^2+y^2-4)*x*y^2",
+                           "(x^2+y^2)^(1/3)*sin(2/3*(atan2(-y,-x)+pi))", "sqrt(1+x^2)*cosh(y)/(2+sin(x*y))"}) {
+    INFO(text);
+    const ExactSolution ex = differentiate_exact_solution(Expression::parse(text, "t"));
+    ExpressionEvaluator u(ex.u), ux(ex.u_x), uy(ex.u_y), f(ex.minus_laplacian);
+    for (auto [x, y] : {std::pair{0.31, 0.52}, {-0.45, 0.27}, {0.8, 0.66}}) {
+      const double h = 1e-4;
+      const double fdx = (u(x + h, y) - u(x - h, y)) / (2 * h);
+      const double fdy = (u(x, y + h) - u(x, y - h)) / (2 * h);
+      const double lap = (u(x + h, y) + u(x - h, y) + u(x, y + h) + u(x, y - h) - 4 * u(x, y)) / (h * h);
+      REQUIRE(std::abs(ux(x, y) - fdx) < 1e-7 * (1 + std::abs(fdx)));
+      REQUIRE(std::abs(uy(x, y) - fdy) < 1e-7 * (1 + std::abs(fdy)));
+      REQUIRE(std::abs(f(x, y) + lap) < 1e-4 * (1 + std::abs(lap)));
+    }
+  }
+}
+
+TEST_CASE("Functions GiNaC cannot differentiate are reported, not crashed on", "[expression]") {
+  REQUIRE_THROWS_AS(differentiate_exact_solution(Expression::parse("min(x, y)", "case: exact")), InputError);
+}

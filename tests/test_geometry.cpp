@@ -1,0 +1,148 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "basis/tensor_patch.hpp"
+#include "cases/geometries.hpp"
+#include "quadrature/bernstein.hpp"
+#include "solver/cell_basis.hpp"
+#include "solver/geometry_map.hpp"
+
+using namespace knotwork;
+
+namespace {
+// 20 Gauss points per direction: det J of a rational map is not a polynomial, so the
+// area is exact only up to a quadrature error that this many points push below roundoff.
+double area(const TensorDiscretization& d, const GeometryMap& g) {
+  double a = 0;
+  CellBasis cb;
+  for (int c = 0; c < d.mesh.num_cells(); ++c) {
+    evaluate_cell_basis(d.mesh, g, c, 20, 20, cb);
+    a += cb.measure.sum();
+  }
+  return a;
+}
+}  // namespace
+
+TEST_CASE("The quarter annulus stays exactly on its circles under k-refinement", "[geometry]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> d(0, 1);
+  for (int p = 2; p <= 5; ++p)
+    for (int n : {1, 3, 7}) {
+      TensorSpaceOptions o;
+      o.degree = {p, p};
+      o.elements_per_span = {n, n};
+      const TensorDiscretization disc = build_tensor_discretization(quarter_annulus_patch(1, 2), o);
+      NurbsGeometryMap g(disc);
+      for (int c = 0; c < disc.mesh.num_cells(); ++c) {
+        Eigen::VectorXd u(4), v(4);
+        for (int k = 0; k < 4; ++k) { u[k] = d(rng); v[k] = d(rng); }
+        u[0] = 0; v[1] = 1;
+        GeometryAtPoints at;
+        g.evaluate(c, u, v, at);
+        const BezierCell& cell = disc.mesh.cell(c);
+        for (int k = 0; k < 4; ++k) {
+          // x(u, v) = (1 + u) * (point on the unit quarter circle): |x| = 1 + u exactly.
+          const double radius = 1.0 + cell.u0 + u[k] * (cell.u1 - cell.u0);
+          REQUIRE(std::abs(at.x.row(k).norm() - radius) < 1e-14);
+          REQUIRE(at.x(k, 0) >= -1e-15);
+          REQUIRE(at.x(k, 1) >= -1e-15);
+        }
+      }
+      INFO("p = " << p << ", n = " << n);
+      REQUIRE(std::abs(area(disc, g) - 0.75 * std::numbers::pi) < 1e-13);
+    }
+}
+
+TEST_CASE("Geometry Jacobians match finite differences of the map", "[geometry]") {
+  TensorSpaceOptions o;
+  o.degree = {3, 3};
+  o.elements_per_span = {2, 3};
+  const TensorDiscretization disc = build_tensor_discretization(quarter_annulus_patch(0.5, 1.5), o);
+  NurbsGeometryMap g(disc);
+  const double h = 1e-6;
+  for (int c = 0; c < disc.mesh.num_cells(); ++c) {
+    Eigen::VectorXd u(5), v(5);
+    u << 0.5, 0.5 + h, 0.5 - h, 0.5, 0.5;
+    v << 0.3, 0.3, 0.3, 0.3 + h, 0.3 - h;
+    GeometryAtPoints at;
+    g.evaluate(c, u, v, at);
+    for (int comp = 0; comp < 2; ++comp) {
+      REQUIRE(std::abs(at.jacobian(0, 2 * comp) - (at.x(1, comp) - at.x(2, comp)) / (2 * h)) < 1e-7);
+      REQUIRE(std::abs(at.jacobian(0, 2 * comp + 1) - (at.x(3, comp) - at.x(4, comp)) / (2 * h)) < 1e-7);
+    }
+  }
+}
+
+TEST_CASE("Built-in geometries have the right areas and positive Jacobians", "[geometry]") {
+  TensorSpaceOptions o;
+  o.degree = {2, 2};
+  o.elements_per_span = {4, 4};
+  {
+    const auto d = build_tensor_discretization(lshape_patch(), o);
+    NurbsGeometryMap g(d);
+    REQUIRE(std::abs(area(d, g) - 3.0) < 1e-13);
+    CellBasis cb;
+    for (int c = 0; c < d.mesh.num_cells(); ++c) {
+      evaluate_cell_basis(d.mesh, g, c, 3, 3, cb);
+      REQUIRE(cb.min_jacobian > 0);
+    }
+  }
+  {
+    const auto d = build_tensor_discretization(rectangle_patch(-1, 2, 3, 2.5), o);
+    NurbsGeometryMap g(d);
+    REQUIRE(std::abs(area(d, g) - 2.0) < 1e-14);
+  }
+}
+
+TEST_CASE("Isoparametric NURBS basis from the BezierMesh: partition of unity and geometry reproduction", "[geometry]") {
+  for (int p = 2; p <= 4; ++p) {
+    TensorSpaceOptions o;
+    o.degree = {p, p};
+    o.elements_per_span = {3, 4};
+    const auto d = build_tensor_discretization(quarter_annulus_patch(1, 2), o);
+    NurbsGeometryMap g(d);
+    REQUIRE(d.mesh.is_rational());
+    // Control points of the refined geometry: x_i = (w x)_i / w_i.
+    const Eigen::MatrixX2d P = d.geometry_homogeneous.leftCols<2>().array().colwise() / d.geometry_homogeneous.col(2).array();
+    CellBasis cb;
+    for (int c = 0; c < d.mesh.num_cells(); ++c) {
+      evaluate_cell_basis(d.mesh, g, c, p + 1, p + 1, cb);
+      const Eigen::MatrixXd R = cb.value * cb.C.transpose();  // points x alive functions
+      const auto ids = d.mesh.functions(c);
+      for (Eigen::Index k = 0; k < R.rows(); ++k) {
+        REQUIRE(std::abs(R.row(k).sum() - 1.0) < 1e-14);
+        Eigen::RowVector2d x = Eigen::RowVector2d::Zero();
+        for (size_t a = 0; a < ids.size(); ++a) x += R(k, a) * P.row(ids[a]);
+        REQUIRE((x - cb.geometry.x.row(k)).norm() < 1e-14);
+      }
+      // Gradients of a partition of unity vanish.
+      const Eigen::MatrixXd Gx = cb.grad_x * cb.C.transpose();
+      REQUIRE(Gx.rowwise().sum().cwiseAbs().maxCoeff() < 1e-12);
+    }
+  }
+}
+
+TEST_CASE("Uniform meshes store few distinct extraction matrices", "[geometry]") {
+  TensorSpaceOptions o;
+  o.degree = {3, 3};
+  o.elements_per_span = {64, 64};
+  const auto d = build_tensor_discretization(rectangle_patch(0, 0, 1, 1), o);
+  REQUIRE(d.mesh.num_cells() == 64 * 64);
+  REQUIRE(d.mesh.num_functions() == 67 * 67);  // (N + p)^2
+  // First and last p elements differ, interior ones are alike: (2p+1)^2 products at most.
+  REQUIRE(d.mesh.num_distinct_extractions() <= 49);
+}
+
+TEST_CASE("Impossible spaces are refused with a reason", "[geometry]") {
+  TensorSpaceOptions o;
+  o.degree = {1, 1};
+  REQUIRE_THROWS_WITH(build_tensor_discretization(quarter_annulus_patch(1, 2), o),
+                      Catch::Contains("rational = false"));
+  o.rational = false;
+  REQUIRE_NOTHROW(build_tensor_discretization(quarter_annulus_patch(1, 2), o));
+  o.degree = {3, 3};
+  o.continuity = {3, 2};
+  REQUIRE_THROWS_WITH(build_tensor_discretization(quarter_annulus_patch(1, 2), o), Catch::Contains("continuity"));
+}

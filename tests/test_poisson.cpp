@@ -1,0 +1,175 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "app/discretize.hpp"
+#include "cases/case_file.hpp"
+#include "cases/geometries.hpp"
+#include "solver/linear_solver.hpp"
+#include "solver/poisson_solver.hpp"
+
+using namespace knotwork;
+
+namespace {
+
+CaseDescription shipped(const std::string& name) {
+  return load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name + ".toml");
+}
+
+CaseDescription with_exact(NurbsPatch geometry, int p, int n, const std::string& u) {
+  CaseDescription c;
+  c.path = "test";
+  c.geometry = std::move(geometry);
+  c.space.degree = {p, p};
+  c.space.elements_per_span = {n, n};
+  c.problem.exact = differentiate_exact_solution(Expression::parse(u, "test"));
+  c.problem.source = c.problem.exact->minus_laplacian;
+  c.problem.boundary.assign(4, BoundaryCondition{});
+  return c;
+}
+
+PoissonSolveOptions options_of(const CaseDescription& c) {
+  PoissonSolveOptions o;
+  o.quadrature = c.quadrature;
+  return o;
+}
+
+ErrorNorms solve(const CaseDescription& c) {
+  const Discretization d = discretize(c);
+  return *solve_poisson(d.mesh(), *d.geometry, c.problem, options_of(c)).errors;
+}
+
+struct Rates {
+  double l2, h1;
+};
+// Observed rates between the last two of `levels` uniform refinements starting at n0.
+Rates rates(CaseDescription c, int n0, int levels) {
+  std::vector<ErrorNorms> e;
+  std::vector<double> h;
+  for (int l = 0; l < levels; ++l) {
+    c.space.elements_per_span = {n0 << l, n0 << l};
+    const Discretization d = discretize(c);
+    e.push_back(*solve_poisson(d.mesh(), *d.geometry, c.problem, options_of(c)).errors);
+    h.push_back(mesh_size(d));
+  }
+  const size_t a = e.size() - 2, b = e.size() - 1;
+  const double lh = std::log(h[a] / h[b]);
+  return {std::log(e[a].l2 / e[b].l2) / lh, std::log(e[a].h1_semi / e[b].h1_semi) / lh};
+}
+
+}  // namespace
+
+TEST_CASE("Patch test: linear solutions are reproduced to roundoff", "[poisson]") {
+  const std::string u = "1 + 2*x - 3*y";
+  // A curved polynomial (unit-weight) map: x(s,t) bends through the middle control point.
+  NurbsPatch bent;
+  bent.basis_u = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
+  bent.basis_v = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
+  bent.control_points.resize(9, 2);
+  bent.control_points << 0, 0, 0.5, -0.1, 1, 0, -0.1, 0.5, 0.6, 0.4, 1.1, 0.5, 0, 1, 0.5, 1.2, 1, 1;
+  bent.weights.setOnes(9);
+  for (int p = 2; p <= 4; ++p) {
+    INFO("degree " << p);
+    // Polynomial maps: grad u . grad v det J is a polynomial of degree <= 2p-1 per direction,
+    // integrated exactly by the default p+1 Gauss points, so u_h = u to roundoff.
+    for (const NurbsPatch& g : {lshape_patch(), bent}) {
+      const ErrorNorms e = solve(with_exact(g, p, 3, u));
+      REQUIRE(e.l2 < 1e-12);
+      REQUIRE(e.h1_semi < 1e-11);
+    }
+    // Rational maps: the isoparametric space still contains u, but det J is rational; the
+    // patch test holds up to quadrature error, which more points drive to roundoff.
+    CaseDescription c = with_exact(quarter_annulus_patch(1, 2), p, 3, u);
+    const ErrorNorms coarse_rule = solve(c);
+    c.quadrature.points_u = c.quadrature.points_v = 16;
+    const ErrorNorms fine_rule = solve(c);
+    REQUIRE(fine_rule.l2 < 1e-12);
+    REQUIRE(fine_rule.h1_semi < 1e-11);
+    REQUIRE(fine_rule.l2 < coarse_rule.l2);
+  }
+  // B-splines on an affine map, with Neumann data on two sides.
+  CaseDescription c = with_exact(rectangle_patch(-1, 0, 2, 1), 1, 5, u);
+  c.space.rational = false;
+  c.problem.boundary[1].kind = BoundaryKind::kNeumann;
+  c.problem.boundary[2].kind = BoundaryKind::kNeumann;
+  const ErrorNorms r = solve(c);
+  REQUIRE(r.l2 < 1e-12);
+  REQUIRE(r.h1_semi < 1e-11);
+  // A quadratic polynomial is in every degree-2 space on the square.
+  const ErrorNorms q = solve(with_exact(rectangle_patch(0, 0, 1, 1), 2, 4, "x^2 - x*y + 0.5*y^2"));
+  REQUIRE(q.l2 < 1e-12);
+}
+
+TEST_CASE("Optimal convergence on the unit square, p = 1..4", "[poisson][rates]") {
+  for (int p = 1; p <= 4; ++p) {
+    CaseDescription c = shipped("square_sinsin");
+    c.space.degree = {p, p};
+    c.space.continuity = {-1, -1};
+    const Rates r = rates(c, 8, 3);
+    INFO("p = " << p << ": L2 rate " << r.l2 << ", H1 rate " << r.h1);
+    REQUIRE(r.l2 >= p + 1 - 0.2);
+    REQUIRE(r.h1 >= p - 0.2);
+    // ... and not better than theory says: the rates are measured, not capped.
+    REQUIRE(r.l2 < p + 1 + 0.3);
+  }
+}
+
+TEST_CASE("Optimal convergence on the quarter annulus, p = 1..4", "[poisson][rates]") {
+  for (int p = 1; p <= 4; ++p) {
+    CaseDescription c = shipped("quarter_annulus");
+    c.space.degree = {p, p};
+    c.space.rational = p >= 2;  // degree 1 cannot hold the circle: B-splines on the exact geometry
+    const Rates r = rates(c, 8, 3);
+    INFO("p = " << p << ": L2 rate " << r.l2 << ", H1 rate " << r.h1);
+    REQUIRE(r.l2 >= p + 1 - 0.2);
+    REQUIRE(r.h1 >= p - 0.2);
+  }
+}
+
+TEST_CASE("Mixed Dirichlet/Neumann case converges optimally", "[poisson][rates]") {
+  const Rates r = rates(shipped("square_exp_sin"), 4, 3);
+  REQUIRE(r.l2 >= 4 - 0.2);
+  REQUIRE(r.h1 >= 3 - 0.2);
+}
+
+TEST_CASE("L-shape: uniform refinement converges in H1 like h^(2/3)", "[poisson][rates]") {
+  const Rates r = rates(shipped("lshape"), 8, 4);
+  INFO("H1 rate " << r.h1);
+  REQUIRE(std::abs(r.h1 - 2.0 / 3.0) < 0.1);
+}
+
+TEST_CASE("Continuity option: C0 quadratics still converge optimally", "[poisson][rates]") {
+  CaseDescription c = shipped("square_sinsin");
+  c.space.continuity = {0, 0};
+  const Rates r = rates(c, 4, 3);
+  REQUIRE(r.l2 >= 3 - 0.2);
+  REQUIRE(r.h1 >= 2 - 0.2);
+}
+
+TEST_CASE("CHOLMOD reuses the symbolic analysis while the pattern stays", "[poisson][solver]") {
+  const int n = 50;
+  Eigen::SparseMatrix<double> A(n, n);  // lower triangle of a tridiagonal SPD matrix
+  std::vector<Eigen::Triplet<double>> t;
+  for (int i = 0; i < n; ++i) {
+    t.emplace_back(i, i, 4.0);
+    if (i + 1 < n) t.emplace_back(i + 1, i, -1.0);
+  }
+  A.setFromTriplets(t.begin(), t.end());
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, 1, 2);
+  for (Ordering o : {Ordering::kAmd, Ordering::kMetis, Ordering::kNesdis}) {
+    SparseCholesky chol(o);
+    chol.factorize(A);
+    Eigen::VectorXd x = chol.solve(b);
+    const Eigen::SparseMatrix<double> full = A.selfadjointView<Eigen::Lower>();
+    REQUIRE((full * x - b).norm() < 1e-12);
+    A *= 2.0;  // new values, same pattern
+    chol.factorize(A);
+    REQUIRE(chol.stats().analyses == 1);
+    x = chol.solve(b);
+    REQUIRE((Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>()) * x - b).norm() < 1e-12);
+    A /= 2.0;
+  }
+  Eigen::SparseMatrix<double> bad = A;
+  bad.coeffRef(3, 3) = -10;
+  SparseCholesky chol;
+  REQUIRE_THROWS_WITH(chol.factorize(bad), Catch::Contains("not positive definite"));
+}
