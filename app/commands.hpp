@@ -10,7 +10,7 @@ struct CommonOptions {
   std::string out;             // overrides [output] directory
   int degree = 0;              // 0: as in the case
   int elements = 0;            // 0: as in the case
-  std::string ordering = "metis";
+  std::string ordering = "amd";
 };
 
 struct RunOptions : CommonOptions {
@@ -27,7 +27,7 @@ struct BenchOptions {
   std::vector<std::string> configs;  // "P:N" (degree P, N x N elements)
   bool quick = false;
   bool json = false;
-  std::string ordering = "metis";
+  std::string ordering = "amd";
   bool with_errors = true;
 };
 

@@ -113,6 +113,13 @@ int converge_command(const ConvergeOptions& o) {
     sl2.x.push_back(v.h); sl2.y.push_back(v.l2);
     sh1.x.push_back(v.h); sh1.y.push_back(v.h1_semi);
   }
+  if (levels.size() > 1) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "L2 (rate %.2f)", levels.back().l2_rate);
+    sl2.label = buf;
+    std::snprintf(buf, sizeof buf, "H1 semi (rate %.2f)", levels.back().h1_rate);
+    sh1.label = buf;
+  }
   Json root = Json::object();
   root.set("case", c.path).set("space", describe_space(c)).set("levels", jl);
   write_text(stage.stage("convergence.csv"), csv);

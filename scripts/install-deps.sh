@@ -3,7 +3,10 @@
 # OpenBLAS matters: CHOLMOD supernodal spends its time in BLAS, and Debian's
 # default reference BLAS is several times slower.
 # Usage: scripts/install-deps.sh [--paraview]
-#   --paraview   also install ParaView + Xvfb (only needed to render docs/ screenshots)
+#   --paraview   also install ParaView + Xvfb (only needed to render docs/ screenshots).
+#                Debian 12's python3-paraview conflicts with python3-vtk9, which libvtk9-dev
+#                needs, so its files are unpacked into .paraview-python/ (used only by
+#                scripts/render_paraview.sh) instead of being installed.
 set -euo pipefail
 
 packages=(
@@ -14,7 +17,9 @@ packages=(
   libmuparser-dev libginac-dev
   libbenchmark-dev
 )
+with_paraview=0
 if [[ "${1:-}" == "--paraview" ]]; then
+  with_paraview=1
   packages+=(paraview xvfb xauth)
 fi
 
@@ -22,13 +27,30 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-if [[ ${#missing[@]} -eq 0 ]]; then
-  echo "install-deps: all ${#packages[@]} packages already installed"
-  exit 0
-fi
-
 sudo_cmd=()
 [[ $(id -u) -ne 0 ]] && sudo_cmd=(sudo)
-echo "install-deps: installing ${missing[*]}"
-"${sudo_cmd[@]}" apt-get update -qq
-DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+if dpkg-query -W -f='${Status}' python3-paraview 2>/dev/null | grep -q "install ok installed"; then
+  echo "install-deps: python3-paraview is installed and conflicts with libvtk9-dev (via python3-vtk9);" >&2
+  echo "install-deps: remove it (apt-get remove python3-paraview): --paraview sets ParaView up without it" >&2
+  exit 1
+fi
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "install-deps: all ${#packages[@]} packages already installed"
+else
+  echo "install-deps: installing ${missing[*]}"
+  "${sudo_cmd[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+if [[ $with_paraview -eq 1 ]]; then
+  root="$(cd "$(dirname "$0")/.." && pwd)"
+  target="$root/.paraview-python"
+  if [[ ! -d "$target/usr/lib/python3/dist-packages/paraview" ]]; then
+    tmp="$(mktemp -d)"
+    (cd "$tmp" && apt-get download python3-paraview >/dev/null 2>&1)
+    mkdir -p "$target"
+    dpkg-deb -x "$tmp"/python3-paraview_*.deb "$target"
+    rm -rf "$tmp"
+    echo "install-deps: ParaView's Python modules unpacked into $target"
+  fi
+fi

@@ -24,7 +24,7 @@ struct CholeskyStats {
 // tree, supernodes) is kept and reused while the sparsity pattern stays the same.
 class SparseCholesky {
  public:
-  explicit SparseCholesky(Ordering ordering = Ordering::kMetis);
+  explicit SparseCholesky(Ordering ordering = Ordering::kAmd);
   ~SparseCholesky();
   // Throws std::runtime_error if the matrix is not positive definite.
   void factorize(const Eigen::SparseMatrix<double>& lower);

@@ -23,7 +23,7 @@ struct PoissonTimings {
 
 struct PoissonSolveOptions {
   QuadratureOptions quadrature;
-  Ordering ordering = Ordering::kMetis;
+  Ordering ordering = Ordering::kAmd;  // measured fastest on IGA matrices: docs/PERFORMANCE.md
   bool compute_errors = true;  // when the problem has an exact solution
   std::function<void(const std::string&)> progress;  // called at the start of each phase
 };

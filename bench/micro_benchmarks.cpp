@@ -1,0 +1,67 @@
+// Micro-benchmarks of the kernels the solver spends its time in. Run:
+//   build/bench/knotwork_micro_bench --benchmark_min_time=0.5
+#include <benchmark/benchmark.h>
+
+#include "app/discretize.hpp"
+#include "cases/geometries.hpp"
+#include "solver/assemble_poisson.hpp"
+#include "solver/error_norms.hpp"
+#include "solver/sparsity.hpp"
+
+using namespace knotwork;
+
+namespace {
+
+CaseDescription square(int p, int n) {
+  CaseDescription c;
+  c.path = "bench";
+  c.geometry = rectangle_patch(0, 0, 1, 1);
+  c.space.degree = {p, p};
+  c.space.elements_per_span = {n, n};
+  c.problem.exact = differentiate_exact_solution(Expression::parse("sin(pi*x)*sin(pi*y)", "bench"));
+  c.problem.source = c.problem.exact->minus_laplacian;
+  c.problem.boundary.assign(4, BoundaryCondition{});
+  return c;
+}
+
+void BM_BezierExtraction(benchmark::State& state) {
+  const auto b = BSplineBasis1D::open_uniform(static_cast<int>(state.range(0)), 0, 1, 1024);
+  for (auto _ : state) benchmark::DoNotOptimize(bezier_extraction(b));
+  state.SetItemsProcessed(state.iterations() * 1024);
+}
+BENCHMARK(BM_BezierExtraction)->Arg(2)->Arg(4);
+
+void BM_AssemblePoisson(benchmark::State& state) {
+  const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const Discretization d = discretize(c);
+  std::vector<bool> fixed;
+  const Eigen::VectorXd g = project_dirichlet_data(d.mesh(), *d.geometry, c.problem, c.quadrature, fixed);
+  const DofLayout layout = make_dof_layout(d.mesh().num_functions(), fixed);
+  Eigen::SparseMatrix<double> K = to_matrix(lower_pattern(d.mesh(), layout));
+  Eigen::VectorXd rhs;
+  for (auto _ : state) assemble_poisson(d.mesh(), *d.geometry, c.problem.source, layout, g, c.quadrature, K, rhs);
+  state.SetItemsProcessed(state.iterations() * d.mesh().num_cells());
+  state.counters["cells"] = d.mesh().num_cells();
+}
+BENCHMARK(BM_AssemblePoisson)->Args({2, 128})->Args({4, 64})->Unit(benchmark::kMillisecond);
+
+void BM_ErrorNorms(benchmark::State& state) {
+  const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const Discretization d = discretize(c);
+  const Eigen::VectorXd u = Eigen::VectorXd::Ones(d.mesh().num_functions());
+  for (auto _ : state) benchmark::DoNotOptimize(error_norms(d.mesh(), *d.geometry, u, *c.problem.exact, c.quadrature));
+  state.SetItemsProcessed(state.iterations() * d.mesh().num_cells());
+}
+BENCHMARK(BM_ErrorNorms)->Args({2, 128})->Args({4, 64})->Unit(benchmark::kMillisecond);
+
+void BM_LowerPattern(benchmark::State& state) {
+  const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const Discretization d = discretize(c);
+  const DofLayout layout = make_dof_layout(d.mesh().num_functions(), std::vector<bool>(d.mesh().num_functions(), false));
+  for (auto _ : state) benchmark::DoNotOptimize(lower_pattern(d.mesh(), layout));
+}
+BENCHMARK(BM_LowerPattern)->Args({2, 128})->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
