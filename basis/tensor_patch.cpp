@@ -1,6 +1,8 @@
 #include "basis/tensor_patch.hpp"
 
 #include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -42,7 +44,7 @@ struct DirectionPlan {
 };
 
 DirectionPlan plan_direction(const BSplineBasis1D& g, int p, int r, int elements, bool rational,
-                             const char* name) {
+                             const std::vector<double>& extra, const char* name) {
   const int pg = g.degree();
   if (p < 1) throw std::invalid_argument(std::string("degree in ") + name + " must be >= 1");
   if (r < 0 || r > p - 1)
@@ -69,6 +71,20 @@ DirectionPlan plan_direction(const BSplineBasis1D& g, int p, int r, int elements
       kg.insert(kg.end(), p >= pg ? p - r : 1, t);
     }
   }
+  std::vector<double> added;
+  for (double t : extra) {
+    if (!(std::isfinite(t) && t > bp.front() && t < bp.back()))
+      throw std::invalid_argument(std::string("extra knot ") + std::to_string(t) + " in " + name +
+                                  " is not inside the parameter domain (" + std::to_string(bp.front()) + ", " +
+                                  std::to_string(bp.back()) + ")");
+    if (std::find(ks.begin(), ks.end(), t) != ks.end() || std::find(added.begin(), added.end(), t) != added.end())
+      continue;  // already a knot: nothing to refine
+    added.push_back(t);
+    ks.insert(ks.end(), p - r, t);
+    kg.insert(kg.end(), p >= pg ? p - r : 1, t);
+  }
+  std::sort(ks.begin(), ks.end());
+  std::sort(kg.begin(), kg.end());
   ks.insert(ks.end(), p + 1, bp.back());
   kg.insert(kg.end(), std::max(p, pg) + 1, bp.back());
   return {BSplineBasis1D(p, std::move(ks)), BSplineBasis1D(std::max(p, pg), std::move(kg))};
@@ -112,8 +128,8 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
   const int rv = o.continuity[1] < 0 ? o.degree[1] - 1 : o.continuity[1];
   if (o.elements_per_span[0] < 1 || o.elements_per_span[1] < 1)
     throw std::invalid_argument("elements must be >= 1");
-  auto pu = plan_direction(patch.basis_u, o.degree[0], ru, o.elements_per_span[0], o.rational, "u");
-  auto pv = plan_direction(patch.basis_v, o.degree[1], rv, o.elements_per_span[1], o.rational, "v");
+  auto pu = plan_direction(patch.basis_u, o.degree[0], ru, o.elements_per_span[0], o.rational, o.extra_knots[0], "u");
+  auto pv = plan_direction(patch.basis_v, o.degree[1], rv, o.elements_per_span[1], o.rational, o.extra_knots[1], "v");
   d.space_u = pu.space;
   d.space_v = pv.space;
   d.geometry_u = pu.geometry;

@@ -263,7 +263,7 @@ void check_elements(const Reader& r, const std::array<long, 2>& e, const std::st
 
 void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
   r.check_keys(s, "space", {"family", "degree", "elements", "continuity", "rational",
-                            "quadrature_points", "error_quadrature_points"});
+                            "quadrature_points", "error_quadrature_points", "insert_knots_u", "insert_knots_v"});
   if (const toml::node* f = s.get("family")) {
     const std::string fam = r.string(*f, "[space] family");
     if (fam != "tensor")
@@ -300,6 +300,17 @@ void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
       pv = static_cast<int>(q[1]);
     }
   };
+  for (int d = 0; d < 2; ++d) {
+    const std::string key = d == 0 ? "insert_knots_u" : "insert_knots_v";
+    if (const toml::node* k = s.get(key)) {
+      c.space.extra_knots[d] = r.numbers(*k, "[space] " + key);
+      const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
+      for (double t : c.space.extra_knots[d])
+        if (!(t > g.domain_begin() && t < g.domain_end()))
+          r.fail("[space] " + key, "knot " + std::to_string(t) + " is not inside the parameter domain (" +
+                                       std::to_string(g.domain_begin()) + ", " + std::to_string(g.domain_end()) + ")");
+    }
+  }
   read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
   read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
 }

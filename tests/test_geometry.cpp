@@ -135,6 +135,24 @@ TEST_CASE("Uniform meshes store few distinct extraction matrices", "[geometry]")
   REQUIRE(d.mesh.num_distinct_extractions() <= 49);
 }
 
+TEST_CASE("Extra knots refine the space and leave the geometry unchanged", "[geometry]") {
+  TensorSpaceOptions o;
+  o.degree = {3, 3};
+  o.elements_per_span = {2, 2};
+  o.continuity = {1, 2};
+  o.extra_knots = {std::vector<double>{0.1, 0.2, 0.2, 0.5}, std::vector<double>{0.9}};
+  const auto d = build_tensor_discretization(quarter_annulus_patch(1, 2), o);
+  // n = (p + 1) + (p - r) * (number of distinct interior knots).
+  // u: 0.5 (uniform) plus 0.1 and 0.2 (the repeated 0.2 counts once): 3 knots, p - r = 2.
+  REQUIRE(d.space_u.num_functions() == (3 + 1) + (3 - 1) * 3);
+  // v: 0.5 plus 0.9: 2 knots, p - r = 1.
+  REQUIRE(d.space_v.num_functions() == (3 + 1) + (3 - 2) * 2);
+  NurbsGeometryMap g(d);
+  REQUIRE(std::abs(area(d, g) - 0.75 * std::numbers::pi) < 1e-13);
+  o.extra_knots = {std::vector<double>{1.5}, {}};
+  REQUIRE_THROWS_WITH(build_tensor_discretization(quarter_annulus_patch(1, 2), o), Catch::Contains("not inside"));
+}
+
 TEST_CASE("Impossible spaces are refused with a reason", "[geometry]") {
   TensorSpaceOptions o;
   o.degree = {1, 1};

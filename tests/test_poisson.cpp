@@ -137,6 +137,20 @@ TEST_CASE("L-shape: uniform refinement converges in H1 like h^(2/3)", "[poisson]
   REQUIRE(std::abs(r.h1 - 2.0 / 3.0) < 0.1);
 }
 
+TEST_CASE("Non-uniform refinement toward the L-shape corner beats uniform refinement", "[poisson][rates]") {
+  CaseDescription uniform = shipped("lshape");
+  uniform.space.elements_per_span = {16, 16};
+  const CaseDescription graded = shipped("lshape_graded");
+  const Discretization du = discretize(uniform), dg = discretize(graded);
+  // u: 2 spans x 8 elements + p, +1 for the C0 fold at u = 1/2 (multiplicity p), +1 per inserted
+  // knot (p - r = 1); v: 8 elements + p + 6 inserted knots.
+  REQUIRE(dg.mesh().num_functions() == (2 * 8 + 2 + 1 + 12) * (8 + 2 + 6));
+  REQUIRE(dg.mesh().num_functions() < du.mesh().num_functions());
+  const double eu = solve(uniform).h1_semi, eg = solve(graded).h1_semi;
+  INFO("uniform " << eu << ", graded " << eg);
+  REQUIRE(eg < 0.5 * eu);
+}
+
 TEST_CASE("Continuity option: C0 quadratics still converge optimally", "[poisson][rates]") {
   CaseDescription c = shipped("square_sinsin");
   c.space.continuity = {0, 0};
