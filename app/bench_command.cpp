@@ -12,6 +12,7 @@
 #include "app/json_writer.hpp"
 #include "cases/geometries.hpp"
 #include "solver/input_error.hpp"
+#include "solver/linear_solver.hpp"
 #include "solver/poisson_solver.hpp"
 
 namespace knotwork {
@@ -24,11 +25,12 @@ struct BenchResult {
   double factor_nonzeros = 0, flops = 0;
   double setup = 0, assembly = 0, analysis = 0, factorization = 0, solve = 0, errors = 0, total = 0;
   double cholmod_peak_bytes = 0, l2 = 0;
+  double floor_seconds = NAN;  // bare CHOLMOD, default settings: analyze + factorize + solve
   long peak_rss_kb = 0;
 };
 
 // The benchmark problem: unit square, u = sin(pi x) sin(pi y), homogeneous Dirichlet.
-BenchResult run_one(int p, int n, Ordering ordering, bool with_errors) {
+BenchResult run_one(int p, int n, Ordering ordering, bool with_errors, bool floor) {
   CaseDescription c;
   c.path = "bench";
   c.geometry = rectangle_patch(0, 0, 1, 1);
@@ -43,8 +45,18 @@ BenchResult run_one(int p, int n, Ordering ordering, bool with_errors) {
   PoissonSolveOptions so;
   so.ordering = ordering;
   so.compute_errors = with_errors;
+  double floor_seconds = NAN;
+  if (floor)
+    so.on_system = [&](const Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& F) {
+      const auto t = std::chrono::steady_clock::now();
+      SparseCholesky bare(Ordering::kCholmodDefault);
+      bare.factorize(K);
+      const Eigen::VectorXd x = bare.solve(F);
+      floor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    };
   const PoissonSolution s = solve_poisson(d.mesh(), *d.geometry, c.problem, so);
   BenchResult r;
+  r.floor_seconds = floor_seconds;
   r.degree = p;
   r.elements = n;
   r.dofs = s.num_functions;
@@ -65,7 +77,7 @@ BenchResult run_one(int p, int n, Ordering ordering, bool with_errors) {
 }
 
 // Each configuration runs in a child process so that its peak memory is its own.
-BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors) {
+BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool floor) {
   int fds[2];
   if (pipe(fds) != 0) throw std::runtime_error("bench: pipe failed");
   const pid_t pid = fork();
@@ -75,7 +87,7 @@ BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors) {
     BenchResult r;
     int code = 0;
     try {
-      r = run_one(p, n, ordering, with_errors);
+      r = run_one(p, n, ordering, with_errors, floor);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "knotwork bench: p=%d n=%d failed: %s\n", p, n, e.what());
       code = 1;
@@ -116,16 +128,18 @@ int bench_command(const BenchOptions& o) {
   std::vector<BenchResult> results;
   if (!o.json)
     std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, ordering %s\n"
-                "%3s %6s %9s %10s %11s %8s %8s %8s %8s %7s %7s %8s %9s %9s\n",
+                "%3s %6s %9s %10s %11s %8s %8s %8s %8s %7s %7s %8s %9s %9s%s\n",
                 std::thread::hardware_concurrency(), o.ordering.c_str(), "p", "n", "dofs", "nnz(A)", "nnz(L)",
-                "setup", "assemb", "analyze", "factor", "solve", "errors", "total", "CHOLMOD", "peak RSS");
+                "setup", "assemb", "analyze", "factor", "solve", "errors", "total", "CHOLMOD", "peak RSS", o.floor ? "    floor" : "");
   for (const auto& [p, n] : configs) {
-    const BenchResult r = run_isolated(p, n, ordering, o.with_errors);
+    const BenchResult r = run_isolated(p, n, ordering, o.with_errors, o.floor);
     results.push_back(r);
     if (!o.json) {
-      std::printf("%3d %6d %9ld %10ld %11.0f %8.3f %8.3f %8.3f %8.3f %7.3f %7.3f %8.3f %7.0f MB %6.0f MB\n", r.degree,
+      std::printf("%3d %6d %9ld %10ld %11.0f %8.3f %8.3f %8.3f %8.3f %7.3f %7.3f %8.3f %7.0f MB %6.0f MB", r.degree,
                   r.elements, r.dofs, r.matrix_nonzeros, r.factor_nonzeros, r.setup, r.assembly, r.analysis,
                   r.factorization, r.solve, r.errors, r.total, r.cholmod_peak_bytes / 1e6, r.peak_rss_kb / 1e3);
+      if (o.floor) std::printf(" %8.3f", r.floor_seconds);
+      std::printf("\n");
       std::fflush(stdout);
     }
   }
@@ -138,7 +152,7 @@ int bench_command(const BenchOptions& o) {
           .set("setup", r.setup).set("assembly", r.assembly).set("analysis", r.analysis)
           .set("factorization", r.factorization).set("solve", r.solve).set("errors", r.errors).set("total", r.total)
           .set("cholmod_peak_bytes", r.cholmod_peak_bytes).set("peak_rss_bytes", r.peak_rss_kb * 1024.0)
-          .set("l2_error", r.l2);
+          .set("l2_error", r.l2).set("cholmod_default_floor_seconds", r.floor_seconds);
       arr.push(j);
     }
     Json root = Json::object();

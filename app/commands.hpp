@@ -29,6 +29,7 @@ struct BenchOptions {
   bool json = false;
   std::string ordering = "amd";
   bool with_errors = true;
+  bool floor = false;  // also time bare CHOLMOD (default settings) on the same matrix
 };
 
 int run_command(const RunOptions& o);

@@ -1,6 +1,9 @@
 // The knotwork command line: run a case, study convergence, benchmark the pipeline.
 #include <CLI/CLI.hpp>
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <new>
 
 #include "app/commands.hpp"
@@ -12,7 +15,7 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
   cmd->add_option("--degree", o.degree, "Polynomial degree in both directions (overrides [space] degree)");
   cmd->add_option("--elements", o.elements, "Elements per geometry knot span and direction (overrides [space] elements)");
   cmd->add_option("--out", o.out, "Output directory (overrides [output] directory; default results/<case name>)");
-  cmd->add_option("--ordering", o.ordering, "Fill-reducing ordering for CHOLMOD: amd (default, fastest measured), metis or nesdis")
+  cmd->add_option("--ordering", o.ordering, "Fill-reducing ordering for CHOLMOD: amd (fastest measured), metis, nesdis, or default (CHOLMOD's own choice)")
       ->capture_default_str();
   cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of the summary");
   cmd->add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
@@ -20,7 +23,19 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
 
 }  // namespace
 
+// CHOLMOD runs OpenMP regions of its own next to OpenBLAS's threads; with libgomp's
+// default spin-waiting they fight over the cores and the factorization is ~8% slower
+// (docs/PERFORMANCE.md). libgomp reads OMP_WAIT_POLICY when it loads, before main, so
+// the only way to choose it from inside is to set it and start again. A user's own
+// setting is kept.
+void prefer_passive_openmp_waiting(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+  setenv("OMP_WAIT_POLICY", "passive", 1);
+  execv("/proc/self/exe", argv);  // returns only on failure: then run as we are
+}
+
 int main(int argc, char** argv) {
+  prefer_passive_openmp_waiting(argv);
   CLI::App app{"knotwork: isogeometric Poisson solver (B-splines/NURBS -> Bezier extraction -> CHOLMOD -> ParaView)"};
   app.set_version_flag("--version", "knotwork 0.1.0");
   app.require_subcommand(1);
@@ -43,9 +58,11 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("--config", bench.configs,
                         "DEGREE:ELEMENTS, repeatable (default 2:128 2:512 2:1024 4:64 4:256 4:512)");
   bench_cmd->add_flag("--quick", bench.quick, "Small configurations only (2:64 2:128 4:32 4:64)");
-  bench_cmd->add_option("--ordering", bench.ordering, "amd, metis or nesdis")->capture_default_str();
+  bench_cmd->add_option("--ordering", bench.ordering, "amd, metis, nesdis, or default (CHOLMOD's own choice)")->capture_default_str();
   bench_cmd->add_flag("--json", bench.json, "Print JSON instead of the table");
   bench_cmd->add_flag("!--no-errors", bench.with_errors, "Skip the error norms");
+  bench_cmd->add_flag("--floor", bench.floor,
+                      "Also time bare CHOLMOD with its default settings on the same matrix (the floor)");
 
   try {
     app.parse(argc, argv);

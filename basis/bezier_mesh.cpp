@@ -33,10 +33,11 @@ void rational_cell_extraction(const BezierMesh& mesh, int c, Eigen::VectorXd& wb
     return;
   }
   const auto ids = mesh.functions(c);
-  Eigen::VectorXd w(ids.size());
+  thread_local Eigen::VectorXd w;
+  w.resize(static_cast<Eigen::Index>(ids.size()));
   for (size_t i = 0; i < ids.size(); ++i) w[i] = mesh.weights()[ids[i]];
   wb.noalias() = C.transpose() * w;
-  C_hat = w.asDiagonal() * C * wb.cwiseInverse().asDiagonal();
+  C_hat.noalias() = w.asDiagonal() * C * wb.cwiseInverse().asDiagonal();
 }
 
 }  // namespace knotwork

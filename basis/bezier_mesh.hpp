@@ -26,6 +26,12 @@ struct BezierCell {
 // uniform tensor meshes) are stored once.
 class BezierMesh {
  public:
+  void reserve(int cells, long ids) {
+    cells_.reserve(cells);
+    extraction_of_cell_.reserve(cells);
+    offsets_.reserve(cells + 1);
+    ids_.reserve(ids);
+  }
   int add_extraction(Eigen::MatrixXd matrix);
   void add_cell(const BezierCell& cell, std::span<const int> functions, int extraction);
   void set_num_functions(int n) { num_functions_ = n; }

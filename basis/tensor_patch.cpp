@@ -167,6 +167,7 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
   const auto& U = d.space_u.knots();
   const auto& V = d.space_v.knots();
   std::vector<int> ids((p + 1) * (q + 1));
+  mesh.reserve(d.elements_u * d.elements_v, static_cast<long>(d.elements_u) * d.elements_v * (p + 1) * (q + 1));
   for (int iv = 0; iv < d.elements_v; ++iv)
     for (int iu = 0; iu < d.elements_u; ++iu) {
       auto key = std::make_pair(idu[iu], idv[iv]);

@@ -13,7 +13,7 @@ namespace knotwork {
 // Stiffness (grad phi_i . grad phi_j) and load (f phi_i) over the free dofs, cell by cell
 // through the BezierMesh, threaded with OpenMP. The Dirichlet lifting -K_{free,fixed} u_fixed
 // goes to the right-hand side at the element level, so the full matrix never exists.
-// `matrix` must hold the lower pattern (see to_matrix); its values are overwritten. Throws InputError when the
+// `matrix` must hold the lower pattern (lower_pattern_matrix); its values are overwritten. Throws InputError when the
 // geometry Jacobian is not positive at a quadrature point (naming the cell) or f is not finite.
 void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const Expression& source,
                       const DofLayout& layout, const Eigen::VectorXd& fixed_values,

@@ -9,31 +9,35 @@ namespace knotwork {
 namespace {
 
 // From Bernstein values/derivatives in reference coordinates to rational values and
-// physical gradients; fills measure with weight * det J.
+// physical gradients; fills measure with weight * det J. Works in out's scratch.
 void finish(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Eigen::MatrixXd& Bv,
             const Eigen::VectorXd& rule_weight, bool rational, CellBasis& out) {
   const Eigen::VectorXd& wb = out.bernstein_weights;
-  Eigen::MatrixXd Ru, Rv;
+  const Eigen::MatrixXd* Ru = &Bu;
+  const Eigen::MatrixXd* Rv = &Bv;
   if (rational) {
-    const Eigen::VectorXd W = B * wb, Wu = Bu * wb, Wv = Bv * wb;
-    const Eigen::VectorXd invW = W.cwiseInverse();
-    out.value = invW.asDiagonal() * B * wb.asDiagonal();
-    Ru = invW.asDiagonal() * (Bu * wb.asDiagonal()) - (Wu.cwiseProduct(invW)).asDiagonal() * out.value;
-    Rv = invW.asDiagonal() * (Bv * wb.asDiagonal()) - (Wv.cwiseProduct(invW)).asDiagonal() * out.value;
+    out.w = (B * wb).array().inverse();  // 1 / W
+    out.wu = (Bu * wb).array() * out.w;  // W_u / W
+    out.wv = (Bv * wb).array() * out.w;
+    out.value.noalias() = out.w.matrix().asDiagonal() * B * wb.asDiagonal();
+    out.d_u.noalias() = out.w.matrix().asDiagonal() * Bu * wb.asDiagonal();
+    out.d_u.noalias() -= out.wu.matrix().asDiagonal() * out.value;
+    out.d_v.noalias() = out.w.matrix().asDiagonal() * Bv * wb.asDiagonal();
+    out.d_v.noalias() -= out.wv.matrix().asDiagonal() * out.value;
+    Ru = &out.d_u;
+    Rv = &out.d_v;
   } else {
     out.value = B;
-    Ru = Bu;
-    Rv = Bv;
   }
   const auto& J = out.geometry.jacobian;
-  const Eigen::ArrayXd det = J.col(0).array() * J.col(3).array() - J.col(1).array() * J.col(2).array();
-  out.min_jacobian = det.minCoeff();
-  const Eigen::ArrayXd inv = det.inverse();
-  out.grad_x = (J.col(3).array() * inv).matrix().asDiagonal() * Ru -
-               (J.col(2).array() * inv).matrix().asDiagonal() * Rv;
-  out.grad_y = (J.col(0).array() * inv).matrix().asDiagonal() * Rv -
-               (J.col(1).array() * inv).matrix().asDiagonal() * Ru;
-  out.measure = (rule_weight.array() * det.abs()).matrix();
+  out.det = J.col(0).array() * J.col(3).array() - J.col(1).array() * J.col(2).array();
+  out.min_jacobian = out.det.minCoeff();
+  out.inv_det = out.det.inverse();
+  out.grad_x.noalias() = (J.col(3).array() * out.inv_det).matrix().asDiagonal() * *Ru;
+  out.grad_x.noalias() -= (J.col(2).array() * out.inv_det).matrix().asDiagonal() * *Rv;
+  out.grad_y.noalias() = (J.col(0).array() * out.inv_det).matrix().asDiagonal() * *Rv;
+  out.grad_y.noalias() -= (J.col(1).array() * out.inv_det).matrix().asDiagonal() * *Ru;
+  out.measure = (rule_weight.array() * out.det.abs()).matrix();
 }
 
 }  // namespace

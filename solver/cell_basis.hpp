@@ -17,6 +17,9 @@ struct CellBasis {
   GeometryAtPoints geometry;
   Eigen::MatrixX2d normal;              // outward unit normal (sides only)
   double min_jacobian = 0;              // smallest det J at the points (volume only)
+  // Scratch reused from cell to cell (no allocation per cell once sizes settle).
+  Eigen::MatrixXd d_u, d_v;
+  Eigen::ArrayXd det, inv_det, w, wu, wv;
 };
 
 // At the tensor Gauss points of an (nu x nv) rule on the cell.

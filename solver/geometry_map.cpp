@@ -62,20 +62,25 @@ void NurbsGeometryMap::homogeneous_bezier(int cell, Eigen::MatrixX3d& out) const
   const int iu = cell % elements_u_, iv = cell / elements_u_;
   const int su = spans_u_[iu] - pu_, sv = spans_v_[iv] - pv_;
   out.resize((pu_ + 1) * (pv_ + 1), 3);
-  Eigen::MatrixXd local(pu_ + 1, pv_ + 1);
+  thread_local Eigen::MatrixXd local, half, bez;
+  local.resize(pu_ + 1, pv_ + 1);
   for (int k = 0; k < 3; ++k) {
     for (int av = 0; av <= pv_; ++av)
       for (int au = 0; au <= pu_; ++au) local(au, av) = net_((su + au) + nu_ * (sv + av), k);
-    const Eigen::MatrixXd bez = cu_[iu].transpose() * local * cv_[iv];
+    half.noalias() = cu_[iu].transpose() * local;
+    bez.noalias() = half * cv_[iv];
     out.col(k) = Eigen::Map<const Eigen::VectorXd>(bez.data(), bez.size());
   }
 }
 
 void NurbsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
   const BernsteinTable& t = bernstein_table(pu_, pv_, nu, nv);
-  Eigen::MatrixX3d bez;
+  thread_local Eigen::MatrixX3d bez, h, hu, hv;
   homogeneous_bezier(cell, bez);
-  dehomogenize(t.value * bez, t.d_u * bez, t.d_v * bez, out);
+  h.noalias() = t.value * bez;
+  hu.noalias() = t.d_u * bez;
+  hv.noalias() = t.d_v * bez;
+  dehomogenize(h, hu, hv, out);
 }
 
 void NurbsGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,

@@ -12,14 +12,16 @@ Ordering parse_ordering(const std::string& name) {
   if (name == "amd") return Ordering::kAmd;
   if (name == "metis") return Ordering::kMetis;
   if (name == "nesdis") return Ordering::kNesdis;
-  throw InputError("ordering: unknown value '" + name + "' (expected amd, metis or nesdis)");
+  if (name == "default") return Ordering::kCholmodDefault;
+  throw InputError("--ordering: unknown value '" + name + "' (expected amd, metis, nesdis or default)");
 }
 
 std::string to_string(Ordering o) {
   switch (o) {
     case Ordering::kAmd: return "amd";
     case Ordering::kMetis: return "metis";
-    default: return "nesdis";
+    case Ordering::kNesdis: return "nesdis";
+    default: return "default";
   }
 }
 
@@ -30,6 +32,7 @@ struct SparseCholesky::Impl {
 
 SparseCholesky::SparseCholesky(Ordering ordering) : impl_(std::make_unique<Impl>()) {
   cholmod_common& cm = impl_->llt.cholmod();
+  if (ordering == Ordering::kCholmodDefault) return;
   cm.nmethods = 1;  // one ordering, chosen by measurement (docs/PERFORMANCE.md), not CHOLMOD's try-several default
   cm.method[0].ordering = ordering == Ordering::kAmd     ? CHOLMOD_AMD
                           : ordering == Ordering::kMetis ? CHOLMOD_METIS

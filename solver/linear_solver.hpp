@@ -6,9 +6,11 @@
 
 namespace knotwork {
 
-// Fill-reducing ordering for the Cholesky factorization (CHOLMOD's names).
-enum class Ordering { kAmd, kMetis, kNesdis };
-Ordering parse_ordering(const std::string& name);  // "amd" | "metis" | "nesdis"; throws InputError
+// Fill-reducing ordering for the Cholesky factorization (CHOLMOD's names). kCholmodDefault
+// leaves CHOLMOD's own strategy (AMD, then METIS too when AMD's fill is high; best kept).
+enum class Ordering { kAmd, kMetis, kNesdis, kCholmodDefault };
+// "amd" | "metis" | "nesdis" | "default"; throws InputError
+Ordering parse_ordering(const std::string& name);
 std::string to_string(Ordering o);
 
 struct CholeskyStats {

@@ -25,7 +25,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   const Eigen::VectorXd fixed_values =
       project_dirichlet_data(mesh, geometry, problem, options.quadrature, fixed);
   const DofLayout layout = make_dof_layout(mesh.num_functions(), fixed);
-  Eigen::SparseMatrix<double> K = to_matrix(lower_pattern(mesh, layout));
+  Eigen::SparseMatrix<double> K = lower_pattern_matrix(mesh, layout);
   sol.num_free = layout.num_free();
   sol.matrix_nonzeros = K.nonZeros();
   sol.timings.setup = seconds_since(t);
@@ -36,6 +36,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   assemble_poisson(mesh, geometry, problem.source, layout, fixed_values, options.quadrature, K, rhs);
   add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs);
   sol.timings.assembly = seconds_since(t);
+  if (options.on_system) options.on_system(K, rhs);
 
   sol.coefficients = fixed_values;
   if (layout.num_free() > 0) {

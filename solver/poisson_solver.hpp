@@ -26,6 +26,9 @@ struct PoissonSolveOptions {
   Ordering ordering = Ordering::kAmd;  // measured fastest on IGA matrices: docs/PERFORMANCE.md
   bool compute_errors = true;  // when the problem has an exact solution
   std::function<void(const std::string&)> progress;  // called at the start of each phase
+  // Called with the assembled system (lower triangle of K over the free dofs, and F)
+  // before it is factored: for inspecting or exporting it, or benchmarking solvers on it.
+  std::function<void(const Eigen::SparseMatrix<double>&, const Eigen::VectorXd&)> on_system;
 };
 
 struct PoissonSolution {

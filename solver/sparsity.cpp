@@ -15,7 +15,7 @@ DofLayout make_dof_layout(int n, const std::vector<bool>& fixed) {
   return l;
 }
 
-LowerPattern lower_pattern(const BezierMesh& mesh, const DofLayout& layout) {
+Eigen::SparseMatrix<double> lower_pattern_matrix(const BezierMesh& mesh, const DofLayout& layout) {
   // Cells of every function (compressed), then for each column the sorted set of
   // coupled dofs below the diagonal. Two passes (count, fill) avoid a vector per column.
   const int nf = mesh.num_functions(), nc = mesh.num_cells();
@@ -30,8 +30,9 @@ LowerPattern lower_pattern(const BezierMesh& mesh, const DofLayout& layout) {
       for (int f : mesh.functions(c)) cells[fill[f]++] = c;
   }
   const int n = layout.num_free();
-  LowerPattern pattern;
-  pattern.outer.assign(n + 1, 0);
+  Eigen::SparseMatrix<double> A(n, n);
+  int* outer = A.outerIndexPtr();
+  outer[0] = 0;
   auto column = [&](int j, std::vector<int>& rows) {
     rows.clear();
     const int f = layout.function_of_dof[j];
@@ -49,31 +50,23 @@ LowerPattern lower_pattern(const BezierMesh& mesh, const DofLayout& layout) {
 #pragma omp for schedule(static)
     for (int j = 0; j < n; ++j) {
       column(j, rows);
-      pattern.outer[j + 1] = static_cast<int>(rows.size());
+      outer[j + 1] = static_cast<int>(rows.size());
     }
   }
-  for (int j = 0; j < n; ++j) pattern.outer[j + 1] += pattern.outer[j];
-  pattern.inner.resize(pattern.outer[n]);
+  for (int j = 0; j < n; ++j) outer[j + 1] += outer[j];
+  A.resizeNonZeros(outer[n]);
+  int* inner = A.innerIndexPtr();
+  double* values = A.valuePtr();
 #pragma omp parallel
   {
     std::vector<int> rows;
 #pragma omp for schedule(static)
     for (int j = 0; j < n; ++j) {
       column(j, rows);
-      std::copy(rows.begin(), rows.end(), pattern.inner.begin() + pattern.outer[j]);
+      std::copy(rows.begin(), rows.end(), inner + outer[j]);
+      std::fill(values + outer[j], values + outer[j + 1], 0.0);
     }
   }
-  return pattern;
-}
-
-Eigen::SparseMatrix<double> to_matrix(LowerPattern&& pattern) {
-  const int n = pattern.size();
-  Eigen::SparseMatrix<double> A(n, n);
-  A.resizeNonZeros(pattern.nonzeros());
-  std::copy(pattern.outer.begin(), pattern.outer.end(), A.outerIndexPtr());
-  std::copy(pattern.inner.begin(), pattern.inner.end(), A.innerIndexPtr());
-  std::fill(A.valuePtr(), A.valuePtr() + pattern.nonzeros(), 0.0);
-  pattern = LowerPattern{};
   return A;
 }
 

@@ -14,16 +14,9 @@ struct DofLayout {
 };
 DofLayout make_dof_layout(int num_functions, const std::vector<bool>& fixed);
 
-// Lower triangle (row >= column) of the coupling pattern of the free dofs, in
-// compressed-column form with sorted row indices: the layout CHOLMOD reads.
-struct LowerPattern {
-  std::vector<int> outer;  // size n+1
-  std::vector<int> inner;
-  int size() const { return static_cast<int>(outer.size()) - 1; }
-  long nonzeros() const { return static_cast<long>(inner.size()); }
-};
-LowerPattern lower_pattern(const BezierMesh& mesh, const DofLayout& layout);
-// A compressed column-major matrix with that pattern and zero values (pattern is consumed).
-Eigen::SparseMatrix<double> to_matrix(LowerPattern&& pattern);
+// The lower triangle (row >= column) of the coupling pattern of the free dofs, as a
+// compressed column-major matrix with sorted row indices and zero values: the layout
+// CHOLMOD reads. Built in place, in two threaded passes (count, fill).
+Eigen::SparseMatrix<double> lower_pattern_matrix(const BezierMesh& mesh, const DofLayout& layout);
 
 }  // namespace knotwork
