@@ -62,11 +62,13 @@ void SparseCholesky::factorize(const Eigen::SparseMatrix<double>& A) {
   const auto t1 = clock::now();
   impl_->llt.factorize(A);
   stats_.factorize_seconds = std::chrono::duration<double>(clock::now() - t1).count();
+  const cholmod_common& cm = impl_->llt.cholmod();
+  if (cm.status == CHOLMOD_OUT_OF_MEMORY || cm.status == CHOLMOD_TOO_LARGE)
+    throw std::bad_alloc();
   if (impl_->llt.info() != Eigen::Success)
     throw std::runtime_error(
         "the stiffness matrix is not positive definite: CHOLMOD could not factor it "
         "(a problem without Dirichlet conditions has no unique solution)");
-  const cholmod_common& cm = impl_->llt.cholmod();
   stats_.factor_nonzeros = cm.lnz;
   stats_.flops = cm.fl;
   stats_.peak_bytes = static_cast<double>(cm.memory_usage);

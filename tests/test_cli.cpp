@@ -130,8 +130,12 @@ TEST_CASE("every subcommand has --help", "[cli]") {
     REQUIRE(r.code == 0);
     REQUIRE(r.out.find("Usage") != std::string::npos);
   }
-  REQUIRE(box.run("").code != 0);
-  REQUIRE(box.run("frobnicate").code != 0);
+  for (const char* bad : {"", "frobnicate", "run", "run x.toml --degree abc", "run x.toml --bogus"}) {
+    const Result r = box.run(bad);
+    INFO(bad << ": " << r.err);
+    REQUIRE(r.code != 0);
+    REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
 }
 
 TEST_CASE("bad input: files and TOML", "[cli][bad-input]") {

@@ -159,6 +159,35 @@ TEST_CASE("Continuity option: C0 quadratics still converge optimally", "[poisson
   REQUIRE(r.h1 >= 2 - 0.2);
 }
 
+TEST_CASE("Analytic geometry map: polar quarter annulus with B-splines converges optimally", "[poisson][rates]") {
+  // The same domain as the NURBS quarter annulus, but parametrized by angle uniformly:
+  // x = (1+u) cos(pi v / 2), y = (1+u) sin(pi v / 2). The space is plain B-splines.
+  const auto polar = [](double u, double v, double* x, double* J) {
+    const double r = 1 + u, a = 0.5 * M_PI * v;
+    x[0] = r * std::cos(a);
+    x[1] = r * std::sin(a);
+    J[0] = std::cos(a);
+    J[1] = -0.5 * M_PI * r * std::sin(a);
+    J[2] = std::sin(a);
+    J[3] = 0.5 * M_PI * r * std::cos(a);
+  };
+  for (int p = 1; p <= 3; ++p) {
+    CaseDescription c = with_exact(rectangle_patch(0, 0, 1, 1), p, 4, "-(x^2+y^2-1)*(x^2+y^2-4)*x*y^2");
+    c.space.rational = false;
+    std::vector<ErrorNorms> e;
+    for (int n : {8, 16}) {
+      c.space.elements_per_span = {n, n};
+      const Discretization d = discretize(c);
+      const AnalyticGeometryMap g(d.mesh(), polar);
+      e.push_back(*solve_poisson(d.mesh(), g, c.problem, options_of(c)).errors);
+    }
+    const double l2_rate = std::log2(e[0].l2 / e[1].l2), h1_rate = std::log2(e[0].h1_semi / e[1].h1_semi);
+    INFO("p = " << p << ": L2 rate " << l2_rate << ", H1 rate " << h1_rate);
+    REQUIRE(l2_rate >= p + 1 - 0.2);
+    REQUIRE(h1_rate >= p - 0.2);
+  }
+}
+
 TEST_CASE("CHOLMOD reuses the symbolic analysis while the pattern stays", "[poisson][solver]") {
   const int n = 50;
   Eigen::SparseMatrix<double> A(n, n);  // lower triangle of a tridiagonal SPD matrix
