@@ -31,14 +31,7 @@ struct BenchResult {
 
 // The benchmark problem: unit square, u = sin(pi x) sin(pi y), homogeneous Dirichlet.
 BenchResult run_one(int p, int n, Ordering ordering, bool with_errors, bool floor) {
-  CaseDescription c;
-  c.path = "bench";
-  c.geometry = rectangle_patch(0, 0, 1, 1);
-  c.space.degree = {p, p};
-  c.space.elements_per_span = {n, n};
-  c.problem.exact = differentiate_exact_solution(Expression::parse("sin(pi*x)*sin(pi*y)", "bench"));
-  c.problem.source = c.problem.exact->minus_laplacian;
-  c.problem.boundary.assign(4, BoundaryCondition{});
+  const CaseDescription c = unit_square_benchmark_case(p, n);
   const auto t0 = std::chrono::steady_clock::now();
   const Discretization d = discretize(c);
   const double t_space = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

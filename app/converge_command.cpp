@@ -57,16 +57,7 @@ int converge_command(const ConvergeOptions& o) {
     progress("building the space (" + std::to_string(c.space.elements_per_span[0]) + " elements per span)");
     const auto t0 = std::chrono::steady_clock::now();
     const Discretization d = discretize(c);
-    PoissonSolveOptions so;
-    so.quadrature = c.quadrature;
-    so.ordering = ordering;
-    so.progress = [&](const std::string& s) { progress(s); };
-    PoissonSolution s;
-    try {
-      s = solve_poisson(d.mesh(), *d.geometry, c.problem, so);
-    } catch (const GeometryError& e) {
-      throw InputError(c.path + ": [geometry]: " + e.what());
-    }
+    const PoissonSolution s = solve_case(c, d, ordering, [&](const std::string& what) { progress(what); });
     Level lv;
     lv.elements = c.space.elements_per_span[0];
     lv.h = mesh_size(d);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "cases/geometries.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -16,6 +17,32 @@ Discretization discretize(const CaseDescription& c) {
   }
   d.geometry = std::make_unique<NurbsGeometryMap>(d.tensor);
   return d;
+}
+
+PoissonSolution solve_case(const CaseDescription& c, const Discretization& d, Ordering ordering,
+                           const std::function<void(const std::string&)>& progress) {
+  PoissonSolveOptions so;
+  so.quadrature = c.quadrature;
+  so.ordering = ordering;
+  so.progress = progress;
+  try {
+    return solve_poisson(d.mesh(), *d.geometry, c.problem, so);
+  } catch (const GeometryError& e) {
+    throw InputError(c.path + ": [geometry]: " + e.what());
+  }
+}
+
+CaseDescription unit_square_benchmark_case(int p, int n) {
+  CaseDescription c;
+  c.path = "bench";
+  c.name = "bench";
+  c.geometry = rectangle_patch(0, 0, 1, 1);
+  c.space.degree = {p, p};
+  c.space.elements_per_span = {n, n};
+  c.problem.exact = differentiate_exact_solution(Expression::parse("sin(pi*x)*sin(pi*y)", "bench"));
+  c.problem.source = c.problem.exact->minus_laplacian;
+  c.problem.boundary.assign(4, BoundaryCondition{});
+  return c;
 }
 
 double mesh_size(const Discretization& d) {

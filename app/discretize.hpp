@@ -4,6 +4,9 @@
 #include "basis/tensor_patch.hpp"
 #include "cases/case_file.hpp"
 #include "solver/geometry_map.hpp"
+#include "solver/poisson_solver.hpp"
+
+#include <functional>
 
 namespace knotwork {
 
@@ -16,6 +19,14 @@ struct Discretization {
 
 // Throws InputError naming the case file and [space] when the space cannot be built.
 Discretization discretize(const CaseDescription& c);
+
+// Solves the case's Poisson problem on its discretization; a GeometryError gets the case
+// file and "[geometry]" in front of its message.
+PoissonSolution solve_case(const CaseDescription& c, const Discretization& d, Ordering ordering,
+                           const std::function<void(const std::string&)>& progress);
+
+// The benchmark problem: unit square, u = sin(pi x) sin(pi y), degree p, n x n elements.
+CaseDescription unit_square_benchmark_case(int p, int n);
 
 // Largest physical cell diameter (longest cell diagonal), the h of convergence tables.
 double mesh_size(const Discretization& d);

@@ -34,16 +34,7 @@ int run_command(const RunOptions& o) {
   const Discretization d = discretize(c);
   const double t_space = since(t);
 
-  PoissonSolveOptions so;
-  so.quadrature = c.quadrature;
-  so.ordering = ordering;
-  so.progress = [&](const std::string& s) { progress(s); };
-  PoissonSolution s;
-  try {
-    s = solve_poisson(d.mesh(), *d.geometry, c.problem, so);
-  } catch (const GeometryError& e) {
-    throw InputError(c.path + ": [geometry]: " + e.what());
-  }
+  PoissonSolution s = solve_case(c, d, ordering, [&](const std::string& what) { progress(what); });
   s.timings.setup += t_space;
 
   std::vector<std::string> outputs;

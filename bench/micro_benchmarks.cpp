@@ -12,17 +12,7 @@ using namespace knotwork;
 
 namespace {
 
-CaseDescription square(int p, int n) {
-  CaseDescription c;
-  c.path = "bench";
-  c.geometry = rectangle_patch(0, 0, 1, 1);
-  c.space.degree = {p, p};
-  c.space.elements_per_span = {n, n};
-  c.problem.exact = differentiate_exact_solution(Expression::parse("sin(pi*x)*sin(pi*y)", "bench"));
-  c.problem.source = c.problem.exact->minus_laplacian;
-  c.problem.boundary.assign(4, BoundaryCondition{});
-  return c;
-}
+CaseDescription square(int p, int n) { return unit_square_benchmark_case(p, n); }
 
 void BM_BezierExtraction(benchmark::State& state) {
   const auto b = BSplineBasis1D::open_uniform(static_cast<int>(state.range(0)), 0, 1, 1024);

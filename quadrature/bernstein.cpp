@@ -34,6 +34,26 @@ void bernstein_values_and_derivatives(int p, double t, double* values, double* d
   }
 }
 
+void tensor_bernstein(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                      Eigen::MatrixXd& B, Eigen::MatrixXd& Bu, Eigen::MatrixXd& Bv) {
+  const Eigen::Index n = u.size();
+  const int nb = (p + 1) * (q + 1);
+  B.resize(n, nb);
+  Bu.resize(n, nb);
+  Bv.resize(n, nb);
+  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    bernstein_values_and_derivatives(p, u[k], bu.data(), du.data());
+    bernstein_values_and_derivatives(q, v[k], bv.data(), dv.data());
+    for (int c = 0; c <= q; ++c)
+      for (int a = 0; a <= p; ++a) {
+        B(k, a + (p + 1) * c) = bu[a] * bv[c];
+        Bu(k, a + (p + 1) * c) = du[a] * bv[c];
+        Bv(k, a + (p + 1) * c) = bu[a] * dv[c];
+      }
+  }
+}
+
 namespace {
 
 BernsteinTable make_table(int p, int q, int nu, int nv) {
@@ -42,31 +62,18 @@ BernsteinTable make_table(int p, int q, int nu, int nv) {
   t.q = q;
   t.rule_u = gauss_legendre(nu);
   t.rule_v = gauss_legendre(nv);
-  const int np = nu * nv, nb = (p + 1) * (q + 1);
+  const int np = nu * nv;
   t.point_u.resize(np);
   t.point_v.resize(np);
   t.weight.resize(np);
-  t.value.resize(np, nb);
-  t.d_u.resize(np, nb);
-  t.d_v.resize(np, nb);
-  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
-  for (int j = 0; j < nv; ++j) {
-    bernstein_values_and_derivatives(q, t.rule_v.nodes[j], bv.data(), dv.data());
+  for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; ++i) {
-      bernstein_values_and_derivatives(p, t.rule_u.nodes[i], bu.data(), du.data());
       const int k = i + nu * j;
       t.point_u[k] = t.rule_u.nodes[i];
       t.point_v[k] = t.rule_v.nodes[j];
       t.weight[k] = t.rule_u.weights[i] * t.rule_v.weights[j];
-      for (int c = 0; c <= q; ++c)
-        for (int a = 0; a <= p; ++a) {
-          const int b = a + (p + 1) * c;
-          t.value(k, b) = bu[a] * bv[c];
-          t.d_u(k, b) = du[a] * bv[c];
-          t.d_v(k, b) = bu[a] * dv[c];
-        }
     }
-  }
+  tensor_bernstein(p, q, t.point_u, t.point_v, t.value, t.d_u, t.d_v);
   return t;
 }
 

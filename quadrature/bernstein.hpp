@@ -9,6 +9,11 @@ namespace knotwork {
 // of degree p on [0,1] at t: out is 2 x (p+1).
 void bernstein_values_and_derivatives(int p, double t, double* values, double* derivatives);
 
+// Tensor-product Bernstein polynomials of bi-degree (p, q) and their reference
+// derivatives at arbitrary points (u_k, v_k): points x functions, function a + (p+1) c.
+void tensor_bernstein(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                      Eigen::MatrixXd& value, Eigen::MatrixXd& d_u, Eigen::MatrixXd& d_v);
+
 // Tabulated tensor-product Bernstein basis of bi-degree (p, q) at the tensor
 // Gauss points of a (nu x nv)-point rule on [0,1]^2.
 // Point index k = i + nu*j (i along u); function index b = a + (p+1)*c (a along u).

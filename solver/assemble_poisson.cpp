@@ -179,29 +179,41 @@ int side_points(const QuadratureOptions& q, const BezierCell& cell) {
   return std::max(rule_points(q.points_u, cell.degree_u, 1), rule_points(q.points_v, cell.degree_v, 1)) + 1;
 }
 
-}  // namespace
-
-void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
-                       const PoissonProblem& problem, const DofLayout& layout,
-                       const QuadratureOptions& quadrature, Eigen::VectorXd& rhs) {
+// Calls visit(cell, side basis, boundary data at the side's points) for every cell side
+// that carries a condition of the given kind.
+template <class Visit>
+void for_each_boundary_side(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
+                            const QuadratureOptions& quadrature, BoundaryKind kind, Visit visit) {
   CellBasis cb;
-  Eigen::VectorXd h, Fe;
+  Eigen::VectorXd data;
   for (size_t id = 0; id < problem.boundary.size(); ++id) {
     const BoundaryCondition& bc = problem.boundary[id];
-    if (bc.kind != BoundaryKind::kNeumann) continue;
+    if (bc.kind != kind) continue;
     std::optional<ExpressionEvaluator> value, ux, uy;
     make_evaluators(problem, bc, value, ux, uy);
     for (int c = 0; c < mesh.num_cells(); ++c)
       for (int s = 0; s < 4; ++s) {
         if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
         evaluate_side_basis(mesh, geometry, c, static_cast<CellSide>(s), side_points(quadrature, mesh.cell(c)), cb);
-        boundary_data(problem, bc, cb, value, ux, uy, h);
-        Fe.noalias() = cb.C * (cb.value.transpose() * cb.measure.cwiseProduct(h));
-        const auto ids = mesh.functions(c);
-        for (size_t a = 0; a < ids.size(); ++a)
-          if (layout.dof[ids[a]] >= 0) rhs[layout.dof[ids[a]]] += Fe[a];
+        boundary_data(problem, bc, cb, value, ux, uy, data);
+        visit(c, cb, data);
       }
   }
+}
+
+}  // namespace
+
+void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
+                       const PoissonProblem& problem, const DofLayout& layout,
+                       const QuadratureOptions& quadrature, Eigen::VectorXd& rhs) {
+  Eigen::VectorXd Fe;
+  for_each_boundary_side(mesh, geometry, problem, quadrature, BoundaryKind::kNeumann,
+                         [&](int c, const CellBasis& cb, const Eigen::VectorXd& h) {
+                           Fe.noalias() = cb.C * (cb.value.transpose() * cb.measure.cwiseProduct(h));
+                           const auto ids = mesh.functions(c);
+                           for (size_t a = 0; a < ids.size(); ++a)
+                             if (layout.dof[ids[a]] >= 0) rhs[layout.dof[ids[a]]] += Fe[a];
+                         });
 }
 
 Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap& geometry,
@@ -232,30 +244,20 @@ Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap
   Eigen::VectorXd result = Eigen::VectorXd::Zero(nf);
   if (nd == 0) return result;
   std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::VectorXd r = Eigen::VectorXd::Zero(nd), g;
-  CellBasis cb;
-  for (size_t id = 0; id < problem.boundary.size(); ++id) {
-    const BoundaryCondition& bc = problem.boundary[id];
-    if (bc.kind != BoundaryKind::kDirichlet) continue;
-    std::optional<ExpressionEvaluator> value, ux, uy;
-    make_evaluators(problem, bc, value, ux, uy);
-    for (int c = 0; c < mesh.num_cells(); ++c)
-      for (int s = 0; s < 4; ++s) {
-        if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
-        evaluate_side_basis(mesh, geometry, c, static_cast<CellSide>(s), side_points(quadrature, mesh.cell(c)), cb);
-        boundary_data(problem, bc, cb, value, ux, uy, g);
-        const Eigen::MatrixXd phi = cb.value * cb.C.transpose();  // points x alive functions
-        const Eigen::MatrixXd Me = phi.transpose() * cb.measure.asDiagonal() * phi;
-        const Eigen::VectorXd re = phi.transpose() * cb.measure.cwiseProduct(g);
-        const auto ids = mesh.functions(c);
-        for (size_t a = 0; a < ids.size(); ++a) {
-          if (local[ids[a]] < 0) continue;
-          r[local[ids[a]]] += re[a];
-          for (size_t b = 0; b < ids.size(); ++b)
-            if (local[ids[b]] >= 0) triplets.emplace_back(local[ids[a]], local[ids[b]], Me(a, b));
-        }
-      }
-  }
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(nd);
+  for_each_boundary_side(mesh, geometry, problem, quadrature, BoundaryKind::kDirichlet,
+                         [&](int c, const CellBasis& cb, const Eigen::VectorXd& g) {
+                           const Eigen::MatrixXd phi = cb.value * cb.C.transpose();  // points x alive
+                           const Eigen::MatrixXd Me = phi.transpose() * cb.measure.asDiagonal() * phi;
+                           const Eigen::VectorXd re = phi.transpose() * cb.measure.cwiseProduct(g);
+                           const auto ids = mesh.functions(c);
+                           for (size_t a = 0; a < ids.size(); ++a) {
+                             if (local[ids[a]] < 0) continue;
+                             r[local[ids[a]]] += re[a];
+                             for (size_t b = 0; b < ids.size(); ++b)
+                               if (local[ids[b]] >= 0) triplets.emplace_back(local[ids[a]], local[ids[b]], Me(a, b));
+                           }
+                         });
   Eigen::SparseMatrix<double> M(nd, nd);
   M.setFromTriplets(triplets.begin(), triplets.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(M);

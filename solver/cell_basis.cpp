@@ -54,7 +54,7 @@ void evaluate_cell_basis(const BezierMesh& mesh, const GeometryMap& geometry, in
 void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell,
                          CellSide side, int n, CellBasis& out) {
   const BezierCell& c = mesh.cell(cell);
-  const int p = c.degree_u, q = c.degree_v, nb = (p + 1) * (q + 1);
+  const int p = c.degree_u, q = c.degree_v;
   const QuadratureRule1D rule = gauss_legendre(n);
   Eigen::VectorXd u(n), v(n), w(n);
   for (int k = 0; k < n; ++k) {
@@ -67,18 +67,8 @@ void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, in
       case kSideLeft: u[k] = 0; v[k] = t; break;
     }
   }
-  Eigen::MatrixXd B(n, nb), Bu(n, nb), Bv(n, nb);
-  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
-  for (int k = 0; k < n; ++k) {
-    bernstein_values_and_derivatives(p, u[k], bu.data(), du.data());
-    bernstein_values_and_derivatives(q, v[k], bv.data(), dv.data());
-    for (int cc = 0; cc <= q; ++cc)
-      for (int a = 0; a <= p; ++a) {
-        B(k, a + (p + 1) * cc) = bu[a] * bv[cc];
-        Bu(k, a + (p + 1) * cc) = du[a] * bv[cc];
-        Bv(k, a + (p + 1) * cc) = bu[a] * dv[cc];
-      }
-  }
+  Eigen::MatrixXd B, Bu, Bv;
+  tensor_bernstein(p, q, u, v, B, Bu, Bv);
   rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
   geometry.evaluate(cell, u, v, out.geometry);
   finish(B, Bu, Bv, w, mesh.is_rational(), out);

@@ -49,20 +49,9 @@ Eigen::MatrixX3d evaluate_solution(const BezierMesh& mesh, const GeometryMap& ge
                                    const Eigen::VectorXd& coefficients, int c,
                                    const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
   const BezierCell& cell = mesh.cell(c);
-  const int p = cell.degree_u, q = cell.degree_v, nb = (p + 1) * (q + 1);
   const Eigen::Index n = u.size();
-  Eigen::MatrixXd B(n, nb), Bu(n, nb), Bv(n, nb);
-  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    bernstein_values_and_derivatives(p, u[k], bu.data(), du.data());
-    bernstein_values_and_derivatives(q, v[k], bv.data(), dv.data());
-    for (int cc = 0; cc <= q; ++cc)
-      for (int a = 0; a <= p; ++a) {
-        B(k, a + (p + 1) * cc) = bu[a] * bv[cc];
-        Bu(k, a + (p + 1) * cc) = du[a] * bv[cc];
-        Bv(k, a + (p + 1) * cc) = bu[a] * dv[cc];
-      }
-  }
+  Eigen::MatrixXd B, Bu, Bv;
+  tensor_bernstein(cell.degree_u, cell.degree_v, u, v, B, Bu, Bv);
   Eigen::VectorXd wb;
   Eigen::MatrixXd C;
   rational_cell_extraction(mesh, c, wb, C);

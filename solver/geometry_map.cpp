@@ -25,26 +25,6 @@ void dehomogenize(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, const E
   }
 }
 
-void bernstein_at_points(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
-                         Eigen::MatrixXd& B, Eigen::MatrixXd& Bu, Eigen::MatrixXd& Bv) {
-  const Eigen::Index n = u.size();
-  const int nb = (p + 1) * (q + 1);
-  B.resize(n, nb);
-  Bu.resize(n, nb);
-  Bv.resize(n, nb);
-  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    bernstein_values_and_derivatives(p, u[k], bu.data(), du.data());
-    bernstein_values_and_derivatives(q, v[k], bv.data(), dv.data());
-    for (int c = 0; c <= q; ++c)
-      for (int a = 0; a <= p; ++a) {
-        B(k, a + (p + 1) * c) = bu[a] * bv[c];
-        Bu(k, a + (p + 1) * c) = du[a] * bv[c];
-        Bv(k, a + (p + 1) * c) = bu[a] * dv[c];
-      }
-  }
-}
-
 }  // namespace
 
 NurbsGeometryMap::NurbsGeometryMap(const TensorDiscretization& d)
@@ -86,7 +66,7 @@ void NurbsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoin
 void NurbsGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                                 GeometryAtPoints& out) const {
   Eigen::MatrixXd B, Bu, Bv;
-  bernstein_at_points(pu_, pv_, u, v, B, Bu, Bv);
+  tensor_bernstein(pu_, pv_, u, v, B, Bu, Bv);
   Eigen::MatrixX3d bez;
   homogeneous_bezier(cell, bez);
   dehomogenize(B * bez, Bu * bez, Bv * bez, out);

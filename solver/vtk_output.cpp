@@ -40,6 +40,28 @@ void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
   if (writer->Write() != 1) throw std::runtime_error(path + ": VTK could not write the file");
 }
 
+// The "exact" and "error" point arrays, present when an exact solution is known.
+struct ExactArrays {
+  vtkSmartPointer<vtkDoubleArray> exact, error;
+  std::optional<ExpressionEvaluator> u;
+  ExactArrays(const ExactSolution* e, vtkIdType n) {
+    if (!e) return;
+    exact = scalar_array("exact", n);
+    error = scalar_array("error", n);
+    u.emplace(e->u);
+  }
+  explicit operator bool() const { return exact != nullptr; }
+  void set(vtkIdType id, double exact_value, double solution_value) {
+    exact->SetValue(id, exact_value);
+    error->SetValue(id, solution_value - exact_value);
+  }
+  void add_to(vtkUnstructuredGrid* grid) const {
+    if (!exact) return;
+    grid->GetPointData()->AddArray(exact);
+    grid->GetPointData()->AddArray(error);
+  }
+};
+
 // Values at the equispaced nodes of each cell: solution (and exact) in the geometry's points.
 struct NodeValues {
   Eigen::VectorXd u, exact;
@@ -75,13 +97,7 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
   auto weights = scalar_array("RationalWeights", total);
   auto degrees = scalar_array("HigherOrderDegrees", nc, 3);
   auto solution = scalar_array("solution", total);
-  vtkSmartPointer<vtkDoubleArray> exact_a, error_a;
-  if (exact) {
-    exact_a = scalar_array("exact", total);
-    error_a = scalar_array("error", total);
-  }
-  std::optional<ExpressionEvaluator> ev;
-  if (exact) ev.emplace(exact->u);
+  ExactArrays ex(exact, total);
   grid->Allocate(nc);
   vtkIdType offset = 0;
   std::vector<vtkIdType> ids;
@@ -107,7 +123,7 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
     // Field coefficients f with sum w_b B_b f_b / W = value at every node.
     GeometryAtPoints at;
     geometry.evaluate(c, nu, nv, at);
-    const NodeValues val = node_values(mesh, geometry, coeffs, exact, c, nu, nv, at.x, ev ? &*ev : nullptr);
+    const NodeValues val = node_values(mesh, geometry, coeffs, exact, c, nu, nv, at.x, ex ? &*ex.u : nullptr);
     const Eigen::VectorXd W = collocation * g.weights;
     auto to_bezier = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
       return (inverse * W.cwiseProduct(v)).cwiseQuotient(g.weights);
@@ -125,10 +141,7 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
         points->SetPoint(id, g.points(b, 0), g.points(b, 1), 0.0);
         weights->SetValue(id, g.weights[b]);
         solution->SetValue(id, fu[b]);
-        if (exact) {
-          exact_a->SetValue(id, fe[b]);
-          error_a->SetValue(id, fu[b] - fe[b]);
-        }
+        if (ex) ex.set(id, fe[b], fu[b]);
       }
     grid->InsertNextCell(VTK_BEZIER_QUADRILATERAL, nb, ids.data());
     const double deg[3] = {double(p), double(q), 1.0};
@@ -139,10 +152,7 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
   grid->GetPointData()->SetRationalWeights(weights);
   grid->GetCellData()->SetHigherOrderDegrees(degrees);
   grid->GetPointData()->SetScalars(solution);
-  if (exact) {
-    grid->GetPointData()->AddArray(exact_a);
-    grid->GetPointData()->AddArray(error_a);
-  }
+  ex.add_to(grid);
   write_grid(path, grid);
 }
 
@@ -156,13 +166,7 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   points->SetNumberOfPoints(total);
   auto solution = scalar_array("solution", total);
   auto gradient = scalar_array("solution_gradient", total, 3);
-  vtkSmartPointer<vtkDoubleArray> exact_a, error_a;
-  if (exact) {
-    exact_a = scalar_array("exact", total);
-    error_a = scalar_array("error", total);
-  }
-  std::optional<ExpressionEvaluator> ev;
-  if (exact) ev.emplace(exact->u);
+  ExactArrays ex(exact, total);
   Eigen::VectorXd u(per_cell), v(per_cell);
   for (int j = 0; j <= s; ++j)
     for (int i = 0; i <= s; ++i) {
@@ -180,11 +184,7 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
       solution->SetValue(base + k, uh(k, 0));
       const double grad[3] = {uh(k, 1), uh(k, 2), 0.0};
       gradient->SetTuple(base + k, grad);
-      if (exact) {
-        const double e = (*ev)(at.x(k, 0), at.x(k, 1));
-        exact_a->SetValue(base + k, e);
-        error_a->SetValue(base + k, uh(k, 0) - e);
-      }
+      if (ex) ex.set(base + k, (*ex.u)(at.x(k, 0), at.x(k, 1)), uh(k, 0));
     }
     for (int j = 0; j < s; ++j)
       for (int i = 0; i < s; ++i) {
@@ -196,10 +196,7 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   grid->SetPoints(points);
   grid->GetPointData()->SetScalars(solution);
   grid->GetPointData()->AddArray(gradient);
-  if (exact) {
-    grid->GetPointData()->AddArray(exact_a);
-    grid->GetPointData()->AddArray(error_a);
-  }
+  ex.add_to(grid);
   write_grid(path, grid);
 }
 
