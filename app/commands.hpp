@@ -32,7 +32,14 @@ struct BenchOptions {
   bool floor = false;  // also time bare CHOLMOD (default settings) on the same matrix
 };
 
+struct DimensionOptions {
+  std::string file;
+  bool exact = false;
+  bool json = false;
+};
+
 int run_command(const RunOptions& o);
+int dimension_command(const DimensionOptions& o);
 int converge_command(const ConvergeOptions& o);
 int bench_command(const BenchOptions& o);
 

@@ -64,6 +64,14 @@ int main(int argc, char** argv) {
   bench_cmd->add_flag("--floor", bench.floor,
                       "Also time bare CHOLMOD with its default settings on the same matrix (the floor)");
 
+  knotwork::DimensionOptions dim;
+  CLI::App* dim_cmd = app.add_subcommand(
+      "dimension", "Brute-force dimension of S(m, n, alpha, beta) over a T-mesh / rectangular partition");
+  dim_cmd->add_option("mesh", dim.file, "Partition file (TOML): cells = [[x0, y0, x1, y1], ...], degree = [m, n]")
+      ->required();
+  dim_cmd->add_flag("--exact", dim.exact, "Rank by exact rational elimination (slower) instead of modulo two primes");
+  dim_cmd->add_flag("--json", dim.json, "Print one JSON object");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -80,6 +88,7 @@ int main(int argc, char** argv) {
     if (*run_cmd) return knotwork::run_command(run);
     if (*conv_cmd) return knotwork::converge_command(conv);
     if (*bench_cmd) return knotwork::bench_command(bench);
+    if (*dim_cmd) return knotwork::dimension_command(dim);
   } catch (const knotwork::InputError& e) {
     std::fprintf(stderr, "knotwork: error: %s\n", e.what());
     return 2;

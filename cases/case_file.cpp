@@ -427,6 +427,57 @@ CaseDescription load_case(const std::string& path) {
   return c;
 }
 
+PartitionDescription load_partition(const std::string& path) {
+  const toml::table root = parse_toml(path);
+  Reader r(path);
+  r.check_keys(root, "", {"cells", "degree", "smoothness", "title", "description"});
+  PartitionDescription d;
+  const toml::node* deg = root.get("degree");
+  if (!deg) r.fail("degree", "missing required key ([m, n] or one int)");
+  const auto mn = r.integer_pair(*deg, "degree");
+  check_degree(r, mn, "degree");
+  d.m = static_cast<int>(mn[0]);
+  d.n = static_cast<int>(mn[1]);
+  d.alpha = d.m - 1;
+  d.beta = d.n - 1;
+  if (const toml::node* sm = root.get("smoothness")) {
+    const auto ab = r.integer_pair(*sm, "smoothness");
+    if (ab[0] < -1 || ab[0] > d.m - 1 || ab[1] < -1 || ab[1] > d.n - 1)
+      r.fail("smoothness", "must be in [-1, degree-1] per direction");
+    d.alpha = static_cast<int>(ab[0]);
+    d.beta = static_cast<int>(ab[1]);
+  }
+  const toml::node* cells = root.get("cells");
+  if (!cells || !cells->is_array()) r.fail("cells", "missing: give cells = [[x0, y0, x1, y1], ...]");
+  const toml::array& a = *cells->as_array();
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string field = "cells[" + std::to_string(i) + "]";
+    const toml::array* c = a.get(i)->as_array();
+    if (!c || c->size() != 4) r.fail(field, "must be [x0, y0, x1, y1]");
+    mpq_class v[4];
+    for (size_t k = 0; k < 4; ++k) {
+      const toml::node& x = *c->get(k);
+      try {
+        if (auto i64 = x.value_exact<int64_t>()) v[k] = mpq_class(static_cast<long>(*i64));
+        else if (auto s = x.value_exact<std::string>()) v[k] = parse_rational(*s);
+        else if (auto f = x.value_exact<double>()) {
+          if (!std::isfinite(*f)) r.fail(field, "coordinates must be finite");
+          v[k] = mpq_class(*f);  // the double's exact binary value: write "1/10", not 0.1, for exact decimals
+        } else r.fail(field, "coordinates must be numbers or rational strings");
+      } catch (const std::invalid_argument& e) {
+        r.fail(field, e.what());
+      }
+    }
+    d.cells.push_back({v[0], v[1], v[2], v[3]});
+  }
+  try {
+    RectangularPartition check(d.cells);
+  } catch (const std::invalid_argument& e) {
+    r.fail("cells", e.what());
+  }
+  return d;
+}
+
 void override_degree(CaseDescription& c, int degree) {
   if (degree < 1 || degree > kMaxDegree)
     throw InputError("--degree: must be in [1, 10], got " + std::to_string(degree));

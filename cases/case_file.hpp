@@ -32,3 +32,20 @@ void override_degree(CaseDescription& c, int degree);
 void override_elements(CaseDescription& c, int elements);
 
 }  // namespace knotwork
+
+#include "basis/rectangular_partition.hpp"
+
+namespace knotwork {
+
+// A rectangular partition (T-mesh) file:
+//   cells = [[x0, y0, x1, y1], ...]   numbers or exact rational strings such as "14/9"
+//   degree = [m, n]                   (or one int)
+//   smoothness = [alpha, beta]        optional, default [m-1, n-1]
+struct PartitionDescription {
+  std::vector<RationalBox> cells;
+  int m = 2, n = 2, alpha = 1, beta = 1;
+};
+// Throws InputError naming the file and field (or the offending cells).
+PartitionDescription load_partition(const std::string& path);
+
+}  // namespace knotwork

@@ -14,7 +14,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev libopenblas-dev
   libvtk9-dev
   catch2 libtomlplusplus-dev libcli11-dev
-  libmuparser-dev libginac-dev
+  libmuparser-dev libginac-dev libgmp-dev
   libbenchmark-dev
 )
 with_paraview=0

@@ -198,3 +198,32 @@ TEST_CASE("bad input: expressions and output directory", "[cli][bad-input]") {
   REQUIRE(r.err.find("not writable") != std::string::npos);
   REQUIRE(slurp(box.dir() / "occupied") == "not a directory");
 }
+
+TEST_CASE("dimension: T-mesh files, results and bad input", "[cli][dimension]") {
+  Sandbox box;
+  // The shipped hierarchical mesh: bicubic C2 on 4 x 4 with the lower-left 2 x 2 block halved.
+  // Hierarchical count: 49 level-0 functions, minus the 2 x 2 whose support lies in the
+  // refined block [0,2]^2, plus the 4 x 4 level-1 functions supported there: 61.
+  const Result r = box.run(std::string("dimension --json ") + KNOTWORK_SOURCE_DIR + "/cases/tmeshes/hierarchical.toml");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  REQUIRE(r.out.find("\"dimension_bruteforce\": 61") != std::string::npos);
+  const Result e = box.run(std::string("dimension --exact ") + KNOTWORK_SOURCE_DIR + "/cases/tmeshes/hierarchical.toml");
+  REQUIRE(e.out.find("dimension  61") != std::string::npos);
+
+  auto rejected = [&](const std::string& text, const std::vector<std::string>& mentions) {
+    box.file("mesh.toml", text);
+    const Result b = box.run("dimension mesh.toml");
+    INFO(b.err);
+    REQUIRE(b.code != 0);
+    REQUIRE(std::count(b.err.begin(), b.err.end(), '\n') == 1);
+    for (const auto& m : mentions) REQUIRE(b.err.find(m) != std::string::npos);
+  };
+  rejected("degree = 2\ncells = [[0, 0, 1, 1], [\"1/2\", 0, 2, 1]]\n", {"mesh.toml", "cells", "cells 0", "overlap"});
+  rejected("degree = 2\ncells = [[0, 0, 1, 1], [1, 0, 2, \"1/2\"]]\n", {"mesh.toml", "cells", "gap"});
+  rejected("degree = 2\ncells = [[0, 0, 1, 1], [1, 0, 1, 1]]\n", {"mesh.toml", "zero"});
+  rejected("degree = 2\ncells = [[0, 0, nan, 1]]\n", {"mesh.toml", "cells[0]", "finite"});
+  rejected("degree = 0\ncells = [[0, 0, 1, 1]]\n", {"mesh.toml", "degree"});
+  rejected("degree = 2\ncells = [[0, 0, \"1/x\", 1]]\n", {"mesh.toml", "cells[0]", "not a number"});
+  rejected("cells = [[0, 0, 1, 1]]\n", {"mesh.toml", "degree", "missing"});
+}

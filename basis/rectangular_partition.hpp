@@ -1,0 +1,44 @@
+#pragma once
+#include <gmpxx.h>
+
+#include <string>
+#include <vector>
+
+namespace knotwork {
+
+// An axis-aligned cell with exact rational corners: the dimension of a spline space over a
+// T-mesh can change with the coordinates (dimensional instability), so coordinates stay
+// exact wherever the computation is exact.
+struct RationalBox {
+  mpq_class x0, y0, x1, y1;
+};
+
+// Parses "14/9", "-3", "0.25" (a decimal is read exactly: 0.25 = 1/4) into a rational.
+// Throws std::invalid_argument.
+mpq_class parse_rational(const std::string& text);
+
+// A rectangle tiled by axis-aligned cells (a T-mesh, or any rectangular partition).
+class RectangularPartition {
+ public:
+  // Validates: positive areas, no two cells overlapping, and together exactly a rectangle.
+  // Throws std::invalid_argument naming the offending cells (0-based indices).
+  explicit RectangularPartition(std::vector<RationalBox> cells);
+
+  const std::vector<RationalBox>& cells() const { return cells_; }
+  int num_cells() const { return static_cast<int>(cells_.size()); }
+
+  // A maximal common segment of two cells' boundaries. Vertical: first is left of
+  // second, the segment is x = position, from <= y <= to. Horizontal: first below second.
+  struct SharedEdge {
+    int first, second;
+    bool vertical;
+    mpq_class position, from, to;
+  };
+  const std::vector<SharedEdge>& shared_edges() const { return edges_; }
+
+ private:
+  std::vector<RationalBox> cells_;
+  std::vector<SharedEdge> edges_;
+};
+
+}  // namespace knotwork

@@ -1,0 +1,127 @@
+#include <catch2/catch.hpp>
+#include <map>
+#include <random>
+#include <set>
+
+#include "basis/rectangular_partition.hpp"
+#include "basis/spline_dimension.hpp"
+
+using namespace knotwork;
+
+namespace {
+
+mpq_class q(long a, long b = 1) {
+  mpq_class r(a, b);
+  r.canonicalize();
+  return r;
+}
+
+// A tensor grid on the given (strictly increasing) breakpoints.
+RectangularPartition grid(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& ys) {
+  std::vector<RationalBox> cells;
+  for (size_t j = 0; j + 1 < ys.size(); ++j)
+    for (size_t i = 0; i + 1 < xs.size(); ++i) cells.push_back({xs[i], ys[j], xs[i + 1], ys[j + 1]});
+  return RectangularPartition(cells);
+}
+
+std::vector<mpq_class> random_breaks(std::mt19937& rng, int pieces) {
+  std::vector<mpq_class> b{0};
+  std::uniform_int_distribution<int> step(1, 9), den(1, 7);
+  for (int i = 0; i < pieces; ++i) b.push_back(b.back() + q(step(rng), den(rng)));
+  return b;
+}
+
+// Random T-mesh: split random cells at random rational positions (guillotine cuts).
+std::vector<RationalBox> random_tmesh(std::mt19937& rng, int splits) {
+  std::vector<RationalBox> cells{{0, 0, 1, 1}};
+  std::uniform_int_distribution<int> frac(1, 4);
+  for (int s = 0; s < splits; ++s) {
+    const size_t i = std::uniform_int_distribution<size_t>(0, cells.size() - 1)(rng);
+    RationalBox c = cells[i], d = c;
+    const mpq_class t = q(frac(rng), 5);
+    if (rng() % 2) {
+      const mpq_class x = c.x0 + t * (c.x1 - c.x0);
+      c.x1 = x;
+      d.x0 = x;
+    } else {
+      const mpq_class y = c.y0 + t * (c.y1 - c.y0);
+      c.y1 = y;
+      d.y0 = y;
+    }
+    cells[i] = c;
+    cells.push_back(d);
+  }
+  return cells;
+}
+
+}  // namespace
+
+TEST_CASE("Tensor grids: the dimension is the tensor-product B-spline count", "[dimension]") {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 60; ++trial) {
+    const int nx = 1 + trial % 4, ny = 1 + (trial / 4) % 3;
+    const int m = 1 + trial % 3, n = 1 + (trial / 3) % 3;
+    const int alpha = -1 + static_cast<int>(rng() % (m + 1)), beta = -1 + static_cast<int>(rng() % (n + 1));
+    const RectangularPartition g = grid(random_breaks(rng, nx), random_breaks(rng, ny));
+    // (m+1) + (nx-1)(m-alpha) univariate functions in x, likewise in y.
+    const long expected = (m + 1 + (nx - 1L) * (m - alpha)) * (n + 1 + (ny - 1L) * (n - beta));
+    INFO("nx " << nx << " ny " << ny << " m " << m << " n " << n << " alpha " << alpha << " beta " << beta);
+    REQUIRE(spline_space_dimension(g, m, n, alpha, beta).dimension == expected);
+    if (trial % 4 == 0) REQUIRE(spline_space_dimension(g, m, n, alpha, beta, RankMethod::kExact).dimension == expected);
+  }
+}
+
+TEST_CASE("Modular rank equals the exact rational rank on random T-meshes", "[dimension]") {
+  std::mt19937 rng(12);
+  for (int trial = 0; trial < 25; ++trial) {
+    const RectangularPartition t(random_tmesh(rng, 4 + trial % 9));
+    const int m = 1 + trial % 3;
+    const auto fast = spline_space_dimension(t, m, m, m - 1, m - 1);
+    const auto exact = spline_space_dimension(t, m, m, m - 1, m - 1, RankMethod::kExact);
+    REQUIRE(exact.exact);
+    REQUIRE(fast.dimension == exact.dimension);
+  }
+}
+
+TEST_CASE("Bilinear C0 splines on a T-mesh: one function per crossing or boundary vertex", "[dimension]") {
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 30; ++trial) {
+    const auto cells = random_tmesh(rng, 3 + trial % 12);
+    // Count, independently, the cell corners that are corners of 4 cells (interior
+    // crossings) or lie on the outer boundary; T-nodes (corner of 2 cells) carry nothing.
+    std::map<std::pair<mpq_class, mpq_class>, int> corner_count;
+    for (const auto& c : cells)
+      for (const auto& p : {std::pair{c.x0, c.y0}, std::pair{c.x1, c.y0}, std::pair{c.x0, c.y1}, std::pair{c.x1, c.y1}})
+        ++corner_count[p];
+    long expected = 0;
+    for (const auto& [p, count] : corner_count) {
+      const bool boundary = p.first == 0 || p.first == 1 || p.second == 0 || p.second == 1;
+      if (boundary || count == 4) ++expected;
+    }
+    REQUIRE(spline_space_dimension(RectangularPartition(cells), 1, 1, 0, 0).dimension == expected);
+  }
+}
+
+TEST_CASE("Discontinuous and constant limits", "[dimension]") {
+  std::mt19937 rng(14);
+  const auto cells = random_tmesh(rng, 10);
+  const RectangularPartition t(cells);
+  // No smoothness: every cell free.
+  REQUIRE(spline_space_dimension(t, 2, 3, -1, -1).dimension == 11 * 12);
+  // Degree 0 with C^-1 is piecewise constant; bi-degree (m, n) with C^{m-1}, C^{n-1} on one cell.
+  REQUIRE(spline_space_dimension(t, 0, 0, -1, -1).dimension == 11);
+  REQUIRE(spline_space_dimension(RectangularPartition({{0, 0, 1, 1}}), 3, 2, 2, 1).dimension == 12);
+  REQUIRE_THROWS(spline_space_dimension(t, 2, 2, 2, 1));
+}
+
+TEST_CASE("Partitions that are not a tiling are refused, naming the cells", "[dimension]") {
+  REQUIRE_THROWS_WITH(RectangularPartition({{0, 0, 1, 1}, {q(1, 2), 0, 2, 1}}), Catch::Contains("cells 0") && Catch::Contains("overlap"));
+  REQUIRE_THROWS_WITH(RectangularPartition({{0, 0, 1, 1}, {1, 0, 2, q(1, 2)}}), Catch::Contains("gap"));
+  REQUIRE_THROWS_WITH(RectangularPartition({{0, 0, 0, 1}}), Catch::Contains("cell 0") && Catch::Contains("zero"));
+  REQUIRE(parse_rational("14/9") == q(14, 9));
+  REQUIRE(parse_rational("-0.25") == q(-1, 4));
+  REQUIRE(parse_rational("3") == 3);
+  REQUIRE_THROWS(parse_rational("1/0"));
+  REQUIRE_THROWS(parse_rational("abc"));
+  REQUIRE_THROWS(parse_rational("1..2"));
+}
