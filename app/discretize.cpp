@@ -1,6 +1,9 @@
 #include "app/discretize.hpp"
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "cases/geometries.hpp"
@@ -8,7 +11,38 @@
 
 namespace knotwork {
 
+namespace {
+
+// Refuses discretizations that cannot fit in memory before allocating anything: cell
+// function lists, the matrix (lower triangle, one copy per thread during assembly) and a
+// conservative Cholesky factor of nnz(A) * 4 log2(n) entries (2D nested-dissection growth).
+void check_memory(const CaseDescription& c) {
+  const auto& s = c.space;
+  double cells = 1, functions = 1;
+  for (int d = 0; d < 2; ++d) {
+    const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
+    const double elements = double(g.num_elements()) * s.elements_per_span[d] + s.extra_knots[d].size();
+    cells *= elements;
+    functions *= elements + s.degree[d];
+  }
+  const double per_cell = double(s.degree[0] + 1) * (s.degree[1] + 1);
+  const double coupling = double(2 * s.degree[0] + 1) * (2 * s.degree[1] + 1) / 2;
+  const double nnz = functions * coupling;
+  const double factor = nnz * 4 * std::max(1.0, std::log2(functions));
+  const double bytes = cells * per_cell * 4 + nnz * 12 * 3 + factor * 8;
+  const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  if (physical > 0 && bytes > 0.9 * physical) {
+    char msg[200];
+    std::snprintf(msg, sizeof msg, "about %.0f GB needed for %.3g cells of degree %dx%d, more than this machine's %.0f GB",
+                  bytes / 1e9, cells, s.degree[0], s.degree[1], physical / 1e9);
+    throw InputError(c.path + ": [space] elements: " + msg);
+  }
+}
+
+}  // namespace
+
 Discretization discretize(const CaseDescription& c) {
+  check_memory(c);
   Discretization d;
   try {
     d.tensor = build_tensor_discretization(c.geometry, c.space);

@@ -20,6 +20,12 @@ constexpr long kMaxCells = 1L << 26;  // ~67M cells: beyond any machine this run
 
 const std::vector<std::string> kSides = {"bottom", "right", "top", "left"};
 
+std::string shortest(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 size_t edit_distance(const std::string& a, const std::string& b) {
   std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
   for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
@@ -307,8 +313,8 @@ void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
       const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
       for (double t : c.space.extra_knots[d])
         if (!(t > g.domain_begin() && t < g.domain_end()))
-          r.fail("[space] " + key, "knot " + std::to_string(t) + " is not inside the parameter domain (" +
-                                       std::to_string(g.domain_begin()) + ", " + std::to_string(g.domain_end()) + ")");
+          r.fail("[space] " + key, "knot " + shortest(t) + " is not inside the parameter domain (" +
+                                       shortest(g.domain_begin()) + ", " + shortest(g.domain_end()) + ")");
     }
   }
   read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -177,6 +178,53 @@ TEST_CASE("bad input: NURBS data", "[cli][bad-input]") {
   // Control points swapped: the map is oriented clockwise.
   expect_rejected(box, replace(kNurbs, "[[0, 0], [1, 0], [0, 1], [1, 1]]", "[[0, 0], [0, 1], [1, 0], [1, 1]]"),
                   {"bad.toml", "[geometry]", "non-positive Jacobian", "cell 0"});
+}
+
+TEST_CASE("bad input: a discretization too large for the machine is refused up front", "[cli][bad-input]") {
+  Sandbox box;
+  expect_rejected(box, kGood, {"bad.toml", "[space] elements", "GB"}, "--degree 10 --elements 8000");
+}
+
+TEST_CASE("nothing typed into a case file crashes knotwork", "[cli][bad-input][fuzz]") {
+  // Random edits of a valid case (characters deleted, inserted, replaced, numbers made
+  // huge, negative or fractional): every run must end with exit 0 or a one-line error,
+  // never a signal, and a rejected run writes nothing.
+  Sandbox box;
+  std::mt19937 rng(2026);
+  const std::string alphabet = "[]{}=\"',.-+0123456789eEnaxyzpi*/^() \n#";
+  const std::vector<std::string> numbers = {"0", "-1", "1e308", "2.5", "99999", "-0", "1e-300", "\"1/3\"", "nan", "inf"};
+  int rejected = 0, accepted = 0;
+  for (int trial = 0; trial < 150; ++trial) {
+    std::string text = kGood;
+    const int edits = 1 + static_cast<int>(rng() % 3);
+    for (int e = 0; e < edits; ++e) {
+      const size_t at = rng() % text.size();
+      switch (rng() % 4) {
+        case 0: text.erase(at, 1); break;
+        case 1: text.insert(at, 1, alphabet[rng() % alphabet.size()]); break;
+        case 2: text[at] = alphabet[rng() % alphabet.size()]; break;
+        default: {
+          const size_t digit = text.find_first_of("0123456789", at);
+          if (digit != std::string::npos) text.replace(digit, 1, numbers[rng() % numbers.size()]);
+        }
+      }
+    }
+    box.file("fuzz.toml", text);
+    const fs::path out = box.dir() / "fuzz_out";
+    fs::remove_all(out);
+    const Result r = box.run("run -q --no-output fuzz.toml --elements 3");
+    INFO("case:\n" << text << "\nstderr: " << r.err);
+    REQUIRE(r.code >= 0);
+    REQUIRE(r.code < 128);  // no signal
+    if (r.code == 0) ++accepted;
+    else {
+      ++rejected;
+      REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+      REQUIRE(r.err.rfind("knotwork: error: ", 0) == 0);
+    }
+  }
+  INFO(accepted << " accepted, " << rejected << " rejected");
+  REQUIRE(rejected > 0);
 }
 
 TEST_CASE("bad input: expressions and output directory", "[cli][bad-input]") {
