@@ -41,11 +41,12 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   sol.coefficients = fixed_values;
   if (layout.num_free() > 0) {
     say("factorization");
-    SparseCholesky cholesky(options.ordering);
-    cholesky.factorize(K);
+    const std::shared_ptr<SparseCholesky> cholesky =
+        options.solver ? options.solver : std::make_shared<SparseCholesky>(options.ordering);
+    cholesky->factorize(K);
     say("solve");
-    const Eigen::VectorXd x = cholesky.solve(rhs);
-    sol.cholesky = cholesky.stats();
+    const Eigen::VectorXd x = cholesky->solve(rhs);
+    sol.cholesky = cholesky->stats();
     sol.timings.analysis = sol.cholesky.analyze_seconds;
     sol.timings.factorization = sol.cholesky.factorize_seconds;
     sol.timings.solve = sol.cholesky.solve_seconds;

@@ -1,6 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -26,6 +27,9 @@ struct PoissonSolveOptions {
   Ordering ordering = Ordering::kAmd;  // measured fastest on IGA matrices: docs/PERFORMANCE.md
   bool compute_errors = true;  // when the problem has an exact solution
   std::function<void(const std::string&)> progress;  // called at the start of each phase
+  // Keep one solver across solves on the same mesh (other sources or boundary data): its
+  // symbolic analysis is reused while the matrix pattern stays the same. Null: a new one.
+  std::shared_ptr<SparseCholesky> solver;
   // Called with the assembled system (lower triangle of K over the free dofs, and F)
   // before it is factored: for inspecting or exporting it, or benchmarking solvers on it.
   std::function<void(const Eigen::SparseMatrix<double>&, const Eigen::VectorXd&)> on_system;

@@ -4,6 +4,7 @@
 #include "app/discretize.hpp"
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
+#include "solver/error_norms.hpp"
 #include "solver/linear_solver.hpp"
 #include "solver/poisson_solver.hpp"
 
@@ -186,6 +187,32 @@ TEST_CASE("Analytic geometry map: polar quarter annulus with B-splines converges
     REQUIRE(l2_rate >= p + 1 - 0.2);
     REQUIRE(h1_rate >= p - 0.2);
   }
+}
+
+TEST_CASE("A solver kept across solves on one mesh skips the second analysis", "[poisson][solver]") {
+  CaseDescription c = shipped("square_sinsin");
+  const Discretization d = discretize(c);
+  PoissonSolveOptions o = options_of(c);
+  o.solver = std::make_shared<SparseCholesky>();
+  const PoissonSolution first = solve_poisson(d.mesh(), *d.geometry, c.problem, o);
+  c.problem.source = Expression::parse("1", "test");  // another load, same matrix pattern
+  c.problem.exact.reset();
+  for (auto& bc : c.problem.boundary) {
+    bc.from_exact = false;
+    bc.value = Expression::parse("0", "test");
+  }
+  const PoissonSolution second = solve_poisson(d.mesh(), *d.geometry, c.problem, o);
+  REQUIRE(first.cholesky.analyses == 1);
+  REQUIRE(second.cholesky.analyses == 1);
+  REQUIRE(second.timings.analysis == 0);
+  REQUIRE(first.timings.analysis > 0);
+  // The second solution is right too: -Laplace(u) = 1 with u = 0 on the unit square has
+  // u(1/2, 1/2) = 0.0736713... (Fourier series); the centre is the top-right corner of cell
+  // (7, 7) of the 16 x 16 mesh.
+  Eigen::VectorXd one(1);
+  one << 1.0;
+  const double centre = evaluate_solution(d.mesh(), *d.geometry, second.coefficients, 7 + 16 * 7, one, one)(0, 0);
+  REQUIRE(centre == Approx(0.0736713).epsilon(1e-4));
 }
 
 TEST_CASE("CHOLMOD reuses the symbolic analysis while the pattern stays", "[poisson][solver]") {
