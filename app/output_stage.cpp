@@ -1,6 +1,10 @@
 #include "app/output_stage.hpp"
 
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
 
 #include "solver/input_error.hpp"
 
@@ -16,6 +20,15 @@ OutputStage::OutputStage(const std::string& directory) : directory_(directory) {
     fs::create_directories(directory_, ec);
     if (ec) throw InputError(directory + ": output directory is not writable (" + ec.message() + ")");
     created_directory_ = true;
+  }
+  // A run that was killed (Ctrl-C, out of memory) could not clean up after itself: remove
+  // staging folders whose process is gone.
+  for (const auto& entry : fs::directory_iterator(directory_, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::string prefix = ".knotwork-staging-";
+    if (name.rfind(prefix, 0) != 0) continue;
+    const pid_t owner = static_cast<pid_t>(std::atol(name.c_str() + prefix.size()));
+    if (owner > 0 && ::kill(owner, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
   }
   staging_ = directory_ / (".knotwork-staging-" + std::to_string(::getpid()));
   fs::create_directory(staging_, ec);

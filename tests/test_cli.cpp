@@ -110,6 +110,17 @@ TEST_CASE("run --json reports errors, timings and the files it wrote", "[cli]") 
     REQUIRE(e.path().filename().string().rfind(".knotwork", 0) != 0);
 }
 
+TEST_CASE("a staging folder left by a killed run is removed by the next run", "[cli]") {
+  Sandbox box;
+  box.file("good.toml", kGood);
+  // pid 2^22 + 7 is above the largest pid_max Linux allows (2^22): no such process exists.
+  fs::create_directories(box.dir() / "res/.knotwork-staging-4194311");
+  box.file("res/.knotwork-staging-4194311/solution.vtu", "partial");
+  REQUIRE(box.run("run -q good.toml --out res").code == 0);
+  REQUIRE(!fs::exists(box.dir() / "res/.knotwork-staging-4194311"));
+  REQUIRE(fs::exists(box.dir() / "res/solution.vtu"));
+}
+
 TEST_CASE("converge writes table, JSON, plot and collection", "[cli]") {
   Sandbox box;
   box.file("good.toml", kGood);
