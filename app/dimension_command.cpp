@@ -3,6 +3,7 @@
 
 #include "app/commands.hpp"
 #include "app/json_writer.hpp"
+#include "basis/partition_topology.hpp"
 #include "basis/spline_dimension.hpp"
 #include "cases/case_file.hpp"
 
@@ -15,6 +16,11 @@ int dimension_command(const DimensionOptions& o) {
   const DimensionResult r =
       spline_space_dimension(partition, p.m, p.n, p.alpha, p.beta, o.exact ? RankMethod::kExact : RankMethod::kModular);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const PartitionTopology topo = partition_topology(partition);
+  using K = PartitionTopology::KnotKind;
+  // Weller's Prop. 4.2 count applies to C^{d-1} splines of equal bi-degree d.
+  const bool weller_applies = p.m == p.n && p.alpha == p.m - 1 && p.beta == p.n - 1;
+  const long weller = weller_applies ? weller_dimension_formula(topo, p.m) : 0;
   if (o.json) {
     Json j = Json::object();
     j.set("file", o.file).set("cells", partition.num_cells())
@@ -22,7 +28,13 @@ int dimension_command(const DimensionOptions& o) {
         .set("smoothness", Json::array().push(double(p.alpha)).push(double(p.beta)))
         .set("unknowns", r.unknowns).set("constraints", r.constraints).set("rank", r.rank)
         .set("dimension_bruteforce", r.dimension).set("exact", r.exact ? "rational" : "two primes")
-        .set("seconds", seconds);
+        .set("seconds", seconds).set("vertices", static_cast<int>(topo.vertices.size()))
+        .set("interior_vertices", topo.interior_vertices()).set("t_nodes", topo.t_nodes())
+        .set("crossings", topo.crossings()).set("interior_edges", topo.interior_edges())
+        .set("knot_lines", topo.count(K::kLine)).set("knot_rays", topo.count(K::kRay))
+        .set("knot_segments", topo.count(K::kSegment));
+    if (weller_applies) j.set("weller_prop_4_2", weller);
+    else j.set_null("weller_prop_4_2");
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
@@ -31,6 +43,13 @@ int dimension_command(const DimensionOptions& o) {
               p.beta, p.m, p.n, p.alpha, p.beta, partition.num_cells());
   std::printf("  dimension  %ld = %ld unknowns - rank %ld (%ld constraints; rank %s, %.3f s)\n", r.dimension,
               r.unknowns, r.rank, r.constraints, r.exact ? "exact over Q" : "modulo two primes, which agree", seconds);
+  std::printf("  topology   %zu vertices (%d interior: %d T-nodes, %d crossings), %d interior edges;\n"
+              "             knots: %d lines, %d rays, %d segments\n",
+              topo.vertices.size(), topo.interior_vertices(), topo.t_nodes(), topo.crossings(), topo.interior_edges(),
+              topo.count(K::kLine), topo.count(K::kRay), topo.count(K::kSegment));
+  if (weller_applies)
+    std::printf("  Weller     (d+1)^2 + (d+1)|E_I| - (2d+1)|V_I| = %ld (Prop. 4.2: the dimension when the partition\n"
+                "             carries a semi-regular collection with interior multiplicities 1)\n", weller);
   return 0;
 }
 

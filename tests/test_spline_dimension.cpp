@@ -125,3 +125,71 @@ TEST_CASE("Partitions that are not a tiling are refused, naming the cells", "[di
   REQUIRE_THROWS(parse_rational("abc"));
   REQUIRE_THROWS(parse_rational("1..2"));
 }
+
+#include "basis/partition_topology.hpp"
+
+TEST_CASE("Partition topology: Euler's formula and T-node bookkeeping on random T-meshes", "[dimension][topology]") {
+  std::mt19937 rng(15);
+  for (int trial = 0; trial < 60; ++trial) {
+    const auto cells = random_tmesh(rng, 1 + trial % 25);
+    const PartitionTopology t = partition_topology(RectangularPartition(cells));
+    const long V = static_cast<long>(t.vertices.size()), E = static_cast<long>(t.edges.size());
+    // Planar graph of a rectangle cut into F cells: V - E + F = 1 (the outer face excluded).
+    REQUIRE(V - E + static_cast<long>(cells.size()) == 1);
+    // Every interior end of a knot is a T-node, and every T-node ends exactly one knot.
+    using K = PartitionTopology::KnotKind;
+    REQUIRE(t.t_nodes() == 2 * t.count(K::kSegment) + t.count(K::kRay));
+    for (const auto& v : t.vertices) {  // corners and boundary T-nodes; interior T-nodes and crossings
+      if (v.boundary) REQUIRE((v.valence == 2 || v.valence == 3));
+      else REQUIRE((v.valence == 3 || v.valence == 4));
+    }
+    REQUIRE(t.interior_vertices() == t.t_nodes() + t.crossings());
+  }
+}
+
+TEST_CASE("Tensor grids: topology counts and Weller's Prop. 4.2 equal the brute force", "[dimension][topology]") {
+  std::mt19937 rng(16);
+  for (int nx = 1; nx <= 4; ++nx)
+    for (int ny = 1; ny <= 3; ++ny) {
+      const RectangularPartition g = grid(random_breaks(rng, nx), random_breaks(rng, ny));
+      const PartitionTopology t = partition_topology(g);
+      REQUIRE(t.interior_vertices() == (nx - 1) * (ny - 1));
+      REQUIRE(t.interior_edges() == (nx - 1) * ny + nx * (ny - 1));
+      REQUIRE(t.count(PartitionTopology::KnotKind::kLine) == (nx - 1) + (ny - 1));
+      REQUIRE(t.count(PartitionTopology::KnotKind::kRay) == 0);
+      for (int d = 1; d <= 3; ++d)
+        REQUIRE(weller_dimension_formula(t, d) == spline_space_dimension(g, d, d, d - 1, d - 1).dimension);
+    }
+}
+
+TEST_CASE("Knot classification on a mesh with a line, a ray and a segment", "[dimension][topology]") {
+  // [0,4]^2 cut by the line x = 2, the ray y = 2 from x = 0 to x = 2, and inside [2,4]^2 ...
+  // the segment x = 3 between the horizontal rays y = 1 and y = 3 from x = 4.
+  const std::vector<RationalBox> cells = {{0, 0, 2, 2}, {0, 2, 2, 4}, {2, 0, 4, 1}, {2, 3, 4, 4},
+                                          {2, 1, 3, 3}, {3, 1, 4, 3}};
+  const PartitionTopology t = partition_topology(RectangularPartition(cells));
+  using K = PartitionTopology::KnotKind;
+  REQUIRE(t.count(K::kLine) == 1);     // x = 2
+  REQUIRE(t.count(K::kRay) == 3);      // y = 2 (from the left side), y = 1 and y = 3 (from the right side)
+  REQUIRE(t.count(K::kSegment) == 1);  // x = 3, between y = 1 and y = 3
+  REQUIRE(t.t_nodes() == 5);
+  REQUIRE(t.crossings() == 0);
+}
+
+TEST_CASE("Weller's formula needs its hypotheses: a short knot segment breaks it", "[dimension][topology]") {
+  // 3 x 3 grid on [0,3]^2 plus the segment x = 3/2, 1 <= y <= 2 splitting the centre cell.
+  // For d = 2 the segment has 2 vertices < d + 2: no C^1 biquadratic has a jump along it
+  // (its jump c(y) (x - 3/2)_+^2 needs a quadratic c with double roots at y = 1 and y = 2),
+  // so the dimension stays (3 + 2)^2 = 25, while the formula counts 25 + 3*3 - 5*2 = 24.
+  std::vector<RationalBox> cells;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i)
+      if (!(i == 1 && j == 1)) cells.push_back({i, j, i + 1, j + 1});
+  cells.push_back({1, 1, q(3, 2), 2});
+  cells.push_back({q(3, 2), 1, 2, 2});
+  const RectangularPartition part(cells);
+  const PartitionTopology t = partition_topology(part);
+  REQUIRE(t.count(PartitionTopology::KnotKind::kSegment) == 1);
+  REQUIRE(spline_space_dimension(part, 2, 2, 1, 1, RankMethod::kExact).dimension == 25);
+  REQUIRE(weller_dimension_formula(t, 2) == 24);
+}
