@@ -306,3 +306,28 @@ Eigen::SparseMatrix<double> refinement_matrix(const BSplineBasis1D& coarse,
 }
 
 }  // namespace knotwork
+
+namespace knotwork {
+Eigen::VectorXd single_bspline_bernstein(const std::vector<double>& knots, double a, double b) {
+  const int d = static_cast<int>(knots.size()) - 2;
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(d + 1);
+  if (b <= knots.front() || a >= knots.back()) return out;
+  // Pad with d knots on each side: the function becomes number d of a valid basis whose
+  // domain is exactly its support.
+  std::vector<double> U(d, knots.front() - 1.0);
+  U.insert(U.end(), knots.begin(), knots.end());
+  U.insert(U.end(), d, knots.back() + 1.0);
+  const BSplineBasis1D basis(d, U);
+  const auto spans = basis.element_spans();
+  const auto C = bezier_extraction(basis);
+  for (size_t e = 0; e < spans.size(); ++e) {
+    const int s = spans[e];
+    if (!(U[s] <= a && b <= U[s + 1])) continue;
+    const int local = d - (s - d);  // row of function d among the alive s-d..s
+    if (local < 0 || local > d) return out;
+    const double h = U[s + 1] - U[s];
+    return subdivision_matrix(d, (a - U[s]) / h, (b - U[s]) / h) * C[e].row(local).transpose();
+  }
+  throw std::invalid_argument("single_bspline_bernstein: [a, b] is not inside one knot span");
+}
+}  // namespace knotwork

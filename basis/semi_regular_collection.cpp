@@ -1,0 +1,349 @@
+#include "basis/semi_regular_collection.hpp"
+
+#include <algorithm>
+#include <map>
+#include <functional>
+#include <numeric>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "basis/bspline_basis.hpp"
+#include "basis/partition_topology.hpp"
+
+namespace knotwork {
+
+namespace {
+
+struct Box {
+  double x0, y0, x1, y1;
+};
+
+std::string describe(const Box& b) {
+  std::ostringstream s;
+  s << "[" << b.x0 << "," << b.x1 << "]x[" << b.y0 << "," << b.y1 << "]";
+  return s.str();
+}
+
+bool contains(const std::vector<double>& v, double t) { return std::find(v.begin(), v.end(), t) != v.end(); }
+
+// Cells of the partition induced by the B-splines: a fine grid on every knot value, with
+// neighbouring fine cells merged unless some B-spline's knot line separates them.
+struct InducedCells {
+  std::vector<Box> cells;
+  std::vector<std::string> problems;  // regions that are not rectangles
+};
+
+InducedCells induced_cells(const std::vector<LocalBSpline>& splines, double X0, double Y0, double X1, double Y1) {
+  std::set<double> sx{X0, X1}, sy{Y0, Y1};
+  for (const auto& b : splines) {
+    sx.insert(b.x.begin(), b.x.end());
+    sy.insert(b.y.begin(), b.y.end());
+  }
+  const std::vector<double> xs(sx.begin(), sx.end()), ys(sy.begin(), sy.end());
+  const int nx = static_cast<int>(xs.size()) - 1, ny = static_cast<int>(ys.size()) - 1;
+  // Knot line pieces: per value, the intervals the B-splines draw there.
+  std::map<double, std::vector<std::pair<double, double>>> vlines, hlines;
+  for (const auto& b : splines) {
+    for (double x : b.x) vlines[x].emplace_back(b.y.front(), b.y.back());
+    for (double y : b.y) hlines[y].emplace_back(b.x.front(), b.x.back());
+  }
+  auto covered = [](const std::vector<std::pair<double, double>>& pieces, double lo, double hi) {
+    for (const auto& [a, b] : pieces)
+      if (a <= lo && hi <= b) return true;
+    return false;
+  };
+  std::vector<int> parent(nx * ny);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::function<int(int)> find = [&](int i) { return parent[i] == i ? i : parent[i] = find(parent[i]); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      if (i + 1 < nx && !covered(vlines[xs[i + 1]], ys[j], ys[j + 1])) parent[find(i + nx * j)] = find(i + 1 + nx * j);
+      if (j + 1 < ny && !covered(hlines[ys[j + 1]], xs[i], xs[i + 1])) parent[find(i + nx * j)] = find(i + nx * (j + 1));
+    }
+  std::map<int, std::vector<int>> groups;
+  for (int k = 0; k < nx * ny; ++k) groups[find(k)].push_back(k);
+  InducedCells out;
+  for (const auto& [root, members] : groups) {
+    int i0 = nx, i1 = -1, j0 = ny, j1 = -1;
+    for (int k : members) {
+      i0 = std::min(i0, k % nx); i1 = std::max(i1, k % nx);
+      j0 = std::min(j0, k / nx); j1 = std::max(j1, k / nx);
+    }
+    const Box box{xs[i0], ys[j0], xs[i1 + 1], ys[j1 + 1]};
+    if (static_cast<int>(members.size()) != (i1 - i0 + 1) * (j1 - j0 + 1))
+      out.problems.push_back("the region around " + describe(box) + " is not a rectangle");
+    out.cells.push_back(box);
+  }
+  std::sort(out.cells.begin(), out.cells.end(), [](const Box& a, const Box& b) {
+    return a.y0 != b.y0 ? a.y0 < b.y0 : a.x0 < b.x0;
+  });
+  return out;
+}
+
+bool alive_on(const LocalBSpline& b, const Box& c) {
+  return b.x.front() <= c.x0 && c.x1 <= b.x.back() && b.y.front() <= c.y0 && c.y1 <= b.y.back();
+}
+
+// Def. 3.3 (2a) for one cell: the alive B-splines are N_i(X|x) N_j(Y^(i)|y) with X of length
+// 2d+2 whose windows are the distinct x vectors, and per window a Y^(i) likewise. `first`
+// selects the coordinate that must be shared (x for case a, y for case b).
+bool regular_in(const std::vector<const LocalBSpline*>& alive, int d_first, int d_second, bool x_first,
+                const Box& c, std::string& why) {
+  auto first = [&](const LocalBSpline* b) -> const std::vector<double>& { return x_first ? b->x : b->y; };
+  auto second = [&](const LocalBSpline* b) -> const std::vector<double>& { return x_first ? b->y : b->x; };
+  const double lo = x_first ? c.x0 : c.y0, hi = x_first ? c.x1 : c.y1;
+  const double lo2 = x_first ? c.y0 : c.x0, hi2 = x_first ? c.y1 : c.x1;
+  std::map<std::vector<double>, std::vector<const LocalBSpline*>> groups;
+  for (const auto* b : alive) groups[first(b)].push_back(b);
+  if (static_cast<int>(groups.size()) != d_first + 1) {
+    why = std::to_string(groups.size()) + " distinct " + (x_first ? "horizontal" : "vertical") +
+          " knot vectors instead of " + std::to_string(d_first + 1);
+    return false;
+  }
+  // Consecutive windows of one vector V of length 2d+2, the cell in its middle span.
+  std::vector<std::vector<double>> windows;
+  for (const auto& [v, members] : groups) windows.push_back(v);  // map order = lexicographic = window order
+  for (int i = 1; i <= d_first; ++i)  // consecutive windows overlap: W_i[t] = W_{i-1}[t+1]
+    for (int t = 0; t <= d_first; ++t)
+      if (windows[i][t] != windows[i - 1][t + 1]) {
+        why = std::string(x_first ? "horizontal" : "vertical") + " knot vectors are not windows of one vector";
+        return false;
+      }
+  if (!(windows[0][d_first] <= lo && hi <= windows[d_first][1])) {
+    why = "the cell is not in the middle span of the shared knot vector";
+    return false;
+  }
+  for (const auto& [v, members] : groups) {
+    std::vector<std::vector<double>> ws;
+    for (const auto* b : members) ws.push_back(second(b));
+    std::sort(ws.begin(), ws.end());
+    ws.erase(std::unique(ws.begin(), ws.end()), ws.end());
+    if (static_cast<int>(ws.size()) != d_second + 1) {
+      why = std::to_string(ws.size()) + " B-splines share a " + (x_first ? "horizontal" : "vertical") +
+            " knot vector instead of " + std::to_string(d_second + 1);
+      return false;
+    }
+    for (int i = 1; i <= d_second; ++i)
+      for (int t = 0; t <= d_second; ++t)
+        if (ws[i][t] != ws[i - 1][t + 1]) {
+          why = "their other knot vectors are not windows of one vector";
+          return false;
+        }
+    if (!(ws[0][d_second] <= lo2 && hi2 <= ws[d_second][1])) {
+      why = "the cell is not in the middle span of a shared knot vector";
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+SemiRegularCollection SemiRegularCollection::tensor_product(int dx, int dy, const std::vector<double>& bx,
+                                                            const std::vector<double>& by) {
+  if (dx < 1 || dy < 1) throw std::invalid_argument("degrees must be >= 1");
+  if (bx.size() < 2 || by.size() < 2) throw std::invalid_argument("need at least two breakpoints per direction");
+  for (size_t i = 1; i < bx.size(); ++i)
+    if (!(bx[i] > bx[i - 1])) throw std::invalid_argument("x breakpoints must increase");
+  for (size_t i = 1; i < by.size(); ++i)
+    if (!(by[i] > by[i - 1])) throw std::invalid_argument("y breakpoints must increase");
+  SemiRegularCollection c;
+  c.dx_ = dx;
+  c.dy_ = dy;
+  c.x0_ = bx.front();
+  c.x1_ = bx.back();
+  c.y0_ = by.front();
+  c.y1_ = by.back();
+  auto open = [](int d, const std::vector<double>& b) {
+    std::vector<double> U(d, b.front());
+    U.insert(U.end(), b.begin(), b.end());
+    U.insert(U.end(), d, b.back());
+    return U;
+  };
+  const auto U = open(dx, bx), V = open(dy, by);
+  for (size_t j = 0; j + dy + 1 < V.size(); ++j)
+    for (size_t i = 0; i + dx + 1 < U.size(); ++i)
+      c.splines_.push_back({std::vector<double>(U.begin() + i, U.begin() + i + dx + 2),
+                            std::vector<double>(V.begin() + j, V.begin() + j + dy + 2)});
+  for (size_t i = 1; i + 1 < bx.size(); ++i) c.lines_.push_back({true, bx[i], c.y0_, c.y1_});
+  for (size_t j = 1; j + 1 < by.size(); ++j) c.lines_.push_back({false, by[j], c.x0_, c.x1_});
+  return c;
+}
+
+SemiRegularCollection SemiRegularCollection::from_splines(int dx, int dy, std::vector<LocalBSpline> splines) {
+  if (splines.empty()) throw std::invalid_argument("the collection is empty");
+  SemiRegularCollection c;
+  c.dx_ = dx;
+  c.dy_ = dy;
+  c.x0_ = c.y0_ = 1e300;
+  c.x1_ = c.y1_ = -1e300;
+  for (size_t k = 0; k < splines.size(); ++k) {
+    const auto& b = splines[k];
+    if (static_cast<int>(b.x.size()) != dx + 2 || static_cast<int>(b.y.size()) != dy + 2)
+      throw std::invalid_argument("B-spline " + std::to_string(k) + " needs " + std::to_string(dx + 2) + " x-knots and " +
+                                  std::to_string(dy + 2) + " y-knots");
+    if (!std::is_sorted(b.x.begin(), b.x.end()) || !std::is_sorted(b.y.begin(), b.y.end()) ||
+        !(b.x.back() > b.x.front() && b.y.back() > b.y.front()))
+      throw std::invalid_argument("B-spline " + std::to_string(k) + " has knots that do not increase");
+    c.x0_ = std::min(c.x0_, b.x.front());
+    c.x1_ = std::max(c.x1_, b.x.back());
+    c.y0_ = std::min(c.y0_, b.y.front());
+    c.y1_ = std::max(c.y1_, b.y.back());
+  }
+  c.splines_ = std::move(splines);
+  return c;
+}
+
+void SemiRegularCollection::split_until_stable(int& splits) {
+  // A B-spline whose support a mesh line crosses completely must use that knot (otherwise
+  // it would "jump over" it, Def. 3.1): split it by univariate knot insertion into two.
+  std::set<LocalBSpline> all(splines_.begin(), splines_.end());
+  bool changed = true;
+  while (changed) {
+    changed = false;
+    for (auto it = all.begin(); it != all.end() && !changed; ++it) {
+      for (const auto& L : lines_) {
+        const std::vector<double>& across = L.vertical ? it->x : it->y;
+        const std::vector<double>& along = L.vertical ? it->y : it->x;
+        if (!(across.front() < L.position && L.position < across.back()) || contains(across, L.position)) continue;
+        if (!(L.from <= along.front() && along.back() <= L.to)) continue;
+        std::vector<double> refined = across;
+        refined.insert(std::upper_bound(refined.begin(), refined.end(), L.position), L.position);
+        LocalBSpline left = *it, right = *it;
+        (L.vertical ? left.x : left.y).assign(refined.begin(), refined.end() - 1);
+        (L.vertical ? right.x : right.y).assign(refined.begin() + 1, refined.end());
+        all.erase(it);
+        all.insert(left);
+        all.insert(right);
+        ++splits;
+        changed = true;
+        break;
+      }
+    }
+  }
+  splines_.assign(all.begin(), all.end());
+}
+
+InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
+  const double lo_across = s.vertical ? x0_ : y0_, hi_across = s.vertical ? x1_ : y1_;
+  const double lo_along = s.vertical ? y0_ : x0_, hi_along = s.vertical ? y1_ : x1_;
+  if (!(s.position > lo_across && s.position < hi_across))
+    throw std::invalid_argument("segment position is not inside the domain");
+  if (!(s.from < s.to)) throw std::invalid_argument("segment has zero length");
+  if (s.from < lo_along || s.to > hi_along) throw std::invalid_argument("segment leaves the domain");
+  InsertionReport report;
+  report.requested = s;
+  KnotInsertion seg = s;
+  // Knot values along the segment's direction: where an extension may stop.
+  std::set<double> stops{lo_along, hi_along};
+  for (const auto& b : splines_)
+    for (double v : s.vertical ? b.y : b.x) stops.insert(v);
+  const SemiRegularCollection before = *this;
+  for (;;) {
+    *this = before;
+    lines_.push_back(seg);
+    int splits = 0;
+    split_until_stable(splits);
+    if (splits > 0 && violations().empty()) {
+      report.inserted = seg;
+      report.splits = splits;
+      report.extended = seg.from != s.from || seg.to != s.to;
+      return report;
+    }
+    if (seg.from <= lo_along && seg.to >= hi_along)
+      throw std::runtime_error("a full knot line does not give a semi-regular collection here");
+    // Extend one knot step at each end that can still grow.
+    auto below = stops.lower_bound(seg.from);
+    if (below != stops.begin()) seg.from = *std::prev(below);
+    auto above = stops.upper_bound(seg.to);
+    if (above != stops.end()) seg.to = *above;
+  }
+}
+
+RectangularPartition SemiRegularCollection::partition() const {
+  const InducedCells ic = induced_cells(splines_, x0_, y0_, x1_, y1_);
+  if (!ic.problems.empty()) throw std::runtime_error(ic.problems.front());
+  std::vector<RationalBox> cells;
+  for (const auto& b : ic.cells) cells.push_back({mpq_class(b.x0), mpq_class(b.y0), mpq_class(b.x1), mpq_class(b.y1)});
+  return RectangularPartition(cells);
+}
+
+std::vector<Violation> SemiRegularCollection::violations() const {
+  std::vector<Violation> out;
+  const InducedCells ic = induced_cells(splines_, x0_, y0_, x1_, y1_);
+  for (const auto& p : ic.problems) out.push_back({-1, p});
+  if (!out.empty()) return out;
+  // Def. 3.1 (2): no B-spline jumps over a knot of the partition that cuts its support.
+  const PartitionTopology topo = partition_topology(partition());
+  for (size_t k = 0; k < splines_.size(); ++k) {
+    const LocalBSpline& b = splines_[k];
+    for (const auto& knot : topo.knots) {
+      const double c = knot.position.get_d();
+      const double from = (knot.vertical ? topo.vertices[knot.vertices.front()].y : topo.vertices[knot.vertices.front()].x).get_d();
+      const double to = (knot.vertical ? topo.vertices[knot.vertices.back()].y : topo.vertices[knot.vertices.back()].x).get_d();
+      const std::vector<double>& across = knot.vertical ? b.x : b.y;
+      const std::vector<double>& along = knot.vertical ? b.y : b.x;
+      if (across.front() < c && c < across.back() && from <= along.front() && along.back() <= to && !contains(across, c)) {
+        std::ostringstream s;
+        s << "B-spline " << k << " jumps over the " << (knot.vertical ? "vertical" : "horizontal") << " knot at "
+          << (knot.vertical ? "x = " : "y = ") << c << " that cuts its support (Def. 3.1)";
+        out.push_back({-1, s.str()});
+      }
+    }
+  }
+  // Def. 3.3, cell by cell.
+  for (size_t ci = 0; ci < ic.cells.size(); ++ci) {
+    const Box& c = ic.cells[ci];
+    std::vector<const LocalBSpline*> alive;
+    for (const auto& b : splines_)
+      if (alive_on(b, c)) alive.push_back(&b);
+    std::string why_a, why_b;
+    if (static_cast<int>(alive.size()) != (dx_ + 1) * (dy_ + 1)) {
+      out.push_back({static_cast<int>(ci), "cell " + describe(c) + ": " + std::to_string(alive.size()) +
+                                               " B-splines are alive, not " + std::to_string((dx_ + 1) * (dy_ + 1))});
+      continue;
+    }
+    if (regular_in(alive, dx_, dy_, true, c, why_a) || regular_in(alive, dy_, dx_, false, c, why_b)) continue;
+    out.push_back({static_cast<int>(ci), "cell " + describe(c) + ": neither (a) " + why_a + " nor (b) " + why_b});
+  }
+  return out;
+}
+
+BezierMesh SemiRegularCollection::bezier_mesh() const {
+  const InducedCells ic = induced_cells(splines_, x0_, y0_, x1_, y1_);
+  if (!ic.problems.empty()) throw std::runtime_error(ic.problems.front());
+  BezierMesh mesh;
+  mesh.set_num_functions(size());
+  mesh.set_boundary_names({"bottom", "right", "top", "left"});
+  const int nb = (dx_ + 1) * (dy_ + 1);
+  for (const Box& c : ic.cells) {
+    std::vector<int> ids;
+    std::vector<Eigen::VectorXd> bx, by;
+    for (int k = 0; k < size(); ++k)
+      if (alive_on(splines_[k], c)) {
+        ids.push_back(k);
+        bx.push_back(single_bspline_bernstein(splines_[k].x, c.x0, c.x1));
+        by.push_back(single_bspline_bernstein(splines_[k].y, c.y0, c.y1));
+      }
+    Eigen::MatrixXd C(ids.size(), nb);
+    for (size_t a = 0; a < ids.size(); ++a)
+      for (int v = 0; v <= dy_; ++v)
+        for (int u = 0; u <= dx_; ++u) C(a, u + (dx_ + 1) * v) = bx[a][u] * by[a][v];
+    BezierCell cell;
+    cell.u0 = c.x0;
+    cell.u1 = c.x1;
+    cell.v0 = c.y0;
+    cell.v1 = c.y1;
+    cell.degree_u = dx_;
+    cell.degree_v = dy_;
+    if (c.y0 == y0_) cell.boundary[kSideBottom] = 0;
+    if (c.x1 == x1_) cell.boundary[kSideRight] = 1;
+    if (c.y1 == y1_) cell.boundary[kSideTop] = 2;
+    if (c.x0 == x0_) cell.boundary[kSideLeft] = 3;
+    mesh.add_cell(cell, ids, mesh.add_extraction(std::move(C)));
+  }
+  return mesh;
+}
+
+}  // namespace knotwork

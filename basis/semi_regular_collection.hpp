@@ -1,0 +1,82 @@
+#pragma once
+#include <string>
+#include <vector>
+
+#include "basis/bezier_mesh.hpp"
+#include "basis/rectangular_partition.hpp"
+
+namespace knotwork {
+
+// One tensor-product B-spline with its own local knot vectors (Weller): dx+2 values in x,
+// dy+2 in y. B(x, y) = N(x_knots | x) N(y_knots | y).
+struct LocalBSpline {
+  std::vector<double> x, y;
+  bool operator==(const LocalBSpline& o) const { return x == o.x && y == o.y; }
+  bool operator<(const LocalBSpline& o) const { return x != o.x ? x < o.x : y < o.y; }
+};
+
+// A knot segment (or ray, or line) to insert: x = position for vertical ones, from <= y <= to
+// (horizontal: y = position, from <= x <= to). Interior multiplicity 1.
+struct KnotInsertion {
+  bool vertical = true;
+  double position = 0, from = 0, to = 0;
+};
+
+// What a refinement did: the segment as inserted after any extension.
+struct InsertionReport {
+  KnotInsertion requested, inserted;
+  bool extended = false;
+  int splits = 0;  // B-splines split
+};
+
+// Why a cell is not semi-regular (Def. 3.3), or which B-spline is degenerate (Def. 3.1).
+struct Violation {
+  int cell = -1;          // index in partition() (-1 for collection-wide problems)
+  std::string reason;     // e.g. "cell [0.25,0.5]x[0.5,0.75]: B-splines 12 and 17 share ..."
+};
+
+// A semi-regular collection of tensor-product B-splines over a rectangle (Weller 1994):
+// local refinement by knot segments that keeps a linearly independent partition of unity.
+class SemiRegularCollection {
+ public:
+  // All tensor-product B-splines of bi-degree (dx, dy) on open knot vectors (interior
+  // multiplicities 1): the starting point of refinement.
+  static SemiRegularCollection tensor_product(int dx, int dy, const std::vector<double>& breaks_x,
+                                              const std::vector<double>& breaks_y);
+
+  // A collection given explicitly (e.g. read from a file), to be checked with violations().
+  // The domain is the bounding box of the supports. Throws std::invalid_argument for knot
+  // vectors of the wrong length or not non-decreasing.
+  static SemiRegularCollection from_splines(int dx, int dy, std::vector<LocalBSpline> splines);
+
+  int degree_x() const { return dx_; }
+  int degree_y() const { return dy_; }
+  const std::vector<LocalBSpline>& splines() const { return splines_; }
+  int size() const { return static_cast<int>(splines_.size()); }
+
+  // Inserts the segment by splitting every B-spline it crosses completely (and repeating
+  // until no B-spline is crossed by a knot it does not use). If the result would not be
+  // non-degenerate and semi-regular, the segment is extended one knot step at a time (both
+  // ends) until it is, at worst to a full knot line. Throws std::invalid_argument for a
+  // segment outside the domain or of zero length.
+  InsertionReport insert(const KnotInsertion& segment);
+
+  // The partition induced by the B-splines (cells in row order of their lower-left corners).
+  RectangularPartition partition() const;
+  // Def. 3.1 and Def. 3.3 checked cell by cell; empty when the collection is semi-regular.
+  std::vector<Violation> violations() const;
+
+  // Every B-spline's polynomial piece on every cell of the partition, as Bernstein
+  // coefficients: the BezierMesh the solver and the checks read. Boundary ids 0..3 as for
+  // a patch (bottom, right, top, left).
+  BezierMesh bezier_mesh() const;
+
+ private:
+  int dx_ = 2, dy_ = 2;
+  std::vector<LocalBSpline> splines_;
+  double x0_ = 0, x1_ = 1, y0_ = 0, y1_ = 1;
+  std::vector<KnotInsertion> lines_;  // every knot line/segment of the mesh so far
+  void split_until_stable(int& splits);
+};
+
+}  // namespace knotwork

@@ -1,0 +1,152 @@
+#include <catch2/catch.hpp>
+#include <Eigen/QR>
+#include <cmath>
+#include <random>
+#include <set>
+
+#include "basis/partition_topology.hpp"
+#include "basis/semi_regular_collection.hpp"
+#include "basis/spline_dimension.hpp"
+#include "solver/geometry_map.hpp"
+#include "solver/poisson_solver.hpp"
+
+using namespace knotwork;
+
+namespace {
+
+// Every property that does not depend on how the collection was built.
+void check_properties(const SemiRegularCollection& c, bool with_formula) {
+  const auto violations = c.violations();
+  INFO((violations.empty() ? std::string("") : violations.front().reason));
+  REQUIRE(violations.empty());
+  const BezierMesh mesh = c.bezier_mesh();
+  const int n = c.size();
+  const int nb = (c.degree_x() + 1) * (c.degree_y() + 1);
+  Eigen::MatrixXd global = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(mesh.num_cells()) * nb);
+  for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+    const Eigen::MatrixXd& C = mesh.extraction(cell);
+    // Partition of unity: the Bernstein polynomials sum to 1, so the columns must.
+    REQUIRE((C.colwise().sum().array() - 1.0).abs().maxCoeff() < 1e-13);
+    REQUIRE(C.minCoeff() > -1e-14);  // non-negative
+    const auto ids = mesh.functions(cell);
+    for (size_t a = 0; a < ids.size(); ++a) global.block(ids[a], static_cast<Eigen::Index>(cell) * nb, 1, nb) = C.row(a);
+  }
+  // Linear independence: the functions' Bezier coefficients over all cells have full rank.
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(global.transpose());
+  qr.setThreshold(1e-10);
+  REQUIRE(qr.rank() == n);
+  if (with_formula) {
+    const RectangularPartition part = c.partition();
+    const int d = c.degree_x();
+    const long brute = spline_space_dimension(part, d, d, d - 1, d - 1).dimension;
+    REQUIRE(n == weller_dimension_formula(partition_topology(part), d));
+    REQUIRE(n == brute);
+  }
+}
+
+std::vector<double> random_breaks(std::mt19937& rng, int pieces) {
+  std::vector<double> b{0};
+  for (int i = 0; i < pieces; ++i) b.push_back(b.back() + (1 + rng() % 4) / 8.0);
+  return b;
+}
+
+// A random segment across the current knots: position halfway between two knots, ends on knots.
+KnotInsertion random_segment(std::mt19937& rng, const SemiRegularCollection& c) {
+  KnotInsertion s;
+  s.vertical = rng() % 2;
+  std::set<double> across, along;
+  for (const auto& b : c.splines()) {
+    across.insert((s.vertical ? b.x : b.y).begin(), (s.vertical ? b.x : b.y).end());
+    along.insert((s.vertical ? b.y : b.x).begin(), (s.vertical ? b.y : b.x).end());
+  }
+  const std::vector<double> a(across.begin(), across.end()), l(along.begin(), along.end());
+  const size_t i = rng() % (a.size() - 1);
+  s.position = 0.5 * (a[i] + a[i + 1]);
+  size_t f = rng() % (l.size() - 1), t = rng() % (l.size() - 1);
+  if (f > t) std::swap(f, t);
+  s.from = l[f];
+  s.to = l[t + 1];
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("Tensor-product start: semi-regular, and the count is (n+d)^2", "[semi-regular]") {
+  for (int d = 1; d <= 4; ++d) {
+    const auto c = SemiRegularCollection::tensor_product(d, d, {0, 0.25, 0.5, 1}, {0, 0.5, 0.75, 1});
+    REQUIRE(c.size() == (3 + d) * (3 + d));
+    check_properties(c, true);
+  }
+}
+
+TEST_CASE("Random refinement sequences keep a semi-regular basis of the full spline space", "[semi-regular]") {
+  std::mt19937 rng(2024);
+  int sequences = 0, insertions = 0, extended = 0, t_meshes = 0, with_segments = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int d = 1 + trial % 4;
+    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 2 + rng() % 3), random_breaks(rng, 2 + rng() % 3));
+    const int steps = 1 + static_cast<int>(rng() % 4);
+    for (int s = 0; s < steps; ++s) {
+      const InsertionReport r = c.insert(random_segment(rng, c));
+      extended += r.extended;
+      ++insertions;
+      INFO("trial " << trial << ", d = " << d << ", step " << s);
+      check_properties(c, true);
+      const PartitionTopology topo = partition_topology(c.partition());
+      t_meshes += topo.t_nodes() > 0;
+      with_segments += topo.count(PartitionTopology::KnotKind::kSegment) > 0;
+    }
+    ++sequences;
+  }
+  INFO(sequences << " sequences, " << insertions << " insertions, " << extended << " extended");
+  REQUIRE(sequences == 200);
+  // Not vacuous: most refinements leave tensor grids behind (T-nodes), some with knot
+  // segments that end inside the domain at both ends.
+  REQUIRE(t_meshes > insertions / 2);
+  REQUIRE(with_segments > 10);
+  WARN("semi-regular property test: " << sequences << " sequences, " << insertions << " insertions (" << extended
+                                      << " extended), " << t_meshes << " T-meshes, " << with_segments
+                                      << " with knot segments");
+}
+
+TEST_CASE("A short segment is extended until it refines, and the extension is reported", "[semi-regular]") {
+  auto c = SemiRegularCollection::tensor_product(2, 2, {0, 1, 2, 3, 4}, {0, 1, 2, 3, 4});
+  // x = 1.5 over one cell height cannot split any biquadratic (support 3 cells high).
+  const InsertionReport r = c.insert({true, 1.5, 1, 2});
+  REQUIRE(r.extended);
+  REQUIRE(r.splits > 0);
+  REQUIRE(r.inserted.to - r.inserted.from > 1);
+  check_properties(c, true);
+  REQUIRE_THROWS(c.insert({true, 5, 0, 1}));
+  REQUIRE_THROWS(c.insert({true, 1.5, 2, 2}));
+}
+
+TEST_CASE("Poisson on a refined collection: patch test through the BezierMesh", "[semi-regular][poisson]") {
+  auto c = SemiRegularCollection::tensor_product(2, 2, {0, 0.25, 0.5, 0.75, 1}, {0, 0.25, 0.5, 0.75, 1});
+  c.insert({true, 0.375, 0, 0.75});
+  c.insert({false, 0.375, 0.25, 1});
+  const BezierMesh mesh = c.bezier_mesh();
+  const AnalyticGeometryMap identity(mesh, [](double u, double v, double* x, double* J) {
+    x[0] = u;
+    x[1] = v;
+    J[0] = 1; J[1] = 0; J[2] = 0; J[3] = 1;
+  });
+  PoissonProblem problem;
+  problem.exact = differentiate_exact_solution(Expression::parse("x^2 - 3*x*y + 2*y^2 + x", "test"));
+  problem.source = problem.exact->minus_laplacian;
+  problem.boundary.assign(4, BoundaryCondition{});
+  const PoissonSolution s = solve_poisson(mesh, identity, problem, PoissonSolveOptions{});
+  REQUIRE(s.errors->l2 < 1e-12);
+  REQUIRE(s.errors->h1_semi < 1e-11);
+}
+
+TEST_CASE("Collections that are not semi-regular are reported, naming the cell", "[semi-regular]") {
+  // Drop one function of a tensor-product basis: the cells it covered lack a B-spline.
+  auto c = SemiRegularCollection::tensor_product(1, 1, {0, 1, 2}, {0, 1, 2});
+  REQUIRE(c.violations().empty());
+  std::vector<LocalBSpline> splines = c.splines();
+  splines.erase(splines.begin() + 4);  // the centre hat
+  const auto v = SemiRegularCollection::from_splines(1, 1, splines).violations();
+  REQUIRE(v.size() == 4);  // the four cells around the centre
+  REQUIRE_THAT(v.front().reason, Catch::Contains("cell [0,1]x[0,1]") && Catch::Contains("3 B-splines are alive, not 4"));
+}
