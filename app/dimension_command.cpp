@@ -21,6 +21,8 @@ int dimension_command(const DimensionOptions& o) {
   // Weller's Prop. 4.2 count applies to C^{d-1} splines of equal bi-degree d.
   const bool weller_applies = p.m == p.n && p.alpha == p.m - 1 && p.beta == p.n - 1;
   const long weller = weller_applies ? weller_dimension_formula(topo, p.m) : 0;
+  const std::vector<std::string> hypotheses = weller_applies ? weller_hypotheses_violations(topo, p.m)
+                                                             : std::vector<std::string>{};
   if (o.json) {
     Json j = Json::object();
     j.set("file", o.file).set("cells", partition.num_cells())
@@ -33,8 +35,13 @@ int dimension_command(const DimensionOptions& o) {
         .set("crossings", topo.crossings()).set("interior_edges", topo.interior_edges())
         .set("knot_lines", topo.count(K::kLine)).set("knot_rays", topo.count(K::kRay))
         .set("knot_segments", topo.count(K::kSegment));
-    if (weller_applies) j.set("weller_prop_4_2", weller);
-    else j.set_null("weller_prop_4_2");
+    if (weller_applies) {
+      Json failed = Json::array();
+      for (const auto& h : hypotheses) failed.push(h);
+      j.set("weller_prop_4_2", weller).set("weller_hypotheses_failed", failed);
+    } else {
+      j.set_null("weller_prop_4_2");
+    }
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
@@ -50,6 +57,9 @@ int dimension_command(const DimensionOptions& o) {
   if (weller_applies)
     std::printf("  Weller     (d+1)^2 + (d+1)|E_I| - (2d+1)|V_I| = %ld (Prop. 4.2: the dimension when the partition\n"
                 "             carries a semi-regular collection with interior multiplicities 1)\n", weller);
+  if (weller_applies && hypotheses.empty())
+    std::printf("             hypotheses of Prop. 4.1 / Lemma 3.4: hold (the count is an upper bound)\n");
+  for (const auto& h : hypotheses) std::printf("             hypothesis fails: %s\n", h.c_str());
   return 0;
 }
 

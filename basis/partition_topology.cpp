@@ -92,3 +92,45 @@ long weller_dimension_formula(const PartitionTopology& t, int d) {
 }
 
 }  // namespace knotwork
+
+namespace knotwork {
+
+std::vector<std::string> weller_hypotheses_violations(const PartitionTopology& t, int d) {
+  std::vector<std::string> out;
+  auto where = [&](const PartitionTopology::Knot& k) {
+    const auto& a = t.vertices[k.vertices.front()];
+    const auto& b = t.vertices[k.vertices.back()];
+    return std::string(k.vertical ? "vertical" : "horizontal") + " knot from (" + a.x.get_str() + ", " + a.y.get_str() +
+           ") to (" + b.x.get_str() + ", " + b.y.get_str() + ")";
+  };
+  for (const auto& k : t.knots)
+    if (k.kind == PartitionTopology::KnotKind::kSegment && static_cast<int>(k.vertices.size()) < d + 2)
+      out.push_back(where(k) + " is a knot segment with " + std::to_string(k.vertices.size()) +
+                    " vertices, fewer than d+2 = " + std::to_string(d + 2));
+  // For every interior vertex: the knots through it, and the vertex counts from their ends.
+  std::vector<std::vector<std::pair<int, int>>> through(t.vertices.size());  // (knot, position)
+  for (int k = 0; k < static_cast<int>(t.knots.size()); ++k)
+    for (int i = 0; i < static_cast<int>(t.knots[k].vertices.size()); ++i) through[t.knots[k].vertices[i]].emplace_back(k, i);
+  for (size_t v = 0; v < t.vertices.size(); ++v) {
+    if (t.vertices[v].boundary || through[v].size() < 2) continue;
+    // Vertices count with their multiplicity: an end on the boundary (edges of multiplicity
+    // infinity, d+1 for open knot vectors) counts d+1 times, interior vertices once.
+    bool ok = false;
+    for (const auto& [k, i] : through[v]) {
+      const auto& vs = t.knots[k].vertices;
+      int before = 0, after = 0;
+      for (int j = 0; j < static_cast<int>(vs.size()); ++j) {
+        const int weight = t.vertices[vs[j]].boundary ? d + 1 : 1;
+        if (j <= i) before += weight;
+        if (j >= i) after += weight;
+      }
+      ok = ok || std::min(before, after) >= d + 2;
+    }
+    if (!ok)
+      out.push_back("at (" + t.vertices[v].x.get_str() + ", " + t.vertices[v].y.get_str() +
+                    ") neither knot has d+2 vertices on both sides (Lemma 3.4)");
+  }
+  return out;
+}
+
+}  // namespace knotwork

@@ -1,6 +1,7 @@
 #pragma once
 #include <gmpxx.h>
 
+#include <string>
 #include <vector>
 
 #include "basis/rectangular_partition.hpp"
@@ -46,4 +47,12 @@ PartitionTopology partition_topology(const RectangularPartition& partition);
 // interior multiplicities 1. Not a dimension for arbitrary T-meshes: the brute-force count is.
 long weller_dimension_formula(const PartitionTopology& topology, int d);
 
+}  // namespace knotwork
+
+namespace knotwork {
+// The hypotheses of Weller's Prop. 4.1 (interior multiplicities 1): every knot segment has at
+// least d+2 vertices, and where two knots meet in an interior vertex v, one of them has at
+// least d+2 vertices from each of its endpoints up to and including v (Lemma 3.4, which
+// every semi-regular collection's partition satisfies). Returns the statements that fail.
+std::vector<std::string> weller_hypotheses_violations(const PartitionTopology& topology, int d);
 }  // namespace knotwork

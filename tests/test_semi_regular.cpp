@@ -4,6 +4,7 @@
 #include <random>
 #include <set>
 
+#include "basis/bspline_basis.hpp"
 #include "basis/partition_topology.hpp"
 #include "basis/semi_regular_collection.hpp"
 #include "basis/spline_dimension.hpp"
@@ -149,4 +150,63 @@ TEST_CASE("Collections that are not semi-regular are reported, naming the cell",
   const auto v = SemiRegularCollection::from_splines(1, 1, splines).violations();
   REQUIRE(v.size() == 4);  // the four cells around the centre
   REQUIRE_THAT(v.front().reason, Catch::Contains("cell [0,1]x[0,1]") && Catch::Contains("3 B-splines are alive, not 4"));
+}
+
+TEST_CASE("Refinement keeps the spaces nested: coarse functions are exact on the fine collection", "[semi-regular]") {
+  std::mt19937 rng(77);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int d = 1 + trial % 4;
+    auto coarse = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 3));
+    coarse.insert(random_segment(rng, coarse));
+    auto fine = coarse;
+    for (int s = 0; s < 2; ++s) fine.insert(random_segment(rng, fine));
+    // Every coarse B-spline, restricted to every fine cell (its Bernstein coefficients
+    // there), must be a combination of the fine B-splines: a least-squares fit over all
+    // fine cells has zero residual.
+    const BezierMesh fm = fine.bezier_mesh();
+    const int nb = (d + 1) * (d + 1), nf = fine.size();
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(fm.num_cells()) * nb, nf);
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(A.rows(), coarse.size());
+    for (int cell = 0; cell < fm.num_cells(); ++cell) {
+      const auto ids = fm.functions(cell);
+      const Eigen::MatrixXd& C = fm.extraction(cell);
+      for (size_t a = 0; a < ids.size(); ++a) A.block(static_cast<Eigen::Index>(cell) * nb, ids[a], nb, 1) = C.row(a).transpose();
+      const BezierCell& bc = fm.cell(cell);
+      for (int k = 0; k < coarse.size(); ++k) {
+        const auto& b = coarse.splines()[k];
+        if (!(b.x.front() <= bc.u0 && bc.u1 <= b.x.back() && b.y.front() <= bc.v0 && bc.v1 <= b.y.back())) continue;
+        const Eigen::VectorXd bx = single_bspline_bernstein(b.x, bc.u0, bc.u1);
+        const Eigen::VectorXd by = single_bspline_bernstein(b.y, bc.v0, bc.v1);
+        for (int v = 0; v <= d; ++v)
+          for (int u = 0; u <= d; ++u) B(static_cast<Eigen::Index>(cell) * nb + u + (d + 1) * v, k) = bx[u] * by[v];
+      }
+    }
+    const Eigen::MatrixXd X = A.colPivHouseholderQr().solve(B);
+    REQUIRE((A * X - B).cwiseAbs().maxCoeff() < 1e-12);
+    REQUIRE(fine.size() >= coarse.size());
+  }
+}
+
+TEST_CASE("Partitions of semi-regular collections satisfy Lemma 3.4 / Prop. 4.1; a short segment does not", "[semi-regular]") {
+  std::mt19937 rng(31);
+  for (int trial = 0; trial < 60; ++trial) {
+    const int d = 1 + trial % 4;
+    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 3));
+    for (int s = 0; s < 3; ++s) {
+      c.insert(random_segment(rng, c));
+      const auto v = weller_hypotheses_violations(partition_topology(c.partition()), d);
+      INFO((v.empty() ? std::string() : v.front()));
+      REQUIRE(v.empty());
+    }
+  }
+  // The 3 x 3 grid with a segment of 2 vertices inside the centre cell (d = 2).
+  std::vector<RationalBox> cells;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i)
+      if (!(i == 1 && j == 1)) cells.push_back({i, j, i + 1, j + 1});
+  cells.push_back({1, 1, mpq_class(3, 2), 2});
+  cells.push_back({mpq_class(3, 2), 1, 2, 2});
+  const auto v = weller_hypotheses_violations(partition_topology(RectangularPartition(cells)), 2);
+  REQUIRE(!v.empty());
+  REQUIRE_THAT(v.front(), Catch::Contains("knot segment with 2 vertices"));
 }
