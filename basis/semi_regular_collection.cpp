@@ -85,11 +85,20 @@ bool alive_on(const LocalBSpline& b, const Box& c) {
   return b.x.front() <= c.x0 && c.x1 <= b.x.back() && b.y.front() <= c.y0 && c.y1 <= b.y.back();
 }
 
+// What Def. 3.3 finds on a cell: the shared vector (X in case a) and, per window i of it,
+// the other vector (Y^(i)) with the B-splines in window order: spline[i][j] = N_i N_j.
+struct CellStructure {
+  bool x_first = true;
+  std::vector<double> shared;
+  std::vector<std::vector<double>> other;
+  std::vector<std::vector<const LocalBSpline*>> spline;
+};
+
 // Def. 3.3 (2a) for one cell: the alive B-splines are N_i(X|x) N_j(Y^(i)|y) with X of length
 // 2d+2 whose windows are the distinct x vectors, and per window a Y^(i) likewise. `first`
 // selects the coordinate that must be shared (x for case a, y for case b).
 bool regular_in(const std::vector<const LocalBSpline*>& alive, int d_first, int d_second, bool x_first,
-                const Box& c, std::string& why) {
+                const Box& c, std::string& why, CellStructure* structure = nullptr) {
   auto first = [&](const LocalBSpline* b) -> const std::vector<double>& { return x_first ? b->x : b->y; };
   auto second = [&](const LocalBSpline* b) -> const std::vector<double>& { return x_first ? b->y : b->x; };
   const double lo = x_first ? c.x0 : c.y0, hi = x_first ? c.x1 : c.y1;
@@ -114,6 +123,13 @@ bool regular_in(const std::vector<const LocalBSpline*>& alive, int d_first, int 
     why = "the cell is not in the middle span of the shared knot vector";
     return false;
   }
+  if (structure) {
+    structure->x_first = x_first;
+    structure->shared = windows[0];
+    structure->shared.insert(structure->shared.end(), windows[d_first].end() - d_first, windows[d_first].end());
+    structure->other.clear();
+    structure->spline.clear();
+  }
   for (const auto& [v, members] : groups) {
     std::vector<std::vector<double>> ws;
     for (const auto* b : members) ws.push_back(second(b));
@@ -133,6 +149,16 @@ bool regular_in(const std::vector<const LocalBSpline*>& alive, int d_first, int 
     if (!(ws[0][d_second] <= lo2 && hi2 <= ws[d_second][1])) {
       why = "the cell is not in the middle span of a shared knot vector";
       return false;
+    }
+    if (structure) {
+      std::vector<double> full = ws[0];
+      full.insert(full.end(), ws[d_second].end() - d_second, ws[d_second].end());
+      structure->other.push_back(full);
+      std::vector<const LocalBSpline*> ordered;
+      for (const auto& w : ws)
+        for (const auto* b : members)
+          if (second(b) == w) ordered.push_back(b);
+      structure->spline.push_back(ordered);
     }
   }
   return true;
@@ -308,6 +334,40 @@ std::vector<Violation> SemiRegularCollection::violations() const {
     out.push_back({static_cast<int>(ci), "cell " + describe(c) + ": neither (a) " + why_a + " nor (b) " + why_b});
   }
   return out;
+}
+
+double SemiRegularCollection::evaluate(std::span<const double> coefficients, double x, double y) const {
+  if (static_cast<int>(coefficients.size()) != size())
+    throw std::invalid_argument("evaluate: one coefficient per B-spline is needed");
+  if (!(x >= x0_ && x <= x1_ && y >= y0_ && y <= y1_)) throw std::invalid_argument("evaluate: point outside the domain");
+  const InducedCells ic = induced_cells(splines_, x0_, y0_, x1_, y1_);
+  // A point on a knot belongs to the cell above / to the right (Weller, Sec. 3); on the
+  // domain's top or right side, to the cell below / to the left.
+  const Box* cell = nullptr;
+  for (const Box& c : ic.cells)
+    if ((c.x0 <= x && (x < c.x1 || (x == x1_ && c.x1 == x1_))) && (c.y0 <= y && (y < c.y1 || (y == y1_ && c.y1 == y1_)))) {
+      cell = &c;
+      break;
+    }
+  if (!cell) throw std::runtime_error("evaluate: no cell contains the point");
+  std::vector<const LocalBSpline*> alive;
+  for (const auto& b : splines_)
+    if (alive_on(b, *cell)) alive.push_back(&b);
+  CellStructure st;
+  std::string why;
+  if (static_cast<int>(alive.size()) != (dx_ + 1) * (dy_ + 1) ||
+      !(regular_in(alive, dx_, dy_, true, *cell, why, &st) || regular_in(alive, dy_, dx_, false, *cell, why, &st)))
+    throw std::runtime_error("evaluate: the collection is not semi-regular on cell " + describe(*cell));
+  const int d_first = st.x_first ? dx_ : dy_, d_second = st.x_first ? dy_ : dx_;
+  const double t_first = st.x_first ? x : y, t_second = st.x_first ? y : x;
+  // Eq. (3.5): b_i = sum_j b_ij N_j(Y^(i) | y), one univariate de Boor run per i; then (3.4).
+  std::vector<double> b(d_first + 1);
+  for (int i = 0; i <= d_first; ++i) {
+    std::vector<double> cij(d_second + 1);
+    for (int j = 0; j <= d_second; ++j) cij[j] = coefficients[st.spline[i][j] - splines_.data()];
+    b[i] = de_boor(BSplineBasis1D(d_second, st.other[i]), cij, t_second);
+  }
+  return de_boor(BSplineBasis1D(d_first, st.shared), b, t_first);
 }
 
 BezierMesh SemiRegularCollection::bezier_mesh() const {

@@ -1,4 +1,5 @@
 #pragma once
+#include <span>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,11 @@ class SemiRegularCollection {
   RectangularPartition partition() const;
   // Def. 3.1 and Def. 3.3 checked cell by cell; empty when the collection is semi-regular.
   std::vector<Violation> violations() const;
+
+  // Value of sum_k coefficients[k] B_k at (x, y) by Weller's evaluation (eqs. 3.4-3.5): on the
+  // point's cell, d+1 univariate de Boor runs over the vectors Y^(i), then one over X (or
+  // the transpose, case (b)). Throws if the point is outside or the cell is not regular.
+  double evaluate(std::span<const double> coefficients, double x, double y) const;
 
   // Every B-spline's polynomial piece on every cell of the partition, as Bernstein
   // coefficients: the BezierMesh the solver and the checks read. Boundary ids 0..3 as for

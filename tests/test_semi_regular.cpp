@@ -5,6 +5,7 @@
 #include <set>
 
 #include "basis/bspline_basis.hpp"
+#include "quadrature/bernstein.hpp"
 #include "basis/partition_topology.hpp"
 #include "basis/semi_regular_collection.hpp"
 #include "basis/spline_dimension.hpp"
@@ -209,4 +210,40 @@ TEST_CASE("Partitions of semi-regular collections satisfy Lemma 3.4 / Prop. 4.1;
   const auto v = weller_hypotheses_violations(partition_topology(RectangularPartition(cells)), 2);
   REQUIRE(!v.empty());
   REQUIRE_THAT(v.front(), Catch::Contains("knot segment with 2 vertices"));
+}
+
+TEST_CASE("Weller's multiple de Boor evaluation agrees with Bezier extraction", "[semi-regular]") {
+  std::mt19937 rng(99);
+  std::normal_distribution<double> g;
+  std::uniform_real_distribution<double> unit(0, 1);
+  int points = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int d = 1 + trial % 4;
+    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 2 + trial % 2));
+    for (int s = 0; s < 1 + trial % 3; ++s) c.insert(random_segment(rng, c));
+    std::vector<double> coef(c.size());
+    for (double& v : coef) v = g(rng);
+    const BezierMesh mesh = c.bezier_mesh();
+    for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+      const BezierCell& bc = mesh.cell(cell);
+      const auto ids = mesh.functions(cell);
+      Eigen::VectorXd local(ids.size());
+      for (size_t a = 0; a < ids.size(); ++a) local[a] = coef[ids[a]];
+      const Eigen::VectorXd beta = mesh.extraction(cell).transpose() * local;
+      for (int k = 0; k < 3; ++k) {
+        // Corners are included: on a knot the point belongs to the cell above / right.
+        const double s = k == 0 ? 0.0 : unit(rng), t = k == 0 ? 0.0 : unit(rng);
+        std::vector<double> bu(d + 1), du(d + 1), bv(d + 1), dv(d + 1);
+        bernstein_values_and_derivatives(d, s, bu.data(), du.data());
+        bernstein_values_and_derivatives(d, t, bv.data(), dv.data());
+        double bezier = 0;
+        for (int v = 0; v <= d; ++v)
+          for (int u = 0; u <= d; ++u) bezier += beta[u + (d + 1) * v] * bu[u] * bv[v];
+        const double x = bc.u0 + s * (bc.u1 - bc.u0), y = bc.v0 + t * (bc.v1 - bc.v0);
+        REQUIRE(std::abs(c.evaluate(coef, x, y) - bezier) < 1e-13 * (1 + std::abs(bezier)));
+        ++points;
+      }
+    }
+  }
+  REQUIRE(points > 1000);
 }
