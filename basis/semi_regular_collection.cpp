@@ -370,6 +370,88 @@ double SemiRegularCollection::evaluate(std::span<const double> coefficients, dou
   return de_boor(BSplineBasis1D(d_first, st.shared), b, t_first);
 }
 
+namespace {
+
+// Global knot vector: every value used, with the largest multiplicity any B-spline gives it.
+std::vector<double> global_knots(const std::vector<LocalBSpline>& splines, bool x) {
+  std::map<double, int> mult;
+  for (const auto& b : splines) {
+    const auto& k = x ? b.x : b.y;
+    for (size_t i = 0; i < k.size();) {
+      size_t j = i;
+      while (j < k.size() && k[j] == k[i]) ++j;
+      mult[k[i]] = std::max(mult[k[i]], static_cast<int>(j - i));
+      i = j;
+    }
+  }
+  std::vector<double> U;
+  for (const auto& [v, m] : mult) U.insert(U.end(), m, v);
+  return U;
+}
+
+// Coefficients of the single B-spline N(local | t) in the basis of the global knot vector U
+// (which contains local's knots): Boehm insertion of the missing knots, then the resulting
+// windows located in U. Returns (global index, coefficient) pairs.
+std::vector<std::pair<int, double>> in_global_basis(const std::vector<double>& local, const std::vector<double>& U) {
+  const int d = static_cast<int>(local.size()) - 2;
+  std::vector<double> padded(d, local.front() - 1.0);  // as in single_bspline_bernstein
+  padded.insert(padded.end(), local.begin(), local.end());
+  padded.insert(padded.end(), d, local.back() + 1.0);
+  BSplineBasis1D basis(d, padded);
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(2 * d + 1, 1);
+  c(d, 0) = 1.0;
+  for (size_t i = 0; i < U.size();) {
+    size_t j = i;
+    while (j < U.size() && U[j] == U[i]) ++j;
+    if (U[i] > local.front() && U[i] < local.back()) {
+      const long have = std::count(local.begin(), local.end(), U[i]);
+      for (long r = have; r < static_cast<long>(j - i); ++r) basis = insert_knot(basis, c, U[i]);
+    }
+    i = j;
+  }
+  std::vector<std::pair<int, double>> out;
+  const auto& K = basis.knots();
+  for (int f = 0; f < basis.num_functions(); ++f) {
+    if (c(f, 0) == 0.0) continue;
+    const std::vector<double> window(K.begin() + f, K.begin() + f + d + 2);
+    for (size_t g = 0; g + d + 2 <= U.size(); ++g)
+      if (std::equal(window.begin(), window.end(), U.begin() + g)) {
+        out.emplace_back(static_cast<int>(g), c(f, 0));
+        break;
+      }
+  }
+  return out;
+}
+
+}  // namespace
+
+double TensorProductSpline::operator()(double x, double y) const {
+  const int p = basis_x.degree(), q = basis_y.degree();
+  const int sx = basis_x.find_span(x), sy = basis_y.find_span(y);
+  std::vector<double> nx(p + 1), ny(q + 1);
+  basis_x.evaluate(sx, x, nx.data());
+  basis_y.evaluate(sy, y, ny.data());
+  double v = 0;
+  for (int j = 0; j <= q; ++j)
+    for (int i = 0; i <= p; ++i) v += coefficients(sx - p + i, sy - q + j) * nx[i] * ny[j];
+  return v;
+}
+
+TensorProductSpline SemiRegularCollection::to_tensor_product(std::span<const double> coefficients) const {
+  if (static_cast<int>(coefficients.size()) != size())
+    throw std::invalid_argument("to_tensor_product: one coefficient per B-spline is needed");
+  TensorProductSpline t{BSplineBasis1D(dx_, global_knots(splines_, true)), BSplineBasis1D(dy_, global_knots(splines_, false)),
+                        Eigen::MatrixXd()};
+  t.coefficients = Eigen::MatrixXd::Zero(t.basis_x.num_functions(), t.basis_y.num_functions());
+  for (int k = 0; k < size(); ++k) {
+    const auto ax = in_global_basis(splines_[k].x, t.basis_x.knots());
+    const auto ay = in_global_basis(splines_[k].y, t.basis_y.knots());
+    for (const auto& [i, a] : ax)
+      for (const auto& [j, b] : ay) t.coefficients(i, j) += coefficients[k] * a * b;
+  }
+  return t;
+}
+
 BezierMesh SemiRegularCollection::bezier_mesh() const {
   const InducedCells ic = induced_cells(splines_, x0_, y0_, x1_, y1_);
   if (!ic.problems.empty()) throw std::runtime_error(ic.problems.front());

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "basis/bezier_mesh.hpp"
+#include "basis/bspline_basis.hpp"
 #include "basis/rectangular_partition.hpp"
 
 namespace knotwork {
@@ -34,6 +35,13 @@ struct InsertionReport {
 struct Violation {
   int cell = -1;          // index in partition() (-1 for collection-wide problems)
   std::string reason;     // e.g. "cell [0.25,0.5]x[0.5,0.75]: B-splines 12 and 17 share ..."
+};
+
+// A classical tensor-product spline: coefficients(i, j) multiplies N_i(x) N_j(y).
+struct TensorProductSpline {
+  BSplineBasis1D basis_x, basis_y;
+  Eigen::MatrixXd coefficients;
+  double operator()(double x, double y) const;
 };
 
 // A semi-regular collection of tensor-product B-splines over a rectangle (Weller 1994):
@@ -71,6 +79,11 @@ class SemiRegularCollection {
   // point's cell, d+1 univariate de Boor runs over the vectors Y^(i), then one over X (or
   // the transpose, case (b)). Throws if the point is outside or the cell is not regular.
   double evaluate(std::span<const double> coefficients, double x, double y) const;
+
+  // The same spline as a classical tensor-product B-spline (Sec. 2): every knot extended to
+  // a knot line with its maximal multiplicity, each B_k rewritten there by knot insertion.
+  // For export to tools that know only tensor-product splines.
+  TensorProductSpline to_tensor_product(std::span<const double> coefficients) const;
 
   // Every B-spline's polynomial piece on every cell of the partition, as Bernstein
   // coefficients: the BezierMesh the solver and the checks read. Boundary ids 0..3 as for

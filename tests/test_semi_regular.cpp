@@ -247,3 +247,24 @@ TEST_CASE("Weller's multiple de Boor evaluation agrees with Bezier extraction", 
   }
   REQUIRE(points > 1000);
 }
+
+TEST_CASE("Conversion to a classical tensor-product B-spline keeps every value", "[semi-regular]") {
+  std::mt19937 rng(123);
+  std::normal_distribution<double> g;
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int d = 1 + trial % 4;
+    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 3));
+    for (int s = 0; s < 2; ++s) c.insert(random_segment(rng, c));
+    std::vector<double> coef(c.size());
+    for (double& v : coef) v = g(rng);
+    const TensorProductSpline t = c.to_tensor_product(coef);
+    REQUIRE(t.basis_x.num_functions() * t.basis_y.num_functions() >= c.size());  // more functions, same spline
+    const double X = t.basis_x.domain_end(), Y = t.basis_y.domain_end();
+    for (int k = 0; k < 30; ++k) {
+      const double x = unit(rng) * X, y = unit(rng) * Y;
+      const double v = c.evaluate(coef, x, y);
+      REQUIRE(std::abs(t(x, y) - v) < 1e-12 * (1 + std::abs(v)));
+    }
+  }
+}
