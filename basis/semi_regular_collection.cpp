@@ -192,8 +192,8 @@ SemiRegularCollection SemiRegularCollection::tensor_product(int dx, int dy, cons
     for (size_t i = 0; i + dx + 1 < U.size(); ++i)
       c.splines_.push_back({std::vector<double>(U.begin() + i, U.begin() + i + dx + 2),
                             std::vector<double>(V.begin() + j, V.begin() + j + dy + 2)});
-  for (size_t i = 1; i + 1 < bx.size(); ++i) c.lines_.push_back({true, bx[i], c.y0_, c.y1_});
-  for (size_t j = 1; j + 1 < by.size(); ++j) c.lines_.push_back({false, by[j], c.x0_, c.x1_});
+  for (size_t i = 1; i + 1 < bx.size(); ++i) c.lines_.push_back({true, bx[i], c.y0_, c.y1_, 1});
+  for (size_t j = 1; j + 1 < by.size(); ++j) c.lines_.push_back({false, by[j], c.x0_, c.x1_, 1});
   return c;
 }
 
@@ -232,7 +232,8 @@ void SemiRegularCollection::split_until_stable(int& splits) {
       for (const auto& L : lines_) {
         const std::vector<double>& across = L.vertical ? it->x : it->y;
         const std::vector<double>& along = L.vertical ? it->y : it->x;
-        if (!(across.front() < L.position && L.position < across.back()) || contains(across, L.position)) continue;
+        if (!(across.front() < L.position && L.position < across.back())) continue;
+        if (std::count(across.begin(), across.end(), L.position) >= L.multiplicity) continue;
         if (!(L.from <= along.front() && along.back() <= L.to)) continue;
         std::vector<double> refined = across;
         refined.insert(std::upper_bound(refined.begin(), refined.end(), L.position), L.position);
@@ -258,6 +259,14 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
     throw std::invalid_argument("segment position is not inside the domain");
   if (!(s.from < s.to)) throw std::invalid_argument("segment has zero length");
   if (s.from < lo_along || s.to > hi_along) throw std::invalid_argument("segment leaves the domain");
+  const int degree = s.vertical ? dx_ : dy_;
+  if (s.multiplicity < 1 || s.multiplicity > degree + 1)
+    throw std::invalid_argument("multiplicity " + std::to_string(s.multiplicity) + " is outside [1, degree+1] = [1, " +
+                                std::to_string(degree + 1) + "]");
+  for (const auto& L : lines_)
+    if (L.vertical == s.vertical && L.position == s.position && std::min(L.to, s.to) > std::max(L.from, s.from) &&
+        L.multiplicity != s.multiplicity)
+      throw std::invalid_argument("segment overlaps an existing knot of multiplicity " + std::to_string(L.multiplicity));
   InsertionReport report;
   report.requested = s;
   KnotInsertion seg = s;
@@ -450,6 +459,18 @@ TensorProductSpline SemiRegularCollection::to_tensor_product(std::span<const dou
       for (const auto& [j, b] : ay) t.coefficients(i, j) += coefficients[k] * a * b;
   }
   return t;
+}
+
+std::vector<InsertionReport> SemiRegularCollection::refine_cells(const std::vector<int>& cells) {
+  const InducedCells ic = induced_cells(splines_, x0_, y0_, x1_, y1_);
+  std::vector<InsertionReport> reports;
+  for (int i : cells) {
+    if (i < 0 || i >= static_cast<int>(ic.cells.size())) throw std::invalid_argument("no cell " + std::to_string(i));
+    const Box& c = ic.cells[i];
+    reports.push_back(insert({true, 0.5 * (c.x0 + c.x1), c.y0, c.y1, 1}));
+    reports.push_back(insert({false, 0.5 * (c.y0 + c.y1), c.x0, c.x1, 1}));
+  }
+  return reports;
 }
 
 BezierMesh SemiRegularCollection::bezier_mesh() const {

@@ -18,10 +18,11 @@ struct LocalBSpline {
 };
 
 // A knot segment (or ray, or line) to insert: x = position for vertical ones, from <= y <= to
-// (horizontal: y = position, from <= x <= to). Interior multiplicity 1.
+// (horizontal: y = position, from <= x <= to), with a multiplicity in [1, degree+1].
 struct KnotInsertion {
   bool vertical = true;
   double position = 0, from = 0, to = 0;
+  int multiplicity = 1;
 };
 
 // What a refinement did: the segment as inserted after any extension.
@@ -67,8 +68,13 @@ class SemiRegularCollection {
   // until no B-spline is crossed by a knot it does not use). If the result would not be
   // non-degenerate and semi-regular, the segment is extended one knot step at a time (both
   // ends) until it is, at worst to a full knot line. Throws std::invalid_argument for a
-  // segment outside the domain or of zero length.
+  // segment outside the domain or of zero length, a multiplicity outside [1, degree+1], or
+  // one that overlaps an existing knot of another multiplicity.
   InsertionReport insert(const KnotInsertion& segment);
+
+  // Refines the given cells of partition() (indices): a vertical and a horizontal segment
+  // through each cell's middle, spanning the cell, extended where needed.
+  std::vector<InsertionReport> refine_cells(const std::vector<int>& cells);
 
   // The partition induced by the B-splines (cells in row order of their lower-left corners).
   RectangularPartition partition() const;

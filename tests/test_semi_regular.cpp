@@ -268,3 +268,30 @@ TEST_CASE("Conversion to a classical tensor-product B-spline keeps every value",
     }
   }
 }
+
+TEST_CASE("Knots of higher multiplicity and marked-cell refinement keep the properties", "[semi-regular]") {
+  std::mt19937 rng(5150);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int d = 2 + trial % 3;
+    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 3));
+    const int before = c.size();
+    KnotInsertion s = random_segment(rng, c);
+    s.from = s.vertical ? 0 : 0;  // a full line of multiplicity m adds m functions per row
+    const std::vector<double> ends = {c.splines().back().x.back(), c.splines().back().y.back()};
+    s.to = s.vertical ? ends[1] : ends[0];
+    s.multiplicity = 1 + trial % d;
+    c.insert(s);
+    const int rows = static_cast<int>(std::sqrt(double(before)) + 0.5);  // square tensor start: rows = columns
+    REQUIRE(c.size() == before + s.multiplicity * rows);
+    check_properties(c, false);
+    const int cells = c.bezier_mesh().num_cells();
+    c.refine_cells({0, cells - 1});
+    check_properties(c, false);
+    REQUIRE(c.bezier_mesh().num_cells() >= cells + 6);
+  }
+  auto c = SemiRegularCollection::tensor_product(2, 2, {0, 1, 2, 3}, {0, 1, 2, 3});
+  REQUIRE_THROWS_WITH(c.insert({true, 1.5, 0, 3, 0}), Catch::Contains("multiplicity 0"));
+  REQUIRE_THROWS_WITH(c.insert({true, 1.5, 0, 3, 4}), Catch::Contains("multiplicity 4"));
+  c.insert({true, 1.5, 0, 3, 2});
+  REQUIRE_THROWS_WITH(c.insert({true, 1.5, 1, 2, 1}), Catch::Contains("multiplicity 2"));
+}
