@@ -42,9 +42,59 @@ void check_memory(const CaseDescription& c) {
 
 }  // namespace
 
+namespace {
+
+// The knot-segment space of a case: a tensor-product start on the geometry's knot spans
+// (cut into `elements` parts; geometry knots of low continuity become knot lines of the
+// needed multiplicity, e.g. the L-shape's C0 fold), then the listed segments.
+void discretize_knot_segments(const CaseDescription& c, Discretization& d) {
+  const int dx = c.space.degree[0], dy = c.space.degree[1];
+  std::array<std::vector<double>, 2> breaks;
+  std::array<std::vector<int>, 2> mults;  // per interior breakpoint
+  for (int dir = 0; dir < 2; ++dir) {
+    const BSplineBasis1D& g = dir == 0 ? c.geometry.basis_u : c.geometry.basis_v;
+    const int deg = dir == 0 ? dx : dy;
+    const auto bp = g.breakpoints();
+    const auto mult = g.multiplicities();
+    for (size_t i = 0; i + 1 < bp.size(); ++i) {
+      for (int e = 0; e < c.space.elements_per_span[dir]; ++e) {
+        breaks[dir].push_back(bp[i] + (bp[i + 1] - bp[i]) * e / c.space.elements_per_span[dir]);
+        if (breaks[dir].size() == 1) continue;
+        // A geometry knot keeps min(its continuity, d-1); new knots are C^(d-1).
+        const int continuity = e == 0 ? std::min(g.degree() - mult[i], deg - 1) : deg - 1;
+        mults[dir].push_back(deg - continuity);
+        d.simple_knots = d.simple_knots && deg - continuity == 1;
+      }
+    }
+    breaks[dir].push_back(bp.back());
+  }
+  try {
+    d.segments = std::make_unique<SemiRegularCollection>(
+        SemiRegularCollection::tensor_product(dx, dy, breaks[0], breaks[1], mults[0], mults[1]));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.path + ": [space]: " + e.what());
+  }
+  for (size_t i = 0; i < c.segments.size(); ++i) {
+    try {
+      d.insertions.push_back(d.segments->insert(c.segments[i]));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(c.path + ": [space] segments[" + std::to_string(i) + "]: " + e.what());
+    }
+    d.simple_knots = d.simple_knots && c.segments[i].multiplicity == 1;
+  }
+  d.segment_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
+  d.geometry = std::make_unique<PatchGeometryMap>(*d.segment_mesh, c.geometry);
+}
+
+}  // namespace
+
 Discretization discretize(const CaseDescription& c) {
   check_memory(c);
   Discretization d;
+  if (c.family == "knot_segments") {
+    discretize_knot_segments(c, d);
+    return d;
+  }
   try {
     d.tensor = build_tensor_discretization(c.geometry, c.space);
   } catch (const std::invalid_argument& e) {
@@ -95,6 +145,9 @@ double mesh_size(const Discretization& d) {
 
 std::string describe_space(const CaseDescription& c) {
   const auto& s = c.space;
+  if (c.family == "knot_segments")
+    return "knot segments (Weller), degree " + std::to_string(s.degree[0]) + "x" + std::to_string(s.degree[1]) +
+           ", " + std::to_string(c.segments.size()) + " segments";
   const int ru = s.continuity[0] < 0 ? s.degree[0] - 1 : s.continuity[0];
   const int rv = s.continuity[1] < 0 ? s.degree[1] - 1 : s.continuity[1];
   std::string r = std::string(s.rational ? "NURBS" : "B-spline") + ", degree " +

@@ -12,9 +12,13 @@ namespace knotwork {
 
 // A case turned into what the solver needs: the BezierMesh and the geometry on its cells.
 struct Discretization {
-  TensorDiscretization tensor;
+  TensorDiscretization tensor;                      // family "tensor"
+  std::unique_ptr<SemiRegularCollection> segments;  // family "knot_segments"
+  std::unique_ptr<BezierMesh> segment_mesh;         // on the heap: geometry maps refer to it
+  std::vector<InsertionReport> insertions;          // what each segment became
+  bool simple_knots = true;                         // every interior knot of multiplicity 1
   std::unique_ptr<GeometryMap> geometry;
-  const BezierMesh& mesh() const { return tensor.mesh; }
+  const BezierMesh& mesh() const { return segments ? *segment_mesh : tensor.mesh; }
 };
 
 // Throws InputError naming the case file and [space] when the space cannot be built.

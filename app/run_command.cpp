@@ -71,7 +71,12 @@ int run_command(const RunOptions& o) {
     return 0;
   }
   std::printf("knotwork run %s%s\n", c.path.c_str(), c.title.empty() ? "" : ("  (" + c.title + ")").c_str());
-  std::printf("  space    %s, %d x %d cells\n", describe_space(c).c_str(), d.tensor.elements_u, d.tensor.elements_v);
+  std::printf("  space    %s, %d cells\n", describe_space(c).c_str(), d.mesh().num_cells());
+  for (const auto& r : d.insertions)
+    if (r.extended)
+      std::printf("  note     segment %s = %g, [%g, %g] was extended to [%g, %g] to keep the basis semi-regular\n",
+                  r.requested.vertical ? "x" : "y", r.requested.position, r.requested.from, r.requested.to,
+                  r.inserted.from, r.inserted.to);
   std::printf("  dofs     %d functions, %d unknowns after Dirichlet elimination, %ld stored matrix entries\n",
               s.num_functions, s.num_free, s.matrix_nonzeros);
   if (s.errors)

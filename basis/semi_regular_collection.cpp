@@ -167,7 +167,8 @@ bool regular_in(const std::vector<const LocalBSpline*>& alive, int d_first, int 
 }  // namespace
 
 SemiRegularCollection SemiRegularCollection::tensor_product(int dx, int dy, const std::vector<double>& bx,
-                                                            const std::vector<double>& by) {
+                                                            const std::vector<double>& by, const std::vector<int>& mx,
+                                                            const std::vector<int>& my) {
   if (dx < 1 || dy < 1) throw std::invalid_argument("degrees must be >= 1");
   if (bx.size() < 2 || by.size() < 2) throw std::invalid_argument("need at least two breakpoints per direction");
   for (size_t i = 1; i < bx.size(); ++i)
@@ -181,19 +182,24 @@ SemiRegularCollection SemiRegularCollection::tensor_product(int dx, int dy, cons
   c.x1_ = bx.back();
   c.y0_ = by.front();
   c.y1_ = by.back();
-  auto open = [](int d, const std::vector<double>& b) {
-    std::vector<double> U(d, b.front());
-    U.insert(U.end(), b.begin(), b.end());
-    U.insert(U.end(), d, b.back());
+  auto multiplicity = [](const std::vector<int>& m, size_t i, int d) {
+    const int r = i - 1 < m.size() ? m[i - 1] : 1;
+    if (r < 1 || r > d) throw std::invalid_argument("interior multiplicity must be in [1, degree]");
+    return r;
+  };
+  auto open = [&](int d, const std::vector<double>& b, const std::vector<int>& m) {
+    std::vector<double> U(d + 1, b.front());
+    for (size_t i = 1; i + 1 < b.size(); ++i) U.insert(U.end(), multiplicity(m, i, d), b[i]);
+    U.insert(U.end(), d + 1, b.back());
     return U;
   };
-  const auto U = open(dx, bx), V = open(dy, by);
+  const auto U = open(dx, bx, mx), V = open(dy, by, my);
   for (size_t j = 0; j + dy + 1 < V.size(); ++j)
     for (size_t i = 0; i + dx + 1 < U.size(); ++i)
       c.splines_.push_back({std::vector<double>(U.begin() + i, U.begin() + i + dx + 2),
                             std::vector<double>(V.begin() + j, V.begin() + j + dy + 2)});
-  for (size_t i = 1; i + 1 < bx.size(); ++i) c.lines_.push_back({true, bx[i], c.y0_, c.y1_, 1});
-  for (size_t j = 1; j + 1 < by.size(); ++j) c.lines_.push_back({false, by[j], c.x0_, c.x1_, 1});
+  for (size_t i = 1; i + 1 < bx.size(); ++i) c.lines_.push_back({true, bx[i], c.y0_, c.y1_, multiplicity(mx, i, dx)});
+  for (size_t j = 1; j + 1 < by.size(); ++j) c.lines_.push_back({false, by[j], c.x0_, c.x1_, multiplicity(my, j, dy)});
   return c;
 }
 

@@ -49,10 +49,12 @@ struct TensorProductSpline {
 // local refinement by knot segments that keeps a linearly independent partition of unity.
 class SemiRegularCollection {
  public:
-  // All tensor-product B-splines of bi-degree (dx, dy) on open knot vectors (interior
-  // multiplicities 1): the starting point of refinement.
+  // All tensor-product B-splines of bi-degree (dx, dy) on open knot vectors: the starting
+  // point of refinement. Interior breakpoint i has multiplicity mult_x[i-1] (default 1).
   static SemiRegularCollection tensor_product(int dx, int dy, const std::vector<double>& breaks_x,
-                                              const std::vector<double>& breaks_y);
+                                              const std::vector<double>& breaks_y,
+                                              const std::vector<int>& mult_x = {},
+                                              const std::vector<int>& mult_y = {});
 
   // A collection given explicitly (e.g. read from a file), to be checked with violations().
   // The domain is the bounding box of the supports. Throws std::invalid_argument for knot

@@ -268,12 +268,46 @@ void check_elements(const Reader& r, const std::array<long, 2>& e, const std::st
 }
 
 void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
-  r.check_keys(s, "space", {"family", "degree", "elements", "continuity", "rational",
-                            "quadrature_points", "error_quadrature_points", "insert_knots_u", "insert_knots_v"});
+  r.check_keys(s, "space", {"family", "degree", "elements", "continuity", "rational", "quadrature_points",
+                            "error_quadrature_points", "insert_knots_u", "insert_knots_v", "segments"});
   if (const toml::node* f = s.get("family")) {
-    const std::string fam = r.string(*f, "[space] family");
-    if (fam != "tensor")
-      r.fail("[space] family", "'" + fam + "' is not available (this version builds \"tensor\")");
+    c.family = r.string(*f, "[space] family");
+    if (c.family != "tensor" && c.family != "knot_segments")
+      r.fail("[space] family", "'" + c.family + "' is not available (" + closest(c.family, {"tensor", "knot_segments"}) +
+                                   "; this version builds \"tensor\" and \"knot_segments\")");
+  }
+  const bool segments_family = c.family == "knot_segments";
+  if (segments_family) {
+    c.space.rational = false;  // knot-segment spaces are polynomial B-splines on the exact geometry
+    for (const char* key : {"continuity", "insert_knots_u", "insert_knots_v"})
+      if (s.get(key))
+        r.fail(std::string("[space] ") + key, "not used with family = \"knot_segments\" (its knots are C^(d-1); "
+                                              "refine with segments, which take a multiplicity)");
+    if (const toml::node* k = s.get("rational"))
+      if (k->value_exact<bool>().value_or(false)) r.fail("[space] rational", "knot_segments spaces are polynomial B-splines");
+    if (const toml::node* segs = s.get("segments")) {
+      const toml::array* a = segs->as_array();
+      if (!a) r.fail("[space] segments", "must be a list of { direction, position, from, to, multiplicity }");
+      for (size_t i = 0; i < a->size(); ++i) {
+        const std::string field = "[space] segments[" + std::to_string(i) + "]";
+        const toml::table* t = a->get(i)->as_table();
+        if (!t) r.fail(field, "must be a table { direction = \"vertical\", position = ..., from = ..., to = ... }");
+        r.check_keys(*t, "space] segments[" + std::to_string(i), {"direction", "position", "from", "to", "multiplicity"});
+        KnotInsertion k;
+        for (const char* key : {"direction", "position", "from", "to"})
+          if (!t->get(key)) r.fail(field + " " + key, "missing");
+        const std::string dir = r.string(*t->get("direction"), field + " direction");
+        if (dir != "vertical" && dir != "horizontal") r.fail(field + " direction", "must be \"vertical\" or \"horizontal\"");
+        k.vertical = dir == "vertical";
+        k.position = r.number(*t->get("position"), field + " position");
+        k.from = r.number(*t->get("from"), field + " from");
+        k.to = r.number(*t->get("to"), field + " to");
+        if (const toml::node* m = t->get("multiplicity")) k.multiplicity = static_cast<int>(r.integer(*m, field + " multiplicity"));
+        c.segments.push_back(k);
+      }
+    }
+  } else if (s.get("segments")) {
+    r.fail("[space] segments", "only with family = \"knot_segments\"");
   }
   const toml::node* d = s.get("degree");
   if (!d) r.fail("[space] degree", "missing required key");

@@ -2,6 +2,7 @@
 #include <string>
 #include <vector>
 
+#include "basis/semi_regular_collection.hpp"
 #include "basis/tensor_patch.hpp"
 #include "solver/poisson_problem.hpp"
 
@@ -15,6 +16,8 @@ struct CaseDescription {
   std::string geometry_type;
   NurbsPatch geometry;
   TensorSpaceOptions space;
+  std::string family = "tensor";         // or "knot_segments"
+  std::vector<KnotInsertion> segments;  // knot_segments: inserted in order, parameter coordinates
   QuadratureOptions quadrature;
   PoissonProblem problem;
   std::string output_directory;  // default results/<name>

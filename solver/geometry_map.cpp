@@ -83,6 +83,66 @@ BezierGeometryCell NurbsGeometryMap::bezier_cell(int cell) const {
   return g;
 }
 
+PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch) : mesh_(mesh), patch_(std::move(patch)) {}
+
+void PatchGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                GeometryAtPoints& out) const {
+  const BezierCell& c = mesh_.cell(cell);
+  const int p = patch_.basis_u.degree(), q = patch_.basis_v.degree(), nu = patch_.basis_u.num_functions();
+  std::vector<double> du(2 * (p + 1)), dv(2 * (q + 1));
+  Eigen::MatrixX3d h(u.size(), 3), hu(u.size(), 3), hv(u.size(), 3);
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    const double s = c.u0 + u[k] * (c.u1 - c.u0), t = c.v0 + v[k] * (c.v1 - c.v0);
+    // Span from the cell's middle, so a point on a cell edge uses the cell's own polynomial.
+    const int su = patch_.basis_u.find_span(0.5 * (c.u0 + c.u1)), sv = patch_.basis_v.find_span(0.5 * (c.v0 + c.v1));
+    patch_.basis_u.evaluate_derivatives(su, s, 1, du.data());
+    patch_.basis_v.evaluate_derivatives(sv, t, 1, dv.data());
+    h.row(k).setZero();
+    hu.row(k).setZero();
+    hv.row(k).setZero();
+    for (int b = 0; b <= q; ++b)
+      for (int a = 0; a <= p; ++a) {
+        const int i = (su - p + a) + nu * (sv - q + b);
+        const double w = patch_.weights[i];
+        const Eigen::RowVector3d P(w * patch_.control_points(i, 0), w * patch_.control_points(i, 1), w);
+        h.row(k) += du[a] * dv[b] * P;
+        hu.row(k) += du[p + 1 + a] * dv[b] * P * (c.u1 - c.u0);  // derivative in the cell's reference u
+        hv.row(k) += du[a] * dv[q + 1 + b] * P * (c.v1 - c.v0);
+      }
+  }
+  dehomogenize(h, hu, hv, out);
+}
+
+void PatchGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
+  const BernsteinTable& t = bernstein_table(1, 1, nu, nv);
+  evaluate(cell, t.point_u, t.point_v, out);
+}
+
+namespace {
+// Bezier control points interpolating a map at the cell's equispaced nodes.
+BezierGeometryCell interpolated_bezier_cell(const GeometryMap& map, const BezierCell& c, int cell) {
+  BezierGeometryCell g;
+  g.degree_u = c.degree_u;
+  g.degree_v = c.degree_v;
+  const int n = (c.degree_u + 1) * (c.degree_v + 1);
+  Eigen::VectorXd u(n), v(n);
+  for (int j = 0; j <= c.degree_v; ++j)
+    for (int i = 0; i <= c.degree_u; ++i) {
+      u[i + (c.degree_u + 1) * j] = double(i) / c.degree_u;
+      v[i + (c.degree_u + 1) * j] = double(j) / c.degree_v;
+    }
+  GeometryAtPoints at;
+  map.evaluate(cell, u, v, at);
+  g.points = bernstein_interpolation_inverse(c.degree_u, c.degree_v) * at.x;
+  g.weights.setOnes(n);
+  return g;
+}
+}  // namespace
+
+BezierGeometryCell PatchGeometryMap::bezier_cell(int cell) const {
+  return interpolated_bezier_cell(*this, mesh_.cell(cell), cell);
+}
+
 AnalyticGeometryMap::AnalyticGeometryMap(const BezierMesh& mesh, Function map)
     : mesh_(mesh), map_(std::move(map)) {}
 
@@ -110,22 +170,7 @@ void AnalyticGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtP
 }
 
 BezierGeometryCell AnalyticGeometryMap::bezier_cell(int cell) const {
-  const BezierCell& c = mesh_.cell(cell);
-  BezierGeometryCell g;
-  g.degree_u = c.degree_u;
-  g.degree_v = c.degree_v;
-  const int n = (c.degree_u + 1) * (c.degree_v + 1);
-  Eigen::VectorXd u(n), v(n);
-  for (int j = 0; j <= c.degree_v; ++j)
-    for (int i = 0; i <= c.degree_u; ++i) {
-      u[i + (c.degree_u + 1) * j] = double(i) / c.degree_u;
-      v[i + (c.degree_u + 1) * j] = double(j) / c.degree_v;
-    }
-  GeometryAtPoints at;
-  evaluate(cell, u, v, at);
-  g.points = bernstein_interpolation_inverse(c.degree_u, c.degree_v) * at.x;
-  g.weights.setOnes(n);
-  return g;
+  return interpolated_bezier_cell(*this, mesh_.cell(cell), cell);
 }
 
 }  // namespace knotwork

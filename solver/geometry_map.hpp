@@ -52,6 +52,22 @@ class NurbsGeometryMap final : public GeometryMap {
   Eigen::MatrixX3d net_;
 };
 
+// A NURBS patch evaluated directly at any parameter point, for cells that do not follow the
+// patch's own knot grid (knot-segment and T-mesh spaces in the patch's parameter domain).
+// Bezier output interpolates the map at the cell's equispaced nodes (exact for polynomial
+// patches of at most the cell's degree).
+class PatchGeometryMap final : public GeometryMap {
+ public:
+  PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch);
+  void evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const override;
+  void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, GeometryAtPoints& out) const override;
+  BezierGeometryCell bezier_cell(int cell) const override;
+
+ private:
+  const BezierMesh& mesh_;
+  NurbsPatch patch_;
+};
+
 // A map given by a function of the patch parameters (tests and manufactured maps).
 // `map(u, v, x[2], J[4])` fills the point and the Jacobian (dx/du, dx/dv, dy/du, dy/dv).
 class AnalyticGeometryMap final : public GeometryMap {

@@ -238,6 +238,30 @@ TEST_CASE("nothing typed into a case file crashes knotwork", "[cli][bad-input][f
   REQUIRE(rejected > 0);
 }
 
+TEST_CASE("bad input: knot segments", "[cli][bad-input]") {
+  Sandbox box;
+  const std::string base = replace(kGood, "degree = 2", "family = \"knot_segments\"\ndegree = 2");
+  auto with = [&](const std::string& segment) {
+    return replace(base, "elements = 4", "elements = 4\nsegments = [ " + segment + " ]");
+  };
+  expect_rejected(box, with("{ direction = \"vertical\", position = 1.5, from = 0, to = 1 }"),
+                  {"bad.toml", "[space] segments[0]", "not inside the domain"});
+  expect_rejected(box, with("{ direction = \"vertical\", position = 0.3, from = 0.5, to = 0.5 }"),
+                  {"bad.toml", "[space] segments[0]", "zero length"});
+  expect_rejected(box, with("{ direction = \"vertical\", position = 0.3, from = 0, to = 1, multiplicity = 4 }"),
+                  {"bad.toml", "[space] segments[0]", "multiplicity 4"});
+  expect_rejected(box, with("{ direction = \"vertical\", position = 0.3, from = 0, to = 1, multiplicity = 0 }"),
+                  {"bad.toml", "[space] segments[0]", "multiplicity 0"});
+  expect_rejected(box, with("{ direction = \"vertical\", position = 0.3, from = 0, to = 1, multiplicity = 2 }, "
+                            "{ direction = \"vertical\", position = 0.3, from = 0.25, to = 0.5 }"),
+                  {"bad.toml", "[space] segments[1]", "multiplicity 2"});
+  expect_rejected(box, with("{ direction = \"diagonal\", position = 0.3, from = 0, to = 1 }"),
+                  {"bad.toml", "[space] segments[0] direction"});
+  expect_rejected(box, with("{ direction = \"vertical\", position = 0.3, from = 0, to = 1, multiplicty = 2 }"),
+                  {"bad.toml", "mult", "did you mean 'multiplicity'"});
+  expect_rejected(box, replace(base, "elements = 4", "elements = 4\ncontinuity = 1"), {"bad.toml", "[space] continuity"});
+}
+
 TEST_CASE("bad input: expressions and output directory", "[cli][bad-input]") {
   Sandbox box;
   expect_rejected(box, replace(kGood, "sin(pi*x)*sin(pi*y)", "sin(pi*x)*sin(pi*y"),
