@@ -38,7 +38,14 @@ struct DimensionOptions {
   bool json = false;
 };
 
+struct BasisOptions {
+  std::string case_file;
+  std::string export_file;
+  bool json = false;
+};
+
 int run_command(const RunOptions& o);
+int basis_command(const BasisOptions& o);
 int dimension_command(const DimensionOptions& o);
 int converge_command(const ConvergeOptions& o);
 int bench_command(const BenchOptions& o);

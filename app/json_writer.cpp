@@ -38,6 +38,7 @@ Json& Json::set(const std::string& key, double v) { items_.emplace_back(key, jso
 Json& Json::set(const std::string& key, long v) { items_.emplace_back(key, std::to_string(v)); return *this; }
 Json& Json::set(const std::string& key, const std::string& v) { items_.emplace_back(key, json_string(v)); return *this; }
 Json& Json::set_null(const std::string& key) { items_.emplace_back(key, "null"); return *this; }
+Json& Json::set_bool(const std::string& key, bool v) { items_.emplace_back(key, v ? "true" : "false"); return *this; }
 Json& Json::push(const Json& value) { return set("", value); }
 Json& Json::push(double v) { return set("", v); }
 Json& Json::push(const std::string& v) { return set("", v); }

@@ -17,6 +17,7 @@ class Json {
   Json& set(const std::string& key, const std::string& value);
   Json& set(const std::string& key, const char* value) { return set(key, std::string(value)); }
   Json& set_null(const std::string& key);
+  Json& set_bool(const std::string& key, bool value);
   Json& push(const Json& value);  // array element
   Json& push(double value);
   Json& push(const std::string& value);

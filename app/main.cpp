@@ -64,6 +64,13 @@ int main(int argc, char** argv) {
   bench_cmd->add_flag("--floor", bench.floor,
                       "Also time bare CHOLMOD with its default settings on the same matrix (the floor)");
 
+  knotwork::BasisOptions basis;
+  CLI::App* basis_cmd = app.add_subcommand(
+      "basis", "Check a case's spline basis: semi-regularity, partition of unity, rank, dimension");
+  basis_cmd->add_option("case", basis.case_file, "Case file (TOML)")->required();
+  basis_cmd->add_option("--export", basis.export_file, "Write every function's local knot vectors to this JSON file");
+  basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
+
   knotwork::DimensionOptions dim;
   CLI::App* dim_cmd = app.add_subcommand(
       "dimension", "Brute-force dimension of S(m, n, alpha, beta) over a T-mesh / rectangular partition");
@@ -89,6 +96,7 @@ int main(int argc, char** argv) {
     if (*conv_cmd) return knotwork::converge_command(conv);
     if (*bench_cmd) return knotwork::bench_command(bench);
     if (*dim_cmd) return knotwork::dimension_command(dim);
+    if (*basis_cmd) return knotwork::basis_command(basis);
   } catch (const knotwork::InputError& e) {
     std::fprintf(stderr, "knotwork: error: %s\n", e.what());
     return 2;

@@ -238,6 +238,23 @@ TEST_CASE("nothing typed into a case file crashes knotwork", "[cli][bad-input][f
   REQUIRE(rejected > 0);
 }
 
+TEST_CASE("basis: checks of a knot-segment space, and the export", "[cli][semi-regular]") {
+  Sandbox box;
+  const std::string file = std::string(KNOTWORK_SOURCE_DIR) + "/cases/square_knot_segments.toml";
+  const Result r = box.run("basis --json --export knots.json " + file);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* expected : {"\"functions\": 46", "\"cells\": 24", "\"semi_regular\": true", "\"violations\": []",
+                               "\"rank\": 46", "\"dimension_formula\": 46", "\"dimension_bruteforce\": 46",
+                               "\"extended_segments\": 1", "\"partition_of_unity_error\""})
+    REQUIRE(r.out.find(expected) != std::string::npos);
+  const std::string exported = slurp(box.dir() / "knots.json");
+  size_t functions = 0;
+  for (size_t at = exported.find("\"x\""); at != std::string::npos; at = exported.find("\"x\"", at + 1)) ++functions;
+  REQUIRE(functions == 46);
+  REQUIRE(!fs::exists(box.dir() / "knots.json.partial"));
+}
+
 TEST_CASE("bad input: knot segments", "[cli][bad-input]") {
   Sandbox box;
   const std::string base = replace(kGood, "degree = 2", "family = \"knot_segments\"\ndegree = 2");
