@@ -1,4 +1,7 @@
 #pragma once
+#include <array>
+#include <map>
+#include <set>
 #include <span>
 #include <string>
 #include <vector>
@@ -63,13 +66,19 @@ class SemiRegularCollection {
 
   int degree_x() const { return dx_; }
   int degree_y() const { return dy_; }
-  const std::vector<LocalBSpline>& splines() const { return splines_; }
-  int size() const { return static_cast<int>(splines_.size()); }
+  // In lexicographic order of their knot vectors (the order coefficients refer to).
+  const std::vector<LocalBSpline>& splines() const;
+  int size() const { return static_cast<int>(set_.size()); }
+  // Bounding box of the supports: x0, y0, x1, y1.
+  std::array<double, 4> domain() const { return {x0_, y0_, x1_, y1_}; }
 
   // Inserts the segment by splitting every B-spline it crosses completely (and repeating
   // until no B-spline is crossed by a knot it does not use). If the result would not be
   // non-degenerate and semi-regular, the segment is extended one knot step at a time (both
-  // ends) until it is, at worst to a full knot line. Throws std::invalid_argument for a
+  // ends) until it is, at worst to a full knot line. A segment the mesh already has is a
+  // no-op (splits = 0). Only the region whose B-splines changed is re-checked, so the cost
+  // grows with the refinement, not with the collection (the collection must be
+  // semi-regular before). Throws std::invalid_argument for a
   // segment outside the domain or of zero length, a multiplicity outside [1, degree+1], or
   // one that overlaps an existing knot of another multiplicity.
   InsertionReport insert(const KnotInsertion& segment);
@@ -77,6 +86,16 @@ class SemiRegularCollection {
   // Refines the given cells of partition() (indices): a vertical and a horizontal segment
   // through each cell's middle, spanning the cell, extended where needed.
   std::vector<InsertionReport> refine_cells(const std::vector<int>& cells);
+  // Refines each listed cell by halving it in the given direction only (kSplitX: a vertical
+  // segment through the middle; kSplitY: a horizontal one; kSplitBoth: both).
+  enum Split { kSplitX = 1, kSplitY = 2, kSplitBoth = 3 };
+  std::vector<InsertionReport> refine_cells(const std::vector<int>& cells, const std::vector<Split>& split);
+
+  // Multiplicity of the mesh's knot at `position` over [from, to] (0 if it is not a knot
+  // there all along): what the inserted segments and the starting grid say.
+  int knot_multiplicity(bool vertical, double position, double from, double to) const {
+    return covering_multiplicity(vertical, position, from, to);
+  }
 
   // The partition induced by the B-splines (cells in row order of their lower-left corners).
   RectangularPartition partition() const;
@@ -99,11 +118,30 @@ class SemiRegularCollection {
   BezierMesh bezier_mesh() const;
 
  private:
+  struct Piece {
+    double from, to;
+    int multiplicity;
+  };
+  // What one insertion attempt changed, to check it locally and to undo it.
+  struct Change {
+    std::vector<LocalBSpline> removed, added;
+  };
   int dx_ = 2, dy_ = 2;
-  std::vector<LocalBSpline> splines_;
+  std::set<LocalBSpline> set_;
+  mutable std::vector<LocalBSpline> cache_;
+  mutable bool cache_valid_ = false;
   double x0_ = 0, x1_ = 1, y0_ = 0, y1_ = 1;
-  std::vector<KnotInsertion> lines_;  // every knot line/segment of the mesh so far
-  void split_until_stable(int& splits);
+  // Every knot line/segment of the mesh so far, per orientation and position.
+  std::map<double, std::vector<Piece>> vlines_, hlines_;
+  void add_line(const KnotInsertion& s);
+  // Largest multiplicity the lines at `position` give on all of [lo, hi] (min over the
+  // interval of the max over the pieces covering each point); 0 if some part is uncovered.
+  int covering_multiplicity(bool vertical, double position, double lo, double hi) const;
+  // Splits B-splines (starting from `work`) until none is crossed by a line it does not use.
+  void split_until_stable(std::vector<LocalBSpline> work, Change& change);
+  // Def. 3.3 on the cells inside the supports that changed; empty when they are fine.
+  std::string local_violation(const Change& change) const;
+  void undo(const Change& change);
 };
 
 }  // namespace knotwork
