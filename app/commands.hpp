@@ -23,6 +23,13 @@ struct ConvergeOptions : CommonOptions {
   int levels = 4;
 };
 
+struct AdaptOptions : CommonOptions {
+  std::string case_file;
+  int steps = 0;        // 0: [adapt] steps of the case
+  double theta = 0;     // 0: [adapt] theta
+  long max_dofs = 0;    // 0: [adapt] max_dofs
+};
+
 struct BenchOptions {
   std::vector<std::string> configs;  // "P:N" (degree P, N x N elements)
   bool quick = false;
@@ -48,6 +55,7 @@ int run_command(const RunOptions& o);
 int basis_command(const BasisOptions& o);
 int dimension_command(const DimensionOptions& o);
 int converge_command(const ConvergeOptions& o);
+int adapt_command(const AdaptOptions& o);
 int bench_command(const BenchOptions& o);
 
 }  // namespace knotwork

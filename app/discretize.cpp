@@ -88,6 +88,14 @@ void discretize_knot_segments(const CaseDescription& c, Discretization& d) {
 
 }  // namespace
 
+Discretization discretize_collection(const CaseDescription& c, const SemiRegularCollection& collection) {
+  Discretization d;
+  d.segments = std::make_unique<SemiRegularCollection>(collection);
+  d.segment_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
+  d.geometry = std::make_unique<PatchGeometryMap>(*d.segment_mesh, c.geometry);
+  return d;
+}
+
 Discretization discretize(const CaseDescription& c) {
   check_memory(c);
   Discretization d;

@@ -24,6 +24,9 @@ struct Discretization {
 // Throws InputError naming the case file and [space] when the space cannot be built.
 Discretization discretize(const CaseDescription& c);
 
+// The case's geometry on a given knot-segment collection (a step of adaptive refinement).
+Discretization discretize_collection(const CaseDescription& c, const SemiRegularCollection& collection);
+
 // Solves the case's Poisson problem on its discretization; a GeometryError gets the case
 // file and "[geometry]" in front of its message.
 PoissonSolution solve_case(const CaseDescription& c, const Discretization& d, Ordering ordering,

@@ -53,6 +53,17 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   add_common(conv_cmd, conv);
 
+  knotwork::AdaptOptions adapt;
+  CLI::App* adapt_cmd = app.add_subcommand(
+      "adapt", "Adaptive refinement by knot segments: solve, estimate (residual), mark (Doerfler), refine, repeat");
+  adapt_cmd->add_option("case", adapt.case_file, "Case file (TOML) with [space] family = \"knot_segments\"")->required();
+  adapt_cmd->add_option("--steps", adapt.steps, "Number of solves (overrides [adapt] steps; default 10)");
+  adapt_cmd->add_option("--theta", adapt.theta,
+                        "Doerfler fraction: mark the fewest cells holding this share of the estimated error squared "
+                        "(overrides [adapt] theta; default 0.5)");
+  adapt_cmd->add_option("--max-dofs", adapt.max_dofs, "Stop once a space has this many functions (overrides [adapt] max_dofs)");
+  add_common(adapt_cmd, adapt);
+
   knotwork::BenchOptions bench;
   CLI::App* bench_cmd = app.add_subcommand("bench", "Benchmark setup, assembly, CHOLMOD and error norms (unit square, sin*sin)");
   bench_cmd->add_option("--config", bench.configs,
@@ -94,6 +105,7 @@ int main(int argc, char** argv) {
   try {
     if (*run_cmd) return knotwork::run_command(run);
     if (*conv_cmd) return knotwork::converge_command(conv);
+    if (*adapt_cmd) return knotwork::adapt_command(adapt);
     if (*bench_cmd) return knotwork::bench_command(bench);
     if (*dim_cmd) return knotwork::dimension_command(dim);
     if (*basis_cmd) return knotwork::basis_command(basis);

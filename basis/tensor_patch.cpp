@@ -9,6 +9,22 @@
 
 namespace knotwork {
 
+Eigen::Vector2d patch_point(const NurbsPatch& patch, double u, double v) {
+  const int p = patch.basis_u.degree(), q = patch.basis_v.degree(), nu = patch.basis_u.num_functions();
+  const int su = patch.basis_u.find_span(u), sv = patch.basis_v.find_span(v);
+  std::vector<double> bu(p + 1), bv(q + 1);
+  patch.basis_u.evaluate(su, u, bu.data());
+  patch.basis_v.evaluate(sv, v, bv.data());
+  Eigen::Vector3d h = Eigen::Vector3d::Zero();
+  for (int b = 0; b <= q; ++b)
+    for (int a = 0; a <= p; ++a) {
+      const int i = (su - p + a) + nu * (sv - q + b);
+      const double w = patch.weights[i] * bu[a] * bv[b];
+      h += Eigen::Vector3d(w * patch.control_points(i, 0), w * patch.control_points(i, 1), w);
+    }
+  return h.head<2>() / h[2];
+}
+
 void NurbsPatch::validate() const {
   const int nu = basis_u.num_functions(), nv = basis_v.num_functions();
   if (!basis_u.is_open()) throw std::invalid_argument("knots_u is not open: the first and last knots must each be repeated degree+1 times");

@@ -18,6 +18,9 @@ struct NurbsPatch {
   void validate() const;
 };
 
+// The patch's point at parameters (u, v).
+Eigen::Vector2d patch_point(const NurbsPatch& patch, double u, double v);
+
 struct TensorSpaceOptions {
   std::array<int, 2> degree{2, 2};
   std::array<int, 2> elements_per_span{1, 1};  // uniform subdivision of every geometry span

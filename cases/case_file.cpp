@@ -448,12 +448,28 @@ void read_output(const Reader& r, const toml::table& t, CaseDescription& c) {
   }
 }
 
+void read_adapt(const Reader& r, const toml::table& t, CaseDescription& c) {
+  r.check_keys(t, "adapt", {"steps", "theta", "max_dofs"});
+  if (const toml::node* n = t.get("steps")) {
+    c.adapt.steps = static_cast<int>(r.integer(*n, "[adapt] steps"));
+    if (c.adapt.steps < 1 || c.adapt.steps > 200) r.fail("[adapt] steps", "must be in [1, 200]");
+  }
+  if (const toml::node* n = t.get("theta")) {
+    c.adapt.theta = r.number(*n, "[adapt] theta");
+    if (!(c.adapt.theta > 0 && c.adapt.theta <= 1)) r.fail("[adapt] theta", "must be in (0, 1]");
+  }
+  if (const toml::node* n = t.get("max_dofs")) {
+    c.adapt.max_dofs = r.integer(*n, "[adapt] max_dofs");
+    if (c.adapt.max_dofs < 1) r.fail("[adapt] max_dofs", "must be positive");
+  }
+}
+
 }  // namespace
 
 CaseDescription load_case(const std::string& path) {
   const toml::table root = parse_toml(path);
   Reader r(path);
-  r.check_keys(root, "", {"title", "description", "geometry", "space", "problem", "output"});
+  r.check_keys(root, "", {"title", "description", "geometry", "space", "problem", "output", "adapt"});
   CaseDescription c;
   c.path = path;
   c.name = std::filesystem::path(path).stem().string();
@@ -464,6 +480,7 @@ CaseDescription load_case(const std::string& path) {
   read_space(r, r.table(root, "space", true), c);
   read_problem(r, r.table(root, "problem", true), c);
   read_output(r, r.table(root, "output", false), c);
+  read_adapt(r, r.table(root, "adapt", false), c);
   return c;
 }
 

@@ -23,6 +23,12 @@ struct CaseDescription {
   std::string output_directory;  // default results/<name>
   bool write_bezier = true, write_sampled = true;
   int samples = 4;  // linear sub-cells per cell and direction in the sampled output
+  // [adapt]: the estimate-mark-refine loop of `knotwork adapt` (command-line flags override).
+  struct Adapt {
+    int steps = 10;          // solves, the first on the case's own mesh
+    double theta = 0.5;      // Doerfler fraction of the estimated error squared to mark
+    long max_dofs = 200000;  // stop refining beyond this many functions
+  } adapt;
 };
 
 // Reads and validates a case file. Throws InputError with a one-line message naming the

@@ -113,6 +113,46 @@ void PatchGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen:
   dehomogenize(h, hu, hv, out);
 }
 
+bool PatchGeometryMap::second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                          Eigen::MatrixXd& out) const {
+  const BezierCell& c = mesh_.cell(cell);
+  const int p = patch_.basis_u.degree(), q = patch_.basis_v.degree(), nu = patch_.basis_u.num_functions();
+  const double su_len = c.u1 - c.u0, sv_len = c.v1 - c.v0;
+  const int su = patch_.basis_u.find_span(0.5 * (c.u0 + c.u1)), sv = patch_.basis_v.find_span(0.5 * (c.v0 + c.v1));
+  std::vector<double> du(3 * (p + 1)), dv(3 * (q + 1));
+  out.resize(u.size(), 6);
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    patch_.basis_u.evaluate_derivatives(su, c.u0 + u[k] * su_len, 2, du.data());
+    patch_.basis_v.evaluate_derivatives(sv, c.v0 + v[k] * sv_len, 2, dv.data());
+    // Homogeneous map H = (w x, w y, w) and its derivatives in the cell's reference coordinates.
+    Eigen::RowVector3d H = Eigen::RowVector3d::Zero(), Hu = H, Hv = H, Huu = H, Huv = H, Hvv = H;
+    for (int b = 0; b <= q; ++b)
+      for (int a = 0; a <= p; ++a) {
+        const int i = (su - p + a) + nu * (sv - q + b);
+        const double w = patch_.weights[i];
+        const Eigen::RowVector3d P(w * patch_.control_points(i, 0), w * patch_.control_points(i, 1), w);
+        const double n0 = du[a], n1 = du[p + 1 + a] * su_len, n2 = du[2 * (p + 1) + a] * su_len * su_len;
+        const double m0 = dv[b], m1 = dv[q + 1 + b] * sv_len, m2 = dv[2 * (q + 1) + b] * sv_len * sv_len;
+        H += n0 * m0 * P;
+        Hu += n1 * m0 * P;
+        Hv += n0 * m1 * P;
+        Huu += n2 * m0 * P;
+        Huv += n1 * m1 * P;
+        Hvv += n0 * m2 * P;
+      }
+    // Quotient rule for g = h / w, one coordinate at a time.
+    const double w = H[2];
+    for (int d = 0; d < 2; ++d) {
+      const double g = H[d] / w;
+      const double gu = (Hu[d] - g * Hu[2]) / w, gv = (Hv[d] - g * Hv[2]) / w;
+      out(k, 3 * d + 0) = (Huu[d] - 2 * gu * Hu[2] - g * Huu[2]) / w;
+      out(k, 3 * d + 1) = (Huv[d] - gu * Hv[2] - gv * Hu[2] - g * Huv[2]) / w;
+      out(k, 3 * d + 2) = (Hvv[d] - 2 * gv * Hv[2] - g * Hvv[2]) / w;
+    }
+  }
+  return true;
+}
+
 void PatchGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
   const BernsteinTable& t = bernstein_table(1, 1, nu, nv);
   evaluate(cell, t.point_u, t.point_v, out);

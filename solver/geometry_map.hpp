@@ -32,6 +32,13 @@ class GeometryMap {
   virtual void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                         GeometryAtPoints& out) const = 0;
   virtual BezierGeometryCell bezier_cell(int cell) const = 0;
+  // Second derivatives with respect to the cell's reference coordinates at reference points,
+  // rows (x_uu, x_uv, x_vv, y_uu, y_uv, y_vv), for operators that need the physical Hessian
+  // (the residual error estimator). Returns false when the map cannot give them.
+  virtual bool second_derivatives(int /*cell*/, const Eigen::VectorXd& /*u*/, const Eigen::VectorXd& /*v*/,
+                                  Eigen::MatrixXd& /*out*/) const {
+    return false;
+  }
 };
 
 // The NURBS geometry of a TensorDiscretization, cell by cell through its own extraction.
@@ -62,6 +69,8 @@ class PatchGeometryMap final : public GeometryMap {
   void evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const override;
   void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, GeometryAtPoints& out) const override;
   BezierGeometryCell bezier_cell(int cell) const override;
+  bool second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                          Eigen::MatrixXd& out) const override;
 
  private:
   const BezierMesh& mesh_;

@@ -6,6 +6,9 @@
 #include <vtkDoubleArray.h>
 #include <vtkHigherOrderQuadrilateral.h>
 #include <vtkIdTypeArray.h>
+#include <vtkIntArray.h>
+#include <vtkPolyData.h>
+#include <vtkXMLPolyDataWriter.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -82,7 +85,7 @@ NodeValues node_values(const BezierMesh& mesh, const GeometryMap& geometry, cons
 }  // namespace
 
 void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
-                      const Eigen::VectorXd& coeffs, const ExactSolution* exact) {
+                      const Eigen::VectorXd& coeffs, const ExactSolution* exact, const CellFields& cell_fields) {
   vtkNew<vtkUnstructuredGrid> grid;
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
@@ -153,6 +156,12 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
   grid->GetCellData()->SetHigherOrderDegrees(degrees);
   grid->GetPointData()->SetScalars(solution);
   ex.add_to(grid);
+  for (const auto& [name, values] : cell_fields) {
+    if (values.size() != nc) throw std::invalid_argument("cell field " + name + ": one value per cell is needed");
+    auto a = scalar_array(name.c_str(), nc);
+    for (int c = 0; c < nc; ++c) a->SetValue(c, values[c]);
+    grid->GetCellData()->AddArray(a);
+  }
   write_grid(path, grid);
 }
 
@@ -200,12 +209,44 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   write_grid(path, grid);
 }
 
+void write_polylines_vtp(const std::string& path, const std::vector<Eigen::MatrixX2d>& lines,
+                         const std::vector<std::pair<std::string, std::vector<int>>>& line_fields) {
+  vtkNew<vtkPolyData> poly;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  vtkNew<vtkCellArray> cells;
+  for (const auto& l : lines) {
+    std::vector<vtkIdType> ids;
+    for (Eigen::Index k = 0; k < l.rows(); ++k) ids.push_back(points->InsertNextPoint(l(k, 0), l(k, 1), 0.0));
+    cells->InsertNextCell(static_cast<vtkIdType>(ids.size()), ids.data());
+  }
+  poly->SetPoints(points);
+  poly->SetLines(cells);
+  for (const auto& [name, values] : line_fields) {
+    if (values.size() != lines.size()) throw std::invalid_argument("line field " + name + ": one value per line is needed");
+    vtkNew<vtkIntArray> a;
+    a->SetName(name.c_str());
+    for (int v : values) a->InsertNextValue(v);
+    poly->GetCellData()->AddArray(a);
+  }
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(poly);
+  if (writer->Write() != 1) throw std::runtime_error(path + ": VTK could not write the file");
+}
+
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries) {
+  std::vector<PvdEntry> e;
+  for (const auto& [time, file] : entries) e.push_back({time, 0, file});
+  write_pvd(path, e);
+}
+
+void write_pvd(const std::string& path, const std::vector<PvdEntry>& entries) {
   std::ofstream out(path);
   out << "<?xml version=\"1.0\"?>\n"
          "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
-  for (const auto& [time, file] : entries)
-    out << "    <DataSet timestep=\"" << time << "\" group=\"\" part=\"0\" file=\"" << file << "\"/>\n";
+  for (const auto& [time, part, file] : entries)
+    out << "    <DataSet timestep=\"" << time << "\" group=\"\" part=\"" << part << "\" file=\"" << file << "\"/>\n";
   out << "  </Collection>\n</VTKFile>\n";
   if (!out) throw std::runtime_error(path + ": could not write the collection file");
 }

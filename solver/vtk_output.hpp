@@ -19,15 +19,31 @@ namespace knotwork {
 // Fields are given as Bezier coefficients that interpolate them at the cell's
 // equispaced nodes: exact for the solution whenever it lies in the cell's (rational)
 // Bezier space, i.e. for isoparametric spaces; an interpolant otherwise.
+// Per-cell scalar fields (e.g. an error indicator), one value per BezierMesh cell.
+using CellFields = std::vector<std::pair<std::string, Eigen::VectorXd>>;
+
 void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
-                      const Eigen::VectorXd& coefficients, const ExactSolution* exact);
+                      const Eigen::VectorXd& coefficients, const ExactSolution* exact,
+                      const CellFields& cell_fields = {});
 
 // The robust fallback: every cell cut into samples x samples linear quads with exact
 // values at their corners.
 void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coefficients, const ExactSolution* exact, int samples);
 
+// Polylines in the plane (.vtp), e.g. the knot lines of a mesh, each with integer cell data
+// (one array per name, one value per line).
+void write_polylines_vtp(const std::string& path, const std::vector<Eigen::MatrixX2d>& lines,
+                         const std::vector<std::pair<std::string, std::vector<int>>>& line_fields);
+
 // A ParaView collection (.pvd): (time value, file name relative to the .pvd) per entry.
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries);
+// With several datasets per time step: (time value, part, file name).
+struct PvdEntry {
+  double time;
+  int part;
+  std::string file;
+};
+void write_pvd(const std::string& path, const std::vector<PvdEntry>& entries);
 
 }  // namespace knotwork

@@ -78,10 +78,10 @@ exact = "x*y"
 )TOML";
 
 void expect_rejected(const Sandbox& box, const std::string& case_text, const std::vector<std::string>& mentions,
-                     const std::string& extra_args = "") {
+                     const std::string& extra_args = "", const std::string& command = "run") {
   const fs::path f = box.file("bad.toml", case_text);
   const fs::path out = box.dir() / "out";
-  const Result r = box.run("run -q bad.toml --out " + out.string() + " " + extra_args);
+  const Result r = box.run(command + " -q bad.toml --out " + out.string() + " " + extra_args);
   INFO("stderr: " << r.err);
   REQUIRE(r.code != 0);
   REQUIRE(r.code < 128);  // an error exit, not a signal
@@ -137,7 +137,8 @@ TEST_CASE("converge writes table, JSON, plot and collection", "[cli]") {
 
 TEST_CASE("every subcommand has --help", "[cli]") {
   Sandbox box;
-  for (const char* c : {"--help", "run --help", "converge --help", "bench --help"}) {
+  for (const char* c : {"--help", "run --help", "converge --help", "bench --help", "adapt --help", "basis --help",
+                        "dimension --help"}) {
     const Result r = box.run(c);
     REQUIRE(r.code == 0);
     REQUIRE(r.out.find("Usage") != std::string::npos);
@@ -326,4 +327,33 @@ TEST_CASE("dimension: T-mesh files, results and bad input", "[cli][dimension]") 
   rejected("degree = 0\ncells = [[0, 0, 1, 1]]\n", {"mesh.toml", "degree"});
   rejected("degree = 2\ncells = [[0, 0, \"1/x\", 1]]\n", {"mesh.toml", "cells[0]", "not a number"});
   rejected("cells = [[0, 0, 1, 1]]\n", {"mesh.toml", "degree", "missing"});
+}
+
+TEST_CASE("adapt writes steps as JSON, CSV, plot and a two-part collection", "[cli][adaptive]") {
+  Sandbox box;
+  const std::string src = std::string(KNOTWORK_SOURCE_DIR) + "/cases/lshape_adaptive.toml";
+  const Result r = box.run("adapt " + src + " --steps 4 --out ad --json -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* key : {"\"steps\"", "\"dofs\"", "\"cells\"", "\"l2_error\"", "\"h1_seminorm_error\"", "\"estimator\"",
+                          "\"marked\""})
+    REQUIRE(r.out.find(key) != std::string::npos);
+  for (const char* f : {"adapt.csv", "adapt.json", "adapt.svg", "adapt.pvd", "step_0.vtu", "step_3.vtu", "step_3_knots.vtp"})
+    REQUIRE(fs::exists(box.dir() / "ad" / f));
+  const std::string pvd = slurp(box.dir() / "ad/adapt.pvd");
+  REQUIRE(pvd.find("part=\"1\" file=\"step_3_knots.vtp\"") != std::string::npos);
+  const std::string vtu = slurp(box.dir() / "ad/step_1.vtu");
+  REQUIRE(vtu.find("Name=\"error_indicator\"") != std::string::npos);
+  const std::string csv = slurp(box.dir() / "ad/adapt.csv");
+  REQUIRE(std::count(csv.begin(), csv.end(), '\n') == 5);
+}
+
+TEST_CASE("bad input: adapt", "[cli][bad-input][adaptive]") {
+  Sandbox box;
+  expect_rejected(box, kGood, {"bad.toml", "[space] family", "knot_segments"}, "", "adapt");
+  const std::string segments = replace(kGood, "degree = 2", "family = \"knot_segments\"\ndegree = 2");
+  expect_rejected(box, segments, {"--theta", "(0, 1]"}, "--theta 1.5", "adapt");
+  expect_rejected(box, segments, {"--steps"}, "--steps 500", "adapt");
+  expect_rejected(box, segments + "\n[adapt]\ntheta = 0\n", {"bad.toml", "[adapt] theta"}, "", "adapt");
+  expect_rejected(box, segments + "\n[adapt]\nstep = 3\n", {"bad.toml", "did you mean 'steps'"}, "", "adapt");
 }

@@ -1,0 +1,42 @@
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "app/discretize.hpp"
+#include "solver/residual_estimator.hpp"
+
+namespace knotwork {
+
+// One solve of the adaptive loop.
+struct AdaptiveStep {
+  int dofs = 0, cells = 0, marked = 0, extended = 0;  // extended: segments lengthened to stay semi-regular
+  double estimator = 0;                               // sqrt(sum of eta_K^2)
+  double l2 = 0, h1_semi = 0;                         // NaN without an exact solution
+  double h1_rate = 0;                                 // against dofs, from the previous step (NaN first)
+  double seconds = 0;
+};
+
+// What a step hands to its observer (for output) before the collection is refined.
+struct AdaptiveStepView {
+  int step;
+  const Discretization& discretization;
+  const PoissonSolution& solution;
+  const ErrorIndicators& indicators;
+  const std::vector<int>& marked;
+  const SemiRegularCollection& collection;
+};
+
+// Solve - estimate - mark - refine, c.adapt.steps times or until c.adapt.max_dofs: the
+// residual estimator, Doerfler marking with c.adapt.theta, and refinement of the marked cells
+// by knot segments (each cell halved across its longer physical side, or alternately in x and
+// y when it is about square). Needs family = "knot_segments"; throws InputError otherwise.
+std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering,
+                                     const std::function<void(const std::string&)>& progress,
+                                     const std::function<void(const AdaptiveStepView&)>& on_step = {});
+
+// Least-squares slope of -log(H1 error) against log(dofs) over steps [first, end): the
+// observed rate N^(-rate).
+double fitted_h1_rate(const std::vector<AdaptiveStep>& steps, size_t first);
+
+}  // namespace knotwork

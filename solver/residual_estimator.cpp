@@ -1,0 +1,288 @@
+#include "solver/residual_estimator.hpp"
+
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <stdexcept>
+
+#include "basis/bspline_basis.hpp"
+#include "quadrature/gauss_legendre.hpp"
+#include "solver/error_norms.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// Bernstein polynomials of degree p on [0,1] and their first two derivatives at t.
+struct BernsteinDerivatives {
+  explicit BernsteinDerivatives(int p) : p(p), basis(p, knots(p)), out(3 * (p + 1)) {}
+  static std::vector<double> knots(int p) {
+    std::vector<double> k(p + 1, 0.0);
+    k.insert(k.end(), p + 1, 1.0);
+    return k;
+  }
+  const double* at(double t) {
+    basis.evaluate_derivatives(p, t, 2, out.data());
+    return out.data();
+  }
+  int p;
+  BSplineBasis1D basis;
+  std::vector<double> out;
+};
+
+// Cell sides that touch, as (cell on the low side, cell on the high side, overlap interval).
+struct SharedSide {
+  int low, high;
+  bool vertical;  // the side lies on u = const (between a left and a right cell)
+  double at, from, to;
+};
+
+std::vector<SharedSide> shared_sides(const BezierMesh& mesh) {
+  struct End {
+    double from, to;
+    int cell;
+  };
+  // Per line position: cells ending there (their high side) and cells starting there.
+  std::map<double, std::vector<End>> vert_low, vert_high, hor_low, hor_high;
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    const BezierCell& b = mesh.cell(c);
+    if (b.boundary[kSideRight] < 0) vert_low[b.u1].push_back({b.v0, b.v1, c});
+    if (b.boundary[kSideLeft] < 0) vert_high[b.u0].push_back({b.v0, b.v1, c});
+    if (b.boundary[kSideTop] < 0) hor_low[b.v1].push_back({b.u0, b.u1, c});
+    if (b.boundary[kSideBottom] < 0) hor_high[b.v0].push_back({b.u0, b.u1, c});
+  }
+  std::vector<SharedSide> out;
+  auto match = [&](std::map<double, std::vector<End>>& low, std::map<double, std::vector<End>>& high, bool vertical) {
+    for (auto& [at, lows] : low) {
+      auto& highs = high[at];
+      auto by_from = [](const End& a, const End& b) { return a.from < b.from; };
+      std::sort(lows.begin(), lows.end(), by_from);
+      std::sort(highs.begin(), highs.end(), by_from);
+      size_t i = 0, j = 0;
+      while (i < lows.size() && j < highs.size()) {
+        const double from = std::max(lows[i].from, highs[j].from), to = std::min(lows[i].to, highs[j].to);
+        if (to > from) out.push_back({lows[i].cell, highs[j].cell, vertical, at, from, to});
+        if (lows[i].to < highs[j].to)
+          ++i;
+        else
+          ++j;
+      }
+    }
+  };
+  match(vert_low, vert_high, true);
+  match(hor_low, hor_high, false);
+  return out;
+}
+
+}  // namespace
+
+ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
+                                    const Eigen::VectorXd& coefficients, const PoissonProblem& problem) {
+  if (mesh.is_rational()) throw std::invalid_argument("the residual estimator needs a polynomial (non-rational) space");
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    if (mesh.cell(c).patch != 0) throw std::invalid_argument("the residual estimator needs a single-patch mesh");
+  {
+    Eigen::MatrixXd probe;
+    const Eigen::VectorXd half = Eigen::VectorXd::Constant(1, 0.5);
+    if (mesh.num_cells() == 0 || !geometry.second_derivatives(0, half, half, probe))
+      throw std::invalid_argument("the residual estimator needs a geometry map with second derivatives");
+  }
+  ErrorIndicators ind;
+  ind.eta_squared = Eigen::VectorXd::Zero(mesh.num_cells());
+  // Physical extent of each cell across its u and v directions (distance between the midpoints
+  // of opposite sides); h_K is the larger.
+  Eigen::VectorXd extent_u(mesh.num_cells()), extent_v(mesh.num_cells());
+  {
+    Eigen::VectorXd mu(4), mv(4);
+    mu << 0, 1, 0.5, 0.5;
+    mv << 0.5, 0.5, 0, 1;
+    GeometryAtPoints m;
+    for (int c = 0; c < mesh.num_cells(); ++c) {
+      geometry.evaluate(c, mu, mv, m);
+      extent_u[c] = (m.x.row(1) - m.x.row(0)).norm();
+      extent_v[c] = (m.x.row(3) - m.x.row(2)).norm();
+    }
+  }
+  double residual_sum = 0;
+  // Interior residual h_K^2 ||f + Laplace(u_h)||^2 per cell.
+#pragma omp parallel reduction(+ : residual_sum)
+  {
+    ExpressionEvaluator f(problem.source);
+    std::map<int, BernsteinDerivatives> bern;
+    GeometryAtPoints g;
+    Eigen::MatrixXd second;
+#pragma omp for schedule(dynamic, 32)
+    for (int c = 0; c < mesh.num_cells(); ++c) {
+      const BezierCell& cell = mesh.cell(c);
+      const int p = cell.degree_u, q = cell.degree_v;
+      const QuadratureRule1D ru = gauss_legendre(p + 2), rv = gauss_legendre(q + 2);
+      const int n = static_cast<int>(ru.nodes.size() * rv.nodes.size());
+      Eigen::VectorXd u(n), v(n), w(n);
+      for (size_t j = 0; j < rv.nodes.size(); ++j)
+        for (size_t i = 0; i < ru.nodes.size(); ++i) {
+          const size_t k = i + ru.nodes.size() * j;
+          u[k] = ru.nodes[i];
+          v[k] = rv.nodes[j];
+          w[k] = ru.weights[i] * rv.weights[j];
+        }
+      geometry.evaluate(c, u, v, g);
+      geometry.second_derivatives(c, u, v, second);
+      const auto ids = mesh.functions(c);
+      Eigen::VectorXd local(ids.size());
+      for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
+      const Eigen::VectorXd beta = mesh.extraction(c).transpose() * local;  // Bernstein coefficients
+      auto& bu = bern.try_emplace(p, p).first->second;
+      auto& bv = bern.try_emplace(-1 - q, q).first->second;  // separate key: both may be evaluated together
+      double integral = 0;
+      for (int k = 0; k < n; ++k) {
+        std::vector<double> du(bu.at(u[k]), bu.at(u[k]) + 3 * (p + 1));
+        const double* dv = bv.at(v[k]);
+        double U[6] = {0, 0, 0, 0, 0, 0};  // u_u, u_v, u_uu, u_uv, u_vv (reference)
+        for (int b = 0; b <= q; ++b)
+          for (int a = 0; a <= p; ++a) {
+            const double cf = beta[a + (p + 1) * b];
+            U[0] += cf * du[p + 1 + a] * dv[b];
+            U[1] += cf * du[a] * dv[q + 1 + b];
+            U[2] += cf * du[2 * (p + 1) + a] * dv[b];
+            U[3] += cf * du[p + 1 + a] * dv[q + 1 + b];
+            U[4] += cf * du[a] * dv[2 * (q + 1) + b];
+          }
+        // Physical derivatives: grad = J^-T (u_u, u_v); Hess_ref = J^T Hess J + sum_i u_xi Hess(x_i).
+        Eigen::Matrix2d J;
+        J << g.jacobian(k, 0), g.jacobian(k, 1), g.jacobian(k, 2), g.jacobian(k, 3);
+        const double det = J.determinant();
+        const Eigen::Matrix2d Jinv = J.inverse();
+        const Eigen::Vector2d grad = Jinv.transpose() * Eigen::Vector2d(U[0], U[1]);
+        Eigen::Matrix2d H;
+        H << U[2], U[3], U[3], U[4];
+        for (int d = 0; d < 2; ++d) {
+          Eigen::Matrix2d Hx;
+          Hx << second(k, 3 * d), second(k, 3 * d + 1), second(k, 3 * d + 1), second(k, 3 * d + 2);
+          H -= grad[d] * Hx;
+        }
+        const double laplacian = (Jinv.transpose() * H * Jinv).trace();
+        const double r = f(g.x(k, 0), g.x(k, 1)) + laplacian;
+        integral += w[k] * std::abs(det) * r * r;
+      }
+      const double h = std::max(extent_u[c], extent_v[c]);
+      ind.eta_squared[c] = h * h * integral;
+      residual_sum += h * h * integral;
+    }
+  }
+  ind.residual_part = residual_sum;
+  // Gradient jumps across interior sides, half to each neighbour.
+  const std::vector<SharedSide> sides = shared_sides(mesh);
+  std::vector<double> side_value(sides.size()), side_max(sides.size());
+#pragma omp parallel for schedule(dynamic, 32)
+  for (size_t s = 0; s < sides.size(); ++s) {
+    const SharedSide& e = sides[s];
+    const BezierCell& lo = mesh.cell(e.low);
+    const BezierCell& hi = mesh.cell(e.high);
+    const int n = std::max({lo.degree_u, lo.degree_v}) + 2;
+    const QuadratureRule1D rule = gauss_legendre(n);
+    Eigen::VectorXd ul(n), vl(n), uh(n), vh(n);
+    for (int k = 0; k < n; ++k) {
+      const double t = e.from + rule.nodes[k] * (e.to - e.from);
+      if (e.vertical) {
+        ul[k] = 1;
+        vl[k] = (t - lo.v0) / (lo.v1 - lo.v0);
+        uh[k] = 0;
+        vh[k] = (t - hi.v0) / (hi.v1 - hi.v0);
+      } else {
+        vl[k] = 1;
+        ul[k] = (t - lo.u0) / (lo.u1 - lo.u0);
+        vh[k] = 0;
+        uh[k] = (t - hi.u0) / (hi.u1 - hi.u0);
+      }
+    }
+    const Eigen::MatrixX3d a = evaluate_solution(mesh, geometry, coefficients, e.low, ul, vl);
+    const Eigen::MatrixX3d b = evaluate_solution(mesh, geometry, coefficients, e.high, uh, vh);
+    GeometryAtPoints g;
+    geometry.evaluate(e.low, ul, vl, g);
+    double length = 0, integral = 0, biggest = 0;
+    for (int k = 0; k < n; ++k) {
+      // |dx/dt| along the side: the reference tangent divided by the cell's parameter length.
+      const double scale = e.vertical ? 1.0 / (lo.v1 - lo.v0) : 1.0 / (lo.u1 - lo.u0);
+      const int col = e.vertical ? 1 : 0;
+      const double ds = std::hypot(g.jacobian(k, col), g.jacobian(k, 2 + col)) * scale * (e.to - e.from) * rule.weights[k];
+      const double jump = std::hypot(a(k, 1) - b(k, 1), a(k, 2) - b(k, 2));
+      length += ds;
+      integral += ds * jump * jump;
+      biggest = std::max(biggest, jump);
+    }
+    side_value[s] = 0.5 * length * integral;
+    side_max[s] = biggest;
+  }
+  for (size_t s = 0; s < sides.size(); ++s) {
+    ind.eta_squared[sides[s].low] += side_value[s];
+    ind.eta_squared[sides[s].high] += side_value[s];
+    ind.jump_part += 2 * side_value[s];
+    ind.max_gradient_jump = std::max(ind.max_gradient_jump, side_max[s]);
+  }
+  // Neumann sides: h_E ||g - du_h/dn||^2.
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    const BezierCell& cell = mesh.cell(c);
+    for (int side = 0; side < 4; ++side) {
+      const int id = cell.boundary[side];
+      if (id < 0 || id >= static_cast<int>(problem.boundary.size())) continue;
+      const BoundaryCondition& bc = problem.boundary[id];
+      if (bc.kind != BoundaryKind::kNeumann) continue;
+      const int n = std::max(cell.degree_u, cell.degree_v) + 2;
+      const QuadratureRule1D rule = gauss_legendre(n);
+      Eigen::VectorXd u(n), v(n);
+      for (int k = 0; k < n; ++k) {
+        const double t = rule.nodes[k];
+        u[k] = side == kSideBottom ? t : side == kSideRight ? 1 : side == kSideTop ? 1 - t : 0;
+        v[k] = side == kSideBottom ? 0 : side == kSideRight ? t : side == kSideTop ? 1 : 1 - t;
+      }
+      const Eigen::MatrixX3d sol = evaluate_solution(mesh, geometry, coefficients, c, u, v);
+      GeometryAtPoints g;
+      geometry.evaluate(c, u, v, g);
+      ExpressionEvaluator data(bc.from_exact ? problem.exact->u_x : bc.value);
+      std::unique_ptr<ExpressionEvaluator> data_y;
+      if (bc.from_exact) data_y = std::make_unique<ExpressionEvaluator>(problem.exact->u_y);
+      double length = 0, integral = 0;
+      for (int k = 0; k < n; ++k) {
+        // Counter-clockwise tangent of the side; the outward normal is it turned clockwise
+        // (for a positively oriented map; flipped otherwise).
+        const double sign = (side == kSideTop || side == kSideLeft) ? -1.0 : 1.0;
+        const int col = (side == kSideBottom || side == kSideTop) ? 0 : 1;
+        double tx = sign * g.jacobian(k, col), ty = sign * g.jacobian(k, 2 + col);
+        const double det = g.jacobian(k, 0) * g.jacobian(k, 3) - g.jacobian(k, 1) * g.jacobian(k, 2);
+        const double len = std::hypot(tx, ty);
+        double nx = ty / len, ny = -tx / len;
+        if (det < 0) nx = -nx, ny = -ny;
+        const double x = g.x(k, 0), y = g.x(k, 1);
+        const double gn = bc.from_exact ? data(x, y) * nx + (*data_y)(x, y) * ny : data(x, y);
+        const double r = gn - (sol(k, 1) * nx + sol(k, 2) * ny);
+        const double ds = len * rule.weights[k];
+        length += ds;
+        integral += ds * r * r;
+      }
+      ind.eta_squared[c] += length * integral;
+      ind.neumann_part += length * integral;
+    }
+  }
+  return ind;
+}
+
+std::vector<int> dorfler_marking(const Eigen::VectorXd& eta_squared, double theta) {
+  if (!(theta > 0 && theta <= 1)) throw std::invalid_argument("the marking fraction theta must be in (0, 1]");
+  std::vector<int> order(eta_squared.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return eta_squared[a] > eta_squared[b]; });
+  const double goal = theta * eta_squared.sum();
+  double sum = 0;
+  std::vector<int> marked;
+  for (int c : order) {
+    if (sum >= goal && !marked.empty()) break;
+    marked.push_back(c);
+    sum += eta_squared[c];
+  }
+  return marked;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,36 @@
+#pragma once
+#include <Eigen/Core>
+#include <vector>
+
+#include "basis/bezier_mesh.hpp"
+#include "solver/geometry_map.hpp"
+#include "solver/poisson_problem.hpp"
+
+namespace knotwork {
+
+// Residual a posteriori error indicators for -Laplace(u) = f (the standard estimator of
+// adaptive FEM/IGA), per cell K:
+//   eta_K^2 = h_K^2 ||f + Laplace(u_h)||^2_K
+//           + 1/2 sum over interior edges E of K of h_E ||[grad u_h]||^2_E
+//           + sum over Neumann edges E of K of h_E ||g - du_h/dn||^2_E
+// with h the physical cell diameter and edge length. u_h is continuous, so the jump of the
+// normal derivative is the jump of the whole gradient; on C^1 edges it vanishes (up to
+// roundoff) and only the C^0 ones (e.g. the L-shape's fold) contribute.
+struct ErrorIndicators {
+  Eigen::VectorXd eta_squared;  // per cell
+  double residual_part = 0, jump_part = 0, neumann_part = 0;  // sums of the three terms
+  double max_gradient_jump = 0;                               // largest |[grad u_h]| seen
+  double total() const { return eta_squared.sum(); }
+};
+
+// Needs a single-patch polynomial BezierMesh whose cells carry their parameter boxes
+// (knot-segment and T-mesh spaces) and a geometry with second derivatives; throws
+// std::invalid_argument otherwise.
+ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
+                                    const Eigen::VectorXd& coefficients, const PoissonProblem& problem);
+
+// Doerfler (bulk) marking: the fewest cells, largest indicators first, whose eta^2 add up to
+// at least theta times the total. theta in (0, 1].
+std::vector<int> dorfler_marking(const Eigen::VectorXd& eta_squared, double theta);
+
+}  // namespace knotwork

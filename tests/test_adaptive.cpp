@@ -1,0 +1,147 @@
+// The adaptive loop and its parts: geometry Hessians, the residual estimator, Doerfler
+// marking, and the observed rates on the L-shape and an interior layer.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "app/adaptive.hpp"
+#include "cases/case_file.hpp"
+#include "cases/geometries.hpp"
+#include "solver/error_norms.hpp"
+
+using namespace knotwork;
+
+namespace {
+
+CaseDescription shipped(const std::string& name) { return load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name); }
+
+// Uniform refinement of the same case (tensor-product start, no segments): H1 error at the
+// first level with at least `dofs` functions.
+std::pair<int, double> uniform_error_beyond(CaseDescription c, int dofs) {
+  for (int n = c.space.elements_per_span[0];; n *= 2) {
+    c.space.elements_per_span = {n, n};
+    const Discretization d = discretize(c);
+    if (d.mesh().num_functions() < dofs) continue;
+    const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
+    return {s.num_functions, s.errors->h1_semi};
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Second derivatives of a NURBS geometry agree with finite differences", "[adaptive]") {
+  BezierMesh mesh;
+  BezierCell cell;
+  cell.u0 = 0.2, cell.u1 = 0.7, cell.v0 = 0.1, cell.v1 = 0.4;
+  const int ids[1] = {0};
+  mesh.add_cell(cell, ids, mesh.add_extraction(Eigen::MatrixXd::Ones(1, 4)));
+  const PatchGeometryMap map(mesh, quarter_annulus_patch(1.0, 2.0));  // rational: the quotient rule matters
+  const double h = 1e-4;
+  for (double u : {0.13, 0.5, 0.91})
+    for (double v : {0.07, 0.62}) {
+      Eigen::VectorXd U(7), V(7);
+      U << u, u + h, u - h, u, u, u + h, u - h;
+      V << v, v, v, v + h, v - h, v + h, v - h;
+      GeometryAtPoints g;
+      map.evaluate(0, U, V, g);
+      Eigen::MatrixXd second;
+      REQUIRE(map.second_derivatives(0, U.head(1), V.head(1), second));
+      for (int d = 0; d < 2; ++d) {
+        const double uu = (g.x(1, d) - 2 * g.x(0, d) + g.x(2, d)) / (h * h);
+        const double vv = (g.x(3, d) - 2 * g.x(0, d) + g.x(4, d)) / (h * h);
+        // (f(+,+) + f(-,-) - 2 f) / (2h^2) = (f_uu + f_vv)/2 + f_uv
+        const double uv = (g.x(5, d) + g.x(6, d) - 2 * g.x(0, d)) / (2 * h * h) - 0.5 * (uu + vv);
+        CHECK(second(0, 3 * d) == Approx(uu).margin(1e-5));
+        CHECK(second(0, 3 * d + 1) == Approx(uv).margin(1e-5));
+        CHECK(second(0, 3 * d + 2) == Approx(vv).margin(1e-5));
+      }
+    }
+}
+
+TEST_CASE("The estimator vanishes when the discrete solution is exact", "[adaptive]") {
+  // On the unit square u = x^2 y - y^2 + 3x is a biquadratic polynomial: u_h = u on any
+  // knot-segment mesh, so f + Laplace(u_h) = 0 and no gradient jumps.
+  CaseDescription c = shipped("interior_layer.toml");
+  c.problem.exact = differentiate_exact_solution(Expression::parse("x^2*y - y^2 + 3*x", "test"));
+  c.problem.source = c.problem.exact->minus_laplacian;
+  c.segments = {{true, 0.3, 0.0, 0.75, 1}, {false, 0.6, 0.1, 0.9, 1}};
+  const Discretization d = discretize(c);
+  const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
+  REQUIRE(s.errors->h1_semi < 1e-11);
+  const ErrorIndicators ind = residual_indicators(d.mesh(), *d.geometry, s.coefficients, c.problem);
+  CHECK(std::sqrt(ind.total()) < 1e-9);
+  CHECK(ind.max_gradient_jump < 1e-9);
+}
+
+TEST_CASE("The estimator bounds the error on the L-shape, and jumps appear only at the C0 fold", "[adaptive]") {
+  CaseDescription c = shipped("lshape_adaptive.toml");
+  c.space.elements_per_span = {4, 4};
+  const Discretization d = discretize(c);
+  const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
+  const ErrorIndicators ind = residual_indicators(d.mesh(), *d.geometry, s.coefficients, c.problem);
+  // Reliability |u - u_h|_1 <= C eta with a moderate constant, and not wildly pessimistic.
+  const double ratio = std::sqrt(ind.total()) / s.errors->h1_semi;
+  INFO("efficiency index " << ratio);
+  CHECK(ratio > 1.0);
+  CHECK(ratio < 50.0);
+  CHECK(ind.jump_part > 0);  // the fold u = 1/2 is only C0
+  // Elsewhere the space is C1: the gradient jump is roundoff away from the fold.
+  const BezierMesh& mesh = d.mesh();
+  for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+    const BezierCell& b = mesh.cell(cell);
+    if (b.u0 != 0.0 || b.v0 != 0.5) continue;  // a cell far from the fold and the corner
+    Eigen::VectorXd u(1), v(1), u2(1), v2(1);
+    u << 1.0, v << 0.5;
+    const Eigen::MatrixX3d left = evaluate_solution(mesh, *d.geometry, s.coefficients, cell, u, v);
+    for (int other = 0; other < mesh.num_cells(); ++other)
+      if (mesh.cell(other).u0 == b.u1 && mesh.cell(other).v0 == b.v0) {
+        u2 << 0.0, v2 << 0.5;
+        const Eigen::MatrixX3d right = evaluate_solution(mesh, *d.geometry, s.coefficients, other, u2, v2);
+        CHECK((left.row(0) - right.row(0)).norm() < 1e-10);
+      }
+  }
+}
+
+TEST_CASE("Doerfler marking takes the fewest largest indicators reaching theta", "[adaptive]") {
+  Eigen::VectorXd eta2(6);
+  eta2 << 1, 8, 2, 5, 3, 1;  // total 20
+  CHECK(dorfler_marking(eta2, 0.5) == std::vector<int>{1, 3});        // 8 + 5 = 13 >= 10
+  CHECK(dorfler_marking(eta2, 0.7) == std::vector<int>{1, 3, 4});     // 16 >= 14
+  CHECK(dorfler_marking(eta2, 1.0).size() == 6);
+  CHECK_THROWS(dorfler_marking(eta2, 0.0));
+  CHECK_THROWS(dorfler_marking(eta2, 1.5));
+}
+
+TEST_CASE("Adaptive knot segments on the L-shape: H1 error ~ N^(-p/2), uniform ~ N^(-1/3)", "[adaptive][slow]") {
+  for (int p : {2, 3}) {
+    CaseDescription c = shipped("lshape_adaptive.toml");
+    c.space.degree = {p, p};
+    c.adapt.steps = 60;
+    c.adapt.max_dofs = p == 2 ? 3000 : 3500;
+    const auto steps = adapt_case(c, Ordering::kAmd, {});
+    const double rate = fitted_h1_rate(steps, steps.size() / 2);
+    const auto [uniform_dofs, uniform_error] = uniform_error_beyond(c, steps.back().dofs);
+    WARN("L-shape p = " << p << ": " << steps.size() << " steps to " << steps.back().dofs << " dofs, H1 error "
+                        << steps.back().h1_semi << ", rate over the last half " << rate << "; uniform: "
+                        << uniform_dofs << " dofs, H1 error " << uniform_error);
+    CHECK(std::abs(rate - p / 2.0) < 0.15);
+    CHECK(steps.back().h1_semi < uniform_error / 5);
+    for (const auto& s : steps) CHECK(s.estimator >= s.h1_semi);  // reliable at every step (constant 1 here)
+  }
+}
+
+TEST_CASE("Adaptive knot segments resolve an interior layer with fewer dofs than uniform refinement", "[adaptive][slow]") {
+  CaseDescription c = shipped("interior_layer.toml");
+  c.adapt.max_dofs = 3000;
+  const auto steps = adapt_case(c, Ordering::kAmd, {});
+  // Uniform refinement with at least twice the functions is still less accurate.
+  const auto [uniform_dofs, uniform_error] = uniform_error_beyond(c, 2 * steps.back().dofs);
+  WARN("interior layer: " << steps.back().dofs << " dofs, H1 error " << steps.back().h1_semi << "; uniform "
+                          << uniform_dofs << " dofs, H1 error " << uniform_error);
+  CHECK(steps.back().h1_semi < uniform_error);
+  CHECK(fitted_h1_rate(steps, steps.size() / 2) > 0.9);
+}
+
+TEST_CASE("Adaptivity refuses spaces it cannot refine", "[adaptive]") {
+  CaseDescription c = shipped("square_sinsin.toml");
+  REQUIRE_THROWS_WITH(adapt_case(c, Ordering::kAmd, {}), Catch::Contains("family") && Catch::Contains("knot_segments"));
+}
