@@ -7,6 +7,7 @@
 #include "basis/bspline_basis.hpp"
 #include "quadrature/bernstein.hpp"
 #include "basis/partition_topology.hpp"
+#include "basis/collection_on_partition.hpp"
 #include "basis/semi_regular_collection.hpp"
 #include "basis/spline_dimension.hpp"
 #include "solver/geometry_map.hpp"
@@ -109,6 +110,30 @@ TEST_CASE("Random refinement sequences keep a semi-regular basis of the full spl
   WARN("semi-regular property test: " << sequences << " sequences, " << insertions << " insertions (" << extended
                                       << " extended), " << t_meshes << " T-meshes, " << with_segments
                                       << " with knot segments");
+}
+
+TEST_CASE("A T-mesh of a refined collection gets a collection back from its cells alone", "[semi-regular]") {
+  // The construction sees only the cells; the random sequences show that such partitions
+  // carry a semi-regular collection. It must find one of the same size (Prop. 4.2: both are
+  // bases of the spline space over the partition).
+  std::mt19937 rng(77);
+  int reached = 0, t_meshes = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int d = 1 + trial % 4;
+    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 2 + rng() % 3), random_breaks(rng, 2 + rng() % 3));
+    const int steps = 1 + static_cast<int>(rng() % 4);
+    for (int s = 0; s < steps; ++s) c.insert(random_segment(rng, c));
+    const RectangularPartition part = c.partition();
+    t_meshes += partition_topology(part).t_nodes() > 0;
+    const CollectionOnPartition built = collection_on_partition(part, d, d);
+    INFO("trial " << trial << ", d = " << d << ", " << part.num_cells() << " cells, order " << built.order);
+    REQUIRE(built.reached);
+    reached += built.reached;
+    REQUIRE(built.collection.size() == c.size());
+    check_properties(built.collection, true);
+  }
+  REQUIRE(t_meshes > 100);
+  WARN("collection on a given partition: " << reached << " of 200 T-meshes rebuilt (" << t_meshes << " with T-nodes)");
 }
 
 TEST_CASE("A short segment is extended until it refines, and the extension is reported", "[semi-regular]") {
