@@ -30,7 +30,8 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
   say("building the starting space: " + describe_space(c));
   Discretization first = discretize(c);
   for (const auto& v : first.segments->violations())
-    throw InputError(c.path + ": [space] segments: the collection is not semi-regular: " + v.reason);
+    throw InputError(c.path + ": [space]: adaptive refinement needs a semi-regular start, and the collection is not: " +
+                     v.reason);
   SemiRegularCollection collection = *first.segments;
   std::vector<AdaptiveStep> steps;
   for (int s = 0; s < c.adapt.steps; ++s) {

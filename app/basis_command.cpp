@@ -6,6 +6,7 @@
 #include "app/commands.hpp"
 #include "app/discretize.hpp"
 #include "app/json_writer.hpp"
+#include "basis/collection_on_partition.hpp"
 #include "basis/partition_topology.hpp"
 #include "basis/spline_dimension.hpp"
 #include "solver/input_error.hpp"
@@ -47,73 +48,110 @@ long bezier_rank(const BezierMesh& mesh) {
   return qr.rank();
 }
 
-}  // namespace
+std::string describe_segment(const KnotInsertion& s) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%s %s = %g, %s in [%g, %g]", s.vertical ? "vertical" : "horizontal",
+                s.vertical ? "x" : "y", s.position, s.vertical ? "y" : "x", s.from, s.to);
+  return buf;
+}
 
-int basis_command(const BasisOptions& o) {
-  const CaseDescription c = load_case(o.case_file);
-  const Discretization d = discretize(c);
-  const BezierMesh& mesh = d.mesh();
-  const bool segments = d.segments != nullptr;
+// What `knotwork basis` reports, whatever the input was.
+struct BasisReport {
+  std::string file, space;
+  const BezierMesh* mesh = nullptr;
+  const SemiRegularCollection* collection = nullptr;  // null for tensor-product spaces
   std::vector<std::string> violations;
-  if (segments)
-    for (const auto& v : d.segments->violations()) violations.push_back(v.reason);
+  bool simple_knots = true;
+  std::vector<std::string> extensions;  // segments the construction had to extend
+  int segments = 0;                     // inserted by the construction
+  bool from_partition = false;          // a T-mesh file
+  bool partition_reached = false;
+  int input_cells = 0;
+  std::string order;
+  std::vector<std::string> input_hypotheses_failed;  // Lemma 3.4 / Prop. 4.1 on the given T-mesh
+};
+
+void write_export(const std::string& file, const std::string& source, const SemiRegularCollection& collection) {
+  Json fs = Json::array();
+  for (const auto& b : collection.splines()) {
+    Json x = Json::array(), y = Json::array();
+    for (double v : b.x) x.push(v);
+    for (double v : b.y) y.push(v);
+    fs.push(Json::object().set("x", x).set("y", y));
+  }
+  Json root = Json::object();
+  root.set("case", source)
+      .set("degree", Json::array().push(double(collection.degree_x())).push(double(collection.degree_y())))
+      .set("functions", fs);
+  const std::string tmp = file + ".partial";
+  {
+    std::ofstream out(tmp);
+    out << root.dump() << "\n";
+    if (!out) {
+      out.close();
+      std::filesystem::remove(tmp);
+      throw InputError(file + ": --export: cannot write the file");
+    }
+  }
+  std::filesystem::rename(tmp, file);
+}
+
+int print_report(const BasisReport& r, const BasisOptions& o) {
+  const BezierMesh& mesh = *r.mesh;
   const double pu = partition_of_unity_error(mesh);
   const long rank = bezier_rank(mesh);
   long formula = -1, brute = -1;
-  const int dx = c.space.degree[0], dy = c.space.degree[1];
-  if (segments && d.simple_knots) {
-    const RectangularPartition part = d.segments->partition();
-    brute = spline_space_dimension(part, dx, dy, dx - 1, dy - 1).dimension;
-    if (dx == dy) formula = weller_dimension_formula(partition_topology(part), dx);
-  }
-  int extended = 0;
-  for (const auto& r : d.insertions) extended += r.extended;
-
-  if (!o.export_file.empty()) {
-    if (!segments) throw InputError("--export: writes local knot vectors of family = \"knot_segments\" spaces");
-    Json fs = Json::array();
-    for (const auto& b : d.segments->splines()) {
-      Json x = Json::array(), y = Json::array();
-      for (double v : b.x) x.push(v);
-      for (double v : b.y) y.push(v);
-      fs.push(Json::object().set("x", x).set("y", y));
+  if (r.collection && r.simple_knots) {
+    try {
+      const RectangularPartition part = r.collection->partition();
+      const int dx = r.collection->degree_x(), dy = r.collection->degree_y();
+      brute = spline_space_dimension(part, dx, dy, dx - 1, dy - 1).dimension;
+      if (dx == dy) formula = weller_dimension_formula(partition_topology(part), dx);
+    } catch (const std::exception&) {
+      // no partition (the supports do not tile the domain): nothing to count over
     }
-    Json root = Json::object();
-    root.set("case", c.path).set("degree", Json::array().push(double(dx)).push(double(dy))).set("functions", fs);
-    const std::string tmp = o.export_file + ".partial";
-    {
-      std::ofstream out(tmp);
-      out << root.dump() << "\n";
-      if (!out) {
-        std::filesystem::remove(tmp);
-        throw InputError(o.export_file + ": --export: cannot write the file");
-      }
-    }
-    std::filesystem::rename(tmp, o.export_file);
   }
-
   if (o.json) {
-    Json v = Json::array();
-    for (const auto& s : violations) v.push(s);
+    Json v = Json::array(), ext = Json::array();
+    for (const auto& s : r.violations) v.push(s);
+    for (const auto& s : r.extensions) ext.push(s);
     Json j = Json::object();
-    j.set("case", c.path).set("space", describe_space(c)).set("functions", mesh.num_functions())
-        .set("cells", mesh.num_cells());
-    if (segments) j.set_bool("semi_regular", violations.empty());
+    j.set("file", r.file).set("space", r.space).set("functions", mesh.num_functions()).set("cells", mesh.num_cells());
+    if (r.collection) j.set_bool("semi_regular", r.violations.empty());
     else j.set_null("semi_regular");  // a tensor-product space: the question does not arise
     j.set("violations", v).set("partition_of_unity_error", pu);
     if (rank >= 0) j.set("rank", rank); else j.set_null("rank");
     if (formula >= 0) j.set("dimension_formula", formula); else j.set_null("dimension_formula");
     if (brute >= 0) j.set("dimension_bruteforce", brute); else j.set_null("dimension_bruteforce");
-    j.set("extended_segments", extended);
+    j.set("extended_segments", static_cast<int>(r.extensions.size())).set("extensions", ext);
+    if (r.from_partition)
+    {
+      Json h = Json::array();
+      for (const auto& s : r.input_hypotheses_failed) h.push(s);
+      j.set("input_cells", r.input_cells).set_bool("partition_reached", r.partition_reached)
+          .set("insertion_order", r.order).set("input_hypotheses_failed", h);
+    }
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
-  std::printf("knotwork basis %s\n  space      %s\n  functions  %d on %d cells\n", c.path.c_str(),
-              describe_space(c).c_str(), mesh.num_functions(), mesh.num_cells());
-  if (segments) {
-    std::printf("  semi-regular  %s\n", violations.empty() ? "yes (Def. 3.1 and 3.3 hold on every cell)" : "NO");
-    for (const auto& s : violations) std::printf("    %s\n", s.c_str());
-    std::printf("  segments   %zu, %d of them extended to keep the basis semi-regular\n", d.insertions.size(), extended);
+  std::printf("knotwork basis %s\n  space      %s\n  functions  %d on %d cells\n", r.file.c_str(), r.space.c_str(),
+              mesh.num_functions(), mesh.num_cells());
+  if (r.from_partition) {
+    if (r.partition_reached)
+      std::printf("  partition  the collection lives on the given %d cells (order: %s)\n", r.input_cells, r.order.c_str());
+    else
+      std::printf("  partition  NOT reached: no insertion order tried gives a semi-regular collection on the given %d\n"
+                  "             cells; the closest one (%s) extends the segments below\n", r.input_cells, r.order.c_str());
+    if (!r.input_hypotheses_failed.empty())
+      std::printf("             the given cells fail Weller's necessary conditions, so none exists there:\n");
+    for (const auto& h : r.input_hypotheses_failed) std::printf("               %s\n", h.c_str());
+  }
+  if (r.collection) {
+    std::printf("  semi-regular  %s\n", r.violations.empty() ? "yes (Def. 3.1 and 3.3 hold on every cell)" : "NO");
+    for (const auto& s : r.violations) std::printf("    %s\n", s.c_str());
+    if (r.segments > 0 || !r.extensions.empty())
+      std::printf("  segments   %d, %zu of them extended to keep the basis semi-regular\n", r.segments, r.extensions.size());
+    for (const auto& s : r.extensions) std::printf("    %s\n", s.c_str());
   }
   std::printf("  partition of unity  max error %.3e\n", pu);
   if (rank >= 0) std::printf("  rank       %ld (%s)\n", rank, rank == mesh.num_functions() ? "linearly independent" : "DEPENDENT");
@@ -122,6 +160,99 @@ int basis_command(const BasisOptions& o) {
   if (brute >= 0) std::printf("\n");
   if (!o.export_file.empty()) std::printf("  output     %s\n", o.export_file.c_str());
   return 0;
+}
+
+int basis_of_case(const BasisOptions& o) {
+  const CaseDescription c = load_case(o.case_file);
+  const Discretization d = discretize(c);
+  BasisReport r;
+  r.file = c.path;
+  r.space = describe_space(c);
+  r.mesh = &d.mesh();
+  r.collection = d.segments.get();
+  r.simple_knots = d.simple_knots;
+  if (d.segments)
+    for (const auto& v : d.segments->violations()) r.violations.push_back(v.reason);
+  r.segments = static_cast<int>(d.insertions.size());
+  for (const auto& i : d.insertions)
+    if (i.extended) r.extensions.push_back(describe_segment(i.requested) + " extended to " + describe_segment(i.inserted));
+  if (!o.export_file.empty()) {
+    if (!d.segments) throw InputError("--export: writes local knot vectors of family = \"knot_segments\" spaces");
+    write_export(o.export_file, c.path, *d.segments);
+  }
+  return print_report(r, o);
+}
+
+int basis_of_partition(const BasisOptions& o) {
+  const PartitionDescription p = load_partition(o.case_file);
+  if (p.alpha != p.m - 1 || p.beta != p.n - 1)
+    throw InputError(o.case_file + ": smoothness: knot-segment collections are C^(d-1) (smoothness = [" +
+                     std::to_string(p.m - 1) + ", " + std::to_string(p.n - 1) +
+                     "]); `knotwork dimension` counts other smoothness");
+  const RectangularPartition partition(p.cells);
+  CollectionOnPartition built;
+  try {
+    built = collection_on_partition(partition, p.m, p.n);
+  } catch (const std::exception& e) {
+    throw InputError(o.case_file + ": cells: " + e.what());
+  }
+  const BezierMesh mesh = built.collection.bezier_mesh();
+  BasisReport r;
+  r.file = o.case_file;
+  r.space = "knot segments on the T-mesh, degree " + std::to_string(p.m) + "x" + std::to_string(p.n) + ", C^(d-1)";
+  r.mesh = &mesh;
+  r.collection = &built.collection;
+  for (const auto& v : built.collection.violations()) r.violations.push_back(v.reason);
+  r.segments = static_cast<int>(built.insertions.size());
+  for (const auto& i : built.insertions)
+    if (i.extended) r.extensions.push_back(describe_segment(i.requested) + " extended to " + describe_segment(i.inserted));
+  r.from_partition = true;
+  r.partition_reached = built.reached;
+  r.input_cells = partition.num_cells();
+  r.order = built.order;
+  if (p.m == p.n) r.input_hypotheses_failed = weller_hypotheses_violations(partition_topology(partition), p.m);
+  if (!o.export_file.empty()) write_export(o.export_file, o.case_file, built.collection);
+  return print_report(r, o);
+}
+
+int basis_of_collection(const BasisOptions& o) {
+  const CollectionDescription cd = load_collection(o.case_file);
+  std::unique_ptr<SemiRegularCollection> collection;
+  try {
+    collection = std::make_unique<SemiRegularCollection>(SemiRegularCollection::from_splines(cd.dx, cd.dy, cd.splines));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(o.case_file + ": functions: " + e.what());
+  }
+  BasisReport r;
+  r.file = o.case_file;
+  r.space = "collection of " + std::to_string(cd.splines.size()) + " B-splines given by local knot vectors, degree " +
+            std::to_string(cd.dx) + "x" + std::to_string(cd.dy) + " (numbered in lexicographic order of their knot vectors)";
+  r.collection = collection.get();
+  for (const auto& v : collection->violations()) r.violations.push_back(v.reason);
+  for (const auto& b : cd.splines)
+    for (const auto* v : {&b.x, &b.y})
+      for (size_t i = 1; i < v->size(); ++i)
+        if ((*v)[i] == (*v)[i - 1] && (*v)[i] != v->front() && (*v)[i] != v->back()) r.simple_knots = false;
+  BezierMesh mesh;
+  try {
+    mesh = collection->bezier_mesh();
+  } catch (const std::runtime_error& e) {
+    throw InputError(o.case_file + ": functions: the supports do not induce a partition: " + e.what());
+  }
+  r.mesh = &mesh;
+  if (!o.export_file.empty()) write_export(o.export_file, o.case_file, *collection);
+  return print_report(r, o);
+}
+
+}  // namespace
+
+int basis_command(const BasisOptions& o) {
+  switch (input_kind(o.case_file)) {
+    case InputKind::kPartition: return basis_of_partition(o);
+    case InputKind::kCollection: return basis_of_collection(o);
+    case InputKind::kCase: break;
+  }
+  return basis_of_case(o);
 }
 
 }  // namespace knotwork

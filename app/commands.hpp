@@ -16,6 +16,7 @@ struct CommonOptions {
 struct RunOptions : CommonOptions {
   std::string case_file;
   bool no_output = false;
+  bool allow_non_semi_regular = false;
 };
 
 struct ConvergeOptions : CommonOptions {

@@ -35,6 +35,9 @@ void write_text(const std::string& path, const std::string& text) {
 
 int converge_command(const ConvergeOptions& o) {
   CaseDescription c = load_case(o.case_file);
+  if (!c.collection_file.empty())
+    throw InputError(c.path + ": [space] collection: a convergence study refines uniformly, and a collection given "
+                     "explicitly has fixed functions (use knotwork run, or knotwork adapt to refine it)");
   if (o.degree) override_degree(c, o.degree);
   if (o.elements) override_elements(c, o.elements);
   if (o.levels < 1 || o.levels > 12) throw InputError("--levels: must be in [1, 12], got " + std::to_string(o.levels));

@@ -47,7 +47,40 @@ namespace {
 // The knot-segment space of a case: a tensor-product start on the geometry's knot spans
 // (cut into `elements` parts; geometry knots of low continuity become knot lines of the
 // needed multiplicity, e.g. the L-shape's C0 fold), then the listed segments.
+// A collection given explicitly ([space] collection): its domain must be the geometry's
+// parameter domain; semi-regularity is checked here and enforced before solving.
+void discretize_explicit_collection(const CaseDescription& c, Discretization& d) {
+  const std::string where = c.path + ": [space] collection: " + c.collection_file;
+  try {
+    d.segments = std::make_unique<SemiRegularCollection>(
+        SemiRegularCollection::from_splines(c.space.degree[0], c.space.degree[1], c.collection));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(where + ": " + e.what());
+  }
+  const auto box = d.segments->domain();
+  const double u0 = c.geometry.basis_u.domain_begin(), u1 = c.geometry.basis_u.domain_end();
+  const double v0 = c.geometry.basis_v.domain_begin(), v1 = c.geometry.basis_v.domain_end();
+  if (box[0] != u0 || box[2] != u1 || box[1] != v0 || box[3] != v1) {
+    char msg[240];
+    std::snprintf(msg, sizeof msg, "the supports cover [%g,%g]x[%g,%g], not the geometry's parameter domain [%g,%g]x[%g,%g]",
+                  box[0], box[2], box[1], box[3], u0, u1, v0, v1);
+    throw InputError(where + ": " + msg);
+  }
+  for (const auto& b : c.collection)
+    for (const auto* v : {&b.x, &b.y})
+      for (size_t i = 1; i < v->size(); ++i) d.simple_knots = d.simple_knots && !((*v)[i] == (*v)[i - 1] &&
+                                                                    (*v)[i] != v->front() && (*v)[i] != v->back());
+  for (const auto& v : d.segments->violations()) d.violations.push_back(v.reason);
+  try {
+    d.segment_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
+  } catch (const std::runtime_error& e) {
+    throw InputError(where + ": the supports do not induce a partition: " + e.what());
+  }
+  d.geometry = std::make_unique<PatchGeometryMap>(*d.segment_mesh, c.geometry);
+}
+
 void discretize_knot_segments(const CaseDescription& c, Discretization& d) {
+  if (!c.collection_file.empty()) return discretize_explicit_collection(c, d);
   const int dx = c.space.degree[0], dy = c.space.degree[1];
   std::array<std::vector<double>, 2> breaks;
   std::array<std::vector<int>, 2> mults;  // per interior breakpoint
@@ -114,6 +147,16 @@ Discretization discretize(const CaseDescription& c) {
 
 PoissonSolution solve_case(const CaseDescription& c, const Discretization& d, Ordering ordering,
                            const std::function<void(const std::string&)>& progress) {
+  if (!d.violations.empty()) {
+    const std::string more =
+        d.violations.size() > 1 ? " (and " + std::to_string(d.violations.size() - 1) + " more; knotwork basis lists them)" : "";
+    if (!c.allow_non_semi_regular)
+      throw InputError(c.path + ": [space] collection: " + c.collection_file + " is not semi-regular: " +
+                       d.violations.front() + more + "; refusing to solve (--allow-non-semi-regular solves anyway)");
+    std::fprintf(stderr, "knotwork: warning: %s: the collection is not semi-regular (%s%s); solving anyway as asked: "
+                         "the functions may be linearly dependent and the matrix singular\n",
+                 c.collection_file.c_str(), d.violations.front().c_str(), more.c_str());
+  }
   PoissonSolveOptions so;
   so.quadrature = c.quadrature;
   so.ordering = ordering;
@@ -153,6 +196,9 @@ double mesh_size(const Discretization& d) {
 
 std::string describe_space(const CaseDescription& c) {
   const auto& s = c.space;
+  if (c.family == "knot_segments" && !c.collection_file.empty())
+    return "knot segments (Weller), degree " + std::to_string(s.degree[0]) + "x" + std::to_string(s.degree[1]) +
+           ", collection of " + std::to_string(c.collection.size()) + " B-splines from " + c.collection_file;
   if (c.family == "knot_segments")
     return "knot segments (Weller), degree " + std::to_string(s.degree[0]) + "x" + std::to_string(s.degree[1]) +
            ", " + std::to_string(c.segments.size()) + " segments";

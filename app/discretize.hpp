@@ -17,6 +17,7 @@ struct Discretization {
   std::unique_ptr<BezierMesh> segment_mesh;         // on the heap: geometry maps refer to it
   std::vector<InsertionReport> insertions;          // what each segment became
   bool simple_knots = true;                         // every interior knot of multiplicity 1
+  std::vector<std::string> violations;              // of an explicit collection (solve_case refuses)
   std::unique_ptr<GeometryMap> geometry;
   const BezierMesh& mesh() const { return segments ? *segment_mesh : tensor.mesh; }
 };

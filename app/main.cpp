@@ -45,6 +45,8 @@ int main(int argc, char** argv) {
   run_cmd->add_option("case", run.case_file, "Case file (TOML), e.g. cases/square_sinsin.toml")->required();
   add_common(run_cmd, run);
   run_cmd->add_flag("--no-output", run.no_output, "Write no files (timing and errors only)");
+  run_cmd->add_flag("--allow-non-semi-regular", run.allow_non_semi_regular,
+                    "Solve on a [space] collection that is not semi-regular (its functions may be dependent)");
 
   knotwork::ConvergeOptions conv;
   CLI::App* conv_cmd = app.add_subcommand("converge", "Uniform h-refinement study: errors and observed rates per level");
@@ -78,7 +80,9 @@ int main(int argc, char** argv) {
   knotwork::BasisOptions basis;
   CLI::App* basis_cmd = app.add_subcommand(
       "basis", "Check a case's spline basis: semi-regularity, partition of unity, rank, dimension");
-  basis_cmd->add_option("case", basis.case_file, "Case file (TOML)")->required();
+  basis_cmd->add_option("file", basis.case_file,
+                        "Case file, T-mesh file (cells = [...], degree) or collection file (functions = [...], degree); "
+                        "TOML or JSON")->required();
   basis_cmd->add_option("--export", basis.export_file, "Write every function's local knot vectors to this JSON file");
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
 

@@ -24,6 +24,7 @@ int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
   if (o.degree) override_degree(c, o.degree);
   if (o.elements) override_elements(c, o.elements);
+  c.allow_non_semi_regular = o.allow_non_semi_regular;
   const Ordering ordering = parse_ordering(o.ordering);
   std::optional<OutputStage> stage;
   if (!o.no_output) stage.emplace(o.out.empty() ? c.output_directory : o.out);

@@ -9,6 +9,7 @@
 #include <toml++/toml.h>
 
 #include "cases/geometries.hpp"
+#include "cases/json_input.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -160,7 +161,58 @@ class Reader {
   std::string path_;
 };
 
+// JSON input goes through the same validation as TOML: the document becomes a toml::table.
+// Appends the converted value to `out` (plain recursion: no template instantiated per level).
+void append_json(toml::array& out, const JsonValue& v, const std::string& path, const std::string& field) {
+  using K = JsonValue::Kind;
+  switch (v.kind) {
+    case K::kNull: throw InputError(path + ": " + field + ": null is not a valid value here");
+    case K::kBool: out.push_back(v.boolean); return;
+    case K::kString: out.push_back(v.text); return;
+    case K::kNumber:
+      if (v.integral && std::abs(v.number) < 9.0e18) out.push_back(static_cast<int64_t>(std::stoll(v.text)));
+      else out.push_back(v.number);
+      return;
+    case K::kArray: {
+      toml::array a;
+      for (size_t i = 0; i < v.items.size(); ++i) append_json(a, v.items[i], path, field + "[" + std::to_string(i) + "]");
+      out.push_back(std::move(a));
+      return;
+    }
+    case K::kObject: {
+      toml::table t;
+      for (const auto& [key, member] : v.members) {
+        toml::array one;
+        append_json(one, member, path, field.empty() ? key : field + "." + key);
+        toml::node& n = *one.get(0);
+        if (auto* x = n.as_table()) t.insert(key, std::move(*x));
+        else if (auto* x = n.as_array()) t.insert(key, std::move(*x));
+        else if (auto* x = n.as_string()) t.insert(key, x->get());
+        else if (auto* x = n.as_integer()) t.insert(key, x->get());
+        else if (auto* x = n.as_floating_point()) t.insert(key, x->get());
+        else if (auto* x = n.as_boolean()) t.insert(key, x->get());
+      }
+      out.push_back(std::move(t));
+      return;
+    }
+  }
+}
+
+bool is_json_file(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return ext == ".json";
+}
+
 toml::table parse_toml(const std::string& path) {
+  if (is_json_file(path)) {
+    const JsonValue doc = read_json_file(path);
+    if (doc.kind != JsonValue::Kind::kObject) throw InputError(path + ": the JSON document must be an object {...}");
+    toml::array one;
+    append_json(one, doc, path, "");
+    toml::table root = std::move(*one.get(0)->as_table());
+    return root;
+  }
   std::ifstream probe(path);
   if (!probe) {
     const std::string why = std::filesystem::exists(path) ? "cannot be read" : "no such file";
@@ -269,7 +321,7 @@ void check_elements(const Reader& r, const std::array<long, 2>& e, const std::st
 
 void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
   r.check_keys(s, "space", {"family", "degree", "elements", "continuity", "rational", "quadrature_points",
-                            "error_quadrature_points", "insert_knots_u", "insert_knots_v", "segments"});
+                            "error_quadrature_points", "insert_knots_u", "insert_knots_v", "segments", "collection"});
   if (const toml::node* f = s.get("family")) {
     c.family = r.string(*f, "[space] family");
     if (c.family != "tensor" && c.family != "knot_segments")
@@ -306,19 +358,42 @@ void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
         c.segments.push_back(k);
       }
     }
+    if (const toml::node* f = s.get("collection")) {
+      std::filesystem::path file = r.string(*f, "[space] collection");
+      if (file.is_relative()) file = std::filesystem::path(r.path()).parent_path() / file;
+      for (const char* key : {"segments", "elements"})
+        if (s.get(key))
+          r.fail(std::string("[space] ") + key, "not used with an explicit collection (its functions are fixed)");
+      c.collection_file = file.string();
+      const CollectionDescription cd = load_collection(c.collection_file);
+      c.collection = cd.splines;
+      if (const toml::node* d = s.get("degree")) {
+        const auto deg = r.integer_pair(*d, "[space] degree");
+        if (deg[0] != cd.dx || deg[1] != cd.dy)
+          r.fail("[space] degree", "the collection " + c.collection_file + " has degree [" + std::to_string(cd.dx) + ", " +
+                                       std::to_string(cd.dy) + "]");
+      }
+      c.space.degree = {cd.dx, cd.dy};
+      c.space.elements_per_span = {1, 1};
+    }
   } else if (s.get("segments")) {
     r.fail("[space] segments", "only with family = \"knot_segments\"");
+  } else if (s.get("collection")) {
+    r.fail("[space] collection", "only with family = \"knot_segments\"");
   }
-  const toml::node* d = s.get("degree");
-  if (!d) r.fail("[space] degree", "missing required key");
-  const auto deg = r.integer_pair(*d, "[space] degree");
-  check_degree(r, deg, "[space] degree");
-  c.space.degree = {static_cast<int>(deg[0]), static_cast<int>(deg[1])};
-  const toml::node* e = s.get("elements");
-  if (!e) r.fail("[space] elements", "missing required key");
-  const auto el = r.integer_pair(*e, "[space] elements");
-  check_elements(r, el, "[space] elements");
-  c.space.elements_per_span = {static_cast<int>(el[0]), static_cast<int>(el[1])};
+  if (c.collection_file.empty()) {
+    const toml::node* d = s.get("degree");
+    if (!d) r.fail("[space] degree", "missing required key");
+    const auto dd = r.integer_pair(*d, "[space] degree");
+    check_degree(r, dd, "[space] degree");
+    c.space.degree = {static_cast<int>(dd[0]), static_cast<int>(dd[1])};
+    const toml::node* e = s.get("elements");
+    if (!e) r.fail("[space] elements", "missing required key");
+    const auto el = r.integer_pair(*e, "[space] elements");
+    check_elements(r, el, "[space] elements");
+    c.space.elements_per_span = {static_cast<int>(el[0]), static_cast<int>(el[1])};
+  }
+  const std::array<long, 2> deg = {c.space.degree[0], c.space.degree[1]};
   if (const toml::node* k = s.get("continuity")) {
     const auto cont = r.integer_pair(*k, "[space] continuity");
     for (int i = 0; i < 2; ++i)
@@ -535,7 +610,54 @@ PartitionDescription load_partition(const std::string& path) {
   return d;
 }
 
+CollectionDescription load_collection(const std::string& path) {
+  const toml::table root = parse_toml(path);
+  Reader r(path);
+  r.check_keys(root, "", {"degree", "functions", "case", "title", "description"});
+  const toml::node* deg = root.get("degree");
+  if (!deg) r.fail("degree", "missing required key ([dx, dy] or one int)");
+  const auto d = r.integer_pair(*deg, "degree");
+  check_degree(r, d, "degree");
+  CollectionDescription c;
+  c.dx = static_cast<int>(d[0]);
+  c.dy = static_cast<int>(d[1]);
+  const toml::node* fs = root.get("functions");
+  if (!fs || !fs->is_array() || fs->as_array()->empty())
+    r.fail("functions", "missing: give functions = [{x = [...], y = [...]}, ...], each with its local knot vectors");
+  const toml::array& a = *fs->as_array();
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string field = "functions[" + std::to_string(i) + "]";
+    const toml::table* t = a.get(i)->as_table();
+    if (!t) r.fail(field, "must be a table {x = [...], y = [...]}");
+    r.check_keys(*t, field, {"x", "y"});
+    LocalBSpline b;
+    for (const char* key : {"x", "y"}) {
+      const toml::node* k = t->get(key);
+      if (!k) r.fail(field + " " + key, "missing local knot vector");
+      std::vector<double>& v = key[0] == 'x' ? b.x : b.y;
+      v = r.numbers(*k, field + " " + key);
+      const int need = (key[0] == 'x' ? c.dx : c.dy) + 2;
+      if (static_cast<int>(v.size()) != need)
+        r.fail(field + " " + key, "needs degree+2 = " + std::to_string(need) + " knots, got " + std::to_string(v.size()));
+      for (size_t j = 1; j < v.size(); ++j)
+        if (!(v[j] >= v[j - 1])) r.fail(field + " " + key, "knots must be non-decreasing");
+      if (!(v.back() > v.front())) r.fail(field + " " + key, "the support has zero width");
+    }
+    c.splines.push_back(std::move(b));
+  }
+  return c;
+}
+
+InputKind input_kind(const std::string& path) {
+  const toml::table root = parse_toml(path);
+  if (root.get("functions")) return InputKind::kCollection;
+  if (root.get("cells")) return InputKind::kPartition;
+  return InputKind::kCase;
+}
+
 void override_degree(CaseDescription& c, int degree) {
+  if (!c.collection_file.empty())
+    throw InputError("--degree: not used with [space] collection (" + c.collection_file + " fixes the degree)");
   if (degree < 1 || degree > kMaxDegree)
     throw InputError("--degree: must be in [1, 10], got " + std::to_string(degree));
   c.space.degree = {degree, degree};
@@ -544,6 +666,8 @@ void override_degree(CaseDescription& c, int degree) {
 }
 
 void override_elements(CaseDescription& c, int elements) {
+  if (!c.collection_file.empty())
+    throw InputError("--elements: not used with [space] collection (" + c.collection_file + " fixes the functions)");
   if (elements < 1) throw InputError("--elements: must be >= 1, got " + std::to_string(elements));
   if (static_cast<long>(elements) * elements > kMaxCells)
     throw InputError("--elements: too many elements (more than 2^26 cells)");

@@ -18,6 +18,9 @@ struct CaseDescription {
   TensorSpaceOptions space;
   std::string family = "tensor";         // or "knot_segments"
   std::vector<KnotInsertion> segments;  // knot_segments: inserted in order, parameter coordinates
+  std::string collection_file;             // knot_segments given explicitly ([space] collection)
+  std::vector<LocalBSpline> collection;    // its functions, not yet checked for semi-regularity
+  bool allow_non_semi_regular = false;     // --allow-non-semi-regular: solve on it anyway
   QuadratureOptions quadrature;
   PoissonProblem problem;
   std::string output_directory;  // default results/<name>
@@ -56,5 +59,20 @@ struct PartitionDescription {
 };
 // Throws InputError naming the file and field (or the offending cells).
 PartitionDescription load_partition(const std::string& path);
+
+// A collection of tensor-product B-splines given by their local knot vectors (the format
+// `knotwork basis --export` writes; JSON or TOML):
+//   degree = [dx, dy]
+//   functions = [{x = [dx+2 knots], y = [dy+2 knots]}, ...]
+struct CollectionDescription {
+  int dx = 2, dy = 2;
+  std::vector<LocalBSpline> splines;
+};
+CollectionDescription load_collection(const std::string& path);
+
+// What an input file describes, from its top-level keys: `functions` (a collection),
+// `cells` (a T-mesh) or else a case. Throws InputError if the file cannot be parsed.
+enum class InputKind { kCase, kPartition, kCollection };
+InputKind input_kind(const std::string& path);
 
 }  // namespace knotwork

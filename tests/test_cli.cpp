@@ -8,89 +8,10 @@
 #include <random>
 #include <sstream>
 
+#include "tests/cli_sandbox.hpp"
+
+using namespace cli_test;
 namespace fs = std::filesystem;
-
-namespace {
-
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-class Sandbox {
- public:
-  Sandbox() {
-    char tmpl[] = "/tmp/knotwork-test-cli-XXXXXX";
-    dir_ = mkdtemp(tmpl);
-  }
-  ~Sandbox() { fs::remove_all(dir_); }
-  fs::path file(const std::string& name, const std::string& text) const {
-    std::ofstream(dir_ / name) << text;
-    return dir_ / name;
-  }
-  Result run(const std::string& args) const {
-    const std::string cmd = "cd " + dir_.string() + " && " + KNOTWORK_BINARY + " " + args + " > stdout.txt 2> stderr.txt";
-    const int status = std::system(cmd.c_str());
-    return {WEXITSTATUS(status), slurp(dir_ / "stdout.txt"), slurp(dir_ / "stderr.txt")};
-  }
-  const fs::path& dir() const { return dir_; }
-
- private:
-  fs::path dir_;
-};
-
-const std::string kGood = R"TOML(
-[geometry]
-type = "rectangle"
-[space]
-degree = 2
-elements = 4
-[problem]
-exact = "sin(pi*x)*sin(pi*y)"
-)TOML";
-
-std::string replace(std::string s, const std::string& from, const std::string& to) {
-  const auto at = s.find(from);
-  REQUIRE(at != std::string::npos);
-  return s.replace(at, from.size(), to);
-}
-
-const std::string kNurbs = R"TOML(
-[geometry]
-type = "nurbs"
-degrees = [1, 1]
-knots_u = [0, 0, 1, 1]
-knots_v = [0, 0, 1, 1]
-control_points = [[0, 0], [1, 0], [0, 1], [1, 1]]
-weights = [1, 1, 1, 1]
-[space]
-degree = 2
-elements = 2
-[problem]
-exact = "x*y"
-)TOML";
-
-void expect_rejected(const Sandbox& box, const std::string& case_text, const std::vector<std::string>& mentions,
-                     const std::string& extra_args = "", const std::string& command = "run") {
-  const fs::path f = box.file("bad.toml", case_text);
-  const fs::path out = box.dir() / "out";
-  const Result r = box.run(command + " -q bad.toml --out " + out.string() + " " + extra_args);
-  INFO("stderr: " << r.err);
-  REQUIRE(r.code != 0);
-  REQUIRE(r.code < 128);  // an error exit, not a signal
-  REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-  for (const auto& m : mentions) REQUIRE(r.err.find(m) != std::string::npos);
-  REQUIRE(!fs::exists(out));
-}
-
-}  // namespace
 
 TEST_CASE("run --json reports errors, timings and the files it wrote", "[cli]") {
   Sandbox box;

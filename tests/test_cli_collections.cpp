@@ -1,0 +1,147 @@
+// `knotwork basis` on T-mesh files and on collections given explicitly, solving on an
+// explicit collection (refused when it is not semi-regular), and JSON input files.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "tests/cli_sandbox.hpp"
+
+using namespace cli_test;
+
+namespace {
+
+const std::string kSource = KNOTWORK_SOURCE_DIR;
+
+bool has(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
+
+}  // namespace
+
+TEST_CASE("basis on a T-mesh file builds the semi-regular collection on it", "[cli][semi-regular]") {
+  Sandbox box;
+  // 8 x 8 biquadratic grid: (8+2)^2 = 100 functions. The ray x = 5/16, y in [0, 3/8] adds 3
+  // interior edges of its own and splits 3 horizontal ones (+6 edges) at 2 crossings and a
+  // T-node (+3 vertices): 3*6 - 5*3 = +3. The segment y = 11/16, x in [1/4, 3/4] adds 4 edges,
+  // splits 5 vertical ones (+9) at 5 new vertices: 3*9 - 5*5 = +2. Weller's count: 105.
+  const Result r = box.run("basis --json --export c.json " + kSource + "/cases/tmeshes/ray_and_segment.toml");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* expected : {"\"functions\": 105", "\"cells\": 71", "\"input_cells\": 71", "\"partition_reached\": true",
+                               "\"semi_regular\": true", "\"violations\": []", "\"rank\": 105",
+                               "\"dimension_formula\": 105", "\"dimension_bruteforce\": 105", "\"extended_segments\": 0"})
+    REQUIRE(has(r.out, expected));
+  // The export reads back as the same collection.
+  const Result back = box.run("basis --json c.json");
+  INFO(back.err);
+  REQUIRE(back.code == 0);
+  for (const char* expected : {"\"functions\": 105", "\"cells\": 71", "\"semi_regular\": true", "\"rank\": 105"})
+    REQUIRE(has(back.out, expected));
+}
+
+TEST_CASE("basis on a T-mesh without a semi-regular collection says why", "[cli][semi-regular]") {
+  Sandbox box;
+  // The hierarchical bicubic mesh fails Lemma 3.4 at the four crossings inside the refined
+  // block, so no semi-regular collection lives on it; the construction extends instead.
+  const Result r = box.run("basis --json " + kSource + "/cases/tmeshes/hierarchical.toml");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* expected : {"\"partition_reached\": false", "\"semi_regular\": true", "Lemma 3.4", "extended to"})
+    REQUIRE(has(r.out, expected));
+  const Result text = box.run("basis " + kSource + "/cases/tmeshes/hierarchical.toml");
+  REQUIRE(has(text.out, "NOT reached"));
+  // Smoothness other than C^(d-1) has no knot-segment collection: refused with the field named.
+  box.file("c1.toml", "degree = 3\nsmoothness = [1, 1]\ncells = [[0, 0, 1, 1]]\n");
+  const Result s = box.run("basis c1.toml");
+  REQUIRE(s.code != 0);
+  REQUIRE(has(s.err, "c1.toml: smoothness"));
+}
+
+TEST_CASE("basis on a collection that is not semi-regular names the cells", "[cli][semi-regular]") {
+  Sandbox box;
+  const Result r = box.run("basis --json " + kSource + "/cases/collections/not_semi_regular.json");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  REQUIRE(has(r.out, "\"semi_regular\": false"));
+  REQUIRE(has(r.out, "cell [0.375,0.5]x[0.375,0.5]: 8 B-splines are alive, not 9"));
+  REQUIRE(has(r.out, "\"functions\": 104"));
+}
+
+TEST_CASE("run on an explicit collection; refusal unless --allow-non-semi-regular", "[cli][semi-regular]") {
+  Sandbox box;
+  const Result good = box.run("run -q --no-output --json " + kSource + "/cases/square_collection.toml");
+  INFO(good.err);
+  REQUIRE(good.code == 0);
+  REQUIRE(has(good.out, "\"dofs\": 105"));
+
+  const std::string bad_case = "[geometry]\ntype = \"rectangle\"\n[space]\nfamily = \"knot_segments\"\ncollection = \"" +
+                               kSource + "/cases/collections/not_semi_regular.json\"\n[problem]\nexact = \"x*y\"\n";
+  expect_rejected(box, bad_case, {"bad.toml", "[space] collection", "not semi-regular", "cell [0.375,0.5]x[0.375,0.5]",
+                                  "--allow-non-semi-regular"});
+  box.file("bad.toml", bad_case);
+  const Result forced = box.run("run -q --no-output bad.toml --allow-non-semi-regular");
+  INFO(forced.err);
+  REQUIRE(forced.code == 0);
+  REQUIRE(has(forced.err, "may be linearly dependent"));
+  // Adaptive refinement needs a semi-regular start, whatever the flags.
+  expect_rejected(box, bad_case, {"bad.toml", "semi-regular"}, "", "adapt");
+}
+
+TEST_CASE("bad input: collection files", "[cli][bad-input][semi-regular]") {
+  Sandbox box;
+  auto collection_case = [&](const std::string& json) {
+    box.file("coll.json", json);
+    return std::string("[geometry]\ntype = \"rectangle\"\n[space]\nfamily = \"knot_segments\"\ncollection = \"coll.json\"\n"
+                       "[problem]\nexact = \"x\"\n");
+  };
+  const std::string one = R"({"degree": [1, 1], "functions": [)";
+  expect_rejected(box, collection_case(one + R"({"x": [0, 1], "y": [0, 0, 1]}]})"),
+                  {"coll.json", "functions[0] x", "degree+2 = 3"});
+  expect_rejected(box, collection_case(one + R"({"x": [0, 1, 0.5], "y": [0, 0, 1]}]})"),
+                  {"coll.json", "functions[0] x", "non-decreasing"});
+  expect_rejected(box, collection_case(one + R"({"x": [0, 0, 1], "y": [0, 0, 1]}, {"x": [0, 0, 1], "y": [0, 0, 1]}]})"),
+                  {"bad.toml", "collection", "twice"});
+  expect_rejected(box, collection_case(one + R"({"x": [0, 0, 2], "y": [0, 0, 1]}]})"),
+                  {"bad.toml", "collection", "parameter domain"});
+  expect_rejected(box, collection_case(one + R"({"x": [0, 0, 1], "y": [0, 0, 1]}, ]})"),
+                  {"coll.json:1:", "JSON syntax error"});
+  expect_rejected(box, collection_case(R"({"degree": null, "functions": []})"), {"coll.json", "degree", "null"});
+  expect_rejected(box, collection_case(R"({"degre": [1, 1], "functions": []})"), {"coll.json", "did you mean 'degree'"});
+  const std::string with_elements =
+      replace(collection_case(one + R"({"x": [0, 0, 1], "y": [0, 0, 1]}]})"), "collection =", "elements = 4\ncollection =");
+  expect_rejected(box, with_elements, {"bad.toml", "[space] elements", "explicit collection"});
+  expect_rejected(box, replace(kGood, "degree = 2", "degree = 2\ncollection = \"coll.json\""),
+                  {"bad.toml", "[space] collection", "knot_segments"});
+  expect_rejected(box, collection_case(one + R"({"x": [0, 0, 1], "y": [0, 0, 1]}]})"), {"--degree"}, "--degree 3");
+  expect_rejected(box, collection_case(one + R"({"x": [0, 0, 1], "y": [0, 0, 1]}]})"),
+                  {"bad.toml", "[space] collection", "convergence"}, "", "converge");
+}
+
+TEST_CASE("a case written as JSON solves exactly like its TOML twin", "[cli][json]") {
+  Sandbox box;
+  box.file("sq.toml", kGood);
+  box.file("sq.json", R"J({
+    "geometry": {"type": "rectangle"},
+    "space": {"degree": 2, "elements": 4},
+    "problem": {"exact": "sin(pi*x)*sin(pi*y)"}
+  })J");
+  const Result t = box.run("run -q --no-output --json sq.toml");
+  const Result j = box.run("run -q --no-output --json sq.json");
+  INFO(t.err << j.err);
+  REQUIRE(t.code == 0);
+  REQUIRE(j.code == 0);
+  auto l2 = [](const std::string& out) {
+    const auto at = out.find("\"l2_error\": ");
+    REQUIRE(at != std::string::npos);
+    return std::stod(out.substr(at + 12));
+  };
+  // The same problem; only the threads' summation order may differ in the last bits.
+  REQUIRE(l2(t.out) > 0);
+  REQUIRE(std::abs(l2(t.out) - l2(j.out)) <= 1e-12 * l2(t.out));
+  // JSON syntax errors carry line and column.
+  box.file("broken.json", "{\n  \"geometry\": {\"type\": \"rectangle\"},\n  \"space\": {\"degree\": 2 \"elements\": 4}\n}\n");
+  const Result b = box.run("run -q broken.json");
+  REQUIRE(b.code != 0);
+  REQUIRE(has(b.err, "broken.json:3:"));
+  REQUIRE(has(b.err, "JSON syntax error"));
+  box.file("dup.json", R"({"geometry": {"type": "rectangle"}, "geometry": {}})");
+  REQUIRE(has(box.run("run -q dup.json").err, "duplicate key \"geometry\""));
+}
