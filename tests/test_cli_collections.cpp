@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <random>
 
 #include "tests/cli_sandbox.hpp"
 
@@ -144,4 +145,44 @@ TEST_CASE("a case written as JSON solves exactly like its TOML twin", "[cli][jso
   REQUIRE(has(b.err, "JSON syntax error"));
   box.file("dup.json", R"({"geometry": {"type": "rectangle"}, "geometry": {}})");
   REQUIRE(has(box.run("run -q dup.json").err, "duplicate key \"geometry\""));
+}
+
+TEST_CASE("nothing typed into a JSON collection or T-mesh file crashes knotwork", "[cli][bad-input][fuzz]") {
+  // Random edits of valid JSON inputs: exit 0 or a one-line error, never a signal.
+  Sandbox box;
+  std::mt19937 rng(2027);
+  const std::string alphabet = "[]{}:,\"\\.-+0123456789eEnulltrufas \n/";
+  const std::vector<std::string> seeds = {
+      R"({"degree": [1, 1], "functions": [{"x": [0, 0, 0.5], "y": [0, 0, 1]}, {"x": [0, 0.5, 1], "y": [0, 0, 1]},)"
+      R"( {"x": [0.5, 1, 1], "y": [0, 0, 1]}, {"x": [0, 0, 0.5], "y": [0, 1, 1]}, {"x": [0, 0.5, 1], "y": [0, 1, 1]},)"
+      R"( {"x": [0.5, 1, 1], "y": [0, 1, 1]}]})",
+      R"({"degree": [2, 2], "cells": [[0, 0, 1, 1], [1, 0, 2, 1], [0, 1, 2, "3/2"], [0, "3/2", 2, 2]]})"};
+  int rejected = 0, accepted = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    std::string text = seeds[trial % seeds.size()];
+    const int edits = 1 + static_cast<int>(rng() % 3);
+    for (int e = 0; e < edits; ++e) {
+      const size_t at = rng() % text.size();
+      switch (rng() % 3) {
+        case 0: text.erase(at, 1); break;
+        case 1: text.insert(at, 1, alphabet[rng() % alphabet.size()]); break;
+        default: text[at] = alphabet[rng() % alphabet.size()];
+      }
+    }
+    box.file("fuzz.json", text);
+    const Result r = box.run("basis --json fuzz.json");
+    INFO("input:\n" << text << "\nstderr: " << r.err);
+    REQUIRE(r.code >= 0);
+    REQUIRE(r.code < 128);
+    if (r.code == 0) {
+      ++accepted;
+    } else {
+      ++rejected;
+      REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+      REQUIRE(r.err.rfind("knotwork: error: ", 0) == 0);
+    }
+  }
+  INFO(accepted << " accepted, " << rejected << " rejected");
+  REQUIRE(rejected > 0);
+  REQUIRE(accepted > 0);
 }
