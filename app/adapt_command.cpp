@@ -103,7 +103,9 @@ int adapt_command(const AdaptOptions& o) {
     Json j = Json::object();
     j.set("step", static_cast<int>(s)).set("dofs", v.dofs).set("cells", v.cells).set("marked", v.marked)
         .set("extended_segments", v.extended).set("estimator", v.estimator).set("l2_error", v.l2)
-        .set("h1_seminorm_error", v.h1_semi).set("h1_rate_vs_dofs", v.h1_rate).set("seconds", v.seconds);
+        .set("h1_seminorm_error", v.h1_semi).set("h1_rate_vs_dofs", v.h1_rate).set("seconds", v.seconds)
+        .set("seconds_space", v.seconds_space).set("seconds_solve", v.seconds_solve)
+        .set("seconds_estimate", v.seconds_estimate).set("seconds_refine", v.seconds_refine);
     js.push(j);
     se.x.push_back(v.dofs);
     se.y.push_back(v.estimator);

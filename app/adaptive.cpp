@@ -37,9 +37,15 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
   for (int s = 0; s < c.adapt.steps; ++s) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::string prefix = "step " + std::to_string(s + 1) + "/" + std::to_string(c.adapt.steps) + ": ";
+    using clock = std::chrono::steady_clock;
+    auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
     const Discretization d = s == 0 ? std::move(first) : discretize_collection(c, collection);
+    const double t_space = since(t0);
+    auto t1 = clock::now();
     const PoissonSolution sol = solve_case(c, d, ordering, [&](const std::string& what) { say(prefix + what); });
+    const double t_solve = since(t1);
     say(prefix + "error estimator");
+    t1 = clock::now();
     ErrorIndicators ind;
     try {
       ind = residual_indicators(d.mesh(), *d.geometry, sol.coefficients, c.problem);
@@ -47,6 +53,9 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
       throw InputError(c.path + ": " + e.what());
     }
     AdaptiveStep st;
+    st.seconds_space = t_space;
+    st.seconds_solve = t_solve;
+    st.seconds_estimate = since(t1);
     st.dofs = sol.num_functions;
     st.cells = d.mesh().num_cells();
     st.estimator = std::sqrt(ind.total());
@@ -77,7 +86,9 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
                         : s % 2 == 0        ? SemiRegularCollection::kSplitX
                                             : SemiRegularCollection::kSplitY);
       }
+      t1 = clock::now();
       for (const auto& r : collection.refine_cells(marked, split)) st.extended += r.extended;
+      st.seconds_refine = since(t1);
     }
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     steps.push_back(st);

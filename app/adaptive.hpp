@@ -14,7 +14,10 @@ struct AdaptiveStep {
   double estimator = 0;                               // sqrt(sum of eta_K^2)
   double l2 = 0, h1_semi = 0;                         // NaN without an exact solution
   double h1_rate = 0;                                 // against dofs, from the previous step (NaN first)
-  double seconds = 0;
+  double seconds = 0;  // the whole step, output included
+  // Phases of the step: building the space (BezierMesh, geometry), the solve (assembly,
+  // CHOLMOD, error norms), the estimator, and the refinement that makes the next step.
+  double seconds_space = 0, seconds_solve = 0, seconds_estimate = 0, seconds_refine = 0;
 };
 
 // What a step hands to its observer (for output) before the collection is refined.
