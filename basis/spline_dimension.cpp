@@ -1,5 +1,7 @@
 #include "basis/spline_dimension.hpp"
 
+#include "basis/sparse_rank.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -9,35 +11,7 @@ namespace knotwork {
 
 namespace {
 
-// ---- arithmetic modulo a prime below 2^61 ----
-struct ModP {
-  uint64_t p;
-  uint64_t mul(uint64_t a, uint64_t b) const { return static_cast<uint64_t>((__uint128_t)a * b % p); }
-  uint64_t add(uint64_t a, uint64_t b) const { const uint64_t s = a + b; return s >= p ? s - p : s; }
-  uint64_t sub(uint64_t a, uint64_t b) const { return a >= b ? a - b : a + p - b; }
-  uint64_t pow(uint64_t a, uint64_t e) const {
-    uint64_t r = 1;
-    for (; e; e >>= 1, a = mul(a, a))
-      if (e & 1) r = mul(r, a);
-    return r;
-  }
-  uint64_t inv(uint64_t a) const { return pow(a, p - 2); }
-  uint64_t of(const mpz_class& z) const {
-    mpz_class r;
-    mpz_fdiv_r_ui(r.get_mpz_t(), z.get_mpz_t(), p);
-    return r.get_ui();
-  }
-  uint64_t of(const mpq_class& q) const {
-    const uint64_t d = of(q.get_den());
-    if (d == 0) throw std::runtime_error("a coordinate's denominator is a multiple of the prime");
-    return mul(of(q.get_num()), inv(d));
-  }
-};
-
-// One smoothness condition: sum over (column, coefficient) = 0, coefficients exact.
-struct Constraint {
-  std::vector<std::pair<long, mpq_class>> terms;
-};
+using Constraint = SparseRationalRow;
 
 long falling(int i, int k) {
   long r = 1;
@@ -73,75 +47,6 @@ std::vector<Constraint> smoothness_constraints(const RectangularPartition& part,
   return rows;
 }
 
-// Incremental sparse row echelon form: each new row is reduced by the pivots whose
-// leading column it meets, until it is zero (dependent) or becomes a new pivot.
-template <class Field>
-long sparse_rank(const std::vector<Constraint>& rows, long columns, const Field& F) {
-  using Value = typename Field::Value;
-  using Row = std::vector<std::pair<long, Value>>;  // sorted by column, leading entry 1
-  std::vector<int> pivot_of(columns, -1);
-  std::vector<Row> pivots;
-  Row row, merged;
-  for (const Constraint& c : rows) {
-    row.clear();
-    for (const auto& [col, q] : c.terms) {
-      Value v = F.of(q);
-      if (!F.zero(v)) row.emplace_back(col, v);
-    }
-    std::sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    while (!row.empty()) {
-      const long lead = row.front().first;
-      const int pv = pivot_of[lead];
-      if (pv < 0) {  // new pivot, normalized to a leading 1
-        const Value inv = F.inv(row.front().second);
-        for (auto& [col, v] : row) v = F.mul(v, inv);
-        pivot_of[lead] = static_cast<int>(pivots.size());
-        pivots.push_back(row);
-        break;
-      }
-      const Value factor = row.front().second;
-      const Row& p = pivots[pv];
-      merged.clear();
-      size_t a = 0, b = 0;
-      while (a < row.size() || b < p.size()) {
-        if (b == p.size() || (a < row.size() && row[a].first < p[b].first)) merged.push_back(row[a++]);
-        else if (a == row.size() || p[b].first < row[a].first) {
-          merged.emplace_back(p[b].first, F.neg(F.mul(factor, p[b].second)));
-          ++b;
-        } else {
-          const Value v = F.sub(row[a].second, F.mul(factor, p[b].second));
-          if (!F.zero(v)) merged.emplace_back(row[a].first, v);
-          ++a;
-          ++b;
-        }
-      }
-      row.swap(merged);
-    }
-  }
-  return static_cast<long>(pivots.size());
-}
-
-struct ModularField {
-  using Value = uint64_t;
-  ModP m;
-  Value of(const mpq_class& q) const { return m.of(q); }
-  bool zero(Value v) const { return v == 0; }
-  Value inv(Value v) const { return m.inv(v); }
-  Value mul(Value a, Value b) const { return m.mul(a, b); }
-  Value sub(Value a, Value b) const { return m.sub(a, b); }
-  Value neg(Value a) const { return m.sub(0, a); }
-};
-
-struct RationalField {
-  using Value = mpq_class;
-  Value of(const mpq_class& q) const { return q; }
-  bool zero(const Value& v) const { return v == 0; }
-  Value inv(const Value& v) const { return 1 / v; }
-  Value mul(const Value& a, const Value& b) const { return a * b; }
-  Value sub(const Value& a, const Value& b) const { return a - b; }
-  Value neg(const Value& a) const { return -a; }
-};
-
 }  // namespace
 
 DimensionResult spline_space_dimension(const RectangularPartition& part, int m, int n, int alpha, int beta,
@@ -154,17 +59,10 @@ DimensionResult spline_space_dimension(const RectangularPartition& part, int m, 
   r.unknowns = static_cast<long>(part.num_cells()) * (m + 1) * (n + 1);
   r.constraints = static_cast<long>(rows.size());
   if (method == RankMethod::kExact) {
-    r.rank = sparse_rank(rows, r.unknowns, RationalField{});
+    r.rank = rank_exact(rows, r.unknowns);
     r.exact = true;
   } else {
-    // Rank mod p <= rank over Q, with equality unless p divides some minor: two
-    // unrelated primes agreeing is the check.
-    const long r1 = sparse_rank(rows, r.unknowns, ModularField{{(1ULL << 61) - 1}});
-    const long r2 = sparse_rank(rows, r.unknowns, ModularField{{2305843009213693921ULL}});
-    if (r1 != r2)
-      throw std::runtime_error("modular ranks disagree (" + std::to_string(r1) + " vs " + std::to_string(r2) +
-                               "): use the exact method");
-    r.rank = r1;
+    r.rank = rank_modular(rows, r.unknowns);
   }
   r.dimension = r.unknowns - r.rank;
   return r;

@@ -1,0 +1,22 @@
+#pragma once
+#include <gmpxx.h>
+
+#include <utility>
+#include <vector>
+
+namespace knotwork {
+
+// One linear condition sum over (column, coefficient) = 0 with exact coefficients.
+struct SparseRationalRow {
+  std::vector<std::pair<long, mpq_class>> terms;
+};
+
+// Rank of the rows by sparse Gaussian elimination modulo two unrelated primes below 2^61.
+// Rank mod p <= rank over Q, with equality unless p divides some minor; the two must agree
+// (std::runtime_error otherwise: then use rank_exact).
+long rank_modular(const std::vector<SparseRationalRow>& rows, long columns);
+
+// Rank over Q by sparse elimination with GMP rationals (exact; slower).
+long rank_exact(const std::vector<SparseRationalRow>& rows, long columns);
+
+}  // namespace knotwork
