@@ -1,0 +1,307 @@
+#include "basis/g1_space.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "basis/sparse_rank.hpp"
+
+namespace knotwork {
+
+// ---- piecewise polynomials ----
+
+PiecewisePolynomial PiecewisePolynomial::constant(const mpq_class& v) {
+  return from_exact({std::vector<mpq_class>{v}, std::vector<mpq_class>{v}});
+}
+
+PiecewisePolynomial PiecewisePolynomial::from_exact(std::array<std::vector<mpq_class>, 2> pieces) {
+  PiecewisePolynomial p;
+  for (int h = 0; h < 2; ++h) {
+    if (pieces[h].empty()) pieces[h].push_back(0);
+    for (const auto& q : pieces[h]) p.pieces[h].push_back(q.get_d());
+  }
+  p.exact = std::move(pieces);
+  return p;
+}
+
+PiecewisePolynomial PiecewisePolynomial::from_double(std::array<std::vector<double>, 2> pieces) {
+  PiecewisePolynomial p;
+  for (int h = 0; h < 2; ++h)
+    if (pieces[h].empty()) pieces[h].push_back(0);
+  p.pieces = std::move(pieces);
+  return p;
+}
+
+double PiecewisePolynomial::operator()(double u) const {
+  const auto& c = pieces[u < 0.5 ? 0 : 1];
+  double v = 0;
+  for (size_t i = c.size(); i-- > 0;) v = v * u + c[i];
+  return v;
+}
+
+mpq_class PiecewisePolynomial::exact_value(const mpq_class& u) const {
+  const auto& c = (*exact)[u < mpq_class(1, 2) ? 0 : 1];
+  mpq_class v = 0;
+  for (size_t i = c.size(); i-- > 0;) v = v * u + c[i];
+  return v;
+}
+
+int PiecewisePolynomial::degree() const {
+  return static_cast<int>(std::max(pieces[0].size(), pieces[1].size())) - 1;
+}
+
+bool GluingData::exact() const {
+  for (const auto& e : edges)
+    if (e && (!e->a.exact || !e->b.exact || !e->c.exact)) return false;
+  return true;
+}
+
+namespace {
+
+// 2cos(pi p/q): exact where it is rational (p/q a multiple of 1/2 or 1/3 in [0, 1]).
+std::optional<mpq_class> two_cos_pi_exact(long p, long q) {
+  mpq_class x(p, q);
+  x.canonicalize();
+  if (x == 0) return mpq_class(2);
+  if (x == mpq_class(1, 3)) return mpq_class(1);
+  if (x == mpq_class(1, 2)) return mpq_class(0);
+  if (x == mpq_class(2, 3)) return mpq_class(-1);
+  if (x == 1) return mpq_class(-2);
+  return std::nullopt;
+}
+
+// The angle of the symmetric gluing at vertex v as a fraction of pi: 2/n inside (n edges),
+// 1/F on the boundary (F faces).
+std::pair<long, long> symmetric_angle(const QuadMesh& mesh, int v) {
+  const auto& ring = mesh.ring(v);
+  if (ring.boundary) return {1, static_cast<long>(ring.faces.size())};
+  return {2, static_cast<long>(mesh.valence(v))};
+}
+
+// B-spline values and first derivatives of U_k^r (knots 0^(k+1), (1/2)^(k-r), 1^(k+1)) at
+// a point strictly inside (0, 1/2) or (1/2, 1).
+template <class Scalar>
+void univariate(int k, int r, const Scalar& u, std::vector<Scalar>& value, std::vector<Scalar>& derivative) {
+  std::vector<Scalar> T;
+  for (int i = 0; i <= k; ++i) T.push_back(Scalar(0));
+  for (int i = 0; i < k - r; ++i) T.push_back(Scalar(1) / 2);
+  for (int i = 0; i <= k; ++i) T.push_back(Scalar(1));
+  const int n = static_cast<int>(T.size()) - k - 1;
+  std::vector<Scalar> N(T.size() - 1, Scalar(0));
+  for (size_t i = 0; i + 1 < T.size(); ++i) N[i] = (T[i] <= u && u < T[i + 1]) ? Scalar(1) : Scalar(0);
+  std::vector<Scalar> lower;
+  for (int p = 1; p <= k; ++p) {
+    lower = N;
+    for (size_t i = 0; i + p + 1 < T.size(); ++i) {
+      Scalar v(0);
+      if (T[i + p] != T[i]) v += (u - T[i]) / (T[i + p] - T[i]) * lower[i];
+      if (T[i + p + 1] != T[i + 1]) v += (T[i + p + 1] - u) / (T[i + p + 1] - T[i + 1]) * lower[i + 1];
+      N[i] = v;
+    }
+  }
+  value.assign(N.begin(), N.begin() + n);
+  derivative.assign(n, Scalar(0));
+  for (int i = 0; i < n; ++i) {  // from the degree k-1 values still in `lower`
+    if (T[i + k] != T[i]) derivative[i] += Scalar(k) / (T[i + k] - T[i]) * lower[i];
+    if (T[i + k + 1] != T[i + 1]) derivative[i] -= Scalar(k) / (T[i + k + 1] - T[i + 1]) * lower[i + 1];
+  }
+}
+
+// Corner frames of a face (MATH.md section 2): (s, t) = origin + u * du + v * dv.
+constexpr int kOrigin[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+constexpr int kDu[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+constexpr int kDv[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};
+
+// A linear functional on one face's coefficients: value or derivative along (ds, dt) at a
+// point of the corner frame.
+template <class Scalar>
+struct FaceFunctional {
+  std::vector<std::pair<long, Scalar>> terms;
+};
+
+template <class Scalar>
+FaceFunctional<Scalar> face_functional(int face, int corner, const Scalar& u, const Scalar& v, const int* direction,
+                                       int k, int r) {
+  const Scalar s = Scalar(kOrigin[corner][0]) + u * kDu[corner][0] + v * kDv[corner][0];
+  const Scalar t = Scalar(kOrigin[corner][1]) + u * kDu[corner][1] + v * kDv[corner][1];
+  std::vector<Scalar> Ns, dNs, Nt, dNt;
+  univariate(k, r, s, Ns, dNs);
+  univariate(k, r, t, Nt, dNt);
+  FaceFunctional<Scalar> out;
+  const int n = static_cast<int>(Ns.size());
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      Scalar c = direction ? Scalar(Scalar(direction[0]) * dNs[i] * Nt[j] + Scalar(direction[1]) * Ns[i] * dNt[j])
+                           : Scalar(Ns[i] * Nt[j]);
+      if (c != 0) out.terms.emplace_back(g1_unknown(face, i, j, k, r), c);
+    }
+  return out;
+}
+
+template <class Scalar>
+Scalar gluing_value(const PiecewisePolynomial& p, const Scalar& u);
+template <>
+double gluing_value(const PiecewisePolynomial& p, const double& u) { return p(u); }
+template <>
+mpq_class gluing_value(const PiecewisePolynomial& p, const mpq_class& u) { return p.exact_value(u); }
+
+// The G1 conditions (2) and (3) across every interior edge, at enough points of each half
+// of the edge to make them polynomial identities there.
+template <class Scalar>
+std::vector<std::vector<std::pair<long, Scalar>>> g1_conditions(const QuadMesh& mesh, const GluingData& gluing, int k,
+                                                                int r) {
+  std::vector<std::vector<std::pair<long, Scalar>>> rows;
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (E.boundary()) continue;
+    const EdgeGluing& g = *gluing.edges[e];
+    const int f1 = E.face[0], c1 = E.corner[0];
+    const int f0 = E.face[1], c0 = (E.corner[1] + 1) % 4;  // face[1]'s corner at v[0]
+    const int points = k + std::max({g.a.degree(), g.b.degree(), g.c.degree(), 0}) + 1;
+    for (int half = 0; half < 2; ++half)
+      for (int q = 0; q < points; ++q) {
+        const Scalar u = Scalar(half) / 2 + Scalar(q + 1) / (2 * (points + 1));
+        const Scalar zero(0);
+        // (2): f1(u, 0) - f0(0, u)
+        const auto v1 = face_functional<Scalar>(f1, c1, u, zero, nullptr, k, r);
+        const auto v0 = face_functional<Scalar>(f0, c0, zero, u, nullptr, k, r);
+        std::vector<std::pair<long, Scalar>> row;
+        for (const auto& [col, c] : v1.terms) row.emplace_back(col, c);
+        for (const auto& [col, c] : v0.terms) row.emplace_back(col, -c);
+        rows.push_back(std::move(row));
+        // (3): c dv f1(u, 0) - b du f0(0, u) - a dv f0(0, u)
+        const Scalar a = gluing_value(g.a, u), b = gluing_value(g.b, u), c = gluing_value(g.c, u);
+        const auto d1 = face_functional<Scalar>(f1, c1, u, zero, kDv[c1], k, r);
+        const auto du0 = face_functional<Scalar>(f0, c0, zero, u, kDu[c0], k, r);
+        const auto dv0 = face_functional<Scalar>(f0, c0, zero, u, kDv[c0], k, r);
+        row.clear();
+        for (const auto& [col, x] : d1.terms) row.emplace_back(col, c * x);
+        for (const auto& [col, x] : du0.terms) row.emplace_back(col, -b * x);
+        for (const auto& [col, x] : dv0.terms) row.emplace_back(col, -a * x);
+        rows.push_back(std::move(row));
+      }
+  }
+  return rows;
+}
+
+}  // namespace
+
+GluingData symmetric_gluing(const QuadMesh& mesh) {
+  GluingData g;
+  g.edges.resize(mesh.num_edges());
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (E.boundary()) continue;
+    const auto [p0, q0] = symmetric_angle(mesh, E.v[0]);
+    const auto [p1, q1] = symmetric_angle(mesh, E.v[1]);
+    const auto x0 = two_cos_pi_exact(p0, q0), x1 = two_cos_pi_exact(p1, q1);
+    EdgeGluing eg;
+    // a = A0 d0 - A1 d1 with d0 = 1 - 4u^2 | 0 and d1 = 0 | -3 + 8u - 4u^2.
+    if (x0 && x1) {
+      const mpq_class A0 = *x0, A1 = *x1;
+      eg.a = PiecewisePolynomial::from_exact({std::vector<mpq_class>{A0, 0, -4 * A0},
+                                              std::vector<mpq_class>{3 * A1, -8 * A1, 4 * A1}});
+    } else {
+      const double A0 = 2 * std::cos(M_PI * p0 / q0), A1 = 2 * std::cos(M_PI * p1 / q1);
+      eg.a = PiecewisePolynomial::from_double({std::vector<double>{A0, 0, -4 * A0}, std::vector<double>{3 * A1, -8 * A1, 4 * A1}});
+    }
+    eg.b = PiecewisePolynomial::constant(-1);
+    eg.c = PiecewisePolynomial::constant(1);
+    g.edges[e] = std::move(eg);
+  }
+  return g;
+}
+
+std::vector<std::string> gluing_violations(const QuadMesh& mesh, const GluingData& gluing, double tolerance) {
+  std::vector<std::string> out;
+  auto edge_name = [&](int e) {
+    return "edge " + std::to_string(mesh.edge(e).v[0] + 1) + "-" + std::to_string(mesh.edge(e).v[1] + 1);
+  };
+  if (static_cast<int>(gluing.edges.size()) != mesh.num_edges()) {
+    out.push_back("gluing data for " + std::to_string(gluing.edges.size()) + " edges, the mesh has " +
+                  std::to_string(mesh.num_edges()));
+    return out;
+  }
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    if (mesh.edge(e).boundary()) continue;
+    if (!gluing.edges[e]) {
+      out.push_back(edge_name(e) + ": interior edge without gluing data");
+      continue;
+    }
+    const auto& c = gluing.edges[e]->c;
+    for (int h = 0; h < 2; ++h) {
+      bool zero = true;
+      for (double x : c.pieces[h]) zero = zero && x == 0;
+      if (zero) out.push_back(edge_name(e) + ": c is identically 0 on [" + (h ? "1/2, 1" : "0, 1/2") + "]");
+    }
+    if (c(0) == 0 || c(1) == 0) out.push_back(edge_name(e) + ": c vanishes at an end of the edge");
+    if (gluing.edges[e]->b(1) == 0 || gluing.edges[e]->b(0) == 0)
+      out.push_back(edge_name(e) + ": b vanishes at an end of the edge (no transition map there)");
+  }
+  if (!out.empty()) return out;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const auto& ring = mesh.ring(v);
+    if (ring.boundary) continue;
+    Eigen::Matrix2d P = Eigen::Matrix2d::Identity();
+    for (int e : ring.edges) {
+      const EdgeGluing& g = *gluing.edges[e];
+      double A, B;
+      if (mesh.edge(e).v[0] == v) {
+        A = g.a(0) / g.c(0);
+        B = g.b(0) / g.c(0);
+      } else {  // seen from the far end: B' = 1/B, A' = A/B with A, B at u = 1
+        const double A1 = g.a(1) / g.c(1), B1 = g.b(1) / g.c(1);
+        A = A1 / B1;
+        B = 1 / B1;
+      }
+      Eigen::Matrix2d M;
+      M << 0, 1, B, A;
+      P = P * M;
+    }
+    if ((P - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff() > tolerance) {
+      std::ostringstream s;
+      s << "vertex " << v + 1 << " (valence " << mesh.valence(v) << "): Condition 3.1 fails, the product of the "
+        << "transition jets is [[" << P(0, 0) << ", " << P(0, 1) << "], [" << P(1, 0) << ", " << P(1, 1)
+        << "]], not the identity";
+      out.push_back(s.str());
+    }
+  }
+  return out;
+}
+
+G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating) {
+  if (k < 2) throw std::invalid_argument("degree k must be >= 2, got " + std::to_string(k));
+  if (r < 0 || r >= k) throw std::invalid_argument("split smoothness r must be in [0, k-1], got " + std::to_string(r));
+  for (int e = 0; e < mesh.num_edges(); ++e)
+    if (!mesh.edge(e).boundary() && (e >= static_cast<int>(gluing.edges.size()) || !gluing.edges[e]))
+      throw std::invalid_argument("interior edge " + std::to_string(mesh.edge(e).v[0] + 1) + "-" +
+                                  std::to_string(mesh.edge(e).v[1] + 1) + " has no gluing data");
+  G1SpaceDimension d;
+  const long n = 2 * k - r + 1;
+  d.unknowns = mesh.num_faces() * n * n;
+  if (gluing.exact() && !floating) {
+    const auto rows = g1_conditions<mpq_class>(mesh, gluing, k, r);
+    std::vector<SparseRationalRow> sparse(rows.size());
+    for (size_t i = 0; i < rows.size(); ++i) sparse[i].terms = rows[i];
+    d.constraints = static_cast<long>(rows.size());
+    d.rank = rank_modular(sparse, d.unknowns);
+    d.exact = true;
+  } else {
+    const auto rows = g1_conditions<double>(mesh, gluing, k, r);
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), d.unknowns);
+    for (size_t i = 0; i < rows.size(); ++i)
+      for (const auto& [col, x] : rows[i]) A(static_cast<Eigen::Index>(i), col) += x;
+    d.constraints = static_cast<long>(rows.size());
+    Eigen::BDCSVD<Eigen::MatrixXd> svd(A);
+    const auto& sv = svd.singularValues();
+    d.tolerance = 1e-10;
+    const double cut = sv.size() ? d.tolerance * sv(0) : 0;
+    d.rank = 0;
+    for (Eigen::Index i = 0; i < sv.size(); ++i) d.rank += sv(i) > cut;
+  }
+  d.dimension = d.unknowns - d.rank;
+  return d;
+}
+
+}  // namespace knotwork

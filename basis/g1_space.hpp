@@ -1,0 +1,67 @@
+#pragma once
+#include <gmpxx.h>
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "basis/quad_mesh.hpp"
+
+namespace knotwork {
+
+// A function on [0, 1] that is a polynomial on [0, 1/2] and on [1/2, 1], each piece given
+// by its coefficients in powers of u (the global parameter, not shifted). Exact rational
+// coefficients when the data are rational (`exact`), doubles always.
+struct PiecewisePolynomial {
+  std::array<std::vector<double>, 2> pieces;
+  std::optional<std::array<std::vector<mpq_class>, 2>> exact;
+  static PiecewisePolynomial constant(const mpq_class& v);
+  static PiecewisePolynomial from_exact(std::array<std::vector<mpq_class>, 2> pieces);
+  static PiecewisePolynomial from_double(std::array<std::vector<double>, 2> pieces);
+  double operator()(double u) const;
+  mpq_class exact_value(const mpq_class& u) const;  // requires exact
+  int degree() const;
+};
+
+// Gluing data [a, b, c] of every interior edge, in the edge's own orientation: u = 0 at
+// QuadMesh::Edge::v[0]. Across the edge, with f1 on edge.face[0] and f0 on edge.face[1] in
+// their corner frames at v[0] (MATH.md section 2):
+//   f1(u, 0) = f0(0, u),   c(u) dv f1(u, 0) = b(u) du f0(0, u) + a(u) dv f0(0, u).
+struct EdgeGluing {
+  PiecewisePolynomial a, b, c;
+};
+struct GluingData {
+  std::vector<std::optional<EdgeGluing>> edges;  // per mesh edge; empty on boundary edges
+  bool exact() const;                            // every coefficient rational
+};
+
+// The symmetric gluing (Blidia-Mourrain-Villamizar eq. 11) with Hermite functions of degree 2,
+// C^0 at 1/2: a = 2cos(2pi/n0) d0(u) - 2cos(2pi/n1) d1(u), b = -1, c = 1, n the number of
+// edges at each end; at a boundary vertex shared by F faces the angle pi/F replaces 2pi/n.
+GluingData symmetric_gluing(const QuadMesh& mesh);
+
+// Condition 3.1 at every interior vertex: the product of [[0, 1], [b_i(0), a_i(0)]] over the
+// edges around it (a = a/c, b = b/c at the vertex's end) is the identity. Returns one
+// message per failing vertex ("vertex 5 (valence 3): product [[...]] is not the identity").
+// Also reports interior edges without data and c = 0 at an end.
+std::vector<std::string> gluing_violations(const QuadMesh& mesh, const GluingData& gluing, double tolerance = 1e-10);
+
+// The spline space S_k^{1,r}(M): per face R_k^r (degree k in s and t, knots 0, 1/2, 1, C^r
+// at 1/2: (2k - r + 1)^2 B-spline coefficients), constrained by the G1 conditions across
+// every interior edge, imposed as polynomial identities on both halves of the edge.
+struct G1SpaceDimension {
+  long unknowns = 0, constraints = 0, rank = 0, dimension = 0;
+  bool exact = false;       // rank of the rational system (modulo two primes that agree)
+  double tolerance = 0;     // otherwise: singular values below tolerance * largest are zero
+};
+// `floating` forces the floating-point path (an independent cross-check of the exact one).
+G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false);
+
+// Index of coefficient (i, j) (i along s, j along t) of face f among the unknowns.
+inline long g1_unknown(int f, int i, int j, int k, int r) {
+  const int n = 2 * k - r + 1;
+  return static_cast<long>(f) * n * n + static_cast<long>(i) * n + j;
+}
+
+}  // namespace knotwork

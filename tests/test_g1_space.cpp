@@ -1,0 +1,242 @@
+// Quad meshes of arbitrary topology and the G1 spline space S_k^{1,r} on them
+// (Blidia, Mourrain, Villamizar): topology checks, gluing data, dimensions.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "basis/g1_space.hpp"
+#include "basis/quad_mesh.hpp"
+
+using namespace knotwork;
+
+namespace {
+
+// The paper's Section 8 mesh: three quads around an interior vertex gamma (valence 3), each
+// sharing an edge gamma-delta_i with the next; delta_i are boundary vertices of two faces.
+QuadMesh three_quads() {
+  std::vector<Eigen::Vector3d> v{{0, 0, 0}};
+  for (int i = 0; i < 3; ++i) {
+    const double a = M_PI / 2 + 2 * M_PI * i / 3;
+    v.emplace_back(std::cos(a), std::sin(a), 0);  // delta_i: vertices 1, 2, 3
+  }
+  for (int i = 0; i < 3; ++i) v.push_back(v[1 + i] + v[1 + (i + 1) % 3]);  // outer corners: 4, 5, 6
+  std::vector<std::array<int, 4>> f;
+  for (int i = 0; i < 3; ++i) f.push_back({0, 1 + i, 4 + i, 1 + (i + 1) % 3});
+  return QuadMesh::from_faces(v, f, "three quads");
+}
+
+QuadMesh grid(int n) {
+  std::vector<Eigen::Vector3d> v;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) v.emplace_back(i, j, 0);
+  std::vector<std::array<int, 4>> f;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i;
+      f.push_back({a, a + 1, a + n + 2, a + n + 1});
+    }
+  return QuadMesh::from_faces(v, f, "grid");
+}
+
+QuadMesh cube() {
+  std::vector<Eigen::Vector3d> v;
+  for (int i = 0; i < 8; ++i) v.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  // Outward normals, counter-clockwise seen from outside.
+  std::vector<std::array<int, 4>> f{{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  return QuadMesh::from_faces(v, f, "cube");
+}
+
+// A torus of n x m quads: every vertex of valence 4, closed, Euler characteristic 0.
+QuadMesh torus(int n, int m) {
+  std::vector<Eigen::Vector3d> v;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * i / n, b = 2 * M_PI * j / m;
+      v.emplace_back((3 + std::cos(b)) * std::cos(a), (3 + std::cos(b)) * std::sin(a), std::sin(b));
+    }
+  std::vector<std::array<int, 4>> f;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int i1 = (i + 1) % n, j1 = (j + 1) % m;
+      f.push_back({j * n + i, j * n + i1, j1 * n + i1, j1 * n + i});
+    }
+  return QuadMesh::from_faces(v, f, "torus");
+}
+
+// Univariate splines of degree k on 2n equal intervals, C^1 at the n-1 original knots and
+// C^r at the n midpoints: the G1 space on an n x n grid is their tensor product.
+long univariate_dimension(int n, int k, int r) { return 2L * n * (k + 1) - 2L * (n - 1) - long(n) * (r + 1); }
+
+}  // namespace
+
+TEST_CASE("Quad mesh topology: rings, valences, boundary, Euler characteristic", "[g1][mesh]") {
+  const QuadMesh m = three_quads();
+  REQUIRE(m.num_faces() == 3);
+  REQUIRE(m.num_edges() == 9);
+  REQUIRE(!m.boundary_vertex(0));
+  REQUIRE(m.valence(0) == 3);
+  for (int i = 1; i <= 3; ++i) {
+    REQUIRE(m.boundary_vertex(i));
+    REQUIRE(m.ring(i).faces.size() == 2);
+    REQUIRE(m.valence(i) == 3);
+  }
+  REQUIRE(m.euler_characteristic() == 1);
+  // Around gamma, consecutive faces share the edge that is the first one's previous edge.
+  const auto& ring = m.ring(0);
+  for (size_t i = 0; i < ring.faces.size(); ++i) {
+    const int e = ring.edges[(i + 1) % ring.faces.size()];
+    const auto& E = m.edge(e);
+    REQUIRE(((E.face[0] == ring.faces[i]) || (E.face[1] == ring.faces[i])));
+  }
+  const QuadMesh c = cube();
+  REQUIRE(c.closed());
+  REQUIRE(c.euler_characteristic() == 2);
+  for (int v = 0; v < 8; ++v) REQUIRE(c.valence(v) == 3);
+  const QuadMesh t = torus(5, 4);
+  REQUIRE(t.closed());
+  REQUIRE(t.euler_characteristic() == 0);
+  for (int v = 0; v < t.num_vertices(); ++v) REQUIRE(t.valence(v) == 4);
+  const QuadMesh g = grid(3);
+  REQUIRE(g.valence(0) == 2);
+  REQUIRE(g.valence(5) == 4);
+  REQUIRE(g.valence(1) == 3);
+}
+
+TEST_CASE("Quad meshes that are not valid oriented quad meshes are refused", "[g1][mesh][bad-input]") {
+  auto refused = [](std::vector<Eigen::Vector3d> v, std::vector<std::array<int, 4>> f, const std::string& why) {
+    try {
+      QuadMesh::from_faces(v, f, "m");
+      FAIL("accepted, expected: " << why);
+    } catch (const std::invalid_argument& e) {
+      INFO(e.what());
+      REQUIRE(std::string(e.what()).find(why) != std::string::npos);
+    }
+  };
+  const std::vector<Eigen::Vector3d> sq{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}, {2, 1, 0}};
+  refused(sq, {{0, 1, 2, 3}}, "vertex 5 is in no face");
+  refused({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 0}}, {{0, 1, 2, 3}}, "same point");
+  refused(sq, {{0, 3, 2, 1}, {1, 4, 5, 2}}, "clockwise");
+  refused(sq, {{0, 1, 2, 1}, {1, 4, 5, 2}}, "twice");
+  refused({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}}, {{0, 1, 2, 3}}, "zero area");
+  // Two faces traversing their common edge the same way (a surface, so orientation is
+  // not decided by the plane).
+  const std::vector<Eigen::Vector3d> bent{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 1}, {0, 0, 1}};
+  refused(bent, {{0, 1, 2, 3}, {0, 1, 4, 5}}, "inconsistent");
+  // An edge in three faces.
+  const std::vector<Eigen::Vector3d> fan{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, -1, 0}, {0, -1, 0},
+                                         {1, 0, 1}, {0, 0, 1}};
+  refused(fan, {{0, 1, 2, 3}, {1, 0, 5, 4}, {0, 1, 6, 7}}, "");
+  // Two fans meeting in one vertex (a bow tie).
+  const std::vector<Eigen::Vector3d> bow{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 0, 0}, {-1, -1, 0}, {0, -1, 0}};
+  refused(bow, {{0, 1, 2, 3}, {0, 4, 5, 6}}, "non-manifold");
+}
+
+TEST_CASE("Reading OBJ files: quads, and one-line errors with the line number", "[g1][mesh][bad-input]") {
+  const auto dir = std::filesystem::temp_directory_path() / "knotwork-test-obj";
+  std::filesystem::create_directories(dir);
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return (dir / name).string();
+  };
+  const QuadMesh m = QuadMesh::read_obj(write("sq.obj", "# a square\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1 4//1\n"));
+  REQUIRE(m.num_faces() == 1);
+  REQUIRE(m.planar());
+  auto refused = [&](const std::string& text, const std::string& why) {
+    const std::string f = write("bad.obj", text);
+    try {
+      QuadMesh::read_obj(f);
+      FAIL("accepted");
+    } catch (const std::invalid_argument& e) {
+      INFO(e.what());
+      REQUIRE(std::string(e.what()).find(why) != std::string::npos);
+    }
+  };
+  refused("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n", "bad.obj:4: face with 3 vertices");
+  refused("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 5\n", "bad.obj:5: face index 5");
+  refused("v 0 0 x\n", "bad.obj:1: vertex coordinate 'x'");
+  refused("v 0 0 0\nl 1 2\n", "bad.obj:2: 'l' is not supported");
+  refused("v 0 0 0\n", "no faces");
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("Symmetric gluing satisfies Condition 3.1; perturbed data fail at the named vertex", "[g1][gluing]") {
+  for (const QuadMesh& m : {three_quads(), grid(3), cube(), torus(5, 4)}) {
+    const GluingData g = symmetric_gluing(m);
+    REQUIRE(gluing_violations(m, g).empty());
+  }
+  const QuadMesh m = three_quads();
+  GluingData g = symmetric_gluing(m);
+  const int e = m.ring(0).edges[0];
+  g.edges[e]->a = PiecewisePolynomial::constant(mpq_class(1, 3));
+  const auto v = gluing_violations(m, g);
+  REQUIRE(v.size() == 1);
+  REQUIRE(v[0].find("vertex 1 (valence 3)") != std::string::npos);
+  g.edges[e].reset();
+  REQUIRE(gluing_violations(m, g).front().find("without gluing data") != std::string::npos);
+}
+
+TEST_CASE("G1 space on a regular grid is the tensor-product C1 spline space", "[g1][dimension]") {
+  for (int n : {1, 2, 3})
+    for (int k = 2; k <= 5; ++k)
+      for (int r = 0; r < k; ++r) {
+        const QuadMesh m = grid(n);
+        const G1SpaceDimension d = g1_space_dimension(m, symmetric_gluing(m), k, r);
+        const long expected = univariate_dimension(n, k, r) * univariate_dimension(n, k, r);
+        INFO("n = " << n << ", k = " << k << ", r = " << r);
+        REQUIRE(d.exact);
+        REQUIRE(d.dimension == expected);
+      }
+}
+
+TEST_CASE("The paper's Section 8 example: dim S_4^{1,1} = 141 around a valence-3 vertex", "[g1][dimension]") {
+  const QuadMesh m = three_quads();
+  const GluingData g = symmetric_gluing(m);
+  // The symmetric data here are the paper's: a = -1 + 4u^2 on [0, 1/2], 0 on [1/2, 1],
+  // b = -1, c = 1 with u = 0 at gamma.
+  for (int e : m.ring(0).edges) {
+    const auto& a = g.edges[e]->a;
+    const double sign_u = m.edge(e).v[0] == 0 ? 1 : -1;  // orientation of the stored edge
+    const auto at = [&](double u) { return sign_u > 0 ? a(u) : a(1 - u); };
+    REQUIRE(at(0) == Approx(-1));
+    REQUIRE(at(0.25) == Approx(-1 + 4 * 0.0625));
+    REQUIRE(at(0.75) == Approx(0).margin(1e-15));
+  }
+  const G1SpaceDimension d = g1_space_dimension(m, g, 4, 1);
+  REQUIRE(d.exact);
+  REQUIRE(d.unknowns == 3 * 64);
+  REQUIRE(d.dimension == 141);
+}
+
+TEST_CASE("Linear gluing data with bicubic patches: the paper's dimension 72 is r = 1", "[g1][dimension]") {
+  // a = u - 1, b = -1, c = 1 with u = 0 at gamma (Section 8, second example).
+  const QuadMesh m = three_quads();
+  GluingData g = symmetric_gluing(m);
+  for (int e : m.ring(0).edges) {
+    const bool from_gamma = m.edge(e).v[0] == 0;
+    // In the stored edge's own parameter: u - 1 from gamma, or -u when gamma is at u = 1
+    // (then a' = a/b with b = -1 at the far end, seen from the other side).
+    const std::vector<mpq_class> a = from_gamma ? std::vector<mpq_class>{-1, 1} : std::vector<mpq_class>{0, 1};
+    g.edges[e]->a = PiecewisePolynomial::from_exact({a, a});
+  }
+  REQUIRE(gluing_violations(m, g).empty());
+  std::vector<long> dims;
+  for (int r = 0; r < 3; ++r) dims.push_back(g1_space_dimension(m, g, 3, r).dimension);
+  WARN("three quads, a = u - 1, k = 3: dim for r = 0, 1, 2: " << dims[0] << ", " << dims[1] << ", " << dims[2]);
+  REQUIRE(dims[1] == 72);
+}
+
+TEST_CASE("Exact and floating-point ranks agree on closed surfaces and extraordinary vertices", "[g1][dimension]") {
+  for (const QuadMesh& m : {cube(), torus(4, 3), three_quads()})
+    for (int k = 3; k <= 4; ++k)
+      for (int r = 0; r <= 1; ++r) {
+        const GluingData g = symmetric_gluing(m);
+        const G1SpaceDimension exact = g1_space_dimension(m, g, k, r);
+        const G1SpaceDimension floating = g1_space_dimension(m, g, k, r, true);
+        INFO(m.num_faces() << " faces, k = " << k << ", r = " << r);
+        REQUIRE(exact.exact);
+        REQUIRE(!floating.exact);
+        REQUIRE(exact.dimension == floating.dimension);
+      }
+}
