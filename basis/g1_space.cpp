@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -209,6 +210,87 @@ GluingData symmetric_gluing(const QuadMesh& mesh) {
     eg.b = PiecewisePolynomial::constant(-1);
     eg.c = PiecewisePolynomial::constant(1);
     g.edges[e] = std::move(eg);
+  }
+  return g;
+}
+
+namespace {
+
+// p(1 - u) for a polynomial p given by coefficients in powers of u.
+template <class Scalar>
+std::vector<Scalar> reflect(const std::vector<Scalar>& p) {
+  std::vector<Scalar> out(p.size(), Scalar(0));
+  for (size_t i = 0; i < p.size(); ++i) {  // (1 - u)^i = sum_j C(i, j) (-u)^j
+    Scalar binom(1);
+    for (size_t j = 0; j <= i; ++j) {
+      out[j] += (j % 2 ? Scalar(-1) : Scalar(1)) * binom * p[i];
+      binom = binom * Scalar(static_cast<long>(i - j)) / Scalar(static_cast<long>(j + 1));
+    }
+  }
+  return out;
+}
+
+PiecewisePolynomial reflected(const PiecewisePolynomial& p) {
+  if (p.exact) return PiecewisePolynomial::from_exact({reflect((*p.exact)[1]), reflect((*p.exact)[0])});
+  return PiecewisePolynomial::from_double({reflect(p.pieces[1]), reflect(p.pieces[0])});
+}
+
+}  // namespace
+
+EdgeGluing reversed(const EdgeGluing& g) { return {reflected(g.a), reflected(g.c), reflected(g.b)}; }
+
+GluingData geometric_gluing(const QuadMesh& mesh) {
+  // Per (vertex, edge): the values a(0), b(0) of eq. (8) seen from that vertex.
+  std::vector<std::map<int, std::pair<double, double>>> at(mesh.num_vertices());
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const auto& ring = mesh.ring(v);
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    for (int f : ring.faces) {
+      const auto& q = mesh.face(f);
+      normal += (mesh.vertex(q[2]) - mesh.vertex(q[0])).cross(mesh.vertex(q[3]) - mesh.vertex(q[1]));
+    }
+    normal.normalize();
+    std::vector<Eigen::Vector2d> u;
+    Eigen::Vector3d e1, e2;
+    for (size_t i = 0; i < ring.edges.size(); ++i) {
+      const auto& E = mesh.edge(ring.edges[i]);
+      const Eigen::Vector3d d = mesh.vertex(E.v[0] == v ? E.v[1] : E.v[0]) - mesh.vertex(v);
+      const Eigen::Vector3d t = d - d.dot(normal) * normal;
+      if (i == 0) {
+        e1 = t.normalized();
+        e2 = normal.cross(e1);
+      }
+      u.emplace_back(t.dot(e1), t.dot(e2));
+    }
+    auto det = [](const Eigen::Vector2d& x, const Eigen::Vector2d& y) { return x.x() * y.y() - x.y() * y.x(); };
+    const int n = static_cast<int>(u.size());
+    for (int i = 0; i < n; ++i) {
+      if (mesh.edge(ring.edges[i]).boundary()) continue;
+      const int prev = ring.boundary ? i - 1 : (i + n - 1) % n, next = ring.boundary ? i + 1 : (i + 1) % n;
+      const double d = det(u[next], u[i]);
+      if (std::abs(d) < 1e-12 * u[next].norm() * u[i].norm())
+        throw std::invalid_argument("vertex " + std::to_string(v + 1) +
+                                    ": two consecutive edges are parallel in the tangent plane; the geometric gluing "
+                                    "is undefined there (use symmetric)");
+      at[v][ring.edges[i]] = {det(u[next], u[prev]) / d, -det(u[i], u[prev]) / d};
+    }
+  }
+  GluingData g;
+  g.edges.resize(mesh.num_edges());
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (E.boundary()) continue;
+    const auto [A0, B0] = at[E.v[0]].at(e);
+    const auto [A1p, B1p] = at[E.v[1]].at(e);
+    const double A1 = A1p / B1p, B1 = 1 / B1p;  // the far end's values in this edge's frames
+    // x0 d0 + x1 d1 with the C^1 Hermite functions d0 = 1 - 2u^2 | 2(1-u)^2 and
+    // d1 = 2u^2 | 1 - 2(1-u)^2: d0 + d1 = 1, so equal end values stay constant along the
+    // edge (a regular grid gets exactly the C1 data a = 0, b = -1).
+    auto blend = [](double x0, double x1) {
+      return PiecewisePolynomial::from_double({std::vector<double>{x0, 0, 2 * (x1 - x0)},
+                                               std::vector<double>{2 * x0 - x1, 4 * (x1 - x0), 2 * (x0 - x1)}});
+    };
+    g.edges[e] = EdgeGluing{blend(A0, A1), blend(B0, B1), PiecewisePolynomial::constant(1)};
   }
   return g;
 }

@@ -41,6 +41,17 @@ struct GluingData {
 // edges at each end; at a boundary vertex shared by F faces the angle pi/F replaces 2pi/n.
 GluingData symmetric_gluing(const QuadMesh& mesh);
 
+// The general construction (eqs. 8 and 10, c = 1) from a fan of vectors per vertex: the
+// mesh's own edge directions, projected to the tangent plane at the vertex. At each end,
+// a and b take the values of eq. (8) and are blended along the edge by the Hermite
+// functions d0, d1 of degree 2, C^1 at 1/2 (d0 + d1 = 1), so Condition 3.1 holds by
+// construction and constant data stay constant.
+// Throws std::invalid_argument naming the vertex where two consecutive edges are parallel.
+GluingData geometric_gluing(const QuadMesh& mesh);
+
+// The data of an edge as seen from its other end: (a, b, c)(u) -> (a, c, b)(1 - u).
+EdgeGluing reversed(const EdgeGluing& g);
+
 // Condition 3.1 at every interior vertex: the product of [[0, 1], [b_i(0), a_i(0)]] over the
 // edges around it (a = a/c, b = b/c at the vertex's end) is the identity. Returns one
 // message per failing vertex ("vertex 5 (valence 3): product [[...]] is not the identity").

@@ -240,3 +240,68 @@ TEST_CASE("Exact and floating-point ranks agree on closed surfaces and extraordi
         REQUIRE(exact.dimension == floating.dimension);
       }
 }
+
+TEST_CASE("Geometric gluing from the mesh's edge directions satisfies Condition 3.1", "[g1][gluing]") {
+  // A planar mesh with a valence-5 vertex: five quads around the origin.
+  std::vector<Eigen::Vector3d> v{{0, 0, 0}};
+  for (int i = 0; i < 5; ++i) v.emplace_back(std::cos(2 * M_PI * i / 5 + 0.1 * i), std::sin(2 * M_PI * i / 5 + 0.1 * i), 0);
+  for (int i = 0; i < 5; ++i) v.push_back(0.9 * (v[1 + i] + v[1 + (i + 1) % 5]));
+  std::vector<std::array<int, 4>> f;
+  for (int i = 0; i < 5; ++i) f.push_back({0, 1 + i, 6 + i, 1 + (i + 1) % 5});
+  const QuadMesh five = QuadMesh::from_faces(v, f, "five");
+  for (const QuadMesh& m : {five, three_quads(), cube(), torus(5, 4), grid(2)}) {
+    const GluingData g = geometric_gluing(m);
+    const auto bad = gluing_violations(m, g);
+    INFO((bad.empty() ? "" : bad.front()));
+    REQUIRE(bad.empty());
+  }
+  // On a regular grid the geometric data are the C1 data: a = 0, b = -1 (c = 1).
+  const QuadMesh gr = grid(2);
+  const GluingData g = geometric_gluing(gr);
+  for (int e = 0; e < gr.num_edges(); ++e)
+    if (g.edges[e]) {
+      REQUIRE(g.edges[e]->a(0.3) == Approx(0).margin(1e-14));
+      REQUIRE(g.edges[e]->b(0.7) == Approx(-1));
+    }
+  // The valence-5 space with geometric data (floating point): reported, no reference value.
+  const long geo = g1_space_dimension(five, geometric_gluing(five), 4, 1).dimension;
+  WARN("five quads around a valence-5 vertex, k = 4, r = 1, geometric gluing: dim " << geo);
+  REQUIRE(geo > 0);
+}
+
+TEST_CASE("Fans of F quads around a non-crossing vertex: dim = (3 + F) + F (4 + 5 + 36)", "[g1][dimension]") {
+  // The Section 8 decomposition for k = 4, r = 1 and symmetric data around a vertex of
+  // valence F != 4: the vertex part has dimension 3 + F (Prop. 5.1, no crossing edge), and
+  // each face adds 4 functions at its boundary vertex delta_i, 5 on the edge tau_i and 36
+  // others. F = 3 is the paper's 141; F = 5 needs the floating-point rank (2cos(2pi/5)).
+  for (int F : {3, 5, 6, 7}) {
+    std::vector<Eigen::Vector3d> v{{0, 0, 0}};
+    for (int i = 0; i < F; ++i) v.emplace_back(std::cos(2 * M_PI * i / F), std::sin(2 * M_PI * i / F), 0);
+    for (int i = 0; i < F; ++i) v.push_back(0.9 * (v[1 + i] + v[1 + (i + 1) % F]));
+    std::vector<std::array<int, 4>> f;
+    for (int i = 0; i < F; ++i) f.push_back({0, 1 + i, 1 + F + i, 1 + (i + 1) % F});
+    const QuadMesh m = QuadMesh::from_faces(v, f, "fan");
+    const G1SpaceDimension d = g1_space_dimension(m, symmetric_gluing(m), 4, 1);
+    INFO("F = " << F << (d.exact ? " (exact)" : " (floating point)"));
+    REQUIRE(d.dimension == (3 + F) + F * (4 + 5 + 36));
+  }
+}
+
+TEST_CASE("Reversing an edge's orientation keeps the G1 space", "[g1][gluing]") {
+  const QuadMesh m = cube();
+  const GluingData g = symmetric_gluing(m);
+  for (int e = 0; e < m.num_edges(); ++e) {
+    const EdgeGluing back = reversed(reversed(*g.edges[e]));
+    for (double u : {0.1, 0.4, 0.6, 0.9}) {
+      REQUIRE(back.a(u) == Approx(g.edges[e]->a(u)));
+      REQUIRE(back.b(u) == Approx(g.edges[e]->b(u)));
+    }
+    // Seen from the other end, bold a' = a/b and b' = 1/b at the same point of the edge.
+    const EdgeGluing r = reversed(*g.edges[e]);
+    for (double u : {0.2, 0.7}) {
+      const auto& o = *g.edges[e];
+      REQUIRE(r.a(1 - u) / r.c(1 - u) == Approx(o.a(u) / o.b(u)));
+      REQUIRE(r.b(1 - u) / r.c(1 - u) == Approx(o.c(u) / o.b(u)));
+    }
+  }
+}
