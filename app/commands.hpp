@@ -50,10 +50,16 @@ struct BasisOptions {
   std::string case_file;
   std::string export_file;
   bool json = false;
+  // --g1 MESH.obj: the G1 macro-patch space S_k^{1,r} on a quad mesh instead.
+  std::string g1_mesh;
+  int degree = 4;
+  int split_smoothness = 1;
+  std::string gluing = "symmetric";  // symmetric | geometric | FILE.json
 };
 
 int run_command(const RunOptions& o);
 int basis_command(const BasisOptions& o);
+int g1_basis_command(const BasisOptions& o);
 int dimension_command(const DimensionOptions& o);
 int converge_command(const ConvergeOptions& o);
 int adapt_command(const AdaptOptions& o);

@@ -82,7 +82,12 @@ int main(int argc, char** argv) {
       "basis", "Check a case's spline basis: semi-regularity, partition of unity, rank, dimension");
   basis_cmd->add_option("file", basis.case_file,
                         "Case file, T-mesh file (cells = [...], degree) or collection file (functions = [...], degree); "
-                        "TOML or JSON")->required();
+                        "TOML or JSON");
+  basis_cmd->add_option("--g1", basis.g1_mesh,
+                        "Quad mesh (Wavefront OBJ): the G1 spline space S_k^{1,r} on it (4-split macro-patches)");
+  basis_cmd->add_option("--degree", basis.degree, "--g1: degree k of the face splines (>= 2)")->capture_default_str();
+  basis_cmd->add_option("--split-smoothness", basis.split_smoothness, "--g1: smoothness r at the 4-split, 0 <= r < k")->capture_default_str();
+  basis_cmd->add_option("--gluing", basis.gluing, "--g1: symmetric | geometric | FILE.json (per-edge a, b, c)")->capture_default_str();
   basis_cmd->add_option("--export", basis.export_file, "Write every function's local knot vectors to this JSON file");
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
 
@@ -112,7 +117,12 @@ int main(int argc, char** argv) {
     if (*adapt_cmd) return knotwork::adapt_command(adapt);
     if (*bench_cmd) return knotwork::bench_command(bench);
     if (*dim_cmd) return knotwork::dimension_command(dim);
-    if (*basis_cmd) return knotwork::basis_command(basis);
+    if (*basis_cmd) {
+      if (basis.g1_mesh.empty() == basis.case_file.empty())
+        throw knotwork::InputError("basis: give one input, a case/T-mesh/collection file or --g1 MESH.obj");
+      if (!basis.g1_mesh.empty()) return knotwork::g1_basis_command(basis);
+      return knotwork::basis_command(basis);
+    }
   } catch (const knotwork::InputError& e) {
     std::fprintf(stderr, "knotwork: error: %s\n", e.what());
     return 2;

@@ -186,3 +186,45 @@ TEST_CASE("nothing typed into a JSON collection or T-mesh file crashes knotwork"
   REQUIRE(rejected > 0);
   REQUIRE(accepted > 0);
 }
+
+TEST_CASE("basis --g1: dimensions of the shipped meshes, and bad input", "[cli][g1]") {
+  Sandbox box;
+  const std::string three = kSource + "/cases/meshes/three_quads.obj";
+  const Result r = box.run("basis --json --g1 " + three + " --degree 4 --split-smoothness 1");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  REQUIRE(has(r.out, "\"dimension\": 141"));
+  REQUIRE(has(r.out, "\"compatible\": true"));
+  const Result lin = box.run("basis --json --g1 " + three + " --degree 3 --split-smoothness 1 --gluing " + kSource +
+                             "/cases/meshes/three_quads_linear.json");
+  INFO(lin.err);
+  REQUIRE(has(lin.out, "\"dimension\": 72"));
+
+  auto rejected = [&](const std::string& args, const std::vector<std::string>& mentions) {
+    const Result b = box.run("basis " + args);
+    INFO(args << "\n" << b.err);
+    REQUIRE(b.code != 0);
+    REQUIRE(b.code < 128);
+    REQUIRE(std::count(b.err.begin(), b.err.end(), '\n') == 1);
+    for (const auto& m : mentions) REQUIRE(has(b.err, m));
+  };
+  rejected("--g1 " + three + " --degree 1", {"--degree"});
+  rejected("--g1 " + three + " --degree 3 --split-smoothness 3", {"--split-smoothness"});
+  rejected("--g1 " + three + " --split-smoothness -1", {"--split-smoothness"});
+  box.file("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  rejected("--g1 tri.obj", {"tri.obj:4", "only quadrilaterals"});
+  box.file("g.json", R"({"gluing": [{"edge": [1, 7], "a": 0, "b": -1, "c": 1}]})");
+  rejected("--g1 " + three + " --gluing g.json", {"g.json", "gluing[0].edge", "[1, 7] is not an edge"});
+  box.file("g.json", R"({"gluing": [{"edge": [1, 2], "a": "-1/3", "b": -1, "c": 1}]})");
+  rejected("--g1 " + three + " --gluing g.json", {"g.json", "no data for the interior edge"});
+  box.file("g.json", R"({"gluing": [{"edge": [1, 2], "a": 0, "b": -1, "c": [[0], [1]]},
+                                    {"edge": [1, 3], "a": 0, "b": -1, "c": 1}, {"edge": [1, 4], "a": 0, "b": -1, "c": 1}]})");
+  rejected("--g1 " + three + " --gluing g.json", {"g.json", "c is identically 0 on [0, 1/2]"});
+  // a = 0 on all three edges at a valence-3 vertex: the jets do not close up.
+  box.file("g.json", R"({"gluing": [{"edge": [1, 2], "a": 0, "b": -1, "c": 1},
+                                    {"edge": [1, 3], "a": 0, "b": -1, "c": 1}, {"edge": [1, 4], "a": 0, "b": -1, "c": 1}]})");
+  rejected("--g1 " + three + " --gluing g.json", {"g.json", "vertex 1 (valence 3): Condition 3.1 fails"});
+  box.file("g.json", R"({"gluing": [{"edge": [2, 5], "a": 0, "b": -1, "c": 1}]})");
+  rejected("--g1 " + three + " --gluing g.json", {"boundary edge"});
+  rejected("--g1 " + three + " " + three, {"one input"});
+}

@@ -305,3 +305,18 @@ TEST_CASE("Reversing an edge's orientation keeps the G1 space", "[g1][gluing]") 
     }
   }
 }
+
+TEST_CASE("G1 space on an all-valence-4 torus is the periodic tensor-product C1 space", "[g1][dimension]") {
+  // Symmetric data on a torus are the C1 data (a = 0, b = -1, c = 1) on every edge, so the
+  // space is the tensor product of periodic univariate splines on 2n intervals: degree k,
+  // C1 at the n mesh knots and C^r at the n midpoints, 2n(k+1) - 2n - n(r+1) functions.
+  auto periodic = [](int n, int k, int r) { return 2L * n * (k + 1) - 2L * n - long(n) * (r + 1); };
+  for (const auto& [n, m] : {std::pair{4, 3}, std::pair{3, 5}})
+    for (int k = 2; k <= 4; ++k)
+      for (int r = 0; r < k; ++r) {
+        const QuadMesh t = torus(n, m);
+        const G1SpaceDimension d = g1_space_dimension(t, symmetric_gluing(t), k, r);
+        INFO(n << " x " << m << " torus, k = " << k << ", r = " << r);
+        REQUIRE(d.dimension == periodic(n, k, r) * periodic(m, k, r));
+      }
+}
