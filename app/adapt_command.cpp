@@ -129,9 +129,7 @@ int adapt_command(const AdaptOptions& o) {
   const auto outputs = stage.commit();
 
   if (o.json) {
-    Json outs = Json::array();
-    for (const auto& p : outputs) outs.push(p);
-    root.set("outputs", outs);
+    root.set("outputs", Json::strings(outputs));
     std::printf("%s\n", root.dump().c_str());
     return 0;
   }

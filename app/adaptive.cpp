@@ -29,9 +29,11 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
   };
   say("building the starting space: " + describe_space(c));
   Discretization first = discretize(c);
-  for (const auto& v : first.segments->violations())
+  // Collections built by insertion are semi-regular by construction; explicit ones were
+  // checked by discretize.
+  if (!first.violations.empty())
     throw InputError(c.path + ": [space]: adaptive refinement needs a semi-regular start, and the collection is not: " +
-                     v.reason);
+                     first.violations.front());
   SemiRegularCollection collection = *first.segments;
   std::vector<AdaptiveStep> steps;
   for (int s = 0; s < c.adapt.steps; ++s) {

@@ -112,25 +112,18 @@ int print_report(const BasisReport& r, const BasisOptions& o) {
     }
   }
   if (o.json) {
-    Json v = Json::array(), ext = Json::array();
-    for (const auto& s : r.violations) v.push(s);
-    for (const auto& s : r.extensions) ext.push(s);
     Json j = Json::object();
     j.set("file", r.file).set("space", r.space).set("functions", mesh.num_functions()).set("cells", mesh.num_cells());
     if (r.collection) j.set_bool("semi_regular", r.violations.empty());
     else j.set_null("semi_regular");  // a tensor-product space: the question does not arise
-    j.set("violations", v).set("partition_of_unity_error", pu);
+    j.set("violations", Json::strings(r.violations)).set("partition_of_unity_error", pu);
     if (rank >= 0) j.set("rank", rank); else j.set_null("rank");
     if (formula >= 0) j.set("dimension_formula", formula); else j.set_null("dimension_formula");
     if (brute >= 0) j.set("dimension_bruteforce", brute); else j.set_null("dimension_bruteforce");
-    j.set("extended_segments", static_cast<int>(r.extensions.size())).set("extensions", ext);
+    j.set("extended_segments", static_cast<int>(r.extensions.size())).set("extensions", Json::strings(r.extensions));
     if (r.from_partition)
-    {
-      Json h = Json::array();
-      for (const auto& s : r.input_hypotheses_failed) h.push(s);
       j.set("input_cells", r.input_cells).set_bool("partition_reached", r.partition_reached)
-          .set("insertion_order", r.order).set("input_hypotheses_failed", h);
-    }
+          .set("insertion_order", r.order).set("input_hypotheses_failed", Json::strings(r.input_hypotheses_failed));
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
@@ -171,8 +164,11 @@ int basis_of_case(const BasisOptions& o) {
   r.mesh = &d.mesh();
   r.collection = d.segments.get();
   r.simple_knots = d.simple_knots;
-  if (d.segments)
+  if (!c.collection_file.empty()) {
+    r.violations = d.violations;  // discretize checked the explicit collection already
+  } else if (d.segments) {
     for (const auto& v : d.segments->violations()) r.violations.push_back(v.reason);
+  }
   r.segments = static_cast<int>(d.insertions.size());
   for (const auto& i : d.insertions)
     if (i.extended) r.extensions.push_back(describe_segment(i.requested) + " extended to " + describe_segment(i.inserted));
@@ -229,10 +225,7 @@ int basis_of_collection(const BasisOptions& o) {
             std::to_string(cd.dx) + "x" + std::to_string(cd.dy) + " (numbered in lexicographic order of their knot vectors)";
   r.collection = collection.get();
   for (const auto& v : collection->violations()) r.violations.push_back(v.reason);
-  for (const auto& b : cd.splines)
-    for (const auto* v : {&b.x, &b.y})
-      for (size_t i = 1; i < v->size(); ++i)
-        if ((*v)[i] == (*v)[i - 1] && (*v)[i] != v->front() && (*v)[i] != v->back()) r.simple_knots = false;
+  r.simple_knots = interior_knots_simple(cd.splines);
   BezierMesh mesh;
   try {
     mesh = collection->bezier_mesh();

@@ -125,9 +125,7 @@ int converge_command(const ConvergeOptions& o) {
   const auto outputs = stage.commit();
 
   if (o.json) {
-    Json outs = Json::array();
-    for (const auto& p : outputs) outs.push(p);
-    root.set("outputs", outs);
+    root.set("outputs", Json::strings(outputs));
     std::printf("%s\n", root.dump().c_str());
     return 0;
   }

@@ -36,9 +36,7 @@ int dimension_command(const DimensionOptions& o) {
         .set("knot_lines", topo.count(K::kLine)).set("knot_rays", topo.count(K::kRay))
         .set("knot_segments", topo.count(K::kSegment));
     if (weller_applies) {
-      Json failed = Json::array();
-      for (const auto& h : hypotheses) failed.push(h);
-      j.set("weller_prop_4_2", weller).set("weller_hypotheses_failed", failed);
+      j.set("weller_prop_4_2", weller).set("weller_hypotheses_failed", Json::strings(hypotheses));
     } else {
       j.set_null("weller_prop_4_2");
     }

@@ -66,10 +66,7 @@ void discretize_explicit_collection(const CaseDescription& c, Discretization& d)
                   box[0], box[2], box[1], box[3], u0, u1, v0, v1);
     throw InputError(where + ": " + msg);
   }
-  for (const auto& b : c.collection)
-    for (const auto* v : {&b.x, &b.y})
-      for (size_t i = 1; i < v->size(); ++i) d.simple_knots = d.simple_knots && !((*v)[i] == (*v)[i - 1] &&
-                                                                    (*v)[i] != v->front() && (*v)[i] != v->back());
+  d.simple_knots = interior_knots_simple(c.collection);
   for (const auto& v : d.segments->violations()) d.violations.push_back(v.reason);
   try {
     d.segment_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());

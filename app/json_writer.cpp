@@ -27,6 +27,12 @@ std::string json_string(const std::string& s) {
 Json Json::object() { return Json(); }
 Json Json::array() { Json j; j.is_object_ = false; return j; }
 
+Json Json::strings(const std::vector<std::string>& items) {
+  Json j = array();
+  for (const auto& s : items) j.push(s);
+  return j;
+}
+
 Json& Json::set(const std::string& key, const Json& value) {
   child_of_item_.resize(items_.size(), -1);
   items_.emplace_back(key, "");

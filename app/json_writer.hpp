@@ -10,6 +10,7 @@ class Json {
  public:
   static Json object();
   static Json array();
+  static Json strings(const std::vector<std::string>& items);  // an array of strings
   Json& set(const std::string& key, const Json& value);  // object member
   Json& set(const std::string& key, double value);
   Json& set(const std::string& key, long value);

@@ -58,8 +58,6 @@ int run_command(const RunOptions& o) {
     timings.set("setup", tm.setup).set("assembly", tm.assembly).set("analysis", tm.analysis)
         .set("factorization", tm.factorization).set("solve", tm.solve).set("errors", tm.errors)
         .set("output", t_output).set("total_without_output", total);
-    Json outs = Json::array();
-    for (const auto& p : outputs) outs.push(p);
     Json j = Json::object();
     j.set("case", c.path).set("space", describe_space(c))
         .set("degree", Json::array().push(double(c.space.degree[0])).push(double(c.space.degree[1])))
@@ -67,7 +65,7 @@ int run_command(const RunOptions& o) {
         .set("matrix_nonzeros", s.matrix_nonzeros).set("factor_nonzeros", s.cholesky.factor_nonzeros);
     if (s.errors) j.set("l2_error", s.errors->l2).set("h1_seminorm_error", s.errors->h1_semi).set("h1_error", s.errors->h1);
     else j.set_null("l2_error").set_null("h1_seminorm_error").set_null("h1_error");
-    j.set("timings", timings).set("outputs", outs);
+    j.set("timings", timings).set("outputs", Json::strings(outputs));
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }

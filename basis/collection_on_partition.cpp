@@ -4,6 +4,7 @@
 #include <array>
 #include <map>
 #include <stdexcept>
+#include <string>
 
 #include "basis/partition_topology.hpp"
 
@@ -107,15 +108,21 @@ CollectionOnPartition collection_on_partition(const RectangularPartition& partit
   }
 
   std::optional<CollectionOnPartition> best;
+  std::string failure;
   int best_extended = 0;
   const std::pair<const char*, const std::vector<int>*> orders[] = {
       {"supporting knots first", &supported}, {"longest first", &longest}, {"shortest first", &shortest}};
   for (const auto& [name, order] : orders) {
     CollectionOnPartition attempt{base, false, {}, name};
     int extended = 0;
-    for (int k : *order) {
-      attempt.insertions.push_back(attempt.collection.insert(knots[k].segment));
-      extended += attempt.insertions.back().extended;
+    try {
+      for (int k : *order) {
+        attempt.insertions.push_back(attempt.collection.insert(knots[k].segment));
+        extended += attempt.insertions.back().extended;
+      }
+    } catch (const std::runtime_error& e) {  // this order dead-ends; another may not
+      failure = e.what();
+      continue;
     }
     attempt.reached = same_cells(attempt.collection.partition(), partition);
     if (attempt.reached) return attempt;
@@ -124,6 +131,7 @@ CollectionOnPartition collection_on_partition(const RectangularPartition& partit
       best = std::move(attempt);
     }
   }
+  if (!best) throw std::runtime_error("no insertion order gives a semi-regular collection: " + failure);
   return std::move(*best);
 }
 

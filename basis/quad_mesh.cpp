@@ -23,10 +23,9 @@ std::string fc(int f) { return "face " + std::to_string(f + 1); }
 }  // namespace
 
 int QuadMesh::find_edge(int a, int b) const {
-  for (size_t e = 0; e < edges_.size(); ++e) {
-    const auto& E = edges_[e];
-    if ((E.v[0] == a && E.v[1] == b) || (E.v[0] == b && E.v[1] == a)) return static_cast<int>(e);
-  }
+  if (a == b) return -1;
+  for (int e : rings_[a].edges)  // the edges at a: a valence's worth, not the whole mesh
+    if (edges_[e].v[0] == b || edges_[e].v[1] == b) return e;
   return -1;
 }
 
@@ -156,10 +155,8 @@ QuadMesh QuadMesh::from_faces(std::vector<Eigen::Vector3d> vertices, std::vector
       }
     }
   M.face_edges_.assign(faces.size(), {-1, -1, -1, -1});
-  std::map<std::pair<int, int>, int> undirected_count;
-  for (const auto& [key, id] : half) ++undirected_count[std::minmax(key.first, key.second)];
-  for (const auto& [key, count] : undirected_count)
-    if (count > 2) fail(source, "edge " + std::to_string(key.first + 1) + "-" + std::to_string(key.second + 1) + " is in more than two faces (non-manifold)");
+  // An edge in three or more faces has two of them traversing it the same way: the
+  // half-edge check above has refused it already.
   for (const auto& [key, id] : half) {
     const int f = id / 4, j = id % 4;
     if (M.face_edges_[f][j] >= 0) continue;

@@ -240,6 +240,14 @@ SemiRegularCollection SemiRegularCollection::tensor_product(int dx, int dy, cons
   return c;
 }
 
+bool interior_knots_simple(const std::vector<LocalBSpline>& splines) {
+  for (const auto& b : splines)
+    for (const auto* v : {&b.x, &b.y})
+      for (size_t i = 1; i < v->size(); ++i)
+        if ((*v)[i] == (*v)[i - 1] && (*v)[i] != v->front() && (*v)[i] != v->back()) return false;
+  return true;
+}
+
 SemiRegularCollection SemiRegularCollection::from_splines(int dx, int dy, std::vector<LocalBSpline> splines) {
   if (splines.empty()) throw std::invalid_argument("the collection is empty");
   SemiRegularCollection c;

@@ -28,6 +28,10 @@ struct KnotInsertion {
   int multiplicity = 1;
 };
 
+// True when no local knot vector repeats a value strictly inside it: every interior knot
+// of the collection has multiplicity 1 (the hypothesis of Weller's Prop. 4.2).
+bool interior_knots_simple(const std::vector<LocalBSpline>& splines);
+
 // What a refinement did: the segment as inserted after any extension.
 struct InsertionReport {
   KnotInsertion requested, inserted;

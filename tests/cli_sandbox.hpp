@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -91,6 +92,27 @@ inline void expect_rejected(const Sandbox& box, const std::string& case_text, co
   REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   for (const auto& m : mentions) REQUIRE(r.err.find(m) != std::string::npos);
   REQUIRE(!fs::exists(out));
+}
+
+// Fuzzing: one random edit of `text` (a character deleted, inserted or replaced).
+inline void random_edit(std::string& text, std::mt19937& rng, const std::string& alphabet) {
+  const size_t at = rng() % text.size();
+  switch (rng() % 3) {
+    case 0: text.erase(at, 1); break;
+    case 1: text.insert(at, 1, alphabet[rng() % alphabet.size()]); break;
+    default: text[at] = alphabet[rng() % alphabet.size()];
+  }
+}
+
+// A fuzzed run must end with exit 0 or one "knotwork: error: " line, never a signal.
+// Returns whether it was accepted.
+inline bool ended_cleanly(const Result& r) {
+  REQUIRE(r.code >= 0);
+  REQUIRE(r.code < 128);
+  if (r.code == 0) return true;
+  REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  REQUIRE(r.err.rfind("knotwork: error: ", 0) == 0);
+  return false;
 }
 
 }  // namespace cli_test

@@ -132,14 +132,11 @@ TEST_CASE("nothing typed into a case file crashes knotwork", "[cli][bad-input][f
     const int edits = 1 + static_cast<int>(rng() % 3);
     for (int e = 0; e < edits; ++e) {
       const size_t at = rng() % text.size();
-      switch (rng() % 4) {
-        case 0: text.erase(at, 1); break;
-        case 1: text.insert(at, 1, alphabet[rng() % alphabet.size()]); break;
-        case 2: text[at] = alphabet[rng() % alphabet.size()]; break;
-        default: {
-          const size_t digit = text.find_first_of("0123456789", at);
-          if (digit != std::string::npos) text.replace(digit, 1, numbers[rng() % numbers.size()]);
-        }
+      if (rng() % 4 == 0) {  // a number made huge, negative, fractional, nan, ...
+        const size_t digit = text.find_first_of("0123456789", at);
+        if (digit != std::string::npos) text.replace(digit, 1, numbers[rng() % numbers.size()]);
+      } else {
+        random_edit(text, rng, alphabet);
       }
     }
     box.file("fuzz.toml", text);
@@ -147,14 +144,8 @@ TEST_CASE("nothing typed into a case file crashes knotwork", "[cli][bad-input][f
     fs::remove_all(out);
     const Result r = box.run("run -q --no-output fuzz.toml --elements 3");
     INFO("case:\n" << text << "\nstderr: " << r.err);
-    REQUIRE(r.code >= 0);
-    REQUIRE(r.code < 128);  // no signal
-    if (r.code == 0) ++accepted;
-    else {
-      ++rejected;
-      REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-      REQUIRE(r.err.rfind("knotwork: error: ", 0) == 0);
-    }
+    if (ended_cleanly(r)) ++accepted;
+    else ++rejected;
   }
   INFO(accepted << " accepted, " << rejected << " rejected");
   REQUIRE(rejected > 0);

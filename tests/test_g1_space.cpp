@@ -127,7 +127,7 @@ TEST_CASE("Quad meshes that are not valid oriented quad meshes are refused", "[g
   // An edge in three faces.
   const std::vector<Eigen::Vector3d> fan{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, -1, 0}, {0, -1, 0},
                                          {1, 0, 1}, {0, 0, 1}};
-  refused(fan, {{0, 1, 2, 3}, {1, 0, 5, 4}, {0, 1, 6, 7}}, "");
+  refused(fan, {{0, 1, 2, 3}, {1, 0, 5, 4}, {0, 1, 6, 7}}, "edge 1-2 is traversed the same way");
   // Two fans meeting in one vertex (a bow tie).
   const std::vector<Eigen::Vector3d> bow{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 0, 0}, {-1, -1, 0}, {0, -1, 0}};
   refused(bow, {{0, 1, 2, 3}, {0, 4, 5, 6}}, "non-manifold");
