@@ -62,7 +62,7 @@ Eigen::VectorXd all_values(const BSplineBasis1D& B, double t) {
 
 }  // namespace
 
-TEST_CASE("Cox-de Boor values match the recursive definition; partition of unity", "[bspline]") {
+TEST_CASE("Cox-de Boor values match the recursive definition, and partition of unity", "[bspline]") {
   std::mt19937 rng(1);
   for (int trial = 0; trial < 200; ++trial) {
     const int p = trial % 7;

@@ -66,7 +66,7 @@ TEST_CASE("basis on a collection that is not semi-regular names the cells", "[cl
   REQUIRE(has(r.out, "\"functions\": 104"));
 }
 
-TEST_CASE("run on an explicit collection; refusal unless --allow-non-semi-regular", "[cli][semi-regular]") {
+TEST_CASE("run on an explicit collection, refused unless --allow-non-semi-regular", "[cli][semi-regular]") {
   Sandbox box;
   const Result good = box.run("run -q --no-output --json " + kSource + "/cases/square_collection.toml");
   INFO(good.err);

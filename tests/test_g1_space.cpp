@@ -161,7 +161,7 @@ TEST_CASE("Reading OBJ files: quads, and one-line errors with the line number", 
   std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("Symmetric gluing satisfies Condition 3.1; perturbed data fail at the named vertex", "[g1][gluing]") {
+TEST_CASE("Symmetric gluing satisfies Condition 3.1, perturbed data fail at the named vertex", "[g1][gluing]") {
   for (const QuadMesh& m : {three_quads(), grid(3), cube(), torus(5, 4)}) {
     const GluingData g = symmetric_gluing(m);
     REQUIRE(gluing_violations(m, g).empty());

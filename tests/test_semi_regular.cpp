@@ -213,7 +213,7 @@ TEST_CASE("Refinement keeps the spaces nested: coarse functions are exact on the
   }
 }
 
-TEST_CASE("Partitions of semi-regular collections satisfy Lemma 3.4 / Prop. 4.1; a short segment does not", "[semi-regular]") {
+TEST_CASE("Partitions of semi-regular collections satisfy Lemma 3.4 / Prop. 4.1, a short segment does not", "[semi-regular]") {
   std::mt19937 rng(31);
   for (int trial = 0; trial < 60; ++trial) {
     const int d = 1 + trial % 4;
