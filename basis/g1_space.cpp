@@ -81,7 +81,7 @@ std::pair<long, long> symmetric_angle(const QuadMesh& mesh, int v) {
 }
 
 // B-spline values and first derivatives of U_k^r (knots 0^(k+1), (1/2)^(k-r), 1^(k+1)) at
-// a point strictly inside (0, 1/2) or (1/2, 1).
+// u in [0, 1] other than 1/2.
 template <class Scalar>
 void univariate(int k, int r, const Scalar& u, std::vector<Scalar>& value, std::vector<Scalar>& derivative) {
   std::vector<Scalar> T;
@@ -90,7 +90,9 @@ void univariate(int k, int r, const Scalar& u, std::vector<Scalar>& value, std::
   for (int i = 0; i <= k; ++i) T.push_back(Scalar(1));
   const int n = static_cast<int>(T.size()) - k - 1;
   std::vector<Scalar> N(T.size() - 1, Scalar(0));
-  for (size_t i = 0; i + 1 < T.size(); ++i) N[i] = (T[i] <= u && u < T[i + 1]) ? Scalar(1) : Scalar(0);
+  // Half-open spans, except that u = 1 (a face side) belongs to the last one.
+  for (size_t i = 0; i + 1 < T.size(); ++i)
+    N[i] = ((T[i] <= u && u < T[i + 1]) || (u == T.back() && T[i] < u && T[i + 1] == u)) ? Scalar(1) : Scalar(0);
   std::vector<Scalar> lower;
   for (int p = 1; p <= k; ++p) {
     lower = N;
@@ -151,11 +153,11 @@ mpq_class gluing_value(const PiecewisePolynomial& p, const mpq_class& u) { retur
 // of the edge to make them polynomial identities there.
 template <class Scalar>
 std::vector<std::vector<std::pair<long, Scalar>>> g1_conditions(const QuadMesh& mesh, const GluingData& gluing, int k,
-                                                                int r) {
+                                                                int r, int only_edge = -1) {
   std::vector<std::vector<std::pair<long, Scalar>>> rows;
   for (int e = 0; e < mesh.num_edges(); ++e) {
     const auto& E = mesh.edge(e);
-    if (E.boundary()) continue;
+    if (E.boundary() || (only_edge >= 0 && e != only_edge)) continue;
     const EdgeGluing& g = *gluing.edges[e];
     const int f1 = E.face[0], c1 = E.corner[0];
     const int f0 = E.face[1], c0 = (E.corner[1] + 1) % 4;  // face[1]'s corner at v[0]
@@ -187,6 +189,16 @@ std::vector<std::vector<std::pair<long, Scalar>>> g1_conditions(const QuadMesh& 
 }
 
 }  // namespace
+
+std::vector<std::vector<std::pair<long, double>>> g1_condition_rows(const QuadMesh& mesh, const GluingData& gluing,
+                                                                    int k, int r, int edge) {
+  return g1_conditions<double>(mesh, gluing, k, r, edge);
+}
+std::vector<std::vector<std::pair<long, mpq_class>>> g1_condition_rows_exact(const QuadMesh& mesh,
+                                                                             const GluingData& gluing, int k, int r,
+                                                                             int edge) {
+  return g1_conditions<mpq_class>(mesh, gluing, k, r, edge);
+}
 
 GluingData symmetric_gluing(const QuadMesh& mesh) {
   GluingData g;

@@ -69,6 +69,16 @@ struct G1SpaceDimension {
 // `floating` forces the floating-point path (an independent cross-check of the exact one).
 G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false);
 
+// The rows of conditions (2) and (3) of one interior edge (all interior edges when edge < 0),
+// as sparse rows over the unknowns g1_unknown(...): point evaluations at k + deg + 1 points
+// of each half of the edge, enough to make them polynomial identities there. The exact
+// version requires gluing.exact().
+std::vector<std::vector<std::pair<long, double>>> g1_condition_rows(const QuadMesh& mesh, const GluingData& gluing,
+                                                                    int k, int r, int edge = -1);
+std::vector<std::vector<std::pair<long, mpq_class>>> g1_condition_rows_exact(const QuadMesh& mesh,
+                                                                             const GluingData& gluing, int k, int r,
+                                                                             int edge = -1);
+
 // Index of coefficient (i, j) (i along s, j along t) of face f among the unknowns.
 inline long g1_unknown(int f, int i, int j, int k, int r) {
   const int n = 2 * k - r + 1;

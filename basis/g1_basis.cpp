@@ -1,0 +1,594 @@
+#include "basis/g1_basis.hpp"
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include "basis/bspline_basis.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// Corner frames of a face, as in g1_space.cpp (MATH.md section 2).
+constexpr int kOrigin[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+constexpr int kDu[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+constexpr int kDv[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};
+
+// Coefficient a steps along the corner's u direction and b steps along its v direction.
+long frame_unknown(int face, int corner, int a, int b, int k, int r) {
+  const int n = 2 * k - r + 1;
+  const int i = kOrigin[corner][0] * (n - 1) + a * kDu[corner][0] + b * kDv[corner][0];
+  const int j = kOrigin[corner][1] * (n - 1) + a * kDu[corner][1] + b * kDv[corner][1];
+  return g1_unknown(face, i, j, k, r);
+}
+
+// The local unknowns of one system, in order; corner-block unknowns come first.
+struct LocalColumns {
+  std::vector<long> global;
+  std::unordered_map<long, int> position;
+  void add(long c) {
+    if (position.emplace(c, static_cast<int>(global.size())).second) global.push_back(c);
+  }
+  int size() const { return static_cast<int>(global.size()); }
+};
+
+void add_corner_block(LocalColumns& cols, int face, int corner, int k, int r) {
+  for (int b = 0; b < 2; ++b)
+    for (int a = 0; a < 2; ++a) cols.add(frame_unknown(face, corner, a, b, k, r));
+}
+
+// The strip of a face side (corner c to c+1): two rows, corner blocks excluded.
+void add_strip(LocalColumns& cols, int face, int corner, int k, int r) {
+  const int n = 2 * k - r + 1;
+  for (int b = 0; b < 2; ++b)
+    for (int a = 2; a <= n - 3; ++a) cols.add(frame_unknown(face, corner, a, b, k, r));
+}
+
+void add_edge_strips(LocalColumns& cols, const QuadMesh& mesh, int e, int k, int r) {
+  const auto& E = mesh.edge(e);
+  for (int side = 0; side < 2; ++side)
+    if (E.face[side] >= 0) add_strip(cols, E.face[side], E.corner[side], k, r);
+}
+
+template <class Scalar>
+using Rows = std::vector<std::vector<std::pair<long, Scalar>>>;
+
+// Rows restricted to the local columns (other unknowns are zero in the local system).
+template <class Scalar>
+std::vector<std::vector<Scalar>> restrict_rows(const Rows<Scalar>& rows, const LocalColumns& cols) {
+  std::vector<std::vector<Scalar>> out;
+  for (const auto& row : rows) {
+    std::vector<Scalar> dense(cols.size(), Scalar(0));
+    bool any = false;
+    for (const auto& [c, x] : row) {
+      const auto it = cols.position.find(c);
+      if (it == cols.position.end()) continue;
+      dense[it->second] += x;
+      any = true;
+    }
+    if (any) out.push_back(std::move(dense));
+  }
+  return out;
+}
+
+// Null space over Q by reduced row echelon form: one vector per free column, with a 1 there.
+std::vector<std::vector<mpq_class>> null_space(std::vector<std::vector<mpq_class>> A, int m) {
+  std::vector<int> pivot_col;
+  size_t rank = 0;
+  for (int c = 0; c < m && rank < A.size(); ++c) {
+    size_t p = rank;
+    while (p < A.size() && A[p][c] == 0) ++p;
+    if (p == A.size()) continue;
+    std::swap(A[p], A[rank]);
+    const mpq_class inv = 1 / A[rank][c];
+    for (int j = c; j < m; ++j) A[rank][j] *= inv;
+    for (size_t i = 0; i < A.size(); ++i) {
+      if (i == rank || A[i][c] == 0) continue;
+      const mpq_class f = A[i][c];
+      for (int j = c; j < m; ++j)
+        if (A[rank][j] != 0) A[i][j] -= f * A[rank][j];
+    }
+    pivot_col.push_back(c);
+    ++rank;
+  }
+  std::vector<bool> is_pivot(m, false);
+  for (int c : pivot_col) is_pivot[c] = true;
+  std::vector<std::vector<mpq_class>> basis;
+  for (int f = 0; f < m; ++f) {
+    if (is_pivot[f]) continue;
+    std::vector<mpq_class> x(m, mpq_class(0));
+    x[f] = 1;
+    for (size_t i = 0; i < pivot_col.size(); ++i) x[pivot_col[i]] = -A[i][f];
+    basis.push_back(std::move(x));
+  }
+  return basis;
+}
+
+constexpr double kTolerance = 1e-10;
+
+// Null space in floating point: right singular vectors of singular values below
+// kTolerance * largest (orthonormal columns).
+Eigen::MatrixXd null_space(const std::vector<std::vector<double>>& rows, int m) {
+  if (rows.empty()) return Eigen::MatrixXd::Identity(m, m);
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), m);
+  for (size_t i = 0; i < rows.size(); ++i)
+    for (int j = 0; j < m; ++j) A(static_cast<Eigen::Index>(i), j) = rows[i][j];
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const auto& sv = svd.singularValues();
+  Eigen::Index rank = 0;
+  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
+  return svd.matrixV().rightCols(m - rank);
+}
+
+// Functions with independent Taylor data (the first `taylor` local unknowns) among the
+// null-space vectors: column elimination on the Taylor rows, exactly.
+std::vector<std::vector<mpq_class>> taylor_independent(std::vector<std::vector<mpq_class>> Z, int taylor) {
+  std::vector<bool> used(Z.size(), false);
+  std::vector<size_t> chosen;
+  for (int t = 0; t < taylor; ++t) {
+    size_t j = 0;
+    while (j < Z.size() && (used[j] || Z[j][t] == 0)) ++j;
+    if (j == Z.size()) continue;
+    used[j] = true;
+    chosen.push_back(j);
+    const mpq_class inv = 1 / Z[j][t];
+    for (auto& x : Z[j]) x *= inv;
+    for (size_t l = 0; l < Z.size(); ++l) {
+      if (l == j || Z[l][t] == 0) continue;
+      const mpq_class f = Z[l][t];
+      for (size_t i = 0; i < Z[l].size(); ++i)
+        if (Z[j][i] != 0) Z[l][i] -= f * Z[j][i];
+    }
+  }
+  std::vector<std::vector<mpq_class>> out;
+  for (size_t j : chosen) out.push_back(std::move(Z[j]));
+  return out;
+}
+
+// The same in floating point: Z times the right singular vectors of its Taylor rows.
+Eigen::MatrixXd taylor_independent(const Eigen::MatrixXd& Z, int taylor) {
+  if (Z.cols() == 0) return Z;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Z.topRows(taylor), Eigen::ComputeFullV);
+  const auto& sv = svd.singularValues();
+  Eigen::Index rank = 0;
+  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * std::max(sv(0), 1.0);
+  return Z * svd.matrixV().leftCols(rank);
+}
+
+G1BasisFunction make_function(G1BasisFunction::Kind kind, int owner, const LocalColumns& cols,
+                              const std::vector<mpq_class>& x) {
+  G1BasisFunction f{kind, owner, {}};
+  for (int i = 0; i < cols.size(); ++i)
+    if (x[i] != 0) f.coefficients.emplace_back(cols.global[i], x[i].get_d());
+  return f;
+}
+
+G1BasisFunction make_function(G1BasisFunction::Kind kind, int owner, const LocalColumns& cols,
+                              const Eigen::VectorXd& x) {
+  G1BasisFunction f{kind, owner, {}};
+  for (int i = 0; i < cols.size(); ++i)
+    if (x(i) != 0) f.coefficients.emplace_back(cols.global[i], x(i));
+  return f;
+}
+
+template <class Scalar>
+Rows<Scalar> edge_rows(const QuadMesh& mesh, const GluingData& gluing, int k, int r, int e) {
+  if constexpr (std::is_same_v<Scalar, mpq_class>)
+    return g1_condition_rows_exact(mesh, gluing, k, r, e);
+  else
+    return g1_condition_rows(mesh, gluing, k, r, e);
+}
+
+// Span of the Taylor data (corner-block coefficients) of the functions kept so far, over Q:
+// a fully reduced echelon form, so that reducing a vector needs one pass.
+class ExactTaylorSpan {
+ public:
+  // Records t and returns true when it is independent of the span.
+  bool add(std::map<long, mpq_class> t) {
+    for (const auto& [p, e] : stored_) {
+      const auto it = t.find(p);
+      if (it == t.end()) continue;
+      const mpq_class f = it->second;
+      for (const auto& [c, x] : e) {
+        mpq_class& y = t[c];
+        y -= f * x;
+        if (y == 0) t.erase(c);
+      }
+    }
+    if (t.empty()) return false;
+    const long p = t.begin()->first;
+    const mpq_class inv = 1 / t.begin()->second;
+    for (auto& [c, x] : t) x *= inv;
+    for (auto& [q, e] : stored_) {
+      const auto it = e.find(p);
+      if (it == e.end()) continue;
+      const mpq_class f = it->second;
+      for (const auto& [c, x] : t) {
+        mpq_class& y = e[c];
+        y -= f * x;
+        if (y == 0) e.erase(c);
+      }
+    }
+    stored_.emplace(p, std::move(t));
+    return true;
+  }
+
+ private:
+  std::map<long, std::map<long, mpq_class>> stored_;  // pivot -> vector with 1 there
+};
+
+// The same in floating point, for the functions beyond the vertex functions: an orthonormal
+// basis of their Taylor data modulo the vertex functions' (which live on disjoint vertex
+// blocks, so the quotient is a projection per vertex block).
+struct FloatTaylorSpan {
+  std::map<long, Eigen::MatrixXd> vertex_basis;  // vertex -> orthonormal columns on its corner blocks
+  std::vector<std::map<long, double>> extra;     // orthonormal, over corner unknowns
+};
+
+struct PairSystem {
+  LocalColumns cols;
+  std::vector<int> block_vertex;  // per Taylor column: the vertex of its corner block
+  int taylor = 0;
+};
+
+PairSystem pair_system(const QuadMesh& mesh, int e, int k, int r) {
+  PairSystem sys;
+  const auto& E = mesh.edge(e);
+  std::set<int> edges;
+  for (int end = 0; end < 2; ++end) {
+    const auto& ring = mesh.ring(E.v[end]);
+    for (size_t i = 0; i < ring.faces.size(); ++i) {
+      add_corner_block(sys.cols, ring.faces[i], ring.corners[i], k, r);
+      sys.block_vertex.resize(sys.cols.size(), E.v[end]);
+    }
+    edges.insert(ring.edges.begin(), ring.edges.end());
+  }
+  sys.taylor = sys.cols.size();
+  for (int x : edges)
+    if (!mesh.edge(x).boundary()) add_edge_strips(sys.cols, mesh, x, k, r);
+  return sys;
+}
+
+// Last resort when Taylor data are coupled beyond single edges (r = k - 1 on meshes with
+// extraordinary vertices, for instance): functions of the global null space whose Taylor
+// data complete the span of `functions`; their supports are not local. This is the
+// floating-point version (the exact one is inline in build).
+void complete_globally(const QuadMesh& mesh, const GluingData& gluing, int k, int r, long missing,
+                       std::vector<G1BasisFunction>& functions) {
+  const int n = 2 * k - r + 1;
+  const long m = static_cast<long>(mesh.num_faces()) * n * n;
+  std::unordered_map<long, int> corner;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 4; ++c)
+      for (int b = 0; b < 2; ++b)
+        for (int a = 0; a < 2; ++a) corner.emplace(frame_unknown(f, c, a, b, k, r), static_cast<int>(corner.size()));
+  const auto rows = g1_condition_rows(mesh, gluing, k, r);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), m);
+  for (size_t i = 0; i < rows.size(); ++i)
+    for (const auto& [c, x] : rows[i]) A(static_cast<Eigen::Index>(i), c) += x;
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const auto& sv = svd.singularValues();
+  Eigen::Index rank = 0;
+  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
+  const Eigen::MatrixXd N = svd.matrixV().rightCols(m - rank);
+  const auto taylor = [&](const auto& column) {
+    Eigen::VectorXd t = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(corner.size()));
+    column(t);
+    return t;
+  };
+  Eigen::MatrixXd T(static_cast<Eigen::Index>(corner.size()), static_cast<Eigen::Index>(functions.size()));
+  for (size_t j = 0; j < functions.size(); ++j)
+    T.col(static_cast<Eigen::Index>(j)) = taylor([&](Eigen::VectorXd& t) {
+      for (const auto& [c, x] : functions[j].coefficients)
+        if (const auto it = corner.find(c); it != corner.end()) t(it->second) = x;
+    });
+  Eigen::MatrixXd R(T.rows(), N.cols());
+  for (Eigen::Index j = 0; j < N.cols(); ++j)
+    R.col(j) = taylor([&](Eigen::VectorXd& t) {
+      for (const auto& [c, i] : corner) t(i) = N(c, j);
+    });
+  if (T.cols() > 0) {
+    const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(T).householderQ() *
+                              Eigen::MatrixXd::Identity(T.rows(), std::min(T.rows(), T.cols()));
+    for (int pass = 0; pass < 2; ++pass) R -= Q * (Q.transpose() * R);
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> complement(R, Eigen::ComputeThinV);
+  const auto& cs = complement.singularValues();
+  if (cs.size() < missing || cs(missing - 1) <= kTolerance)
+    throw std::runtime_error("the Taylor data of S_" + std::to_string(k) + "^{1," + std::to_string(r) +
+                             "} could not be completed: rank tolerance too coarse for these gluing data");
+  for (long j = 0; j < missing; ++j) {
+    LocalColumns cols;
+    for (long c = 0; c < m; ++c) cols.add(c);
+    functions.push_back(make_function(G1BasisFunction::Kind::coupled, -1, cols,
+                                      Eigen::VectorXd(N * complement.matrixV().col(j))));
+  }
+}
+
+template <class Scalar>
+void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
+  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
+  std::vector<Rows<Scalar>> rows(mesh.num_edges());
+  for (int e = 0; e < mesh.num_edges(); ++e)
+    if (!mesh.edge(e).boundary()) rows[e] = edge_rows<Scalar>(mesh, gluing, k, r, e);
+  constexpr bool exact = std::is_same_v<Scalar, mpq_class>;
+  ExactTaylorSpan exact_span;
+  FloatTaylorSpan float_span;
+
+  std::vector<G1BasisFunction> vertex_functions;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const auto& ring = mesh.ring(v);
+    LocalColumns cols;
+    for (size_t i = 0; i < ring.faces.size(); ++i) add_corner_block(cols, ring.faces[i], ring.corners[i], k, r);
+    const int taylor = cols.size();
+    std::set<int> edges(ring.edges.begin(), ring.edges.end());
+    Rows<Scalar> vertex_rows;
+    for (int e : edges) {
+      if (mesh.edge(e).boundary()) continue;
+      add_edge_strips(cols, mesh, e, k, r);
+      vertex_rows.insert(vertex_rows.end(), rows[e].begin(), rows[e].end());
+    }
+    const auto A = restrict_rows(vertex_rows, cols);
+    if constexpr (exact) {
+      for (const auto& x : taylor_independent(null_space(A, cols.size()), taylor)) {
+        vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, x));
+        std::map<long, mpq_class> t;
+        for (int i = 0; i < taylor; ++i)
+          if (x[i] != 0) t.emplace(cols.global[i], x[i]);
+        exact_span.add(std::move(t));
+      }
+    } else {
+      const Eigen::MatrixXd Z = taylor_independent(null_space(A, cols.size()), taylor);
+      for (Eigen::Index j = 0; j < Z.cols(); ++j)
+        vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, Z.col(j)));
+      Eigen::HouseholderQR<Eigen::MatrixXd> qr(Z.topRows(taylor));
+      float_span.vertex_basis[v] =
+          qr.householderQ() * Eigen::MatrixXd::Identity(taylor, std::min<Eigen::Index>(Z.cols(), taylor));
+    }
+  }
+
+  std::vector<G1BasisFunction> edge_functions;
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    LocalColumns cols;
+    add_edge_strips(cols, mesh, e, k, r);
+    const auto A = restrict_rows(rows[e], cols);
+    if constexpr (exact) {
+      for (const auto& x : null_space(A, cols.size()))
+        edge_functions.push_back(make_function(G1BasisFunction::Kind::edge, e, cols, x));
+    } else {
+      const Eigen::MatrixXd Z = null_space(A, cols.size());
+      for (Eigen::Index j = 0; j < Z.cols(); ++j)
+        edge_functions.push_back(make_function(G1BasisFunction::Kind::edge, e, cols, Z.col(j)));
+    }
+  }
+  const long face_count = static_cast<long>(mesh.num_faces()) * std::max(n - 4, 0) * std::max(n - 4, 0);
+
+  // Below the separability of an edge, the Taylor data at its two ends are coupled and the
+  // vertex functions miss part of the Taylor map's image: solutions on the faces around
+  // both ends supply it (kind vertex_pair, one edge at a time, while something is missing).
+  const long wanted = basis.space.dimension - static_cast<long>(edge_functions.size()) - face_count;
+  long have = static_cast<long>(vertex_functions.size());
+  for (int e = 0; e < mesh.num_edges() && have < wanted; ++e) {
+    if (mesh.edge(e).boundary()) continue;
+    const PairSystem sys = pair_system(mesh, e, k, r);
+    Rows<Scalar> pair_rows;
+    for (size_t i = 0; i < rows.size(); ++i) {
+      if (rows[i].empty()) continue;
+      const auto& E = mesh.edge(static_cast<int>(i));
+      const auto& P = mesh.edge(e);
+      if (E.v[0] == P.v[0] || E.v[0] == P.v[1] || E.v[1] == P.v[0] || E.v[1] == P.v[1])
+        pair_rows.insert(pair_rows.end(), rows[i].begin(), rows[i].end());
+    }
+    const auto A = restrict_rows(pair_rows, sys.cols);
+    if constexpr (exact) {
+      for (const auto& x : null_space(A, sys.cols.size())) {
+        std::map<long, mpq_class> t;
+        for (int i = 0; i < sys.taylor; ++i)
+          if (x[i] != 0) t.emplace(sys.cols.global[i], x[i]);
+        if (!exact_span.add(std::move(t))) continue;
+        vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex_pair, e, sys.cols, x));
+        if (++have == wanted) break;
+      }
+    } else {
+      const Eigen::MatrixXd Z = null_space(A, sys.cols.size());
+      // Taylor rows modulo the vertex functions, block by block.
+      Eigen::MatrixXd R = Z.topRows(sys.taylor);
+      for (const int v : {mesh.edge(e).v[0], mesh.edge(e).v[1]}) {
+        std::vector<Eigen::Index> at;
+        for (int i = 0; i < sys.taylor; ++i)
+          if (sys.block_vertex[i] == v) at.push_back(i);
+        const Eigen::MatrixXd& Q = float_span.vertex_basis[v];
+        Eigen::MatrixXd block(static_cast<Eigen::Index>(at.size()), Z.cols());
+        for (size_t i = 0; i < at.size(); ++i) block.row(static_cast<Eigen::Index>(i)) = R.row(at[i]);
+        block -= Q * (Q.transpose() * block);
+        for (size_t i = 0; i < at.size(); ++i) R.row(at[i]) = block.row(static_cast<Eigen::Index>(i));
+      }
+      // ... and modulo the pair functions kept so far (twice, for orthogonality).
+      for (int pass = 0; pass < 2; ++pass)
+        for (const auto& q : float_span.extra) {
+          Eigen::RowVectorXd dot = Eigen::RowVectorXd::Zero(Z.cols());
+          std::vector<std::pair<int, double>> local;
+          for (int i = 0; i < sys.taylor; ++i) {
+            const auto it = q.find(sys.cols.global[i]);
+            if (it != q.end()) local.emplace_back(i, it->second);
+          }
+          for (const auto& [i, x] : local) dot += x * R.row(i);
+          for (const auto& [i, x] : local) R.row(i) -= x * dot;
+        }
+      Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const auto& sv = svd.singularValues();
+      for (Eigen::Index j = 0; j < sv.size() && have < wanted; ++j) {
+        if (sv(j) <= kTolerance) break;
+        vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex_pair, e, sys.cols,
+                                                 Eigen::VectorXd(Z * svd.matrixV().col(j))));
+        std::map<long, double> q;
+        for (int i = 0; i < sys.taylor; ++i)
+          if (svd.matrixU()(i, j) != 0) q.emplace(sys.cols.global[i], svd.matrixU()(i, j));
+        float_span.extra.push_back(std::move(q));
+        ++have;
+      }
+    }
+  }
+
+  if (have < wanted) {
+    if constexpr (exact) {
+      // Exactly, on every corner block and strip (face interiors are in no condition).
+      LocalColumns cols;
+      for (int f = 0; f < mesh.num_faces(); ++f)
+        for (int c = 0; c < 4; ++c) add_corner_block(cols, f, c, k, r);
+      const int taylor = cols.size();
+      for (int e = 0; e < mesh.num_edges(); ++e) add_edge_strips(cols, mesh, e, k, r);
+      Rows<Scalar> all;
+      for (const auto& x : rows) all.insert(all.end(), x.begin(), x.end());
+      for (const auto& x : null_space(restrict_rows(all, cols), cols.size())) {
+        std::map<long, mpq_class> t;
+        for (int i = 0; i < taylor; ++i)
+          if (x[i] != 0) t.emplace(cols.global[i], x[i]);
+        if (!exact_span.add(std::move(t))) continue;
+        vertex_functions.push_back(make_function(G1BasisFunction::Kind::coupled, -1, cols, x));
+        if (++have == wanted) break;
+      }
+    } else {
+      complete_globally(mesh, gluing, k, r, wanted - have, vertex_functions);
+    }
+  }
+  basis.functions = std::move(vertex_functions);
+  for (auto& f : edge_functions) basis.functions.push_back(std::move(f));
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int i = 2; i <= n - 3; ++i)
+      for (int j = 2; j <= n - 3; ++j)
+        basis.functions.push_back({G1BasisFunction::Kind::face, f, {{g1_unknown(f, i, j, k, r), 1.0}}});
+}
+
+}  // namespace
+
+G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating) {
+  G1Basis basis;
+  basis.k = k;
+  basis.r = r;
+  basis.space = g1_space_dimension(mesh, gluing, k, r, floating);  // also validates k, r, gluing
+  basis.exact = gluing.exact() && !floating;
+  if (basis.exact)
+    build<mpq_class>(mesh, gluing, basis);
+  else
+    build<double>(mesh, gluing, basis);
+  for (const auto& f : basis.functions) ++basis.counts[static_cast<int>(f.kind)];
+  const long count = static_cast<long>(basis.functions.size());
+  if (count != basis.space.dimension)
+    throw std::runtime_error("the basis has " + std::to_string(count) + " functions but dim S_" + std::to_string(k) +
+                             "^{1," + std::to_string(r) + "} = " + std::to_string(basis.space.dimension) +
+                             " (the rank tolerance does not separate these gluing data)");
+  return basis;
+}
+
+double g1_residual_max(const QuadMesh& mesh, const GluingData& gluing, const G1Basis& basis) {
+  const auto rows = g1_condition_rows(mesh, gluing, basis.k, basis.r);
+  double worst = 0;
+  std::unordered_map<long, double> x;
+  for (const auto& f : basis.functions) {
+    x.clear();
+    double scale = 0;
+    for (const auto& [c, v] : f.coefficients) {
+      x[c] = v;
+      scale = std::max(scale, std::abs(v));
+    }
+    if (scale == 0) return INFINITY;  // a zero function is no basis function
+    for (const auto& row : rows) {
+      double sum = 0, size = 0;
+      for (const auto& [c, a] : row) {
+        size += std::abs(a);
+        const auto it = x.find(c);
+        if (it != x.end()) sum += a * it->second;
+      }
+      if (size > 0) worst = std::max(worst, std::abs(sum) / (size * scale));
+    }
+  }
+  return worst;
+}
+
+long g1_basis_rank(const G1Basis& basis) {
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(basis.unknowns(), static_cast<Eigen::Index>(basis.functions.size()));
+  for (size_t j = 0; j < basis.functions.size(); ++j)
+    for (const auto& [c, v] : basis.functions[j].coefficients) M(c, static_cast<Eigen::Index>(j)) = v;
+  if (M.cols() == 0) return 0;
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(M);
+  const auto& sv = svd.singularValues();
+  long rank = 0;
+  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
+  return rank;
+}
+
+std::vector<int> support_faces(const G1BasisFunction& f, int k, int r) {
+  const long per_face = static_cast<long>(2 * k - r + 1) * (2 * k - r + 1);
+  std::set<int> faces;
+  for (const auto& [c, v] : f.coefficients)
+    if (v != 0) faces.insert(static_cast<int>(c / per_face));
+  return {faces.begin(), faces.end()};
+}
+
+BezierMesh g1_bezier_mesh(const QuadMesh& mesh, const G1Basis& basis) {
+  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
+  std::vector<double> knots(k + 1, 0.0);
+  knots.insert(knots.end(), k - r, 0.5);
+  knots.insert(knots.end(), k + 1, 1.0);
+  const auto extraction = bezier_extraction(BSplineBasis1D(k, knots));  // two elements, (k+1) x (k+1)
+  const int first[2] = {0, n - k - 1};                                  // first function alive per half
+
+  // Per face: the functions living on it, with their coefficients there.
+  const long per_face = static_cast<long>(n) * n;
+  std::vector<std::map<int, std::vector<std::pair<int, double>>>> on_face(mesh.num_faces());
+  for (size_t j = 0; j < basis.functions.size(); ++j)
+    for (const auto& [c, v] : basis.functions[j].coefficients)
+      on_face[c / per_face][static_cast<int>(j)].emplace_back(static_cast<int>(c % per_face), v);
+
+  BezierMesh out;
+  out.reserve(4 * mesh.num_faces(), 0);
+  out.set_num_functions(static_cast<int>(basis.functions.size()));
+  out.set_boundary_names({"boundary"});
+  const int B = (k + 1) * (k + 1);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int ht = 0; ht < 2; ++ht)
+      for (int hs = 0; hs < 2; ++hs) {
+        BezierCell cell;
+        cell.patch = f;
+        cell.index_u = hs;
+        cell.index_v = ht;
+        cell.u0 = 0.5 * hs;
+        cell.u1 = cell.u0 + 0.5;
+        cell.v0 = 0.5 * ht;
+        cell.v1 = cell.v0 + 0.5;
+        cell.degree_u = cell.degree_v = k;
+        // Face sides: corner 0 -> 1 is t = 0, 1 -> 2 is s = 1, 2 -> 3 is t = 1, 3 -> 0 is s = 0.
+        const bool touches[4] = {ht == 0, hs == 1, ht == 1, hs == 0};
+        const CellSide sides[4] = {kSideBottom, kSideRight, kSideTop, kSideLeft};
+        for (int c = 0; c < 4; ++c)
+          if (touches[c] && mesh.edge(mesh.face_edge(f, c)).boundary()) cell.boundary[sides[c]] = 0;
+        std::vector<int> ids;
+        std::vector<Eigen::RowVectorXd> rows;
+        for (const auto& [j, coefficients] : on_face[f]) {
+          Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(B);
+          for (const auto& [local, v] : coefficients) {
+            const int i = local / n - first[hs], jj = local % n - first[ht];
+            if (i < 0 || i > k || jj < 0 || jj > k) continue;
+            for (int c = 0; c <= k; ++c)
+              for (int a = 0; a <= k; ++a) row(a + (k + 1) * c) += v * extraction[hs](i, a) * extraction[ht](jj, c);
+          }
+          if (row.cwiseAbs().maxCoeff() == 0) continue;
+          ids.push_back(j);
+          rows.push_back(std::move(row));
+        }
+        Eigen::MatrixXd C(static_cast<Eigen::Index>(rows.size()), B);
+        for (size_t i = 0; i < rows.size(); ++i) C.row(static_cast<Eigen::Index>(i)) = rows[i];
+        out.add_cell(cell, ids, out.add_extraction(std::move(C)));
+      }
+  return out;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,69 @@
+#pragma once
+#include <array>
+#include <utility>
+#include <vector>
+
+#include "basis/bezier_mesh.hpp"
+#include "basis/g1_space.hpp"
+
+namespace knotwork {
+
+// One basis function of S_k^{1,r}(M), as its nonzero B-spline coefficients over the faces:
+// (g1_unknown(face, i, j, k, r), value).
+struct G1BasisFunction {
+  enum class Kind { vertex, edge, face, vertex_pair, coupled };
+  Kind kind = Kind::face;
+  int owner = 0;  // the vertex, edge or face it is attached to (vertex_pair: the edge)
+  std::vector<std::pair<long, double>> coefficients;
+};
+
+// The local basis of Blidia-Mourrain-Villamizar sections 4-6, built from the B-spline
+// coefficients of each face split into
+//   corner blocks  (the 2x2 coefficients at a corner: they fix the Taylor data there),
+//   edge strips    (the two rows along a side, corner blocks excluded),
+//   the interior   (indices 2..n-3 in both directions),
+// so that the conditions of an interior edge involve only its strips and the corner blocks
+// at its ends. Then
+//   vertex functions: solutions on the corner blocks at the vertex and the strips of its
+//     interior edges (the other ends' corner blocks zero), one per independent Taylor
+//     datum: they span the image of the Taylor map at the vertex;
+//   edge functions: solutions on the strips of one edge (Taylor data zero at both ends);
+//     on a boundary edge every strip coefficient;
+//   face functions: the interior B-splines.
+// Supports: faces around the vertex, the faces of the edge, one face.
+// When the degree is below the separability of an edge (Prop. 5.2 does not apply), the
+// Taylor data at its two ends are coupled and the vertex functions miss part of the image
+// of the Taylor map; then vertex_pair functions, solutions on the faces around both ends
+// of one edge, complete it (the paper has no such functions: it assumes k >= s*). Where
+// even those fall short (r = k - 1 around extraordinary vertices), `coupled` functions from
+// the global null space (exact for rational data; not local) complete the basis.
+struct G1Basis {
+  int k = 0, r = 0;
+  std::vector<G1BasisFunction> functions;
+  G1SpaceDimension space;           // the null-space dimension the basis was checked against
+  std::array<long, 5> counts{};     // vertex, edge, face, vertex_pair, coupled functions
+  bool exact = false;               // local null spaces computed over Q
+  long unknowns() const { return space.unknowns; }
+};
+
+// Throws std::invalid_argument for bad k, r or missing gluing data.
+// `floating` forces the floating-point path (SVD, singular values below 1e-10 * largest
+// are zero) also for rational data.
+G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false);
+
+// Largest relative residual of conditions (2)-(3) over the basis functions:
+// max over functions and rows of |C_row x| / (sum_j |C_row,j| * max|x|).
+double g1_residual_max(const QuadMesh& mesh, const GluingData& gluing, const G1Basis& basis);
+
+// Numerical rank of the functions' coefficient matrix (SVD, tolerance 1e-10 * largest).
+long g1_basis_rank(const G1Basis& basis);
+
+// The faces a function lives on (sorted).
+std::vector<int> support_faces(const G1BasisFunction& f, int k, int r);
+
+// The basis as a BezierMesh: four polynomial cells of degree k per face (the quarters of
+// the 4-split, patch = face, index_u/index_v = which half in s/t), boundary id 0
+// ("boundary") on the mesh's boundary edges.
+BezierMesh g1_bezier_mesh(const QuadMesh& mesh, const G1Basis& basis);
+
+}  // namespace knotwork

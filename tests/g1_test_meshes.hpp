@@ -1,0 +1,82 @@
+#pragma once
+// Quad meshes shared by the G1 tests: the paper's Section 8 mesh, grids, a cube, tori, fans.
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "basis/quad_mesh.hpp"
+
+namespace knotwork::test {
+
+// The paper's Section 8 mesh: three quads around an interior vertex gamma (valence 3), each
+// sharing an edge gamma-delta_i with the next; delta_i are boundary vertices of two faces.
+inline QuadMesh three_quads() {
+  std::vector<Eigen::Vector3d> v{{0, 0, 0}};
+  for (int i = 0; i < 3; ++i) {
+    const double a = M_PI / 2 + 2 * M_PI * i / 3;
+    v.emplace_back(std::cos(a), std::sin(a), 0);  // delta_i: vertices 1, 2, 3
+  }
+  for (int i = 0; i < 3; ++i) v.push_back(v[1 + i] + v[1 + (i + 1) % 3]);  // outer corners: 4, 5, 6
+  std::vector<std::array<int, 4>> f;
+  for (int i = 0; i < 3; ++i) f.push_back({0, 1 + i, 4 + i, 1 + (i + 1) % 3});
+  return QuadMesh::from_faces(v, f, "three quads");
+}
+
+inline QuadMesh grid(int n) {
+  std::vector<Eigen::Vector3d> v;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) v.emplace_back(i, j, 0);
+  std::vector<std::array<int, 4>> f;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i;
+      f.push_back({a, a + 1, a + n + 2, a + n + 1});
+    }
+  return QuadMesh::from_faces(v, f, "grid");
+}
+
+inline QuadMesh cube() {
+  std::vector<Eigen::Vector3d> v;
+  for (int i = 0; i < 8; ++i) v.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  // Outward normals, counter-clockwise seen from outside.
+  std::vector<std::array<int, 4>> f{{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  return QuadMesh::from_faces(v, f, "cube");
+}
+
+// A torus of n x m quads: every vertex of valence 4, closed, Euler characteristic 0.
+inline QuadMesh torus(int n, int m) {
+  std::vector<Eigen::Vector3d> v;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * i / n, b = 2 * M_PI * j / m;
+      v.emplace_back((3 + std::cos(b)) * std::cos(a), (3 + std::cos(b)) * std::sin(a), std::sin(b));
+    }
+  std::vector<std::array<int, 4>> f;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int i1 = (i + 1) % n, j1 = (j + 1) % m;
+      f.push_back({j * n + i, j * n + i1, j1 * n + i1, j1 * n + i});
+    }
+  return QuadMesh::from_faces(v, f, "torus");
+}
+
+// Univariate splines of degree k on 2n equal intervals, C^1 at the n-1 original knots and
+// C^r at the n midpoints: the G1 space on an n x n grid is their tensor product.
+inline long univariate_dimension(int n, int k, int r) { return 2L * n * (k + 1) - 2L * (n - 1) - long(n) * (r + 1); }
+
+
+// F quads around an interior vertex 0 (valence F): vertices 1..F on the unit circle
+// (delta_i, rotated by `twist` * i to make the angles uneven), outer corners F+1..2F.
+inline QuadMesh fan(int F, double twist = 0) {
+  std::vector<Eigen::Vector3d> v{{0, 0, 0}};
+  for (int i = 0; i < F; ++i) {
+    const double a = 2 * M_PI * i / F + twist * i;
+    v.emplace_back(std::cos(a), std::sin(a), 0);
+  }
+  for (int i = 0; i < F; ++i) v.push_back(0.9 * (v[1 + i] + v[1 + (i + 1) % F]));
+  std::vector<std::array<int, 4>> f;
+  for (int i = 0; i < F; ++i) f.push_back({0, 1 + i, 1 + F + i, 1 + (i + 1) % F});
+  return QuadMesh::from_faces(v, f, "fan");
+}
+
+}  // namespace knotwork::test
