@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "basis/g1_basis.hpp"
+#include "basis/sparse_rank.hpp"
 #include "tests/g1_test_meshes.hpp"
 
 using namespace knotwork;
@@ -276,4 +277,120 @@ TEST_CASE("Below the separability degree the basis is completed and still verifi
   REQUIRE(c.coupled > 0);
   // Linear gluing with degree 3 and r = 0 is separable: local functions only.
   REQUIRE(check_basis(cube(), symmetric_gluing(cube()), 3, 0).coupled == 0);
+}
+
+namespace {
+
+// A function given as B-spline coefficients (face, i, j, value), i along u (= s), j along v.
+using Printed = std::vector<std::tuple<int, int, int, mpq_class>>;
+using Block = std::vector<std::tuple<int, int, mpq_class>>;
+
+void add(Printed& f, int face, const Block& block, const mpq_class& scale = 1) {
+  for (const auto& [i, j, v] : block) f.emplace_back(face, i, j, scale * v);
+}
+Printed rotated(const Printed& f, int steps) {  // sigma_i -> sigma_{i+steps}
+  Printed out;
+  for (const auto& [face, i, j, v] : f) out.emplace_back((face + steps) % 3, i, j, v);
+  return out;
+}
+Printed sum(Printed a, const Printed& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+// Number of sampled conditions (2)-(3) the function violates, in exact arithmetic.
+int violated(const QuadMesh& m, const GluingData& g, const Printed& f) {
+  std::map<long, mpq_class> x;
+  for (const auto& [face, i, j, v] : f) x[g1_unknown(face, i, j, 4, 1)] += v;
+  int bad = 0;
+  for (const auto& row : g1_condition_rows_exact(m, g, 4, 1)) {
+    mpq_class s = 0;
+    for (const auto& [c, a] : row)
+      if (const auto it = x.find(c); it != x.end()) s += a * it->second;
+    bad += s != 0;
+  }
+  return bad;
+}
+
+}  // namespace
+
+TEST_CASE("The basis printed in the paper's Section 8, checked against conditions (2)-(3)", "[g1][basis][paper]") {
+  // Faces sigma_1..3 are faces 0..2 of three_quads(): each face's corner 0 is gamma, its
+  // u axis runs along tau_i and its v axis along tau_{i+1}, as in the paper's frames, and
+  // the data are the paper's (a = -1 + 4u^2 | 0, b = -1, c = 1). k = 4, r = 1.
+  const QuadMesh m = three_quads();
+  const GluingData g = symmetric_gluing(m);
+  const mpq_class third(1, 3);
+  const auto q = [](long a, long b) { return mpq_class(a, b); };
+  const Block Gv{{0, 1, 1}, {0, 2, q(10, 3)}, {0, 3, q(16, 3)}, {0, 4, q(16, 3)},
+                 {1, 2, q(14, 3)}, {1, 3, q(32, 3)}, {1, 4, q(32, 3)}};
+  const Block Gv_printed{{0, 1, 1}, {0, 2, q(10, 3)}, {0, 3, q(16, 3)}, {0, 4, q(16, 3)},
+                         {1, 2, q(16, 3)}, {1, 3, q(32, 3)}, {1, 4, q(32, 3)}};
+  const Block Gu{{1, 0, 1}, {2, 0, q(10, 3)}, {3, 0, q(16, 3)}, {4, 0, q(16, 3)}};
+  const Block Cv{{0, 2, q(-4, 3)}, {0, 3, q(-8, 3)}, {0, 4, q(-8, 3)}, {1, 2, q(-4, 3)}, {1, 3, q(-16, 3)}, {1, 4, q(-16, 3)}};
+  const Block Cu{{2, 0, q(-4, 3)}, {3, 0, q(-8, 3)}, {4, 0, q(-8, 3)}};
+  const Block N11{{1, 1, 1}};
+
+  Printed value;
+  add(value, 0, {{0, 0, 1}, {0, 2, third}, {0, 3, 1}, {0, 4, 1}, {1, 3, 2}, {1, 4, 2}, {2, 0, third}, {3, 0, 1}, {4, 0, 1}});
+  add(value, 1, {{0, 0, 1}, {2, 0, third}, {3, 0, 1}, {4, 0, 1}, {0, 1, 3}, {0, 2, q(31, 3)}, {0, 3, 17}, {0, 4, 17},
+                 {1, 2, 14}, {1, 3, 34}, {1, 4, 34}});
+  add(value, 2, {{0, 0, 1}, {1, 0, 3}, {2, 0, q(31, 3)}, {3, 0, 17}, {4, 0, 17}, {0, 2, third}, {0, 3, 1}, {0, 4, 1},
+                 {1, 3, 2}, {1, 4, 2}});
+  Printed g_printed, g_fixed_coefficient, h;
+  add(g_printed, 0, Gv), add(g_printed, 1, Gu), add(g_printed, 2, Gv_printed, -1), add(g_printed, 2, Gu, -1);
+  add(g_fixed_coefficient, 0, Gv), add(g_fixed_coefficient, 1, Gu), add(g_fixed_coefficient, 2, Gv, -1),
+      add(g_fixed_coefficient, 2, Gu, -1);
+  add(h, 0, Gu), add(h, 1, Gv, -1), add(h, 2, Gu, -1), add(h, 2, Gv);
+  Printed c1, c2, c3;
+  add(c1, 0, Cv), add(c1, 0, N11), add(c1, 1, Cu);
+  add(c2, 0, Cu), add(c2, 1, Cv), add(c2, 2, Cu), add(c2, 2, N11), add(c2, 2, Cv);
+  add(c3, 0, Cu), add(c3, 2, Cv);
+  std::vector<Printed> delta(4), edge(5);
+  add(delta[0], 0, {{0, 7, 1}}), add(delta[0], 1, {{7, 0, 1}, {7, 1, 2}});
+  add(delta[1], 0, {{0, 6, 1}}), add(delta[1], 1, {{6, 0, 1}, {6, 1, 2}});
+  add(delta[2], 0, {{1, 7, 1}}), add(delta[2], 1, {{7, 1, -1}});
+  add(delta[3], 0, {{1, 6, 1}}), add(delta[3], 1, {{6, 1, -1}});
+  for (int j = 2; j <= 5; ++j) add(edge[j - 2], 0, {{1, j, -1}}), add(edge[j - 2], 1, {{j, 1, 1}});
+  add(edge[4], 0, {{0, 5, 1}, {1, 5, 2}}), add(edge[4], 1, {{5, 0, 1}});
+
+  // In S as printed: the value function, h, the cross-derivative function c2, the four
+  // functions at delta and the five on the edge.
+  REQUIRE(violated(m, g, value) == 0);
+  REQUIRE(violated(m, g, h) == 0);
+  REQUIRE(violated(m, g, c2) == 0);
+  for (const auto& f : delta) REQUIRE(violated(m, g, f) == 0);
+  for (const auto& f : edge) REQUIRE(violated(m, g, f) == 0);
+  // Not in S: g (neither as printed, with -16/3 N_{1,2} on sigma_3, nor with h's 14/3),
+  // and c1, c3 each fail one condition family on one half-edge (7 of the 84 sampled rows).
+  REQUIRE(violated(m, g, g_printed) > 0);
+  REQUIRE(violated(m, g, g_fixed_coefficient) > 0);
+  REQUIRE(violated(m, g, c1) == 7);
+  REQUIRE(violated(m, g, c3) == 7);
+  // What is in S instead: c1 + c3 (the cross-derivative function of sigma_1, shaped like
+  // c2), and h carried to the next face by the mesh's rotation symmetry.
+  const Printed c1_plus_c3 = sum(c1, c3);
+  const Printed g_rotated = rotated(h, 1);
+  REQUIRE(violated(m, g, c1_plus_c3) == 0);
+  REQUIRE(violated(m, g, g_rotated) == 0);
+
+  // With those two replacements, and the cross-derivative function of sigma_2 obtained by
+  // rotating c2, the paper's list (delta and edge functions carried around by rotation,
+  // 36 x 3 interior-type B-splines N_{i,j}, 2 <= i, j <= 7) is a basis: exact rank 141.
+  std::vector<Printed> basis{value, g_rotated, h, c1_plus_c3, c2, rotated(c2, 2)};
+  for (int s = 0; s < 3; ++s) {
+    for (const auto& f : delta) basis.push_back(rotated(f, s));
+    for (const auto& f : edge) basis.push_back(rotated(f, s));
+  }
+  for (int face = 0; face < 3; ++face)
+    for (int i = 2; i <= 7; ++i)
+      for (int j = 2; j <= 7; ++j) basis.push_back({{face, i, j, 1}});
+  REQUIRE(basis.size() == 141);
+  std::vector<SparseRationalRow> rows;
+  for (const auto& f : basis) {
+    REQUIRE(violated(m, g, f) == 0);
+    SparseRationalRow row;
+    for (const auto& [face, i, j, v] : f) row.terms.emplace_back(g1_unknown(face, i, j, 4, 1), v);
+    rows.push_back(std::move(row));
+  }
+  REQUIRE(rank_exact(rows, 3 * 64) == 141);
 }
