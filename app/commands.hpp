@@ -55,6 +55,8 @@ struct BasisOptions {
   int degree = 4;
   int split_smoothness = 1;
   std::string gluing = "symmetric";  // symmetric | geometric | FILE.json
+  std::string vtk_file;               // the fitted G1 surface and the --show functions
+  std::string show = "extraordinary";  // vertex:N | edge:I-J | face:N | all | extraordinary
 };
 
 int run_command(const RunOptions& o);

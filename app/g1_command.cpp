@@ -1,24 +1,197 @@
 // knotwork basis --g1 MESH.obj: the G1 macro-patch spline space on a quad mesh — topology,
-// gluing data and their compatibility, and the dimension of S_k^{1,r}(M).
+// gluing data and their compatibility, the dimension of S_k^{1,r}(M), its local basis
+// (checked: count, rank, G1 residual), export, and ParaView output.
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
 #include <map>
+#include <regex>
 
 #include "app/commands.hpp"
 #include "app/json_writer.hpp"
+#include "basis/g1_basis.hpp"
 #include "basis/g1_space.hpp"
 #include "basis/quad_mesh.hpp"
 #include "cases/gluing_file.hpp"
 #include "solver/input_error.hpp"
+#include "solver/vtk_output.hpp"
 
 namespace knotwork {
+
+namespace {
+
+const char* kind_name(G1BasisFunction::Kind k) {
+  switch (k) {
+    case G1BasisFunction::Kind::vertex: return "vertex";
+    case G1BasisFunction::Kind::edge: return "edge";
+    case G1BasisFunction::Kind::face: return "face";
+    case G1BasisFunction::Kind::vertex_pair: return "vertex_pair";
+    case G1BasisFunction::Kind::coupled: return "coupled";
+  }
+  return "?";
+}
+
+// What a function is attached to, in the OBJ's 1-based numbering: a vertex or face number,
+// an edge's two vertices, or null (coupled functions).
+void set_attached_to(Json& object, const QuadMesh& mesh, const G1BasisFunction& f) {
+  using K = G1BasisFunction::Kind;
+  if (f.kind == K::vertex || f.kind == K::face) {
+    object.set("attached_to", f.owner + 1);
+  } else if (f.kind == K::coupled) {
+    object.set_null("attached_to");
+  } else {
+    const auto& e = mesh.edge(f.owner);
+    object.set("attached_to", Json::array().push(double(e.v[0] + 1)).push(double(e.v[1] + 1)));
+  }
+}
+
+std::string label(const QuadMesh& mesh, const G1BasisFunction& f) {
+  using K = G1BasisFunction::Kind;
+  if (f.kind == K::vertex) return "vertex" + std::to_string(f.owner + 1);
+  if (f.kind == K::face) return "face" + std::to_string(f.owner + 1);
+  if (f.kind == K::coupled) return "coupled";
+  const auto& e = mesh.edge(f.owner);
+  return std::string(f.kind == K::edge ? "edge" : "pair") + std::to_string(e.v[0] + 1) + "-" + std::to_string(e.v[1] + 1);
+}
+
+// The functions --show selects.
+std::vector<int> selected_functions(const QuadMesh& mesh, const G1Basis& basis, const std::string& show,
+                                    std::string& description) {
+  using K = G1BasisFunction::Kind;
+  std::smatch m;
+  std::vector<int> out;
+  auto pick = [&](K kind, int owner) {
+    for (size_t j = 0; j < basis.functions.size(); ++j)
+      if (basis.functions[j].kind == kind && basis.functions[j].owner == owner) out.push_back(static_cast<int>(j));
+  };
+  auto bad = [&](const std::string& why) { return InputError("--show " + show + ": " + why); };
+  if (show == "all") {
+    if (basis.functions.size() > 400) throw bad(std::to_string(basis.functions.size()) + " functions are too many fields for one file (at most 400); choose vertex:N, edge:I-J or face:N");
+    for (size_t j = 0; j < basis.functions.size(); ++j) out.push_back(static_cast<int>(j));
+    description = "all functions";
+  } else if (show == "extraordinary") {
+    int chosen = 0;
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (!mesh.boundary_vertex(v) && mesh.valence(v) != 4) {
+        chosen = v;
+        break;
+      }
+    pick(K::vertex, chosen);
+    description = "the vertex functions of vertex " + std::to_string(chosen + 1) + " (valence " +
+                  std::to_string(mesh.valence(chosen)) + ")";
+  } else if (std::regex_match(show, m, std::regex(R"(vertex:(\d{1,9}))"))) {
+    const int v = std::stoi(m[1]) - 1;
+    if (v < 0 || v >= mesh.num_vertices()) throw bad("the mesh has vertices 1.." + std::to_string(mesh.num_vertices()));
+    pick(K::vertex, v);
+    description = "the vertex functions of vertex " + std::to_string(v + 1);
+  } else if (std::regex_match(show, m, std::regex(R"(edge:(\d{1,9})-(\d{1,9}))"))) {
+    const int a = std::stoi(m[1]) - 1, b = std::stoi(m[2]) - 1;
+    const int e = (a >= 0 && b >= 0 && a < mesh.num_vertices() && b < mesh.num_vertices()) ? mesh.find_edge(a, b) : -1;
+    if (e < 0) throw bad("no edge between vertices " + std::string(m[1]) + " and " + std::string(m[2]));
+    pick(K::edge, e);
+    pick(K::vertex_pair, e);
+    description = "the edge functions of edge " + std::string(m[1]) + "-" + std::string(m[2]);
+  } else if (std::regex_match(show, m, std::regex(R"(face:(\d{1,9}))"))) {
+    const int f = std::stoi(m[1]) - 1;
+    if (f < 0 || f >= mesh.num_faces()) throw bad("the mesh has faces 1.." + std::to_string(mesh.num_faces()));
+    pick(K::face, f);
+    description = "the face functions of face " + std::to_string(f + 1);
+  } else {
+    throw bad("expected vertex:N, edge:I-J, face:N, all or extraordinary");
+  }
+  return out;
+}
+
+void write_atomically(const std::string& file, const std::string& what, const std::function<void(const std::string&)>& write) {
+  const std::filesystem::path target(file);
+  const std::string tmp = (target.parent_path() / (".partial." + target.filename().string())).string();
+  try {
+    write(tmp);
+  } catch (const std::exception& e) {
+    std::filesystem::remove(tmp);
+    throw InputError(file + ": " + what + ": cannot write the file (" + e.what() + ")");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) {
+    std::filesystem::remove(tmp);
+    throw InputError(file + ": " + what + ": cannot write the file (" + ec.message() + ")");
+  }
+}
+
+void export_basis(const std::string& file, const BasisOptions& o, const QuadMesh& mesh, const G1Basis& basis) {
+  const int n = 2 * basis.k - basis.r + 1;
+  Json fs = Json::array();
+  for (const auto& f : basis.functions) {
+    std::map<int, std::vector<double>> per_face;
+    for (const auto& [c, v] : f.coefficients) {
+      auto& coefficients = per_face[static_cast<int>(c / (n * n))];
+      coefficients.resize(static_cast<size_t>(n) * n, 0.0);
+      coefficients[c % (n * n)] = v;
+    }
+    Json faces = Json::array();
+    for (const auto& [face, coefficients] : per_face) {
+      Json a = Json::array();
+      for (double v : coefficients) a.push(v);
+      faces.push(Json::object().set("face", face + 1).set("coefficients", a));
+    }
+    Json entry = Json::object();
+    entry.set("kind", kind_name(f.kind));
+    set_attached_to(entry, mesh, f);
+    fs.push(entry.set("faces", faces));
+  }
+  Json root = Json::object();
+  root.set("mesh", o.g1_mesh).set("degree", basis.k).set("split_smoothness", basis.r).set("gluing", o.gluing)
+      .set("coefficients_per_face", n * n)
+      .set("layout", "faces numbered 1.. in the OBJ's order; coefficient (i, j) of the face's B-spline basis "
+                     "N_i(s) N_j(t) (knots 0^(k+1), (1/2)^(k-r), 1^(k+1); s from the face's 1st to 2nd vertex, "
+                     "t from its 1st to 4th) at index i * n + j (row-major in s), n = 2k - r + 1")
+      .set("functions", fs);
+  write_atomically(file, "--export", [&](const std::string& path) {
+    std::ofstream out(path);
+    out << root.dump() << "\n";
+    if (!out) throw std::runtime_error("write failed");
+  });
+}
+
+// The fitted G1 surface as Bezier cells with the selected functions as point fields.
+void write_vtk(const std::string& file, const QuadMesh& mesh, const G1Basis& basis, const std::vector<int>& show,
+               double& deviation) {
+  const Eigen::MatrixX3d fit = g1_fit_bilinear(mesh, basis, &deviation);
+  const BezierMesh bm = g1_bezier_mesh(mesh, basis);
+  const std::vector<Eigen::MatrixXd> points = g1_cell_bernstein(bm, fit);
+  BezierSurface s;
+  s.points = points;
+  s.degree.assign(bm.num_cells(), basis.k);
+  Eigen::VectorXd face(bm.num_cells());
+  for (int c = 0; c < bm.num_cells(); ++c) face(c) = bm.cell(c).patch + 1;
+  s.cell_fields.emplace_back("face", face);
+  std::map<std::string, int> used;
+  for (int j : show) {
+    std::vector<Eigen::VectorXd> per_cell(bm.num_cells());
+    for (int c = 0; c < bm.num_cells(); ++c) {
+      per_cell[c] = Eigen::VectorXd::Zero(bm.extraction(c).cols());
+      const auto ids = bm.functions(c);
+      for (size_t a = 0; a < ids.size(); ++a)
+        if (ids[a] == j) per_cell[c] = bm.extraction(c).row(static_cast<Eigen::Index>(a)).transpose();
+    }
+    const std::string base = label(mesh, basis.functions[j]);
+    s.point_fields.emplace_back(base + "_" + std::to_string(++used[base]), std::move(per_cell));
+  }
+  write_atomically(file, "--vtk", [&](const std::string& path) { write_bezier_surface_vtu(path, s); });
+}
+
+}  // namespace
 
 int g1_basis_command(const BasisOptions& o) {
   if (o.degree < 2 || o.degree > 10) throw InputError("--degree: k must be in [2, 10] for G1 splines, got " + std::to_string(o.degree));
   if (o.split_smoothness < 0 || o.split_smoothness >= o.degree)
     throw InputError("--split-smoothness: r must be in [0, k-1] = [0, " + std::to_string(o.degree - 1) + "], got " +
                      std::to_string(o.split_smoothness));
-  if (!o.export_file.empty()) throw InputError("--export: not available with --g1 yet (the local basis is not built)");
+  if (!o.vtk_file.empty() && std::filesystem::path(o.vtk_file).extension() != ".vtu")
+    throw InputError(o.vtk_file + ": --vtk: the file must end in .vtu");
   QuadMesh mesh;
   try {
     mesh = QuadMesh::read_obj(o.g1_mesh);
@@ -45,8 +218,21 @@ int g1_basis_command(const BasisOptions& o) {
                      violations.front() +
                      (violations.size() > 1 ? " (and " + std::to_string(violations.size() - 1) + " more)" : ""));
   const auto t0 = std::chrono::steady_clock::now();
-  const G1SpaceDimension d = g1_space_dimension(mesh, gluing, o.degree, o.split_smoothness);
+  const G1Basis basis = g1_basis(mesh, gluing, o.degree, o.split_smoothness);
+  const G1SpaceDimension& d = basis.space;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto t1 = std::chrono::steady_clock::now();
+  const double residual = g1_residual_max(mesh, gluing, basis);
+  std::string rank_method;
+  const long rank = g1_basis_rank(basis, &rank_method);
+  const double check_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  std::vector<int> show;
+  std::string show_description;
+  if (!o.vtk_file.empty()) show = selected_functions(mesh, basis, o.show, show_description);
+  if (!o.export_file.empty()) export_basis(o.export_file, o, mesh, basis);
+  const std::optional<long> formula = theorem_7_1_dimension(mesh, gluing, o.degree, o.split_smoothness);
+  double deviation = 0;
+  if (!o.vtk_file.empty()) write_vtk(o.vtk_file, mesh, basis, show, deviation);
   std::map<int, int> interior_valences, boundary_valences;
   int boundary_edges = 0;
   for (int v = 0; v < mesh.num_vertices(); ++v)
@@ -64,10 +250,20 @@ int g1_basis_command(const BasisOptions& o) {
         .set("boundary_edges", boundary_edges).set("euler_characteristic", mesh.euler_characteristic())
         .set("unknowns", d.unknowns).set("constraints", d.constraints).set("dimension", d.dimension)
         .set("rank_method", d.exact ? "exact data, rank modulo two primes" : "floating point SVD")
-        .set("seconds", seconds);
+        .set("functions", static_cast<double>(basis.functions.size()))
+        .set("counts", Json::object()
+                           .set("vertex", basis.counts[0]).set("edge", basis.counts[1]).set("face", basis.counts[2])
+                           .set("vertex_pair", basis.counts[3]).set("coupled", basis.counts[4]))
+        .set("g1_residual_max", residual).set("rank", rank).set("rank_method_basis", rank_method)
+        .set_bool("basis_exact", basis.exact).set("seconds", seconds).set("check_seconds", check_seconds);
     if (!d.exact) j.set("svd_tolerance", d.tolerance);
-    // The explicit local basis (vertex, edge and face functions) is not built yet.
-    j.set_null("functions").set_null("dimension_formula").set_null("counts").set_null("g1_residual_max").set_null("rank");
+    // Theorem 7.1 on closed meshes (its count of boundary edges and vertices is not stated).
+    if (formula)
+      j.set("dimension_formula", *formula);
+    else
+      j.set_null("dimension_formula");
+    if (!o.export_file.empty()) j.set("export", o.export_file);
+    if (!o.vtk_file.empty()) j.set("vtk", o.vtk_file).set("vtk_functions", static_cast<double>(show.size())).set("fit_deviation", deviation);
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
@@ -85,6 +281,26 @@ int g1_basis_command(const BasisOptions& o) {
               d.rank, d.constraints,
               d.exact ? "rational data, rank modulo two primes which agree" : "floating-point data, SVD rank at 1e-10",
               seconds);
+  if (formula)
+    std::printf("  Thm 7.1    %ld%s\n", *formula,
+                *formula == d.dimension ? " (agrees)"
+                                        : " (differs: k is below the separability of the gluing data, see docs/G1.md)");
+  else
+    std::printf("  Thm 7.1    not applied: the mesh has a boundary\n");
+  std::printf("  basis      %zu functions: %ld vertex, %ld edge, %ld face", basis.functions.size(), basis.counts[0],
+              basis.counts[1], basis.counts[2]);
+  if (basis.counts[3]) std::printf(", %ld vertex-pair", basis.counts[3]);
+  if (basis.counts[4]) std::printf(", %ld coupled (not local)", basis.counts[4]);
+  std::printf("\n             rank %ld (%s), largest relative G1 residual %.2e (%.3f s)\n", rank,
+              rank_method.c_str(), residual, check_seconds);
+  if (basis.counts[3] || basis.counts[4])
+    std::printf("             the degree is below the separability of some edges: vertex functions alone do not\n"
+                "             span the Taylor data there (see docs/G1.md)\n");
+  if (!o.export_file.empty()) std::printf("  export     %s\n", o.export_file.c_str());
+  if (!o.vtk_file.empty())
+    std::printf("  vtk        %s: the G1 surface fitted to the bilinear faces (largest coefficient deviation %.3g),\n"
+                "             with %s as point fields\n",
+                o.vtk_file.c_str(), deviation, show_description.c_str());
   return 0;
 }
 

@@ -88,7 +88,13 @@ int main(int argc, char** argv) {
   basis_cmd->add_option("--degree", basis.degree, "--g1: degree k of the face splines (>= 2)")->capture_default_str();
   basis_cmd->add_option("--split-smoothness", basis.split_smoothness, "--g1: smoothness r at the 4-split, 0 <= r < k")->capture_default_str();
   basis_cmd->add_option("--gluing", basis.gluing, "--g1: symmetric | geometric | FILE.json (per-edge a, b, c)")->capture_default_str();
-  basis_cmd->add_option("--export", basis.export_file, "Write every function's local knot vectors to this JSON file");
+  basis_cmd->add_option("--export", basis.export_file,
+                        "Write every function to this JSON file (local knot vectors; with --g1, per-face B-spline coefficients)");
+  basis_cmd->add_option("--vtk", basis.vtk_file,
+                        "--g1: write the G1 surface fitted to the mesh, with the --show functions as fields, to this .vtu");
+  basis_cmd->add_option("--show", basis.show,
+                        "--g1 --vtk: functions to write: vertex:N (OBJ index), edge:I-J, face:N (1-based), all")
+      ->capture_default_str();
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
 
   knotwork::DimensionOptions dim;

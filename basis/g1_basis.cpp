@@ -11,6 +11,10 @@
 #include <unordered_map>
 
 #include "basis/bspline_basis.hpp"
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseQR>
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCore>
 
 namespace knotwork {
 
@@ -489,7 +493,11 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
 }
 
 double g1_residual_max(const QuadMesh& mesh, const GluingData& gluing, const G1Basis& basis) {
-  const auto rows = g1_condition_rows(mesh, gluing, basis.k, basis.r);
+  // Rows per edge; a function is checked on the edges of the faces it lives on (on every
+  // other edge both sides of every row are zero).
+  std::vector<std::vector<std::vector<std::pair<long, double>>>> rows(mesh.num_edges());
+  for (int e = 0; e < mesh.num_edges(); ++e)
+    if (!mesh.edge(e).boundary()) rows[e] = g1_condition_rows(mesh, gluing, basis.k, basis.r, e);
   double worst = 0;
   std::unordered_map<long, double> x;
   for (const auto& f : basis.functions) {
@@ -500,29 +508,49 @@ double g1_residual_max(const QuadMesh& mesh, const GluingData& gluing, const G1B
       scale = std::max(scale, std::abs(v));
     }
     if (scale == 0) return INFINITY;  // a zero function is no basis function
-    for (const auto& row : rows) {
-      double sum = 0, size = 0;
-      for (const auto& [c, a] : row) {
-        size += std::abs(a);
-        const auto it = x.find(c);
-        if (it != x.end()) sum += a * it->second;
+    std::set<int> edges;
+    for (int face : support_faces(f, basis.k, basis.r))
+      for (int side = 0; side < 4; ++side) edges.insert(mesh.face_edge(face, side));
+    for (int e : edges)
+      for (const auto& row : rows[e]) {
+        double sum = 0, size = 0;
+        for (const auto& [c, a] : row) {
+          size += std::abs(a);
+          const auto it = x.find(c);
+          if (it != x.end()) sum += a * it->second;
+        }
+        if (size > 0) worst = std::max(worst, std::abs(sum) / (size * scale));
       }
-      if (size > 0) worst = std::max(worst, std::abs(sum) / (size * scale));
-    }
   }
   return worst;
 }
 
-long g1_basis_rank(const G1Basis& basis) {
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(basis.unknowns(), static_cast<Eigen::Index>(basis.functions.size()));
-  for (size_t j = 0; j < basis.functions.size(); ++j)
-    for (const auto& [c, v] : basis.functions[j].coefficients) M(c, static_cast<Eigen::Index>(j)) = v;
-  if (M.cols() == 0) return 0;
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(M);
-  const auto& sv = svd.singularValues();
-  long rank = 0;
-  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
-  return rank;
+long g1_basis_rank(const G1Basis& basis, std::string* method) {
+  const Eigen::Index m = basis.unknowns(), n = static_cast<Eigen::Index>(basis.functions.size());
+  if (n == 0) return 0;
+  if (static_cast<double>(m) * static_cast<double>(n) <= 2.5e7) {
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, n);
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (const auto& [c, v] : basis.functions[j].coefficients) M(c, j) = v;
+    Eigen::BDCSVD<Eigen::MatrixXd> svd(M);
+    const auto& sv = svd.singularValues();
+    long rank = 0;
+    for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
+    if (method) *method = "SVD, singular values above 1e-10 * largest";
+    return rank;
+  }
+  // Too large for a dense SVD: sparse rank-revealing QR.
+  Eigen::SparseMatrix<double> M(m, n);
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (const auto& [c, v] : basis.functions[j].coefficients) entries.emplace_back(c, j, v);
+  M.setFromTriplets(entries.begin(), entries.end());
+  M.makeCompressed();
+  Eigen::SparseQR<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> qr;
+  qr.setPivotThreshold(1e-10);
+  qr.compute(M);
+  if (method) *method = "sparse QR, pivots above 1e-10";
+  return qr.rank();
 }
 
 std::vector<int> support_faces(const G1BasisFunction& f, int k, int r) {
@@ -589,6 +617,65 @@ BezierMesh g1_bezier_mesh(const QuadMesh& mesh, const G1Basis& basis) {
         out.add_cell(cell, ids, out.add_extraction(std::move(C)));
       }
   return out;
+}
+
+}  // namespace knotwork
+
+namespace knotwork {
+
+Eigen::MatrixXd g1_face_coefficients(const G1Basis& basis, const Eigen::MatrixXd& c) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(basis.unknowns(), c.cols());
+  for (size_t j = 0; j < basis.functions.size(); ++j)
+    for (const auto& [u, v] : basis.functions[j].coefficients) out.row(u) += v * c.row(static_cast<Eigen::Index>(j));
+  return out;
+}
+
+std::vector<Eigen::MatrixXd> g1_cell_bernstein(const BezierMesh& mesh, const Eigen::MatrixXd& c) {
+  std::vector<Eigen::MatrixXd> out(mesh.num_cells());
+  for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+    const auto ids = mesh.functions(cell);
+    const Eigen::MatrixXd& C = mesh.extraction(cell);
+    out[cell] = Eigen::MatrixXd::Zero(C.cols(), c.cols());
+    for (size_t a = 0; a < ids.size(); ++a) out[cell] += C.row(static_cast<Eigen::Index>(a)).transpose() * c.row(ids[a]);
+  }
+  return out;
+}
+
+Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, double* deviation) {
+  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
+  // Greville abscissae: a B-spline combination with these as coefficients is the identity,
+  // so the bilinear face has the bilinear map at (xi_i, xi_j) as its coefficients.
+  std::vector<double> knots(k + 1, 0.0);
+  knots.insert(knots.end(), k - r, 0.5);
+  knots.insert(knots.end(), k + 1, 1.0);
+  std::vector<double> xi(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    for (int l = 1; l <= k; ++l) xi[i] += knots[i + l];
+    xi[i] /= k;
+  }
+  Eigen::MatrixX3d target(basis.unknowns(), 3);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const auto& v = mesh.face(f);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const double s = xi[i], t = xi[j];
+        target.row(g1_unknown(f, i, j, k, r)) =
+            ((1 - s) * (1 - t) * mesh.vertex(v[0]) + s * (1 - t) * mesh.vertex(v[1]) + s * t * mesh.vertex(v[2]) +
+             (1 - s) * t * mesh.vertex(v[3]))
+                .transpose();
+      }
+  }
+  Eigen::SparseMatrix<double> M(basis.unknowns(), static_cast<Eigen::Index>(basis.functions.size()));
+  std::vector<Eigen::Triplet<double>> entries;
+  for (size_t j = 0; j < basis.functions.size(); ++j)
+    for (const auto& [u, x] : basis.functions[j].coefficients) entries.emplace_back(u, static_cast<int>(j), x);
+  M.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SparseMatrix<double> normal = M.transpose() * M;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("G1 least-squares fit: the normal equations are singular");
+  const Eigen::MatrixX3d c = solver.solve(Eigen::MatrixX3d(M.transpose() * target));
+  if (deviation) *deviation = (M * c - target).rowwise().norm().maxCoeff();
+  return c;
 }
 
 }  // namespace knotwork

@@ -1,5 +1,6 @@
 #pragma once
 #include <array>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -55,8 +56,9 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
 // max over functions and rows of |C_row x| / (sum_j |C_row,j| * max|x|).
 double g1_residual_max(const QuadMesh& mesh, const GluingData& gluing, const G1Basis& basis);
 
-// Numerical rank of the functions' coefficient matrix (SVD, tolerance 1e-10 * largest).
-long g1_basis_rank(const G1Basis& basis);
+// Numerical rank of the functions' coefficient matrix: SVD (tolerance 1e-10 * largest) up
+// to 2.5e7 matrix entries, sparse rank-revealing QR beyond; `method` says which.
+long g1_basis_rank(const G1Basis& basis, std::string* method = nullptr);
 
 // The faces a function lives on (sorted).
 std::vector<int> support_faces(const G1BasisFunction& f, int k, int r);
@@ -65,5 +67,23 @@ std::vector<int> support_faces(const G1BasisFunction& f, int k, int r);
 // the 4-split, patch = face, index_u/index_v = which half in s/t), boundary id 0
 // ("boundary") on the mesh's boundary edges.
 BezierMesh g1_bezier_mesh(const QuadMesh& mesh, const G1Basis& basis);
+
+}  // namespace knotwork
+
+namespace knotwork {
+
+// The least-squares projection onto S_k^{1,r} (in the B-spline coefficients) of the G0
+// spline made of the mesh's bilinear faces, as the paper does for its Fig. 6: returns the
+// coefficient of every basis function (one column per coordinate x, y, z) and, in
+// `deviation`, the largest distance between a projected and a bilinear coefficient.
+Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, double* deviation = nullptr);
+
+// Per-face B-spline coefficients (rows g1_unknown(face, i, j)) of sum_j c_j phi_j, for each
+// column of c.
+Eigen::MatrixXd g1_face_coefficients(const G1Basis& basis, const Eigen::MatrixXd& c);
+
+// Bernstein coefficients of the same on each BezierMesh cell of g1_bezier_mesh (rows: the
+// cell's (k+1)^2 Bernstein polynomials, a + (k+1) b with a along s).
+std::vector<Eigen::MatrixXd> g1_cell_bernstein(const BezierMesh& mesh, const Eigen::MatrixXd& c);
 
 }  // namespace knotwork

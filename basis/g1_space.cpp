@@ -1,6 +1,7 @@
 #include "basis/g1_space.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -396,6 +397,94 @@ G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& glui
   }
   d.dimension = d.unknowns - d.rank;
   return d;
+}
+
+}  // namespace knotwork
+
+namespace knotwork {
+
+namespace {
+
+// Rows of the syzygy conditions of one edge's data, over the unknowns: per half h, the
+// coefficients (powers of u) of A_h (degree k-1), B_h and C_h (degree k).
+template <class Scalar>
+std::vector<std::vector<std::pair<long, Scalar>>> syzygy_rows(const EdgeGluing& g, int k, int r) {
+  const int na = k, nb = k + 1, per_half = na + 2 * nb;
+  auto A = [&](int h, int j) { return static_cast<long>(h * per_half + j); };
+  auto B = [&](int h, int j) { return static_cast<long>(h * per_half + na + j); };
+  auto C = [&](int h, int j) { return static_cast<long>(h * per_half + na + nb + j); };
+  std::vector<std::vector<std::pair<long, Scalar>>> rows;
+  const int degree = k + std::max({g.a.degree(), g.b.degree(), g.c.degree(), 0});
+  for (int h = 0; h < 2; ++h)
+    for (int q = 0; q <= degree; ++q) {  // A a + B b - C c = 0 at degree + 1 points of the half
+      const Scalar u = Scalar(h) / 2 + Scalar(q + 1) / (2 * (degree + 2));
+      const Scalar a = gluing_value(g.a, u), b = gluing_value(g.b, u), c = gluing_value(g.c, u);
+      std::vector<std::pair<long, Scalar>> row;
+      Scalar power(1);
+      for (int j = 0; j <= k; ++j) {
+        if (j < na) row.emplace_back(A(h, j), a * power);
+        row.emplace_back(B(h, j), b * power);
+        row.emplace_back(C(h, j), -c * power);
+        power *= u;
+      }
+      rows.push_back(std::move(row));
+    }
+  // Derivatives 0..m of the two pieces agree at u = 1/2 (A: C^{r-1}; B, C: C^r).
+  auto smooth = [&](auto column, int count, int order) {
+    for (int m = 0; m <= order; ++m) {
+      std::vector<std::pair<long, Scalar>> row;
+      for (int j = m; j < count; ++j) {
+        Scalar d(1);
+        for (int i = 0; i < m; ++i) d *= Scalar(j - i);
+        for (int i = 0; i < j - m; ++i) d /= 2;
+        row.emplace_back(column(0, j), d);
+        row.emplace_back(column(1, j), -d);
+      }
+      rows.push_back(std::move(row));
+    }
+  };
+  smooth(A, na, r - 1);
+  smooth(B, nb, r);
+  smooth(C, nb, r);
+  return rows;
+}
+
+}  // namespace
+
+long gluing_syzygy_dimension(const EdgeGluing& g, int k, int r) {
+  const long unknowns = 2L * (k + 2 * (k + 1));
+  if (g.a.exact && g.b.exact && g.c.exact) {
+    const auto rows = syzygy_rows<mpq_class>(g, k, r);
+    std::vector<SparseRationalRow> sparse(rows.size());
+    for (size_t i = 0; i < rows.size(); ++i) sparse[i].terms = rows[i];
+    return unknowns - rank_exact(sparse, unknowns);
+  }
+  const auto rows = syzygy_rows<double>(g, k, r);
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), unknowns);
+  for (size_t i = 0; i < rows.size(); ++i)
+    for (const auto& [c, x] : rows[i]) M(static_cast<Eigen::Index>(i), c) += x;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(M);
+  const auto& sv = svd.singularValues();
+  long rank = 0;
+  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > 1e-10 * sv(0);
+  return unknowns - rank;
+}
+
+std::optional<long> theorem_7_1_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r) {
+  if (!mesh.closed()) return std::nullopt;
+  const long F2 = mesh.num_faces(), F1 = mesh.num_edges(), F0 = mesh.num_vertices();
+  // Crossing vertices: a = 0 at that end of every edge around it (Definition 2.3).
+  std::vector<bool> crossing(mesh.num_vertices(), true);
+  long syzygies = 0;
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const EdgeGluing& g = *gluing.edges[e];
+    if (std::abs(g.a(0) / g.c(0)) > 1e-12) crossing[mesh.edge(e).v[0]] = false;
+    if (std::abs(g.a(1) / g.c(1)) > 1e-12) crossing[mesh.edge(e).v[1]] = false;
+    syzygies += gluing_syzygy_dimension(g, k, r);
+  }
+  const long Fplus = std::count(crossing.begin(), crossing.end(), true);
+  const long interior = std::max(2L * k - r - 3, 0L);
+  return interior * interior * F2 + syzygies + 4 * F2 - 9 * F1 + 3 * F0 + Fplus;
 }
 
 }  // namespace knotwork

@@ -69,6 +69,17 @@ struct G1SpaceDimension {
 // `floating` forces the floating-point path (an independent cross-check of the exact one).
 G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false);
 
+// dim Syz_k^{r-1,r,r} of one edge's data (Sec. 4.2): triples (A, B, C), A of degree k-1 and
+// C^{r-1} at 1/2, B and C of degree k and C^r (A the derivative along the edge, B and C the
+// cross-boundary derivatives), with A a + B b - C c = 0. Exact for rational data.
+long gluing_syzygy_dimension(const EdgeGluing& g, int k, int r);
+
+// Theorem 7.1: (2k-r-3)^2 F2 + sum over edges of dim Syz + 4 F2 - 9 F1 + 3 F0 + F+ (F+ the
+// crossing vertices, where a = 0 on every edge). Stated for k at or above the separability
+// of every edge; the count of the theorem is for closed meshes (boundary edges and
+// vertices count differently, Remark 4.14): nullopt on meshes with a boundary.
+std::optional<long> theorem_7_1_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
+
 // The rows of conditions (2) and (3) of one interior edge (all interior edges when edge < 0),
 // as sparse rows over the unknowns g1_unknown(...): point evaluations at k + deg + 1 points
 // of each half of the edge, enough to make them polynomial identities there. The exact

@@ -165,6 +165,62 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
   write_grid(path, grid);
 }
 
+void write_bezier_surface_vtu(const std::string& path, const BezierSurface& s) {
+  vtkNew<vtkUnstructuredGrid> grid;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  const int nc = static_cast<int>(s.points.size());
+  vtkIdType total = 0;
+  for (int c = 0; c < nc; ++c) total += s.points[c].rows();
+  points->SetNumberOfPoints(total);
+  auto weights = scalar_array("RationalWeights", total);
+  auto degrees = scalar_array("HigherOrderDegrees", nc, 3);
+  std::vector<vtkSmartPointer<vtkDoubleArray>> fields;
+  for (const auto& [name, values] : s.point_fields) {
+    if (static_cast<int>(values.size()) != nc) throw std::invalid_argument("point field " + name + ": one vector per cell is needed");
+    fields.push_back(scalar_array(name.c_str(), total));
+  }
+  grid->Allocate(nc);
+  vtkIdType offset = 0;
+  std::vector<vtkIdType> ids;
+  for (int c = 0; c < nc; ++c) {
+    const int p = s.degree[c], nb = (p + 1) * (p + 1);
+    if (s.points[c].rows() != nb) throw std::invalid_argument("cell " + std::to_string(c) + ": (p+1)^2 control points needed");
+    const int order[2] = {p, p};
+    ids.assign(nb, 0);
+    for (int j = 0; j <= p; ++j)
+      for (int i = 0; i <= p; ++i) {
+        const int b = i + (p + 1) * j;
+        const int local = vtkHigherOrderQuadrilateral::PointIndexFromIJK(i, j, order);
+        const vtkIdType id = offset + local;
+        ids[local] = id;
+        points->SetPoint(id, s.points[c](b, 0), s.points[c](b, 1), s.points[c](b, 2));
+        weights->SetValue(id, 1.0);
+        for (size_t f = 0; f < fields.size(); ++f) fields[f]->SetValue(id, s.point_fields[f].second[c](b));
+      }
+    grid->InsertNextCell(VTK_BEZIER_QUADRILATERAL, nb, ids.data());
+    const double deg[3] = {double(p), double(p), 1.0};
+    degrees->SetTuple(c, deg);
+    offset += nb;
+  }
+  grid->SetPoints(points);
+  grid->GetPointData()->SetRationalWeights(weights);
+  grid->GetCellData()->SetHigherOrderDegrees(degrees);
+  for (size_t f = 0; f < fields.size(); ++f) {
+    if (f == 0)
+      grid->GetPointData()->SetScalars(fields[f]);
+    else
+      grid->GetPointData()->AddArray(fields[f]);
+  }
+  for (const auto& [name, values] : s.cell_fields) {
+    if (values.size() != nc) throw std::invalid_argument("cell field " + name + ": one value per cell is needed");
+    auto a = scalar_array(name.c_str(), nc);
+    for (int c = 0; c < nc; ++c) a->SetValue(c, values[c]);
+    grid->GetCellData()->AddArray(a);
+  }
+  write_grid(path, grid);
+}
+
 void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coeffs, const ExactSolution* exact, int samples) {
   const int s = samples, nc = mesh.num_cells(), per_cell = (s + 1) * (s + 1);

@@ -26,6 +26,18 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
                       const Eigen::VectorXd& coefficients, const ExactSolution* exact,
                       const CellFields& cell_fields = {});
 
+// Polynomial Bezier quadrilaterals in R^3 given by their Bernstein coefficients (surfaces,
+// or planar domains, with no geometry map behind them): per cell its degree (both
+// directions), control points ((p+1)^2 rows x 3, Bernstein index a + (p+1) b) and, per named
+// point field, the field's Bernstein coefficients on the cell. Exact: nothing is sampled.
+struct BezierSurface {
+  std::vector<int> degree;
+  std::vector<Eigen::MatrixXd> points;
+  std::vector<std::pair<std::string, std::vector<Eigen::VectorXd>>> point_fields;
+  CellFields cell_fields;
+};
+void write_bezier_surface_vtu(const std::string& path, const BezierSurface& surface);
+
 // The robust fallback: every cell cut into samples x samples linear quads with exact
 // values at their corners.
 void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,

@@ -3,11 +3,16 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <map>
 #include <random>
 
+#include "basis/g1_space.hpp"
+#include "basis/quad_mesh.hpp"
+#include "cases/json_input.hpp"
 #include "tests/cli_sandbox.hpp"
 
 using namespace cli_test;
+using namespace knotwork;
 
 namespace {
 
@@ -213,4 +218,87 @@ TEST_CASE("basis --g1: dimensions of the shipped meshes, and bad input", "[cli][
   box.file("g.json", R"({"gluing": [{"edge": [2, 5], "a": 0, "b": -1, "c": 1}]})");
   rejected("--g1 " + three + " --gluing g.json", {"boundary edge"});
   rejected("--g1 " + three + " " + three, {"one input"});
+}
+
+TEST_CASE("basis --g1: the basis in JSON, --export per-face coefficients, --vtk surface and functions", "[cli][g1]") {
+  Sandbox box;
+  const std::string three = kSource + "/cases/meshes/three_quads.obj";
+  const Result r = box.run("basis --json --g1 " + three + " --degree 4 --split-smoothness 1 --export basis.json "
+                           "--vtk basis.vtu --show vertex:1");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* field : {"\"functions\": 141", "\"rank\": 141", "\"vertex\": 30", "\"edge\": 63", "\"face\": 48",
+                            "\"coupled\": 0", "\"dimension_formula\": null", "\"vtk_functions\": 6"})
+    REQUIRE(has(r.out, field));
+  REQUIRE(has(r.out, "\"g1_residual_max\": "));
+
+  // The export: every function as per-face arrays of (2k - r + 1)^2 = 64 coefficients,
+  // and each one satisfies the G1 conditions of the mesh read independently here.
+  const JsonValue root = read_json_file((box.dir() / "basis.json").string());
+  const JsonValue* functions = nullptr;
+  for (const auto& [key, value] : root.members)
+    if (key == "functions") functions = &value;
+  REQUIRE(functions);
+  REQUIRE(functions->items.size() == 141);
+  const QuadMesh mesh = QuadMesh::read_obj(three);
+  const auto rows = g1_condition_rows(mesh, symmetric_gluing(mesh), 4, 1);
+  std::map<std::string, int> kinds;
+  for (const auto& f : functions->items) {
+    std::map<long, double> x;
+    double scale = 0;
+    for (const auto& [key, value] : f.members) {
+      if (key == "kind") ++kinds[value.text];
+      if (key != "faces") continue;
+      for (const auto& face : value.items) {
+        REQUIRE(face.members.size() == 2);
+        const int index = static_cast<int>(face.members[0].second.number) - 1;
+        REQUIRE(index >= 0);
+        REQUIRE(index < 3);
+        const auto& c = face.members[1].second.items;
+        REQUIRE(c.size() == 64);
+        for (int i = 0; i < 64; ++i) {
+          x[index * 64L + i] = c[i].number;
+          scale = std::max(scale, std::abs(c[i].number));
+        }
+      }
+    }
+    REQUIRE(scale > 0);
+    for (const auto& row : rows) {
+      double s = 0, size = 0;
+      for (const auto& [col, a] : row) {
+        size += std::abs(a);
+        if (x.count(col)) s += a * x[col];
+      }
+      REQUIRE(std::abs(s) <= 1e-11 * size * scale);
+    }
+  }
+  REQUIRE(kinds["vertex"] == 30);
+  REQUIRE(kinds["edge"] == 63);
+  REQUIRE(kinds["face"] == 48);
+
+  const std::string vtu = slurp(box.dir() / "basis.vtu");
+  REQUIRE(has(vtu, "HigherOrderDegrees"));
+  for (int i = 1; i <= 6; ++i) REQUIRE(has(vtu, "vertex1_" + std::to_string(i)));
+  REQUIRE(!has(vtu, "vertex1_7"));
+
+  // Closed surface: Theorem 7.1 applies and agrees with the null space.
+  const Result cube = box.run("basis --json --g1 " + kSource + "/cases/meshes/cube.obj --degree 4 --split-smoothness 1");
+  REQUIRE(has(cube.out, "\"dimension\": 192"));
+  REQUIRE(has(cube.out, "\"dimension_formula\": 192"));
+
+  auto rejected = [&](const std::string& args, const std::vector<std::string>& mentions) {
+    const Result b = box.run("basis " + args);
+    INFO(args << "\n" << b.err);
+    REQUIRE(b.code != 0);
+    REQUIRE(b.code < 128);
+    REQUIRE(std::count(b.err.begin(), b.err.end(), '\n') == 1);
+    for (const auto& m : mentions) REQUIRE(has(b.err, m));
+  };
+  rejected("--g1 " + three + " --vtk out.txt", {"out.txt", "--vtk", ".vtu"});
+  rejected("--g1 " + three + " --vtk bad.vtu --show vertex:99", {"--show vertex:99", "vertices 1..7"});
+  rejected("--g1 " + three + " --vtk bad.vtu --show edge:2-3", {"no edge between vertices 2 and 3"});
+  rejected("--g1 " + three + " --vtk bad.vtu --show corner", {"--show corner", "expected"});
+  rejected("--g1 " + three + " --export no/such/dir/basis.json", {"no/such/dir/basis.json", "--export"});
+  REQUIRE(!fs::exists(box.dir() / "bad.vtu"));
+  for (const auto& entry : fs::directory_iterator(box.dir())) REQUIRE(!has(entry.path().filename().string(), "partial"));
 }
