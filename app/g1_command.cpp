@@ -217,6 +217,12 @@ int g1_basis_command(const BasisOptions& o) {
     throw InputError((o.gluing == "symmetric" || o.gluing == "geometric" ? o.g1_mesh : o.gluing) + ": " +
                      violations.front() +
                      (violations.size() > 1 ? " (and " + std::to_string(violations.size() - 1) + " more)" : ""));
+  // Irrational data have no exact rank: the dimension is a dense SVD, cubic in the unknowns.
+  const long unknowns = static_cast<long>(mesh.num_faces()) * (2 * o.degree - o.split_smoothness + 1) *
+                        (2 * o.degree - o.split_smoothness + 1);
+  if (!gluing.exact() && unknowns > 6000)
+    throw InputError(o.g1_mesh + ": --gluing " + o.gluing + ": the data are not rational, and checking the space's dimension by SVD over " +
+                     std::to_string(unknowns) + " unknowns (more than 6000) is too slow; use rational data (a JSON file) or a smaller mesh");
   const auto t0 = std::chrono::steady_clock::now();
   const G1Basis basis = g1_basis(mesh, gluing, o.degree, o.split_smoothness);
   const G1SpaceDimension& d = basis.space;

@@ -93,7 +93,8 @@ int main(int argc, char** argv) {
   basis_cmd->add_option("--vtk", basis.vtk_file,
                         "--g1: write the G1 surface fitted to the mesh, with the --show functions as fields, to this .vtu");
   basis_cmd->add_option("--show", basis.show,
-                        "--g1 --vtk: functions to write: vertex:N (OBJ index), edge:I-J, face:N (1-based), all")
+                        "--g1 --vtk: functions to write: vertex:N (OBJ index), edge:I-J, face:N (1-based), all, or "
+                        "extraordinary (the first interior vertex of valence != 4)")
       ->capture_default_str();
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
 

@@ -483,6 +483,76 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
     build<mpq_class>(mesh, gluing, basis);
   else
     build<double>(mesh, gluing, basis);
+  // A vertex function plus any edge function of its edges is as good a vertex function; keep
+  // the one orthogonal to them (coefficient space), which removes the large bumps along the
+  // edges that the echelon form leaves (the paper's printed functions have them too).
+  {
+    std::vector<std::vector<int>> of_edge(mesh.num_edges());
+    for (size_t j = 0; j < basis.functions.size(); ++j)
+      if (basis.functions[j].kind == G1BasisFunction::Kind::edge) of_edge[basis.functions[j].owner].push_back(static_cast<int>(j));
+    for (auto& f : basis.functions) {
+      if (f.kind != G1BasisFunction::Kind::vertex) continue;
+      std::set<int> edges(mesh.ring(f.owner).edges.begin(), mesh.ring(f.owner).edges.end());
+      LocalColumns cols;
+      for (const auto& [c, v] : f.coefficients) cols.add(c);
+      std::vector<int> others;
+      for (int e : edges)
+        for (int j : of_edge[e]) {
+          others.push_back(j);
+          for (const auto& [c, v] : basis.functions[j].coefficients) cols.add(c);
+        }
+      if (others.empty()) continue;
+      Eigen::MatrixXd E = Eigen::MatrixXd::Zero(cols.size(), static_cast<Eigen::Index>(others.size()));
+      for (size_t i = 0; i < others.size(); ++i)
+        for (const auto& [c, v] : basis.functions[others[i]].coefficients) E(cols.position[c], static_cast<Eigen::Index>(i)) = v;
+      Eigen::VectorXd x = Eigen::VectorXd::Zero(cols.size());
+      for (const auto& [c, v] : f.coefficients) x(cols.position[c]) = v;
+      x -= E * E.colPivHouseholderQr().solve(x);
+      f.coefficients.clear();
+      for (int i = 0; i < cols.size(); ++i)
+        if (std::abs(x(i)) > 1e-14 * x.cwiseAbs().maxCoeff()) f.coefficients.emplace_back(cols.global[i], x(i));
+    }
+  }
+  // Within each vertex's functions, the first is the one with value 1 at the vertex and the
+  // others vanish there (what users plot and what the paper lists first).
+  {
+    std::map<int, std::vector<size_t>> at_vertex;
+    for (size_t j = 0; j < basis.functions.size(); ++j)
+      if (basis.functions[j].kind == G1BasisFunction::Kind::vertex) at_vertex[basis.functions[j].owner].push_back(j);
+    for (const auto& [v, ids] : at_vertex) {
+      const long corner = frame_unknown(mesh.ring(v).faces[0], mesh.ring(v).corners[0], 0, 0, k, r);
+      auto value = [&](size_t j) {
+        for (const auto& [c, x] : basis.functions[j].coefficients)
+          if (c == corner) return x;
+        return 0.0;
+      };
+      size_t best = ids[0];
+      for (size_t j : ids)
+        if (std::abs(value(j)) > std::abs(value(best))) best = j;
+      const double pivot = value(best);
+      if (pivot == 0) continue;
+      std::swap(basis.functions[ids[0]], basis.functions[best]);
+      for (auto& [c, x] : basis.functions[ids[0]].coefficients) x /= pivot;
+      std::map<long, double> first(basis.functions[ids[0]].coefficients.begin(), basis.functions[ids[0]].coefficients.end());
+      for (size_t i = 1; i < ids.size(); ++i) {
+        const double f = value(ids[i]);
+        if (f == 0) continue;
+        std::map<long, double> x(basis.functions[ids[i]].coefficients.begin(), basis.functions[ids[i]].coefficients.end());
+        for (const auto& [c, y] : first) x[c] -= f * y;
+        x[corner] = 0;  // exactly: the values at the vertex agree on every face
+        basis.functions[ids[i]].coefficients.clear();
+        for (const auto& [c, y] : x)
+          if (y != 0) basis.functions[ids[i]].coefficients.emplace_back(c, y);
+      }
+    }
+  }
+  // Largest coefficient +1: comparable scales for assembly and plots, a definite sign.
+  for (auto& f : basis.functions) {
+    double largest = 0;
+    for (const auto& [c, v] : f.coefficients)
+      if (std::abs(v) > std::abs(largest)) largest = v;
+    for (auto& [c, v] : f.coefficients) v /= largest;
+  }
   for (const auto& f : basis.functions) ++basis.counts[static_cast<int>(f.kind)];
   const long count = static_cast<long>(basis.functions.size());
   if (count != basis.space.dimension)

@@ -10,7 +10,7 @@
 namespace knotwork {
 
 // One basis function of S_k^{1,r}(M), as its nonzero B-spline coefficients over the faces:
-// (g1_unknown(face, i, j, k, r), value).
+// (g1_unknown(face, i, j, k, r), value), scaled so that the largest in magnitude is +1.
 struct G1BasisFunction {
   enum class Kind { vertex, edge, face, vertex_pair, coupled };
   Kind kind = Kind::face;

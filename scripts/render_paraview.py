@@ -9,7 +9,9 @@ RationalWeights are interpreted by ParaView itself), colours by `field` (default
 `solution`; --cell-data for a per-cell field such as the adaptive error indicator, --log
 for a logarithmic colour scale), shows the cell edges (or, with --lines, the knot lines of
 a .vtp written by `knotwork adapt`), and saves a PNG. Needs
-`scripts/install-deps.sh --paraview`; run it through render_paraview.sh.
+`scripts/install-deps.sh --paraview`; run it through render_paraview.sh. --camera X,Y,Z
+views a surface in R^3 from that direction (z up), e.g. the G1 surface of
+`knotwork basis --g1 cases/meshes/cube.obj --vtk cube.vtu`.
 """
 import argparse
 
@@ -23,6 +25,8 @@ parser.add_argument("field", nargs="?", default="solution")
 parser.add_argument("--cell-data", action="store_true")
 parser.add_argument("--log", action="store_true")
 parser.add_argument("--lines")
+parser.add_argument("--camera", help="x,y,z: look at the data from this direction (3D surfaces); default from +z")
+parser.add_argument("--no-edges", action="store_true", help="hide the cell edges")
 args = parser.parse_args()
 
 reader = XMLUnstructuredGridReader(FileName=[args.source])
@@ -35,7 +39,7 @@ try:
 except AttributeError:
     pass
 display = Show(reader, view)
-display.SetRepresentationType("Surface" if args.lines else "Surface With Edges")
+display.SetRepresentationType("Surface" if args.lines or args.no_edges else "Surface With Edges")
 display.NonlinearSubdivisionLevel = 4  # draw the curved Bezier cells smoothly
 display.EdgeColor = [0.2, 0.2, 0.2]
 ColorBy(display, ("CELLS" if args.cell_data else "POINTS", args.field))
@@ -60,8 +64,13 @@ if args.lines:
     shown.AmbientColor = [0, 0, 0]
     shown.DiffuseColor = [0, 0, 0]
     shown.LineWidth = 1.5
-view.CameraPosition = [0, 0, 10]
-view.CameraViewUp = [0, 1, 0]
+if args.camera:
+    view.CameraPosition = [float(c) for c in args.camera.split(",")]
+    view.CameraFocalPoint = [0, 0, 0]
+    view.CameraViewUp = [0, 0, 1]
+else:
+    view.CameraPosition = [0, 0, 10]
+    view.CameraViewUp = [0, 1, 0]
 ResetCamera()
 SaveScreenshot(args.png, view, ImageResolution=[1200, 900])
 print("wrote", args.png)

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Renders a knotwork .vtu to PNG with ParaView's own reader and renderer, headless.
-# Usage: scripts/render_paraview.sh FILE.vtu OUT.png [field]   (field: solution, exact, error)
+# Usage: scripts/render_paraview.sh FILE.vtu OUT.png [field] [--cell-data] [--log] [--lines X.vtp] [--camera x,y,z] [--no-edges]
 # Needs: scripts/install-deps.sh --paraview
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
