@@ -354,6 +354,38 @@ std::vector<std::string> gluing_violations(const QuadMesh& mesh, const GluingDat
       M << 0, 1, B, A;
       P = P * M;
     }
+    if ((P - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff() <= tolerance && ring.edges.size() == 4) {
+      // Condition 3.2 at a crossing vertex (valence 4, bold a = 0 at the vertex on every edge):
+      // eqs. (6) and (7) on the first derivatives, with the data seen from the vertex.
+      std::array<double, 4> a{}, da{}, b{}, db_over_b{};
+      bool crossing = true;
+      for (int i = 0; i < 4; ++i) {
+        const int e = ring.edges[i];
+        const EdgeGluing g = mesh.edge(e).v[0] == v ? *gluing.edges[e] : reversed(*gluing.edges[e]);
+        auto at0 = [](const PiecewisePolynomial& p, int order) {
+          return order < static_cast<int>(p.pieces[0].size()) ? p.pieces[0][order] : 0.0;
+        };
+        const double a0 = at0(g.a, 0), a1 = at0(g.a, 1), b0 = at0(g.b, 0), b1 = at0(g.b, 1), c0 = at0(g.c, 0),
+                     c1 = at0(g.c, 1);
+        a[i] = a0 / c0;
+        b[i] = b0 / c0;
+        da[i] = (a1 * c0 - a0 * c1) / (c0 * c0);
+        db_over_b[i] = b1 / b0 - c1 / c0;
+        crossing = crossing && std::abs(a[i]) <= tolerance;
+      }
+      if (crossing) {
+        const double r6 = da[0] + db_over_b[3] + b[0] * (da[2] + db_over_b[1]);
+        const double r7 = da[1] + db_over_b[0] + b[1] * (da[3] + db_over_b[2]);
+        if (std::abs(r6) > tolerance * (1 + std::abs(da[0]) + std::abs(da[2])) ||
+            std::abs(r7) > tolerance * (1 + std::abs(da[1]) + std::abs(da[3]))) {
+          std::ostringstream s;
+          s << "vertex " << v + 1 << " (crossing, valence 4): Condition 3.2 fails, eq. (6) is off by " << r6
+            << " and eq. (7) by " << r7;
+          out.push_back(s.str());
+        }
+      }
+      continue;
+    }
     if ((P - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff() > tolerance) {
       std::ostringstream s;
       s << "vertex " << v + 1 << " (valence " << mesh.valence(v) << "): Condition 3.1 fails, the product of the "

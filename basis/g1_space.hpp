@@ -55,6 +55,8 @@ EdgeGluing reversed(const EdgeGluing& g);
 // Condition 3.1 at every interior vertex: the product of [[0, 1], [b_i(0), a_i(0)]] over the
 // edges around it (a = a/c, b = b/c at the vertex's end) is the identity. Returns one
 // message per failing vertex ("vertex 5 (valence 3): product [[...]] is not the identity").
+// At a crossing vertex (valence 4, a = 0 at it on every edge) also Condition 3.2, eqs. (6)
+// and (7) ("vertex 5 (crossing, valence 4): Condition 3.2 fails ...").
 // Also reports interior edges without data and c = 0 at an end.
 std::vector<std::string> gluing_violations(const QuadMesh& mesh, const GluingData& gluing, double tolerance = 1e-10);
 

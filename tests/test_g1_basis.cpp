@@ -434,3 +434,43 @@ TEST_CASE("Theorem 7.1 on closed meshes equals the null-space dimension where th
   REQUIRE(b.counts[1] == 12 * 4);
   REQUIRE(b.counts[2] == 6 * 16);
 }
+
+TEST_CASE("Condition 3.2 at a crossing vertex: violations are named, and the Taylor image shrinks", "[g1][gluing]") {
+  // The centre of a 2 x 2 grid is a crossing vertex. Data seen from it: a_i = alpha_i u (1 - u),
+  // b = -1, c = 1. Then (27)-(28) around the vertex give s_1 - s_1 = (alpha_3 - alpha_1) q_1 +
+  // (alpha_2 - alpha_4) q_2 (by hand): the gradient is free, and the vertex has its 4 functions
+  // of Prop. 5.1 (3 + 4 - 4 + 1), exactly when alpha_1 = alpha_3 and alpha_2 = alpha_4, which is
+  // what eqs. (6)-(7) say for b = -1.
+  const QuadMesh m = grid(2);
+  const int centre = 4;
+  auto data = [&](std::array<int, 4> alpha) {
+    GluingData g = symmetric_gluing(m);
+    for (int i = 0; i < 4; ++i) {
+      const int e = m.ring(centre).edges[i];
+      const mpq_class x(alpha[i]);
+      const std::vector<mpq_class> p{0, x, -x};
+      EdgeGluing seen{PiecewisePolynomial::from_exact({p, p}), PiecewisePolynomial::constant(-1),
+                      PiecewisePolynomial::constant(1)};
+      g.edges[e] = m.edge(e).v[0] == centre ? seen : reversed(seen);
+    }
+    return g;
+  };
+  auto centre_functions = [&](const GluingData& g) {
+    const G1Basis b = g1_basis(m, g, 4, 1);
+    return std::count_if(b.functions.begin(), b.functions.end(), [&](const G1BasisFunction& f) {
+      return f.kind == G1BasisFunction::Kind::vertex && f.owner == centre;
+    });
+  };
+  for (const auto& alpha : {std::array<int, 4>{1, 2, 1, 2}, std::array<int, 4>{3, -1, 3, -1}, std::array<int, 4>{0, 0, 0, 0}}) {
+    const GluingData g = data(alpha);
+    REQUIRE(gluing_violations(m, g).empty());
+    REQUIRE(centre_functions(g) == 4);
+  }
+  for (const auto& alpha : {std::array<int, 4>{1, 2, 3, 2}, std::array<int, 4>{1, 0, -1, 0}, std::array<int, 4>{0, 1, 0, 0}}) {
+    const GluingData g = data(alpha);
+    const auto bad = gluing_violations(m, g);
+    REQUIRE(bad.size() == 1);
+    REQUIRE(bad[0].find("vertex 5 (crossing, valence 4): Condition 3.2 fails") == 0);
+    REQUIRE(centre_functions(g) < 4);
+  }
+}
