@@ -192,6 +192,14 @@ int g1_basis_command(const BasisOptions& o) {
                      std::to_string(o.split_smoothness));
   if (!o.vtk_file.empty() && std::filesystem::path(o.vtk_file).extension() != ".vtu")
     throw InputError(o.vtk_file + ": --vtk: the file must end in .vtu");
+  if (o.vtk_file.empty() && o.show != "extraordinary") throw InputError("--show " + o.show + ": needs --vtk FILE.vtu");
+  // Refuse unwritable targets before any work (and before VTK reports it in its own words).
+  for (const auto& [file, option] : {std::pair{o.vtk_file, "--vtk"}, std::pair{o.export_file, "--export"}}) {
+    if (file.empty()) continue;
+    const std::filesystem::path dir = std::filesystem::path(file).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir))
+      throw InputError(file + ": " + option + ": the folder " + dir.string() + " does not exist");
+  }
   QuadMesh mesh;
   try {
     mesh = QuadMesh::read_obj(o.g1_mesh);

@@ -298,7 +298,9 @@ TEST_CASE("basis --g1: the basis in JSON, --export per-face coefficients, --vtk 
   rejected("--g1 " + three + " --vtk bad.vtu --show vertex:99", {"--show vertex:99", "vertices 1..7"});
   rejected("--g1 " + three + " --vtk bad.vtu --show edge:2-3", {"no edge between vertices 2 and 3"});
   rejected("--g1 " + three + " --vtk bad.vtu --show corner", {"--show corner", "expected"});
-  rejected("--g1 " + three + " --export no/such/dir/basis.json", {"no/such/dir/basis.json", "--export"});
+  rejected("--g1 " + three + " --export no/such/dir/basis.json", {"no/such/dir/basis.json", "--export", "does not exist"});
+  rejected("--g1 " + three + " --vtk no/such/dir/s.vtu", {"no/such/dir/s.vtu", "--vtk", "does not exist"});
+  rejected("--g1 " + three + " --show vertex:2", {"--show vertex:2", "needs --vtk"});
   // Irrational data on a mesh of 240 faces: the dense SVD check would take minutes; refused.
   std::string torus;
   for (int j = 0; j < 12; ++j)
