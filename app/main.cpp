@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
 
   knotwork::BasisOptions basis;
   CLI::App* basis_cmd = app.add_subcommand(
-      "basis", "Check a case's spline basis: semi-regularity, partition of unity, rank, dimension");
+      "basis", "Check a spline basis: semi-regularity, partition of unity, rank, dimension (or, with --g1, the G1 basis on a quad mesh)");
   basis_cmd->add_option("file", basis.case_file,
                         "Case file, T-mesh file (cells = [...], degree) or collection file (functions = [...], degree); "
                         "TOML or JSON");

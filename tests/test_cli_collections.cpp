@@ -320,3 +320,28 @@ TEST_CASE("basis --g1: the basis in JSON, --export per-face coefficients, --vtk 
   REQUIRE(!fs::exists(box.dir() / "bad.vtu"));
   for (const auto& entry : fs::directory_iterator(box.dir())) REQUIRE(!has(entry.path().filename().string(), "partial"));
 }
+
+TEST_CASE("nothing typed into a quad mesh or gluing file crashes knotwork basis --g1", "[cli][g1][bad-input][fuzz]") {
+  // Random edits of the shipped OBJ and gluing files: exit 0 or a one-line error, never a signal.
+  Sandbox box;
+  std::mt19937 rng(2028);
+  const std::string obj = slurp(kSource + "/cases/meshes/three_quads.obj");
+  const std::string gluing = slurp(kSource + "/cases/meshes/three_quads_linear.json");
+  int rejected = 0, accepted = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    const bool edit_mesh = trial % 2 == 0;
+    std::string text = edit_mesh ? obj : gluing;
+    const std::string alphabet = edit_mesh ? "vf 0123456789.-e\n/#" : "[]{}:,\"\\.-+0123456789eEnulltrufas \n/";
+    const int edits = 1 + static_cast<int>(rng() % 3);
+    for (int e = 0; e < edits; ++e) random_edit(text, rng, alphabet);
+    box.file("fuzz.obj", edit_mesh ? text : obj);
+    box.file("fuzz.json", edit_mesh ? gluing : text);
+    const Result r = box.run("basis --json --g1 fuzz.obj --degree 3 --split-smoothness 1 --gluing fuzz.json");
+    INFO("input:\n" << text << "\nstderr: " << r.err);
+    if (ended_cleanly(r)) ++accepted;
+    else ++rejected;
+  }
+  INFO(accepted << " accepted, " << rejected << " rejected");
+  REQUIRE(rejected > 0);
+  REQUIRE(accepted > 0);
+}
