@@ -213,4 +213,57 @@ BezierGeometryCell AnalyticGeometryMap::bezier_cell(int cell) const {
   return interpolated_bezier_cell(*this, mesh_.cell(cell), cell);
 }
 
+BezierCellsGeometryMap::BezierCellsGeometryMap(std::vector<BezierGeometryCell> cells) : cells_(std::move(cells)) {
+  for (size_t c = 0; c < cells_.size(); ++c) {
+    const auto& g = cells_[c];
+    if (g.points.rows() != (g.degree_u + 1) * (g.degree_v + 1))
+      throw std::invalid_argument("Bezier geometry cell " + std::to_string(c) + ": (p+1)(q+1) control points needed");
+    if (g.weights.size() == 0) cells_[c].weights = Eigen::VectorXd::Ones(g.points.rows());
+  }
+}
+
+void BezierCellsGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                      GeometryAtPoints& out) const {
+  const BezierGeometryCell& g = cells_[cell];
+  const int p = g.degree_u, q = g.degree_v;
+  // Bernstein values and derivatives of degree n at t.
+  auto bernstein = [](int n, double t, std::vector<double>& B, std::vector<double>& dB) {
+    std::vector<double> lower(n, 0.0);  // degree n - 1
+    B.assign(n + 1, 0.0);
+    B[0] = 1;
+    for (int d = 1; d <= n; ++d) {
+      if (d == n) std::copy(B.begin(), B.begin() + n, lower.begin());
+      for (int i = d; i >= 0; --i) B[i] = (i > 0 ? t * B[i - 1] : 0.0) + (i < d ? (1 - t) * B[i] : 0.0);
+    }
+    dB.assign(n + 1, 0.0);
+    for (int i = 0; i <= n; ++i)
+      dB[i] = n * ((i > 0 ? lower[i - 1] : 0.0) - (i < n ? lower[i] : 0.0));
+  };
+  out.x.resize(u.size(), 2);
+  out.jacobian.resize(u.size(), 4);
+  std::vector<double> Bu, dBu, Bv, dBv;
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    bernstein(p, u[k], Bu, dBu);
+    bernstein(q, v[k], Bv, dBv);
+    double x[2] = {0, 0}, J[4] = {0, 0, 0, 0};
+    for (int b = 0; b <= q; ++b)
+      for (int a = 0; a <= p; ++a) {
+        const int i = a + (p + 1) * b;
+        for (int d = 0; d < 2; ++d) {
+          x[d] += g.points(i, d) * Bu[a] * Bv[b];
+          J[2 * d] += g.points(i, d) * dBu[a] * Bv[b];
+          J[2 * d + 1] += g.points(i, d) * Bu[a] * dBv[b];
+        }
+      }
+    out.x(k, 0) = x[0];
+    out.x(k, 1) = x[1];
+    for (int j = 0; j < 4; ++j) out.jacobian(k, j) = J[j];
+  }
+}
+
+void BezierCellsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
+  const BernsteinTable& t = bernstein_table(1, 1, nu, nv);
+  evaluate(cell, t.point_u, t.point_v, out);
+}
+
 }  // namespace knotwork

@@ -94,4 +94,17 @@ class AnalyticGeometryMap final : public GeometryMap {
   Function map_;
 };
 
+// A map given cell by cell as polynomial Bezier patches (e.g. the coordinates of a G1 spline
+// surface, `g1_cell_bernstein`): exact, with its own Bezier cells for output.
+class BezierCellsGeometryMap final : public GeometryMap {
+ public:
+  explicit BezierCellsGeometryMap(std::vector<BezierGeometryCell> cells);
+  void evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const override;
+  void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, GeometryAtPoints& out) const override;
+  BezierGeometryCell bezier_cell(int cell) const override { return cells_[cell]; }
+
+ private:
+  std::vector<BezierGeometryCell> cells_;
+};
+
 }  // namespace knotwork
