@@ -6,6 +6,7 @@
 #include "app/commands.hpp"
 #include "app/discretize.hpp"
 #include "app/json_writer.hpp"
+#include "app/output_stage.hpp"
 #include "basis/collection_on_partition.hpp"
 #include "basis/partition_topology.hpp"
 #include "basis/spline_dimension.hpp"
@@ -83,17 +84,11 @@ void write_export(const std::string& file, const std::string& source, const Semi
   root.set("case", source)
       .set("degree", Json::array().push(double(collection.degree_x())).push(double(collection.degree_y())))
       .set("functions", fs);
-  const std::string tmp = file + ".partial";
-  {
-    std::ofstream out(tmp);
+  write_file_atomically(file, "--export", [&](const std::string& path) {
+    std::ofstream out(path);
     out << root.dump() << "\n";
-    if (!out) {
-      out.close();
-      std::filesystem::remove(tmp);
-      throw InputError(file + ": --export: cannot write the file");
-    }
-  }
-  std::filesystem::rename(tmp, file);
+    if (!out) throw std::runtime_error("write failed");
+  });
 }
 
 int print_report(const BasisReport& r, const BasisOptions& o) {

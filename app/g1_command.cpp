@@ -5,12 +5,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <map>
 #include <regex>
 
 #include "app/commands.hpp"
 #include "app/json_writer.hpp"
+#include "app/output_stage.hpp"
 #include "basis/g1_basis.hpp"
 #include "basis/g1_space.hpp"
 #include "basis/quad_mesh.hpp"
@@ -104,23 +104,6 @@ std::vector<int> selected_functions(const QuadMesh& mesh, const G1Basis& basis, 
   return out;
 }
 
-void write_atomically(const std::string& file, const std::string& what, const std::function<void(const std::string&)>& write) {
-  const std::filesystem::path target(file);
-  const std::string tmp = (target.parent_path() / (".partial." + target.filename().string())).string();
-  try {
-    write(tmp);
-  } catch (const std::exception& e) {
-    std::filesystem::remove(tmp);
-    throw InputError(file + ": " + what + ": cannot write the file (" + e.what() + ")");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::filesystem::remove(tmp);
-    throw InputError(file + ": " + what + ": cannot write the file (" + ec.message() + ")");
-  }
-}
-
 void export_basis(const std::string& file, const BasisOptions& o, const QuadMesh& mesh, const G1Basis& basis) {
   const int n = 2 * basis.k - basis.r + 1;
   Json fs = Json::array();
@@ -149,7 +132,7 @@ void export_basis(const std::string& file, const BasisOptions& o, const QuadMesh
                      "N_i(s) N_j(t) (knots 0^(k+1), (1/2)^(k-r), 1^(k+1); s from the face's 1st to 2nd vertex, "
                      "t from its 1st to 4th) at index i * n + j (row-major in s), n = 2k - r + 1")
       .set("functions", fs);
-  write_atomically(file, "--export", [&](const std::string& path) {
+  write_file_atomically(file, "--export", [&](const std::string& path) {
     std::ofstream out(path);
     out << root.dump() << "\n";
     if (!out) throw std::runtime_error("write failed");
@@ -180,7 +163,7 @@ void write_vtk(const std::string& file, const QuadMesh& mesh, const G1Basis& bas
     const std::string base = label(mesh, basis.functions[j]);
     s.point_fields.emplace_back(base + "_" + std::to_string(++used[base]), std::move(per_cell));
   }
-  write_atomically(file, "--vtk", [&](const std::string& path) { write_bezier_surface_vtu(path, s); });
+  write_file_atomically(file, "--vtk", [&](const std::string& path) { write_bezier_surface_vtu(path, s); });
 }
 
 }  // namespace

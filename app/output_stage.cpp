@@ -64,4 +64,22 @@ std::vector<std::string> OutputStage::commit() {
   return finals;
 }
 
+void write_file_atomically(const std::string& file, const std::string& what,
+                           const std::function<void(const std::string& path)>& write) {
+  const fs::path target(file);
+  const std::string tmp = (target.parent_path() / (".partial." + target.filename().string())).string();
+  try {
+    write(tmp);
+  } catch (const std::exception& e) {
+    fs::remove(tmp);
+    throw InputError(file + ": " + what + ": cannot write the file (" + e.what() + ")");
+  }
+  std::error_code ec;
+  fs::rename(tmp, file, ec);
+  if (ec) {
+    fs::remove(tmp);
+    throw InputError(file + ": " + what + ": cannot write the file (" + ec.message() + ")");
+  }
+}
+
 }  // namespace knotwork

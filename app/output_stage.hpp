@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -24,5 +25,11 @@ class OutputStage {
   std::vector<std::string> names_;
   bool created_directory_ = false, committed_ = false;
 };
+
+// A single output file (e.g. --export): `write` fills a hidden sibling, which is renamed to
+// `file` only when it succeeded; otherwise it is removed and InputError names the file and
+// the option `what`.
+void write_file_atomically(const std::string& file, const std::string& what,
+                           const std::function<void(const std::string& path)>& write);
 
 }  // namespace knotwork

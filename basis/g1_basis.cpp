@@ -20,19 +20,6 @@ namespace knotwork {
 
 namespace {
 
-// Corner frames of a face, as in g1_space.cpp (MATH.md section 2).
-constexpr int kOrigin[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-constexpr int kDu[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
-constexpr int kDv[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};
-
-// Coefficient a steps along the corner's u direction and b steps along its v direction.
-long frame_unknown(int face, int corner, int a, int b, int k, int r) {
-  const int n = 2 * k - r + 1;
-  const int i = kOrigin[corner][0] * (n - 1) + a * kDu[corner][0] + b * kDv[corner][0];
-  const int j = kOrigin[corner][1] * (n - 1) + a * kDu[corner][1] + b * kDv[corner][1];
-  return g1_unknown(face, i, j, k, r);
-}
-
 // The local unknowns of one system, in order; corner-block unknowns come first.
 struct LocalColumns {
   std::vector<long> global;
@@ -45,14 +32,14 @@ struct LocalColumns {
 
 void add_corner_block(LocalColumns& cols, int face, int corner, int k, int r) {
   for (int b = 0; b < 2; ++b)
-    for (int a = 0; a < 2; ++a) cols.add(frame_unknown(face, corner, a, b, k, r));
+    for (int a = 0; a < 2; ++a) cols.add(g1_corner_unknown(face, corner, a, b, k, r));
 }
 
 // The strip of a face side (corner c to c+1): two rows, corner blocks excluded.
 void add_strip(LocalColumns& cols, int face, int corner, int k, int r) {
   const int n = 2 * k - r + 1;
   for (int b = 0; b < 2; ++b)
-    for (int a = 2; a <= n - 3; ++a) cols.add(frame_unknown(face, corner, a, b, k, r));
+    for (int a = 2; a <= n - 3; ++a) cols.add(g1_corner_unknown(face, corner, a, b, k, r));
 }
 
 void add_edge_strips(LocalColumns& cols, const QuadMesh& mesh, int e, int k, int r) {
@@ -166,20 +153,33 @@ Eigen::MatrixXd taylor_independent(const Eigen::MatrixXd& Z, int taylor) {
   return Z * svd.matrixV().leftCols(rank);
 }
 
-G1BasisFunction make_function(G1BasisFunction::Kind kind, int owner, const LocalColumns& cols,
-                              const std::vector<mpq_class>& x) {
+double to_double(const mpq_class& x) { return x.get_d(); }
+double to_double(double x) { return x; }
+
+// A local solution (std::vector<mpq_class> or Eigen::VectorXd over `cols`) as a function.
+template <class Vector>
+G1BasisFunction make_function(G1BasisFunction::Kind kind, int owner, const LocalColumns& cols, const Vector& x) {
   G1BasisFunction f{kind, owner, {}};
   for (int i = 0; i < cols.size(); ++i)
-    if (x[i] != 0) f.coefficients.emplace_back(cols.global[i], x[i].get_d());
+    if (x[i] != 0) f.coefficients.emplace_back(cols.global[i], to_double(x[i]));
   return f;
 }
 
-G1BasisFunction make_function(G1BasisFunction::Kind kind, int owner, const LocalColumns& cols,
-                              const Eigen::VectorXd& x) {
-  G1BasisFunction f{kind, owner, {}};
-  for (int i = 0; i < cols.size(); ++i)
-    if (x(i) != 0) f.coefficients.emplace_back(cols.global[i], x(i));
-  return f;
+// The Taylor part (the first `taylor` local unknowns: corner blocks) of an exact solution.
+std::map<long, mpq_class> taylor_part(const LocalColumns& cols, const std::vector<mpq_class>& x, int taylor) {
+  std::map<long, mpq_class> t;
+  for (int i = 0; i < taylor; ++i)
+    if (x[i] != 0) t.emplace(cols.global[i], x[i]);
+  return t;
+}
+
+// y -= f * x on sparse vectors, dropping the entries that become zero.
+void subtract_scaled(std::map<long, mpq_class>& y, const mpq_class& f, const std::map<long, mpq_class>& x) {
+  for (const auto& [c, v] : x) {
+    mpq_class& z = y[c];
+    z -= f * v;
+    if (z == 0) y.erase(c);
+  }
 }
 
 template <class Scalar>
@@ -196,30 +196,14 @@ class ExactTaylorSpan {
  public:
   // Records t and returns true when it is independent of the span.
   bool add(std::map<long, mpq_class> t) {
-    for (const auto& [p, e] : stored_) {
-      const auto it = t.find(p);
-      if (it == t.end()) continue;
-      const mpq_class f = it->second;
-      for (const auto& [c, x] : e) {
-        mpq_class& y = t[c];
-        y -= f * x;
-        if (y == 0) t.erase(c);
-      }
-    }
+    for (const auto& [p, e] : stored_)
+      if (const auto it = t.find(p); it != t.end()) subtract_scaled(t, mpq_class(it->second), e);
     if (t.empty()) return false;
     const long p = t.begin()->first;
     const mpq_class inv = 1 / t.begin()->second;
     for (auto& [c, x] : t) x *= inv;
-    for (auto& [q, e] : stored_) {
-      const auto it = e.find(p);
-      if (it == e.end()) continue;
-      const mpq_class f = it->second;
-      for (const auto& [c, x] : t) {
-        mpq_class& y = e[c];
-        y -= f * x;
-        if (y == 0) e.erase(c);
-      }
-    }
+    for (auto& [q, e] : stored_)
+      if (const auto it = e.find(p); it != e.end()) subtract_scaled(e, mpq_class(it->second), t);
     stored_.emplace(p, std::move(t));
     return true;
   }
@@ -240,23 +224,23 @@ struct PairSystem {
   LocalColumns cols;
   std::vector<int> block_vertex;  // per Taylor column: the vertex of its corner block
   int taylor = 0;
+  std::set<int> edges;            // the interior edges at either end
 };
 
 PairSystem pair_system(const QuadMesh& mesh, int e, int k, int r) {
   PairSystem sys;
   const auto& E = mesh.edge(e);
-  std::set<int> edges;
   for (int end = 0; end < 2; ++end) {
     const auto& ring = mesh.ring(E.v[end]);
     for (size_t i = 0; i < ring.faces.size(); ++i) {
       add_corner_block(sys.cols, ring.faces[i], ring.corners[i], k, r);
       sys.block_vertex.resize(sys.cols.size(), E.v[end]);
     }
-    edges.insert(ring.edges.begin(), ring.edges.end());
+    for (int x : ring.edges)
+      if (!mesh.edge(x).boundary()) sys.edges.insert(x);
   }
   sys.taylor = sys.cols.size();
-  for (int x : edges)
-    if (!mesh.edge(x).boundary()) add_edge_strips(sys.cols, mesh, x, k, r);
+  for (int x : sys.edges) add_edge_strips(sys.cols, mesh, x, k, r);
   return sys;
 }
 
@@ -272,7 +256,7 @@ void complete_globally(const QuadMesh& mesh, const GluingData& gluing, int k, in
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int c = 0; c < 4; ++c)
       for (int b = 0; b < 2; ++b)
-        for (int a = 0; a < 2; ++a) corner.emplace(frame_unknown(f, c, a, b, k, r), static_cast<int>(corner.size()));
+        for (int a = 0; a < 2; ++a) corner.emplace(g1_corner_unknown(f, c, a, b, k, r), static_cast<int>(corner.size()));
   const auto rows = g1_condition_rows(mesh, gluing, k, r);
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), m);
   for (size_t i = 0; i < rows.size(); ++i)
@@ -282,22 +266,14 @@ void complete_globally(const QuadMesh& mesh, const GluingData& gluing, int k, in
   Eigen::Index rank = 0;
   for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
   const Eigen::MatrixXd N = svd.matrixV().rightCols(m - rank);
-  const auto taylor = [&](const auto& column) {
-    Eigen::VectorXd t = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(corner.size()));
-    column(t);
-    return t;
-  };
-  Eigen::MatrixXd T(static_cast<Eigen::Index>(corner.size()), static_cast<Eigen::Index>(functions.size()));
+  // Taylor parts (rows: corner unknowns) of the functions so far and of the null space.
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(corner.size()),
+                                            static_cast<Eigen::Index>(functions.size()));
   for (size_t j = 0; j < functions.size(); ++j)
-    T.col(static_cast<Eigen::Index>(j)) = taylor([&](Eigen::VectorXd& t) {
-      for (const auto& [c, x] : functions[j].coefficients)
-        if (const auto it = corner.find(c); it != corner.end()) t(it->second) = x;
-    });
+    for (const auto& [c, x] : functions[j].coefficients)
+      if (const auto it = corner.find(c); it != corner.end()) T(it->second, static_cast<Eigen::Index>(j)) = x;
   Eigen::MatrixXd R(T.rows(), N.cols());
-  for (Eigen::Index j = 0; j < N.cols(); ++j)
-    R.col(j) = taylor([&](Eigen::VectorXd& t) {
-      for (const auto& [c, i] : corner) t(i) = N(c, j);
-    });
+  for (const auto& [c, i] : corner) R.row(i) = N.row(c);
   if (T.cols() > 0) {
     const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(T).householderQ() *
                               Eigen::MatrixXd::Identity(T.rows(), std::min(T.rows(), T.cols()));
@@ -308,9 +284,9 @@ void complete_globally(const QuadMesh& mesh, const GluingData& gluing, int k, in
   if (cs.size() < missing || cs(missing - 1) <= kTolerance)
     throw std::runtime_error("the Taylor data of S_" + std::to_string(k) + "^{1," + std::to_string(r) +
                              "} could not be completed: rank tolerance too coarse for these gluing data");
+  LocalColumns cols;
+  for (long c = 0; c < m; ++c) cols.add(c);
   for (long j = 0; j < missing; ++j) {
-    LocalColumns cols;
-    for (long c = 0; c < m; ++c) cols.add(c);
     functions.push_back(make_function(G1BasisFunction::Kind::coupled, -1, cols,
                                       Eigen::VectorXd(N * complement.matrixV().col(j))));
   }
@@ -343,10 +319,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
     if constexpr (exact) {
       for (const auto& x : taylor_independent(null_space(A, cols.size()), taylor)) {
         vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, x));
-        std::map<long, mpq_class> t;
-        for (int i = 0; i < taylor; ++i)
-          if (x[i] != 0) t.emplace(cols.global[i], x[i]);
-        exact_span.add(std::move(t));
+        exact_span.add(taylor_part(cols, x, taylor));
       }
     } else {
       const Eigen::MatrixXd Z = taylor_independent(null_space(A, cols.size()), taylor);
@@ -379,27 +352,24 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
   // both ends supply it (kind vertex_pair, one edge at a time, while something is missing).
   const long wanted = basis.space.dimension - static_cast<long>(edge_functions.size()) - face_count;
   long have = static_cast<long>(vertex_functions.size());
+  // Exact: the solutions whose Taylor data add to the span, until nothing is missing.
+  auto keep_independent = [&](G1BasisFunction::Kind kind, int owner, const LocalColumns& cols,
+                              const std::vector<std::vector<mpq_class>>& solutions, int taylor) {
+    for (const auto& x : solutions) {
+      if (have == wanted) return;
+      if (!exact_span.add(taylor_part(cols, x, taylor))) continue;
+      vertex_functions.push_back(make_function(kind, owner, cols, x));
+      ++have;
+    }
+  };
   for (int e = 0; e < mesh.num_edges() && have < wanted; ++e) {
     if (mesh.edge(e).boundary()) continue;
     const PairSystem sys = pair_system(mesh, e, k, r);
     Rows<Scalar> pair_rows;
-    for (size_t i = 0; i < rows.size(); ++i) {
-      if (rows[i].empty()) continue;
-      const auto& E = mesh.edge(static_cast<int>(i));
-      const auto& P = mesh.edge(e);
-      if (E.v[0] == P.v[0] || E.v[0] == P.v[1] || E.v[1] == P.v[0] || E.v[1] == P.v[1])
-        pair_rows.insert(pair_rows.end(), rows[i].begin(), rows[i].end());
-    }
+    for (int x : sys.edges) pair_rows.insert(pair_rows.end(), rows[x].begin(), rows[x].end());
     const auto A = restrict_rows(pair_rows, sys.cols);
     if constexpr (exact) {
-      for (const auto& x : null_space(A, sys.cols.size())) {
-        std::map<long, mpq_class> t;
-        for (int i = 0; i < sys.taylor; ++i)
-          if (x[i] != 0) t.emplace(sys.cols.global[i], x[i]);
-        if (!exact_span.add(std::move(t))) continue;
-        vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex_pair, e, sys.cols, x));
-        if (++have == wanted) break;
-      }
+      keep_independent(G1BasisFunction::Kind::vertex_pair, e, sys.cols, null_space(A, sys.cols.size()), sys.taylor);
     } else {
       const Eigen::MatrixXd Z = null_space(A, sys.cols.size());
       // Taylor rows modulo the vertex functions, block by block.
@@ -451,14 +421,8 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
       for (int e = 0; e < mesh.num_edges(); ++e) add_edge_strips(cols, mesh, e, k, r);
       Rows<Scalar> all;
       for (const auto& x : rows) all.insert(all.end(), x.begin(), x.end());
-      for (const auto& x : null_space(restrict_rows(all, cols), cols.size())) {
-        std::map<long, mpq_class> t;
-        for (int i = 0; i < taylor; ++i)
-          if (x[i] != 0) t.emplace(cols.global[i], x[i]);
-        if (!exact_span.add(std::move(t))) continue;
-        vertex_functions.push_back(make_function(G1BasisFunction::Kind::coupled, -1, cols, x));
-        if (++have == wanted) break;
-      }
+      keep_independent(G1BasisFunction::Kind::coupled, -1, cols, null_space(restrict_rows(all, cols), cols.size()),
+                       taylor);
     } else {
       complete_globally(mesh, gluing, k, r, wanted - have, vertex_functions);
     }
@@ -469,6 +433,62 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
     for (int i = 2; i <= n - 3; ++i)
       for (int j = 2; j <= n - 3; ++j)
         basis.functions.push_back({G1BasisFunction::Kind::face, f, {{g1_unknown(f, i, j, k, r), 1.0}}});
+}
+
+// Two changes of basis within each vertex's functions, which keep the span:
+// - a vertex function plus any edge function of its edges is as good a vertex function; keep
+//   the one orthogonal to them (coefficient space), which removes the large bumps along the
+//   edges that the echelon form leaves (the paper's printed functions have them too);
+// - the first is the one with value 1 at the vertex, and the others vanish there (what users
+//   plot, and what the paper lists first).
+void tidy_vertex_functions(const QuadMesh& mesh, G1Basis& basis) {
+  std::vector<std::vector<int>> of_edge(mesh.num_edges()), of_vertex(mesh.num_vertices());
+  for (size_t j = 0; j < basis.functions.size(); ++j) {
+    const auto& f = basis.functions[j];
+    if (f.kind == G1BasisFunction::Kind::edge) of_edge[f.owner].push_back(static_cast<int>(j));
+    if (f.kind == G1BasisFunction::Kind::vertex) of_vertex[f.owner].push_back(static_cast<int>(j));
+  }
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const std::vector<int>& ids = of_vertex[v];
+    if (ids.empty()) continue;
+    std::vector<int> others;
+    for (int e : std::set<int>(mesh.ring(v).edges.begin(), mesh.ring(v).edges.end()))
+      others.insert(others.end(), of_edge[e].begin(), of_edge[e].end());
+    const long corner = g1_corner_unknown(mesh.ring(v).faces[0], mesh.ring(v).corners[0], 0, 0, basis.k, basis.r);
+    LocalColumns cols;
+    cols.add(corner);
+    for (int j : ids)
+      for (const auto& [c, x] : basis.functions[j].coefficients) cols.add(c);
+    for (int j : others)
+      for (const auto& [c, x] : basis.functions[j].coefficients) cols.add(c);
+    auto dense = [&](const std::vector<int>& which) {
+      Eigen::MatrixXd M = Eigen::MatrixXd::Zero(cols.size(), static_cast<Eigen::Index>(which.size()));
+      for (size_t i = 0; i < which.size(); ++i)
+        for (const auto& [c, x] : basis.functions[which[i]].coefficients) M(cols.position[c], static_cast<Eigen::Index>(i)) = x;
+      return M;
+    };
+    Eigen::MatrixXd X = dense(ids);
+    if (!others.empty()) {
+      const Eigen::MatrixXd E = dense(others);
+      X -= E * E.colPivHouseholderQr().solve(X);
+    }
+    Eigen::Index best;
+    const double pivot_size = X.row(0).cwiseAbs().maxCoeff(&best);  // row 0: the value at the vertex
+    if (pivot_size > 0) {
+      X.col(0).swap(X.col(best));
+      X.col(0) /= X(0, 0);
+      for (Eigen::Index i = 1; i < X.cols(); ++i) X.col(i) -= X(0, i) * X.col(0);
+    }
+    for (size_t i = 0; i < ids.size(); ++i) {
+      // Entries at rounding level are dropped, to keep the supports sparse.
+      const double drop = 1e-14 * X.col(static_cast<Eigen::Index>(i)).cwiseAbs().maxCoeff();
+      auto& coefficients = basis.functions[ids[i]].coefficients;
+      coefficients.clear();
+      for (int row = 0; row < cols.size(); ++row)
+        if (std::abs(X(row, static_cast<Eigen::Index>(i))) > drop)
+          coefficients.emplace_back(cols.global[row], X(row, static_cast<Eigen::Index>(i)));
+    }
+  }
 }
 
 }  // namespace
@@ -483,69 +503,7 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
     build<mpq_class>(mesh, gluing, basis);
   else
     build<double>(mesh, gluing, basis);
-  // A vertex function plus any edge function of its edges is as good a vertex function; keep
-  // the one orthogonal to them (coefficient space), which removes the large bumps along the
-  // edges that the echelon form leaves (the paper's printed functions have them too).
-  {
-    std::vector<std::vector<int>> of_edge(mesh.num_edges());
-    for (size_t j = 0; j < basis.functions.size(); ++j)
-      if (basis.functions[j].kind == G1BasisFunction::Kind::edge) of_edge[basis.functions[j].owner].push_back(static_cast<int>(j));
-    for (auto& f : basis.functions) {
-      if (f.kind != G1BasisFunction::Kind::vertex) continue;
-      std::set<int> edges(mesh.ring(f.owner).edges.begin(), mesh.ring(f.owner).edges.end());
-      LocalColumns cols;
-      for (const auto& [c, v] : f.coefficients) cols.add(c);
-      std::vector<int> others;
-      for (int e : edges)
-        for (int j : of_edge[e]) {
-          others.push_back(j);
-          for (const auto& [c, v] : basis.functions[j].coefficients) cols.add(c);
-        }
-      if (others.empty()) continue;
-      Eigen::MatrixXd E = Eigen::MatrixXd::Zero(cols.size(), static_cast<Eigen::Index>(others.size()));
-      for (size_t i = 0; i < others.size(); ++i)
-        for (const auto& [c, v] : basis.functions[others[i]].coefficients) E(cols.position[c], static_cast<Eigen::Index>(i)) = v;
-      Eigen::VectorXd x = Eigen::VectorXd::Zero(cols.size());
-      for (const auto& [c, v] : f.coefficients) x(cols.position[c]) = v;
-      x -= E * E.colPivHouseholderQr().solve(x);
-      f.coefficients.clear();
-      for (int i = 0; i < cols.size(); ++i)
-        if (std::abs(x(i)) > 1e-14 * x.cwiseAbs().maxCoeff()) f.coefficients.emplace_back(cols.global[i], x(i));
-    }
-  }
-  // Within each vertex's functions, the first is the one with value 1 at the vertex and the
-  // others vanish there (what users plot and what the paper lists first).
-  {
-    std::map<int, std::vector<size_t>> at_vertex;
-    for (size_t j = 0; j < basis.functions.size(); ++j)
-      if (basis.functions[j].kind == G1BasisFunction::Kind::vertex) at_vertex[basis.functions[j].owner].push_back(j);
-    for (const auto& [v, ids] : at_vertex) {
-      const long corner = frame_unknown(mesh.ring(v).faces[0], mesh.ring(v).corners[0], 0, 0, k, r);
-      auto value = [&](size_t j) {
-        for (const auto& [c, x] : basis.functions[j].coefficients)
-          if (c == corner) return x;
-        return 0.0;
-      };
-      size_t best = ids[0];
-      for (size_t j : ids)
-        if (std::abs(value(j)) > std::abs(value(best))) best = j;
-      const double pivot = value(best);
-      if (pivot == 0) continue;
-      std::swap(basis.functions[ids[0]], basis.functions[best]);
-      for (auto& [c, x] : basis.functions[ids[0]].coefficients) x /= pivot;
-      std::map<long, double> first(basis.functions[ids[0]].coefficients.begin(), basis.functions[ids[0]].coefficients.end());
-      for (size_t i = 1; i < ids.size(); ++i) {
-        const double f = value(ids[i]);
-        if (f == 0) continue;
-        std::map<long, double> x(basis.functions[ids[i]].coefficients.begin(), basis.functions[ids[i]].coefficients.end());
-        for (const auto& [c, y] : first) x[c] -= f * y;
-        x[corner] = 0;  // exactly: the values at the vertex agree on every face
-        basis.functions[ids[i]].coefficients.clear();
-        for (const auto& [c, y] : x)
-          if (y != 0) basis.functions[ids[i]].coefficients.emplace_back(c, y);
-      }
-    }
-  }
+  tidy_vertex_functions(mesh, basis);
   // Largest coefficient +1: comparable scales for assembly and plots, a definite sign.
   for (auto& f : basis.functions) {
     double largest = 0;
@@ -633,10 +591,7 @@ std::vector<int> support_faces(const G1BasisFunction& f, int k, int r) {
 
 BezierMesh g1_bezier_mesh(const QuadMesh& mesh, const G1Basis& basis) {
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
-  std::vector<double> knots(k + 1, 0.0);
-  knots.insert(knots.end(), k - r, 0.5);
-  knots.insert(knots.end(), k + 1, 1.0);
-  const auto extraction = bezier_extraction(BSplineBasis1D(k, knots));  // two elements, (k+1) x (k+1)
+  const auto extraction = bezier_extraction(BSplineBasis1D(k, g1_face_knots(k, r)));  // two elements, (k+1) x (k+1)
   const int first[2] = {0, n - k - 1};                                  // first function alive per half
 
   // Per face: the functions living on it, with their coefficients there.
@@ -693,13 +648,6 @@ BezierMesh g1_bezier_mesh(const QuadMesh& mesh, const G1Basis& basis) {
 
 namespace knotwork {
 
-Eigen::MatrixXd g1_face_coefficients(const G1Basis& basis, const Eigen::MatrixXd& c) {
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(basis.unknowns(), c.cols());
-  for (size_t j = 0; j < basis.functions.size(); ++j)
-    for (const auto& [u, v] : basis.functions[j].coefficients) out.row(u) += v * c.row(static_cast<Eigen::Index>(j));
-  return out;
-}
-
 std::vector<Eigen::MatrixXd> g1_cell_bernstein(const BezierMesh& mesh, const Eigen::MatrixXd& c) {
   std::vector<Eigen::MatrixXd> out(mesh.num_cells());
   for (int cell = 0; cell < mesh.num_cells(); ++cell) {
@@ -715,9 +663,7 @@ Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, dou
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
   // Greville abscissae: a B-spline combination with these as coefficients is the identity,
   // so the bilinear face has the bilinear map at (xi_i, xi_j) as its coefficients.
-  std::vector<double> knots(k + 1, 0.0);
-  knots.insert(knots.end(), k - r, 0.5);
-  knots.insert(knots.end(), k + 1, 1.0);
+  const std::vector<double> knots = g1_face_knots(k, r);
   std::vector<double> xi(n, 0.0);
   for (int i = 0; i < n; ++i) {
     for (int l = 1; l <= k; ++l) xi[i] += knots[i + l];

@@ -78,10 +78,6 @@ namespace knotwork {
 // `deviation`, the largest distance between a projected and a bilinear coefficient.
 Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, double* deviation = nullptr);
 
-// Per-face B-spline coefficients (rows g1_unknown(face, i, j)) of sum_j c_j phi_j, for each
-// column of c.
-Eigen::MatrixXd g1_face_coefficients(const G1Basis& basis, const Eigen::MatrixXd& c);
-
 // Bernstein coefficients of the same on each BezierMesh cell of g1_bezier_mesh (rows: the
 // cell's (k+1)^2 Bernstein polynomials, a + (k+1) b with a along s).
 std::vector<Eigen::MatrixXd> g1_cell_bernstein(const BezierMesh& mesh, const Eigen::MatrixXd& c);

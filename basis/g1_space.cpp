@@ -191,6 +191,20 @@ std::vector<std::vector<std::pair<long, Scalar>>> g1_conditions(const QuadMesh& 
 
 }  // namespace
 
+long g1_corner_unknown(int face, int corner, int a, int b, int k, int r) {
+  const int n = 2 * k - r + 1;
+  const int i = kOrigin[corner][0] * (n - 1) + a * kDu[corner][0] + b * kDv[corner][0];
+  const int j = kOrigin[corner][1] * (n - 1) + a * kDu[corner][1] + b * kDv[corner][1];
+  return g1_unknown(face, i, j, k, r);
+}
+
+std::vector<double> g1_face_knots(int k, int r) {
+  std::vector<double> knots(k + 1, 0.0);
+  knots.insert(knots.end(), k - r, 0.5);
+  knots.insert(knots.end(), k + 1, 1.0);
+  return knots;
+}
+
 std::vector<std::vector<std::pair<long, double>>> g1_condition_rows(const QuadMesh& mesh, const GluingData& gluing,
                                                                     int k, int r, int edge) {
   return g1_conditions<double>(mesh, gluing, k, r, edge);

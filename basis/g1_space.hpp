@@ -98,4 +98,12 @@ inline long g1_unknown(int f, int i, int j, int k, int r) {
   return static_cast<long>(f) * n * n + static_cast<long>(i) * n + j;
 }
 
+// The same for the coefficient a steps along the u direction and b steps along the v
+// direction of the face's frame at `corner` (MATH.md section 2: corner 0 at (s, t) = (0, 0),
+// u along s; corners counter-clockwise).
+long g1_corner_unknown(int face, int corner, int a, int b, int k, int r);
+
+// The knot vector of each direction of a face: 0^(k+1), (1/2)^(k-r), 1^(k+1).
+std::vector<double> g1_face_knots(int k, int r);
+
 }  // namespace knotwork

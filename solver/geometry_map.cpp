@@ -222,48 +222,31 @@ BezierCellsGeometryMap::BezierCellsGeometryMap(std::vector<BezierGeometryCell> c
   }
 }
 
+namespace {
+// Point and Jacobian (dx/du, dx/dv, dy/du, dy/dv) from tabulated Bernstein values.
+void bezier_map(const Eigen::MatrixX2d& points, const Eigen::MatrixXd& value, const Eigen::MatrixXd& d_u,
+                const Eigen::MatrixXd& d_v, GeometryAtPoints& out) {
+  out.x = value * points;
+  out.jacobian.resize(value.rows(), 4);
+  out.jacobian.col(0) = d_u * points.col(0);
+  out.jacobian.col(1) = d_v * points.col(0);
+  out.jacobian.col(2) = d_u * points.col(1);
+  out.jacobian.col(3) = d_v * points.col(1);
+}
+}  // namespace
+
 void BezierCellsGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                                       GeometryAtPoints& out) const {
   const BezierGeometryCell& g = cells_[cell];
-  const int p = g.degree_u, q = g.degree_v;
-  // Bernstein values and derivatives of degree n at t.
-  auto bernstein = [](int n, double t, std::vector<double>& B, std::vector<double>& dB) {
-    std::vector<double> lower(n, 0.0);  // degree n - 1
-    B.assign(n + 1, 0.0);
-    B[0] = 1;
-    for (int d = 1; d <= n; ++d) {
-      if (d == n) std::copy(B.begin(), B.begin() + n, lower.begin());
-      for (int i = d; i >= 0; --i) B[i] = (i > 0 ? t * B[i - 1] : 0.0) + (i < d ? (1 - t) * B[i] : 0.0);
-    }
-    dB.assign(n + 1, 0.0);
-    for (int i = 0; i <= n; ++i)
-      dB[i] = n * ((i > 0 ? lower[i - 1] : 0.0) - (i < n ? lower[i] : 0.0));
-  };
-  out.x.resize(u.size(), 2);
-  out.jacobian.resize(u.size(), 4);
-  std::vector<double> Bu, dBu, Bv, dBv;
-  for (Eigen::Index k = 0; k < u.size(); ++k) {
-    bernstein(p, u[k], Bu, dBu);
-    bernstein(q, v[k], Bv, dBv);
-    double x[2] = {0, 0}, J[4] = {0, 0, 0, 0};
-    for (int b = 0; b <= q; ++b)
-      for (int a = 0; a <= p; ++a) {
-        const int i = a + (p + 1) * b;
-        for (int d = 0; d < 2; ++d) {
-          x[d] += g.points(i, d) * Bu[a] * Bv[b];
-          J[2 * d] += g.points(i, d) * dBu[a] * Bv[b];
-          J[2 * d + 1] += g.points(i, d) * Bu[a] * dBv[b];
-        }
-      }
-    out.x(k, 0) = x[0];
-    out.x(k, 1) = x[1];
-    for (int j = 0; j < 4; ++j) out.jacobian(k, j) = J[j];
-  }
+  Eigen::MatrixXd value, d_u, d_v;
+  tensor_bernstein(g.degree_u, g.degree_v, u, v, value, d_u, d_v);
+  bezier_map(g.points, value, d_u, d_v, out);
 }
 
 void BezierCellsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
-  const BernsteinTable& t = bernstein_table(1, 1, nu, nv);
-  evaluate(cell, t.point_u, t.point_v, out);
+  const BezierGeometryCell& g = cells_[cell];
+  const BernsteinTable& t = bernstein_table(g.degree_u, g.degree_v, nu, nv);
+  bezier_map(g.points, t.value, t.d_u, t.d_v, out);
 }
 
 }  // namespace knotwork

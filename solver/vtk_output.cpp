@@ -43,6 +43,15 @@ void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
   if (writer->Write() != 1) throw std::runtime_error(path + ": VTK could not write the file");
 }
 
+void add_cell_fields(vtkUnstructuredGrid* grid, const CellFields& fields, int nc) {
+  for (const auto& [name, values] : fields) {
+    if (values.size() != nc) throw std::invalid_argument("cell field " + name + ": one value per cell is needed");
+    auto a = scalar_array(name.c_str(), nc);
+    for (int c = 0; c < nc; ++c) a->SetValue(c, values[c]);
+    grid->GetCellData()->AddArray(a);
+  }
+}
+
 // The "exact" and "error" point arrays, present when an exact solution is known.
 struct ExactArrays {
   vtkSmartPointer<vtkDoubleArray> exact, error;
@@ -156,12 +165,7 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
   grid->GetCellData()->SetHigherOrderDegrees(degrees);
   grid->GetPointData()->SetScalars(solution);
   ex.add_to(grid);
-  for (const auto& [name, values] : cell_fields) {
-    if (values.size() != nc) throw std::invalid_argument("cell field " + name + ": one value per cell is needed");
-    auto a = scalar_array(name.c_str(), nc);
-    for (int c = 0; c < nc; ++c) a->SetValue(c, values[c]);
-    grid->GetCellData()->AddArray(a);
-  }
+  add_cell_fields(grid, cell_fields, nc);
   write_grid(path, grid);
 }
 
@@ -212,12 +216,7 @@ void write_bezier_surface_vtu(const std::string& path, const BezierSurface& s) {
     else
       grid->GetPointData()->AddArray(fields[f]);
   }
-  for (const auto& [name, values] : s.cell_fields) {
-    if (values.size() != nc) throw std::invalid_argument("cell field " + name + ": one value per cell is needed");
-    auto a = scalar_array(name.c_str(), nc);
-    for (int c = 0; c < nc; ++c) a->SetValue(c, values[c]);
-    grid->GetCellData()->AddArray(a);
-  }
+  add_cell_fields(grid, s.cell_fields, nc);
   write_grid(path, grid);
 }
 

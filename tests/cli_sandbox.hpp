@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -81,16 +82,20 @@ elements = 2
 exact = "x*y"
 )TOML";
 
+// An error exit (not a signal) with one line on stderr that mentions every string.
+inline void expect_one_line_error(const Result& r, const std::vector<std::string>& mentions) {
+  INFO("stderr: " << r.err);
+  REQUIRE(r.code != 0);
+  REQUIRE(r.code < 128);
+  REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  for (const auto& m : mentions) REQUIRE(r.err.find(m) != std::string::npos);
+}
+
 inline void expect_rejected(const Sandbox& box, const std::string& case_text, const std::vector<std::string>& mentions,
                      const std::string& extra_args = "", const std::string& command = "run") {
   const fs::path f = box.file("bad.toml", case_text);
   const fs::path out = box.dir() / "out";
-  const Result r = box.run(command + " -q bad.toml --out " + out.string() + " " + extra_args);
-  INFO("stderr: " << r.err);
-  REQUIRE(r.code != 0);
-  REQUIRE(r.code < 128);  // an error exit, not a signal
-  REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-  for (const auto& m : mentions) REQUIRE(r.err.find(m) != std::string::npos);
+  expect_one_line_error(box.run(command + " -q bad.toml --out " + out.string() + " " + extra_args), mentions);
   REQUIRE(!fs::exists(out));
 }
 
@@ -113,6 +118,23 @@ inline bool ended_cleanly(const Result& r) {
   REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   REQUIRE(r.err.rfind("knotwork: error: ", 0) == 0);
   return false;
+}
+
+// Fuzz runs: `prepare(trial)` writes the fuzzed input files and returns {command, what was
+// fuzzed}; every run must end cleanly, and both outcomes must occur (else the fuzzing is
+// too weak or too strong to test anything).
+inline void fuzz(const Sandbox& box, int trials,
+                 const std::function<std::pair<std::string, std::string>(int trial)>& prepare) {
+  int accepted = 0, rejected = 0;
+  for (int trial = 0; trial < trials; ++trial) {
+    const auto [command, input] = prepare(trial);
+    const Result r = box.run(command);
+    INFO("input:\n" << input << "\nstderr: " << r.err);
+    (ended_cleanly(r) ? accepted : rejected)++;
+  }
+  INFO(accepted << " accepted, " << rejected << " rejected");
+  REQUIRE(accepted > 0);
+  REQUIRE(rejected > 0);
 }
 
 }  // namespace cli_test
