@@ -112,10 +112,8 @@ Eigen::MatrixXd null_space(const std::vector<std::vector<double>>& rows, int m) 
   for (size_t i = 0; i < rows.size(); ++i)
     for (int j = 0; j < m; ++j) A(static_cast<Eigen::Index>(i), j) = rows[i][j];
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
-  const auto& sv = svd.singularValues();
-  Eigen::Index rank = 0;
-  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
-  return svd.matrixV().rightCols(m - rank);
+  svd.setThreshold(kTolerance);
+  return svd.matrixV().rightCols(m - svd.rank());
 }
 
 // Functions with independent Taylor data (the first `taylor` local unknowns) among the
@@ -257,15 +255,9 @@ void complete_globally(const QuadMesh& mesh, const GluingData& gluing, int k, in
     for (int c = 0; c < 4; ++c)
       for (int b = 0; b < 2; ++b)
         for (int a = 0; a < 2; ++a) corner.emplace(g1_corner_unknown(f, c, a, b, k, r), static_cast<int>(corner.size()));
-  const auto rows = g1_condition_rows(mesh, gluing, k, r);
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), m);
-  for (size_t i = 0; i < rows.size(); ++i)
-    for (const auto& [c, x] : rows[i]) A(static_cast<Eigen::Index>(i), c) += x;
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
-  const auto& sv = svd.singularValues();
-  Eigen::Index rank = 0;
-  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
-  const Eigen::MatrixXd N = svd.matrixV().rightCols(m - rank);
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(dense_rows(g1_condition_rows(mesh, gluing, k, r), m), Eigen::ComputeFullV);
+  svd.setThreshold(kTolerance);
+  const Eigen::MatrixXd N = svd.matrixV().rightCols(m - svd.rank());
   // Taylor parts (rows: corner unknowns) of the functions so far and of the null space.
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(corner.size()),
                                             static_cast<Eigen::Index>(functions.size()));
@@ -561,11 +553,9 @@ long g1_basis_rank(const G1Basis& basis, std::string* method) {
     for (Eigen::Index j = 0; j < n; ++j)
       for (const auto& [c, v] : basis.functions[j].coefficients) M(c, j) = v;
     Eigen::BDCSVD<Eigen::MatrixXd> svd(M);
-    const auto& sv = svd.singularValues();
-    long rank = 0;
-    for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * sv(0);
+    svd.setThreshold(kTolerance);
     if (method) *method = "SVD, singular values above 1e-10 * largest";
-    return rank;
+    return svd.rank();
   }
   // Too large for a dense SVD: sparse rank-revealing QR.
   Eigen::SparseMatrix<double> M(m, n);

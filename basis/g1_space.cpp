@@ -191,6 +191,13 @@ std::vector<std::vector<std::pair<long, Scalar>>> g1_conditions(const QuadMesh& 
 
 }  // namespace
 
+Eigen::MatrixXd dense_rows(const std::vector<std::vector<std::pair<long, double>>>& rows, long columns) {
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), columns);
+  for (size_t i = 0; i < rows.size(); ++i)
+    for (const auto& [c, x] : rows[i]) A(static_cast<Eigen::Index>(i), c) += x;
+  return A;
+}
+
 long g1_corner_unknown(int face, int corner, int a, int b, int k, int r) {
   const int n = 2 * k - r + 1;
   const int i = kOrigin[corner][0] * (n - 1) + a * kDu[corner][0] + b * kDv[corner][0];
@@ -430,16 +437,11 @@ G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& glui
     d.exact = true;
   } else {
     const auto rows = g1_conditions<double>(mesh, gluing, k, r);
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), d.unknowns);
-    for (size_t i = 0; i < rows.size(); ++i)
-      for (const auto& [col, x] : rows[i]) A(static_cast<Eigen::Index>(i), col) += x;
     d.constraints = static_cast<long>(rows.size());
-    Eigen::BDCSVD<Eigen::MatrixXd> svd(A);
-    const auto& sv = svd.singularValues();
     d.tolerance = 1e-10;
-    const double cut = sv.size() ? d.tolerance * sv(0) : 0;
-    d.rank = 0;
-    for (Eigen::Index i = 0; i < sv.size(); ++i) d.rank += sv(i) > cut;
+    Eigen::BDCSVD<Eigen::MatrixXd> svd(dense_rows(rows, d.unknowns));
+    svd.setThreshold(d.tolerance);
+    d.rank = svd.rank();
   }
   d.dimension = d.unknowns - d.rank;
   return d;
@@ -505,15 +507,9 @@ long gluing_syzygy_dimension(const EdgeGluing& g, int k, int r) {
     for (size_t i = 0; i < rows.size(); ++i) sparse[i].terms = rows[i];
     return unknowns - rank_exact(sparse, unknowns);
   }
-  const auto rows = syzygy_rows<double>(g, k, r);
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), unknowns);
-  for (size_t i = 0; i < rows.size(); ++i)
-    for (const auto& [c, x] : rows[i]) M(static_cast<Eigen::Index>(i), c) += x;
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(M);
-  const auto& sv = svd.singularValues();
-  long rank = 0;
-  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > 1e-10 * sv(0);
-  return unknowns - rank;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(dense_rows(syzygy_rows<double>(g, k, r), unknowns));
+  svd.setThreshold(1e-10);
+  return unknowns - svd.rank();
 }
 
 std::optional<long> theorem_7_1_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r) {

@@ -92,6 +92,9 @@ std::vector<std::vector<std::pair<long, mpq_class>>> g1_condition_rows_exact(con
                                                                              const GluingData& gluing, int k, int r,
                                                                              int edge = -1);
 
+// Sparse rows (column, value) as a dense matrix with `columns` columns.
+Eigen::MatrixXd dense_rows(const std::vector<std::vector<std::pair<long, double>>>& rows, long columns);
+
 // Index of coefficient (i, j) (i along s, j along t) of face f among the unknowns.
 inline long g1_unknown(int f, int i, int j, int k, int r) {
   const int n = 2 * k - r + 1;

@@ -364,11 +364,11 @@ TEST_CASE("The basis printed in the paper's Section 8, checked against condition
   for (const auto& f : delta) REQUIRE(violated(m, g, f) == 0);
   for (const auto& f : edge) REQUIRE(violated(m, g, f) == 0);
   // Not in S: g (neither as printed, with -16/3 N_{1,2} on sigma_3, nor with h's 14/3),
-  // and c1, c3 each fail one condition family on one half-edge (7 of the 84 sampled rows).
+  // c1 and c3.
   REQUIRE(violated(m, g, g_printed) > 0);
   REQUIRE(violated(m, g, g_fixed_coefficient) > 0);
-  REQUIRE(violated(m, g, c1) == 7);
-  REQUIRE(violated(m, g, c3) == 7);
+  REQUIRE(violated(m, g, c1) > 0);
+  REQUIRE(violated(m, g, c3) > 0);
   // What is in S instead: c1 + c3 (the cross-derivative function of sigma_1, shaped like
   // c2), and h carried to the next face by the mesh's rotation symmetry.
   const Printed c1_plus_c3 = sum(c1, c3);
