@@ -274,8 +274,21 @@ PiecewisePolynomial reflected(const PiecewisePolynomial& p) {
 EdgeGluing reversed(const EdgeGluing& g) { return {reflected(g.a), reflected(g.c), reflected(g.b)}; }
 
 GluingData geometric_gluing(const QuadMesh& mesh) {
-  // Per (vertex, edge): the values a(0), b(0) of eq. (8) seen from that vertex.
-  std::vector<std::map<int, std::pair<double, double>>> at(mesh.num_vertices());
+  // Per (vertex, edge): the values a(0), b(0) of eq. (8) seen from that vertex. They are
+  // ratios of 2x2 determinants, invariant under rotations and scalings of the tangent frame:
+  // on a planar mesh the frame is the xy plane and they are rational in the coordinates,
+  // computed exactly when the coordinates are short binary fractions (multiples of 2^-20,
+  // as typed in a mesh file meant to be exact). Coordinates such as cos(2 pi / 5) rounded
+  // to doubles are not: as exact rationals they make the space a perturbation of the
+  // intended one, whose extra constraints are independent only at rounding level (an
+  // ill-conditioned basis), so those data stay floating point and get a rank tolerance.
+  bool exact = mesh.planar();
+  for (int v = 0; v < mesh.num_vertices() && exact; ++v)
+    for (int i = 0; i < 2; ++i) {
+      const double scaled = std::ldexp(mesh.vertex(v)(i), 20);
+      exact = exact && std::abs(scaled) < 0x1p40 && scaled == std::round(scaled);
+    }
+  std::vector<std::map<int, std::pair<mpq_class, mpq_class>>> at(mesh.num_vertices());
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     const auto& ring = mesh.ring(v);
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
@@ -284,25 +297,36 @@ GluingData geometric_gluing(const QuadMesh& mesh) {
       normal += (mesh.vertex(q[2]) - mesh.vertex(q[0])).cross(mesh.vertex(q[3]) - mesh.vertex(q[1]));
     }
     normal.normalize();
-    std::vector<Eigen::Vector2d> u;
+    std::vector<std::array<mpq_class, 2>> u;
+    std::vector<double> length;
     Eigen::Vector3d e1, e2;
     for (size_t i = 0; i < ring.edges.size(); ++i) {
       const auto& E = mesh.edge(ring.edges[i]);
-      const Eigen::Vector3d d = mesh.vertex(E.v[0] == v ? E.v[1] : E.v[0]) - mesh.vertex(v);
+      const int w = E.v[0] == v ? E.v[1] : E.v[0];
+      if (exact) {  // exact differences of the (binary) coordinates
+        u.push_back({mpq_class(mesh.vertex(w).x()) - mpq_class(mesh.vertex(v).x()),
+                     mpq_class(mesh.vertex(w).y()) - mpq_class(mesh.vertex(v).y())});
+        length.push_back((mesh.vertex(w) - mesh.vertex(v)).norm());
+        continue;
+      }
+      const Eigen::Vector3d d = mesh.vertex(w) - mesh.vertex(v);
       const Eigen::Vector3d t = d - d.dot(normal) * normal;
       if (i == 0) {
         e1 = t.normalized();
         e2 = normal.cross(e1);
       }
-      u.emplace_back(t.dot(e1), t.dot(e2));
+      u.push_back({mpq_class(t.dot(e1)), mpq_class(t.dot(e2))});
+      length.push_back(t.norm());
     }
-    auto det = [](const Eigen::Vector2d& x, const Eigen::Vector2d& y) { return x.x() * y.y() - x.y() * y.x(); };
+    auto det = [](const std::array<mpq_class, 2>& x, const std::array<mpq_class, 2>& y) -> mpq_class {
+      return x[0] * y[1] - x[1] * y[0];
+    };
     const int n = static_cast<int>(u.size());
     for (int i = 0; i < n; ++i) {
       if (mesh.edge(ring.edges[i]).boundary()) continue;
       const int prev = ring.boundary ? i - 1 : (i + n - 1) % n, next = ring.boundary ? i + 1 : (i + 1) % n;
-      const double d = det(u[next], u[i]);
-      if (std::abs(d) < 1e-12 * u[next].norm() * u[i].norm())
+      const mpq_class d = det(u[next], u[i]);
+      if (std::abs(d.get_d()) < 1e-12 * length[next] * length[i])
         throw std::invalid_argument("vertex " + std::to_string(v + 1) +
                                     ": two consecutive edges are parallel in the tangent plane; the geometric gluing "
                                     "is undefined there (use symmetric)");
@@ -314,15 +338,20 @@ GluingData geometric_gluing(const QuadMesh& mesh) {
   for (int e = 0; e < mesh.num_edges(); ++e) {
     const auto& E = mesh.edge(e);
     if (E.boundary()) continue;
-    const auto [A0, B0] = at[E.v[0]].at(e);
-    const auto [A1p, B1p] = at[E.v[1]].at(e);
-    const double A1 = A1p / B1p, B1 = 1 / B1p;  // the far end's values in this edge's frames
+    const auto& [A0, B0] = at[E.v[0]].at(e);
+    const auto& [A1p, B1p] = at[E.v[1]].at(e);
+    const mpq_class A1 = A1p / B1p, B1 = 1 / B1p;  // the far end's values in this edge's frames
     // x0 d0 + x1 d1 with the C^1 Hermite functions d0 = 1 - 2u^2 | 2(1-u)^2 and
     // d1 = 2u^2 | 1 - 2(1-u)^2: d0 + d1 = 1, so equal end values stay constant along the
     // edge (a regular grid gets exactly the C1 data a = 0, b = -1).
-    auto blend = [](double x0, double x1) {
-      return PiecewisePolynomial::from_double({std::vector<double>{x0, 0, 2 * (x1 - x0)},
-                                               std::vector<double>{2 * x0 - x1, 4 * (x1 - x0), 2 * (x0 - x1)}});
+    auto blend = [&](const mpq_class& x0, const mpq_class& x1) {
+      std::array<std::vector<mpq_class>, 2> p{std::vector<mpq_class>{x0, 0, 2 * (x1 - x0)},
+                                              std::vector<mpq_class>{2 * x0 - x1, 4 * (x1 - x0), 2 * (x0 - x1)}};
+      if (exact) return PiecewisePolynomial::from_exact(std::move(p));
+      std::array<std::vector<double>, 2> d;
+      for (int h = 0; h < 2; ++h)
+        for (const auto& x : p[h]) d[h].push_back(x.get_d());
+      return PiecewisePolynomial::from_double(std::move(d));
     };
     g.edges[e] = EdgeGluing{blend(A0, A1), blend(B0, B1), PiecewisePolynomial::constant(1)};
   }

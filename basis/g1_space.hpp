@@ -45,7 +45,9 @@ GluingData symmetric_gluing(const QuadMesh& mesh);
 // mesh's own edge directions, projected to the tangent plane at the vertex. At each end,
 // a and b take the values of eq. (8) and are blended along the edge by the Hermite
 // functions d0, d1 of degree 2, C^1 at 1/2 (d0 + d1 = 1), so Condition 3.1 holds by
-// construction and constant data stay constant.
+// construction and constant data stay constant. On planar meshes whose coordinates are
+// multiples of 2^-20 (e.g. 0.375, 1.25) the data are exact rationals; otherwise floating
+// point.
 // Throws std::invalid_argument naming the vertex where two consecutive edges are parallel.
 GluingData geometric_gluing(const QuadMesh& mesh);
 
