@@ -35,6 +35,7 @@ void write_text(const std::string& path, const std::string& text) {
 
 int converge_command(const ConvergeOptions& o) {
   CaseDescription c = load_case(o.case_file);
+  if (c.family == "g1") return converge_g1_case(o, c);
   if (!c.collection_file.empty())
     throw InputError(c.path + ": [space] collection: a convergence study refines uniformly, and a collection given "
                      "explicitly has fixed functions (use knotwork run, or knotwork adapt to refine it)");

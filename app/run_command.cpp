@@ -22,6 +22,7 @@ double since(std::chrono::steady_clock::time_point t) {
 int run_command(const RunOptions& o) {
   using clock = std::chrono::steady_clock;
   CaseDescription c = load_case(o.case_file);
+  if (c.family == "g1") return run_g1_case(o, c);
   if (o.degree) override_degree(c, o.degree);
   if (o.elements) override_elements(c, o.elements);
   c.allow_non_semi_regular = o.allow_non_semi_regular;

@@ -571,6 +571,44 @@ long g1_basis_rank(const G1Basis& basis, std::string* method) {
   return qr.rank();
 }
 
+std::vector<int> g1_inseparable_edges(const QuadMesh& mesh, const GluingData& gluing, int k, int r) {
+  std::vector<int> out;
+  const bool exact = gluing.exact();
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (E.boundary()) continue;
+    // Corner blocks at v[0] first, then at v[1], then the strips.
+    LocalColumns cols;
+    add_corner_block(cols, E.face[0], E.corner[0], k, r);
+    add_corner_block(cols, E.face[1], (E.corner[1] + 1) % 4, k, r);
+    add_corner_block(cols, E.face[0], (E.corner[0] + 1) % 4, k, r);
+    add_corner_block(cols, E.face[1], E.corner[1], k, r);
+    add_edge_strips(cols, mesh, e, k, r);
+    bool separable;
+    if (exact) {
+      const auto Z = null_space(restrict_rows(g1_condition_rows_exact(mesh, gluing, k, r, e), cols), cols.size());
+      // Rank of the Taylor rows [from, to) of the null-space vectors, exactly.
+      auto rank = [&](int from, int to) {
+        std::vector<std::vector<mpq_class>> T(to - from, std::vector<mpq_class>(Z.size()));
+        for (size_t j = 0; j < Z.size(); ++j)
+          for (int i = from; i < to; ++i) T[i - from][j] = Z[j][i];
+        return static_cast<long>(Z.size()) - static_cast<long>(null_space(T, static_cast<int>(Z.size())).size());
+      };
+      separable = rank(0, 16) == rank(0, 8) + rank(8, 16);
+    } else {
+      const Eigen::MatrixXd Z = null_space(restrict_rows(g1_condition_rows(mesh, gluing, k, r, e), cols), cols.size());
+      auto rank = [&](int from, int to) {
+        Eigen::JacobiSVD<Eigen::MatrixXd> svd(Z.middleRows(from, to - from));
+        svd.setThreshold(kTolerance);
+        return static_cast<long>(svd.rank());
+      };
+      separable = rank(0, 16) == rank(0, 8) + rank(8, 16);
+    }
+    if (!separable) out.push_back(e);
+  }
+  return out;
+}
+
 std::vector<int> support_faces(const G1BasisFunction& f, int k, int r) {
   const long per_face = static_cast<long>(2 * k - r + 1) * (2 * k - r + 1);
   std::set<int> faces;
@@ -650,6 +688,19 @@ std::vector<Eigen::MatrixXd> g1_cell_bernstein(const BezierMesh& mesh, const Eig
 }
 
 Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, double* deviation) {
+  return g1_fit(
+      mesh, basis,
+      [&](int f, double s, double t) -> Eigen::Vector3d {
+        const auto& v = mesh.face(f);
+        return (1 - s) * (1 - t) * mesh.vertex(v[0]) + s * (1 - t) * mesh.vertex(v[1]) + s * t * mesh.vertex(v[2]) +
+               (1 - s) * t * mesh.vertex(v[3]);
+      },
+      deviation);
+}
+
+Eigen::MatrixX3d g1_fit(const QuadMesh& mesh, const G1Basis& basis,
+                        const std::function<Eigen::Vector3d(int face, double s, double t)>& target_point,
+                        double* deviation) {
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
   // Greville abscissae: a B-spline combination with these as coefficients is the identity,
   // so the bilinear face has the bilinear map at (xi_i, xi_j) as its coefficients.
@@ -660,17 +711,9 @@ Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, dou
     xi[i] /= k;
   }
   Eigen::MatrixX3d target(basis.unknowns(), 3);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const auto& v = mesh.face(f);
+  for (int f = 0; f < mesh.num_faces(); ++f)
     for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) {
-        const double s = xi[i], t = xi[j];
-        target.row(g1_unknown(f, i, j, k, r)) =
-            ((1 - s) * (1 - t) * mesh.vertex(v[0]) + s * (1 - t) * mesh.vertex(v[1]) + s * t * mesh.vertex(v[2]) +
-             (1 - s) * t * mesh.vertex(v[3]))
-                .transpose();
-      }
-  }
+      for (int j = 0; j < n; ++j) target.row(g1_unknown(f, i, j, k, r)) = target_point(f, xi[i], xi[j]).transpose();
   Eigen::SparseMatrix<double> M(basis.unknowns(), static_cast<Eigen::Index>(basis.functions.size()));
   std::vector<Eigen::Triplet<double>> entries;
   for (size_t j = 0; j < basis.functions.size(); ++j)

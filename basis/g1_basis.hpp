@@ -1,5 +1,6 @@
 #pragma once
 #include <array>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -60,6 +61,11 @@ double g1_residual_max(const QuadMesh& mesh, const GluingData& gluing, const G1B
 // to 2.5e7 matrix entries, sparse rank-revealing QR beyond; `method` says which.
 long g1_basis_rank(const G1Basis& basis, std::string* method = nullptr);
 
+// The interior edges whose separability (Definition 4.11) exceeds k: on the two faces of
+// the edge alone, the Taylor data at its ends are coupled (the rank of the joint Taylor map
+// is less than the sum of the two ends' ranks). Theorem 7.1 assumes there are none.
+std::vector<int> g1_inseparable_edges(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
+
 // The faces a function lives on (sorted).
 std::vector<int> support_faces(const G1BasisFunction& f, int k, int r);
 
@@ -77,6 +83,13 @@ namespace knotwork {
 // coefficient of every basis function (one column per coordinate x, y, z) and, in
 // `deviation`, the largest distance between a projected and a bilinear coefficient.
 Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, double* deviation = nullptr);
+
+// The same for any target surface given per face: target(face, s, t) is the point the face's
+// coefficient with Greville abscissae (s, t) should take (e.g. the bilinear point projected
+// onto a sphere).
+Eigen::MatrixX3d g1_fit(const QuadMesh& mesh, const G1Basis& basis,
+                        const std::function<Eigen::Vector3d(int face, double s, double t)>& target,
+                        double* deviation = nullptr);
 
 // Bernstein coefficients of the same on each BezierMesh cell of g1_bezier_mesh (rows: the
 // cell's (k+1)^2 Bernstein polynomials, a + (k+1) b with a along s).

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <toml++/toml.h>
 
+#include "basis/quad_mesh.hpp"
 #include "cases/geometries.hpp"
 #include "cases/json_input.hpp"
 #include "solver/input_error.hpp"
@@ -325,8 +326,8 @@ void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
   if (const toml::node* f = s.get("family")) {
     c.family = r.string(*f, "[space] family");
     if (c.family != "tensor" && c.family != "knot_segments")
-      r.fail("[space] family", "'" + c.family + "' is not available (" + closest(c.family, {"tensor", "knot_segments"}) +
-                                   "; this version builds \"tensor\" and \"knot_segments\")");
+      r.fail("[space] family", "'" + c.family + "' is not available (" + closest(c.family, {"tensor", "knot_segments", "g1"}) +
+                                   "; this version builds \"tensor\", \"knot_segments\" and \"g1\")");
   }
   const bool segments_family = c.family == "knot_segments";
   if (segments_family) {
@@ -539,6 +540,135 @@ void read_adapt(const Reader& r, const toml::table& t, CaseDescription& c) {
   }
 }
 
+// A case of family "g1": [space] mesh/degree/split_smoothness/gluing/refine, [geometry]
+// shape, [problem] operator/exact/source/reaction/dirichlet. See cases/README.md.
+void read_g1_case(const Reader& r, const toml::table& root, CaseDescription& c) {
+  auto& g = c.g1;
+  const toml::table& s = r.table(root, "space", true);
+  r.check_keys(s, "space", {"family", "mesh", "degree", "split_smoothness", "gluing", "refine", "quadrature_points",
+                            "error_quadrature_points"});
+  const std::filesystem::path folder = std::filesystem::path(r.path()).parent_path();
+  auto resolve = [&](const std::string& file) {
+    std::filesystem::path f = file;
+    return (f.is_relative() ? folder / f : f).string();
+  };
+  const toml::node* m = s.get("mesh");
+  if (!m) r.fail("[space] mesh", "missing: the quad mesh (.obj) the G1 space lives on");
+  g.mesh_file = resolve(r.string(*m, "[space] mesh"));
+  QuadMesh mesh;
+  try {
+    mesh = QuadMesh::read_obj(g.mesh_file);
+  } catch (const std::invalid_argument& e) {
+    r.fail("[space] mesh", e.what());
+  }
+  if (const toml::node* d = s.get("degree")) g.degree = static_cast<int>(r.integer(*d, "[space] degree"));
+  if (g.degree < 2 || g.degree > 12) r.fail("[space] degree", "must be in [2, 12] (one integer: the bidegree k of the patches)");
+  if (const toml::node* d = s.get("split_smoothness"))
+    g.split_smoothness = static_cast<int>(r.integer(*d, "[space] split_smoothness"));
+  if (g.split_smoothness < 1 || g.split_smoothness > g.degree - 1)
+    r.fail("[space] split_smoothness", "must be in [1, degree-1] (C^r across the 4-split lines; r >= 1 for "
+                                       "refinement to nest the spaces), got " + std::to_string(g.split_smoothness));
+  if (const toml::node* d = s.get("gluing")) {
+    g.gluing = r.string(*d, "[space] gluing");
+    if (g.gluing != "symmetric" && g.gluing != "geometric") g.gluing = resolve(g.gluing);
+  }
+  if (const toml::node* d = s.get("refine")) g.refine = static_cast<int>(r.integer(*d, "[space] refine"));
+  if (g.refine < 0 || g.refine > 6) r.fail("[space] refine", "must be in [0, 6]");
+  auto read_points = [&](const char* key, int& pu, int& pv) {
+    if (const toml::node* k = s.get(key)) {
+      const long q = r.integer(*k, std::string("[space] ") + key);
+      if (q < 1 || q > 30) r.fail(std::string("[space] ") + key, "must be in [1, 30]");
+      pu = pv = static_cast<int>(q);
+    }
+  };
+  read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
+  read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
+  c.space.degree = {g.degree, g.degree};
+
+  const toml::table& geo = r.table(root, "geometry", false);
+  r.check_keys(geo, "geometry", {"shape", "center", "radius", "major_radius", "minor_radius"});
+  if (const toml::node* n = geo.get("shape")) g.shape = r.string(*n, "[geometry] shape");
+  if (g.shape != "bilinear" && g.shape != "sphere" && g.shape != "torus")
+    r.fail("[geometry] shape", "unknown shape '" + g.shape + "' (" + closest(g.shape, {"bilinear", "sphere", "torus"}) + ")");
+  if (const toml::node* n = geo.get("center")) {
+    const toml::array* a = n->as_array();
+    if (!a || a->size() != 3) r.fail("[geometry] center", "must be [x, y, z]");
+    for (int i = 0; i < 3; ++i) g.center(i) = r.number(*a->get(i), "[geometry] center");
+  }
+  auto positive = [&](const char* key, double& out) {
+    if (const toml::node* n = geo.get(key)) {
+      out = r.number(*n, std::string("[geometry] ") + key);
+      if (!(out > 0)) r.fail(std::string("[geometry] ") + key, "must be > 0");
+    }
+  };
+  positive("radius", g.radius);
+  positive("major_radius", g.major_radius);
+  positive("minor_radius", g.minor_radius);
+  if (g.shape == "torus" && !(g.minor_radius < g.major_radius))
+    r.fail("[geometry] minor_radius", "must be smaller than major_radius");
+  if (g.shape != "sphere" && (geo.get("radius")))
+    r.fail("[geometry] radius", "only with shape = \"sphere\"");
+
+  const toml::table& t = r.table(root, "problem", true);
+  r.check_keys(t, "problem", {"operator", "exact", "source", "reaction", "dirichlet"});
+  std::string op = "laplace";
+  if (const toml::node* n = t.get("operator")) op = r.string(*n, "[problem] operator");
+  if (op != "laplace" && op != "laplace_beltrami")
+    r.fail("[problem] operator", "'" + op + "' (" + closest(op, {"laplace", "laplace_beltrami"}) + ")");
+  g.surface = op == "laplace_beltrami";
+  const std::string& f = r.path();
+  if (!g.surface) {
+    if (!mesh.planar()) {
+      int v = 0;
+      while (v < mesh.num_vertices() && mesh.vertex(v).z() == 0) ++v;
+      r.fail("[space] mesh", g.mesh_file + ": vertex " + std::to_string(v + 1) + " has z = " +
+                                 std::to_string(mesh.vertex(v).z()) +
+                                 "; operator = \"laplace\" needs a planar mesh (z = 0), surfaces take "
+                                 "operator = \"laplace_beltrami\"");
+    }
+    if (mesh.closed()) r.fail("[space] mesh", "a planar mesh without boundary");
+    if (g.shape != "bilinear") r.fail("[geometry] shape", "planar cases use shape = \"bilinear\"");
+    if (t.get("reaction")) r.fail("[problem] reaction", "only with operator = \"laplace_beltrami\"");
+    PoissonProblem& pb = c.problem;
+    if (const toml::node* e = t.get("exact"))
+      pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
+    if (const toml::node* e = t.get("source"))
+      pb.source = Expression::parse(r.string(*e, "[problem] source"), f + ": [problem] source");
+    else if (pb.exact)
+      pb.source = pb.exact->minus_laplacian;
+    else
+      r.fail("[problem] source", "missing: give `source`, or `exact` to derive it from");
+    pb.boundary.assign(1, BoundaryCondition{});  // one boundary: the whole of it
+    if (const toml::node* d = t.get("dirichlet")) {
+      const auto text = d->value_exact<std::string>();
+      if (!text) r.fail("[problem] dirichlet", "must be \"exact\" or an expression (G1 domains have one boundary)");
+      if (*text != "exact") {
+        pb.boundary[0].from_exact = false;
+        pb.boundary[0].value = Expression::parse(*text, f + ": [problem] dirichlet");
+      }
+    }
+    if (pb.boundary[0].from_exact && !pb.exact)
+      r.fail("[problem] dirichlet", "the boundary data come from the exact solution, but [problem] exact is not given");
+    return;
+  }
+  if (t.get("dirichlet"))
+    r.fail("[problem] dirichlet", mesh.closed() ? "the surface " + g.mesh_file + " is closed: it has no boundary to "
+                                                  "put Dirichlet data on"
+                                                : "Dirichlet data on surfaces are not supported (closed surfaces only)");
+  if (!mesh.closed())
+    r.fail("[space] mesh", g.mesh_file + " has a boundary; Laplace-Beltrami problems are solved on closed surfaces");
+  if (const toml::node* n = t.get("reaction")) {
+    g.reaction = r.number(*n, "[problem] reaction");
+    if (!(g.reaction >= 0)) r.fail("[problem] reaction", "must be >= 0 (0: zero-mean solution)");
+  }
+  if (const toml::node* e = t.get("exact"))
+    g.surface_exact = differentiate_surface_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
+  if (const toml::node* e = t.get("source"))
+    g.surface_source = Expression::parse(r.string(*e, "[problem] source"), f + ": [problem] source");
+  if (!g.surface_exact && !g.surface_source)
+    r.fail("[problem] source", "missing: give `source`, or `exact` to derive it on the surface");
+}
+
 }  // namespace
 
 CaseDescription load_case(const std::string& path) {
@@ -551,6 +681,14 @@ CaseDescription load_case(const std::string& path) {
   c.output_directory = "results/" + c.name;
   if (const toml::node* t = root.get("title")) c.title = r.string(*t, "title");
   if (const toml::node* t = root.get("description")) r.string(*t, "description");
+  if (const toml::node* sp = root.get("space"); sp && sp->is_table())
+    if (const toml::node* fam = sp->as_table()->get("family"); fam && fam->value_exact<std::string>() == "g1") {
+      c.family = "g1";
+      read_g1_case(r, root, c);
+      read_output(r, r.table(root, "output", false), c);
+      if (root.get("adapt")) r.fail("[adapt]", "not available for family = \"g1\" (refinement is uniform subdivision)");
+      return c;
+    }
   read_geometry(r, r.table(root, "geometry", true), c);
   read_space(r, r.table(root, "space", true), c);
   read_problem(r, r.table(root, "problem", true), c);

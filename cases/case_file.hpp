@@ -2,6 +2,9 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+#include <optional>
+
 #include "basis/semi_regular_collection.hpp"
 #include "basis/tensor_patch.hpp"
 #include "solver/poisson_problem.hpp"
@@ -16,11 +19,27 @@ struct CaseDescription {
   std::string geometry_type;
   NurbsPatch geometry;
   TensorSpaceOptions space;
-  std::string family = "tensor";         // or "knot_segments"
+  std::string family = "tensor";         // or "knot_segments", "g1"
   std::vector<KnotInsertion> segments;  // knot_segments: inserted in order, parameter coordinates
   std::string collection_file;             // knot_segments given explicitly ([space] collection)
   std::vector<LocalBSpline> collection;    // its functions, not yet checked for semi-regularity
   bool allow_non_semi_regular = false;     // --allow-non-semi-regular: solve on it anyway
+  // family "g1": the G1 macro-patch space on a quad mesh; the geometry is the G1 spline
+  // fitted to the mesh ([geometry] shape) and the problem is planar Poisson or
+  // Laplace-Beltrami on a closed surface ([problem] operator).
+  struct G1 {
+    std::string mesh_file;              // resolved against the case file's folder
+    int degree = 4, split_smoothness = 1;
+    std::string gluing = "symmetric";   // "symmetric", "geometric" or a JSON file (resolved)
+    int refine = 0;                     // subdivisions before solving (converge adds one per level)
+    std::string shape = "bilinear";     // "bilinear" | "sphere" | "torus"
+    Eigen::Vector3d center = Eigen::Vector3d::Zero();
+    double radius = 1, major_radius = 2, minor_radius = 1;  // sphere; torus around the z axis
+    bool surface = false;               // operator = "laplace_beltrami"
+    double reaction = 0;                // -Laplace_Beltrami(u) + reaction u = f
+    std::optional<SurfaceExactSolution> surface_exact;
+    std::optional<Expression> surface_source;  // literal f(x, y, z); else derived on the surface
+  } g1;
   QuadratureOptions quadrature;
   PoissonProblem problem;
   std::string output_directory;  // default results/<name>

@@ -1,10 +1,11 @@
 #pragma once
+#include <array>
 #include <memory>
 #include <string>
 
 namespace knotwork {
 
-// A scalar function of x and y written by the user, e.g. "sin(pi*x)*exp(-y^2)".
+// A scalar function of x, y and z (z = 0 in the plane) written by the user, e.g. "sin(pi*x)*exp(-y^2)".
 // Operators + - * / ^, functions sin cos tan asin acos atan atan2 sinh cosh tanh
 // exp log (natural) sqrt abs pow, constants pi and e.
 class Expression {
@@ -28,7 +29,8 @@ class ExpressionEvaluator {
   explicit ExpressionEvaluator(const Expression& e);
   ~ExpressionEvaluator();
   ExpressionEvaluator(ExpressionEvaluator&&) noexcept;
-  double operator()(double x, double y);
+  double operator()(double x, double y);  // z = 0
+  double operator()(double x, double y, double z);
 
  private:
   struct Impl;
@@ -43,5 +45,14 @@ struct ExactSolution {
 // Throws InputError if u cannot be differentiated (unknown function, non-smooth parts GiNaC
 // rejects). The derived expressions are checked against GiNaC's own evaluation.
 ExactSolution differentiate_exact_solution(const Expression& u);
+
+// The same for a function of (x, y, z) restricted to a surface: its ambient gradient and
+// Hessian, from which the surface operators follow (solver/surface_poisson).
+struct SurfaceExactSolution {
+  Expression u;
+  std::array<Expression, 3> gradient;
+  std::array<std::array<Expression, 3>, 3> hessian;
+};
+SurfaceExactSolution differentiate_surface_solution(const Expression& u);
 
 }  // namespace knotwork

@@ -1,0 +1,43 @@
+#pragma once
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "basis/g1_basis.hpp"
+#include "basis/g1_refine.hpp"
+#include "cases/case_file.hpp"
+#include "solver/geometry_map.hpp"
+#include "solver/surface_poisson.hpp"
+
+namespace knotwork {
+
+// A family "g1" case at one refinement level: the G1 space on the subdivided quad mesh and
+// the geometry, which is the G1 spline fitted once on the case's own (coarse) mesh and
+// restricted exactly to the finer cells (subdivision keeps it in every finer space).
+struct G1Discretization {
+  QuadMesh coarse;
+  GluingData coarse_gluing;
+  G1Refinement level;                 // mesh, gluing and origin of every face
+  int levels = 0;                     // subdivisions from the coarse mesh
+  G1Basis basis;
+  BezierMesh mesh;                    // 4 cells per face, cell 4 f + 2 ht + hs
+  std::vector<SurfaceCell> cells;     // the geometry per cell (z = 0 for planar cases)
+  std::unique_ptr<BezierCellsGeometryMap> planar;  // planar cases
+  double fit_deviation = 0;           // largest distance fitted - target coefficient (coarse)
+  double min_regularity = 0;          // planar: min det J / max det J; surface: min |x_u x x_v| / max
+  int worst_face = -1;                // coarse face (0-based) where min_regularity occurs
+  double shape_distance = 0;          // sphere/torus: largest distance of a Gauss point from the exact shape
+  double boundary_deviation = 0;      // planar: largest distance of a boundary point from its straight edge
+};
+
+// Throws InputError naming the case file and field (bad gluing data, a degree below an
+// edge's separability, a fit that is not regular: naming the face).
+G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
+                               const std::function<void(const std::string&)>& progress = {});
+
+// The largest jump of the physical (surface) gradient of u_h across interior edges of the
+// level's mesh, relative to the largest gradient seen, at `samples` points per cell side.
+double g1_gradient_jump(const G1Discretization& d, const Eigen::VectorXd& coefficients, int samples = 7);
+
+}  // namespace knotwork
