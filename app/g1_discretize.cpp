@@ -104,7 +104,8 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
   say("building the G1 space (" + std::to_string(d.levels) + " subdivisions)");
   d.level = refine_g1(d.coarse, d.coarse_gluing, d.levels);
   try {
-    d.basis = g1_basis(d.level.mesh, d.level.gluing, k, r);
+    // The geometry is the G1 fit in both cases, so the C0 baseline solves on the same domain.
+    d.basis = g.c0 ? c0_multipatch_basis(d.level.mesh, k, r) : g1_basis(d.level.mesh, d.level.gluing, k, r);
   } catch (const std::runtime_error& e) {
     throw InputError(c.path + ": [space]: " + e.what());
   }

@@ -33,7 +33,8 @@ struct G1Level {
 
 std::string describe_g1(const CaseDescription& c) {
   const auto& g = c.g1;
-  return "G1 macro-patch splines (Blidia-Mourrain-Villamizar), degree " + std::to_string(g.degree) + ", C^" +
+  return std::string(g.c0 ? "C0 multipatch baseline" : "G1 macro-patch splines (Blidia-Mourrain-Villamizar)") +
+         ", degree " + std::to_string(g.degree) + ", C^" +
          std::to_string(g.split_smoothness) + " 4-split, " +
          (g.gluing == "symmetric" || g.gluing == "geometric" ? g.gluing : std::string("file")) + " gluing, " +
          (g.surface ? "Laplace-Beltrami on a " + g.shape + " surface" : std::string("planar Poisson"));

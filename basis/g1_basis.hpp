@@ -66,6 +66,11 @@ long g1_basis_rank(const G1Basis& basis, std::string* method = nullptr);
 // is less than the sum of the two ends' ranks). Theorem 7.1 assumes there are none.
 std::vector<int> g1_inseparable_edges(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
 
+// The plain C0 multipatch space on the same faces (each face R_k^r, values matched across
+// interior edges, no condition on derivatives): the baseline G1 spaces are compared with.
+// Functions of kind `face`; a coefficient shared by several faces is one function.
+G1Basis c0_multipatch_basis(const QuadMesh& mesh, int k, int r);
+
 // The faces a function lives on (sorted).
 std::vector<int> support_faces(const G1BasisFunction& f, int k, int r);
 

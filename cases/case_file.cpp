@@ -545,8 +545,8 @@ void read_adapt(const Reader& r, const toml::table& t, CaseDescription& c) {
 void read_g1_case(const Reader& r, const toml::table& root, CaseDescription& c) {
   auto& g = c.g1;
   const toml::table& s = r.table(root, "space", true);
-  r.check_keys(s, "space", {"family", "mesh", "degree", "split_smoothness", "gluing", "refine", "quadrature_points",
-                            "error_quadrature_points"});
+  r.check_keys(s, "space", {"family", "mesh", "degree", "split_smoothness", "gluing", "refine", "smoothness",
+                            "quadrature_points", "error_quadrature_points"});
   const std::filesystem::path folder = std::filesystem::path(r.path()).parent_path();
   auto resolve = [&](const std::string& file) {
     std::filesystem::path f = file;
@@ -573,6 +573,11 @@ void read_g1_case(const Reader& r, const toml::table& root, CaseDescription& c) 
     if (g.gluing != "symmetric" && g.gluing != "geometric") g.gluing = resolve(g.gluing);
   }
   if (const toml::node* d = s.get("refine")) g.refine = static_cast<int>(r.integer(*d, "[space] refine"));
+  if (const toml::node* d = s.get("smoothness")) {
+    const std::string v = r.string(*d, "[space] smoothness");
+    if (v != "g1" && v != "c0") r.fail("[space] smoothness", "must be \"g1\" (default) or \"c0\" (the C0 multipatch baseline)");
+    g.c0 = v == "c0";
+  }
   if (g.refine < 0 || g.refine > 6) r.fail("[space] refine", "must be in [0, 6]");
   auto read_points = [&](const char* key, int& pu, int& pv) {
     if (const toml::node* k = s.get(key)) {

@@ -32,6 +32,7 @@ struct CaseDescription {
     int degree = 4, split_smoothness = 1;
     std::string gluing = "symmetric";   // "symmetric", "geometric" or a JSON file (resolved)
     int refine = 0;                     // subdivisions before solving (converge adds one per level)
+    bool c0 = false;                    // [space] smoothness = "c0": the plain C0 multipatch baseline
     std::string shape = "bilinear";     // "bilinear" | "sphere" | "torus"
     Eigen::Vector3d center = Eigen::Vector3d::Zero();
     double radius = 1, major_radius = 2, minor_radius = 1;  // sphere; torus around the z axis
