@@ -147,6 +147,22 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
       }
     }
     d.min_regularity = largest > 0 ? smallest / largest : 0;
+    Eigen::VectorXd nu(9), nv(9);
+    nu << 0, 0.5, 1, 0, 0.5, 1, 0, 0.5, 1;
+    nv << 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1;
+    double smallest_node = INFINITY;
+    for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
+      GeometryAtPoints at;
+      d.planar->evaluate(cell, nu, nv, at);
+      for (Eigen::Index q = 0; q < 9; ++q) {
+        const double det = at.jacobian(q, 0) * at.jacobian(q, 3) - at.jacobian(q, 1) * at.jacobian(q, 2);
+        if (det < smallest_node) {
+          smallest_node = det;
+          d.singular_point << at.x(q, 0), at.x(q, 1), 0;
+        }
+      }
+    }
+    d.min_regularity_nodes = largest > 0 ? smallest_node / largest : 0;
     // Straight boundary edges: distance of boundary control points from the chord.
     for (int cell = 0; cell < d.mesh.num_cells(); ++cell)
       for (int side = 0; side < 4; ++side) {
@@ -168,6 +184,7 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
   } else {
     const SurfaceRegularity reg = surface_regularity(d.cells, points);
     d.min_regularity = reg.min_ratio;
+    d.min_regularity_nodes = reg.min_ratio;  // surfaces: checked at the Gauss points only
     if (reg.cell >= 0) d.worst_face = d.level.origin[d.mesh.cell(reg.cell).patch].face;
     const BernsteinTable& t = bernstein_table(k, k, points, points);
     for (const auto& cell : d.cells) {

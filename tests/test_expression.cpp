@@ -18,7 +18,7 @@ TEST_CASE("Syntax errors name the place and the position", "[expression]") {
   REQUIRE_THROWS_AS(Expression::parse("sin(x", "case.toml: [problem] exact"), InputError);
   REQUIRE_THROWS_WITH(Expression::parse("sin(x", "case.toml: [problem] exact"),
                       Catch::Contains("case.toml: [problem] exact") && Catch::Contains("position"));
-  REQUIRE_THROWS_WITH(Expression::parse("x + z", "f"), Catch::Contains("position 4"));
+  REQUIRE_THROWS_WITH(Expression::parse("x + w", "f"), Catch::Contains("position 4"));  // z is a variable (surfaces)
   REQUIRE_THROWS_WITH(Expression::parse("  ", "f"), Catch::Contains("empty"));
 }
 
@@ -42,4 +42,14 @@ TEST_CASE("Symbolic derivatives agree with finite differences", "[expression]") 
 
 TEST_CASE("Functions GiNaC cannot differentiate are reported, not crashed on", "[expression]") {
   REQUIRE_THROWS_AS(differentiate_exact_solution(Expression::parse("min(x, y)", "case: exact")), InputError);
+}
+
+TEST_CASE("Surface solutions: ambient gradient and Hessian in x, y, z", "[expression][surface]") {
+  const SurfaceExactSolution s = differentiate_surface_solution(Expression::parse("x*y*z + sin(z)", "f"));
+  ExpressionEvaluator gz(s.gradient[2]), hzz(s.hessian[2][2]), hxy(s.hessian[0][1]), hyz(s.hessian[1][2]);
+  const double x = 0.3, y = -0.7, z = 0.45;
+  REQUIRE(gz(x, y, z) == Approx(x * y + std::cos(z)));
+  REQUIRE(hzz(x, y, z) == Approx(-std::sin(z)));
+  REQUIRE(hxy(x, y, z) == Approx(z));
+  REQUIRE(hyz(x, y, z) == Approx(x));
 }

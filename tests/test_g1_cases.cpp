@@ -1,0 +1,167 @@
+// Poisson and Laplace-Beltrami on G1 spaces through the case files: convergence rates
+// against exact solutions (theory: O(h^(k+1)) in L2 and O(h^k) in H1 for degree k), C1
+// continuity of the discrete solution across every interface, the C0 baseline's jumps,
+// separability, and bad input through the real binary.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "app/g1_discretize.hpp"
+#include "solver/poisson_solver.hpp"
+#include "tests/cli_sandbox.hpp"
+#include "tests/g1_test_meshes.hpp"
+
+using namespace knotwork;
+using namespace cli_test;
+
+namespace {
+
+const std::string kSource = KNOTWORK_SOURCE_DIR;
+
+struct Measured {
+  double h, l2, h1, jump;
+  int dofs;
+};
+
+// One level solved here with the library (not through g1_run.cpp): h is the largest cell
+// diagonal, computed from the geometry cells.
+Measured solve(const CaseDescription& c, int level) {
+  const G1Discretization d = discretize_g1(c, level);
+  Measured m{0, 0, 0, 0, d.mesh.num_functions()};
+  const int k = d.basis.k, last = (k + 1) * (k + 1) - 1;
+  for (const auto& cell : d.cells) m.h = std::max(m.h, (cell.points.row(0) - cell.points.row(last)).norm());
+  Eigen::VectorXd x;
+  if (d.planar) {
+    const PoissonSolution s = solve_poisson(d.mesh, *d.planar, c.problem, PoissonSolveOptions{});
+    m.l2 = s.errors->l2, m.h1 = s.errors->h1_semi, x = s.coefficients;
+  } else {
+    SurfaceProblem p;
+    p.exact = c.g1.surface_exact;
+    p.reaction = c.g1.reaction;
+    const SurfaceSolution s = solve_surface_poisson(d.mesh, d.cells, p, QuadratureOptions{});
+    m.l2 = s.errors->l2, m.h1 = s.errors->h1_semi, x = s.coefficients;
+  }
+  m.jump = g1_gradient_jump(d, x);
+  return m;
+}
+
+double rate(double e0, double e1, double h0, double h1) { return std::log(e0 / e1) / std::log(h0 / h1); }
+
+}  // namespace
+
+// Observed (docs/G1_POISSON.md): around the valence-3 vertex the finest rates are L2 5.36,
+// H1 3.77 at level 3 (4.85 and 3.50 at level 4), below the optimal 5 and 4 in H1; the
+// asserted bounds are what this code establishes, not the theory.
+TEST_CASE("G1 Poisson, case (a): errors fall at high order, the solution is C1 across interfaces", "[g1][cases]") {
+  const CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
+  std::vector<Measured> m;
+  for (int l = 0; l <= 3; ++l) m.push_back(solve(c, l));
+  for (const auto& x : m) {
+    INFO("h " << x.h << " dofs " << x.dofs << " L2 " << x.l2 << " H1 " << x.h1 << " jump " << x.jump);
+    REQUIRE(x.jump < 1e-9);
+  }
+  REQUIRE(rate(m[2].l2, m[3].l2, m[2].h, m[3].h) > 4.5);
+  REQUIRE(rate(m[2].h1, m[3].h1, m[2].h, m[3].h) > 3.3);
+  // Over the whole study: at least h^4 in L2 and h^3 in H1 on average.
+  REQUIRE(rate(m[0].l2, m[3].l2, m[0].h, m[3].h) > 4);
+  REQUIRE(rate(m[0].h1, m[3].h1, m[0].h, m[3].h) > 3);
+}
+
+TEST_CASE("The C0 multipatch baseline on the same mesh is not C1 (the jump check sees it)", "[g1][cases]") {
+  CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
+  c.g1.c0 = true;
+  const Measured m = solve(c, 1);
+  REQUIRE(m.jump > 1e-2);
+  REQUIRE(m.l2 < 1e-3);  // and it converges: a fair baseline
+}
+
+TEST_CASE("Laplace-Beltrami on the G1 sphere from a cube: rates with the zero-mean constraint", "[g1][cases][surface]") {
+  const CaseDescription c = load_case(kSource + "/cases/g1_sphere_xy.toml");
+  std::vector<Measured> m;
+  for (int l = 0; l <= 2; ++l) m.push_back(solve(c, l));
+  for (const auto& x : m) {
+    INFO("h " << x.h << " dofs " << x.dofs << " L2 " << x.l2 << " H1 " << x.h1 << " jump " << x.jump);
+    REQUIRE(x.jump < 1e-9);
+  }
+  // Observed 5.53, 4.83 (L2) and 4.44, 3.83 (H1); optimal for k = 4: 5 and 4.
+  REQUIRE(rate(m[1].l2, m[2].l2, m[1].h, m[2].h) > 4.3);
+  REQUIRE(rate(m[1].h1, m[2].h1, m[1].h, m[2].h) > 3.4);
+}
+
+TEST_CASE("Separability of edges (Definition 4.11) computed on the edge's two faces", "[g1][separability]") {
+  const QuadMesh cube = knotwork::test::cube(), three = knotwork::test::three_quads();
+  // The cube with symmetric data needs k >= 4 at r = 1 (at k = 3 its basis has no vertex
+  // functions at all: knotwork basis reports vertex-pair and coupled ones).
+  REQUIRE(g1_inseparable_edges(cube, symmetric_gluing(cube), 3, 1).size() == 12);
+  REQUIRE(g1_inseparable_edges(cube, symmetric_gluing(cube), 4, 1).empty());
+  for (int k = 3; k <= 5; ++k) REQUIRE(g1_inseparable_edges(three, symmetric_gluing(three), k, 1).empty());
+}
+
+TEST_CASE("G1 cases through the binary: run, converge with a .pvd over levels, and bad input", "[g1][cases][cli]") {
+  Sandbox box;
+  const std::string meshes = kSource + "/cases/meshes/";
+  const Result run = box.run("converge " + kSource + "/cases/g1_sphere_xy.toml --levels 2 --quiet --out conv");
+  INFO(run.err);
+  REQUIRE(run.code == 0);
+  REQUIRE(fs::exists(box.dir() / "conv" / "level_1.vtu"));
+  REQUIRE(slurp(box.dir() / "conv" / "convergence.pvd").find("level_1.vtu") != std::string::npos);
+
+  auto rejected = [&](const std::string& name, const std::string& text, const std::vector<std::string>& mentions) {
+    box.file(name, text);
+    INFO(text);
+    expect_one_line_error(box.run("run " + name + " --quiet --out never"), mentions);
+    REQUIRE(!fs::exists(box.dir() / "never" / "solution.vtu"));
+  };
+  const std::string space = "[space]\nfamily = \"g1\"\n";
+  // A surface case with Dirichlet data but no boundary.
+  rejected("closed.toml",
+           space + "mesh = \"" + meshes + "cube_centered.obj\"\n[geometry]\nshape = \"sphere\"\n[problem]\n"
+                   "operator = \"laplace_beltrami\"\nexact = \"x*y\"\ndirichlet = \"exact\"\n",
+           {"closed.toml", "[problem] dirichlet", "closed", "no boundary"});
+  // A planar case with z != 0.
+  rejected("planar.toml", space + "mesh = \"" + meshes + "cube_centered.obj\"\n[problem]\nexact = \"x\"\n",
+           {"planar.toml", "[space] mesh", "vertex 1 has z = -1", "laplace_beltrami"});
+  // The degree below the separability of the gluing data: the edge is named.
+  rejected("low.toml", space + "mesh = \"" + meshes + "pentagon.obj\"\ngluing = \"geometric\"\ndegree = 4\n[problem]\nexact = \"x\"\n",
+           {"low.toml", "[space] degree", "separability of edge 1-2"});
+  // A mesh whose fitted G1 geometry is not regular: the face is named. (Nine triangles split
+  // into three quads each, with the geometric gluing: the least-squares fit folds over.)
+  std::string obj;
+  {
+    const double A[2] = {-0.5, 0}, B[2] = {0.5, 0};
+    const double ring[7][2] = {{0, 1}, {-1.125, 0.75}, {-1.5, 0}, {-1.125, -0.75}, {0, -1}, {1.25, -0.625}, {1.25, 0.625}};
+    std::vector<std::array<double, 2>> P{{A[0], A[1]}, {B[0], B[1]}};
+    for (const auto& p : ring) P.push_back({p[0], p[1]});
+    const int tris[9][3] = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 5}, {0, 5, 6}, {0, 6, 1}, {1, 6, 7}, {1, 7, 8}, {1, 8, 2}};
+    std::vector<std::array<double, 2>> V;
+    auto id = [&](double x, double y) {
+      for (size_t i = 0; i < V.size(); ++i)
+        if (V[i][0] == x && V[i][1] == y) return static_cast<int>(i) + 1;
+      V.push_back({x, y});
+      return static_cast<int>(V.size());
+    };
+    std::string faces;
+    for (const auto& t : tris) {
+      const auto &a = P[t[0]], &b = P[t[1]], &cc = P[t[2]];
+      const double gx = std::round((a[0] + b[0] + cc[0]) / 3 * 64) / 64, gy = std::round((a[1] + b[1] + cc[1]) / 3 * 64) / 64;
+      const std::array<double, 2> corner[3] = {a, b, cc};
+      for (int i = 0; i < 3; ++i) {
+        const auto &x = corner[i], &y = corner[(i + 1) % 3], &z = corner[(i + 2) % 3];
+        faces += "f " + std::to_string(id(x[0], x[1])) + " " + std::to_string(id((x[0] + y[0]) / 2, (x[1] + y[1]) / 2)) +
+                 " " + std::to_string(id(gx, gy)) + " " + std::to_string(id((z[0] + x[0]) / 2, (z[1] + x[1]) / 2)) + "\n";
+      }
+    }
+    for (const auto& v : V) obj += "v " + std::to_string(v[0]) + " " + std::to_string(v[1]) + " 0\n";
+    obj += faces;
+  }
+  box.file("folded.obj", obj);
+  rejected("folded.toml", space + "mesh = \"folded.obj\"\ngluing = \"geometric\"\ndegree = 5\n[problem]\nexact = \"x\"\n",
+           {"folded.toml", "[geometry]", "not regular at face"});
+  // Keys of other families, and surfaces that need an exact solution or a source.
+  rejected("keys.toml", space + "mesh = \"" + meshes + "three_quads.obj\"\nelements = 4\n[problem]\nexact = \"x\"\n",
+           {"keys.toml", "[space] elements", "unknown key"});
+  rejected("nosource.toml",
+           space + "mesh = \"" + meshes + "cube_centered.obj\"\n[geometry]\nshape = \"sphere\"\n[problem]\n"
+                   "operator = \"laplace_beltrami\"\n",
+           {"nosource.toml", "[problem] source", "missing"});
+}
