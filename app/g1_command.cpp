@@ -189,23 +189,12 @@ int g1_basis_command(const BasisOptions& o) {
   } catch (const std::invalid_argument& e) {
     throw InputError(e.what());
   }
-  GluingData gluing;
-  if (o.gluing == "symmetric") {
-    gluing = symmetric_gluing(mesh);
-  } else if (o.gluing == "geometric") {
-    try {
-      gluing = geometric_gluing(mesh);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(o.g1_mesh + ": --gluing geometric: " + e.what());
-    }
-  } else {
-    gluing = load_gluing_file(o.gluing, mesh);
-  }
+  const GluingData gluing = make_gluing(o.gluing, mesh, o.g1_mesh + ": --gluing");
   const std::vector<std::string> violations = gluing_violations(mesh, gluing);
   // Incompatible data give a space too small to be useful (Sec. 3): refused, naming the
   // first edge or vertex that fails.
   if (!violations.empty())
-    throw InputError((o.gluing == "symmetric" || o.gluing == "geometric" ? o.g1_mesh : o.gluing) + ": " +
+    throw InputError((is_named_gluing(o.gluing) ? o.g1_mesh : o.gluing) + ": " +
                      violations.front() +
                      (violations.size() > 1 ? " (and " + std::to_string(violations.size() - 1) + " more)" : ""));
   // Irrational data have no exact rank: the dimension is a dense SVD, cubic in the unknowns.

@@ -17,13 +17,8 @@ GluingData case_gluing(const CaseDescription& c, const QuadMesh& mesh) {
   const auto& g = c.g1;
   GluingData gluing;
   try {
-    if (g.gluing == "symmetric")
-      gluing = symmetric_gluing(mesh);
-    else if (g.gluing == "geometric")
-      gluing = geometric_gluing(mesh);
-    else
-      gluing = load_gluing_file(g.gluing, mesh);
-  } catch (const std::invalid_argument& e) {
+    gluing = make_gluing(g.gluing, mesh, g.mesh_file);
+  } catch (const InputError& e) {
     throw InputError(c.path + ": [space] gluing: " + e.what());
   }
   const auto violations = gluing_violations(mesh, gluing);

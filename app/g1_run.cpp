@@ -12,6 +12,7 @@
 #include "app/output_stage.hpp"
 #include "app/progress.hpp"
 #include "app/svg_plot.hpp"
+#include "cases/gluing_file.hpp"
 #include "basis/bezier_ops.hpp"
 #include "quadrature/bernstein.hpp"
 #include "solver/input_error.hpp"
@@ -36,7 +37,7 @@ std::string describe_g1(const CaseDescription& c) {
   return std::string(g.c0 ? "C0 multipatch baseline" : "G1 macro-patch splines (Blidia-Mourrain-Villamizar)") +
          ", degree " + std::to_string(g.degree) + ", C^" +
          std::to_string(g.split_smoothness) + " 4-split, " +
-         (g.gluing == "symmetric" || g.gluing == "geometric" ? g.gluing : std::string("file")) + " gluing, " +
+         (is_named_gluing(g.gluing) ? g.gluing : std::string("file")) + " gluing, " +
          (g.surface ? "Laplace-Beltrami on a " + g.shape + " surface" : std::string("planar Poisson"));
 }
 
@@ -65,7 +66,18 @@ G1Level solve_level(const CaseDescription& c, const G1Discretization& d, Orderin
     so.quadrature = c.quadrature;
     so.ordering = ordering;
     so.progress = [&](const std::string& s) { progress(s); };
-    const PoissonSolution s = solve_poisson(d.mesh, *d.planar, c.problem, so);
+    PoissonSolution s;
+    try {
+      s = solve_poisson(d.mesh, *d.planar, c.problem, so);
+    } catch (const std::runtime_error& e) {
+      if (std::string(e.what()).find("boundary mass matrix") == std::string::npos) throw;
+      // Known limitation: Dirichlet data are imposed by L2 projection onto the traces of the
+      // basis functions, which must be independent; G1 vertex functions at boundary vertices
+      // can have dependent traces (seen with irrational data at valence 5).
+      throw InputError(c.path + ": [problem] dirichlet: the traces of this G1 basis on the boundary are linearly "
+                       "dependent, which the Dirichlet projection does not handle yet (try gluing = \"geometric\" or "
+                       "another degree)");
+    }
     lv.free = s.num_free;
     lv.coefficients = s.coefficients;
     if (s.errors) lv.l2 = s.errors->l2, lv.h1_semi = s.errors->h1_semi, lv.h1 = s.errors->h1;

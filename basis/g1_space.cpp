@@ -222,7 +222,17 @@ std::vector<std::vector<std::pair<long, mpq_class>>> g1_condition_rows_exact(con
   return g1_conditions<mpq_class>(mesh, gluing, k, r, edge);
 }
 
-GluingData symmetric_gluing(const QuadMesh& mesh) {
+GluingData symmetric_gluing(const QuadMesh& mesh, bool c1_blend) {
+  // a = A0 d0 - A1 d1, as coefficients of the two pieces, for either blend.
+  auto pieces = [c1_blend](const auto& A0, const auto& A1) {
+    using T = std::decay_t<decltype(A0)>;
+    if (!c1_blend)  // d0 = 1 - 4u^2 | 0, d1 = 0 | -3 + 8u - 4u^2 (C^0 at 1/2, the paper's)
+      return std::array<std::vector<T>, 2>{std::vector<T>{A0, T(0), T(-4 * A0)},
+                                           std::vector<T>{T(3 * A1), T(-8 * A1), T(4 * A1)}};
+    // d0 = 1 - 2u^2 | 2(1-u)^2, d1 = 2u^2 | 1 - 2(1-u)^2 (C^1 at 1/2)
+    return std::array<std::vector<T>, 2>{std::vector<T>{A0, T(0), T(-2 * A0 - 2 * A1)},
+                                         std::vector<T>{T(2 * A0 + A1), T(-4 * A0 - 4 * A1), T(2 * A0 + 2 * A1)}};
+  };
   GluingData g;
   g.edges.resize(mesh.num_edges());
   for (int e = 0; e < mesh.num_edges(); ++e) {
@@ -232,15 +242,10 @@ GluingData symmetric_gluing(const QuadMesh& mesh) {
     const auto [p1, q1] = symmetric_angle(mesh, E.v[1]);
     const auto x0 = two_cos_pi_exact(p0, q0), x1 = two_cos_pi_exact(p1, q1);
     EdgeGluing eg;
-    // a = A0 d0 - A1 d1 with d0 = 1 - 4u^2 | 0 and d1 = 0 | -3 + 8u - 4u^2.
-    if (x0 && x1) {
-      const mpq_class A0 = *x0, A1 = *x1;
-      eg.a = PiecewisePolynomial::from_exact({std::vector<mpq_class>{A0, 0, -4 * A0},
-                                              std::vector<mpq_class>{3 * A1, -8 * A1, 4 * A1}});
-    } else {
-      const double A0 = 2 * std::cos(M_PI * p0 / q0), A1 = 2 * std::cos(M_PI * p1 / q1);
-      eg.a = PiecewisePolynomial::from_double({std::vector<double>{A0, 0, -4 * A0}, std::vector<double>{3 * A1, -8 * A1, 4 * A1}});
-    }
+    if (x0 && x1)
+      eg.a = PiecewisePolynomial::from_exact(pieces(mpq_class(*x0), mpq_class(*x1)));
+    else
+      eg.a = PiecewisePolynomial::from_double(pieces(2 * std::cos(M_PI * p0 / q0), 2 * std::cos(M_PI * p1 / q1)));
     eg.b = PiecewisePolynomial::constant(-1);
     eg.c = PiecewisePolynomial::constant(1);
     g.edges[e] = std::move(eg);

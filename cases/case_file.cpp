@@ -10,6 +10,7 @@
 
 #include "basis/quad_mesh.hpp"
 #include "cases/geometries.hpp"
+#include "cases/gluing_file.hpp"
 #include "cases/json_input.hpp"
 #include "solver/input_error.hpp"
 
@@ -570,7 +571,7 @@ void read_g1_case(const Reader& r, const toml::table& root, CaseDescription& c) 
                                        "refinement to nest the spaces), got " + std::to_string(g.split_smoothness));
   if (const toml::node* d = s.get("gluing")) {
     g.gluing = r.string(*d, "[space] gluing");
-    if (g.gluing != "symmetric" && g.gluing != "geometric") g.gluing = resolve(g.gluing);
+    if (!is_named_gluing(g.gluing)) g.gluing = resolve(g.gluing);
   }
   if (const toml::node* d = s.get("refine")) g.refine = static_cast<int>(r.integer(*d, "[space] refine"));
   if (const toml::node* d = s.get("smoothness")) {

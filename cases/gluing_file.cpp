@@ -95,4 +95,21 @@ GluingData load_gluing_file(const std::string& path, const QuadMesh& mesh) {
   return g;
 }
 
+bool is_named_gluing(const std::string& name) {
+  return name == "symmetric" || name == "symmetric_c1" || name == "geometric";
+}
+
+GluingData make_gluing(const std::string& name_or_file, const QuadMesh& mesh, const std::string& mesh_name) {
+  if (name_or_file == "symmetric") return symmetric_gluing(mesh);
+  if (name_or_file == "symmetric_c1") return symmetric_gluing(mesh, true);
+  if (name_or_file == "geometric") {
+    try {
+      return geometric_gluing(mesh);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(mesh_name + ": gluing \"geometric\": " + e.what());
+    }
+  }
+  return load_gluing_file(name_or_file, mesh);
+}
+
 }  // namespace knotwork

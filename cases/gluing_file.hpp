@@ -16,4 +16,11 @@ namespace knotwork {
 // Throws InputError "<file>: gluing[3].edge: ..." .
 GluingData load_gluing_file(const std::string& path, const QuadMesh& mesh);
 
+// "symmetric" (eq. 11, the paper's C^0 blend), "symmetric_c1" (the same values at the
+// vertices, C^1 blend) and "geometric" (eq. 8 from the mesh's edge directions).
+bool is_named_gluing(const std::string& name);
+// A named construction or else a gluing file. Throws InputError "<where>: ..." (where: the
+// mesh for named data, the file otherwise).
+GluingData make_gluing(const std::string& name_or_file, const QuadMesh& mesh, const std::string& mesh_name);
+
 }  // namespace knotwork

@@ -49,9 +49,9 @@ double rate(double e0, double e1, double h0, double h1) { return std::log(e0 / e
 
 }  // namespace
 
-// Observed (docs/G1_POISSON.md): around the valence-3 vertex the finest rates are L2 5.36,
-// H1 3.77 at level 3 (4.85 and 3.50 at level 4), below the optimal 5 and 4 in H1; the
-// asserted bounds are what this code establishes, not the theory.
+// Observed (docs/G1_POISSON.md), symmetric data with the C1 blend: rates 4.61, 4.58 (L2) and
+// 3.67, 3.64 (H1) at levels 2 and 3, below the optimal 5 and 4; the asserted bounds are what
+// this code establishes, not the theory.
 TEST_CASE("G1 Poisson, case (a): errors fall at high order, the solution is C1 across interfaces", "[g1][cases]") {
   const CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
   std::vector<Measured> m;
@@ -60,18 +60,37 @@ TEST_CASE("G1 Poisson, case (a): errors fall at high order, the solution is C1 a
     INFO("h " << x.h << " dofs " << x.dofs << " L2 " << x.l2 << " H1 " << x.h1 << " jump " << x.jump);
     REQUIRE(x.jump < 1e-9);
   }
-  REQUIRE(rate(m[2].l2, m[3].l2, m[2].h, m[3].h) > 4.5);
+  REQUIRE(rate(m[2].l2, m[3].l2, m[2].h, m[3].h) > 4.3);
   REQUIRE(rate(m[2].h1, m[3].h1, m[2].h, m[3].h) > 3.3);
   // Over the whole study: at least h^4 in L2 and h^3 in H1 on average.
   REQUIRE(rate(m[0].l2, m[3].l2, m[0].h, m[3].h) > 4);
   REQUIRE(rate(m[0].h1, m[3].h1, m[0].h, m[3].h) > 3);
 }
 
+// The paper's symmetric data blend the vertex values with Hermite functions that are only C0
+// at the edge midpoint; with a C1 split (r = 1) every G1 map with such data has a singular
+// Jacobian where a has the kink (here: at the midpoints of the three interior edges). The C1
+// blend has the same values at the vertices and no kink: the fitted map stays regular.
+TEST_CASE("G1 geometry with the paper's C0-blended symmetric data is singular at edge midpoints", "[g1][cases]") {
+  CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
+  c.g1.gluing = "symmetric";
+  const G1Discretization paper = discretize_g1(c, 0);
+  REQUIRE(paper.min_regularity > 0);                          // positive at the Gauss points
+  REQUIRE(std::abs(paper.min_regularity_nodes) < 1e-12);      // zero at a side midpoint ...
+  REQUIRE(paper.singular_point.x() == Approx(0).margin(1e-12));  // ... on the edge from the vertex to (0, 1)
+  REQUIRE(paper.singular_point.y() > 0.3);
+  REQUIRE(paper.singular_point.y() < 0.6);
+  c.g1.gluing = "symmetric_c1";
+  const G1Discretization smooth = discretize_g1(c, 0);
+  REQUIRE(smooth.min_regularity_nodes > 0.9);
+}
+
 TEST_CASE("The C0 multipatch baseline on the same mesh is not C1 (the jump check sees it)", "[g1][cases]") {
   CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
   c.g1.c0 = true;
   const Measured m = solve(c, 1);
-  REQUIRE(m.jump > 1e-2);
+  INFO("C0 gradient jump " << m.jump);
+  REQUIRE(m.jump > 1e-4);  // the G1 spaces stay below 1e-9 (test above); this is O(h^k), not rounding
   REQUIRE(m.l2 < 1e-3);  // and it converges: a fair baseline
 }
 
