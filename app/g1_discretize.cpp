@@ -1,5 +1,6 @@
 #include "app/g1_discretize.hpp"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <stdexcept>
 
@@ -179,7 +180,24 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
   } else {
     const SurfaceRegularity reg = surface_regularity(d.cells, points);
     d.min_regularity = reg.min_ratio;
-    d.min_regularity_nodes = reg.min_ratio;  // surfaces: checked at the Gauss points only
+    Eigen::VectorXd nu(9), nv(9);
+    nu << 0, 0.5, 1, 0, 0.5, 1, 0, 0.5, 1;
+    nv << 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1;
+    Eigen::MatrixXd B, Bu, Bv;
+    tensor_bernstein(k, k, nu, nv, B, Bu, Bv);
+    double smallest_node = INFINITY, largest = 0;
+    for (const auto& cell : d.cells) {
+      const Eigen::MatrixX3d x = B * cell.points, xu = Bu * cell.points, xv = Bv * cell.points;
+      for (Eigen::Index q = 0; q < 9; ++q) {
+        const double a = xu.row(q).cross(xv.row(q)).norm();
+        largest = std::max(largest, a);
+        if (a < smallest_node) {
+          smallest_node = a;
+          d.singular_point = x.row(q).transpose();
+        }
+      }
+    }
+    d.min_regularity_nodes = largest > 0 ? smallest_node / largest : 0;
     if (reg.cell >= 0) d.worst_face = d.level.origin[d.mesh.cell(reg.cell).patch].face;
     const BernsteinTable& t = bernstein_table(k, k, points, points);
     for (const auto& cell : d.cells) {

@@ -27,7 +27,8 @@ struct G1Discretization {
   double fit_deviation = 0;           // largest distance fitted - target coefficient (coarse)
   double min_regularity = 0;          // planar: min det J / max det J; surface: min |x_u x x_v| / max
   int worst_face = -1;                // coarse face (0-based) where min_regularity occurs
-  // The same at the corners and side midpoints of every cell (never quadrature points): a
+  // The same at the corners and side midpoints of every cell (never quadrature points;
+  // surfaces: |x_u x x_v| relative to the largest there): a
   // value <= 0 means the map is singular on a cell boundary (e.g. at an extraordinary vertex
   // or where C^0 gluing data meet a C^1 split), which the Gauss points do not see but the
   // approximation does. Reported, with the point, not refused.

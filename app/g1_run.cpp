@@ -203,10 +203,11 @@ int run_g1_case(const RunOptions& o, CaseDescription& c) {
               c.g1.shape.c_str(), d.fit_deviation, c.g1.surface ? "min |x_u x x_v|/max" : "min det J/max",
               d.min_regularity, d.worst_face + 1,
               c.g1.surface ? (", distance to the " + c.g1.shape + " " + std::to_string(d.shape_distance)).c_str() : "");
-  if (!c.g1.surface && d.min_regularity_nodes <= 1e-12)
-    std::printf("  warning  det J = %.3g (relative) at (%.6g, %.6g), a cell corner or side midpoint: the fitted geometry is\n"
-                "           singular there (positive at every quadrature point); expect reduced convergence rates\n",
-                d.min_regularity_nodes, d.singular_point.x(), d.singular_point.y());
+  if (d.min_regularity_nodes <= 1e-8)
+    std::printf("  warning  %s = %.3g (relative) at (%.6g, %.6g, %.6g), a cell corner or side midpoint: the fitted\n"
+                "           geometry is singular there (regular at every quadrature point); expect reduced rates\n",
+                c.g1.surface ? "|x_u x x_v|" : "det J", d.min_regularity_nodes, d.singular_point.x(),
+                d.singular_point.y(), d.singular_point.z());
   if (!std::isnan(lv.l2))
     std::printf("  errors   L2 %.6e   H1-seminorm %.6e   H1 %.6e\n", lv.l2, lv.h1_semi, lv.h1);
   std::printf("  C1       largest gradient jump across interfaces %.3e (relative)\n", lv.jump);
