@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
                         "Quad mesh (Wavefront OBJ): the G1 spline space S_k^{1,r} on it (4-split macro-patches)");
   basis_cmd->add_option("--degree", basis.degree, "--g1: degree k of the face splines (>= 2)")->capture_default_str();
   basis_cmd->add_option("--split-smoothness", basis.split_smoothness, "--g1: smoothness r at the 4-split, 0 <= r < k")->capture_default_str();
-  basis_cmd->add_option("--gluing", basis.gluing, "--g1: symmetric | symmetric_c1 | geometric | FILE.json (per-edge a, b, c)")->capture_default_str();
+  basis_cmd->add_option("--gluing", basis.gluing, "--g1: symmetric | symmetric_c1 | geometric | regular_fans | FILE.json (per-edge a, b, c)")->capture_default_str();
   basis_cmd->add_option("--export", basis.export_file,
                         "Write every function to this JSON file (local knot vectors; with --g1, per-face B-spline coefficients)");
   basis_cmd->add_option("--vtk", basis.vtk_file,

@@ -278,7 +278,7 @@ PiecewisePolynomial reflected(const PiecewisePolynomial& p) {
 
 EdgeGluing reversed(const EdgeGluing& g) { return {reflected(g.a), reflected(g.c), reflected(g.b)}; }
 
-GluingData geometric_gluing(const QuadMesh& mesh) {
+GluingData geometric_gluing(const QuadMesh& mesh, bool regular_fans_where_rational) {
   // Per (vertex, edge): the values a(0), b(0) of eq. (8) seen from that vertex. They are
   // ratios of 2x2 determinants, invariant under rotations and scalings of the tangent frame:
   // on a planar mesh the frame is the xy plane and they are rational in the coordinates,
@@ -296,6 +296,15 @@ GluingData geometric_gluing(const QuadMesh& mesh) {
   std::vector<std::map<int, std::pair<mpq_class, mpq_class>>> at(mesh.num_vertices());
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     const auto& ring = mesh.ring(v);
+    if (regular_fans_where_rational) {
+      // The regular fan (eq. 8 for equal angles: a = 2cos(angle), b = -1) where that is rational.
+      const auto [p, q] = symmetric_angle(mesh, v);
+      if (const auto two_cos = two_cos_pi_exact(p, q)) {
+        for (int e : ring.edges)
+          if (!mesh.edge(e).boundary()) at[v][e] = {*two_cos, mpq_class(-1)};
+        continue;
+      }
+    }
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     for (int f : ring.faces) {
       const auto& q = mesh.face(f);

@@ -96,15 +96,15 @@ GluingData load_gluing_file(const std::string& path, const QuadMesh& mesh) {
 }
 
 bool is_named_gluing(const std::string& name) {
-  return name == "symmetric" || name == "symmetric_c1" || name == "geometric";
+  return name == "symmetric" || name == "symmetric_c1" || name == "geometric" || name == "regular_fans";
 }
 
 GluingData make_gluing(const std::string& name_or_file, const QuadMesh& mesh, const std::string& mesh_name) {
   if (name_or_file == "symmetric") return symmetric_gluing(mesh);
   if (name_or_file == "symmetric_c1") return symmetric_gluing(mesh, true);
-  if (name_or_file == "geometric") {
+  if (name_or_file == "geometric" || name_or_file == "regular_fans") {
     try {
-      return geometric_gluing(mesh);
+      return geometric_gluing(mesh, name_or_file == "regular_fans");
     } catch (const std::invalid_argument& e) {
       throw InputError(mesh_name + ": gluing \"geometric\": " + e.what());
     }

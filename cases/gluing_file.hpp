@@ -17,7 +17,9 @@ namespace knotwork {
 GluingData load_gluing_file(const std::string& path, const QuadMesh& mesh);
 
 // "symmetric" (eq. 11, the paper's C^0 blend), "symmetric_c1" (the same values at the
-// vertices, C^1 blend) and "geometric" (eq. 8 from the mesh's edge directions).
+// vertices, C^1 blend), "geometric" (eq. 8 from the mesh's edge directions) and
+// "regular_fans" (eq. 8 with regular fans where their cosines are rational, the mesh's
+// directions elsewhere).
 bool is_named_gluing(const std::string& name);
 // A named construction or else a gluing file. Throws InputError "<where>: ..." (where: the
 // mesh for named data, the file otherwise).
