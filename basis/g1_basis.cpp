@@ -225,14 +225,15 @@ struct PairSystem {
   std::set<int> edges;            // the interior edges at either end
 };
 
-PairSystem pair_system(const QuadMesh& mesh, int e, int k, int r) {
+// The system on the faces around the given vertices: their corner blocks, then the strips of
+// their interior edges.
+PairSystem patch_system(const QuadMesh& mesh, const std::vector<int>& vertices, int k, int r) {
   PairSystem sys;
-  const auto& E = mesh.edge(e);
-  for (int end = 0; end < 2; ++end) {
-    const auto& ring = mesh.ring(E.v[end]);
+  for (const int v : vertices) {
+    const auto& ring = mesh.ring(v);
     for (size_t i = 0; i < ring.faces.size(); ++i) {
       add_corner_block(sys.cols, ring.faces[i], ring.corners[i], k, r);
-      sys.block_vertex.resize(sys.cols.size(), E.v[end]);
+      sys.block_vertex.resize(sys.cols.size(), v);
     }
     for (int x : ring.edges)
       if (!mesh.edge(x).boundary()) sys.edges.insert(x);
@@ -240,6 +241,10 @@ PairSystem pair_system(const QuadMesh& mesh, int e, int k, int r) {
   sys.taylor = sys.cols.size();
   for (int x : sys.edges) add_edge_strips(sys.cols, mesh, x, k, r);
   return sys;
+}
+
+PairSystem pair_system(const QuadMesh& mesh, int e, int k, int r) {
+  return patch_system(mesh, {mesh.edge(e).v[0], mesh.edge(e).v[1]}, k, r);
 }
 
 // Last resort when Taylor data are coupled beyond single edges (r = k - 1 on meshes with
@@ -403,6 +408,18 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
     }
   }
 
+  // Still short (Taylor data coupled across more than one edge): exact solutions on the faces
+  // around the four corners of one face at a time, still local (kind coupled).
+  if constexpr (exact) {
+    for (int f = 0; f < mesh.num_faces() && have < wanted; ++f) {
+      const auto& q = mesh.face(f);
+      const PairSystem sys = patch_system(mesh, {q[0], q[1], q[2], q[3]}, k, r);
+      Rows<Scalar> patch_rows;
+      for (int x : sys.edges) patch_rows.insert(patch_rows.end(), rows[x].begin(), rows[x].end());
+      keep_independent(G1BasisFunction::Kind::coupled, -1, sys.cols,
+                       null_space(restrict_rows(patch_rows, sys.cols), sys.cols.size()), sys.taylor);
+    }
+  }
   if (have < wanted) {
     if constexpr (exact) {
       // Exactly, on every corner block and strip (face interiors are in no condition).
@@ -413,6 +430,12 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
       for (int e = 0; e < mesh.num_edges(); ++e) add_edge_strips(cols, mesh, e, k, r);
       Rows<Scalar> all;
       for (const auto& x : rows) all.insert(all.end(), x.begin(), x.end());
+      // The exact global system is dense here: refuse what cannot fit rather than exhaust memory.
+      if (static_cast<double>(all.size()) * cols.size() > 3e7)
+        throw std::runtime_error("the local constructions leave " + std::to_string(wanted - have) +
+                                 " functions of S_" + std::to_string(k) + "^{1," + std::to_string(r) +
+                                 "} undetermined, and the global completion is too large for this mesh (" +
+                                 std::to_string(mesh.num_faces()) + " faces)");
       keep_independent(G1BasisFunction::Kind::coupled, -1, cols, null_space(restrict_rows(all, cols), cols.size()),
                        taylor);
     } else {
@@ -526,6 +549,73 @@ void tidy_pair_functions(const QuadMesh& mesh, G1Basis& basis) {
   }
 }
 
+// At a boundary vertex, the traces on the boundary of its vertex (and vertex-pair) functions
+// can be linearly dependent (e.g. where the boundary is straight). Dirichlet data are
+// imposed on the traces, so each group is changed, within its span, into functions with
+// independent traces and functions with zero trace (column-pivoted QR of the trace rows).
+void separate_boundary_traces(const QuadMesh& mesh, G1Basis& basis) {
+  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
+  std::set<long> trace_unknowns;  // row 0 of every boundary side
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (!E.boundary()) continue;
+    for (int a = 0; a < n; ++a) trace_unknowns.insert(g1_corner_unknown(E.face[0], E.corner[0], a, 0, k, r));
+  }
+  std::map<int, std::vector<int>> groups;  // boundary vertex -> functions
+  for (size_t j = 0; j < basis.functions.size(); ++j) {
+    const auto& f = basis.functions[j];
+    int v = -1;
+    if (f.kind == G1BasisFunction::Kind::vertex) v = f.owner;
+    if (f.kind == G1BasisFunction::Kind::vertex_pair) {
+      const auto& E = mesh.edge(f.owner);
+      v = mesh.boundary_vertex(E.v[0]) ? E.v[0] : E.v[1];
+    }
+    if (v >= 0 && mesh.boundary_vertex(v)) groups[v].push_back(static_cast<int>(j));
+  }
+  for (const auto& [v, ids] : groups) {
+    LocalColumns rows, cols;
+    for (int j : ids)
+      for (const auto& [c, x] : basis.functions[j].coefficients) {
+        cols.add(c);
+        if (trace_unknowns.count(c)) rows.add(c);
+      }
+    if (rows.size() == 0) continue;
+    const Eigen::Index m = static_cast<Eigen::Index>(ids.size());
+    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(rows.size(), m), X = Eigen::MatrixXd::Zero(cols.size(), m);
+    for (Eigen::Index i = 0; i < m; ++i)
+      for (const auto& [c, x] : basis.functions[ids[i]].coefficients) {
+        X(cols.position[c], i) = x;
+        if (const auto it = rows.position.find(c); it != rows.position.end()) T(it->second, i) = x;
+      }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(T);
+    qr.setThreshold(1e-10);
+    const Eigen::Index rank = qr.rank();
+    if (rank == m) continue;
+    // T P = Q [R11 R12]: the columns P [-R11^{-1} R12; I] have zero trace.
+    const Eigen::MatrixXd R = qr.matrixR().topRows(rank).template triangularView<Eigen::Upper>();
+    const Eigen::MatrixXd R11 = R.leftCols(rank), R12 = R.rightCols(m - rank);
+    const Eigen::MatrixXd W = R11.template triangularView<Eigen::Upper>().solve(R12);
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(m, m - rank);
+    const auto& P = qr.colsPermutation().indices();
+    for (Eigen::Index c = 0; c < m - rank; ++c) {
+      Z(P(rank + c), c) = 1;
+      for (Eigen::Index i = 0; i < rank; ++i) Z(P(i), c) = -W(i, c);
+    }
+    const Eigen::MatrixXd Y = X * Z;
+    for (Eigen::Index c = 0; c < m - rank; ++c) {
+      auto& coefficients = basis.functions[ids[P(rank + c)]].coefficients;
+      coefficients.clear();
+      const double drop = 1e-14 * Y.col(c).cwiseAbs().maxCoeff();
+      for (int row = 0; row < cols.size(); ++row) {
+        const long u = cols.global[row];
+        // Exactly zero on the boundary rows (rounding there would make the trace nonzero).
+        if (trace_unknowns.count(u)) continue;
+        if (std::abs(Y(row, c)) > drop) coefficients.emplace_back(u, Y(row, c));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating) {
@@ -540,6 +630,7 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
     build<double>(mesh, gluing, basis);
   tidy_vertex_functions(mesh, basis);
   tidy_pair_functions(mesh, basis);
+  separate_boundary_traces(mesh, basis);
   // Largest coefficient +1: comparable scales for assembly and plots, a definite sign.
   for (auto& f : basis.functions) {
     double largest = 0;
