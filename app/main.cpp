@@ -42,7 +42,9 @@ int main(int argc, char** argv) {
 
   knotwork::RunOptions run;
   CLI::App* run_cmd = app.add_subcommand("run", "Solve one case and write ParaView files");
-  run_cmd->add_option("case", run.case_file, "Case file (TOML), e.g. cases/square_sinsin.toml")->required();
+  run_cmd->add_option("case", run.case_file,
+                     "Case file (TOML), e.g. cases/square_sinsin.toml, or a G1 case such as cases/g1_sphere_xy.toml")
+      ->required();
   add_common(run_cmd, run);
   run_cmd->add_flag("--no-output", run.no_output, "Write no files (timing and errors only)");
   run_cmd->add_flag("--allow-non-semi-regular", run.allow_non_semi_regular,
@@ -51,7 +53,8 @@ int main(int argc, char** argv) {
   knotwork::ConvergeOptions conv;
   CLI::App* conv_cmd = app.add_subcommand("converge", "Uniform h-refinement study: errors and observed rates per level");
   conv_cmd->add_option("case", conv.case_file, "Case file (TOML) with [problem] exact")->required();
-  conv_cmd->add_option("--levels", conv.levels, "Number of levels; level l has elements * 2^l per span")
+  conv_cmd->add_option("--levels", conv.levels,
+                      "Number of levels; level l has elements * 2^l per span (G1 cases: the quad mesh subdivided l times)")
       ->capture_default_str();
   add_common(conv_cmd, conv);
 
