@@ -163,8 +163,6 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
     for (int cell = 0; cell < d.mesh.num_cells(); ++cell)
       for (int side = 0; side < 4; ++side) {
         if (d.mesh.cell(cell).boundary[side] < 0) continue;
-        const int face = d.level.origin[d.mesh.cell(cell).patch].face;
-        (void)face;
         std::vector<Eigen::Vector2d> pts;
         for (int i = 0; i <= k; ++i) {
           const int a = side == kSideBottom ? i : side == kSideRight ? k : side == kSideTop ? k - i : 0;

@@ -84,7 +84,7 @@ Metric metric(const SurfacePoints& s, int q) {
 
 // -Laplace_Beltrami(u) + reaction u at a point of the discrete surface, from the exact
 // solution's ambient derivatives and the surface's curvature there.
-double derived_source(const SurfaceExactSolution& /*exact*/, std::array<ExpressionEvaluator, 3>& gradient,
+double derived_source(std::array<ExpressionEvaluator, 3>& gradient,
                       std::array<std::array<std::optional<ExpressionEvaluator>, 3>, 3>& hessian,
                       ExpressionEvaluator& value, double reaction, const SurfacePoints& s, int q, const Metric& m) {
   const double x = s.x(q, 0), y = s.x(q, 1), z = s.x(q, 2);
@@ -182,7 +182,7 @@ SurfaceSolution solve_surface_poisson(const BezierMesh& mesh, const std::vector<
       Ke.noalias() += w * D * g.inverse * D.transpose();
       Me.noalias() += w * N.col(q) * N.col(q).transpose();
       const double f = source ? (*source)(s.x(q, 0), s.x(q, 1), s.x(q, 2))
-                              : derived_source(*problem.exact, exact->gradient, exact->hessian, exact->value,
+                              : derived_source(exact->gradient, exact->hessian, exact->value,
                                                problem.reaction, s, q, g);
       if (!std::isfinite(f))
         throw std::invalid_argument("surface: the source is not finite at a quadrature point of cell " +
@@ -255,7 +255,6 @@ SurfaceSolution solve_surface_poisson(const BezierMesh& mesh, const std::vector<
 
   if (exact) {
     // Mean of the exact solution (removed when the problem fixes the mean to zero).
-    std::vector<std::pair<SurfacePoints, int>> unused;
     double mean = 0;
     auto for_error_points = [&](auto&& visit) {
       for (int c = 0; c < mesh.num_cells(); ++c) {

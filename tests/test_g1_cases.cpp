@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <random>
 
 #include "app/g1_discretize.hpp"
 #include "solver/poisson_solver.hpp"
@@ -196,4 +197,25 @@ TEST_CASE("G1 cases through the binary: run, converge with a .pvd over levels, a
            space + "mesh = \"" + meshes + "cube_centered.obj\"\n[geometry]\nshape = \"sphere\"\n[problem]\n"
                    "operator = \"laplace_beltrami\"\n",
            {"nosource.toml", "[problem] source", "missing"});
+}
+
+TEST_CASE("Nothing typed into a G1 case file crashes knotwork", "[g1][cases][fuzz]") {
+  // Random edits of small planar and surface G1 cases: every run ends with exit 0 or one
+  // error line, never a signal.
+  Sandbox box;
+  std::mt19937 rng(1122);
+  const std::string alphabet = "[]{}=\"',.-+0123456789eEnaxyzpi*/^() \n#_";
+  const std::string meshes = kSource + "/cases/meshes/";
+  const std::vector<std::string> good = {
+      "[space]\nfamily = \"g1\"\nmesh = \"" + meshes + "three_quads.obj\"\ndegree = 3\nsplit_smoothness = 1\n"
+      "gluing = \"symmetric_c1\"\n[problem]\nexact = \"x*y + 1\"\n",
+      "[space]\nfamily = \"g1\"\nmesh = \"" + meshes + "cube_centered.obj\"\ndegree = 4\n[geometry]\nshape = \"sphere\"\n"
+      "radius = 1\n[problem]\noperator = \"laplace_beltrami\"\nreaction = 1\nexact = \"x*z\"\n"};
+  fuzz(box, 80, [&](int trial) {
+    std::string text = good[trial % 2];
+    const int edits = 1 + static_cast<int>(rng() % 2);
+    for (int e = 0; e < edits; ++e) random_edit(text, rng, alphabet);
+    box.file("fuzz.toml", text);
+    return std::pair{std::string("run -q --no-output fuzz.toml"), text};
+  });
 }
