@@ -121,6 +121,17 @@ TEST_CASE("Torus and the mixed-valence square: optimal rates from the first refi
   }
 }
 
+// Case (b), k = 5: observed 5.55 (L2) and 4.41 (H1) between levels 0 and 1, below the optimal
+// 6 and 5 (the map is singular at the valence-5 vertex; docs/G1_POISSON.md).
+TEST_CASE("Pentagon (valence 5, k = 5): high order, below optimal, C1", "[g1][cases]") {
+  const CaseDescription c = load_case(kSource + "/cases/g1_pentagon.toml");
+  const Measured m0 = solve(c, 0), m1 = solve(c, 1);
+  INFO("L2 " << m0.l2 << " -> " << m1.l2 << ", H1 " << m0.h1 << " -> " << m1.h1);
+  REQUIRE(rate(m0.l2, m1.l2, m0.h, m1.h) > 5.2);
+  REQUIRE(rate(m0.h1, m1.h1, m0.h, m1.h) > 4.1);
+  REQUIRE(m1.jump < 1e-9);
+}
+
 TEST_CASE("Separability of edges (Definition 4.11) computed on the edge's two faces", "[g1][separability]") {
   const QuadMesh cube = knotwork::test::cube(), three = knotwork::test::three_quads();
   // The cube with symmetric data needs k >= 4 at r = 1 (at k = 3 its basis has no vertex
