@@ -891,10 +891,19 @@ Eigen::MatrixX3d g1_fit(const QuadMesh& mesh, const G1Basis& basis,
   for (size_t j = 0; j < basis.functions.size(); ++j)
     for (const auto& [u, x] : basis.functions[j].coefficients) entries.emplace_back(u, static_cast<int>(j), x);
   M.setFromTriplets(entries.begin(), entries.end());
-  const Eigen::SparseMatrix<double> normal = M.transpose() * M;
+  // The boundary curve (row 0 of every boundary side) weighs 10^6 times more: a straight
+  // side of the mesh stays straight wherever the space allows it (the target is on the
+  // segment), instead of trading boundary accuracy for interior accuracy.
+  Eigen::VectorXd weight = Eigen::VectorXd::Ones(basis.unknowns());
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (!E.boundary()) continue;
+    for (int a = 0; a < n; ++a) weight(g1_corner_unknown(E.face[0], E.corner[0], a, 0, k, r)) = 1e6;
+  }
+  const Eigen::SparseMatrix<double> normal = M.transpose() * weight.asDiagonal() * M;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
   if (solver.info() != Eigen::Success) throw std::runtime_error("G1 least-squares fit: the normal equations are singular");
-  const Eigen::MatrixX3d c = solver.solve(Eigen::MatrixX3d(M.transpose() * target));
+  const Eigen::MatrixX3d c = solver.solve(Eigen::MatrixX3d(M.transpose() * weight.asDiagonal() * target));
   if (deviation) *deviation = (M * c - target).rowwise().norm().maxCoeff();
   return c;
 }

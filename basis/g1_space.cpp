@@ -296,8 +296,9 @@ GluingData geometric_gluing(const QuadMesh& mesh, bool regular_fans_where_ration
   std::vector<std::map<int, std::pair<mpq_class, mpq_class>>> at(mesh.num_vertices());
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     const auto& ring = mesh.ring(v);
-    if (regular_fans_where_rational) {
-      // The regular fan (eq. 8 for equal angles: a = 2cos(angle), b = -1) where that is rational.
+    if (regular_fans_where_rational && !ring.boundary) {
+      // The regular fan (eq. 8 for equal angles: a = 2cos(angle), b = -1) where that is
+      // rational; boundary vertices keep the mesh's directions (a corner stays a corner).
       const auto [p, q] = symmetric_angle(mesh, v);
       if (const auto two_cos = two_cos_pi_exact(p, q)) {
         for (int e : ring.edges)

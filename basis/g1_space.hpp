@@ -52,11 +52,12 @@ GluingData symmetric_gluing(const QuadMesh& mesh, bool c1_blend = false);
 // multiples of 2^-20 (e.g. 0.375, 1.25) the data are exact rationals; otherwise floating
 // point.
 // Throws std::invalid_argument naming the vertex where two consecutive edges are parallel.
-// regular_fans_where_rational ("regular_fans" in files): at vertices where the symmetric
-// angle has a rational cosine (valence 3, 4, 6; 1 to 3 faces on the boundary) the regular
-// fan's values a = 2cos(angle), b = -1 replace the mesh's own directions, so that the data
-// stay exact (on meshes with short binary coordinates) and as regular as the symmetric ones
-// where they can, and follow the mesh only at the other vertices (e.g. valence 5).
+// regular_fans_where_rational ("regular_fans" in files): at interior vertices where the
+// symmetric angle 2pi/n has a rational cosine (valence 3, 4, 6) the regular fan's values
+// a = 2cos(2pi/n), b = -1 replace the mesh's own directions, so that the data stay exact (on
+// meshes with short binary coordinates) and as regular as the symmetric ones where they can;
+// they follow the mesh at the other vertices (e.g. valence 5) and on the boundary (so that a
+// corner of the domain stays a corner and a straight side stays straight).
 GluingData geometric_gluing(const QuadMesh& mesh, bool regular_fans_where_rational = false);
 
 // The data of an edge as seen from its other end: (a, b, c)(u) -> (a, c, b)(1 - u).

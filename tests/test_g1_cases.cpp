@@ -132,6 +132,34 @@ TEST_CASE("Pentagon (valence 5, k = 5): high order, below optimal, C1", "[g1][ca
   REQUIRE(m1.jump < 1e-9);
 }
 
+// The fit weighs the boundary rows heavily and regular_fans keeps the mesh's directions at
+// boundary vertices: the unit square of case (c) stays the unit square. Checked on the
+// boundary control points of the fitted cells (each must lie on a side of [0, 1]^2).
+TEST_CASE("The fitted G1 geometry keeps straight sides straight and corners", "[g1][cases]") {
+  const CaseDescription c = load_case(kSource + "/cases/g1_mixed_valences.toml");
+  const G1Discretization d = discretize_g1(c, 0);
+  const int k = d.basis.k;
+  double worst = 0;
+  int sides = 0;
+  for (int cell = 0; cell < d.mesh.num_cells(); ++cell)
+    for (int side = 0; side < 4; ++side) {
+      if (d.mesh.cell(cell).boundary[side] < 0) continue;
+      ++sides;
+      for (int i = 0; i <= k; ++i) {
+        const int a = side == kSideBottom ? i : side == kSideRight ? k : side == kSideTop ? k - i : 0;
+        const int b = side == kSideBottom ? 0 : side == kSideRight ? i : side == kSideTop ? k : k - i;
+        const Eigen::RowVector3d p = d.cells[cell].points.row(a + (k + 1) * b);
+        worst = std::max(worst, std::min({std::abs(p.x()), std::abs(p.x() - 1), std::abs(p.y()), std::abs(p.y() - 1)}));
+      }
+    }
+  int boundary_edges = 0;
+  for (int e = 0; e < d.coarse.num_edges(); ++e) boundary_edges += d.coarse.edge(e).boundary();
+  REQUIRE(sides == 2 * boundary_edges);  // two cells along each boundary edge
+  INFO("largest distance of a boundary control point from the square's sides " << worst);
+  REQUIRE(worst < 1e-5);
+  REQUIRE(d.min_regularity > 0.05);
+}
+
 TEST_CASE("Separability of edges (Definition 4.11) computed on the edge's two faces", "[g1][separability]") {
   const QuadMesh cube = knotwork::test::cube(), three = knotwork::test::three_quads();
   // The cube with symmetric data needs k >= 4 at r = 1 (at k = 3 its basis has no vertex
