@@ -106,7 +106,9 @@ G1Level solve_level(const CaseDescription& c, const G1Discretization& d, Orderin
 void write_level_vtu(const std::string& path, const CaseDescription& c, const G1Discretization& d,
                      const Eigen::VectorXd& coefficients, double mean) {
   if (!c.g1.surface) {
-    write_bezier_vtu(path, d.mesh, *d.planar, coefficients, c.problem.exact ? &*c.problem.exact : nullptr);
+    CellFields fields;
+    if (c.problem.exact) fields.emplace_back("h1_error_squared", g1_cell_h1_error_squared(d, coefficients, *c.problem.exact));
+    write_bezier_vtu(path, d.mesh, *d.planar, coefficients, c.problem.exact ? &*c.problem.exact : nullptr, fields);
     return;
   }
   // Solution: its Bernstein coefficients (exact). Exact solution and error: interpolants at
