@@ -170,8 +170,10 @@ int run_g1_case(const RunOptions& o, CaseDescription& c) {
   if (o.elements) throw InputError("--elements: not used with family = \"g1\" (refine with [space] refine)");
   if (o.degree) {
     if (o.degree < 2 || o.degree > 12) throw InputError("--degree: must be in [2, 12] for G1 spaces");
+    if (c.g1.split_smoothness > o.degree - 1)
+      throw InputError("--degree: " + std::to_string(o.degree) + " is too low for the case's split_smoothness " +
+                       std::to_string(c.g1.split_smoothness) + " (needs degree >= split_smoothness + 1)");
     c.g1.degree = o.degree;
-    if (c.g1.split_smoothness > o.degree - 1) c.g1.split_smoothness = o.degree - 1;
   }
   const Ordering ordering = parse_ordering(o.ordering);
   std::optional<OutputStage> stage;
@@ -222,8 +224,10 @@ int converge_g1_case(const ConvergeOptions& o, CaseDescription& c) {
   if (o.elements) throw InputError("--elements: not used with family = \"g1\" (levels subdivide the quad mesh)");
   if (o.degree) {
     if (o.degree < 2 || o.degree > 12) throw InputError("--degree: must be in [2, 12] for G1 spaces");
+    if (c.g1.split_smoothness > o.degree - 1)
+      throw InputError("--degree: " + std::to_string(o.degree) + " is too low for the case's split_smoothness " +
+                       std::to_string(c.g1.split_smoothness) + " (needs degree >= split_smoothness + 1)");
     c.g1.degree = o.degree;
-    if (c.g1.split_smoothness > o.degree - 1) c.g1.split_smoothness = o.degree - 1;
   }
   if (o.levels < 1 || o.levels > 7) throw InputError("--levels: must be in [1, 7] for G1 spaces, got " + std::to_string(o.levels));
   if (!c.problem.exact && !c.g1.surface_exact)
