@@ -34,7 +34,7 @@ int dimension_command(const DimensionOptions& o) {
         .set("interior_vertices", topo.interior_vertices()).set("t_nodes", topo.t_nodes())
         .set("crossings", topo.crossings()).set("interior_edges", topo.interior_edges())
         .set("knot_lines", topo.count(K::kLine)).set("knot_rays", topo.count(K::kRay))
-        .set("knot_segments", topo.count(K::kSegment));
+        .set("knot_segments", topo.count(K::kSegment)).set("vanished_segments", topo.vanished_segments(p.m, p.n));
     if (weller_applies) {
       j.set("weller_prop_4_2", weller).set("weller_hypotheses_failed", Json::strings(hypotheses));
     } else {
@@ -49,9 +49,10 @@ int dimension_command(const DimensionOptions& o) {
   std::printf("  dimension  %ld = %ld unknowns - rank %ld (%ld constraints; rank %s, %.3f s)\n", r.dimension,
               r.unknowns, r.rank, r.constraints, r.exact ? "exact over Q" : "modulo two primes, which agree", seconds);
   std::printf("  topology   %zu vertices (%d interior: %d T-nodes, %d crossings), %d interior edges;\n"
-              "             knots: %d lines, %d rays, %d segments\n",
+              "             knots: %d lines, %d rays, %d segments (%d vanished: at most m+1 vertices if horizontal,\n"
+              "             n+1 if vertical, so no extra freedom)\n",
               topo.vertices.size(), topo.interior_vertices(), topo.t_nodes(), topo.crossings(), topo.interior_edges(),
-              topo.count(K::kLine), topo.count(K::kRay), topo.count(K::kSegment));
+              topo.count(K::kLine), topo.count(K::kRay), topo.count(K::kSegment), topo.vanished_segments(p.m, p.n));
   if (weller_applies)
     std::printf("  Weller     (d+1)^2 + (d+1)|E_I| - (2d+1)|V_I| = %ld (Prop. 4.2: the dimension when the partition\n"
                 "             carries a semi-regular collection with interior multiplicities 1)\n", weller);

@@ -23,6 +23,12 @@ int PartitionTopology::count(KnotKind kind) const {
   return static_cast<int>(std::count_if(knots.begin(), knots.end(), [&](const Knot& k) { return k.kind == kind; }));
 }
 
+int PartitionTopology::vanished_segments(int m, int n) const {
+  return static_cast<int>(std::count_if(knots.begin(), knots.end(), [&](const Knot& k) {
+    return k.kind == KnotKind::kSegment && static_cast<int>(k.vertices.size()) <= (k.vertical ? n : m) + 1;
+  }));
+}
+
 PartitionTopology partition_topology(const RectangularPartition& partition) {
   PartitionTopology t;
   const auto& cells = partition.cells();

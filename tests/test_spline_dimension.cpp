@@ -193,3 +193,36 @@ TEST_CASE("Weller's formula needs its hypotheses: a short knot segment breaks it
   REQUIRE(spline_space_dimension(part, 2, 2, 1, 1, RankMethod::kExact).dimension == 25);
   REQUIRE(weller_dimension_formula(t, 2) == 24);
 }
+
+// A vanished T l-edge carries no extra freedom: inserting it leaves the brute-force dimension
+// unchanged; one vertex more than the threshold adds one function (V - (m+1), MATH.md §3).
+TEST_CASE("Vanished T l-edges: no extra freedom, one more vertex adds one function", "[dimension][topology]") {
+  auto grid_with_segment = [](bool with_segment) {
+    std::vector<RationalBox> cells;
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) {
+        if (with_segment && j == 1 && (i == 1 || i == 2)) {  // y = 3/2 from x = 1 to x = 3
+          cells.push_back({i, 1, i + 1, q(3, 2)});
+          cells.push_back({i, q(3, 2), i + 1, 2});
+          continue;
+        }
+        cells.push_back({i, j, i + 1, j + 1});
+      }
+    return RectangularPartition(cells);
+  };
+  const RectangularPartition plain = grid_with_segment(false), refined = grid_with_segment(true);
+  const PartitionTopology topo = partition_topology(refined);
+  REQUIRE(topo.count(PartitionTopology::KnotKind::kSegment) == 1);  // 3 vertices: x = 1, 2, 3
+  for (int m = 1; m <= 3; ++m) {
+    const long before = spline_space_dimension(plain, m, m, m - 1, m - 1).dimension;
+    const long after = spline_space_dimension(refined, m, m, m - 1, m - 1).dimension;
+    INFO("degree " << m << ": " << before << " -> " << after);
+    if (m >= 2) {
+      REQUIRE(topo.vanished_segments(m, m) == 1);
+      REQUIRE(after == before);
+    } else {
+      REQUIRE(topo.vanished_segments(m, m) == 0);
+      REQUIRE(after == before + 1);
+    }
+  }
+}
