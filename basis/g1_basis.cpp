@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "basis/bspline_basis.hpp"
+#include "basis/sparse_rank.hpp"
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseQR>
 #include <Eigen/OrderingMethods>
@@ -67,39 +68,6 @@ std::vector<std::vector<Scalar>> restrict_rows(const Rows<Scalar>& rows, const L
     if (any) out.push_back(std::move(dense));
   }
   return out;
-}
-
-// Null space over Q by reduced row echelon form: one vector per free column, with a 1 there.
-std::vector<std::vector<mpq_class>> null_space(std::vector<std::vector<mpq_class>> A, int m) {
-  std::vector<int> pivot_col;
-  size_t rank = 0;
-  for (int c = 0; c < m && rank < A.size(); ++c) {
-    size_t p = rank;
-    while (p < A.size() && A[p][c] == 0) ++p;
-    if (p == A.size()) continue;
-    std::swap(A[p], A[rank]);
-    const mpq_class inv = 1 / A[rank][c];
-    for (int j = c; j < m; ++j) A[rank][j] *= inv;
-    for (size_t i = 0; i < A.size(); ++i) {
-      if (i == rank || A[i][c] == 0) continue;
-      const mpq_class f = A[i][c];
-      for (int j = c; j < m; ++j)
-        if (A[rank][j] != 0) A[i][j] -= f * A[rank][j];
-    }
-    pivot_col.push_back(c);
-    ++rank;
-  }
-  std::vector<bool> is_pivot(m, false);
-  for (int c : pivot_col) is_pivot[c] = true;
-  std::vector<std::vector<mpq_class>> basis;
-  for (int f = 0; f < m; ++f) {
-    if (is_pivot[f]) continue;
-    std::vector<mpq_class> x(m, mpq_class(0));
-    x[f] = 1;
-    for (size_t i = 0; i < pivot_col.size(); ++i) x[pivot_col[i]] = -A[i][f];
-    basis.push_back(std::move(x));
-  }
-  return basis;
 }
 
 constexpr double kTolerance = 1e-10;
@@ -314,7 +282,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
     }
     const auto A = restrict_rows(vertex_rows, cols);
     if constexpr (exact) {
-      for (const auto& x : taylor_independent(null_space(A, cols.size()), taylor)) {
+      for (const auto& x : taylor_independent(null_space_exact(A, cols.size()), taylor)) {
         vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, x));
         exact_span.add(taylor_part(cols, x, taylor));
       }
@@ -334,7 +302,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
     add_edge_strips(cols, mesh, e, k, r);
     const auto A = restrict_rows(rows[e], cols);
     if constexpr (exact) {
-      for (const auto& x : null_space(A, cols.size()))
+      for (const auto& x : null_space_exact(A, cols.size()))
         edge_functions.push_back(make_function(G1BasisFunction::Kind::edge, e, cols, x));
     } else {
       const Eigen::MatrixXd Z = null_space(A, cols.size());
@@ -366,7 +334,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
     for (int x : sys.edges) pair_rows.insert(pair_rows.end(), rows[x].begin(), rows[x].end());
     const auto A = restrict_rows(pair_rows, sys.cols);
     if constexpr (exact) {
-      keep_independent(G1BasisFunction::Kind::vertex_pair, e, sys.cols, null_space(A, sys.cols.size()), sys.taylor);
+      keep_independent(G1BasisFunction::Kind::vertex_pair, e, sys.cols, null_space_exact(A, sys.cols.size()), sys.taylor);
     } else {
       const Eigen::MatrixXd Z = null_space(A, sys.cols.size());
       // Taylor rows modulo the vertex functions, block by block.
@@ -417,7 +385,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
       Rows<Scalar> patch_rows;
       for (int x : sys.edges) patch_rows.insert(patch_rows.end(), rows[x].begin(), rows[x].end());
       keep_independent(G1BasisFunction::Kind::coupled, -1, sys.cols,
-                       null_space(restrict_rows(patch_rows, sys.cols), sys.cols.size()), sys.taylor);
+                       null_space_exact(restrict_rows(patch_rows, sys.cols), sys.cols.size()), sys.taylor);
     }
   }
   if (have < wanted) {
@@ -436,7 +404,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
                                  " functions of S_" + std::to_string(k) + "^{1," + std::to_string(r) +
                                  "} undetermined, and the global completion is too large for this mesh (" +
                                  std::to_string(mesh.num_faces()) + " faces)");
-      keep_independent(G1BasisFunction::Kind::coupled, -1, cols, null_space(restrict_rows(all, cols), cols.size()),
+      keep_independent(G1BasisFunction::Kind::coupled, -1, cols, null_space_exact(restrict_rows(all, cols), cols.size()),
                        taylor);
     } else {
       complete_globally(mesh, gluing, k, r, wanted - have, vertex_functions);
@@ -721,13 +689,15 @@ std::vector<int> g1_inseparable_edges(const QuadMesh& mesh, const GluingData& gl
     add_edge_strips(cols, mesh, e, k, r);
     bool separable;
     if (exact) {
-      const auto Z = null_space(restrict_rows(g1_condition_rows_exact(mesh, gluing, k, r, e), cols), cols.size());
+      const auto Z = null_space_exact(restrict_rows(g1_condition_rows_exact(mesh, gluing, k, r, e), cols), cols.size());
       // Rank of the Taylor rows [from, to) of the null-space vectors, exactly.
       auto rank = [&](int from, int to) {
         std::vector<std::vector<mpq_class>> T(to - from, std::vector<mpq_class>(Z.size()));
         for (size_t j = 0; j < Z.size(); ++j)
           for (int i = from; i < to; ++i) T[i - from][j] = Z[j][i];
-        return static_cast<long>(Z.size()) - static_cast<long>(null_space(T, static_cast<int>(Z.size())).size());
+        long r = 0;
+        null_space_exact(std::move(T), static_cast<int>(Z.size()), &r);
+        return r;
       };
       separable = rank(0, 16) == rank(0, 8) + rank(8, 16);
     } else {

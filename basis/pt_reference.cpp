@@ -1,5 +1,7 @@
 #include "basis/pt_reference.hpp"
 
+#include "basis/sparse_rank.hpp"
+
 #include <algorithm>
 #include <set>
 #include <stdexcept>
@@ -47,40 +49,6 @@ std::vector<mpq_class> top_derivative(const std::vector<mpq_class>& t, int p, in
     c = std::move(next);
   }
   return c;
-}
-
-// Null space over Q (reduced row echelon form), one vector per free column.
-std::vector<std::vector<mpq_class>> null_space(std::vector<std::vector<mpq_class>> A, int columns, long& rank) {
-  std::vector<int> pivots;
-  size_t r = 0;
-  for (int c = 0; c < columns && r < A.size(); ++c) {
-    size_t p = r;
-    while (p < A.size() && A[p][c] == 0) ++p;
-    if (p == A.size()) continue;
-    std::swap(A[p], A[r]);
-    const mpq_class inv = 1 / A[r][c];
-    for (int j = c; j < columns; ++j) A[r][j] *= inv;
-    for (size_t i = 0; i < A.size(); ++i) {
-      if (i == r || A[i][c] == 0) continue;
-      const mpq_class f = A[i][c];
-      for (int j = c; j < columns; ++j)
-        if (A[r][j] != 0) A[i][j] -= f * A[r][j];
-    }
-    pivots.push_back(c);
-    ++r;
-  }
-  rank = static_cast<long>(r);
-  std::vector<bool> is_pivot(columns, false);
-  for (int c : pivots) is_pivot[c] = true;
-  std::vector<std::vector<mpq_class>> out;
-  for (int f = 0; f < columns; ++f) {
-    if (is_pivot[f]) continue;
-    std::vector<mpq_class> x(columns, mpq_class(0));
-    x[f] = 1;
-    for (size_t i = 0; i < pivots.size(); ++i) x[pivots[i]] = -A[i][f];
-    out.push_back(std::move(x));
-  }
-  return out;
 }
 
 }  // namespace
@@ -154,7 +122,7 @@ TensorCombinationBasis pt_full_extension_basis(const RectangularPartition& mesh,
     }
   }
   B.equations = static_cast<long>(rows.size());
-  for (auto& v : null_space(std::move(rows), columns, B.rank)) {
+  for (auto& v : null_space_exact(std::move(rows), columns, &B.rank)) {
     std::vector<std::pair<int, mpq_class>> f;
     for (int c = 0; c < columns; ++c)
       if (v[c] != 0) f.emplace_back(c, v[c]);

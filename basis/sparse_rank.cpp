@@ -130,4 +130,37 @@ long rank_exact(const std::vector<SparseRationalRow>& rows, long columns) {
   return sparse_rank(rows, columns, RationalField{});
 }
 
+std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq_class>> A, int columns, long* rank) {
+  std::vector<int> pivot_col;
+  size_t r = 0;
+  for (int c = 0; c < columns && r < A.size(); ++c) {
+    size_t p = r;
+    while (p < A.size() && A[p][c] == 0) ++p;
+    if (p == A.size()) continue;
+    std::swap(A[p], A[r]);
+    const mpq_class inv = 1 / A[r][c];
+    for (int j = c; j < columns; ++j) A[r][j] *= inv;
+    for (size_t i = 0; i < A.size(); ++i) {
+      if (i == r || A[i][c] == 0) continue;
+      const mpq_class f = A[i][c];
+      for (int j = c; j < columns; ++j)
+        if (A[r][j] != 0) A[i][j] -= f * A[r][j];
+    }
+    pivot_col.push_back(c);
+    ++r;
+  }
+  if (rank) *rank = static_cast<long>(r);
+  std::vector<bool> is_pivot(columns, false);
+  for (int c : pivot_col) is_pivot[c] = true;
+  std::vector<std::vector<mpq_class>> basis;
+  for (int f = 0; f < columns; ++f) {
+    if (is_pivot[f]) continue;
+    std::vector<mpq_class> x(columns, mpq_class(0));
+    x[f] = 1;
+    for (size_t i = 0; i < pivot_col.size(); ++i) x[pivot_col[i]] = -A[i][f];
+    basis.push_back(std::move(x));
+  }
+  return basis;
+}
+
 }  // namespace knotwork

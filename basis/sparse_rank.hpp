@@ -19,4 +19,10 @@ long rank_modular(const std::vector<SparseRationalRow>& rows, long columns);
 // Rank over Q by sparse elimination with GMP rationals (exact; slower).
 long rank_exact(const std::vector<SparseRationalRow>& rows, long columns);
 
+// Null space over Q of dense rows (reduced row echelon form): one vector per free column,
+// with a 1 there and the pivot columns solved for. `rank` (optional) receives the rank.
+// For the small local systems of the G1 and PT-spline constructions.
+std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq_class>> rows, int columns,
+                                                     long* rank = nullptr);
+
 }  // namespace knotwork
