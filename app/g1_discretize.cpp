@@ -249,26 +249,4 @@ double g1_gradient_jump(const G1Discretization& d, const Eigen::VectorXd& coeffi
   return largest > 0 ? jump / largest : 0;
 }
 
-Eigen::VectorXd g1_cell_h1_error_squared(const G1Discretization& d, const Eigen::VectorXd& coefficients,
-                                         const ExactSolution& exact) {
-  if (!d.planar) throw std::invalid_argument("g1_cell_h1_error_squared: planar cases only");
-  ExpressionEvaluator ux(exact.u_x), uy(exact.u_y);
-  const int points = d.basis.k + 2;
-  const BernsteinTable& t = bernstein_table(d.basis.k, d.basis.k, points, points);
-  Eigen::VectorXd out(d.mesh.num_cells());
-  for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
-    GeometryAtPoints g;
-    d.planar->evaluate(cell, t.point_u, t.point_v, g);
-    const Eigen::MatrixX3d e = evaluate_solution(d.mesh, *d.planar, coefficients, cell, t.point_u, t.point_v);
-    double sum = 0;
-    for (int q = 0; q < t.num_points(); ++q) {
-      const double det = std::abs(g.jacobian(q, 0) * g.jacobian(q, 3) - g.jacobian(q, 1) * g.jacobian(q, 2));
-      const double dx = e(q, 1) - ux(g.x(q, 0), g.x(q, 1)), dy = e(q, 2) - uy(g.x(q, 0), g.x(q, 1));
-      sum += t.weight(q) * det * (dx * dx + dy * dy);
-    }
-    out(cell) = sum;
-  }
-  return out;
-}
-
 }  // namespace knotwork

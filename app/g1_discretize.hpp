@@ -47,10 +47,4 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
 // level's mesh, relative to the largest gradient seen, at `samples` points per cell side.
 double g1_gradient_jump(const G1Discretization& d, const Eigen::VectorXd& coefficients, int samples = 7);
 
-// Planar cases: the squared H1-seminorm error of u_h on every cell (Gauss rule of degree+2
-// points per direction), for locating where the error concentrates (written as the cell
-// field "h1_error_squared" in the level's .vtu).
-Eigen::VectorXd g1_cell_h1_error_squared(const G1Discretization& d, const Eigen::VectorXd& coefficients,
-                                         const ExactSolution& exact);
-
 }  // namespace knotwork

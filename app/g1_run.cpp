@@ -30,6 +30,7 @@ struct G1Level {
   double exact_mean = 0;  // removed from the exact solution (surface problems with reaction 0)
   std::array<long, 5> counts{};
   Eigen::VectorXd coefficients;
+  Eigen::VectorXd cell_h1_squared;  // planar: |u - u_h|^2_H1 per cell, for the .vtu
 };
 
 std::string describe_g1(const CaseDescription& c) {
@@ -66,21 +67,20 @@ G1Level solve_level(const CaseDescription& c, const G1Discretization& d, Orderin
     so.quadrature = c.quadrature;
     so.ordering = ordering;
     so.progress = [&](const std::string& s) { progress(s); };
+    so.compute_errors = false;  // below, once, with the per-cell split
     PoissonSolution s;
     try {
       s = solve_poisson(d.mesh, *d.planar, c.problem, so);
     } catch (const std::runtime_error& e) {
-      if (std::string(e.what()).find("boundary mass matrix") == std::string::npos) throw;
-      // Known limitation: Dirichlet data are imposed by L2 projection onto the traces of the
-      // basis functions, which must be independent; G1 vertex functions at boundary vertices
-      // can have dependent traces (seen with irrational data at valence 5).
-      throw InputError(c.path + ": [problem] dirichlet: the traces of this G1 basis on the boundary are linearly "
-                       "dependent, which the Dirichlet projection does not handle yet (try gluing = \"geometric\" or "
-                       "another degree)");
+      throw InputError(c.path + ": " + e.what());
     }
     lv.free = s.num_free;
     lv.coefficients = s.coefficients;
-    if (s.errors) lv.l2 = s.errors->l2, lv.h1_semi = s.errors->h1_semi, lv.h1 = s.errors->h1;
+    if (c.problem.exact) {
+      progress("error norms");
+      const ErrorNorms e = error_norms(d.mesh, *d.planar, s.coefficients, *c.problem.exact, c.quadrature, &lv.cell_h1_squared);
+      lv.l2 = e.l2, lv.h1_semi = e.h1_semi, lv.h1 = e.h1;
+    }
   } else {
     progress("assembly and solve (Laplace-Beltrami)");
     SurfaceProblem p;
@@ -104,11 +104,11 @@ G1Level solve_level(const CaseDescription& c, const G1Discretization& d, Orderin
 }
 
 void write_level_vtu(const std::string& path, const CaseDescription& c, const G1Discretization& d,
-                     const Eigen::VectorXd& coefficients, double mean) {
+                     const G1Level& lv) {
   if (!c.g1.surface) {
     CellFields fields;
-    if (c.problem.exact) fields.emplace_back("h1_error_squared", g1_cell_h1_error_squared(d, coefficients, *c.problem.exact));
-    write_bezier_vtu(path, d.mesh, *d.planar, coefficients, c.problem.exact ? &*c.problem.exact : nullptr, fields);
+    if (lv.cell_h1_squared.size() > 0) fields.emplace_back("h1_error_squared", lv.cell_h1_squared);
+    write_bezier_vtu(path, d.mesh, *d.planar, lv.coefficients, c.problem.exact ? &*c.problem.exact : nullptr, fields);
     return;
   }
   // Solution: its Bernstein coefficients (exact). Exact solution and error: interpolants at
@@ -122,20 +122,23 @@ void write_level_vtu(const std::string& path, const CaseDescription& c, const G1
   Eigen::VectorXd nu((k + 1) * (k + 1)), nv((k + 1) * (k + 1));
   for (int b = 0; b <= k; ++b)
     for (int a = 0; a <= k; ++a) nu(a + (k + 1) * b) = double(a) / k, nv(a + (k + 1) * b) = double(b) / k;
+  Eigen::MatrixXd B, Bu, Bv;
+  tensor_bernstein(k, k, nu, nv, B, Bu, Bv);
   for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
     surface.degree.push_back(k);
     surface.points.push_back(d.cells[cell].points);
-    const Eigen::MatrixX4d values = evaluate_surface_solution(d.mesh, d.cells, coefficients, cell, nu, nv);
-    solution.push_back(interpolation * values.col(0));
+    const auto ids = d.mesh.functions(cell);
+    Eigen::VectorXd local(ids.size());
+    for (size_t a = 0; a < ids.size(); ++a) local(a) = lv.coefficients(ids[a]);
+    const Eigen::VectorXd bernstein = d.mesh.extraction(cell).transpose() * local;  // u_h on the cell, exactly
     if (u) {
-      Eigen::VectorXd ex(nu.size());
-      Eigen::MatrixXd B, Bu, Bv;
-      tensor_bernstein(k, k, nu, nv, B, Bu, Bv);
       const Eigen::MatrixX3d x = B * d.cells[cell].points;
-      for (Eigen::Index q = 0; q < nu.size(); ++q) ex(q) = (*u)(x(q, 0), x(q, 1), x(q, 2)) - mean;
+      Eigen::VectorXd ex(nu.size());
+      for (Eigen::Index q = 0; q < nu.size(); ++q) ex(q) = (*u)(x(q, 0), x(q, 1), x(q, 2)) - lv.exact_mean;
       exact.push_back(interpolation * ex);
-      error.push_back(interpolation * (values.col(0) - ex));
+      error.push_back(bernstein - exact.back());
     }
+    solution.push_back(bernstein);
   }
   surface.point_fields.emplace_back("solution", std::move(solution));
   if (u) {
@@ -185,7 +188,7 @@ int run_g1_case(const RunOptions& o, CaseDescription& c) {
   std::vector<std::string> outputs;
   if (stage) {
     progress("writing ParaView output");
-    write_level_vtu(stage->stage("solution.vtu"), c, d, lv.coefficients, lv.exact_mean);
+    write_level_vtu(stage->stage("solution.vtu"), c, d, lv);
     outputs = stage->commit();
   }
   lv.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -250,10 +253,11 @@ int converge_g1_case(const ConvergeOptions& o, CaseDescription& c) {
     if (c.write_bezier) {
       progress("writing ParaView output");
       const std::string name = "level_" + std::to_string(l) + ".vtu";
-      write_level_vtu(stage.stage(name), c, d, lv.coefficients, lv.exact_mean);
+      write_level_vtu(stage.stage(name), c, d, lv);
       pvd.emplace_back(l, name);
     }
     lv.coefficients.resize(0);
+    lv.cell_h1_squared.resize(0);
     lv.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     levels.push_back(lv);
   }

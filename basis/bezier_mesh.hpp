@@ -22,6 +22,8 @@ struct BezierCell {
 // global functions are alive and which combination of the cell's Bernstein polynomials
 // each one is (N_active = C_e * B, B ordered a + (p+1)*c with a along u).
 // Rational spaces add one positive weight per global function: R_i = w_i N_i / sum_j w_j N_j.
+// The functions that do not vanish on a boundary side must have linearly independent traces
+// there: Dirichlet data are imposed by L2 projection onto those traces.
 // Extraction matrices live in a pool so that identical ones (most interior cells of
 // uniform tensor meshes) are stored once.
 class BezierMesh {

@@ -261,7 +261,9 @@ Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap
   Eigen::SparseMatrix<double> M(nd, nd);
   M.setFromTriplets(triplets.begin(), triplets.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(M);
-  if (ldlt.info() != Eigen::Success) throw std::runtime_error("Dirichlet projection: boundary mass matrix is singular");
+  if (ldlt.info() != Eigen::Success) throw std::runtime_error(
+        "Dirichlet projection: the traces of the basis functions on the Dirichlet sides are linearly dependent "
+        "(singular boundary mass matrix); the space breaks the BezierMesh contract");
   const Eigen::VectorXd x = ldlt.solve(r);
   for (int f = 0; f < nf; ++f)
     if (local[f] >= 0) result[f] = x[local[f]];

@@ -10,8 +10,9 @@ namespace knotwork {
 
 ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coefficients, const ExactSolution& exact,
-                       const QuadratureOptions& quadrature) {
+                       const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell) {
   double l2 = 0, semi = 0;
+  if (h1_semi_squared_per_cell) h1_semi_squared_per_cell->setZero(mesh.num_cells());
 #pragma omp parallel reduction(+ : l2, semi)
   {
     ExpressionEvaluator u(exact.u), ux(exact.u_x), uy(exact.u_y);
@@ -29,13 +30,16 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
       uh.noalias() = cb.value * beta;
       uhx.noalias() = cb.grad_x * beta;
       uhy.noalias() = cb.grad_y * beta;
+      double cell_semi = 0;
       for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
         const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
         const double e = u(x, y) - uh[k];
         const double ex = ux(x, y) - uhx[k], ey = uy(x, y) - uhy[k];
         l2 += cb.measure[k] * e * e;
-        semi += cb.measure[k] * (ex * ex + ey * ey);
+        cell_semi += cb.measure[k] * (ex * ex + ey * ey);
       }
+      semi += cell_semi;
+      if (h1_semi_squared_per_cell) (*h1_semi_squared_per_cell)[c] = cell_semi;
     }
   }
   ErrorNorms n;

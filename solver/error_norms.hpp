@@ -16,9 +16,11 @@ struct ErrorNorms {
 
 // Errors of the discrete solution (one coefficient per function) against the exact
 // solution, by Gauss quadrature per cell (error_points, default degree+2 per direction).
+// `h1_semi_squared_per_cell` (optional) receives |u - u_h|^2_H1 of every cell: where the
+// error sits (the sum is h1_semi^2).
 ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coefficients, const ExactSolution& exact,
-                       const QuadratureOptions& quadrature);
+                       const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell = nullptr);
 
 // u_h and its physical gradient at reference points (u, v) of one cell: (value, dx, dy) rows.
 Eigen::MatrixX3d evaluate_solution(const BezierMesh& mesh, const GeometryMap& geometry,
