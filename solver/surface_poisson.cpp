@@ -3,63 +3,71 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
+#include "basis/bspline_basis.hpp"
 #include "quadrature/bernstein.hpp"
 
 namespace knotwork {
 
 namespace {
 
-// Values, first and second derivatives of the p+1 Bernstein polynomials at t.
-void bernstein_up_to_second(int p, double t, Eigen::VectorXd& b, Eigen::VectorXd& d1, Eigen::VectorXd& d2) {
-  auto values = [&](int q) {  // degree q, padded to p+1 entries
-    Eigen::VectorXd v = Eigen::VectorXd::Zero(p + 1);
-    if (q < 0) return v;
-    v(0) = 1;
-    for (int j = 1; j <= q; ++j) {
-      for (int i = j; i >= 1; --i) v(i) = (1 - t) * v(i) + t * v(i - 1);
-      v(0) *= 1 - t;
-    }
-    return v;
-  };
-  b = values(p);
-  const Eigen::VectorXd lower1 = values(p - 1), lower2 = values(p - 2);
-  d1 = Eigen::VectorXd::Zero(p + 1);
-  d2 = Eigen::VectorXd::Zero(p + 1);
-  for (int i = 0; i <= p; ++i) {
-    if (p >= 1) d1(i) = p * ((i >= 1 ? lower1(i - 1) : 0) - (i <= p - 1 ? lower1(i) : 0));
-    if (p >= 2)
-      d2(i) = p * (p - 1) *
-              ((i >= 2 ? lower2(i - 2) : 0) - 2 * (i >= 1 && i - 1 <= p - 2 ? lower2(i - 1) : 0) +
-               (i <= p - 2 ? lower2(i) : 0));
-  }
+// Second derivatives of the tensor Bernstein basis at the points of bernstein_table(p, p, nq,
+// nq), in its point and function order (the Bernstein basis is the B-spline basis on
+// 0^(p+1) 1^(p+1), whose derivatives BSplineBasis1D gives). Built once per (p, nq).
+struct SecondDerivativeTable {
+  Eigen::MatrixXd uu, uv, vv;
+};
+
+const SecondDerivativeTable& second_derivative_table(int p, int nq) {
+  static std::mutex lock;
+  static std::map<std::pair<int, int>, SecondDerivativeTable> cache;
+  const std::lock_guard<std::mutex> guard(lock);
+  const auto found = cache.find({p, nq});
+  if (found != cache.end()) return found->second;
+  std::vector<double> knots(p + 1, 0.0);
+  knots.insert(knots.end(), p + 1, 1.0);
+  const BSplineBasis1D bernstein(p, knots);
+  const BernsteinTable& t = bernstein_table(p, p, nq, nq);
+  const int nb = p + 1;
+  // d[i](order, a): derivative `order` of Bernstein a at node i.
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>> d(nq, Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor>(3, nb));
+  for (int i = 0; i < nq; ++i) bernstein.evaluate_derivatives(p, t.rule_u.nodes[i], p >= 2 ? 2 : 1, d[i].data());
+  if (p < 2)
+    for (auto& m : d) m.row(2).setZero();
+  SecondDerivativeTable s;
+  s.uu.resize(nq * nq, nb * nb);
+  s.uv.resize(nq * nq, nb * nb);
+  s.vv.resize(nq * nq, nb * nb);
+  for (int j = 0; j < nq; ++j)
+    for (int i = 0; i < nq; ++i)
+      for (int c = 0; c < nb; ++c)
+        for (int a = 0; a < nb; ++a) {
+          s.uu(i + nq * j, a + nb * c) = d[i](2, a) * d[j](0, c);
+          s.uv(i + nq * j, a + nb * c) = d[i](1, a) * d[j](1, c);
+          s.vv(i + nq * j, a + nb * c) = d[i](0, a) * d[j](2, c);
+        }
+  return cache.emplace(std::make_pair(p, nq), std::move(s)).first->second;
 }
 
-// Geometry of one cell at the points of a rule: point, first and second derivatives.
+// Geometry of one cell at the points of a Gauss rule: point, first and second derivatives.
 struct SurfacePoints {
   Eigen::MatrixX3d x, xu, xv, xuu, xuv, xvv;
 };
 
-SurfacePoints surface_at(const SurfaceCell& cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
-  const int p = cell.degree, n = static_cast<int>(u.size());
+SurfacePoints surface_at(const SurfaceCell& cell, const BernsteinTable& t, bool second = false) {
   SurfacePoints s;
-  for (auto* m : {&s.x, &s.xu, &s.xv, &s.xuu, &s.xuv, &s.xvv}) m->setZero(n, 3);
-  Eigen::VectorXd bu, du, ddu, bv, dv, ddv;
-  for (int q = 0; q < n; ++q) {
-    bernstein_up_to_second(p, u(q), bu, du, ddu);
-    bernstein_up_to_second(p, v(q), bv, dv, ddv);
-    for (int b = 0; b <= p; ++b)
-      for (int a = 0; a <= p; ++a) {
-        const Eigen::RowVector3d P = cell.points.row(a + (p + 1) * b);
-        s.x.row(q) += bu(a) * bv(b) * P;
-        s.xu.row(q) += du(a) * bv(b) * P;
-        s.xv.row(q) += bu(a) * dv(b) * P;
-        s.xuu.row(q) += ddu(a) * bv(b) * P;
-        s.xuv.row(q) += du(a) * dv(b) * P;
-        s.xvv.row(q) += bu(a) * ddv(b) * P;
-      }
+  s.x.noalias() = t.value * cell.points;
+  s.xu.noalias() = t.d_u * cell.points;
+  s.xv.noalias() = t.d_v * cell.points;
+  if (second) {
+    const SecondDerivativeTable& d = second_derivative_table(cell.degree, t.rule_u.size());
+    s.xuu.noalias() = d.uu * cell.points;
+    s.xuv.noalias() = d.uv * cell.points;
+    s.xvv.noalias() = d.vv * cell.points;
   }
   return s;
 }
@@ -70,9 +78,8 @@ struct Metric {
   Eigen::Vector3d normal;
 };
 
-Metric metric(const SurfacePoints& s, int q) {
+Metric metric(const Eigen::Vector3d& xu, const Eigen::Vector3d& xv) {
   Metric m;
-  const Eigen::Vector3d xu = s.xu.row(q).transpose(), xv = s.xv.row(q).transpose();
   Eigen::Matrix2d G;
   G << xu.dot(xu), xu.dot(xv), xu.dot(xv), xv.dot(xv);
   const Eigen::Vector3d c = xu.cross(xv);
@@ -127,7 +134,7 @@ SurfaceRegularity surface_regularity(const std::vector<SurfaceCell>& cells, int 
   double largest = 0, smallest = INFINITY;
   for (size_t c = 0; c < cells.size(); ++c) {
     const BernsteinTable& t = bernstein_table(cells[c].degree, cells[c].degree, points, points);
-    const SurfacePoints s = surface_at(cells[c], t.point_u, t.point_v);
+    const SurfacePoints s = surface_at(cells[c], t);
     for (int q = 0; q < t.num_points(); ++q) {
       const double a = s.xu.row(q).cross(s.xv.row(q)).norm();
       largest = std::max(largest, a);
@@ -165,18 +172,18 @@ SurfaceSolution solve_surface_poisson(const BezierMesh& mesh, const std::vector<
     if (C.cols() != t.num_functions())
       throw std::invalid_argument("surface: cell " + std::to_string(c) + " has degree " + std::to_string(p) +
                                   " but its extraction has " + std::to_string(C.cols()) + " Bernstein columns");
-    const SurfacePoints s = surface_at(cells[c], t.point_u, t.point_v);
+    // Second derivatives only for the curvature term of a derived source.
+    const SurfacePoints s = surface_at(cells[c], t, !source);
     const Eigen::MatrixXd N = C * t.value.transpose(), Nu = C * t.d_u.transpose(), Nv = C * t.d_v.transpose();
     const Eigen::Index m = C.rows();
-    Eigen::MatrixXd Ke = Eigen::MatrixXd::Zero(m, m), Me = Eigen::MatrixXd::Zero(m, m);
+    Eigen::MatrixXd Ke = Eigen::MatrixXd::Zero(m, m), Me = Eigen::MatrixXd::Zero(m, m), D(m, 2);
     Eigen::VectorXd Fe = Eigen::VectorXd::Zero(m), Ie = Eigen::VectorXd::Zero(m);
     for (int q = 0; q < t.num_points(); ++q) {
-      const Metric g = metric(s, q);
+      const Metric g = metric(s.xu.row(q).transpose(), s.xv.row(q).transpose());
       if (!(g.area > 0) || !std::isfinite(g.area))
         throw std::invalid_argument("surface: degenerate (zero area element) at a quadrature point of cell " +
                                     std::to_string(c));
       const double w = t.weight(q) * g.area;
-      Eigen::MatrixXd D(m, 2);
       D.col(0) = Nu.col(q);
       D.col(1) = Nv.col(q);
       Ke.noalias() += w * D * g.inverse * D.transpose();
@@ -261,14 +268,14 @@ SurfaceSolution solve_surface_poisson(const BezierMesh& mesh, const std::vector<
         const int p = cells[c].degree;
         const int nq = quadrature.error_points_u > 0 ? quadrature.error_points_u : p + 2;
         const BernsteinTable& t = bernstein_table(p, p, nq, nq);
-        const SurfacePoints s = surface_at(cells[c], t.point_u, t.point_v);
+        const SurfacePoints s = surface_at(cells[c], t);
         visit(c, t, s);
       }
     };
     if (problem.reaction == 0) {
       for_error_points([&](int, const BernsteinTable& t, const SurfacePoints& s) {
         for (int q = 0; q < t.num_points(); ++q)
-          mean += t.weight(q) * metric(s, q).area * exact->value(s.x(q, 0), s.x(q, 1), s.x(q, 2));
+          mean += t.weight(q) * metric(s.xu.row(q).transpose(), s.xv.row(q).transpose()).area * exact->value(s.x(q, 0), s.x(q, 1), s.x(q, 2));
       });
       mean /= sol.area;
       sol.exact_mean = mean;
@@ -282,7 +289,7 @@ SurfaceSolution solve_surface_poisson(const BezierMesh& mesh, const std::vector<
       const Eigen::VectorXd bern = C.transpose() * local;  // the solution's Bernstein coefficients
       const Eigen::VectorXd uh = t.value * bern, uh_u = t.d_u * bern, uh_v = t.d_v * bern;
       for (int q = 0; q < t.num_points(); ++q) {
-        const Metric g = metric(s, q);
+        const Metric g = metric(s.xu.row(q).transpose(), s.xv.row(q).transpose());
         const double w = t.weight(q) * g.area;
         const double x = s.x(q, 0), y = s.x(q, 1), z = s.x(q, 2);
         const Eigen::Vector2d coeffs = g.inverse * Eigen::Vector2d(uh_u(q), uh_v(q));
@@ -314,13 +321,13 @@ Eigen::MatrixX4d evaluate_surface_solution(const BezierMesh& mesh, const std::ve
   Eigen::VectorXd local(C.rows());
   for (Eigen::Index a = 0; a < C.rows(); ++a) local(a) = coefficients(ids[a]);
   const Eigen::VectorXd bern = C.transpose() * local;
-  const SurfacePoints s = surface_at(cells[cell], u, v);
+  const Eigen::MatrixX3d xu = Bu * cells[cell].points, xv = Bv * cells[cell].points;
   Eigen::MatrixX4d out(u.size(), 4);
   for (Eigen::Index q = 0; q < u.size(); ++q) {
-    const Metric g = metric(s, static_cast<int>(q));
+    const Metric g = metric(xu.row(q).transpose(), xv.row(q).transpose());
     const Eigen::Vector2d coeffs = g.inverse * Eigen::Vector2d(Bu.row(q).dot(bern), Bv.row(q).dot(bern));
     out(q, 0) = B.row(q).dot(bern);
-    out.block<1, 3>(q, 1) = s.xu.row(q) * coeffs(0) + s.xv.row(q) * coeffs(1);
+    out.block<1, 3>(q, 1) = xu.row(q) * coeffs(0) + xv.row(q) * coeffs(1);
   }
   return out;
 }
