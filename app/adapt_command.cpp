@@ -20,13 +20,6 @@ namespace knotwork {
 
 namespace {
 
-
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error(path + ": could not write");
-}
-
 // The knots of the partition (lines, rays, segments) as polylines in physical space, with
 // their kind (0 line, 1 ray, 2 segment) and multiplicity.
 void write_knot_lines(const std::string& path, const SemiRegularCollection& coll, const NurbsPatch& geometry) {
@@ -122,9 +115,9 @@ int adapt_command(const AdaptOptions& o) {
   root.set("case", c.path).set("space", describe_space(c)).set("theta", c.adapt.theta).set("steps", js);
   if (steps.size() >= 4 && !std::isnan(steps.back().h1_semi))
     root.set("h1_rate_last_half", fitted_h1_rate(steps, steps.size() / 2));
-  write_text(stage.stage("adapt.csv"), csv);
-  write_text(stage.stage("adapt.json"), root.dump() + "\n");
-  write_text(stage.stage("adapt.svg"), loglog_svg(c.name + ": adaptive knot segments", "degrees of freedom", "error", plot));
+  write_text_file(stage.stage("adapt.csv"), csv);
+  write_text_file(stage.stage("adapt.json"), root.dump() + "\n");
+  write_text_file(stage.stage("adapt.svg"), loglog_svg(c.name + ": adaptive knot segments", "degrees of freedom", "error", plot));
   if (!pvd.empty()) write_pvd(stage.stage("adapt.pvd"), pvd);
   const auto outputs = stage.commit();
 

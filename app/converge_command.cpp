@@ -25,11 +25,6 @@ struct Level {
   double seconds = 0;
 };
 
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error(path + ": could not write");
-}
 
 }  // namespace
 
@@ -117,9 +112,9 @@ int converge_command(const ConvergeOptions& o) {
   }
   Json root = Json::object();
   root.set("case", c.path).set("space", describe_space(c)).set("levels", jl);
-  write_text(stage.stage("convergence.csv"), csv);
-  write_text(stage.stage("convergence.json"), root.dump() + "\n");
-  write_text(stage.stage("convergence.svg"),
+  write_text_file(stage.stage("convergence.csv"), csv);
+  write_text_file(stage.stage("convergence.json"), root.dump() + "\n");
+  write_text_file(stage.stage("convergence.svg"),
              loglog_svg(c.name + ": " + describe_space(c), "h (largest cell diameter)", "error", {sl2, sh1}));
   if (!pvd.empty()) write_pvd(stage.stage("convergence.pvd"), pvd);
   if (!pvd_sampled.empty()) write_pvd(stage.stage("convergence_sampled.pvd"), pvd_sampled);

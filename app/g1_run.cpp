@@ -148,11 +148,6 @@ void write_level_vtu(const std::string& path, const CaseDescription& c, const G1
   write_bezier_surface_vtu(path, surface);
 }
 
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error(path + ": could not write");
-}
 
 Json level_json(const G1Level& v) {
   Json j = Json::object();
@@ -167,17 +162,22 @@ Json level_json(const G1Level& v) {
   return j;
 }
 
+// --degree and --elements on a G1 case.
+void apply_overrides(const CommonOptions& o, CaseDescription& c) {
+  if (o.elements)
+    throw InputError("--elements: not used with family = \"g1\" (refine with [space] refine; converge subdivides)");
+  if (!o.degree) return;
+  if (o.degree < 2 || o.degree > 12) throw InputError("--degree: must be in [2, 12] for G1 spaces");
+  if (c.g1.split_smoothness > o.degree - 1)
+    throw InputError("--degree: " + std::to_string(o.degree) + " is too low for the case's split_smoothness " +
+                     std::to_string(c.g1.split_smoothness) + " (needs degree >= split_smoothness + 1)");
+  c.g1.degree = o.degree;
+}
+
 }  // namespace
 
 int run_g1_case(const RunOptions& o, CaseDescription& c) {
-  if (o.elements) throw InputError("--elements: not used with family = \"g1\" (refine with [space] refine)");
-  if (o.degree) {
-    if (o.degree < 2 || o.degree > 12) throw InputError("--degree: must be in [2, 12] for G1 spaces");
-    if (c.g1.split_smoothness > o.degree - 1)
-      throw InputError("--degree: " + std::to_string(o.degree) + " is too low for the case's split_smoothness " +
-                       std::to_string(c.g1.split_smoothness) + " (needs degree >= split_smoothness + 1)");
-    c.g1.degree = o.degree;
-  }
+  apply_overrides(o, c);
   const Ordering ordering = parse_ordering(o.ordering);
   std::optional<OutputStage> stage;
   if (!o.no_output) stage.emplace(o.out.empty() ? c.output_directory : o.out);
@@ -224,14 +224,7 @@ int run_g1_case(const RunOptions& o, CaseDescription& c) {
 }
 
 int converge_g1_case(const ConvergeOptions& o, CaseDescription& c) {
-  if (o.elements) throw InputError("--elements: not used with family = \"g1\" (levels subdivide the quad mesh)");
-  if (o.degree) {
-    if (o.degree < 2 || o.degree > 12) throw InputError("--degree: must be in [2, 12] for G1 spaces");
-    if (c.g1.split_smoothness > o.degree - 1)
-      throw InputError("--degree: " + std::to_string(o.degree) + " is too low for the case's split_smoothness " +
-                       std::to_string(c.g1.split_smoothness) + " (needs degree >= split_smoothness + 1)");
-    c.g1.degree = o.degree;
-  }
+  apply_overrides(o, c);
   if (o.levels < 1 || o.levels > 7) throw InputError("--levels: must be in [1, 7] for G1 spaces, got " + std::to_string(o.levels));
   if (!c.problem.exact && !c.g1.surface_exact)
     throw InputError(c.path + ": [problem] exact: a convergence study needs the exact solution");
@@ -277,9 +270,9 @@ int converge_g1_case(const ConvergeOptions& o, CaseDescription& c) {
   }
   Json root = Json::object();
   root.set("case", c.path).set("space", describe_g1(c)).set("levels", jl);
-  write_text(stage.stage("convergence.csv"), csv);
-  write_text(stage.stage("convergence.json"), root.dump() + "\n");
-  write_text(stage.stage("convergence.svg"),
+  write_text_file(stage.stage("convergence.csv"), csv);
+  write_text_file(stage.stage("convergence.json"), root.dump() + "\n");
+  write_text_file(stage.stage("convergence.svg"),
              loglog_svg(c.name + ": " + describe_g1(c), "h (largest cell diagonal)", "error", {sl2, sh1}));
   if (!pvd.empty()) write_pvd(stage.stage("convergence.pvd"), pvd);
   const auto outputs = stage.commit();

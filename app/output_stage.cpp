@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <fstream>
 
 #include "solver/input_error.hpp"
 
@@ -80,6 +81,12 @@ void write_file_atomically(const std::string& file, const std::string& what,
     fs::remove(tmp);
     throw InputError(file + ": " + what + ": cannot write the file (" + ec.message() + ")");
   }
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw std::runtime_error(path + ": could not write");
 }
 
 }  // namespace knotwork

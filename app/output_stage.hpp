@@ -32,4 +32,7 @@ class OutputStage {
 void write_file_atomically(const std::string& file, const std::string& what,
                            const std::function<void(const std::string& path)>& write);
 
+// Writes `text` to `path` (a staged file); throws std::runtime_error naming it on failure.
+void write_text_file(const std::string& path, const std::string& text);
+
 }  // namespace knotwork
