@@ -418,6 +418,50 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
         basis.functions.push_back({G1BasisFunction::Kind::face, f, {{g1_unknown(f, i, j, k, r), 1.0}}});
 }
 
+// The functions of each vertex and edge (by owner), for the changes of basis below.
+struct FunctionsByOwner {
+  std::vector<std::vector<int>> vertex, edge;
+  std::vector<int> pairs;
+  FunctionsByOwner(const QuadMesh& mesh, const G1Basis& basis) : vertex(mesh.num_vertices()), edge(mesh.num_edges()) {
+    for (size_t j = 0; j < basis.functions.size(); ++j) {
+      const auto& f = basis.functions[j];
+      if (f.kind == G1BasisFunction::Kind::edge) edge[f.owner].push_back(static_cast<int>(j));
+      if (f.kind == G1BasisFunction::Kind::vertex) vertex[f.owner].push_back(static_cast<int>(j));
+      if (f.kind == G1BasisFunction::Kind::vertex_pair) pairs.push_back(static_cast<int>(j));
+    }
+  }
+};
+
+// Adds the coefficients of the functions to the local columns.
+void add_columns(const G1Basis& basis, const std::vector<int>& which, LocalColumns& cols) {
+  for (int j : which)
+    for (const auto& [c, x] : basis.functions[j].coefficients) cols.add(c);
+}
+
+// The functions as dense columns over `cols` (which holds all their coefficients).
+Eigen::MatrixXd dense_columns(const G1Basis& basis, const std::vector<int>& which, LocalColumns& cols) {
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(cols.size(), static_cast<Eigen::Index>(which.size()));
+  for (size_t i = 0; i < which.size(); ++i)
+    for (const auto& [c, x] : basis.functions[which[i]].coefficients) M(cols.position[c], static_cast<Eigen::Index>(i)) = x;
+  return M;
+}
+
+// Replaces function `id` by the dense column x over `cols`. Entries at rounding level are
+// dropped, to keep the supports sparse, and so are the unknowns in `zero` (exact zeros).
+void store_column(G1Basis& basis, int id, const Eigen::Ref<const Eigen::VectorXd>& x, const LocalColumns& cols,
+                  const std::set<long>* zero = nullptr) {
+  const double drop = 1e-14 * x.cwiseAbs().maxCoeff();
+  auto& coefficients = basis.functions[id].coefficients;
+  coefficients.clear();
+  for (int row = 0; row < cols.size(); ++row)
+    if (std::abs(x(row)) > drop && !(zero && zero->count(cols.global[row]))) coefficients.emplace_back(cols.global[row], x(row));
+}
+
+// Removes from the columns of X their least-squares part in the span of O.
+void project_out(Eigen::MatrixXd& X, const Eigen::MatrixXd& O) {
+  if (O.cols() > 0) X -= O * O.colPivHouseholderQr().solve(X);
+}
+
 // Two changes of basis within each vertex's functions, which keep the span:
 // - a vertex function plus any edge function of its edges is as good a vertex function; keep
 //   the one orthogonal to them (coefficient space), which removes the large bumps along the
@@ -425,36 +469,19 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
 // - the first is the one with value 1 at the vertex, and the others vanish there (what users
 //   plot, and what the paper lists first).
 void tidy_vertex_functions(const QuadMesh& mesh, G1Basis& basis) {
-  std::vector<std::vector<int>> of_edge(mesh.num_edges()), of_vertex(mesh.num_vertices());
-  for (size_t j = 0; j < basis.functions.size(); ++j) {
-    const auto& f = basis.functions[j];
-    if (f.kind == G1BasisFunction::Kind::edge) of_edge[f.owner].push_back(static_cast<int>(j));
-    if (f.kind == G1BasisFunction::Kind::vertex) of_vertex[f.owner].push_back(static_cast<int>(j));
-  }
+  const FunctionsByOwner by(mesh, basis);
   for (int v = 0; v < mesh.num_vertices(); ++v) {
-    const std::vector<int>& ids = of_vertex[v];
+    const std::vector<int>& ids = by.vertex[v];
     if (ids.empty()) continue;
     std::vector<int> others;
     for (int e : std::set<int>(mesh.ring(v).edges.begin(), mesh.ring(v).edges.end()))
-      others.insert(others.end(), of_edge[e].begin(), of_edge[e].end());
-    const long corner = g1_corner_unknown(mesh.ring(v).faces[0], mesh.ring(v).corners[0], 0, 0, basis.k, basis.r);
+      others.insert(others.end(), by.edge[e].begin(), by.edge[e].end());
     LocalColumns cols;
-    cols.add(corner);
-    for (int j : ids)
-      for (const auto& [c, x] : basis.functions[j].coefficients) cols.add(c);
-    for (int j : others)
-      for (const auto& [c, x] : basis.functions[j].coefficients) cols.add(c);
-    auto dense = [&](const std::vector<int>& which) {
-      Eigen::MatrixXd M = Eigen::MatrixXd::Zero(cols.size(), static_cast<Eigen::Index>(which.size()));
-      for (size_t i = 0; i < which.size(); ++i)
-        for (const auto& [c, x] : basis.functions[which[i]].coefficients) M(cols.position[c], static_cast<Eigen::Index>(i)) = x;
-      return M;
-    };
-    Eigen::MatrixXd X = dense(ids);
-    if (!others.empty()) {
-      const Eigen::MatrixXd E = dense(others);
-      X -= E * E.colPivHouseholderQr().solve(X);
-    }
+    cols.add(g1_corner_unknown(mesh.ring(v).faces[0], mesh.ring(v).corners[0], 0, 0, basis.k, basis.r));  // row 0
+    add_columns(basis, ids, cols);
+    add_columns(basis, others, cols);
+    Eigen::MatrixXd X = dense_columns(basis, ids, cols);
+    project_out(X, dense_columns(basis, others, cols));
     Eigen::Index best;
     const double pivot_size = X.row(0).cwiseAbs().maxCoeff(&best);  // row 0: the value at the vertex
     if (pivot_size > 0) {
@@ -462,15 +489,7 @@ void tidy_vertex_functions(const QuadMesh& mesh, G1Basis& basis) {
       X.col(0) /= X(0, 0);
       for (Eigen::Index i = 1; i < X.cols(); ++i) X.col(i) -= X(0, i) * X.col(0);
     }
-    for (size_t i = 0; i < ids.size(); ++i) {
-      // Entries at rounding level are dropped, to keep the supports sparse.
-      const double drop = 1e-14 * X.col(static_cast<Eigen::Index>(i)).cwiseAbs().maxCoeff();
-      auto& coefficients = basis.functions[ids[i]].coefficients;
-      coefficients.clear();
-      for (int row = 0; row < cols.size(); ++row)
-        if (std::abs(X(row, static_cast<Eigen::Index>(i))) > drop)
-          coefficients.emplace_back(cols.global[row], X(row, static_cast<Eigen::Index>(i)));
-    }
+    for (size_t i = 0; i < ids.size(); ++i) store_column(basis, ids[i], X.col(static_cast<Eigen::Index>(i)), cols);
   }
 }
 
@@ -478,42 +497,23 @@ void tidy_vertex_functions(const QuadMesh& mesh, G1Basis& basis) {
 // them is as good a vertex-pair function: keep the part orthogonal to those (coefficient
 // space). Without this the exact echelon-form solutions can lie close to the span of the
 // others, and the stiffness matrix is needlessly ill-conditioned (condition 6e7 instead of
-// 6e3 at two subdivisions of the three-quad mesh).
+// 1.8e3 at two subdivisions of the three-quad mesh).
 void tidy_pair_functions(const QuadMesh& mesh, G1Basis& basis) {
-  std::vector<std::vector<int>> of_edge(mesh.num_edges()), of_vertex(mesh.num_vertices());
-  std::vector<int> pairs;
-  for (size_t j = 0; j < basis.functions.size(); ++j) {
-    const auto& f = basis.functions[j];
-    if (f.kind == G1BasisFunction::Kind::edge) of_edge[f.owner].push_back(static_cast<int>(j));
-    if (f.kind == G1BasisFunction::Kind::vertex) of_vertex[f.owner].push_back(static_cast<int>(j));
-    if (f.kind == G1BasisFunction::Kind::vertex_pair) pairs.push_back(static_cast<int>(j));
-  }
-  for (const int j : pairs) {
+  const FunctionsByOwner by(mesh, basis);
+  for (const int j : by.pairs) {
     const auto& E = mesh.edge(basis.functions[j].owner);
-    std::set<int> others;
+    std::set<int> around;
     for (const int v : {E.v[0], E.v[1]}) {
-      others.insert(of_vertex[v].begin(), of_vertex[v].end());
-      for (int e : mesh.ring(v).edges) others.insert(of_edge[e].begin(), of_edge[e].end());
+      around.insert(by.vertex[v].begin(), by.vertex[v].end());
+      for (int e : mesh.ring(v).edges) around.insert(by.edge[e].begin(), by.edge[e].end());
     }
-    if (others.empty()) continue;
+    const std::vector<int> others(around.begin(), around.end()), self{j};
     LocalColumns cols;
-    for (const auto& [c, x] : basis.functions[j].coefficients) cols.add(c);
-    for (int o : others)
-      for (const auto& [c, x] : basis.functions[o].coefficients) cols.add(c);
-    Eigen::VectorXd x = Eigen::VectorXd::Zero(cols.size());
-    for (const auto& [c, v] : basis.functions[j].coefficients) x(cols.position[c]) = v;
-    Eigen::MatrixXd O = Eigen::MatrixXd::Zero(cols.size(), static_cast<Eigen::Index>(others.size()));
-    Eigen::Index i = 0;
-    for (int o : others) {
-      for (const auto& [c, v] : basis.functions[o].coefficients) O(cols.position[c], i) = v;
-      ++i;
-    }
-    x -= O * O.colPivHouseholderQr().solve(x);
-    const double drop = 1e-14 * x.cwiseAbs().maxCoeff();
-    auto& coefficients = basis.functions[j].coefficients;
-    coefficients.clear();
-    for (int row = 0; row < cols.size(); ++row)
-      if (std::abs(x(row)) > drop) coefficients.emplace_back(cols.global[row], x(row));
+    add_columns(basis, self, cols);
+    add_columns(basis, others, cols);
+    Eigen::MatrixXd x = dense_columns(basis, self, cols);
+    project_out(x, dense_columns(basis, others, cols));
+    store_column(basis, j, x.col(0), cols);
   }
 }
 
@@ -541,28 +541,22 @@ void separate_boundary_traces(const QuadMesh& mesh, G1Basis& basis) {
     if (v >= 0 && mesh.boundary_vertex(v)) groups[v].push_back(static_cast<int>(j));
   }
   for (const auto& [v, ids] : groups) {
-    LocalColumns rows, cols;
-    for (int j : ids)
-      for (const auto& [c, x] : basis.functions[j].coefficients) {
-        cols.add(c);
-        if (trace_unknowns.count(c)) rows.add(c);
-      }
-    if (rows.size() == 0) continue;
-    const Eigen::Index m = static_cast<Eigen::Index>(ids.size());
-    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(rows.size(), m), X = Eigen::MatrixXd::Zero(cols.size(), m);
-    for (Eigen::Index i = 0; i < m; ++i)
-      for (const auto& [c, x] : basis.functions[ids[i]].coefficients) {
-        X(cols.position[c], i) = x;
-        if (const auto it = rows.position.find(c); it != rows.position.end()) T(it->second, i) = x;
-      }
+    LocalColumns cols;
+    add_columns(basis, ids, cols);
+    const Eigen::MatrixXd X = dense_columns(basis, ids, cols);
+    std::vector<int> trace_rows;
+    for (int row = 0; row < cols.size(); ++row)
+      if (trace_unknowns.count(cols.global[row])) trace_rows.push_back(row);
+    if (trace_rows.empty()) continue;
+    const Eigen::MatrixXd T = X(trace_rows, Eigen::all);
+    const Eigen::Index m = X.cols();
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(T);
     qr.setThreshold(1e-10);
     const Eigen::Index rank = qr.rank();
     if (rank == m) continue;
     // T P = Q [R11 R12]: the columns P [-R11^{-1} R12; I] have zero trace.
     const Eigen::MatrixXd R = qr.matrixR().topRows(rank).template triangularView<Eigen::Upper>();
-    const Eigen::MatrixXd R11 = R.leftCols(rank), R12 = R.rightCols(m - rank);
-    const Eigen::MatrixXd W = R11.template triangularView<Eigen::Upper>().solve(R12);
+    const Eigen::MatrixXd W = R.leftCols(rank).template triangularView<Eigen::Upper>().solve(R.rightCols(m - rank));
     Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(m, m - rank);
     const auto& P = qr.colsPermutation().indices();
     for (Eigen::Index c = 0; c < m - rank; ++c) {
@@ -570,17 +564,8 @@ void separate_boundary_traces(const QuadMesh& mesh, G1Basis& basis) {
       for (Eigen::Index i = 0; i < rank; ++i) Z(P(i), c) = -W(i, c);
     }
     const Eigen::MatrixXd Y = X * Z;
-    for (Eigen::Index c = 0; c < m - rank; ++c) {
-      auto& coefficients = basis.functions[ids[P(rank + c)]].coefficients;
-      coefficients.clear();
-      const double drop = 1e-14 * Y.col(c).cwiseAbs().maxCoeff();
-      for (int row = 0; row < cols.size(); ++row) {
-        const long u = cols.global[row];
-        // Exactly zero on the boundary rows (rounding there would make the trace nonzero).
-        if (trace_unknowns.count(u)) continue;
-        if (std::abs(Y(row, c)) > drop) coefficients.emplace_back(u, Y(row, c));
-      }
-    }
+    // Exactly zero on the boundary rows (rounding there would make the trace nonzero).
+    for (Eigen::Index c = 0; c < m - rank; ++c) store_column(basis, ids[P(rank + c)], Y.col(c), cols, &trace_unknowns);
   }
 }
 
