@@ -65,6 +65,32 @@ Eigen::MatrixX3d restrict_cell(const Eigen::MatrixX3d& P, int k, double s0, doub
   return out;
 }
 
+// Extremes over the cells of det J = (x_u x x_v)_z (planar, signed) or |x_u x x_v| (surface)
+// at the tabulated points (B, Bu, Bv: points x Bernstein polynomials).
+struct RegularityExtremes {
+  double smallest = INFINITY, largest = 0;
+  int cell = 0;                   // where the smallest is
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+};
+RegularityExtremes regularity_extremes(const std::vector<SurfaceCell>& cells, const Eigen::MatrixXd& B,
+                                       const Eigen::MatrixXd& Bu, const Eigen::MatrixXd& Bv, bool surface) {
+  RegularityExtremes r;
+  for (size_t c = 0; c < cells.size(); ++c) {
+    const Eigen::MatrixX3d x = B * cells[c].points, xu = Bu * cells[c].points, xv = Bv * cells[c].points;
+    for (Eigen::Index q = 0; q < x.rows(); ++q) {
+      const Eigen::Vector3d n = xu.row(q).cross(xv.row(q));
+      const double measure = surface ? n.norm() : n.z();
+      r.largest = std::max(r.largest, std::abs(measure));
+      if (measure < r.smallest) {
+        r.smallest = measure;
+        r.cell = static_cast<int>(c);
+        r.point = x.row(q).transpose();
+      }
+    }
+  }
+  return r;
+}
+
 }  // namespace
 
 G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
@@ -120,8 +146,8 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
     d.cells[cell].points = restrict_cell(P, k, 2 * s0 - hs, 2 * s1 - hs, 2 * t0 - ht, 2 * t1 - ht);
   }
 
-  // Regularity, reported and enforced.
-  const int points = k + 1;
+  // Regularity, reported and enforced: det J (signed) in the plane, |x_u x x_v| on surfaces,
+  // at the Gauss points (enforced) and at the cell corners and side midpoints (reported).
   if (!g.surface) {
     std::vector<BezierGeometryCell> planar(d.cells.size());
     for (size_t i = 0; i < d.cells.size(); ++i) {
@@ -129,36 +155,26 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
       planar[i].points = d.cells[i].points.leftCols(2);
     }
     d.planar = std::make_unique<BezierCellsGeometryMap>(std::move(planar));
-    double largest = 0, smallest = INFINITY;
-    for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
-      GeometryAtPoints at;
-      d.planar->evaluate_at_rule(cell, points, points, at);
-      for (Eigen::Index q = 0; q < at.jacobian.rows(); ++q) {
-        const double det = at.jacobian(q, 0) * at.jacobian(q, 3) - at.jacobian(q, 1) * at.jacobian(q, 2);
-        largest = std::max(largest, std::abs(det));
-        if (det < smallest) {
-          smallest = det;
-          d.worst_face = d.level.origin[d.mesh.cell(cell).patch].face;
-        }
-      }
+  }
+  const BernsteinTable& gauss = bernstein_table(k, k, k + 1, k + 1);
+  const RegularityExtremes at_gauss = regularity_extremes(d.cells, gauss.value, gauss.d_u, gauss.d_v, g.surface);
+  Eigen::VectorXd nu(9), nv(9);
+  nu << 0, 0.5, 1, 0, 0.5, 1, 0, 0.5, 1;
+  nv << 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1;
+  Eigen::MatrixXd B, Bu, Bv;
+  tensor_bernstein(k, k, nu, nv, B, Bu, Bv);
+  const RegularityExtremes at_nodes = regularity_extremes(d.cells, B, Bu, Bv, g.surface);
+  d.min_regularity = at_gauss.largest > 0 ? at_gauss.smallest / at_gauss.largest : 0;
+  d.min_regularity_nodes = at_gauss.largest > 0 ? at_nodes.smallest / at_gauss.largest : 0;
+  d.worst_face = d.level.origin[d.mesh.cell(at_gauss.cell).patch].face;
+  d.singular_point = at_nodes.point;
+  if (g.surface) {
+    for (const auto& cell : d.cells) {
+      const Eigen::MatrixX3d x = gauss.value * cell.points;
+      for (Eigen::Index q = 0; q < x.rows(); ++q)
+        d.shape_distance = std::max(d.shape_distance, shape_distance(g, x.row(q).transpose()));
     }
-    d.min_regularity = largest > 0 ? smallest / largest : 0;
-    Eigen::VectorXd nu(9), nv(9);
-    nu << 0, 0.5, 1, 0, 0.5, 1, 0, 0.5, 1;
-    nv << 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1;
-    double smallest_node = INFINITY;
-    for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
-      GeometryAtPoints at;
-      d.planar->evaluate(cell, nu, nv, at);
-      for (Eigen::Index q = 0; q < 9; ++q) {
-        const double det = at.jacobian(q, 0) * at.jacobian(q, 3) - at.jacobian(q, 1) * at.jacobian(q, 2);
-        if (det < smallest_node) {
-          smallest_node = det;
-          d.singular_point << at.x(q, 0), at.x(q, 1), 0;
-        }
-      }
-    }
-    d.min_regularity_nodes = largest > 0 ? smallest_node / largest : 0;
+  } else {
     // Straight boundary edges: distance of boundary control points from the chord.
     for (int cell = 0; cell < d.mesh.num_cells(); ++cell)
       for (int side = 0; side < 4; ++side) {
@@ -175,34 +191,6 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
           d.boundary_deviation = std::max(d.boundary_deviation, std::abs(w.x() * dir.y() - w.y() * dir.x()));
         }
       }
-  } else {
-    const SurfaceRegularity reg = surface_regularity(d.cells, points);
-    d.min_regularity = reg.min_ratio;
-    Eigen::VectorXd nu(9), nv(9);
-    nu << 0, 0.5, 1, 0, 0.5, 1, 0, 0.5, 1;
-    nv << 0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1;
-    Eigen::MatrixXd B, Bu, Bv;
-    tensor_bernstein(k, k, nu, nv, B, Bu, Bv);
-    double smallest_node = INFINITY, largest = 0;
-    for (const auto& cell : d.cells) {
-      const Eigen::MatrixX3d x = B * cell.points, xu = Bu * cell.points, xv = Bv * cell.points;
-      for (Eigen::Index q = 0; q < 9; ++q) {
-        const double a = xu.row(q).cross(xv.row(q)).norm();
-        largest = std::max(largest, a);
-        if (a < smallest_node) {
-          smallest_node = a;
-          d.singular_point = x.row(q).transpose();
-        }
-      }
-    }
-    d.min_regularity_nodes = largest > 0 ? smallest_node / largest : 0;
-    if (reg.cell >= 0) d.worst_face = d.level.origin[d.mesh.cell(reg.cell).patch].face;
-    const BernsteinTable& t = bernstein_table(k, k, points, points);
-    for (const auto& cell : d.cells) {
-      const Eigen::MatrixX3d x = t.value * cell.points;
-      for (Eigen::Index q = 0; q < x.rows(); ++q)
-        d.shape_distance = std::max(d.shape_distance, shape_distance(g, x.row(q).transpose()));
-    }
   }
   if (!(d.min_regularity > 1e-8))
     throw InputError(c.path + ": [geometry]: the G1 geometry fitted to " + g.mesh_file + " is not regular at face " +

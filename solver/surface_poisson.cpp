@@ -129,25 +129,6 @@ void check_cells(const BezierMesh& mesh, const std::vector<SurfaceCell>& cells) 
 
 }  // namespace
 
-SurfaceRegularity surface_regularity(const std::vector<SurfaceCell>& cells, int points) {
-  SurfaceRegularity r;
-  double largest = 0, smallest = INFINITY;
-  for (size_t c = 0; c < cells.size(); ++c) {
-    const BernsteinTable& t = bernstein_table(cells[c].degree, cells[c].degree, points, points);
-    const SurfacePoints s = surface_at(cells[c], t);
-    for (int q = 0; q < t.num_points(); ++q) {
-      const double a = s.xu.row(q).cross(s.xv.row(q)).norm();
-      largest = std::max(largest, a);
-      if (a < smallest) {
-        smallest = a;
-        r.cell = static_cast<int>(c);
-      }
-    }
-  }
-  r.min_ratio = largest > 0 ? smallest / largest : 0;
-  return r;
-}
-
 SurfaceSolution solve_surface_poisson(const BezierMesh& mesh, const std::vector<SurfaceCell>& cells,
                                       const SurfaceProblem& problem, const QuadratureOptions& quadrature) {
   check_cells(mesh, cells);

@@ -54,14 +54,6 @@ struct SurfaceSolution {
 SurfaceSolution solve_surface_poisson(const BezierMesh& mesh, const std::vector<SurfaceCell>& cells,
                                       const SurfaceProblem& problem, const QuadratureOptions& quadrature);
 
-// Smallest |x_u x x_v| at the Gauss points of every cell (points x points), relative to the
-// largest over the surface, and the cell where it occurs: how far from degenerate normals.
-struct SurfaceRegularity {
-  double min_ratio = 0;
-  int cell = -1;
-};
-SurfaceRegularity surface_regularity(const std::vector<SurfaceCell>& cells, int points);
-
 // u_h and its surface gradient at reference points of a cell: rows (value, gx, gy, gz).
 Eigen::MatrixX4d evaluate_surface_solution(const BezierMesh& mesh, const std::vector<SurfaceCell>& cells,
                                            const Eigen::VectorXd& coefficients, int cell, const Eigen::VectorXd& u,
