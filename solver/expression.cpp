@@ -43,12 +43,7 @@ ExpressionEvaluator::ExpressionEvaluator(const Expression& e) : impl_(std::make_
 ExpressionEvaluator::~ExpressionEvaluator() = default;
 ExpressionEvaluator::ExpressionEvaluator(ExpressionEvaluator&&) noexcept = default;
 
-double ExpressionEvaluator::operator()(double x, double y) {
-  impl_->x = x;
-  impl_->y = y;
-  impl_->z = 0;
-  return impl_->parser.Eval();
-}
+double ExpressionEvaluator::operator()(double x, double y) { return (*this)(x, y, 0.0); }
 
 double ExpressionEvaluator::operator()(double x, double y, double z) {
   impl_->x = x;
