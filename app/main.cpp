@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <new>
+#include <string>
 
 #include "app/commands.hpp"
 #include "solver/input_error.hpp"
@@ -19,6 +20,20 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
       ->capture_default_str();
   cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of the summary");
   cmd->add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
+}
+
+// Every error is one line on stderr (scripts and tests rely on it), whatever a message
+// quotes from the input: control characters such as a newline in a TOML parser's
+// "saw '...'" are printed escaped.
+void print_error(const std::string& message) {
+  std::string line;
+  for (const char c : message) {
+    if (c == '\n') line += "\\n";
+    else if (c == '\t') line += "\\t";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) line += "?";
+    else line += c;
+  }
+  std::fprintf(stderr, "knotwork: error: %s\n", line.c_str());
 }
 
 }  // namespace
@@ -118,7 +133,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "knotwork: error: %s (see knotwork --help)\n", e.what());
+    print_error(std::string(e.what()) + " (see knotwork --help)");
     return e.get_exit_code() != 0 ? e.get_exit_code() : 2;
   }
   try {
@@ -134,13 +149,13 @@ int main(int argc, char** argv) {
       return knotwork::basis_command(basis);
     }
   } catch (const knotwork::InputError& e) {
-    std::fprintf(stderr, "knotwork: error: %s\n", e.what());
+    print_error(e.what());
     return 2;
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "knotwork: error: out of memory (try fewer elements or a lower degree)\n");
+    print_error("out of memory (try fewer elements or a lower degree)");
     return 3;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "knotwork: error: %s\n", e.what());
+    print_error(e.what());
     return 1;
   }
   return 0;
