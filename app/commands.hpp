@@ -57,11 +57,17 @@ struct BasisOptions {
   std::string gluing = "symmetric";  // symmetric | geometric | FILE.json
   std::string vtk_file;               // the fitted G1 surface and the --show functions
   std::string show = "extraordinary";  // vertex:N | edge:I-J | face:N | all | extraordinary
+  // --pt: the PT-spline basis of the T-mesh instead of a knot-segment collection.
+  bool pt = false;
+  std::string pt_extension = "auto";  // auto | horizontal | vertical
+  bool pt_non_negative = true;        // Prop. 1 (--no-prop1 keeps the EEE combinations)
+  bool pt_reference = false;          // also the full-extension reference's support sizes
 };
 
 int run_command(const RunOptions& o);
 int basis_command(const BasisOptions& o);
 int g1_basis_command(const BasisOptions& o);
+int pt_basis_command(const BasisOptions& o);
 int dimension_command(const DimensionOptions& o);
 int converge_command(const ConvergeOptions& o);
 int adapt_command(const AdaptOptions& o);

@@ -115,6 +115,14 @@ int main(int argc, char** argv) {
                         "extraordinary (the first interior vertex of valence != 4)")
       ->capture_default_str();
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
+  basis_cmd->add_flag("--pt", basis.pt, "PT-splines of the T-mesh file (edge extension + Extended Edge Elimination)");
+  basis_cmd->add_option("--extension", basis.pt_extension,
+                        "--pt: extend the horizontal or vertical l-edges to cross-cuts (auto: fewer extended edges)")
+      ->capture_default_str();
+  basis_cmd->add_flag("!--no-prop1", basis.pt_non_negative,
+                      "--pt: keep the EEE combinations instead of the non-negative basis of Prop. 1");
+  basis_cmd->add_flag("--reference", basis.pt_reference,
+                      "--pt: also build the full-extension reference and report its support sizes (slow)");
 
   knotwork::DimensionOptions dim;
   CLI::App* dim_cmd = app.add_subcommand(
@@ -146,6 +154,7 @@ int main(int argc, char** argv) {
       if (basis.g1_mesh.empty() == basis.case_file.empty())
         throw knotwork::InputError("basis: give one input, a case/T-mesh/collection file or --g1 MESH.obj");
       if (!basis.g1_mesh.empty()) return knotwork::g1_basis_command(basis);
+      if (basis.pt) return knotwork::pt_basis_command(basis);
       return knotwork::basis_command(basis);
     }
   } catch (const knotwork::InputError& e) {

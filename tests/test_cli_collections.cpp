@@ -323,3 +323,39 @@ TEST_CASE("nothing typed into a quad mesh or gluing file crashes knotwork basis 
     return std::pair{std::string("basis --json --g1 fuzz.obj --degree 3 --split-smoothness 1 --gluing fuzz.json"), text};
   });
 }
+
+// A number printed in the JSON object by `key`.
+static double json_number_of(const std::string& out, const std::string& key) {
+  const auto at = out.find("\"" + key + "\": ");
+  REQUIRE(at != std::string::npos);
+  return std::stod(out.substr(at + key.size() + 4));
+}
+
+TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and bad input", "[cli][pt]") {
+  Sandbox box;
+  const Result r = box.run("basis --pt --json --export pt.json " + kSource + "/cases/tmeshes/hierarchical.toml");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  // The hierarchical bicubic mesh: 61 functions (the brute-force count, an independent algorithm).
+  REQUIRE(json_number_of(r.out, "functions") == 61);
+  REQUIRE(json_number_of(r.out, "dimension_bruteforce") == 61);
+  REQUIRE(json_number_of(r.out, "rank") == 61);
+  REQUIRE(json_number_of(r.out, "max_smoothness_residual") <= 1e-11);
+  REQUIRE(json_number_of(r.out, "min_bernstein_coefficient") >= 0);  // Prop. 1
+  REQUIRE(json_number_of(r.out, "extended_edges") > 0);
+  REQUIRE(has(r.out, "\"dimension_formula\": null"));
+  const std::string exported = slurp(box.dir() / "pt.json");
+  REQUIRE(std::count(exported.begin(), exported.end(), 'b') >= 61);  // one "bernstein" per function
+  REQUIRE(has(exported, "\"bernstein\""));
+  // Without Prop. 1 the EEE combinations change sign.
+  const Result raw = box.run("basis --pt --json --no-prop1 " + kSource + "/cases/tmeshes/hierarchical.toml");
+  REQUIRE(json_number_of(raw.out, "min_bernstein_coefficient") < 0);
+  // Bad input: one line naming what is wrong, nothing written.
+  expect_one_line_error(box.run("basis --pt --extension diagonal " + kSource + "/cases/tmeshes/hierarchical.toml"),
+                        {"--extension", "diagonal"});
+  box.file("overlap.toml", "degree = [2, 2]\ncells = [[0, 0, 1, 1], [\"1/2\", 0, 2, 1]]\n");
+  expect_one_line_error(box.run("basis --pt --export never.json overlap.toml"), {"overlap.toml", "overlap"});
+  REQUIRE(!fs::exists(box.dir() / "never.json"));
+  box.file("degree0.toml", "degree = [0, 2]\ncells = [[0, 0, 1, 1]]\n");
+  expect_one_line_error(box.run("basis --pt degree0.toml"), {"degree0.toml", "degree"});
+}

@@ -1,0 +1,690 @@
+#include "basis/pt_spline.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+#include <stdexcept>
+
+#include "basis/sparse_rank.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// Value of the B-spline with local knots t (degree t.size() - 2) at x, not at a knot.
+template <class S>
+S bspline_value(const std::vector<mpq_class>& knots, const S& x) {
+  const int p = static_cast<int>(knots.size()) - 2;
+  std::vector<S> t(knots.size());
+  for (size_t i = 0; i < knots.size(); ++i) {
+    if constexpr (std::is_same_v<S, double>) t[i] = knots[i].get_d();
+    else t[i] = knots[i];
+  }
+  if (x < t.front() || x >= t.back()) return S(0);
+  std::vector<S> N(p + 1, S(0));
+  for (int i = 0; i <= p; ++i)
+    if (t[i] <= x && x < t[i + 1]) N[i] = 1;
+  for (int q = 1; q <= p; ++q)
+    for (int i = 0; i + q <= p; ++i) {
+      S v = 0;
+      if (t[i + q] != t[i]) v += (x - t[i]) / (t[i + q] - t[i]) * N[i];
+      if (t[i + q + 1] != t[i + 1]) v += (t[i + q + 1] - x) / (t[i + q + 1] - t[i + 1]) * N[i + 1];
+      N[i] = v;
+    }
+  return N[0];
+}
+
+// The jump of the p-th derivative (p = degree) of the B-spline with local knots t across the
+// knot value k: the p-th derivative is piecewise constant on the knot intervals.
+mpq_class top_derivative_jump(const std::vector<mpq_class>& t, const mpq_class& k) {
+  const int p = static_cast<int>(t.size()) - 2;
+  std::vector<mpq_class> c(p + 2, mpq_class(0));  // coefficients on degree-q indicator splines
+  c[0] = 1;
+  for (int q = p; q >= 1; --q) {
+    // B-splines of degree q on knots t[i..i+q+1], i = 0..p-q; their derivatives in degree q-1.
+    std::vector<mpq_class> next(p + 2, mpq_class(0));
+    for (int i = 0; i + q <= p; ++i) {
+      if (c[i] == 0) continue;
+      if (t[i + q] != t[i]) next[i] += c[i] * q / (t[i + q] - t[i]);
+      if (t[i + q + 1] != t[i + 1]) next[i + 1] -= c[i] * q / (t[i + q + 1] - t[i + 1]);
+    }
+    c = std::move(next);
+  }
+  // c[i]: value of the p-th derivative on [t_i, t_{i+1}).
+  mpq_class below = 0, above = 0;
+  for (int i = 0; i <= p; ++i) {
+    if (t[i + 1] == k && t[i] < k) below = c[i];
+    if (t[i] == k && k < t[i + 1]) above = c[i];
+  }
+  return above - below;
+}
+
+std::vector<mpq_class> open_knots(const std::vector<mpq_class>& interior, const mpq_class& a, const mpq_class& b, int p) {
+  std::vector<mpq_class> t(p + 1, a);
+  t.insert(t.end(), interior.begin(), interior.end());
+  t.insert(t.end(), p + 1, b);
+  return t;
+}
+
+// The partition with x and y exchanged.
+RectangularPartition transposed(const RectangularPartition& mesh) {
+  std::vector<RationalBox> cells;
+  for (const auto& c : mesh.cells()) cells.push_back({c.y0, c.x0, c.y1, c.x1});
+  return RectangularPartition(std::move(cells));
+}
+
+// The full grid of all coordinates, and which cell of T covers each grid cell.
+struct Grid {
+  std::vector<mpq_class> X, Y;
+  std::vector<int> owner;  // ix + (X.size() - 1) * iy
+  int nx() const { return static_cast<int>(X.size()) - 1; }
+  int ny() const { return static_cast<int>(Y.size()) - 1; }
+  int at(int ix, int iy) const { return owner[ix + nx() * iy]; }
+  int index_x(const mpq_class& v) const { return static_cast<int>(std::lower_bound(X.begin(), X.end(), v) - X.begin()); }
+  int index_y(const mpq_class& v) const { return static_cast<int>(std::lower_bound(Y.begin(), Y.end(), v) - Y.begin()); }
+};
+
+Grid make_grid(const RectangularPartition& mesh) {
+  std::set<mpq_class> xs, ys;
+  for (const auto& c : mesh.cells()) {
+    xs.insert(c.x0), xs.insert(c.x1);
+    ys.insert(c.y0), ys.insert(c.y1);
+  }
+  Grid g;
+  g.X.assign(xs.begin(), xs.end());
+  g.Y.assign(ys.begin(), ys.end());
+  g.owner.assign(static_cast<size_t>(g.nx()) * g.ny(), -1);
+  for (int k = 0; k < mesh.num_cells(); ++k) {
+    const auto& c = mesh.cells()[k];
+    for (int iy = g.index_y(c.y0); iy < g.index_y(c.y1); ++iy)
+      for (int ix = g.index_x(c.x0); ix < g.index_x(c.x1); ++ix) g.owner[ix + g.nx() * iy] = k;
+  }
+  return g;
+}
+
+// Pairs (cell, grid line strictly inside it) for horizontal lines.
+long horizontal_extended_edges(const RectangularPartition& mesh, const Grid& g) {
+  long count = 0;
+  for (const auto& c : mesh.cells()) count += g.index_y(c.y1) - g.index_y(c.y0) - 1;
+  return count;
+}
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int a) { return parent[a] == a ? a : parent[a] = find(parent[a]); }
+  void join(int a, int b) { parent[find(a)] = find(b); }
+};
+
+// The construction with horizontal lines extended, on `mesh` as given.
+PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, const std::vector<mpq_class>& c0_vertical,
+                               const std::vector<mpq_class>& c0_horizontal) {
+  const Grid g = make_grid(mesh);
+  PtSplineBasis B;
+  B.m = m, B.n = n, B.horizontal = true;
+  const std::set<mpq_class> c0x(c0_vertical.begin(), c0_vertical.end()), c0y(c0_horizontal.begin(), c0_horizontal.end());
+  // Global y knots: every y-coordinate, simple, or of multiplicity n on a C0 line.
+  std::vector<mpq_class> interior_y;
+  for (int k = 1; k < g.ny(); ++k) interior_y.insert(interior_y.end(), c0y.count(g.Y[k]) ? n : 1, g.Y[k]);
+  const std::vector<mpq_class> KY = open_knots(interior_y, g.Y.front(), g.Y.back(), n);
+  const int ny = static_cast<int>(KY.size()) - n - 1;
+  std::vector<std::vector<int>> columns_of_row_spline(ny);  // spline indices per j
+  for (int j = 0; j < ny; ++j) {
+    const std::vector<mpq_class> ky(KY.begin() + j, KY.begin() + j + n + 2);
+    const int s0 = g.index_y(ky.front()), s1 = g.index_y(ky.back());
+    // Vertical lines of T across every strip of supp N_j.
+    std::vector<mpq_class> interior_x;
+    for (int ix = 1; ix < g.nx(); ++ix) {
+      bool across = true;
+      for (int s = s0; s < s1 && across; ++s) across = g.at(ix - 1, s) != g.at(ix, s);
+      if (across) interior_x.insert(interior_x.end(), c0x.count(g.X[ix]) ? m : 1, g.X[ix]);
+    }
+    const std::vector<mpq_class> KX = open_knots(interior_x, g.X.front(), g.X.back(), m);
+    for (size_t i = 0; i + m + 1 < KX.size(); ++i) {
+      columns_of_row_spline[j].push_back(static_cast<int>(B.splines.size()));
+      B.splines.push_back({std::vector<mpq_class>(KX.begin() + i, KX.begin() + i + m + 2), ky});
+    }
+  }
+  const int columns = static_cast<int>(B.splines.size());
+
+  // EEE rows: for each cell of T and each grid line y = Y_k strictly inside it, the jump of
+  // d^n/dy^n across Y_k, a polynomial of degree m in x on [x0, x1] (no knot of any M_{j,i}
+  // lies inside a cell its support meets), vanishes at m + 1 points.
+  std::vector<std::vector<std::pair<int, mpq_class>>> rows;
+  for (const auto& c : mesh.cells()) {
+    for (int k = g.index_y(c.y0) + 1; k < g.index_y(c.y1); ++k) {
+      ++B.extended_edges;
+      const mpq_class& yk = g.Y[k];
+      std::vector<std::pair<int, mpq_class>> jumps;  // (j, jump of N_j^(n) at yk)
+      for (int j = 0; j < ny; ++j) {
+        if (KY[j] > yk || KY[j + n + 1] < yk) continue;  // an end knot jumps too
+        const std::vector<mpq_class> ky(KY.begin() + j, KY.begin() + j + n + 2);
+        mpq_class jump = top_derivative_jump(ky, yk);
+        if (jump != 0) jumps.emplace_back(j, std::move(jump));
+      }
+      for (int q = 0; q <= m; ++q) {
+        const mpq_class xq = c.x0 + (c.x1 - c.x0) * (q + 1) / (m + 2);
+        std::vector<std::pair<int, mpq_class>> row;
+        for (const auto& [j, jump] : jumps)
+          for (int col : columns_of_row_spline[j]) {
+            const auto& kx = B.splines[col].x;
+            if (kx.front() >= xq || kx.back() <= xq) continue;
+            mpq_class v = jump * bspline_value<mpq_class>(kx, xq);
+            if (v != 0) row.emplace_back(col, std::move(v));
+          }
+        if (!row.empty()) rows.push_back(std::move(row));
+      }
+    }
+  }
+  B.equations = static_cast<long>(rows.size());
+
+  // Independent blocks: B-splines linked by a common equation.
+  UnionFind uf(columns);
+  std::vector<bool> touched(columns, false);
+  for (const auto& r : rows)
+    for (const auto& [col, v] : r) {
+      touched[col] = true;
+      uf.join(col, r.front().first);
+    }
+  std::map<int, std::vector<int>> block_columns, block_rows;
+  for (int col = 0; col < columns; ++col)
+    if (touched[col]) block_columns[uf.find(col)].push_back(col);
+  for (size_t r = 0; r < rows.size(); ++r) block_rows[uf.find(rows[r].front().first)].push_back(static_cast<int>(r));
+  for (int col = 0; col < columns; ++col)
+    if (!touched[col]) {
+      B.functions.push_back({{col, mpq_class(1)}});
+      ++B.untouched;
+    }
+  for (const auto& [root, cols] : block_columns) {
+    ++B.blocks;
+    B.largest_block = std::max(B.largest_block, static_cast<int>(cols.size()));
+    std::map<int, int> local;
+    for (size_t a = 0; a < cols.size(); ++a) local[cols[a]] = static_cast<int>(a);
+    std::vector<std::vector<mpq_class>> dense;
+    for (int r : block_rows[root]) {
+      std::vector<mpq_class> row(cols.size(), mpq_class(0));
+      for (const auto& [col, v] : rows[r]) row[local[col]] = v;
+      dense.push_back(std::move(row));
+    }
+    long rank = 0;
+    for (auto& v : null_space_exact(std::move(dense), static_cast<int>(cols.size()), &rank)) {
+      std::vector<std::pair<int, mpq_class>> f;
+      for (size_t a = 0; a < cols.size(); ++a)
+        if (v[a] != 0) f.emplace_back(cols[a], v[a]);
+      B.functions.push_back(std::move(f));
+    }
+    B.rank += rank;
+  }
+  return B;
+}
+
+void check_c0_lines(const RectangularPartition& mesh, const PtC0Lines& c0) {
+  const Grid g = make_grid(mesh);
+  for (int dir = 0; dir < 2; ++dir)
+    for (const auto& v : dir == 0 ? c0.vertical : c0.horizontal) {
+      const auto& lines = dir == 0 ? g.X : g.Y;
+      const int i = dir == 0 ? g.index_x(v) : g.index_y(v);
+      bool cross_cut = i > 0 && i + 1 < static_cast<int>(lines.size()) && lines[i] == v;
+      const int strips = dir == 0 ? g.ny() : g.nx();
+      for (int s = 0; s < strips && cross_cut; ++s)
+        cross_cut = dir == 0 ? g.at(i - 1, s) != g.at(i, s) : g.at(s, i - 1) != g.at(s, i);
+      if (!cross_cut)
+        throw std::invalid_argument(std::string("C0 line ") + (dir == 0 ? "x = " : "y = ") + v.get_str() +
+                                    " is not a cross-cut of the T-mesh (an interior line from boundary to boundary)");
+    }
+}
+
+template <class S>
+S magnitude(const S& v) {
+  return v < 0 ? S(-v) : v;
+}
+
+template <class S>
+S to_scalar(const mpq_class& v) {
+  if constexpr (std::is_same_v<S, double>) return v.get_d();
+  else return v;
+}
+
+// Inverse of the Bernstein collocation matrix of degree p at points s_q (q = 0..p).
+template <class S>
+std::vector<std::vector<S>> inverse_bernstein_collocation(int p, const std::vector<S>& s) {
+  std::vector<std::vector<S>> A(p + 1, std::vector<S>(2 * (p + 1), S(0)));
+  std::vector<S> binom(p + 1, S(1));
+  for (int a = 1; a <= p; ++a) binom[a] = binom[a - 1] * (p - a + 1) / a;
+  for (int q = 0; q <= p; ++q) {
+    for (int a = 0; a <= p; ++a) {
+      S v = binom[a];
+      for (int e = 0; e < a; ++e) v *= s[q];
+      for (int e = 0; e < p - a; ++e) v *= (1 - s[q]);
+      A[q][a] = v;
+    }
+    A[q][p + 1 + q] = 1;
+  }
+  for (int col = 0; col <= p; ++col) {  // Gauss-Jordan with partial pivoting
+    int piv = col;
+    for (int r = col + 1; r <= p; ++r)
+      if (magnitude(A[r][col]) > magnitude(A[piv][col])) piv = r;
+    std::swap(A[col], A[piv]);
+    const S d = A[col][col];
+    for (auto& v : A[col]) v /= d;
+    for (int r = 0; r <= p; ++r) {
+      if (r == col || A[r][col] == 0) continue;
+      const S f = A[r][col];
+      for (int k = 0; k < 2 * (p + 1); ++k) A[r][k] -= f * A[col][k];
+    }
+  }
+  std::vector<std::vector<S>> inv(p + 1, std::vector<S>(p + 1));
+  for (int a = 0; a <= p; ++a)
+    for (int q = 0; q <= p; ++q) inv[a][q] = A[a][p + 1 + q];
+  return inv;
+}
+
+template <class S>
+std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const PtSplineBasis& B,
+                                                                           const RectangularPartition& mesh) {
+  const Grid g = make_grid(mesh);
+  const int m = B.m, n = B.n;
+  // Per cell: the largest grid interval inside it in each direction (every B-spline is a
+  // polynomial on each grid cell), the sample points there and the inverse collocations.
+  struct CellSampling {
+    std::vector<S> px, py;
+    std::vector<std::vector<S>> inv_x, inv_y;
+  };
+  std::vector<CellSampling> sampling(mesh.num_cells());
+  for (int k = 0; k < mesh.num_cells(); ++k) {
+    const auto& c = mesh.cells()[k];
+    auto largest = [](const std::vector<mpq_class>& L, int i0, int i1) {
+      int best = i0;
+      for (int i = i0; i < i1; ++i)
+        if (L[i + 1] - L[i] > L[best + 1] - L[best]) best = i;
+      return best;
+    };
+    const int bx = largest(g.X, g.index_x(c.x0), g.index_x(c.x1)), by = largest(g.Y, g.index_y(c.y0), g.index_y(c.y1));
+    CellSampling& cs = sampling[k];
+    std::vector<S> sx, sy;
+    for (int q = 0; q <= m; ++q) {
+      const mpq_class x = g.X[bx] + (g.X[bx + 1] - g.X[bx]) * (q + 1) / (m + 2);
+      cs.px.push_back(to_scalar<S>(x));
+      sx.push_back(to_scalar<S>(mpq_class((x - c.x0) / (c.x1 - c.x0))));
+    }
+    for (int q = 0; q <= n; ++q) {
+      const mpq_class y = g.Y[by] + (g.Y[by + 1] - g.Y[by]) * (q + 1) / (n + 2);
+      cs.py.push_back(to_scalar<S>(y));
+      sy.push_back(to_scalar<S>(mpq_class((y - c.y0) / (c.y1 - c.y0))));
+    }
+    cs.inv_x = inverse_bernstein_collocation<S>(m, sx);
+    cs.inv_y = inverse_bernstein_collocation<S>(n, sy);
+  }
+  std::vector<std::vector<std::pair<int, std::vector<S>>>> out(B.functions.size());
+  for (size_t f = 0; f < B.functions.size(); ++f) {
+    std::set<int> cells;
+    for (const auto& [s, coef] : B.functions[f]) {
+      const auto& sp = B.splines[s];
+      for (int iy = g.index_y(sp.y.front()); iy < g.index_y(sp.y.back()); ++iy)
+        for (int ix = g.index_x(sp.x.front()); ix < g.index_x(sp.x.back()); ++ix) cells.insert(g.at(ix, iy));
+    }
+    for (int k : cells) {
+      const CellSampling& cs = sampling[k];
+      // Values at the tensor sample points.
+      std::vector<S> V((m + 1) * (n + 1), S(0));
+      for (const auto& [s, coef] : B.functions[f]) {
+        const auto& sp = B.splines[s];
+        std::vector<S> vx(m + 1), vy(n + 1);
+        for (int q = 0; q <= m; ++q) vx[q] = bspline_value<S>(sp.x, cs.px[q]);
+        for (int q = 0; q <= n; ++q) vy[q] = bspline_value<S>(sp.y, cs.py[q]);
+        const S cf = to_scalar<S>(coef);
+        for (int b = 0; b <= n; ++b) {
+          if (vy[b] == 0) continue;
+          for (int a = 0; a <= m; ++a)
+            if (vx[a] != 0) V[a + (m + 1) * b] += cf * vx[a] * vy[b];
+        }
+      }
+      // Bernstein coefficients C = inv_x V inv_y^T.
+      std::vector<S> T((m + 1) * (n + 1), S(0)), C((m + 1) * (n + 1), S(0));
+      for (int b = 0; b <= n; ++b)
+        for (int a = 0; a <= m; ++a)
+          for (int q = 0; q <= m; ++q) T[a + (m + 1) * b] += cs.inv_x[a][q] * V[q + (m + 1) * b];
+      bool nonzero = false;
+      S scale = 0;
+      for (int b = 0; b <= n; ++b)
+        for (int a = 0; a <= m; ++a) {
+          for (int q = 0; q <= n; ++q) C[a + (m + 1) * b] += cs.inv_y[b][q] * T[a + (m + 1) * q];
+          if (magnitude(C[a + (m + 1) * b]) > scale) scale = magnitude(C[a + (m + 1) * b]);
+        }
+      if constexpr (std::is_same_v<S, double>) {
+        // Cancellation leaves rounding noise where the function vanishes on the cell.
+        double fscale = 0;
+        for (const auto& [s, coef] : B.functions[f]) fscale += magnitude(coef.get_d());
+        nonzero = scale > 1e-13 * fscale;
+      } else {
+        nonzero = scale != 0;
+      }
+      if (nonzero) out[f].emplace_back(k, std::move(C));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, PtExtension extension,
+                              const PtC0Lines& c0) {
+  if (m < 1 || n < 1) throw std::invalid_argument("PT-splines need degrees m, n >= 1");
+  check_c0_lines(mesh, c0);
+  const RectangularPartition flipped = transposed(mesh);
+  if (extension == PtExtension::kAuto) {
+    const long h = horizontal_extended_edges(mesh, make_grid(mesh));
+    const long v = horizontal_extended_edges(flipped, make_grid(flipped));
+    extension = v < h ? PtExtension::kVertical : PtExtension::kHorizontal;
+  }
+  if (extension == PtExtension::kHorizontal) return build_horizontal(mesh, m, n, c0.vertical, c0.horizontal);
+  PtSplineBasis B = build_horizontal(flipped, n, m, c0.horizontal, c0.vertical);
+  for (auto& s : B.splines) std::swap(s.x, s.y);
+  std::swap(B.m, B.n);
+  B.horizontal = false;
+  return B;
+}
+
+PtCellPolynomialsExact pt_cell_polynomials_exact(const PtSplineBasis& basis, const RectangularPartition& mesh) {
+  return cell_polynomials<mpq_class>(basis, mesh);
+}
+
+PtCellPolynomials pt_cell_polynomials(const PtSplineBasis& basis, const RectangularPartition& mesh) {
+  return cell_polynomials<double>(basis, mesh);
+}
+
+PtCellPolynomials to_double(const PtCellPolynomialsExact& exact) {
+  PtCellPolynomials out(exact.size());
+  for (size_t f = 0; f < exact.size(); ++f)
+    for (const auto& [k, c] : exact[f]) {
+      std::vector<double> d;
+      for (const auto& v : c) d.push_back(v.get_d());
+      out[f].emplace_back(k, std::move(d));
+    }
+  return out;
+}
+
+}  // namespace knotwork
+
+namespace knotwork {
+
+namespace {
+
+using SparseVector = std::map<int, mpq_class>;
+
+void axpy(SparseVector& y, const mpq_class& a, const SparseVector& x) {
+  for (const auto& [k, v] : x) {
+    mpq_class& t = y[k];
+    t += a * v;
+    if (t == 0) y.erase(k);
+  }
+}
+
+std::vector<std::pair<int, mpq_class>> as_function(const SparseVector& v) { return {v.begin(), v.end()}; }
+
+// Echelon elimination that keeps the functions whose `key` vectors are independent (in the
+// order given) and reduces the others to zero key: `on_dependent(i, reduced function)`.
+// Pivots are not changed, so the result is the same space with a triangular change of basis.
+template <class OnDependent>
+void eliminate(const std::vector<SparseVector>& keys, const std::vector<SparseVector>& functions,
+               OnDependent on_dependent) {
+  std::map<int, std::pair<SparseVector, SparseVector>> pivots;  // leading key -> (key, function)
+  for (size_t i = 0; i < keys.size(); ++i) {
+    SparseVector r = keys[i], full = functions[i];
+    if (r.empty()) continue;
+    for (auto it = r.begin(); it != r.end();) {
+      const auto p = pivots.find(it->first);
+      if (p == pivots.end()) {
+        ++it;
+        continue;
+      }
+      const int lead = it->first;
+      const mpq_class factor = -it->second / p->second.first.at(lead);
+      axpy(r, factor, p->second.first);
+      axpy(full, factor, p->second.second);
+      it = r.upper_bound(lead);
+    }
+    if (r.empty()) {
+      on_dependent(i, full);
+    } else {
+      const int lead = r.begin()->first;  // read before r is moved
+      pivots.emplace(lead, std::make_pair(std::move(r), std::move(full)));
+    }
+  }
+}
+
+}  // namespace
+
+void make_boundary_traces_independent(PtSplineBasis& B, const RectangularPartition& mesh) {
+  const Grid g = make_grid(mesh);
+  const mpq_class &x0 = g.X.front(), &x1 = g.X.back(), &y0 = g.Y.front(), &y1 = g.Y.back();
+  // On each side the traces of the B-splines are B-splines of one knot vector, so a trace
+  // coordinate is (side, knots along the side).
+  std::map<std::pair<int, std::vector<mpq_class>>, int> coordinate;
+  std::vector<std::vector<int>> coordinates_of(B.splines.size());
+  auto all_equal = [](const std::vector<mpq_class>& t, size_t from, size_t to, const mpq_class& v) {
+    for (size_t i = from; i < to; ++i)
+      if (t[i] != v) return false;
+    return true;
+  };
+  for (size_t s = 0; s < B.splines.size(); ++s) {
+    const auto& sp = B.splines[s];
+    auto add = [&](int side, const std::vector<mpq_class>& along) {
+      const auto key = std::make_pair(side, along);
+      auto it = coordinate.find(key);
+      if (it == coordinate.end()) it = coordinate.emplace(key, static_cast<int>(coordinate.size())).first;
+      coordinates_of[s].push_back(it->second);
+    };
+    if (all_equal(sp.y, 0, B.n + 1, y0)) add(0, sp.x);
+    if (all_equal(sp.x, 1, B.m + 2, x1)) add(1, sp.y);
+    if (all_equal(sp.y, 1, B.n + 2, y1)) add(2, sp.x);
+    if (all_equal(sp.x, 0, B.m + 1, x0)) add(3, sp.y);
+  }
+  std::vector<SparseVector> keys, functions;
+  for (const auto& f : B.functions) {
+    SparseVector key, full;
+    for (const auto& [s, c] : f) {
+      full[s] = c;
+      for (int id : coordinates_of[s]) axpy(key, c, SparseVector{{id, mpq_class(1)}});
+    }
+    keys.push_back(std::move(key));
+    functions.push_back(std::move(full));
+  }
+  eliminate(keys, functions, [&](size_t i, const SparseVector& reduced) { B.functions[i] = as_function(reduced); });
+}
+
+int make_non_negative(PtSplineBasis& B, const RectangularPartition& mesh) {
+  const Grid g = make_grid(mesh);
+  // Cross-cuts of T: lines from boundary to boundary.
+  std::vector<mpq_class> cx, cy;
+  for (int ix = 1; ix < g.nx(); ++ix) {
+    bool cut = true;
+    for (int s = 0; s < g.ny() && cut; ++s) cut = g.at(ix - 1, s) != g.at(ix, s);
+    if (cut) cx.push_back(g.X[ix]);
+  }
+  for (int iy = 1; iy < g.ny(); ++iy) {
+    bool cut = true;
+    for (int s = 0; s < g.nx() && cut; ++s) cut = g.at(s, iy - 1) != g.at(s, iy);
+    if (cut) cy.push_back(g.Y[iy]);
+  }
+  const auto KX = open_knots(cx, g.X.front(), g.X.back(), B.m), KY = open_knots(cy, g.Y.front(), g.Y.back(), B.n);
+  const int first_cross = static_cast<int>(B.splines.size());
+  std::vector<std::vector<std::pair<int, mpq_class>>> cross;
+  for (size_t j = 0; j + B.n + 1 < KY.size(); ++j)
+    for (size_t i = 0; i + B.m + 1 < KX.size(); ++i) {
+      cross.push_back({{static_cast<int>(B.splines.size()), mpq_class(1)}});
+      B.splines.push_back({std::vector<mpq_class>(KX.begin() + i, KX.begin() + i + B.m + 2),
+                           std::vector<mpq_class>(KY.begin() + j, KY.begin() + j + B.n + 2)});
+    }
+  // Exchange: the cross-cut B-splines first, then the functions independent of what precedes.
+  PtSplineBasis all = B;
+  all.functions = cross;
+  all.functions.insert(all.functions.end(), B.functions.begin(), B.functions.end());
+  const auto poly = pt_cell_polynomials_exact(all, mesh);
+  const int per_cell = (B.m + 1) * (B.n + 1);
+  std::vector<SparseVector> keys, functions;
+  for (size_t f = 0; f < all.functions.size(); ++f) {
+    SparseVector key, full;
+    for (const auto& [k, c] : poly[f])
+      for (int a = 0; a < per_cell; ++a)
+        if (c[a] != 0) key[k * per_cell + a] = c[a];
+    for (const auto& [s, c] : all.functions[f]) full[s] = c;
+    keys.push_back(std::move(key));
+    functions.push_back(std::move(full));
+  }
+  std::vector<bool> dropped(all.functions.size(), false);
+  eliminate(keys, functions, [&](size_t i, const SparseVector&) { dropped[i] = true; });
+  std::vector<std::vector<std::pair<int, mpq_class>>> kept = cross;
+  for (size_t f = cross.size(); f < all.functions.size(); ++f)
+    if (!dropped[f]) kept.push_back(all.functions[f]);
+  if (kept.size() != B.functions.size())
+    throw std::logic_error("make_non_negative: the cross-cut B-splines are not in the span of the basis (" +
+                           std::to_string(cross.size()) + " cross-cut, " + std::to_string(kept.size()) + " kept of " +
+                           std::to_string(all.functions.size()) + ")");
+  // Lift: f + c * (sum of the cross-cut B-splines over the cells where f lives) >= 0.
+  all.functions = kept;
+  const auto kept_poly = pt_cell_polynomials_exact(all, mesh);
+  for (size_t f = cross.size(); f < kept.size(); ++f) {
+    mpq_class lowest = 0;
+    std::set<int> cells;
+    for (const auto& [k, c] : kept_poly[f]) {
+      cells.insert(k);
+      for (const auto& v : c) lowest = std::min(lowest, v);
+    }
+    if (lowest >= 0) continue;
+    SparseVector full;
+    for (const auto& [s, c] : kept[f]) full[s] = c;
+    for (size_t k = 0; k < cross.size(); ++k) {
+      const auto& sp = B.splines[first_cross + static_cast<int>(k)];
+      bool meets = false;
+      for (int cell : cells) {
+        const auto& c = mesh.cells()[cell];
+        meets = meets || (sp.x.front() < c.x1 && c.x0 < sp.x.back() && sp.y.front() < c.y1 && c.y0 < sp.y.back());
+      }
+      if (meets) axpy(full, -lowest, SparseVector{{first_cross + static_cast<int>(k), mpq_class(1)}});
+    }
+    kept[f] = as_function(full);
+  }
+  B.functions = std::move(kept);
+  return static_cast<int>(cross.size());
+}
+
+BezierMesh pt_bezier_mesh(const PtSplineBasis& B, const RectangularPartition& mesh) {
+  const auto poly = pt_cell_polynomials(B, mesh);
+  std::vector<std::vector<std::pair<int, const std::vector<double>*>>> alive(mesh.num_cells());
+  for (size_t f = 0; f < poly.size(); ++f)
+    for (const auto& [k, c] : poly[f]) alive[k].emplace_back(static_cast<int>(f), &c);
+  const Grid g = make_grid(mesh);
+  BezierMesh out;
+  out.set_boundary_names({"bottom", "right", "top", "left"});
+  for (int k = 0; k < mesh.num_cells(); ++k) {
+    const auto& c = mesh.cells()[k];
+    BezierCell cell;
+    cell.u0 = c.x0.get_d(), cell.u1 = c.x1.get_d(), cell.v0 = c.y0.get_d(), cell.v1 = c.y1.get_d();
+    cell.degree_u = B.m, cell.degree_v = B.n;
+    if (c.y0 == g.Y.front()) cell.boundary[kSideBottom] = 0;
+    if (c.x1 == g.X.back()) cell.boundary[kSideRight] = 1;
+    if (c.y1 == g.Y.back()) cell.boundary[kSideTop] = 2;
+    if (c.x0 == g.X.front()) cell.boundary[kSideLeft] = 3;
+    Eigen::MatrixXd E(alive[k].size(), (B.m + 1) * (B.n + 1));
+    std::vector<int> ids;
+    for (size_t r = 0; r < alive[k].size(); ++r) {
+      ids.push_back(alive[k][r].first);
+      for (int a = 0; a < E.cols(); ++a) E(r, a) = (*alive[k][r].second)[a];
+    }
+    out.add_cell(cell, ids, out.add_extraction(std::move(E)));
+  }
+  out.set_num_functions(static_cast<int>(B.functions.size()));
+  return out;
+}
+
+}  // namespace knotwork
+
+namespace knotwork {
+
+mpq_class pt_evaluate(const PtSplineBasis& B, int f, const mpq_class& x, const mpq_class& y) {
+  mpq_class v = 0;
+  for (const auto& [s, c] : B.functions[f]) {
+    const auto& sp = B.splines[s];
+    if (x < sp.x.front() || x >= sp.x.back() || y < sp.y.front() || y >= sp.y.back()) continue;
+    v += c * bspline_value<mpq_class>(sp.x, x) * bspline_value<mpq_class>(sp.y, y);
+  }
+  return v;
+}
+
+namespace {
+
+// d^k/ds^k of the Bernstein polynomial with coefficients b (degree p) at s, on [0, 1].
+double bernstein_derivative(std::vector<double> b, int k, double s) {
+  int p = static_cast<int>(b.size()) - 1;
+  for (int d = 0; d < k; ++d, --p) {
+    for (int i = 0; i < p; ++i) b[i] = p * (b[i + 1] - b[i]);
+    b.pop_back();
+  }
+  if (b.empty()) return 0;
+  for (int level = static_cast<int>(b.size()) - 1; level > 0; --level)
+    for (int i = 0; i < level; ++i) b[i] = (1 - s) * b[i] + s * b[i + 1];
+  return b[0];
+}
+
+}  // namespace
+
+double pt_smoothness_residual(const PtCellPolynomials& polys, const RectangularPartition& mesh, int m, int n) {
+  double worst = 0;
+  const int per_cell = (m + 1) * (n + 1);
+  for (const auto& f : polys) {
+    std::map<int, const std::vector<double>*> on;
+    double scale = 0;
+    for (const auto& [k, c] : f) {
+      on[k] = &c;
+      for (double v : c) scale = std::max(scale, std::abs(v));
+    }
+    if (scale == 0) continue;
+    static const std::vector<double> zero(64, 0.0);
+    auto coeff = [&](int k) -> const std::vector<double>& {
+      const auto it = on.find(k);
+      return it == on.end() ? zero : *it->second;
+    };
+    for (const auto& e : mesh.shared_edges()) {
+      if (!on.count(e.first) && !on.count(e.second)) continue;
+      const auto& A = mesh.cells()[e.first];
+      const auto& C = mesh.cells()[e.second];
+      const int across = e.vertical ? m : n;  // derivatives 0 .. across-1 must match
+      const int points = m + n + 2;
+      for (int q = 0; q < points; ++q) {
+        const mpq_class t = e.from + (e.to - e.from) * (q + 1) / (points + 1);
+        for (int k = 0; k < across; ++k) {
+          double value[2];
+          for (int side = 0; side < 2; ++side) {
+            const int cell = side == 0 ? e.first : e.second;
+            const auto& box = side == 0 ? A : C;
+            const auto& b = coeff(cell);
+            // Restrict the cell polynomial to the line: a univariate Bernstein polynomial
+            // along the normal direction at the tangential parameter.
+            const double h = e.vertical ? mpq_class(box.x1 - box.x0).get_d() : mpq_class(box.y1 - box.y0).get_d();
+            const double tangential = e.vertical ? mpq_class((t - box.y0) / (box.y1 - box.y0)).get_d()
+                                                 : mpq_class((t - box.x0) / (box.x1 - box.x0)).get_d();
+            const int pn = e.vertical ? m : n, pt = e.vertical ? n : m;
+            std::vector<double> normal(pn + 1);
+            for (int i = 0; i <= pn; ++i) {
+              std::vector<double> line(pt + 1);
+              for (int j = 0; j <= pt; ++j) line[j] = e.vertical ? b[i + (m + 1) * j] : b[j + (m + 1) * i];
+              normal[i] = bernstein_derivative(line, 0, tangential);
+            }
+            value[side] = bernstein_derivative(normal, k, side == 0 ? 1.0 : 0.0) / std::pow(h, k);
+          }
+          // Relative to the scale of a k-th derivative on the smaller of the two cells.
+          const double h = std::min(e.vertical ? mpq_class(A.x1 - A.x0).get_d() : mpq_class(A.y1 - A.y0).get_d(),
+                                    e.vertical ? mpq_class(C.x1 - C.x0).get_d() : mpq_class(C.y1 - C.y0).get_d());
+          worst = std::max(worst, std::abs(value[0] - value[1]) * std::pow(h, k) / scale);
+        }
+      }
+    }
+    (void)per_cell;
+  }
+  return worst;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,93 @@
+#pragma once
+#include <gmpxx.h>
+
+#include <utility>
+#include <vector>
+
+#include "basis/bezier_mesh.hpp"
+#include "basis/rectangular_partition.hpp"
+
+namespace knotwork {
+
+// PT-splines over an arbitrary T-mesh T (Sec. 3 of the PT-spline paper), highest smoothness
+// S(m, n, m-1, n-1, T), by edge extension and Extended Edge Elimination (EEE):
+//
+// 1. Extension T^e: every horizontal T l-edge and ray is extended to a cross-cut (or every
+//    vertical one: the direction with fewer extended edges). This is the extension of the
+//    proof of Lemma 2. Over T^e every horizontal line is global, so each f in S(T^e) is
+//    f = sum_j g_j(x) N_j(y) with N_j the B-splines on all y-coordinates, and g_j a spline
+//    on the x-coordinates of the vertical lines of T that cross all of supp N_j. The basis
+//    of S(T^e) is therefore the local tensor-product B-splines M_{j,i}(x) N_j(y).
+// 2. EEE: f lies in S(T) iff across every extended edge (a global line y = Y_k inside a cell
+//    of T) the jump of d^n f / dy^n vanishes. These equations couple only the B-splines
+//    whose supports meet the edge; they are split into independent blocks (connected
+//    components) and each block's null space is computed exactly over Q.
+// 3. The basis of S(T): the B-splines that meet no extended edge, untouched, and one
+//    combination per null vector of each block (Theorem 3).
+//
+// Optional C0 lines (cross-cuts of T across which only continuity is asked, e.g. the fold of
+// a C0 geometry map) are knots of multiplicity m (vertical) or n (horizontal); they are
+// never extended edges.
+enum class PtExtension { kAuto, kHorizontal, kVertical };
+
+struct PtLocalBSpline {
+  std::vector<mpq_class> x, y;  // m + 2 and n + 2 local knots
+};
+
+struct PtSplineBasis {
+  int m = 0, n = 0;
+  bool horizontal = true;              // horizontal l-edges were extended to cross-cuts
+  // The local B-splines the functions combine: the basis of S(T^e), followed by the
+  // cross-cut B-splines once make_non_negative has run.
+  std::vector<PtLocalBSpline> splines;
+  // The basis of S(T): each function a combination (spline index, coefficient).
+  std::vector<std::vector<std::pair<int, mpq_class>>> functions;
+  long extended_edges = 0;  // pairs (cell of T, extended line through its interior)
+  long equations = 0, rank = 0;
+  int blocks = 0, largest_block = 0;  // EEE blocks; the largest one's number of B-splines
+  int untouched = 0;                  // B-splines of T^e kept as they are
+};
+
+struct PtC0Lines {
+  std::vector<mpq_class> vertical, horizontal;  // x = value / y = value, cross-cuts of T
+};
+
+// Throws std::invalid_argument for m or n < 1, or a C0 line that is not a cross-cut of T.
+PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n,
+                              PtExtension extension = PtExtension::kAuto, const PtC0Lines& c0 = {});
+
+// Each function on each cell of T where it is not zero: (cell, Bernstein coefficients on the
+// cell, index a + (m+1) b with a along x). Exact, and in double precision (computed from
+// values on the largest piece of the cell where the B-splines are polynomials).
+using PtCellPolynomialsExact = std::vector<std::vector<std::pair<int, std::vector<mpq_class>>>>;
+using PtCellPolynomials = std::vector<std::vector<std::pair<int, std::vector<double>>>>;
+PtCellPolynomialsExact pt_cell_polynomials_exact(const PtSplineBasis& basis, const RectangularPartition& mesh);
+PtCellPolynomials pt_cell_polynomials(const PtSplineBasis& basis, const RectangularPartition& mesh);
+// The exact coefficients rounded once (no rounding error from the sampling).
+PtCellPolynomials to_double(const PtCellPolynomialsExact& exact);
+
+// Value of function f at (x, y), exactly (the combination of its local B-splines).
+mpq_class pt_evaluate(const PtSplineBasis& basis, int f, const mpq_class& x, const mpq_class& y);
+
+// Largest jump, over every shared edge of T and every function, of the derivatives that
+// S(T) keeps continuous (d^k/dx^k, k < m, across vertical edges; d^k/dy^k, k < n, across
+// horizontal ones), sampled at m + n + 2 points per edge from the per-cell polynomials and
+// relative to the function's largest Bernstein coefficient (times h^-k of the edge's cells).
+double pt_smoothness_residual(const PtCellPolynomials& polynomials, const RectangularPartition& mesh, int m, int n);
+
+// Changes the basis (by adding to some functions combinations of others) so that the functions
+// that do not vanish on the boundary of the rectangle have linearly independent traces there
+// (the BezierMesh contract for Dirichlet data); the others vanish on the whole boundary.
+void make_boundary_traces_independent(PtSplineBasis& basis, const RectangularPartition& mesh);
+
+// Prop. 1: the tensor-product B-splines of the cross-cuts of T (non-negative, a partition of
+// unity) replace as many basis functions as they are, and every other function gets
+// c times the sum of the cross-cut B-splines over its support, with c = minus its smallest
+// Bernstein coefficient, when that is negative: a basis of non-negative functions (their
+// Bernstein coefficients are all >= 0). Returns the number of cross-cut B-splines.
+int make_non_negative(PtSplineBasis& basis, const RectangularPartition& mesh);
+
+// The BezierMesh of the basis on the cells of T (boundary ids bottom 0, right 1, top 2, left 3).
+BezierMesh pt_bezier_mesh(const PtSplineBasis& basis, const RectangularPartition& mesh);
+
+}  // namespace knotwork
