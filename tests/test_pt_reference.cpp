@@ -10,55 +10,19 @@
 #include "basis/pt_reference.hpp"
 #include "basis/spline_dimension.hpp"
 #include "cases/case_file.hpp"
+#include "tmesh_testing.hpp"
 
 using namespace knotwork;
+using knotwork::testing::q;
+using knotwork::testing::random_halvings;
 
 namespace {
 
-mpq_class q(long a, long b = 1) {
-  mpq_class r(a, b);
-  r.canonicalize();
-  return r;
-}
-
-// Random hierarchical-style T-meshes: random cells of [0, 1]^2 split in halves, in x or y.
-std::vector<RationalBox> random_halvings(std::mt19937& rng, int splits) {
-  std::vector<RationalBox> cells{{0, 0, 1, 1}};
-  for (int s = 0; s < splits; ++s) {
-    const size_t i = std::uniform_int_distribution<size_t>(0, cells.size() - 1)(rng);
-    RationalBox a = cells[i], b = a;
-    if (rng() % 2) {
-      a.x1 = b.x0 = (a.x0 + a.x1) / 2;
-    } else {
-      a.y1 = b.y0 = (a.y0 + a.y1) / 2;
-    }
-    cells[i] = a;
-    cells.push_back(b);
-  }
-  return cells;
-}
-
-// Largest |finite difference| of order m + 1 along x (and n + 1 along y) of every function
-// on equispaced points inside every cell: zero exactly when it is one polynomial there.
+// Every function of the basis, one polynomial per cell (exact finite differences).
 bool polynomial_per_cell(const RectangularPartition& mesh, const TensorCombinationBasis& B) {
   for (int f = 0; f < static_cast<int>(B.functions.size()); ++f)
-    for (const auto& c : mesh.cells())
-      for (int dir = 0; dir < 2; ++dir) {
-        const int order = dir == 0 ? B.m + 1 : B.n + 1;
-        const int other = dir == 0 ? B.n + 1 : B.m + 1;
-        for (int line = 0; line <= other; ++line) {
-          std::vector<mpq_class> v;
-          for (int i = 0; i <= order; ++i) {
-            const mpq_class s = mpq_class(i + 1, order + 2), t = mpq_class(line + 1, other + 2);
-            const mpq_class x = c.x0 + (dir == 0 ? s : t) * (c.x1 - c.x0);
-            const mpq_class y = c.y0 + (dir == 0 ? t : s) * (c.y1 - c.y0);
-            v.push_back(evaluate(B, f, x, y));
-          }
-          for (int k = 0; k < order; ++k)
-            for (int i = 0; i + 1 < static_cast<int>(v.size()) - k; ++i) v[i] = v[i + 1] - v[i];
-          if (v[0] != 0) return false;
-        }
-      }
+    if (!testing::polynomial_per_cell(mesh, B.m, B.n, [&](const mpq_class& x, const mpq_class& y) { return evaluate(B, f, x, y); }))
+      return false;
   return true;
 }
 

@@ -13,23 +13,12 @@
 #include "basis/sparse_rank.hpp"
 #include "basis/spline_dimension.hpp"
 #include "cases/case_file.hpp"
+#include "tmesh_testing.hpp"
 
 using namespace knotwork;
+using knotwork::testing::random_halvings;
 
 namespace {
-
-std::vector<RationalBox> random_halvings(std::mt19937& rng, int splits) {
-  std::vector<RationalBox> cells{{0, 0, 1, 1}};
-  for (int s = 0; s < splits; ++s) {
-    const size_t i = std::uniform_int_distribution<size_t>(0, cells.size() - 1)(rng);
-    RationalBox a = cells[i], b = a;
-    if (rng() % 2) a.x1 = b.x0 = (a.x0 + a.x1) / 2;
-    else a.y1 = b.y0 = (a.y0 + a.y1) / 2;
-    cells[i] = a;
-    cells.push_back(b);
-  }
-  return cells;
-}
 
 // A T-cycle: four T l-edges around the middle cell, each ending on the next (pinwheel),
 // inside a 3 x 3 frame with non-uniform rational coordinates, each arm cell halved once.
@@ -58,29 +47,8 @@ long exact_rank(const PtCellPolynomialsExact& P, const RectangularPartition& mes
   return rank_exact(rows, static_cast<long>(mesh.num_cells()) * per_cell);
 }
 
-// Exact finite differences of order m+1 in x and n+1 in y of the function's values inside
-// every cell: all zero iff it is one polynomial of bidegree (m, n) on each cell.
 bool polynomial_per_cell(const PtSplineBasis& B, int f, const RectangularPartition& mesh) {
-  for (const auto& c : mesh.cells())
-    for (int dir = 0; dir < 2; ++dir) {
-      const int order = dir == 0 ? B.m + 1 : B.n + 1, other = dir == 0 ? B.n + 1 : B.m + 1;
-      for (int line = 0; line <= other; ++line) {
-        // 3 (order + 1) points: every window of order + 1 of them must have a zero difference,
-        // so that a break anywhere but very near the cell's ends is seen.
-        const int K = 3 * (order + 1);
-        std::vector<mpq_class> v;
-        for (int i = 0; i < K; ++i) {
-          const mpq_class s(i + 1, K + 1), t(line + 1, other + 2);
-          const mpq_class x = c.x0 + (dir == 0 ? s : t) * (c.x1 - c.x0), y = c.y0 + (dir == 0 ? t : s) * (c.y1 - c.y0);
-          v.push_back(pt_evaluate(B, f, x, y));
-        }
-        for (int k = 0; k < order; ++k)
-          for (int i = 0; i + 1 < static_cast<int>(v.size()) - k; ++i) v[i] = v[i + 1] - v[i];
-        for (int i = 0; i < K - order; ++i)
-          if (v[i] != 0) return false;
-      }
-    }
-  return true;
+  return testing::polynomial_per_cell(mesh, B.m, B.n, [&](const mpq_class& x, const mpq_class& y) { return pt_evaluate(B, f, x, y); });
 }
 
 void check_basis(const RectangularPartition& mesh, int m, int n, PtExtension ext) {

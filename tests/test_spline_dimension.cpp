@@ -5,16 +5,12 @@
 
 #include "basis/rectangular_partition.hpp"
 #include "basis/spline_dimension.hpp"
+#include "tmesh_testing.hpp"
 
 using namespace knotwork;
+using knotwork::testing::q;
 
 namespace {
-
-mpq_class q(long a, long b = 1) {
-  mpq_class r(a, b);
-  r.canonicalize();
-  return r;
-}
 
 // A tensor grid on the given (strictly increasing) breakpoints.
 RectangularPartition grid(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& ys) {

@@ -1,0 +1,60 @@
+// T-mesh helpers shared by the tests of the spline constructions over T-meshes.
+#pragma once
+#include <gmpxx.h>
+
+#include <functional>
+#include <random>
+#include <vector>
+
+#include "basis/rectangular_partition.hpp"
+
+namespace knotwork::testing {
+
+// The rational a/b in canonical form (mpq_class(a, b) alone is not canonicalized).
+inline mpq_class q(long a, long b = 1) {
+  mpq_class r(a, b);
+  r.canonicalize();
+  return r;
+}
+
+// Random hierarchical-style T-meshes: random cells of [0, 1]^2 split in halves, in x or y.
+inline std::vector<RationalBox> random_halvings(std::mt19937& rng, int splits) {
+  std::vector<RationalBox> cells{{0, 0, 1, 1}};
+  for (int s = 0; s < splits; ++s) {
+    const size_t i = std::uniform_int_distribution<size_t>(0, cells.size() - 1)(rng);
+    RationalBox a = cells[i], b = a;
+    if (rng() % 2) a.x1 = b.x0 = (a.x0 + a.x1) / 2;
+    else a.y1 = b.y0 = (a.y0 + a.y1) / 2;
+    cells[i] = a;
+    cells.push_back(b);
+  }
+  return cells;
+}
+
+// Whether the function `value(x, y)` (exact) is one polynomial of bidegree (m, n) on every
+// cell: on lines across each cell, 3 (order + 1) equispaced values must have zero
+// differences of order m + 1 in x (n + 1 in y) in every window, so that a break anywhere but
+// very near a cell's ends is seen.
+inline bool polynomial_per_cell(const RectangularPartition& mesh, int m, int n,
+                                const std::function<mpq_class(const mpq_class&, const mpq_class&)>& value) {
+  for (const auto& c : mesh.cells())
+    for (int dir = 0; dir < 2; ++dir) {
+      const int order = dir == 0 ? m + 1 : n + 1, other = dir == 0 ? n + 1 : m + 1;
+      const int K = 3 * (order + 1);
+      for (int line = 0; line <= other; ++line) {
+        std::vector<mpq_class> v;
+        for (int i = 0; i < K; ++i) {
+          const mpq_class s(i + 1, K + 1), t(line + 1, other + 2);
+          const mpq_class x = c.x0 + (dir == 0 ? s : t) * (c.x1 - c.x0), y = c.y0 + (dir == 0 ? t : s) * (c.y1 - c.y0);
+          v.push_back(value(x, y));
+        }
+        for (int k = 0; k < order; ++k)
+          for (int i = 0; i + 1 < K - k; ++i) v[i] = v[i + 1] - v[i];
+        for (int i = 0; i < K - order; ++i)
+          if (v[i] != 0) return false;
+      }
+    }
+  return true;
+}
+
+}  // namespace knotwork::testing
