@@ -176,10 +176,7 @@ int basis_of_case(const BasisOptions& o) {
 
 int basis_of_partition(const BasisOptions& o) {
   const PartitionDescription p = load_partition(o.case_file);
-  if (p.alpha != p.m - 1 || p.beta != p.n - 1)
-    throw InputError(o.case_file + ": smoothness: knot-segment collections are C^(d-1) (smoothness = [" +
-                     std::to_string(p.m - 1) + ", " + std::to_string(p.n - 1) +
-                     "]); `knotwork dimension` counts other smoothness");
+  require_highest_smoothness(p, o.case_file, "knot-segment collections are C^(d-1)");
   const RectangularPartition partition(p.cells);
   CollectionOnPartition built;
   try {

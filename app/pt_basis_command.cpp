@@ -15,6 +15,7 @@
 #include "basis/sparse_rank.hpp"
 #include "basis/spline_dimension.hpp"
 #include "cases/case_file.hpp"
+#include "quadrature/bernstein.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -50,27 +51,22 @@ std::vector<int> reference_support(const RectangularPartition& mesh, const Tenso
   return out;
 }
 
+// Value of the tensor Bernstein polynomial with coefficients b (index a + (m+1) c) at (s, t).
 double bernstein_value(const std::vector<double>& b, int m, int n, double s, double t) {
-  std::vector<double> row(n + 1);
-  for (int j = 0; j <= n; ++j) {
-    std::vector<double> c(b.begin() + (m + 1) * j, b.begin() + (m + 1) * (j + 1));
-    for (int level = m; level > 0; --level)
-      for (int i = 0; i < level; ++i) c[i] = (1 - s) * c[i] + s * c[i + 1];
-    row[j] = c[0];
-  }
-  for (int level = n; level > 0; --level)
-    for (int i = 0; i < level; ++i) row[i] = (1 - t) * row[i] + t * row[i + 1];
-  return row[0];
+  std::vector<double> bx(m + 1), by(n + 1), dx(m + 1), dy(n + 1);
+  bernstein_values_and_derivatives(m, s, bx.data(), dx.data());
+  bernstein_values_and_derivatives(n, t, by.data(), dy.data());
+  double v = 0;
+  for (int c = 0; c <= n; ++c)
+    for (int a = 0; a <= m; ++a) v += b[a + (m + 1) * c] * bx[a] * by[c];
+  return v;
 }
 
 }  // namespace
 
 int pt_basis_command(const BasisOptions& o) {
   const PartitionDescription p = load_partition(o.case_file);
-  if (p.alpha != p.m - 1 || p.beta != p.n - 1)
-    throw InputError(o.case_file + ": smoothness: PT-splines span S(m, n, m-1, n-1) (smoothness = [" +
-                     std::to_string(p.m - 1) + ", " + std::to_string(p.n - 1) +
-                     "]); `knotwork dimension` counts other smoothness");
+  require_highest_smoothness(p, o.case_file, "PT-splines span S(m, n, m-1, n-1)");
   PtExtension extension = PtExtension::kAuto;
   if (o.pt_extension == "horizontal") extension = PtExtension::kHorizontal;
   else if (o.pt_extension == "vertical") extension = PtExtension::kVertical;

@@ -119,15 +119,12 @@ struct UnionFind {
 };
 
 // The construction with horizontal lines extended, on `mesh` as given.
-PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, const std::vector<mpq_class>& c0_vertical,
-                               const std::vector<mpq_class>& c0_horizontal) {
+PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n) {
   const Grid g = make_grid(mesh);
   PtSplineBasis B;
   B.m = m, B.n = n, B.horizontal = true;
-  const std::set<mpq_class> c0x(c0_vertical.begin(), c0_vertical.end()), c0y(c0_horizontal.begin(), c0_horizontal.end());
-  // Global y knots: every y-coordinate, simple, or of multiplicity n on a C0 line.
-  std::vector<mpq_class> interior_y;
-  for (int k = 1; k < g.ny(); ++k) interior_y.insert(interior_y.end(), c0y.count(g.Y[k]) ? n : 1, g.Y[k]);
+  // Global y knots: every y-coordinate, simple.
+  const std::vector<mpq_class> interior_y(g.Y.begin() + 1, g.Y.end() - 1);
   const std::vector<mpq_class> KY = open_knots(interior_y, g.Y.front(), g.Y.back(), n);
   const int ny = static_cast<int>(KY.size()) - n - 1;
   std::vector<std::vector<int>> columns_of_row_spline(ny);  // spline indices per j
@@ -139,7 +136,7 @@ PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, c
     for (int ix = 1; ix < g.nx(); ++ix) {
       bool across = true;
       for (int s = s0; s < s1 && across; ++s) across = g.at(ix - 1, s) != g.at(ix, s);
-      if (across) interior_x.insert(interior_x.end(), c0x.count(g.X[ix]) ? m : 1, g.X[ix]);
+      if (across) interior_x.push_back(g.X[ix]);
     }
     const std::vector<mpq_class> KX = open_knots(interior_x, g.X.front(), g.X.back(), m);
     for (size_t i = 0; i + m + 1 < KX.size(); ++i) {
@@ -218,22 +215,6 @@ PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, c
     B.rank += rank;
   }
   return B;
-}
-
-void check_c0_lines(const RectangularPartition& mesh, const PtC0Lines& c0) {
-  const Grid g = make_grid(mesh);
-  for (int dir = 0; dir < 2; ++dir)
-    for (const auto& v : dir == 0 ? c0.vertical : c0.horizontal) {
-      const auto& lines = dir == 0 ? g.X : g.Y;
-      const int i = dir == 0 ? g.index_x(v) : g.index_y(v);
-      bool cross_cut = i > 0 && i + 1 < static_cast<int>(lines.size()) && lines[i] == v;
-      const int strips = dir == 0 ? g.ny() : g.nx();
-      for (int s = 0; s < strips && cross_cut; ++s)
-        cross_cut = dir == 0 ? g.at(i - 1, s) != g.at(i, s) : g.at(s, i - 1) != g.at(s, i);
-      if (!cross_cut)
-        throw std::invalid_argument(std::string("C0 line ") + (dir == 0 ? "x = " : "y = ") + v.get_str() +
-                                    " is not a cross-cut of the T-mesh (an interior line from boundary to boundary)");
-    }
 }
 
 template <class S>
@@ -369,18 +350,16 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
 
 }  // namespace
 
-PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, PtExtension extension,
-                              const PtC0Lines& c0) {
+PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, PtExtension extension) {
   if (m < 1 || n < 1) throw std::invalid_argument("PT-splines need degrees m, n >= 1");
-  check_c0_lines(mesh, c0);
   const RectangularPartition flipped = transposed(mesh);
   if (extension == PtExtension::kAuto) {
     const long h = horizontal_extended_edges(mesh, make_grid(mesh));
     const long v = horizontal_extended_edges(flipped, make_grid(flipped));
     extension = v < h ? PtExtension::kVertical : PtExtension::kHorizontal;
   }
-  if (extension == PtExtension::kHorizontal) return build_horizontal(mesh, m, n, c0.vertical, c0.horizontal);
-  PtSplineBasis B = build_horizontal(flipped, n, m, c0.horizontal, c0.vertical);
+  if (extension == PtExtension::kHorizontal) return build_horizontal(mesh, m, n);
+  PtSplineBasis B = build_horizontal(flipped, n, m);
   for (auto& s : B.splines) std::swap(s.x, s.y);
   std::swap(B.m, B.n);
   B.horizontal = false;
@@ -537,19 +516,19 @@ int make_non_negative(PtSplineBasis& B, const RectangularPartition& mesh) {
   std::vector<bool> dropped(all.functions.size(), false);
   eliminate(keys, functions, [&](size_t i, const SparseVector&) { dropped[i] = true; });
   std::vector<std::vector<std::pair<int, mpq_class>>> kept = cross;
+  std::vector<size_t> kept_from;  // index in `all` (and `poly`) of each kept function
+  for (size_t f = 0; f < cross.size(); ++f) kept_from.push_back(f);
   for (size_t f = cross.size(); f < all.functions.size(); ++f)
-    if (!dropped[f]) kept.push_back(all.functions[f]);
+    if (!dropped[f]) kept.push_back(all.functions[f]), kept_from.push_back(f);
   if (kept.size() != B.functions.size())
     throw std::logic_error("make_non_negative: the cross-cut B-splines are not in the span of the basis (" +
                            std::to_string(cross.size()) + " cross-cut, " + std::to_string(kept.size()) + " kept of " +
                            std::to_string(all.functions.size()) + ")");
   // Lift: f + c * (sum of the cross-cut B-splines over the cells where f lives) >= 0.
-  all.functions = kept;
-  const auto kept_poly = pt_cell_polynomials_exact(all, mesh);
   for (size_t f = cross.size(); f < kept.size(); ++f) {
     mpq_class lowest = 0;
     std::set<int> cells;
-    for (const auto& [k, c] : kept_poly[f]) {
+    for (const auto& [k, c] : poly[kept_from[f]]) {
       cells.insert(k);
       for (const auto& v : c) lowest = std::min(lowest, v);
     }
@@ -569,35 +548,6 @@ int make_non_negative(PtSplineBasis& B, const RectangularPartition& mesh) {
   }
   B.functions = std::move(kept);
   return static_cast<int>(cross.size());
-}
-
-BezierMesh pt_bezier_mesh(const PtSplineBasis& B, const RectangularPartition& mesh) {
-  const auto poly = pt_cell_polynomials(B, mesh);
-  std::vector<std::vector<std::pair<int, const std::vector<double>*>>> alive(mesh.num_cells());
-  for (size_t f = 0; f < poly.size(); ++f)
-    for (const auto& [k, c] : poly[f]) alive[k].emplace_back(static_cast<int>(f), &c);
-  const Grid g = make_grid(mesh);
-  BezierMesh out;
-  out.set_boundary_names({"bottom", "right", "top", "left"});
-  for (int k = 0; k < mesh.num_cells(); ++k) {
-    const auto& c = mesh.cells()[k];
-    BezierCell cell;
-    cell.u0 = c.x0.get_d(), cell.u1 = c.x1.get_d(), cell.v0 = c.y0.get_d(), cell.v1 = c.y1.get_d();
-    cell.degree_u = B.m, cell.degree_v = B.n;
-    if (c.y0 == g.Y.front()) cell.boundary[kSideBottom] = 0;
-    if (c.x1 == g.X.back()) cell.boundary[kSideRight] = 1;
-    if (c.y1 == g.Y.back()) cell.boundary[kSideTop] = 2;
-    if (c.x0 == g.X.front()) cell.boundary[kSideLeft] = 3;
-    Eigen::MatrixXd E(alive[k].size(), (B.m + 1) * (B.n + 1));
-    std::vector<int> ids;
-    for (size_t r = 0; r < alive[k].size(); ++r) {
-      ids.push_back(alive[k][r].first);
-      for (int a = 0; a < E.cols(); ++a) E(r, a) = (*alive[k][r].second)[a];
-    }
-    out.add_cell(cell, ids, out.add_extraction(std::move(E)));
-  }
-  out.set_num_functions(static_cast<int>(B.functions.size()));
-  return out;
 }
 
 }  // namespace knotwork
@@ -632,57 +582,63 @@ double bernstein_derivative(std::vector<double> b, int k, double s) {
 }  // namespace
 
 double pt_smoothness_residual(const PtCellPolynomials& polys, const RectangularPartition& mesh, int m, int n) {
+  const auto& edges = mesh.shared_edges();
+  std::vector<std::vector<int>> edges_of_cell(mesh.num_cells());
+  for (size_t e = 0; e < edges.size(); ++e) {
+    edges_of_cell[edges[e].first].push_back(static_cast<int>(e));
+    edges_of_cell[edges[e].second].push_back(static_cast<int>(e));
+  }
+  const std::vector<double> zero((m + 1) * (n + 1), 0.0);
   double worst = 0;
-  const int per_cell = (m + 1) * (n + 1);
   for (const auto& f : polys) {
     std::map<int, const std::vector<double>*> on;
+    std::set<int> near;  // edges of the cells where f lives
     double scale = 0;
     for (const auto& [k, c] : f) {
       on[k] = &c;
+      near.insert(edges_of_cell[k].begin(), edges_of_cell[k].end());
       for (double v : c) scale = std::max(scale, std::abs(v));
     }
     if (scale == 0) continue;
-    static const std::vector<double> zero(64, 0.0);
-    auto coeff = [&](int k) -> const std::vector<double>& {
-      const auto it = on.find(k);
-      return it == on.end() ? zero : *it->second;
-    };
-    for (const auto& e : mesh.shared_edges()) {
-      if (!on.count(e.first) && !on.count(e.second)) continue;
-      const auto& A = mesh.cells()[e.first];
-      const auto& C = mesh.cells()[e.second];
-      const int across = e.vertical ? m : n;  // derivatives 0 .. across-1 must match
+    for (int index : near) {
+      const auto& e = edges[index];
+      const int pn = e.vertical ? m : n, pt = e.vertical ? n : m;  // degree across / along
       const int points = m + n + 2;
+      double h[2];
+      const std::vector<double>* b[2];
+      for (int side = 0; side < 2; ++side) {
+        const int cell = side == 0 ? e.first : e.second;
+        const auto& box = mesh.cells()[cell];
+        h[side] = mpq_class(e.vertical ? box.x1 - box.x0 : box.y1 - box.y0).get_d();
+        const auto it = on.find(cell);
+        b[side] = it == on.end() ? &zero : it->second;
+      }
       for (int q = 0; q < points; ++q) {
         const mpq_class t = e.from + (e.to - e.from) * (q + 1) / (points + 1);
-        for (int k = 0; k < across; ++k) {
-          double value[2];
-          for (int side = 0; side < 2; ++side) {
-            const int cell = side == 0 ? e.first : e.second;
-            const auto& box = side == 0 ? A : C;
-            const auto& b = coeff(cell);
-            // Restrict the cell polynomial to the line: a univariate Bernstein polynomial
-            // along the normal direction at the tangential parameter.
-            const double h = e.vertical ? mpq_class(box.x1 - box.x0).get_d() : mpq_class(box.y1 - box.y0).get_d();
-            const double tangential = e.vertical ? mpq_class((t - box.y0) / (box.y1 - box.y0)).get_d()
-                                                 : mpq_class((t - box.x0) / (box.x1 - box.x0)).get_d();
-            const int pn = e.vertical ? m : n, pt = e.vertical ? n : m;
-            std::vector<double> normal(pn + 1);
-            for (int i = 0; i <= pn; ++i) {
-              std::vector<double> line(pt + 1);
-              for (int j = 0; j <= pt; ++j) line[j] = e.vertical ? b[i + (m + 1) * j] : b[j + (m + 1) * i];
-              normal[i] = bernstein_derivative(line, 0, tangential);
-            }
-            value[side] = bernstein_derivative(normal, k, side == 0 ? 1.0 : 0.0) / std::pow(h, k);
+        // Each cell polynomial restricted to the line through the point across the edge: a
+        // univariate Bernstein polynomial in the normal direction.
+        std::vector<double> normal[2];
+        for (int side = 0; side < 2; ++side) {
+          const auto& box = mesh.cells()[side == 0 ? e.first : e.second];
+          const double along = e.vertical ? mpq_class((t - box.y0) / (box.y1 - box.y0)).get_d()
+                                          : mpq_class((t - box.x0) / (box.x1 - box.x0)).get_d();
+          normal[side].resize(pn + 1);
+          std::vector<double> line(pt + 1);
+          for (int i = 0; i <= pn; ++i) {
+            for (int j = 0; j <= pt; ++j) line[j] = e.vertical ? (*b[side])[i + (m + 1) * j] : (*b[side])[j + (m + 1) * i];
+            normal[side][i] = bernstein_derivative(line, 0, along);
           }
-          // Relative to the scale of a k-th derivative on the smaller of the two cells.
-          const double h = std::min(e.vertical ? mpq_class(A.x1 - A.x0).get_d() : mpq_class(A.y1 - A.y0).get_d(),
-                                    e.vertical ? mpq_class(C.x1 - C.x0).get_d() : mpq_class(C.y1 - C.y0).get_d());
-          worst = std::max(worst, std::abs(value[0] - value[1]) * std::pow(h, k) / scale);
+        }
+        // Derivatives 0 .. pn-1 must match; each jump relative to the scale of a k-th
+        // derivative on the smaller of the two cells.
+        const double h_min = std::min(h[0], h[1]);
+        for (int k = 0; k < pn; ++k) {
+          const double left = bernstein_derivative(normal[0], k, 1.0) / std::pow(h[0], k);
+          const double right = bernstein_derivative(normal[1], k, 0.0) / std::pow(h[1], k);
+          worst = std::max(worst, std::abs(left - right) * std::pow(h_min, k) / scale);
         }
       }
     }
-    (void)per_cell;
   }
   return worst;
 }

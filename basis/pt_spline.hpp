@@ -4,7 +4,6 @@
 #include <utility>
 #include <vector>
 
-#include "basis/bezier_mesh.hpp"
 #include "basis/rectangular_partition.hpp"
 
 namespace knotwork {
@@ -24,10 +23,6 @@ namespace knotwork {
 //    components) and each block's null space is computed exactly over Q.
 // 3. The basis of S(T): the B-splines that meet no extended edge, untouched, and one
 //    combination per null vector of each block (Theorem 3).
-//
-// Optional C0 lines (cross-cuts of T across which only continuity is asked, e.g. the fold of
-// a C0 geometry map) are knots of multiplicity m (vertical) or n (horizontal); they are
-// never extended edges.
 enum class PtExtension { kAuto, kHorizontal, kVertical };
 
 struct PtLocalBSpline {
@@ -48,13 +43,9 @@ struct PtSplineBasis {
   int untouched = 0;                  // B-splines of T^e kept as they are
 };
 
-struct PtC0Lines {
-  std::vector<mpq_class> vertical, horizontal;  // x = value / y = value, cross-cuts of T
-};
-
-// Throws std::invalid_argument for m or n < 1, or a C0 line that is not a cross-cut of T.
+// Throws std::invalid_argument for m or n < 1.
 PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n,
-                              PtExtension extension = PtExtension::kAuto, const PtC0Lines& c0 = {});
+                              PtExtension extension = PtExtension::kAuto);
 
 // Each function on each cell of T where it is not zero: (cell, Bernstein coefficients on the
 // cell, index a + (m+1) b with a along x). Exact, and in double precision (computed from
@@ -86,8 +77,5 @@ void make_boundary_traces_independent(PtSplineBasis& basis, const RectangularPar
 // Bernstein coefficient, when that is negative: a basis of non-negative functions (their
 // Bernstein coefficients are all >= 0). Returns the number of cross-cut B-splines.
 int make_non_negative(PtSplineBasis& basis, const RectangularPartition& mesh);
-
-// The BezierMesh of the basis on the cells of T (boundary ids bottom 0, right 1, top 2, left 3).
-BezierMesh pt_bezier_mesh(const PtSplineBasis& basis, const RectangularPartition& mesh);
 
 }  // namespace knotwork

@@ -703,6 +703,12 @@ CaseDescription load_case(const std::string& path) {
   return c;
 }
 
+void require_highest_smoothness(const PartitionDescription& p, const std::string& path, const std::string& space) {
+  if (p.alpha != p.m - 1 || p.beta != p.n - 1)
+    throw InputError(path + ": smoothness: " + space + " (smoothness = [" + std::to_string(p.m - 1) + ", " +
+                     std::to_string(p.n - 1) + "]); `knotwork dimension` counts other smoothness");
+}
+
 PartitionDescription load_partition(const std::string& path) {
   const toml::table root = parse_toml(path);
   Reader r(path);

@@ -80,6 +80,10 @@ struct PartitionDescription {
 // Throws InputError naming the file and field (or the offending cells).
 PartitionDescription load_partition(const std::string& path);
 
+// For constructions of the highest smoothness only: throws InputError naming the file and
+// `smoothness` unless alpha = m - 1 and beta = n - 1; `space` says which construction.
+void require_highest_smoothness(const PartitionDescription& p, const std::string& path, const std::string& space);
+
 // A collection of tensor-product B-splines given by their local knot vectors (the format
 // `knotwork basis --export` writes; JSON or TOML):
 //   degree = [dx, dy]

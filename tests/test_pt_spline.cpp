@@ -64,8 +64,9 @@ void check_basis(const RectangularPartition& mesh, int m, int n, PtExtension ext
   REQUIRE(not_polynomial == 0);
   REQUIRE(pt_smoothness_residual(to_double(exact), mesh, m, n) <= 1e-11);
   // The fast double-precision sampling used for assembly agrees with the exact coefficients.
-  // (Extrapolating from the largest polynomial piece of a cell loses up to ~1e-10 relative
-  // at degree 3 on these meshes, measured.)
+  // Extrapolating from the largest polynomial piece of a cell loses accuracy: 9.2e-11
+  // relative at most, measured on 6 random halving meshes at degrees up to 3x3 and both
+  // directions; the bound keeps a factor 100.
   const auto fast = pt_cell_polynomials(B, mesh);
   double worst = 0;
   for (size_t f = 0; f < fast.size(); ++f) {
