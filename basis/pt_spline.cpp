@@ -118,13 +118,18 @@ struct UnionFind {
   void join(int a, int b) { parent[find(a)] = find(b); }
 };
 
+bool contains(const std::vector<mpq_class>& lines, const mpq_class& v) {
+  return std::find(lines.begin(), lines.end(), v) != lines.end();
+}
+
 // The construction with horizontal lines extended, on `mesh` as given.
-PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n) {
+PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0) {
   const Grid g = make_grid(mesh);
   PtSplineBasis B;
-  B.m = m, B.n = n, B.horizontal = true;
-  // Global y knots: every y-coordinate, simple.
-  const std::vector<mpq_class> interior_y(g.Y.begin() + 1, g.Y.end() - 1);
+  B.m = m, B.n = n, B.horizontal = true, B.c0 = c0;
+  // Global y knots: every y-coordinate, simple, except the C^0 lines (multiplicity n).
+  std::vector<mpq_class> interior_y;
+  for (int iy = 1; iy < g.ny(); ++iy) interior_y.insert(interior_y.end(), contains(c0.y, g.Y[iy]) ? n : 1, g.Y[iy]);
   const std::vector<mpq_class> KY = open_knots(interior_y, g.Y.front(), g.Y.back(), n);
   const int ny = static_cast<int>(KY.size()) - n - 1;
   std::vector<std::vector<int>> columns_of_row_spline(ny);  // spline indices per j
@@ -136,7 +141,7 @@ PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n) {
     for (int ix = 1; ix < g.nx(); ++ix) {
       bool across = true;
       for (int s = s0; s < s1 && across; ++s) across = g.at(ix - 1, s) != g.at(ix, s);
-      if (across) interior_x.push_back(g.X[ix]);
+      if (across) interior_x.insert(interior_x.end(), contains(c0.x, g.X[ix]) ? m : 1, g.X[ix]);
     }
     const std::vector<mpq_class> KX = open_knots(interior_x, g.X.front(), g.X.back(), m);
     for (size_t i = 0; i + m + 1 < KX.size(); ++i) {
@@ -350,18 +355,33 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
 
 }  // namespace
 
-PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, PtExtension extension) {
+PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, PtExtension extension, const C0Lines& c0) {
   if (m < 1 || n < 1) throw std::invalid_argument("PT-splines need degrees m, n >= 1");
+  {
+    const Grid g = make_grid(mesh);
+    for (int dir = 0; dir < 2; ++dir)
+      for (const mpq_class& v : dir == 0 ? c0.x : c0.y) {
+        const auto& L = dir == 0 ? g.X : g.Y;
+        const int i = dir == 0 ? g.index_x(v) : g.index_y(v);
+        bool cut = i > 0 && i + 1 < static_cast<int>(L.size()) && L[i] == v;
+        for (int s = 0; s < (dir == 0 ? g.ny() : g.nx()) && cut; ++s)
+          cut = dir == 0 ? g.at(i - 1, s) != g.at(i, s) : g.at(s, i - 1) != g.at(s, i);
+        if (!cut)
+          throw std::invalid_argument(std::string("the C0 line ") + (dir == 0 ? "x = " : "y = ") + v.get_str() +
+                                      " is not a line of the T-mesh from boundary to boundary");
+      }
+  }
   const RectangularPartition flipped = transposed(mesh);
   if (extension == PtExtension::kAuto) {
     const long h = horizontal_extended_edges(mesh, make_grid(mesh));
     const long v = horizontal_extended_edges(flipped, make_grid(flipped));
     extension = v < h ? PtExtension::kVertical : PtExtension::kHorizontal;
   }
-  if (extension == PtExtension::kHorizontal) return build_horizontal(mesh, m, n);
-  PtSplineBasis B = build_horizontal(flipped, n, m);
+  if (extension == PtExtension::kHorizontal) return build_horizontal(mesh, m, n, c0);
+  PtSplineBasis B = build_horizontal(flipped, n, m, C0Lines{c0.y, c0.x});
   for (auto& s : B.splines) std::swap(s.x, s.y);
   std::swap(B.m, B.n);
+  B.c0 = c0;
   B.horizontal = false;
   return B;
 }
@@ -481,12 +501,12 @@ int make_non_negative(PtSplineBasis& B, const RectangularPartition& mesh) {
   for (int ix = 1; ix < g.nx(); ++ix) {
     bool cut = true;
     for (int s = 0; s < g.ny() && cut; ++s) cut = g.at(ix - 1, s) != g.at(ix, s);
-    if (cut) cx.push_back(g.X[ix]);
+    if (cut) cx.insert(cx.end(), contains(B.c0.x, g.X[ix]) ? B.m : 1, g.X[ix]);
   }
   for (int iy = 1; iy < g.ny(); ++iy) {
     bool cut = true;
     for (int s = 0; s < g.nx() && cut; ++s) cut = g.at(s, iy - 1) != g.at(s, iy);
-    if (cut) cy.push_back(g.Y[iy]);
+    if (cut) cy.insert(cy.end(), contains(B.c0.y, g.Y[iy]) ? B.n : 1, g.Y[iy]);
   }
   const auto KX = open_knots(cx, g.X.front(), g.X.back(), B.m), KY = open_knots(cy, g.Y.front(), g.Y.back(), B.n);
   const int first_cross = static_cast<int>(B.splines.size());
@@ -581,7 +601,8 @@ double bernstein_derivative(std::vector<double> b, int k, double s) {
 
 }  // namespace
 
-double pt_smoothness_residual(const PtCellPolynomials& polys, const RectangularPartition& mesh, int m, int n) {
+double pt_smoothness_residual(const PtCellPolynomials& polys, const RectangularPartition& mesh, int m, int n,
+                              const C0Lines& c0) {
   const auto& edges = mesh.shared_edges();
   std::vector<std::vector<int>> edges_of_cell(mesh.num_cells());
   for (size_t e = 0; e < edges.size(); ++e) {
@@ -603,6 +624,7 @@ double pt_smoothness_residual(const PtCellPolynomials& polys, const RectangularP
     for (int index : near) {
       const auto& e = edges[index];
       const int pn = e.vertical ? m : n, pt = e.vertical ? n : m;  // degree across / along
+      const int orders = contains(e.vertical ? c0.x : c0.y, e.position) ? 1 : pn;  // derivatives kept
       const int points = m + n + 2;
       double h[2];
       const std::vector<double>* b[2];
@@ -632,7 +654,7 @@ double pt_smoothness_residual(const PtCellPolynomials& polys, const RectangularP
         // Derivatives 0 .. pn-1 must match; each jump relative to the scale of a k-th
         // derivative on the smaller of the two cells.
         const double h_min = std::min(h[0], h[1]);
-        for (int k = 0; k < pn; ++k) {
+        for (int k = 0; k < orders; ++k) {
           const double left = bernstein_derivative(normal[0], k, 1.0) / std::pow(h[0], k);
           const double right = bernstein_derivative(normal[1], k, 0.0) / std::pow(h[1], k);
           worst = std::max(worst, std::abs(left - right) * std::pow(h_min, k) / scale);

@@ -31,6 +31,7 @@ struct PtLocalBSpline {
 
 struct PtSplineBasis {
   int m = 0, n = 0;
+  C0Lines c0;  // knots of multiplicity m (in x) or n (in y): the space is only C^0 across them
   bool horizontal = true;              // horizontal l-edges were extended to cross-cuts
   // The local B-splines the functions combine: the basis of S(T^e), followed by the
   // cross-cut B-splines once make_non_negative has run.
@@ -43,9 +44,11 @@ struct PtSplineBasis {
   int untouched = 0;                  // B-splines of T^e kept as they are
 };
 
-// Throws std::invalid_argument for m or n < 1.
+// The space S(m, n, m-1, n-1) of T, except only C^0 across the lines of `c0` (cross-cuts of T,
+// which therefore never get extended: the B-splines carry them as knots of full multiplicity).
+// Throws std::invalid_argument for m or n < 1, or a C^0 line that is not a cross-cut of T.
 PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n,
-                              PtExtension extension = PtExtension::kAuto);
+                              PtExtension extension = PtExtension::kAuto, const C0Lines& c0 = {});
 
 // Each function on each cell of T where it is not zero: (cell, Bernstein coefficients on the
 // cell, index a + (m+1) b with a along x). Exact, and in double precision (computed from
@@ -64,7 +67,9 @@ mpq_class pt_evaluate(const PtSplineBasis& basis, int f, const mpq_class& x, con
 // S(T) keeps continuous (d^k/dx^k, k < m, across vertical edges; d^k/dy^k, k < n, across
 // horizontal ones), sampled at m + n + 2 points per edge from the per-cell polynomials and
 // relative to the function's largest Bernstein coefficient (times h^-k of the edge's cells).
-double pt_smoothness_residual(const PtCellPolynomials& polynomials, const RectangularPartition& mesh, int m, int n);
+// Across edges on the lines of `c0` only the values must agree.
+double pt_smoothness_residual(const PtCellPolynomials& polynomials, const RectangularPartition& mesh, int m, int n,
+                              const C0Lines& c0 = {});
 
 // Changes the basis (by adding to some functions combinations of others) so that the functions
 // that do not vanish on the boundary of the rectangle have linearly independent traces there

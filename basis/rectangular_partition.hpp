@@ -13,6 +13,13 @@ struct RationalBox {
   mpq_class x0, y0, x1, y1;
 };
 
+// Lines x = const and y = const of a partition across which a spline space is only C^0 (for
+// instance the fold of a one-patch L-shape geometry): each must run from boundary to boundary.
+struct C0Lines {
+  std::vector<mpq_class> x, y;
+  bool empty() const { return x.empty() && y.empty(); }
+};
+
 // Parses "14/9", "-3", "0.25" (a decimal is read exactly: 0.25 = 1/4) into a rational.
 // Throws std::invalid_argument.
 mpq_class parse_rational(const std::string& text);

@@ -26,7 +26,9 @@ enum class RankMethod {
 
 // Throws std::invalid_argument for degrees < 0 or smoothness outside [-1, degree-1], and
 // std::runtime_error if the two primes disagree (an unlucky prime: never seen, but checked).
+// Edges on the lines of `c0` are only C^0.
 DimensionResult spline_space_dimension(const RectangularPartition& partition, int m, int n, int alpha,
-                                       int beta, RankMethod method = RankMethod::kModular);
+                                       int beta, RankMethod method = RankMethod::kModular,
+                                       const C0Lines& c0 = {});
 
 }  // namespace knotwork

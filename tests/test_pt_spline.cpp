@@ -51,18 +51,18 @@ bool polynomial_per_cell(const PtSplineBasis& B, int f, const RectangularPartiti
   return testing::polynomial_per_cell(mesh, B.m, B.n, [&](const mpq_class& x, const mpq_class& y) { return pt_evaluate(B, f, x, y); });
 }
 
-void check_basis(const RectangularPartition& mesh, int m, int n, PtExtension ext) {
+void check_basis(const RectangularPartition& mesh, int m, int n, PtExtension ext, const C0Lines& c0 = {}) {
   INFO("degree " << m << "x" << n << ", extension " << (ext == PtExtension::kHorizontal ? "horizontal" : "vertical")
-                 << ", " << mesh.num_cells() << " cells");
-  const PtSplineBasis B = pt_spline_basis(mesh, m, n, ext);
-  const long dim = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kExact).dimension;
+                 << ", " << mesh.num_cells() << " cells, " << c0.x.size() + c0.y.size() << " C0 lines");
+  const PtSplineBasis B = pt_spline_basis(mesh, m, n, ext, c0);
+  const long dim = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kExact, c0).dimension;
   REQUIRE(static_cast<long>(B.functions.size()) == dim);
   const auto exact = pt_cell_polynomials_exact(B, mesh);
   REQUIRE(exact_rank(exact, mesh, (m + 1) * (n + 1)) == dim);
   int not_polynomial = 0;
   for (int f = 0; f < static_cast<int>(B.functions.size()); ++f) not_polynomial += !polynomial_per_cell(B, f, mesh);
   REQUIRE(not_polynomial == 0);
-  REQUIRE(pt_smoothness_residual(to_double(exact), mesh, m, n) <= 1e-11);
+  REQUIRE(pt_smoothness_residual(to_double(exact), mesh, m, n, c0) <= 1e-11);
   // The fast double-precision sampling used for assembly agrees with the exact coefficients.
   // Extrapolating from the largest polynomial piece of a cell loses accuracy: 9.2e-11
   // relative at most, measured on 6 random halving meshes at degrees up to 3x3 and both
@@ -101,6 +101,32 @@ TEST_CASE("PT-splines: count = brute-force dimension, independent, in S(T), on a
     for (const auto& [m, n] : std::vector<std::pair<int, int>>{{1, 1}, {2, 2}, {3, 2}})
       for (PtExtension ext : {PtExtension::kHorizontal, PtExtension::kVertical}) check_basis(mesh, m, n, ext);
   }
+}
+
+TEST_CASE("PT-splines with C0 lines (a folded geometry's knot lines): the space of the brute-force count", "[pt]") {
+  // x = 1/2 (and y = 1/2) are cross-cuts of every mesh: the halvings start from the pieces.
+  std::mt19937 rng(77);
+  const mpq_class h(1, 2);
+  const std::vector<RationalBox> halves = {{0, 0, h, 1}, {h, 0, 1, 1}};
+  const std::vector<RationalBox> quarters = {{0, 0, h, h}, {h, 0, 1, h}, {0, h, h, 1}, {h, h, 1, 1}};
+  for (int t = 0; t < 3; ++t) {
+    const RectangularPartition one(random_halvings(rng, 10 + 2 * t, halves));
+    const RectangularPartition two(random_halvings(rng, 10 + 2 * t, quarters));
+    for (const auto& [m, n] : std::vector<std::pair<int, int>>{{2, 2}, {3, 2}})
+      for (PtExtension ext : {PtExtension::kHorizontal, PtExtension::kVertical}) {
+        check_basis(one, m, n, ext, C0Lines{{h}, {}});
+        check_basis(two, m, n, ext, C0Lines{{h}, {h}});
+      }
+  }
+  // The C0 space is larger than the C^(m-1) one, and some of its functions do have a kink.
+  const RectangularPartition mesh(halves);
+  const auto B = pt_spline_basis(mesh, 2, 2, PtExtension::kAuto, C0Lines{{h}, {}});
+  REQUIRE(B.functions.size() == 5 * 3);  // x knots 0,0,0,1/2,1/2,1,1,1 and y knots 0,0,0,1,1,1
+  REQUIRE(pt_smoothness_residual(pt_cell_polynomials(B, mesh), mesh, 2, 2) > 0.1);
+  // A C0 line must be a cross-cut.
+  const RectangularPartition t(random_halvings(rng, 0, {{0, 0, h, h}, {h, 0, 1, h}, {0, h, 1, 1}}));
+  REQUIRE_THROWS_WITH(pt_spline_basis(t, 2, 2, PtExtension::kAuto, C0Lines{{h}, {}}),
+                      Catch::Contains("C0 line x = 1/2 is not a line of the T-mesh"));
 }
 
 TEST_CASE("PT-splines: a B-spline of the extended mesh that meets an extended edge is not in S(T)", "[pt]") {

@@ -222,3 +222,21 @@ TEST_CASE("Vanished T l-edges: no extra freedom, one more vertex adds one functi
     }
   }
 }
+
+// A C0 knot line of a tensor grid is a knot of multiplicity m: the tensor count with it.
+TEST_CASE("Brute-force dimension with C0 lines: the tensor count with full-multiplicity knots", "[dimension]") {
+  std::vector<RationalBox> cells;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 4; ++i) cells.push_back({i, j, i + 1, j + 1});
+  const RectangularPartition grid(cells);
+  for (int m = 1; m <= 3; ++m)
+    for (int n = 1; n <= 3; ++n) {
+      INFO("degree " << m << "x" << n);
+      // x: 3 interior lines, x = 2 of multiplicity m; y: 2 interior lines, y = 1 of multiplicity n.
+      const long x_functions = (2 + m) + m + 1, y_functions = (1 + n) + n + 1;
+      REQUIRE(spline_space_dimension(grid, m, n, m - 1, n - 1, RankMethod::kModular, C0Lines{{2}, {1}}).dimension ==
+              x_functions * y_functions);
+      REQUIRE(spline_space_dimension(grid, m, n, m - 1, n - 1, RankMethod::kModular, C0Lines{{2}, {}}).dimension ==
+              x_functions * (2 + n + 1));
+    }
+}

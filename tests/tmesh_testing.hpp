@@ -17,9 +17,10 @@ inline mpq_class q(long a, long b = 1) {
   return r;
 }
 
-// Random hierarchical-style T-meshes: random cells of [0, 1]^2 split in halves, in x or y.
-inline std::vector<RationalBox> random_halvings(std::mt19937& rng, int splits) {
-  std::vector<RationalBox> cells{{0, 0, 1, 1}};
+// Random hierarchical-style T-meshes: random cells split in halves, in x or y.
+// Starts from `cells` (default the unit square), so lines of the start stay cross-cuts.
+inline std::vector<RationalBox> random_halvings(std::mt19937& rng, int splits,
+                                                std::vector<RationalBox> cells = {{0, 0, 1, 1}}) {
   for (int s = 0; s < splits; ++s) {
     const size_t i = std::uniform_int_distribution<size_t>(0, cells.size() - 1)(rng);
     RationalBox a = cells[i], b = a;
