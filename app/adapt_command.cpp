@@ -1,8 +1,9 @@
-// knotwork adapt: estimate - mark (Doerfler) - refine (knot segments) - solve, repeated.
+// knotwork adapt: estimate - mark (Doerfler) - refine (knot segments or T-mesh cells) - solve, repeated.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 
 #include "app/commands.hpp"
 #include "app/adaptive.hpp"
@@ -22,8 +23,9 @@ namespace {
 
 // The knots of the partition (lines, rays, segments) as polylines in physical space, with
 // their kind (0 line, 1 ray, 2 segment) and multiplicity.
-void write_knot_lines(const std::string& path, const SemiRegularCollection& coll, const NurbsPatch& geometry) {
-  const PartitionTopology topo = partition_topology(coll.partition());
+void write_knot_lines(const std::string& path, const RectangularPartition& partition, const NurbsPatch& geometry,
+                      const std::function<int(bool vertical, double at, double from, double to)>& multiplicity_of) {
+  const PartitionTopology topo = partition_topology(partition);
   std::vector<Eigen::MatrixX2d> lines;
   std::vector<int> kind, multiplicity;
   const int samples = 8;  // per edge: curved geometries stay curved
@@ -40,7 +42,7 @@ void write_knot_lines(const std::string& path, const SemiRegularCollection& coll
       }
     lines.push_back(poly);
     kind.push_back(k.kind == PartitionTopology::KnotKind::kLine ? 0 : k.kind == PartitionTopology::KnotKind::kRay ? 1 : 2);
-    multiplicity.push_back(coll.knot_multiplicity(k.vertical, at, stops.front(), stops.back()));
+    multiplicity.push_back(multiplicity_of(k.vertical, at, stops.front(), stops.back()));
   }
   write_polylines_vtp(path, lines, {{"kind", kind}, {"multiplicity", multiplicity}});
 }
@@ -81,7 +83,20 @@ int adapt_command(const AdaptOptions& o) {
     const Discretization& d = v.discretization;
     write_bezier_vtu(stage.stage(name + ".vtu"), d.mesh(), *d.geometry, v.solution.coefficients, exact,
                      {{"error_indicator", eta}, {"marked", flag}});
-    write_knot_lines(stage.stage(name + "_knots.vtp"), v.collection, c.geometry);
+    if (v.collection) {
+      write_knot_lines(stage.stage(name + "_knots.vtp"), v.collection->partition(), c.geometry,
+                       [&](bool vertical, double at, double from, double to) {
+                         return v.collection->knot_multiplicity(vertical, at, from, to);
+                       });
+    } else {
+      // PT-spline knots are simple, except along the C0 lines.
+      const auto& c0 = d.pt->c0;
+      write_knot_lines(stage.stage(name + "_knots.vtp"), *v.tmesh, c.geometry, [&](bool vertical, double at, double, double) {
+        for (const auto& t : vertical ? c0.x : c0.y)
+          if (t.get_d() == at) return vertical ? d.pt->m : d.pt->n;
+        return 1;
+      });
+    }
     pvd.push_back({double(v.step), 0, name + ".vtu"});
     pvd.push_back({double(v.step), 1, name + "_knots.vtp"});
   });
@@ -117,7 +132,7 @@ int adapt_command(const AdaptOptions& o) {
     root.set("h1_rate_last_half", fitted_h1_rate(steps, steps.size() / 2));
   write_text_file(stage.stage("adapt.csv"), csv);
   write_text_file(stage.stage("adapt.json"), root.dump() + "\n");
-  write_text_file(stage.stage("adapt.svg"), loglog_svg(c.name + ": adaptive knot segments", "degrees of freedom", "error", plot));
+  write_text_file(stage.stage("adapt.svg"), loglog_svg(c.name + (c.family == "pt" ? ": adaptive PT-splines" : ": adaptive knot segments"), "degrees of freedom", "error", plot));
   if (!pvd.empty()) write_pvd(stage.stage("adapt.pvd"), pvd);
   const auto outputs = stage.commit();
 

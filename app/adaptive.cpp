@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "solver/input_error.hpp"
 
@@ -21,27 +22,31 @@ constexpr double kAspect = 1.2;
 std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering,
                                      const std::function<void(const std::string&)>& progress,
                                      const std::function<void(const AdaptiveStepView&)>& on_step) {
-  if (c.family != "knot_segments")
-    throw InputError(c.path + ": [space] family: adaptive refinement works by knot segments; set family = \"knot_segments\" (got \"" +
-                     c.family + "\")");
+  const bool pt = c.family == "pt";
+  if (c.family != "knot_segments" && !pt)
+    throw InputError(c.path + ": [space] family: adaptive refinement works by knot segments or PT-splines; set family = "
+                     "\"knot_segments\" or \"pt\" (got \"" + c.family + "\")");
   auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };
   say("building the starting space: " + describe_space(c));
-  Discretization first = discretize(c);
+  std::vector<RationalBox> cells;  // family "pt": the T-mesh
+  if (pt) cells = pt_start_cells(c);
+  Discretization first = pt ? discretize_pt(c, cells) : discretize(c);
   // Collections built by insertion are semi-regular by construction; explicit ones were
   // checked by discretize.
   if (!first.violations.empty())
     throw InputError(c.path + ": [space]: adaptive refinement needs a semi-regular start, and the collection is not: " +
                      first.violations.front());
-  SemiRegularCollection collection = *first.segments;
+  std::optional<SemiRegularCollection> collection;  // family "knot_segments"
+  if (!pt) collection = *first.segments;
   std::vector<AdaptiveStep> steps;
   for (int s = 0; s < c.adapt.steps; ++s) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::string prefix = "step " + std::to_string(s + 1) + "/" + std::to_string(c.adapt.steps) + ": ";
     using clock = std::chrono::steady_clock;
     auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
-    const Discretization d = s == 0 ? std::move(first) : discretize_collection(c, collection);
+    const Discretization d = s == 0 ? std::move(first) : pt ? discretize_pt(c, cells) : discretize_collection(c, *collection);
     const double t_space = since(t0);
     auto t1 = clock::now();
     const PoissonSolution sol = solve_case(c, d, ordering, [&](const std::string& what) { say(prefix + what); });
@@ -72,9 +77,10 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     std::vector<int> marked;
     if (!last) marked = dorfler_marking(ind.eta_squared, c.adapt.theta);
     st.marked = static_cast<int>(marked.size());
-    if (on_step) on_step({s, d, sol, ind, marked, collection});
+    if (on_step) on_step({s, d, sol, ind, marked, pt ? nullptr : &*collection, pt ? d.tmesh.get() : nullptr});
     if (!last) {
-      say(prefix + "refining " + std::to_string(marked.size()) + " marked cells by knot segments");
+      say(prefix + "refining " + std::to_string(marked.size()) + " marked cells " +
+          (pt ? "of the T-mesh" : "by knot segments"));
       std::vector<SemiRegularCollection::Split> split;
       Eigen::VectorXd mu(4), mv(4);
       mu << 0, 1, 0.5, 0.5;
@@ -89,7 +95,18 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
                                             : SemiRegularCollection::kSplitY);
       }
       t1 = clock::now();
-      for (const auto& r : collection.refine_cells(marked, split)) st.extended += r.extended;
+      if (pt) {
+        // The BezierMesh cells are the T-mesh cells, in order: halve the marked ones.
+        for (size_t k = 0; k < marked.size(); ++k) {
+          RationalBox& a = cells[marked[k]];
+          RationalBox b = a;
+          if (split[k] == SemiRegularCollection::kSplitX) a.x1 = b.x0 = (a.x0 + a.x1) / 2;
+          else a.y1 = b.y0 = (a.y0 + a.y1) / 2;
+          cells.push_back(b);
+        }
+      } else {
+        for (const auto& r : collection->refine_cells(marked, split)) st.extended += r.extended;
+      }
       st.seconds_refine = since(t1);
     }
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -27,13 +27,15 @@ struct AdaptiveStepView {
   const PoissonSolution& solution;
   const ErrorIndicators& indicators;
   const std::vector<int>& marked;
-  const SemiRegularCollection& collection;
+  const SemiRegularCollection* collection;  // family "knot_segments"; else null
+  const RectangularPartition* tmesh;        // family "pt"; else null
 };
 
 // Solve - estimate - mark - refine, c.adapt.steps times or until c.adapt.max_dofs: the
 // residual estimator, Doerfler marking with c.adapt.theta, and refinement of the marked cells
-// by knot segments (each cell halved across its longer physical side, or alternately in x and
-// y when it is about square). Needs family = "knot_segments"; throws InputError otherwise.
+// (each cell halved across its longer physical side, or alternately in x and y when it is
+// about square): by knot segments (family "knot_segments"), or by splitting the cells of the
+// T-mesh and building the PT-splines anew (family "pt"). Throws InputError for other families.
 std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering,
                                      const std::function<void(const std::string&)>& progress,
                                      const std::function<void(const AdaptiveStepView&)>& on_step = {});

@@ -69,11 +69,11 @@ void discretize_explicit_collection(const CaseDescription& c, Discretization& d)
   d.simple_knots = interior_knots_simple(c.collection);
   for (const auto& v : d.segments->violations()) d.violations.push_back(v.reason);
   try {
-    d.segment_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
+    d.local_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
   } catch (const std::runtime_error& e) {
     throw InputError(where + ": the supports do not induce a partition: " + e.what());
   }
-  d.geometry = std::make_unique<PatchGeometryMap>(*d.segment_mesh, c.geometry);
+  d.geometry = std::make_unique<PatchGeometryMap>(*d.local_mesh, c.geometry);
 }
 
 void discretize_knot_segments(const CaseDescription& c, Discretization& d) {
@@ -112,8 +112,8 @@ void discretize_knot_segments(const CaseDescription& c, Discretization& d) {
     }
     d.simple_knots = d.simple_knots && c.segments[i].multiplicity == 1;
   }
-  d.segment_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
-  d.geometry = std::make_unique<PatchGeometryMap>(*d.segment_mesh, c.geometry);
+  d.local_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
+  d.geometry = std::make_unique<PatchGeometryMap>(*d.local_mesh, c.geometry);
 }
 
 }  // namespace
@@ -121,18 +121,19 @@ void discretize_knot_segments(const CaseDescription& c, Discretization& d) {
 Discretization discretize_collection(const CaseDescription& c, const SemiRegularCollection& collection) {
   Discretization d;
   d.segments = std::make_unique<SemiRegularCollection>(collection);
-  d.segment_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
-  d.geometry = std::make_unique<PatchGeometryMap>(*d.segment_mesh, c.geometry);
+  d.local_mesh = std::make_unique<BezierMesh>(d.segments->bezier_mesh());
+  d.geometry = std::make_unique<PatchGeometryMap>(*d.local_mesh, c.geometry);
   return d;
 }
 
 Discretization discretize(const CaseDescription& c) {
-  check_memory(c);
+  if (c.family != "pt") check_memory(c);
   Discretization d;
   if (c.family == "knot_segments") {
     discretize_knot_segments(c, d);
     return d;
   }
+  if (c.family == "pt") return discretize_pt(c, pt_start_cells(c));
   try {
     d.tensor = build_tensor_discretization(c.geometry, c.space);
   } catch (const std::invalid_argument& e) {
@@ -193,6 +194,16 @@ double mesh_size(const Discretization& d) {
 
 std::string describe_space(const CaseDescription& c) {
   const auto& s = c.space;
+  if (c.family == "pt") {
+    const char* ext = c.pt.extension == PtExtension::kHorizontal ? "horizontal"
+                      : c.pt.extension == PtExtension::kVertical ? "vertical" : "auto";
+    std::string start = !c.pt.tmesh_file.empty() ? "T-mesh " + c.pt.tmesh_file
+                        : !c.pt.cells.empty()    ? std::to_string(c.pt.cells.size()) + " given cells"
+                                                 : "tensor start";
+    if (!c.pt.segments.empty()) start += " + " + std::to_string(c.pt.segments.size()) + " segments";
+    return "PT-splines, degree " + std::to_string(s.degree[0]) + "x" + std::to_string(s.degree[1]) + ", " + start +
+           ", extension " + ext;
+  }
   if (c.family == "knot_segments" && !c.collection_file.empty())
     return "knot segments (Weller), degree " + std::to_string(s.degree[0]) + "x" + std::to_string(s.degree[1]) +
            ", collection of " + std::to_string(c.collection.size()) + " B-splines from " + c.collection_file;

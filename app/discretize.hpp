@@ -14,12 +14,14 @@ namespace knotwork {
 struct Discretization {
   TensorDiscretization tensor;                      // family "tensor"
   std::unique_ptr<SemiRegularCollection> segments;  // family "knot_segments"
-  std::unique_ptr<BezierMesh> segment_mesh;         // on the heap: geometry maps refer to it
+  std::unique_ptr<RectangularPartition> tmesh;      // family "pt": the T-mesh (parameter domain)
+  std::unique_ptr<PtSplineBasis> pt;                //   and its PT-spline basis
+  std::unique_ptr<BezierMesh> local_mesh;           // knot_segments, pt; on the heap: geometry maps refer to it
   std::vector<InsertionReport> insertions;          // what each segment became
   bool simple_knots = true;                         // every interior knot of multiplicity 1
   std::vector<std::string> violations;              // of an explicit collection (solve_case refuses)
   std::unique_ptr<GeometryMap> geometry;
-  const BezierMesh& mesh() const { return segments ? *segment_mesh : tensor.mesh; }
+  const BezierMesh& mesh() const { return local_mesh ? *local_mesh : tensor.mesh; }
 };
 
 // Throws InputError naming the case file and [space] when the space cannot be built.
@@ -27,6 +29,13 @@ Discretization discretize(const CaseDescription& c);
 
 // The case's geometry on a given knot-segment collection (a step of adaptive refinement).
 Discretization discretize_collection(const CaseDescription& c, const SemiRegularCollection& collection);
+
+// Family "pt": the case's starting T-mesh in parameter coordinates (cells or the tensor grid
+// of the geometry's knot spans, each cut into [space] elements parts, then the segments).
+std::vector<RationalBox> pt_start_cells(const CaseDescription& c);
+// PT-splines on the given T-mesh of the case's parameter domain, ready to solve: the
+// geometry's C0 knot lines are C0 lines of the space. Throws InputError naming the case.
+Discretization discretize_pt(const CaseDescription& c, const std::vector<RationalBox>& cells);
 
 // Solves the case's Poisson problem on its discretization; a GeometryError gets the case
 // file and "[geometry]" in front of its message.

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <set>
 #include <stdexcept>
+#include <tuple>
 
 #include "basis/sparse_rank.hpp"
 
@@ -122,6 +123,136 @@ bool contains(const std::vector<mpq_class>& lines, const mpq_class& v) {
   return std::find(lines.begin(), lines.end(), v) != lines.end();
 }
 
+using SparseVector = std::map<int, mpq_class>;
+
+void axpy(SparseVector& y, const mpq_class& a, const SparseVector& x) {
+  for (const auto& [k, v] : x) {
+    mpq_class& t = y[k];
+    t += a * v;
+    if (t == 0) y.erase(k);
+  }
+}
+
+std::vector<std::pair<int, mpq_class>> as_function(const SparseVector& v) { return {v.begin(), v.end()}; }
+
+// Vectors kept in echelon form, to test whether a new one is independent of those before.
+class SparseEchelon {
+ public:
+  // Reduces v by the vectors added so far and adds the remainder, if not zero, which it
+  // returns (empty when v was dependent).
+  SparseVector add(SparseVector v) {
+    for (auto it = v.begin(); it != v.end();) {
+      const auto p = pivots_.find(it->first);
+      if (p == pivots_.end()) {
+        ++it;
+        continue;
+      }
+      const int lead = it->first;
+      axpy(v, -it->second / p->second.at(lead), p->second);
+      it = v.upper_bound(lead);
+    }
+    if (v.empty()) return v;
+    const int lead = v.begin()->first;
+    pivots_.emplace(lead, v);
+    return v;
+  }
+  size_t size() const { return pivots_.size(); }
+
+ private:
+  std::map<int, SparseVector> pivots_;
+};
+
+// Grid box [x0, x1) x [y0, y1) in grid cell indices.
+struct GridBox {
+  int x0, y0, x1, y1;
+  bool operator<(const GridBox& o) const { return std::tie(x0, y0, x1, y1) < std::tie(o.x0, o.y0, o.x1, o.y1); }
+  bool contains(const GridBox& o) const { return x0 <= o.x0 && o.x1 <= x1 && y0 <= o.y0 && o.y1 <= y1; }
+};
+
+// A basis of the null space of one EEE block made of local vectors: null vectors supported on
+// the B-splines inside small boxes of T cells (the support of one B-spline, snapped to the
+// cells of T, then grown a layer of cells at a time), smallest boxes first, each kept when
+// independent of those before. The reduced row echelon basis of the whole block is also a
+// basis, but on graded meshes its vectors spread over the block with coefficients up to 1e8
+// (measured on an adaptive L-shape mesh), a basis too ill-conditioned to solve with.
+std::vector<SparseVector> local_null_basis(const std::vector<int>& cols, const std::vector<int>& block_rows,
+                                           const std::vector<std::vector<std::pair<int, mpq_class>>>& rows,
+                                           const std::vector<GridBox>& support, const Grid& g, const RectangularPartition& mesh,
+                                           long nullity) {
+  std::map<int, std::vector<int>> rows_of_col;
+  for (int r : block_rows)
+    for (const auto& [col, v] : rows[r]) rows_of_col[col].push_back(r);
+  auto snap = [&](GridBox b) {  // grow to a union of cells of T
+    for (bool grown = true; grown;) {
+      grown = false;
+      for (int iy = b.y0; iy < b.y1; ++iy)
+        for (int ix = b.x0; ix < b.x1; ++ix) {
+          const auto& c = mesh.cells()[g.at(ix, iy)];
+          const GridBox cb{g.index_x(c.x0), g.index_y(c.y0), g.index_x(c.x1), g.index_y(c.y1)};
+          if (!b.contains(cb)) {
+            b = {std::min(b.x0, cb.x0), std::min(b.y0, cb.y0), std::max(b.x1, cb.x1), std::max(b.y1, cb.y1)};
+            grown = true;
+          }
+        }
+    }
+    return b;
+  };
+  std::vector<int> order = cols;  // seeds: smallest supports first
+  auto area = [&](const GridBox& b) { return mpq_class((g.X[b.x1] - g.X[b.x0]) * (g.Y[b.y1] - g.Y[b.y0])); };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return area(support[a]) < area(support[b]); });
+  std::vector<GridBox> boxes;
+  for (int s : order) boxes.push_back(snap(support[s]));
+  SparseEchelon echelon;
+  std::vector<SparseVector> out;
+  std::set<GridBox> tried;
+  for (int layer = 0; static_cast<long>(out.size()) < nullity; ++layer) {
+    bool whole = false;
+    for (GridBox& box : boxes) {
+      if (static_cast<long>(out.size()) == nullity) break;
+      if (layer > 0)
+        box = snap({std::max(box.x0 - 1, 0), std::max(box.y0 - 1, 0), std::min(box.x1 + 1, g.nx()), std::min(box.y1 + 1, g.ny())});
+      whole = whole || (box.x0 == 0 && box.y0 == 0 && box.x1 == g.nx() && box.y1 == g.ny());
+      if (!tried.insert(box).second) continue;
+      std::vector<int> inside;
+      for (int col : cols)
+        if (box.contains(support[col])) inside.push_back(col);
+      if (inside.empty()) continue;
+      std::set<int> local_rows;
+      for (int col : inside)
+        for (int r : rows_of_col[col]) local_rows.insert(r);
+      std::map<int, int> local;
+      for (size_t a = 0; a < inside.size(); ++a) local[inside[a]] = static_cast<int>(a);
+      std::vector<std::vector<mpq_class>> dense;
+      for (int r : local_rows) {
+        std::vector<mpq_class> row(inside.size(), mpq_class(0));
+        for (const auto& [col, v] : rows[r])
+          if (const auto it = local.find(col); it != local.end()) row[it->second] = v;
+        dense.push_back(std::move(row));
+      }
+      for (auto& v : null_space_exact(std::move(dense), static_cast<int>(inside.size()))) {
+        SparseVector f;
+        mpq_class largest = 0;
+        for (size_t a = 0; a < inside.size(); ++a)
+          if (v[a] != 0) {
+            f[inside[a]] = v[a];
+            largest = std::max(largest, mpq_class(abs(v[a])));
+          }
+        for (auto& [k, c] : f) c /= largest;
+        SparseVector rest = echelon.add(f);
+        if (rest.empty()) continue;
+        largest = 0;
+        for (const auto& [k, c] : rest) largest = std::max(largest, mpq_class(abs(c)));
+        for (auto& [k, c] : rest) c /= largest;
+        out.push_back(std::move(rest));
+        if (static_cast<long>(out.size()) == nullity) break;
+      }
+    }
+    if (whole && static_cast<long>(out.size()) < nullity)
+      throw std::logic_error("local_null_basis: the whole mesh holds fewer null vectors than the block's nullity");
+  }
+  return out;
+}
+
 // The construction with horizontal lines extended, on `mesh` as given.
 PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0) {
   const Grid g = make_grid(mesh);
@@ -199,24 +330,19 @@ PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, c
       B.functions.push_back({{col, mpq_class(1)}});
       ++B.untouched;
     }
+  std::vector<GridBox> support(columns);
+  for (int col = 0; col < columns; ++col) {
+    const auto& sp = B.splines[col];
+    support[col] = {g.index_x(sp.x.front()), g.index_y(sp.y.front()), g.index_x(sp.x.back()), g.index_y(sp.y.back())};
+  }
   for (const auto& [root, cols] : block_columns) {
     ++B.blocks;
     B.largest_block = std::max(B.largest_block, static_cast<int>(cols.size()));
-    std::map<int, int> local;
-    for (size_t a = 0; a < cols.size(); ++a) local[cols[a]] = static_cast<int>(a);
-    std::vector<std::vector<mpq_class>> dense;
-    for (int r : block_rows[root]) {
-      std::vector<mpq_class> row(cols.size(), mpq_class(0));
-      for (const auto& [col, v] : rows[r]) row[local[col]] = v;
-      dense.push_back(std::move(row));
-    }
-    long rank = 0;
-    for (auto& v : null_space_exact(std::move(dense), static_cast<int>(cols.size()), &rank)) {
-      std::vector<std::pair<int, mpq_class>> f;
-      for (size_t a = 0; a < cols.size(); ++a)
-        if (v[a] != 0) f.emplace_back(cols[a], v[a]);
-      B.functions.push_back(std::move(f));
-    }
+    std::vector<SparseRationalRow> sparse;
+    for (int r : block_rows[root]) sparse.push_back({{rows[r].begin(), rows[r].end()}});
+    const long rank = rank_exact(sparse, columns);
+    for (const auto& v : local_null_basis(cols, block_rows[root], rows, support, g, mesh, static_cast<long>(cols.size()) - rank))
+      B.functions.push_back(as_function(v));
     B.rank += rank;
   }
   return B;
@@ -411,17 +537,6 @@ namespace knotwork {
 
 namespace {
 
-using SparseVector = std::map<int, mpq_class>;
-
-void axpy(SparseVector& y, const mpq_class& a, const SparseVector& x) {
-  for (const auto& [k, v] : x) {
-    mpq_class& t = y[k];
-    t += a * v;
-    if (t == 0) y.erase(k);
-  }
-}
-
-std::vector<std::pair<int, mpq_class>> as_function(const SparseVector& v) { return {v.begin(), v.end()}; }
 
 // Echelon elimination that keeps the functions whose `key` vectors are independent (in the
 // order given) and reduces the others to zero key: `on_dependent(i, reduced function)`.

@@ -90,3 +90,60 @@ RectangularPartition::RectangularPartition(std::vector<RationalBox> cells) : cel
 }
 
 }  // namespace knotwork
+
+namespace knotwork {
+
+std::vector<RationalBox> grid_cells(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& ys) {
+  for (const auto* L : {&xs, &ys}) {
+    if (L->size() < 2) throw std::invalid_argument("a grid needs at least two coordinates per direction");
+    for (size_t i = 1; i < L->size(); ++i)
+      if (!((*L)[i] > (*L)[i - 1]))
+        throw std::invalid_argument(std::string("grid ") + (L == &xs ? "x" : "y") + " coordinates must increase (" +
+                                    num((*L)[i - 1]) + " then " + num((*L)[i]) + ")");
+  }
+  std::vector<RationalBox> cells;
+  for (size_t j = 0; j + 1 < ys.size(); ++j)
+    for (size_t i = 0; i + 1 < xs.size(); ++i) cells.push_back({xs[i], ys[j], xs[i + 1], ys[j + 1]});
+  return cells;
+}
+
+std::vector<RationalBox> insert_segments(std::vector<RationalBox> cells, const std::vector<AxisSegment>& segments) {
+  for (size_t k = 0; k < segments.size(); ++k) {
+    AxisSegment s = segments[k];
+    for (mpq_class* v : {&s.position, &s.from, &s.to}) v->canonicalize();
+    const std::string name = "segment " + std::to_string(k) + " (" + (s.vertical ? "x = " : "y = ") + num(s.position) +
+                             " from " + num(s.from) + " to " + num(s.to) + ")";
+    if (!(s.to > s.from)) throw std::invalid_argument(name + " has zero or negative length");
+    std::vector<RationalBox> next;
+    mpq_class covered = 0;  // length of the segment lying on cell interiors or edges
+    for (const RationalBox& c : cells) {
+      // In the segment's frame: `a` across, `b` along.
+      const mpq_class &a0 = s.vertical ? c.x0 : c.y0, &a1 = s.vertical ? c.x1 : c.y1;
+      const mpq_class &b0 = s.vertical ? c.y0 : c.x0, &b1 = s.vertical ? c.y1 : c.x1;
+      const mpq_class lo = std::max(b0, s.from), hi = std::min(b1, s.to);
+      if (a0 <= s.position && s.position <= a1 && hi > lo) {
+        if (s.position == a0 || s.position == a1) {
+          if (s.position == a0) covered += hi - lo;  // counted once, on the cell above/right
+        } else {
+          covered += hi - lo;
+          if (lo > b0 || hi < b1)
+            throw std::invalid_argument(name + " ends inside cell " + box(c) +
+                                        ": a segment must end on an edge of the mesh");
+          RationalBox first = c, second = c;
+          (s.vertical ? first.x1 : first.y1) = s.position;
+          (s.vertical ? second.x0 : second.y0) = s.position;
+          next.push_back(first);
+          next.push_back(second);
+          continue;
+        }
+      }
+      next.push_back(c);
+    }
+    if (covered != s.to - s.from)
+      throw std::invalid_argument(name + " does not lie inside the rectangle of the mesh (or lies on its boundary)");
+    cells = std::move(next);
+  }
+  return cells;
+}
+
+}  // namespace knotwork

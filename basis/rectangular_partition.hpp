@@ -48,4 +48,16 @@ class RectangularPartition {
   std::vector<SharedEdge> edges_;
 };
 
+// A T-mesh given as a base grid and inserted segments: the tensor cells of the coordinate
+// lists, then each segment (x = position from y = from to y = to when vertical) splits the
+// cells it crosses. Each segment must end on an edge of the mesh so far (a segment cannot
+// end inside a cell) and lie inside the rectangle. Throws std::invalid_argument naming the
+// segment (0-based) and the cell.
+struct AxisSegment {
+  bool vertical = true;
+  mpq_class position, from, to;
+};
+std::vector<RationalBox> grid_cells(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& ys);
+std::vector<RationalBox> insert_segments(std::vector<RationalBox> cells, const std::vector<AxisSegment>& segments);
+
 }  // namespace knotwork

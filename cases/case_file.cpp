@@ -115,6 +115,21 @@ class Reader {
     fail(field, "\"" + s + "\" is not a number");
   }
 
+  // Exact: integers, rational strings ("14/9", "0.1" = 1/10), or a float's exact binary value.
+  mpq_class rational(const toml::node& x, const std::string& field) const {
+    try {
+      if (auto i64 = x.value_exact<int64_t>()) return mpq_class(static_cast<long>(*i64));
+      if (auto s = x.value_exact<std::string>()) return parse_rational(*s);
+      if (auto f = x.value_exact<double>()) {
+        if (!std::isfinite(*f)) fail(field, "coordinates must be finite (got nan or inf)");
+        return mpq_class(*f);  // write "1/10", not 0.1, for exact decimals
+      }
+    } catch (const std::invalid_argument& e) {
+      fail(field, e.what());
+    }
+    fail(field, "must be a number or a rational string such as \"14/9\"");
+  }
+
   long integer(const toml::node& n, const std::string& field) const {
     if (auto i = n.value_exact<int64_t>()) return static_cast<long>(*i);
     fail(field, "must be an integer");
@@ -321,14 +336,165 @@ void check_elements(const Reader& r, const std::array<long, 2>& e, const std::st
     r.fail(field, "too many elements (more than 2^26 cells)");
 }
 
+void read_quadrature(const Reader& r, const toml::table& s, CaseDescription& c) {
+  auto read_points = [&](const char* key, int& pu, int& pv) {
+    if (const toml::node* k = s.get(key)) {
+      const auto q = r.integer_pair(*k, std::string("[space] ") + key);
+      for (long v : q)
+        if (v < 1 || v > 30) r.fail(std::string("[space] ") + key, "must be in [1, 30]");
+      pu = static_cast<int>(q[0]);
+      pv = static_cast<int>(q[1]);
+    }
+  };
+  read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
+  read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
+}
+
+// cells = [[x0, y0, x1, y1], ...] with exact coordinates (`field` names the key).
+std::vector<RationalBox> read_cells(const Reader& r, const toml::node& node, const std::string& field) {
+  const toml::array* a = node.as_array();
+  if (!a) r.fail(field, "must be a list of cells [[x0, y0, x1, y1], ...]");
+  std::vector<RationalBox> cells;
+  for (size_t i = 0; i < a->size(); ++i) {
+    const std::string f = field + "[" + std::to_string(i) + "]";
+    const toml::array* c = a->get(i)->as_array();
+    if (!c || c->size() != 4) r.fail(f, "must be [x0, y0, x1, y1]");
+    mpq_class v[4];
+    for (size_t k = 0; k < 4; ++k) v[k] = r.rational(*c->get(k), f);
+    cells.push_back({v[0], v[1], v[2], v[3]});
+  }
+  return cells;
+}
+
+// segments = [{direction = "vertical", position, from, to}, ...] with exact coordinates.
+std::vector<AxisSegment> read_axis_segments(const Reader& r, const toml::node& node, const std::string& field) {
+  const toml::array* a = node.as_array();
+  if (!a) r.fail(field, "must be a list of { direction, position, from, to }");
+  std::vector<AxisSegment> out;
+  for (size_t i = 0; i < a->size(); ++i) {
+    const std::string f = field + "[" + std::to_string(i) + "]";
+    const toml::table* t = a->get(i)->as_table();
+    if (!t) r.fail(f, "must be a table { direction = \"vertical\", position = ..., from = ..., to = ... }");
+    r.check_keys(*t, f.front() == '[' ? f.substr(1) : f, {"direction", "position", "from", "to"});
+    for (const char* key : {"direction", "position", "from", "to"})
+      if (!t->get(key)) r.fail(f + " " + key, "missing");
+    const std::string dir = r.string(*t->get("direction"), f + " direction");
+    if (dir != "vertical" && dir != "horizontal") r.fail(f + " direction", "must be \"vertical\" or \"horizontal\"");
+    AxisSegment s;
+    s.vertical = dir == "vertical";
+    s.position = r.rational(*t->get("position"), f + " position");
+    s.from = r.rational(*t->get("from"), f + " from");
+    s.to = r.rational(*t->get("to"), f + " to");
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+// A T-mesh from `cells`, or from `grid` = {x = [...], y = [...]} and `segments` (`prefix`
+// goes in front of the field names). Validated as a partition of a rectangle.
+std::vector<RationalBox> read_tmesh(const Reader& r, const toml::table& t, const std::string& prefix) {
+  std::vector<RationalBox> cells;
+  const toml::node* c = t.get("cells");
+  const toml::node* g = t.get("grid");
+  if (c && g) r.fail(prefix + "grid", "give either cells or grid (with segments), not both");
+  if (c) {
+    if (t.get("segments")) r.fail(prefix + "segments", "inserted into a grid: use grid = {x = [...], y = [...]} with them");
+    cells = read_cells(r, *c, prefix + "cells");
+  } else if (g) {
+    const toml::table* gt = g->as_table();
+    if (!gt) r.fail(prefix + "grid", "must be a table {x = [...], y = [...]}");
+    r.check_keys(*gt, prefix.empty() ? "grid" : prefix.substr(1, prefix.size() - 3) + ".grid", {"x", "y"});
+    std::vector<mpq_class> xy[2];
+    for (int d = 0; d < 2; ++d) {
+      const std::string f = prefix + "grid." + (d == 0 ? "x" : "y");
+      const toml::node* n = gt->get(d == 0 ? "x" : "y");
+      if (!n || !n->as_array()) r.fail(f, "missing: the grid's coordinates, increasing");
+      for (size_t i = 0; i < n->as_array()->size(); ++i)
+        xy[d].push_back(r.rational(*n->as_array()->get(i), f + "[" + std::to_string(i) + "]"));
+    }
+    try {
+      cells = grid_cells(xy[0], xy[1]);
+    } catch (const std::invalid_argument& e) {
+      r.fail(prefix + "grid", e.what());
+    }
+    if (const toml::node* sg = t.get("segments")) {
+      const auto segs = read_axis_segments(r, *sg, prefix + "segments");
+      try {
+        cells = insert_segments(std::move(cells), segs);
+      } catch (const std::invalid_argument& e) {
+        r.fail(prefix + "segments", e.what());
+      }
+    }
+  } else {
+    r.fail(prefix + "cells", "missing: give cells = [[x0, y0, x1, y1], ...] or grid = {x = [...], y = [...]}");
+  }
+  try {
+    RectangularPartition check(cells);
+  } catch (const std::invalid_argument& e) {
+    r.fail(prefix + "cells", e.what());
+  }
+  return cells;
+}
+
+// [space] of family "pt".
+void read_pt_space(const Reader& r, const toml::table& s, CaseDescription& c) {
+  r.check_keys(s, "space", {"family", "degree", "elements", "cells", "tmesh", "segments", "extension",
+                            "quadrature_points", "error_quadrature_points"});
+  c.space.rational = false;
+  const toml::node* d = s.get("degree");
+  if (!d) r.fail("[space] degree", "missing required key");
+  const auto dd = r.integer_pair(*d, "[space] degree");
+  check_degree(r, dd, "[space] degree");
+  c.space.degree = {static_cast<int>(dd[0]), static_cast<int>(dd[1])};
+  const bool given = s.get("cells") || s.get("tmesh");
+  c.space.elements_per_span = {1, 1};
+  if (const toml::node* e = s.get("elements")) {
+    const auto el = r.integer_pair(*e, "[space] elements");
+    check_elements(r, el, "[space] elements");
+    c.space.elements_per_span = {static_cast<int>(el[0]), static_cast<int>(el[1])};
+  } else if (!given) {
+    r.fail("[space] elements", "missing: give elements (a tensor start on the geometry's knot spans), cells or tmesh");
+  }
+  if (s.get("cells") && s.get("tmesh")) r.fail("[space] tmesh", "give either cells or tmesh, not both");
+  if (const toml::node* cl = s.get("cells")) {
+    c.pt.cells = read_cells(r, *cl, "[space] cells");
+    try {
+      RectangularPartition check(c.pt.cells);
+    } catch (const std::invalid_argument& e) {
+      r.fail("[space] cells", e.what());
+    }
+  }
+  if (const toml::node* tm = s.get("tmesh")) {
+    std::filesystem::path file = r.string(*tm, "[space] tmesh");
+    if (file.is_relative()) file = std::filesystem::path(r.path()).parent_path() / file;
+    c.pt.tmesh_file = file.string();
+    c.pt.cells = load_partition(c.pt.tmesh_file, false).cells;
+  }
+  if (const toml::node* sg = s.get("segments")) c.pt.segments = read_axis_segments(r, *sg, "[space] segments");
+  if (const toml::node* x = s.get("extension")) {
+    const std::string e = r.string(*x, "[space] extension");
+    if (e == "auto") c.pt.extension = PtExtension::kAuto;
+    else if (e == "horizontal") c.pt.extension = PtExtension::kHorizontal;
+    else if (e == "vertical") c.pt.extension = PtExtension::kVertical;
+    else r.fail("[space] extension", "'" + e + "' is not one of auto, horizontal, vertical (" +
+                                         closest(e, {"auto", "horizontal", "vertical"}) + ")");
+  }
+  read_quadrature(r, s, c);
+}
+
 void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
+  if (const toml::node* f = s.get("family"); f && f->value_exact<std::string>() == "pt") {
+    c.family = "pt";
+    return read_pt_space(r, s, c);
+  }
   r.check_keys(s, "space", {"family", "degree", "elements", "continuity", "rational", "quadrature_points",
                             "error_quadrature_points", "insert_knots_u", "insert_knots_v", "segments", "collection"});
   if (const toml::node* f = s.get("family")) {
     c.family = r.string(*f, "[space] family");
     if (c.family != "tensor" && c.family != "knot_segments")
-      r.fail("[space] family", "'" + c.family + "' is not available (" + closest(c.family, {"tensor", "knot_segments", "g1"}) +
-                                   "; this version builds \"tensor\", \"knot_segments\" and \"g1\")");
+      r.fail("[space] family", "'" + c.family + "' is not available (" +
+                                   closest(c.family, {"tensor", "knot_segments", "g1", "pt"}) +
+                                   "; this version builds \"tensor\", \"knot_segments\", \"g1\" and \"pt\")");
   }
   const bool segments_family = c.family == "knot_segments";
   if (segments_family) {
@@ -408,15 +574,6 @@ void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
     if (!b) r.fail("[space] rational", "must be true or false");
     c.space.rational = *b;
   }
-  auto read_points = [&](const char* key, int& pu, int& pv) {
-    if (const toml::node* k = s.get(key)) {
-      const auto q = r.integer_pair(*k, std::string("[space] ") + key);
-      for (long v : q)
-        if (v < 1 || v > 30) r.fail(std::string("[space] ") + key, "must be in [1, 30]");
-      pu = static_cast<int>(q[0]);
-      pv = static_cast<int>(q[1]);
-    }
-  };
   for (int d = 0; d < 2; ++d) {
     const std::string key = d == 0 ? "insert_knots_u" : "insert_knots_v";
     if (const toml::node* k = s.get(key)) {
@@ -428,8 +585,7 @@ void read_space(const Reader& r, const toml::table& s, CaseDescription& c) {
                                        shortest(g.domain_begin()) + ", " + shortest(g.domain_end()) + ")");
     }
   }
-  read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
-  read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
+  read_quadrature(r, s, c);
 }
 
 int side_index(const Reader& r, const std::string& side, const std::string& field) {
@@ -709,17 +865,19 @@ void require_highest_smoothness(const PartitionDescription& p, const std::string
                      std::to_string(p.n - 1) + "]); `knotwork dimension` counts other smoothness");
 }
 
-PartitionDescription load_partition(const std::string& path) {
+PartitionDescription load_partition(const std::string& path, bool need_degree) {
   const toml::table root = parse_toml(path);
   Reader r(path);
-  r.check_keys(root, "", {"cells", "degree", "smoothness", "title", "description"});
+  r.check_keys(root, "", {"cells", "grid", "segments", "degree", "smoothness", "title", "description"});
   PartitionDescription d;
   const toml::node* deg = root.get("degree");
-  if (!deg) r.fail("degree", "missing required key ([m, n] or one int)");
-  const auto mn = r.integer_pair(*deg, "degree");
-  check_degree(r, mn, "degree");
-  d.m = static_cast<int>(mn[0]);
-  d.n = static_cast<int>(mn[1]);
+  if (!deg && need_degree) r.fail("degree", "missing required key ([m, n] or one int)");
+  if (deg) {
+    const auto mn = r.integer_pair(*deg, "degree");
+    check_degree(r, mn, "degree");
+    d.m = static_cast<int>(mn[0]);
+    d.n = static_cast<int>(mn[1]);
+  }
   d.alpha = d.m - 1;
   d.beta = d.n - 1;
   if (const toml::node* sm = root.get("smoothness")) {
@@ -729,34 +887,7 @@ PartitionDescription load_partition(const std::string& path) {
     d.alpha = static_cast<int>(ab[0]);
     d.beta = static_cast<int>(ab[1]);
   }
-  const toml::node* cells = root.get("cells");
-  if (!cells || !cells->is_array()) r.fail("cells", "missing: give cells = [[x0, y0, x1, y1], ...]");
-  const toml::array& a = *cells->as_array();
-  for (size_t i = 0; i < a.size(); ++i) {
-    const std::string field = "cells[" + std::to_string(i) + "]";
-    const toml::array* c = a.get(i)->as_array();
-    if (!c || c->size() != 4) r.fail(field, "must be [x0, y0, x1, y1]");
-    mpq_class v[4];
-    for (size_t k = 0; k < 4; ++k) {
-      const toml::node& x = *c->get(k);
-      try {
-        if (auto i64 = x.value_exact<int64_t>()) v[k] = mpq_class(static_cast<long>(*i64));
-        else if (auto s = x.value_exact<std::string>()) v[k] = parse_rational(*s);
-        else if (auto f = x.value_exact<double>()) {
-          if (!std::isfinite(*f)) r.fail(field, "coordinates must be finite");
-          v[k] = mpq_class(*f);  // the double's exact binary value: write "1/10", not 0.1, for exact decimals
-        } else r.fail(field, "coordinates must be numbers or rational strings");
-      } catch (const std::invalid_argument& e) {
-        r.fail(field, e.what());
-      }
-    }
-    d.cells.push_back({v[0], v[1], v[2], v[3]});
-  }
-  try {
-    RectangularPartition check(d.cells);
-  } catch (const std::invalid_argument& e) {
-    r.fail("cells", e.what());
-  }
+  d.cells = read_tmesh(r, root, "");
   return d;
 }
 
@@ -801,7 +932,7 @@ CollectionDescription load_collection(const std::string& path) {
 InputKind input_kind(const std::string& path) {
   const toml::table root = parse_toml(path);
   if (root.get("functions")) return InputKind::kCollection;
-  if (root.get("cells")) return InputKind::kPartition;
+  if (root.get("cells") || root.get("grid")) return InputKind::kPartition;
   return InputKind::kCase;
 }
 

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <optional>
 
+#include "basis/pt_spline.hpp"
 #include "basis/semi_regular_collection.hpp"
 #include "basis/tensor_patch.hpp"
 #include "solver/poisson_problem.hpp"
@@ -19,7 +20,7 @@ struct CaseDescription {
   std::string geometry_type;
   NurbsPatch geometry;
   TensorSpaceOptions space;
-  std::string family = "tensor";         // or "knot_segments", "g1"
+  std::string family = "tensor";         // or "knot_segments", "g1", "pt"
   std::vector<KnotInsertion> segments;  // knot_segments: inserted in order, parameter coordinates
   std::string collection_file;             // knot_segments given explicitly ([space] collection)
   std::vector<LocalBSpline> collection;    // its functions, not yet checked for semi-regularity
@@ -41,6 +42,16 @@ struct CaseDescription {
     std::optional<SurfaceExactSolution> surface_exact;
     std::optional<Expression> surface_source;  // literal f(x, y, z); else derived on the surface
   } g1;
+  // family "pt": PT-splines over a T-mesh in the geometry's parameter domain. The start is
+  // `cells` (inline or from [space] tmesh) or else the tensor grid of the geometry's knot
+  // spans; every start cell is cut into space.elements_per_span parts, then `segments` are
+  // inserted (exact rationals).
+  struct Pt {
+    std::vector<RationalBox> cells;
+    std::vector<AxisSegment> segments;
+    std::string tmesh_file;  // resolved; empty for inline cells or the tensor start
+    PtExtension extension = PtExtension::kAuto;
+  } pt;
   QuadratureOptions quadrature;
   PoissonProblem problem;
   std::string output_directory;  // default results/<name>
@@ -71,14 +82,16 @@ namespace knotwork {
 
 // A rectangular partition (T-mesh) file:
 //   cells = [[x0, y0, x1, y1], ...]   numbers or exact rational strings such as "14/9"
+//     or grid = {x = [...], y = [...]} with segments = [{direction, position, from, to}, ...]
 //   degree = [m, n]                   (or one int)
 //   smoothness = [alpha, beta]        optional, default [m-1, n-1]
 struct PartitionDescription {
   std::vector<RationalBox> cells;
   int m = 2, n = 2, alpha = 1, beta = 1;
 };
-// Throws InputError naming the file and field (or the offending cells).
-PartitionDescription load_partition(const std::string& path);
+// Throws InputError naming the file and field (or the offending cells). Without need_degree
+// the file may omit `degree` (a case's [space] tmesh gives its own).
+PartitionDescription load_partition(const std::string& path, bool need_degree = true);
 
 // For constructions of the highest smoothness only: throws InputError naming the file and
 // `smoothness` unless alpha = m - 1 and beta = n - 1; `space` says which construction.
