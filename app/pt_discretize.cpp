@@ -104,6 +104,7 @@ Discretization discretize_pt(const CaseDescription& c, const std::vector<Rationa
     throw InputError(c.path + ": [space]: " + e.what());
   }
   make_boundary_traces_independent(*d.pt, *d.tmesh);
+  make_numerically_independent(*d.pt, *d.tmesh);
   // Exact Bernstein coefficients, rounded once: assembly sees functions that are C^(m-1) to
   // the last bit, whatever the T-mesh.
   d.local_mesh = std::make_unique<BezierMesh>(

@@ -76,6 +76,15 @@ double pt_smoothness_residual(const PtCellPolynomials& polynomials, const Rectan
 // (the BezierMesh contract for Dirichlet data); the others vanish on the whole boundary.
 void make_boundary_traces_independent(PtSplineBasis& basis, const RectangularPartition& mesh);
 
+// Exactly independent functions can still be nearly dependent in double precision: on a
+// uniformly halved T-mesh the local EEE functions had a combination of norm 1e-6 of theirs,
+// and CHOLMOD factored the numerically singular stiffness matrix into a wrong solution. This
+// replaces, group by group (functions sharing B-splines; those vanishing on the boundary
+// apart from the others, so traces stay as they are), the functions of nearly dependent
+// combinations by those combinations, normalized. The span is unchanged and every function
+// stays exactly in S(T). See condition_block in pt_spline.cpp.
+void make_numerically_independent(PtSplineBasis& basis, const RectangularPartition& mesh);
+
 // Prop. 1: the tensor-product B-splines of the cross-cuts of T (non-negative, a partition of
 // unity) replace as many basis functions as they are, and every other function gets
 // c times the sum of the cross-cut B-splines over its support, with c = minus its smallest

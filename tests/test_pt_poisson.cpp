@@ -1,0 +1,191 @@
+// Poisson with PT-splines ([space] family = "pt"): the BezierMesh against exact evaluation,
+// reproduction of a solution that lies in the space, optimal rates under uniform halving of a
+// T-mesh, the C0 fold of the L-shape, adaptive refinement, and input errors.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "app/adaptive.hpp"
+#include "app/discretize.hpp"
+#include "quadrature/bernstein.hpp"
+#include "solver/input_error.hpp"
+
+using namespace knotwork;
+
+namespace {
+
+// A case file written to a temporary folder (removed with the object).
+struct CaseText {
+  std::filesystem::path dir, path;
+  explicit CaseText(const std::string& text) {
+    char tmpl[] = "/tmp/knotwork-test-pt-XXXXXX";
+    dir = mkdtemp(tmpl);
+    path = dir / "case.toml";
+    std::ofstream(path) << text;
+  }
+  ~CaseText() { std::filesystem::remove_all(dir); }
+  CaseDescription load() const { return load_case(path.string()); }
+};
+
+// A T-mesh of the unit square with rays, a T l-edge and a T-cycle-free hierarchy: a 4 x 4
+// grid plus segments, as users write it.
+const std::string kSquare = R"(
+[geometry]
+type = "rectangle"
+[space]
+family = "pt"
+degree = DEGREE
+elements = 4
+segments = [
+  { direction = "vertical", position = "3/8", from = 0, to = "1/2" },
+  { direction = "horizontal", position = "3/8", from = "1/4", to = 1 },
+  { direction = "vertical", position = "5/8", from = "1/4", to = "3/4" },
+  { direction = "horizontal", position = "5/16", from = "1/4", to = "1/2" },
+]
+[problem]
+exact = "EXACT"
+)";
+
+std::string square_case(int degree, const std::string& exact) {
+  std::string t = kSquare;
+  t.replace(t.find("DEGREE"), 6, std::to_string(degree));
+  t.replace(t.find("EXACT"), 5, exact);
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("PT BezierMesh: every extraction row reproduces the exact PT function", "[pt][poisson]") {
+  const CaseText file(square_case(2, "x*y"));
+  const CaseDescription c = file.load();
+  const Discretization d = discretize(c);
+  REQUIRE(d.pt);
+  const BezierMesh& mesh = d.mesh();
+  REQUIRE(mesh.num_functions() == static_cast<int>(d.pt->functions.size()));
+  REQUIRE(mesh.num_cells() == d.tmesh->num_cells());
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> pick(1, 15);
+  double worst = 0;
+  int checked = 0;
+  for (int k = 0; k < mesh.num_cells(); ++k) {
+    const BezierCell& cell = mesh.cell(k);
+    const RationalBox& box = d.tmesh->cells()[k];
+    for (int trial = 0; trial < 2; ++trial) {
+      const mpq_class s(pick(rng), 16), t(pick(rng), 16);
+      const mpq_class x = box.x0 + s * (box.x1 - box.x0), y = box.y0 + t * (box.y1 - box.y0);
+      std::vector<double> bu(cell.degree_u + 1), bv(cell.degree_v + 1), du(bu.size()), dv(bv.size());
+      bernstein_values_and_derivatives(cell.degree_u, s.get_d(), bu.data(), du.data());
+      bernstein_values_and_derivatives(cell.degree_v, t.get_d(), bv.data(), dv.data());
+      const auto ids = mesh.functions(k);
+      std::vector<bool> alive(mesh.num_functions(), false);
+      for (size_t a = 0; a < ids.size(); ++a) {
+        double v = 0;
+        for (int j = 0; j <= cell.degree_v; ++j)
+          for (int i = 0; i <= cell.degree_u; ++i) v += mesh.extraction(k)(a, i + (cell.degree_u + 1) * j) * bu[i] * bv[j];
+        worst = std::max(worst, std::abs(v - pt_evaluate(*d.pt, ids[a], x, y).get_d()));
+        alive[ids[a]] = true;
+      }
+      // The functions not listed on the cell vanish there.
+      for (int f = 0; f < mesh.num_functions(); ++f)
+        if (!alive[f]) worst = std::max(worst, std::abs(pt_evaluate(*d.pt, f, x, y).get_d()));
+      ++checked;
+    }
+  }
+  REQUIRE(checked == 2 * mesh.num_cells());
+  REQUIRE(worst < 1e-13);
+}
+
+TEST_CASE("PT Poisson: a solution in the space is reproduced to rounding", "[pt][poisson]") {
+  // Biquadratic and bicubic polynomials lie in S(T) of any T-mesh; Dirichlet data on all sides.
+  for (const auto& [p, exact] : std::vector<std::pair<int, std::string>>{{2, "x^2*y^2 + 3*x*y - y^2 + 1"},
+                                                                        {3, "x^3*y^2 - 2*x*y^3 + x^2"}}) {
+    INFO("degree " << p << ", u = " << exact);
+    const CaseText file(square_case(p, exact));
+    const CaseDescription c = file.load();
+    const Discretization d = discretize(c);
+    const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
+    REQUIRE(s.errors->l2 < 1e-11);
+    REQUIRE(s.errors->h1_semi < 1e-10);
+  }
+}
+
+TEST_CASE("PT Poisson: optimal rates when every cell of a T-mesh is halved", "[pt][poisson]") {
+  // h^(p+1) in L2 and h^p in the H1 seminorm for the smooth u = sin(pi x) sin(pi y).
+  for (int p : {2, 3}) {
+    const CaseText file(square_case(p, "sin(pi*x)*sin(pi*y)"));
+    CaseDescription c = file.load();
+    c.pt.cells = pt_start_cells(c);  // the T-mesh, then halved uniformly
+    c.pt.segments.clear();
+    std::vector<double> l2, h1;
+    for (int e : {2, 4, 8}) {
+      c.space.elements_per_span = {e, e};
+      const Discretization d = discretize(c);
+      const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
+      l2.push_back(s.errors->l2);
+      h1.push_back(s.errors->h1_semi);
+    }
+    INFO("degree " << p << ": L2 " << l2[0] << " " << l2[1] << " " << l2[2] << ", H1 " << h1[0] << " " << h1[1] << " " << h1[2]);
+    REQUIRE(std::log2(l2[1] / l2[2]) == Approx(p + 1).margin(0.2));
+    REQUIRE(std::log2(h1[1] / h1[2]) == Approx(p).margin(0.15));
+  }
+}
+
+TEST_CASE("PT Poisson on the L-shape: C0 across the fold, adaptive refinement beats uniform", "[pt][poisson][adaptive]") {
+  const std::string root = KNOTWORK_SOURCE_DIR;
+  CaseDescription c = load_case(root + "/cases/lshape_adaptive_pt.toml");
+  REQUIRE(c.family == "pt");
+  // The fold u = 1/2 is C0: without it the space could not approximate the corner (and the
+  // functions would be C1 in the parameter domain across a kink of the map).
+  const Discretization d = discretize(c);
+  REQUIRE(d.pt->c0.x.size() == 1);
+  REQUIRE(d.pt->c0.x[0] == mpq_class(1, 2));
+  c.adapt.steps = 14;
+  c.adapt.max_dofs = 100000;
+  const auto steps = adapt_case(c, Ordering::kAmd, {});
+  REQUIRE(steps.size() == 14);
+  // Uniform refinement of the same start with at least as many functions.
+  CaseDescription u = c;
+  double uniform = 0;
+  int uniform_dofs = 0;
+  for (int e = 2;; e *= 2) {
+    u.space.elements_per_span = {e, e};
+    const Discretization du = discretize(u);
+    if (du.mesh().num_functions() < steps.back().dofs) continue;
+    const PoissonSolution s = solve_case(u, du, Ordering::kAmd, {});
+    uniform = s.errors->h1_semi, uniform_dofs = s.num_functions;
+    break;
+  }
+  INFO("adaptive " << steps.back().dofs << " dofs: " << steps.back().h1_semi << "; uniform " << uniform_dofs << " dofs: " << uniform);
+  REQUIRE(uniform_dofs >= steps.back().dofs);
+  REQUIRE(steps.back().h1_semi < 0.7 * uniform);
+  REQUIRE(steps.back().h1_semi < 0.5 * steps.front().h1_semi);
+}
+
+TEST_CASE("PT case files: bad T-meshes give one-line errors naming the field", "[pt][poisson]") {
+  auto error_of = [](const std::string& space) {
+    const CaseText file("[geometry]\ntype = \"lshape\"\n[space]\nfamily = \"pt\"\ndegree = 2\n" + space +
+                        "\n[problem]\nexact = \"x\"\n");
+    try {
+      const CaseDescription c = file.load();
+      discretize(c);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  using Catch::Contains;
+  CHECK_THAT(error_of("cells = [[0, 0, 1, 1], [\"1/2\", 0, 1, 1]]"), Contains("[space] cells") && Contains("overlap"));
+  CHECK_THAT(error_of("cells = [[0, 0, \"1/2\", 1]]"), Contains("not the geometry's parameter domain"));
+  CHECK_THAT(error_of("cells = [[0, 0, 1, 1]]"), Contains("straddles the geometry's knot line u = 0.5"));
+  CHECK_THAT(error_of("cells = [[0, 0, 1, 0]]"), Contains("zero or negative area"));
+  CHECK_THAT(error_of("cells = [[0, 0, \"1/2\", 1], [\"1/2\", 0, 1, nan]]"), Contains("finite"));
+  CHECK_THAT(error_of("elements = 2\nsegments = [{ direction = \"vertical\", position = \"1/8\", from = 0, to = \"1/4\" }]"),
+             Contains("[space] segments") && Contains("ends inside cell"));
+  CHECK_THAT(error_of("elements = 2\nextension = \"diagonal\""), Contains("[space] extension") && Contains("auto"));
+  CHECK_THAT(error_of("elements = 2\ncells = []\ntmesh = \"x.toml\""), Contains("either cells or tmesh"));
+  CHECK_THAT(error_of(""), Contains("[space] elements") && Contains("missing"));
+  CHECK_THAT(error_of("elements = 2\ncontinuity = 1"), Contains("[space] continuity") && Contains("unknown key"));
+}
