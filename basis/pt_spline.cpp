@@ -9,6 +9,7 @@
 #include <set>
 #include <stdexcept>
 #include <tuple>
+#include <unordered_map>
 
 #include "basis/sparse_rank.hpp"
 
@@ -210,12 +211,13 @@ std::vector<SparseVector> local_null_basis(const std::vector<int>& cols, const s
   auto consider = [&](SparseVector f) {
     if (!echelon.add(f).empty()) out.push_back(std::move(f));
   };
+  std::set<std::vector<int>> tried_sets;  // different boxes often hold the same B-splines
   auto null_vectors = [&](const GridBox& box) {
     std::vector<SparseVector> found;
     std::vector<int> inside;
     for (int col : cols)
       if (box.contains(support[col])) inside.push_back(col);
-    if (inside.empty()) return found;
+    if (inside.empty() || !tried_sets.insert(inside).second) return found;
     std::set<int> local_rows;
     for (int col : inside)
       for (int r : rows_of_col[col]) local_rows.insert(r);
@@ -411,7 +413,9 @@ PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, c
     B.largest_block = std::max(B.largest_block, static_cast<int>(cols.size()));
     std::vector<SparseRationalRow> sparse;
     for (int r : block_rows[root]) sparse.push_back({{rows[r].begin(), rows[r].end()}});
-    const long rank = rank_exact(sparse, columns);
+    // Modular rank <= rank over Q; were it lower, the boxes could not reach the nullity and
+    // local_null_basis would throw rather than return too few functions.
+    const long rank = rank_modular(sparse, columns);
     std::vector<SparseVector> null = local_null_basis(cols, block_rows[root], rows, support, g, mesh,
                                                       static_cast<long>(cols.size()) - rank);
     for (const auto& v : null) B.functions.push_back(as_function(v));
@@ -502,29 +506,47 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
     cs.inv_y = inverse_bernstein_collocation<S>(n, sy);
   }
   std::vector<std::vector<std::pair<int, std::vector<S>>>> out(B.functions.size());
+  std::unordered_map<long, std::pair<std::vector<S>, std::vector<S>>> sample_values;
   for (size_t f = 0; f < B.functions.size(); ++f) {
-    std::set<int> cells;
+    // Values at each cell's sample points, visiting for each B-spline only the cells of its
+    // support (a function can combine hundreds of B-splines over hundreds of cells).
+    std::map<int, std::vector<S>> values;
+    std::vector<int> seen;
     for (const auto& [s, coef] : B.functions[f]) {
       const auto& sp = B.splines[s];
+      const S cf = to_scalar<S>(coef);
+      seen.clear();
       for (int iy = g.index_y(sp.y.front()); iy < g.index_y(sp.y.back()); ++iy)
-        for (int ix = g.index_x(sp.x.front()); ix < g.index_x(sp.x.back()); ++ix) cells.insert(g.at(ix, iy));
-    }
-    for (int k : cells) {
-      const CellSampling& cs = sampling[k];
-      // Values at the tensor sample points.
-      std::vector<S> V((m + 1) * (n + 1), S(0));
-      for (const auto& [s, coef] : B.functions[f]) {
-        const auto& sp = B.splines[s];
-        std::vector<S> vx(m + 1), vy(n + 1);
-        for (int q = 0; q <= m; ++q) vx[q] = bspline_value<S>(sp.x, cs.px[q]);
-        for (int q = 0; q <= n; ++q) vy[q] = bspline_value<S>(sp.y, cs.py[q]);
-        const S cf = to_scalar<S>(coef);
-        for (int b = 0; b <= n; ++b) {
-          if (vy[b] == 0) continue;
-          for (int a = 0; a <= m; ++a)
-            if (vx[a] != 0) V[a + (m + 1) * b] += cf * vx[a] * vy[b];
+        for (int ix = g.index_x(sp.x.front()); ix < g.index_x(sp.x.back()); ++ix) {
+          const int k = g.at(ix, iy);
+          if (std::find(seen.begin(), seen.end(), k) != seen.end()) continue;
+          seen.push_back(k);
+          // A B-spline's values at a cell's sample points, computed once: the functions that
+          // make_numerically_independent combines share their B-splines.
+          auto [cached, fresh_values] = sample_values.try_emplace(static_cast<long>(s) * mesh.num_cells() + k);
+          if (fresh_values) {
+            const CellSampling& cs = sampling[k];
+            cached->second.first.resize(m + 1), cached->second.second.resize(n + 1);
+            for (int q = 0; q <= m; ++q) cached->second.first[q] = bspline_value<S>(sp.x, cs.px[q]);
+            for (int q = 0; q <= n; ++q) cached->second.second[q] = bspline_value<S>(sp.y, cs.py[q]);
+          }
+          const std::vector<S>&vx = cached->second.first, &vy = cached->second.second;
+          bool any_x = false, any_y = false;
+          for (const S& v : vx) any_x = any_x || v != 0;
+          for (const S& v : vy) any_y = any_y || v != 0;
+          if (!any_x || !any_y) continue;
+          auto [it, fresh] = values.try_emplace(k);
+          if (fresh) it->second.assign((m + 1) * (n + 1), S(0));
+          std::vector<S>& V = it->second;
+          for (int b = 0; b <= n; ++b) {
+            if (vy[b] == 0) continue;
+            for (int a = 0; a <= m; ++a)
+              if (vx[a] != 0) V[a + (m + 1) * b] += cf * vx[a] * vy[b];
+          }
         }
-      }
+    }
+    for (const auto& [k, V] : values) {
+      const CellSampling& cs = sampling[k];
       // Bernstein coefficients C = inv_x V inv_y^T.
       std::vector<S> T((m + 1) * (n + 1), S(0)), C((m + 1) * (n + 1), S(0));
       for (int b = 0; b <= n; ++b)
