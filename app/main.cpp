@@ -109,10 +109,12 @@ int main(int argc, char** argv) {
   basis_cmd->add_option("--export", basis.export_file,
                         "Write every function to this JSON file (local knot vectors; with --g1, per-face B-spline coefficients)");
   basis_cmd->add_option("--vtk", basis.vtk_file,
-                        "--g1: write the G1 surface fitted to the mesh, with the --show functions as fields, to this .vtu");
+                        "--g1: write the G1 surface fitted to the mesh, with the --show functions as fields, to this .vtu; "
+                        "--pt: the T-mesh cells with the --show functions");
   basis_cmd->add_option("--show", basis.show,
                         "--g1 --vtk: functions to write: vertex:N (OBJ index), edge:I-J, face:N (1-based), all, or "
-                        "extraordinary (the first interior vertex of valence != 4)")
+                        "extraordinary (the first interior vertex of valence != 4); --pt --vtk: all, 0-based indices such as 0,5, "
+                        "or by default the four functions with the largest supports")
       ->capture_default_str();
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
   basis_cmd->add_flag("--pt", basis.pt, "PT-splines of the T-mesh file (edge extension + Extended Edge Elimination)");

@@ -3,6 +3,7 @@
 // smoothness residual, non-negativity, support sizes) and an export of every function.
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <set>
 
@@ -17,6 +18,7 @@
 #include "cases/case_file.hpp"
 #include "quadrature/bernstein.hpp"
 #include "solver/input_error.hpp"
+#include "solver/vtk_output.hpp"
 
 namespace knotwork {
 
@@ -62,11 +64,75 @@ double bernstein_value(const std::vector<double>& b, int m, int n, double s, dou
   return v;
 }
 
+// Which functions --vtk writes: "all", 0-based indices "3,17", or by default
+// ("extraordinary", the --g1 default) the four with the largest supports.
+std::vector<int> shown_functions(const std::string& show, const PtCellPolynomials& polys) {
+  const int nf = static_cast<int>(polys.size());
+  std::vector<int> out;
+  if (show == "all") {
+    for (int f = 0; f < nf; ++f) out.push_back(f);
+  } else if (show == "extraordinary") {
+    for (int f = 0; f < nf; ++f) out.push_back(f);
+    std::stable_sort(out.begin(), out.end(), [&](int a, int b) { return polys[a].size() > polys[b].size(); });
+    out.resize(std::min(nf, 4));
+  } else {
+    size_t at = 0;
+    while (at <= show.size()) {
+      const size_t comma = std::min(show.find(',', at), show.size());
+      const std::string item = show.substr(at, comma - at);
+      size_t used = 0;
+      int f = -1;
+      try {
+        f = std::stoi(item, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != item.size() || item.empty() || f < 0 || f >= nf)
+        throw InputError("--show: '" + item + "' is not a function index in [0, " + std::to_string(nf - 1) +
+                         "] (give all, or indices such as 0,5)");
+      out.push_back(f);
+      at = comma + 1;
+    }
+  }
+  return out;
+}
+
+// The T-mesh as Bezier cells of the parameter plane with the shown functions as exact fields.
+void write_vtk(const std::string& file, const RectangularPartition& mesh, const PtCellPolynomials& polys, int p,
+               const std::vector<int>& show) {
+  BezierSurface s;
+  Eigen::VectorXd alive = Eigen::VectorXd::Zero(mesh.num_cells());
+  for (const auto& f : polys)
+    for (const auto& [k, c] : f) alive[k] += 1;
+  for (const auto& c : mesh.cells()) {
+    Eigen::MatrixXd points = Eigen::MatrixXd::Zero((p + 1) * (p + 1), 3);
+    for (int b = 0; b <= p; ++b)
+      for (int a = 0; a <= p; ++a) {
+        points(a + (p + 1) * b, 0) = mpq_class(c.x0 + (c.x1 - c.x0) * a / p).get_d();
+        points(a + (p + 1) * b, 1) = mpq_class(c.y0 + (c.y1 - c.y0) * b / p).get_d();
+      }
+    s.points.push_back(points);
+    s.degree.push_back(p);
+  }
+  s.cell_fields.emplace_back("functions_alive", alive);
+  for (int f : show) {
+    std::vector<Eigen::VectorXd> per_cell(mesh.num_cells(), Eigen::VectorXd::Zero((p + 1) * (p + 1)));
+    for (const auto& [k, c] : polys[f]) per_cell[k] = Eigen::Map<const Eigen::VectorXd>(c.data(), static_cast<Eigen::Index>(c.size()));
+    s.point_fields.emplace_back("function_" + std::to_string(f), std::move(per_cell));
+  }
+  write_file_atomically(file, "--vtk", [&](const std::string& path) { write_bezier_surface_vtu(path, s); });
+}
+
 }  // namespace
 
 int pt_basis_command(const BasisOptions& o) {
   const PartitionDescription p = load_partition(o.case_file);
   require_highest_smoothness(p, o.case_file, "PT-splines span S(m, n, m-1, n-1)");
+  if (!o.vtk_file.empty() && std::filesystem::path(o.vtk_file).extension() != ".vtu")
+    throw InputError(o.vtk_file + ": --vtk: the file must end in .vtu");
+  if (!o.vtk_file.empty() && p.m != p.n)
+    throw InputError(o.case_file + ": degree: --vtk writes Bezier cells of one degree, and this T-mesh has degree [" +
+                     std::to_string(p.m) + ", " + std::to_string(p.n) + "]");
   PtExtension extension = PtExtension::kAuto;
   if (o.pt_extension == "horizontal") extension = PtExtension::kHorizontal;
   else if (o.pt_extension == "vertical") extension = PtExtension::kVertical;
@@ -123,6 +189,11 @@ int pt_basis_command(const BasisOptions& o) {
   }
   const PartitionTopology topo = partition_topology(mesh);
 
+  std::vector<int> show;
+  if (!o.vtk_file.empty()) {
+    show = shown_functions(o.show, polys);
+    write_vtk(o.vtk_file, mesh, polys, p.m, show);
+  }
   if (!o.export_file.empty()) {
     Json cells = Json::array(), fs = Json::array();
     for (const auto& c : mesh.cells())
@@ -184,6 +255,11 @@ int pt_basis_command(const BasisOptions& o) {
       j.set("reference_functions", reference_functions)
           .set("reference_support_cells_max", reference.max)
           .set("reference_support_cells_mean", reference.mean);
+    if (!o.vtk_file.empty()) {
+      Json shown = Json::array();
+      for (int f : show) shown.push(static_cast<double>(f));
+      j.set("vtk", o.vtk_file).set("vtk_functions", shown);
+    }
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
@@ -202,6 +278,7 @@ int pt_basis_command(const BasisOptions& o) {
     std::printf("  reference  full extension: %ld functions, cells per function max %d, mean %.2f\n", reference_functions,
                 reference.max, reference.mean);
   if (!o.export_file.empty()) std::printf("  output     %s\n", o.export_file.c_str());
+  if (!o.vtk_file.empty()) std::printf("  output     %s (%zu functions as fields)\n", o.vtk_file.c_str(), show.size());
   return 0;
 }
 

@@ -358,6 +358,62 @@ TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and b
   box.file("overlap.toml", "degree = [2, 2]\ncells = [[0, 0, 1, 1], [\"1/2\", 0, 2, 1]]\n");
   expect_one_line_error(box.run("basis --pt --export never.json overlap.toml"), {"overlap.toml", "overlap"});
   REQUIRE(!fs::exists(box.dir() / "never.json"));
+  // ParaView output: the T-mesh with the chosen functions as exact Bezier fields.
+  const Result v = box.run("basis --pt --json --vtk f.vtu --show 0,7 " + kSource + "/cases/tmeshes/ray_and_segment.toml");
+  REQUIRE(v.code == 0);
+  const std::string vtu = slurp(box.dir() / "f.vtu");
+  REQUIRE(has(vtu, "function_0"));
+  REQUIRE(has(vtu, "function_7"));
+  REQUIRE(has(vtu, "HigherOrderDegrees"));
+  expect_one_line_error(box.run("basis --pt --vtk g.vtu --show 3,x " + kSource + "/cases/tmeshes/ray_and_segment.toml"),
+                        {"--show", "'x'"});
+  REQUIRE(!fs::exists(box.dir() / "g.vtu"));
   box.file("degree0.toml", "degree = [0, 2]\ncells = [[0, 0, 1, 1]]\n");
   expect_one_line_error(box.run("basis --pt degree0.toml"), {"degree0.toml", "degree"});
+}
+
+TEST_CASE("family pt: run and converge on a T-mesh given as a grid plus segments", "[cli][pt]") {
+  Sandbox box;
+  // The T-mesh file format with a base grid and inserted segments, read by basis --pt too.
+  box.file("tmesh.toml",
+           "grid = { x = [0, \"1/4\", \"1/2\", \"3/4\", 1], y = [0, \"1/4\", \"1/2\", \"3/4\", 1] }\n"
+           "segments = [ { direction = \"vertical\", position = \"3/8\", from = 0, to = \"1/2\" },\n"
+           "             { direction = \"horizontal\", position = \"3/8\", from = \"1/4\", to = 1 } ]\n");
+  box.file("pt.toml",
+           "[geometry]\ntype = \"rectangle\"\n[space]\nfamily = \"pt\"\ndegree = 2\ntmesh = \"tmesh.toml\"\n"
+           "[problem]\nexact = \"x^2*y^2 - 3*x*y + y\"\n");
+  const Result r = box.run("run pt.toml --json -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  // A biquadratic solution lies in the space: reproduced to rounding. 22 cells, and the
+  // brute-force dimension of this T-mesh at degree 2 is 42 (knotwork dimension, an
+  // independent count).
+  REQUIRE(json_number_of(r.out, "cells") == 22);
+  REQUIRE(json_number_of(r.out, "dofs") == 42);
+  REQUIRE(json_number_of(r.out, "l2_error") < 1e-12);
+  REQUIRE(fs::exists(box.dir() / "results/pt/solution.vtu"));
+  const Result b = box.run("basis tmesh.toml --pt --json");
+  REQUIRE(b.code == 2);  // the T-mesh file has no degree: basis needs one
+  box.file("tmesh2.toml", "degree = 2\n" + slurp(box.dir() / "tmesh.toml"));
+  const Result b2 = box.run("basis tmesh2.toml --pt --json");
+  REQUIRE(b2.code == 0);
+  REQUIRE(json_number_of(b2.out, "functions") == 42);
+  REQUIRE(json_number_of(b2.out, "dimension_bruteforce") == 42);
+  // A segment that ends inside a cell: one line naming the file and the segment.
+  box.file("bad.toml", "degree = 2\ngrid = { x = [0, 1, 2], y = [0, 1, 2] }\n"
+                       "segments = [ { direction = \"vertical\", position = \"1/2\", from = 0, to = \"3/2\" } ]\n");
+  expect_one_line_error(box.run("basis bad.toml --pt"), {"bad.toml", "segments", "ends inside cell"});
+  // Convergence on the T-mesh, every cell halved per level: optimal rates.
+  box.file("ptsin.toml",
+           "[geometry]\ntype = \"rectangle\"\n[space]\nfamily = \"pt\"\ndegree = 2\ntmesh = \"tmesh.toml\"\n"
+           "[problem]\nexact = \"sin(pi*x)*sin(pi*y)\"\n");
+  const Result c = box.run("converge ptsin.toml --levels 3 --json -q");
+  INFO(c.err << c.out);
+  REQUIRE(c.code == 0);
+  // The last level's rates (h^2 in H1, h^3 in L2 for degree 2) are the last ones printed.
+  const size_t h1 = c.out.rfind("\"h1_rate\""), l2 = c.out.rfind("\"l2_rate\"");
+  REQUIRE(h1 != std::string::npos);
+  REQUIRE(l2 != std::string::npos);
+  REQUIRE(std::stod(c.out.substr(c.out.find(':', h1) + 1)) == Approx(2.0).margin(0.1));
+  REQUIRE(std::stod(c.out.substr(c.out.find(':', l2) + 1)) == Approx(3.0).margin(0.2));
 }
