@@ -2,7 +2,7 @@
 # Regenerates docs/ADAPTIVITY.md: adaptive knot-segment refinement against uniform refinement,
 # DOFs against errors, for the L-shape (p = 2, 3) and the interior layer (p = 2), then
 # adaptive PT-splines on the L-shape (p = 2, 3).
-# Usage: scripts/adaptivity_tables.sh > docs/ADAPTIVITY.md   (about 15 minutes on 2 cores)
+# Usage: scripts/adaptivity_tables.sh > docs/ADAPTIVITY.md   (about 20 minutes on 2 cores)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 k="$root/build/app/knotwork"
