@@ -53,17 +53,6 @@ std::vector<int> reference_support(const RectangularPartition& mesh, const Tenso
   return out;
 }
 
-// Value of the tensor Bernstein polynomial with coefficients b (index a + (m+1) c) at (s, t).
-double bernstein_value(const std::vector<double>& b, int m, int n, double s, double t) {
-  std::vector<double> bx(m + 1), by(n + 1), dx(m + 1), dy(n + 1);
-  bernstein_values_and_derivatives(m, s, bx.data(), dx.data());
-  bernstein_values_and_derivatives(n, t, by.data(), dy.data());
-  double v = 0;
-  for (int c = 0; c <= n; ++c)
-    for (int a = 0; a <= m; ++a) v += b[a + (m + 1) * c] * bx[a] * by[c];
-  return v;
-}
-
 // Which functions --vtk writes: "all", 0-based indices "3,17", or by default
 // ("extraordinary", the --g1 default) the four with the largest supports.
 std::vector<int> shown_functions(const std::string& show, const PtCellPolynomials& polys) {
@@ -164,19 +153,22 @@ int pt_basis_command(const BasisOptions& o) {
   const double residual = pt_smoothness_residual(polys, mesh, p.m, p.n);
   // Values on a 5 x 5 grid of every cell (the Bernstein coefficients bound them from below),
   // and the partition-of-unity error there.
+  // The tensor Bernstein polynomials at the 25 points, tabulated once (points x functions).
+  Eigen::VectorXd su(25), sv(25);
+  for (int j = 0; j < 5; ++j)
+    for (int i = 0; i < 5; ++i) su[i + 5 * j] = i / 4.0, sv[i + 5 * j] = j / 4.0;
+  Eigen::MatrixXd at_points, d_u, d_v;
+  tensor_bernstein(p.m, p.n, su, sv, at_points, d_u, d_v);
   double min_value = 0, pu_error = 0;
-  std::vector<std::vector<double>> sums(mesh.num_cells(), std::vector<double>(25, 0.0));
+  std::vector<Eigen::VectorXd> sums(mesh.num_cells(), Eigen::VectorXd::Zero(25));
   bool first_value = true;
   for (const auto& f : polys)
-    for (const auto& [k, c] : f)
-      for (int i = 0; i < 5; ++i)
-        for (int j = 0; j < 5; ++j) {
-          const double v = bernstein_value(c, p.m, p.n, i / 4.0, j / 4.0);
-          if (first_value || v < min_value) min_value = v, first_value = false;
-          sums[k][i + 5 * j] += v;
-        }
-  for (const auto& cell : sums)
-    for (double s : cell) pu_error = std::max(pu_error, std::abs(s - 1));
+    for (const auto& [k, c] : f) {
+      const Eigen::VectorXd v = at_points * Eigen::Map<const Eigen::VectorXd>(c.data(), static_cast<Eigen::Index>(c.size()));
+      if (first_value || v.minCoeff() < min_value) min_value = v.minCoeff(), first_value = false;
+      sums[k] += v;
+    }
+  for (const auto& cell : sums) pu_error = std::max(pu_error, (cell.array() - 1).abs().maxCoeff());
   std::vector<int> support;
   for (const auto& f : polys) support.push_back(static_cast<int>(f.size()));
   const SupportStats stats = support_stats(support);

@@ -37,7 +37,8 @@ std::vector<RationalBox> pinwheel() {
   return cells;
 }
 
-long exact_rank(const PtCellPolynomialsExact& P, const RectangularPartition& mesh, int per_cell) {
+// The functions as rows of their Bernstein coefficients on all cells (column k * per_cell + a).
+std::vector<SparseRationalRow> coefficient_rows(const PtCellPolynomialsExact& P, int per_cell) {
   std::vector<SparseRationalRow> rows;
   for (const auto& f : P) {
     SparseRationalRow r;
@@ -46,6 +47,11 @@ long exact_rank(const PtCellPolynomialsExact& P, const RectangularPartition& mes
         if (c[a] != 0) r.terms.emplace_back(static_cast<long>(k) * per_cell + a, c[a]);
     rows.push_back(std::move(r));
   }
+  return rows;
+}
+
+long exact_rank(const PtCellPolynomialsExact& P, const RectangularPartition& mesh, int per_cell) {
+  const std::vector<SparseRationalRow> rows = coefficient_rows(P, per_cell);
   return rank_exact(rows, static_cast<long>(mesh.num_cells()) * per_cell);
 }
 
@@ -260,15 +266,8 @@ TEST_CASE("PT-splines: the numerically independent basis spans the same space, w
     // The same space: as many functions as the brute-force dimension, independent, in S(T).
     const long dim = spline_space_dimension(mesh, p, p, p - 1, p - 1).dimension;
     REQUIRE(static_cast<long>(B.functions.size()) == dim);
-    std::vector<SparseRationalRow> rows;
     const int per_cell = (p + 1) * (p + 1);
-    for (const auto& f : exact) {
-      SparseRationalRow r;
-      for (const auto& [k, c] : f)
-        for (int a = 0; a < per_cell; ++a)
-          if (c[a] != 0) r.terms.emplace_back(static_cast<long>(k) * per_cell + a, c[a]);
-      rows.push_back(std::move(r));
-    }
+    const std::vector<SparseRationalRow> rows = coefficient_rows(exact, per_cell);
     REQUIRE(rank_modular(rows, static_cast<long>(mesh.num_cells()) * per_cell) == dim);
     REQUIRE(pt_smoothness_residual(to_double(exact), mesh, p, p) <= 1e-11);
   }
