@@ -177,8 +177,8 @@ struct GridBox {
 // B-splines inside small boxes of T cells (the support of one B-spline snapped to the cells
 // of T, then grown by a layer of cells at a time), smallest boxes first, each kept when it is
 // independent (exactly) of those kept before. The reduced row echelon basis of the whole
-// block is also a basis, but on graded meshes its vectors spread over the block with
-// coefficients up to 1e8 (measured on an adaptive L-shape mesh).
+// block is also a basis, but on graded meshes its vectors spread over the block (up to 123
+// of 454 cells on an adaptive L-shape mesh, where the local vectors cover at most 62).
 std::vector<SparseVector> local_null_basis(const std::vector<int>& cols, const std::vector<int>& block_rows,
                                            const std::vector<std::vector<std::pair<int, mpq_class>>>& rows,
                                            const std::vector<GridBox>& support, const Grid& g, const RectangularPartition& mesh,

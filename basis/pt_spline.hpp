@@ -77,8 +77,9 @@ double pt_smoothness_residual(const PtCellPolynomials& polynomials, const Rectan
 void make_boundary_traces_independent(PtSplineBasis& basis, const RectangularPartition& mesh);
 
 // Exactly independent functions can still be nearly dependent in double precision: on a
-// uniformly halved T-mesh the local EEE functions had a combination of norm 1e-6 of theirs,
-// and CHOLMOD factored the numerically singular stiffness matrix into a wrong solution. This
+// uniformly halved T-mesh the local EEE functions had (degree 3) a combination of norm 1e-6
+// of theirs, and (degree 2) CHOLMOD factored the numerically singular stiffness matrix into
+// a wrong solution (docs/PT_SPLINES.md). This
 // replaces, group by group (functions sharing B-splines; those vanishing on the boundary
 // apart from the others, so traces stay as they are), the functions of nearly dependent
 // combinations by those combinations, normalized. The span is unchanged and every function
