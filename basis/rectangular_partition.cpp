@@ -108,42 +108,131 @@ std::vector<RationalBox> grid_cells(const std::vector<mpq_class>& xs, const std:
 }
 
 std::vector<RationalBox> insert_segments(std::vector<RationalBox> cells, const std::vector<AxisSegment>& segments) {
-  for (size_t k = 0; k < segments.size(); ++k) {
-    AxisSegment s = segments[k];
+  if (segments.empty()) return cells;
+  mpq_class X0 = cells.at(0).x0, Y0 = cells[0].y0, X1 = cells[0].x1, Y1 = cells[0].y1;
+  for (auto& c : cells) {
+    for (mpq_class* v : {&c.x0, &c.y0, &c.x1, &c.y1}) v->canonicalize();
+    X0 = std::min(X0, c.x0); Y0 = std::min(Y0, c.y0);
+    X1 = std::max(X1, c.x1); Y1 = std::max(Y1, c.y1);
+  }
+  std::vector<AxisSegment> segs(segments);
+  auto name = [&](size_t k) {
+    const AxisSegment& s = segs[k];
+    return "segment " + std::to_string(k) + " (" + (s.vertical ? "x = " : "y = ") + num(s.position) + " from " +
+           num(s.from) + " to " + num(s.to) + ")";
+  };
+  for (size_t k = 0; k < segs.size(); ++k) {
+    AxisSegment& s = segs[k];
     for (mpq_class* v : {&s.position, &s.from, &s.to}) v->canonicalize();
-    const std::string name = "segment " + std::to_string(k) + " (" + (s.vertical ? "x = " : "y = ") + num(s.position) +
-                             " from " + num(s.from) + " to " + num(s.to) + ")";
-    if (!(s.to > s.from)) throw std::invalid_argument(name + " has zero or negative length");
-    std::vector<RationalBox> next;
-    mpq_class covered = 0;  // length of the segment lying on cell interiors or edges
-    for (const RationalBox& c : cells) {
-      // In the segment's frame: `a` across, `b` along.
+    if (!(s.to > s.from)) throw std::invalid_argument(name(k) + " has zero or negative length");
+    const mpq_class &a0 = s.vertical ? X0 : Y0, &a1 = s.vertical ? X1 : Y1;
+    const mpq_class &b0 = s.vertical ? Y0 : X0, &b1 = s.vertical ? Y1 : X1;
+    if (!(a0 < s.position && s.position < a1 && b0 <= s.from && s.to <= b1))
+      throw std::invalid_argument(name(k) + " does not lie inside the rectangle of the mesh (or lies on its boundary)");
+  }
+  // All segments cut at once, so a segment may end on any other one, whatever their order
+  // (a pinwheel of four segments, each ending on the next, has no valid insertion order).
+  // Each cell is cut by the pieces crossing its interior: on the local grid of the pieces'
+  // positions and ends, fine cells not separated by a piece merge, and every merged region
+  // must be a rectangle and every piece must separate two regions, or some segment ends
+  // inside the cell.
+  std::vector<RationalBox> out;
+  for (const RationalBox& c : cells) {
+    std::vector<size_t> cutting;
+    std::vector<mpq_class> xs{c.x0, c.x1}, ys{c.y0, c.y1};
+    for (size_t k = 0; k < segs.size(); ++k) {
+      const AxisSegment& s = segs[k];
       const mpq_class &a0 = s.vertical ? c.x0 : c.y0, &a1 = s.vertical ? c.x1 : c.y1;
       const mpq_class &b0 = s.vertical ? c.y0 : c.x0, &b1 = s.vertical ? c.y1 : c.x1;
       const mpq_class lo = std::max(b0, s.from), hi = std::min(b1, s.to);
-      if (a0 <= s.position && s.position <= a1 && hi > lo) {
-        if (s.position == a0 || s.position == a1) {
-          if (s.position == a0) covered += hi - lo;  // counted once, on the cell above/right
+      if (!(a0 < s.position && s.position < a1 && hi > lo)) continue;
+      cutting.push_back(k);
+      auto& across = s.vertical ? xs : ys;
+      auto& along = s.vertical ? ys : xs;
+      across.push_back(s.position);
+      along.push_back(lo);
+      along.push_back(hi);
+    }
+    if (cutting.empty()) {
+      out.push_back(c);
+      continue;
+    }
+    for (auto* L : {&xs, &ys}) {
+      std::sort(L->begin(), L->end());
+      L->erase(std::unique(L->begin(), L->end()), L->end());
+    }
+    const size_t nx = xs.size() - 1, ny = ys.size() - 1;
+    // Whether the fine edge on line `at` between `lo` and `hi` lies on a cutting piece.
+    auto cut = [&](bool vertical, const mpq_class& at, const mpq_class& lo, const mpq_class& hi) {
+      for (size_t k : cutting) {
+        const AxisSegment& s = segs[k];
+        if (s.vertical == vertical && s.position == at && s.from <= lo && hi <= s.to) return true;
+      }
+      return false;
+    };
+    std::vector<size_t> parent(nx * ny);
+    for (size_t i = 0; i < parent.size(); ++i) parent[i] = i;
+    auto find = [&](size_t i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    for (size_t j = 0; j < ny; ++j)
+      for (size_t i = 0; i < nx; ++i) {
+        if (i + 1 < nx && !cut(true, xs[i + 1], ys[j], ys[j + 1])) parent[find(j * nx + i)] = find(j * nx + i + 1);
+        if (j + 1 < ny && !cut(false, ys[j + 1], xs[i], xs[i + 1])) parent[find(j * nx + i)] = find((j + 1) * nx + i);
+      }
+    std::vector<RationalBox> region(nx * ny);
+    std::vector<mpq_class> area(nx * ny);
+    std::vector<bool> seen(nx * ny, false);
+    std::vector<size_t> order;
+    for (size_t j = 0; j < ny; ++j)
+      for (size_t i = 0; i < nx; ++i) {
+        const size_t r = find(j * nx + i);
+        const RationalBox f{xs[i], ys[j], xs[i + 1], ys[j + 1]};
+        if (!seen[r]) {
+          seen[r] = true;
+          region[r] = f;
+          order.push_back(r);
         } else {
-          covered += hi - lo;
-          if (lo > b0 || hi < b1)
-            throw std::invalid_argument(name + " ends inside cell " + box(c) +
-                                        ": a segment must end on an edge of the mesh");
-          RationalBox first = c, second = c;
-          (s.vertical ? first.x1 : first.y1) = s.position;
-          (s.vertical ? second.x0 : second.y0) = s.position;
-          next.push_back(first);
-          next.push_back(second);
-          continue;
+          RationalBox& b = region[r];
+          b = {std::min(b.x0, f.x0), std::min(b.y0, f.y0), std::max(b.x1, f.x1), std::max(b.y1, f.y1)};
+        }
+        area[r] += (f.x1 - f.x0) * (f.y1 - f.y0);
+      }
+    // A piece with the same region on both sides is a slit: its segment ends inside the cell.
+    bool slit = false;
+    for (size_t j = 0; j < ny; ++j)
+      for (size_t i = 0; i < nx; ++i) {
+        if (i + 1 < nx && find(j * nx + i) == find(j * nx + i + 1)) slit = slit || cut(true, xs[i + 1], ys[j], ys[j + 1]);
+        if (j + 1 < ny && find(j * nx + i) == find((j + 1) * nx + i))
+          slit = slit || cut(false, ys[j + 1], xs[i], xs[i + 1]);
+      }
+    for (size_t r : order) {
+      const RationalBox& b = region[r];
+      if (!slit && area[r] == (b.x1 - b.x0) * (b.y1 - b.y0)) continue;
+      // Name a segment with an end inside the cell that no perpendicular line crosses.
+      size_t culprit = cutting.front();
+      bool found = false;
+      for (size_t k : cutting) {
+        if (found) break;
+        const AxisSegment& s = segs[k];
+        for (const mpq_class& e : {s.from, s.to}) {
+          const mpq_class& b0 = s.vertical ? c.y0 : c.x0;
+          const mpq_class& b1 = s.vertical ? c.y1 : c.x1;
+          if (!(b0 < e && e < b1)) continue;
+          bool crossed = false;
+          for (size_t q : cutting)
+            crossed = crossed || (segs[q].vertical != s.vertical && segs[q].position == e && segs[q].from < s.position &&
+                                  s.position < segs[q].to);
+          if (!crossed && !found) culprit = k, found = true;
         }
       }
-      next.push_back(c);
+      throw std::invalid_argument(name(culprit) + " ends inside cell " + box(c) +
+                                  ": a segment must end on an edge of the mesh");
     }
-    if (covered != s.to - s.from)
-      throw std::invalid_argument(name + " does not lie inside the rectangle of the mesh (or lies on its boundary)");
-    cells = std::move(next);
+    for (size_t r : order) out.push_back(region[r]);
   }
-  return cells;
+  return out;
 }
 
 }  // namespace knotwork

@@ -50,9 +50,9 @@ class RectangularPartition {
 
 // A T-mesh given as a base grid and inserted segments: the tensor cells of the coordinate
 // lists, then each segment (x = position from y = from to y = to when vertical) splits the
-// cells it crosses. Each segment must end on an edge of the mesh so far (a segment cannot
-// end inside a cell) and lie inside the rectangle. Throws std::invalid_argument naming the
-// segment (0-based) and the cell.
+// cells it crosses. All segments cut at once, so their order does not matter: each must end
+// on a cell edge or on another segment (not inside a cell) and lie inside the rectangle.
+// Throws std::invalid_argument naming the segment (0-based) and the cell.
 struct AxisSegment {
   bool vertical = true;
   mpq_class position, from, to;
