@@ -5,6 +5,7 @@
 #include "app/json_writer.hpp"
 #include "basis/partition_topology.hpp"
 #include "basis/spline_dimension.hpp"
+#include "basis/tmesh_conformality.hpp"
 #include "cases/case_file.hpp"
 
 namespace knotwork {
@@ -23,6 +24,9 @@ int dimension_command(const DimensionOptions& o) {
   const long weller = weller_applies ? weller_dimension_formula(topo, p.m) : 0;
   const std::vector<std::string> hypotheses = weller_applies ? weller_hypotheses_violations(topo, p.m)
                                                              : std::vector<std::string>{};
+  // The smoothing cofactor count and the diagonalizable-mesh formula are for highest smoothness.
+  const bool highest = p.alpha == p.m - 1 && p.beta == p.n - 1;
+  const ConformalityCount cofactor = highest ? conformality_count(topo, p.m, p.n) : ConformalityCount{};
   if (o.json) {
     Json j = Json::object();
     j.set("file", o.file).set("cells", partition.num_cells())
@@ -40,6 +44,13 @@ int dimension_command(const DimensionOptions& o) {
     } else {
       j.set_null("weller_prop_4_2");
     }
+    if (highest) {
+      j.set("dimension_cofactor", cofactor.dimension).set("conformality_rows", cofactor.conformality_rows)
+          .set("conformality_rank", cofactor.conformality_rank).set_bool("diagonalizable", cofactor.diagonalizable);
+      if (cofactor.formula) j.set("dimension_formula", *cofactor.formula); else j.set_null("dimension_formula");
+    } else {
+      j.set_null("dimension_cofactor").set_null("diagonalizable").set_null("dimension_formula");
+    }
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
@@ -53,6 +64,18 @@ int dimension_command(const DimensionOptions& o) {
               "             n+1 if vertical, so no extra freedom)\n",
               topo.vertices.size(), topo.interior_vertices(), topo.t_nodes(), topo.crossings(), topo.interior_edges(),
               topo.count(K::kLine), topo.count(K::kRay), topo.count(K::kSegment), topo.vanished_segments(p.m, p.n));
+  if (highest) {
+    std::printf("  cofactor   %ld = %ld (polynomial and cross-cuts) + %ld interior vertices - rank %ld of the %ld\n"
+                "             T l-edge conformality conditions (smoothing cofactor-conformality, exact rank)\n",
+                cofactor.dimension, cofactor.tensor_part, cofactor.interior_vertices, cofactor.conformality_rank,
+                cofactor.conformality_rows);
+    if (cofactor.formula)
+      std::printf("  formula    %ld: diagonalizable (an ordering of the T l-edges keeps deg+1 vertices on each),\n"
+                  "             so the dimension depends on the topology alone\n", *cofactor.formula);
+    else
+      std::printf("  formula    none: not diagonalizable (no ordering of the T l-edges keeps deg+1 vertices on each),\n"
+                  "             the dimension may change with the coordinates\n");
+  }
   if (weller_applies)
     std::printf("  Weller     (d+1)^2 + (d+1)|E_I| - (2d+1)|V_I| = %ld (Prop. 4.2: the dimension when the partition\n"
                 "             carries a semi-regular collection with interior multiplicities 1)\n", weller);

@@ -15,6 +15,7 @@
 #include "basis/pt_spline.hpp"
 #include "basis/sparse_rank.hpp"
 #include "basis/spline_dimension.hpp"
+#include "basis/tmesh_conformality.hpp"
 #include "cases/case_file.hpp"
 #include "quadrature/bernstein.hpp"
 #include "solver/input_error.hpp"
@@ -214,6 +215,7 @@ int pt_basis_command(const BasisOptions& o) {
   }
 
   const char* direction = B.horizontal ? "horizontal" : "vertical";
+  const ConformalityCount cofactor = conformality_count(partition_topology(mesh), p.m, p.n);
   if (o.json) {
     Json j = Json::object();
     j.set("file", o.case_file)
@@ -222,7 +224,8 @@ int pt_basis_command(const BasisOptions& o) {
         .set("cells", mesh.num_cells())
         .set("functions", static_cast<long>(B.functions.size()))
         .set("dimension_bruteforce", brute);
-    j.set_null("dimension_formula");  // the diagonalizable-mesh formula is not implemented
+    if (cofactor.formula) j.set("dimension_formula", *cofactor.formula); else j.set_null("dimension_formula");
+    j.set_bool("diagonalizable", cofactor.diagonalizable).set("dimension_cofactor", cofactor.dimension);
     j.set("rank", rank)
         .set("max_smoothness_residual", residual)
         .set("min_value", min_value)
@@ -259,6 +262,11 @@ int pt_basis_command(const BasisOptions& o) {
   std::printf("  space      PT-splines S(%d, %d, %d, %d) on %d cells\n", p.m, p.n, p.m - 1, p.n - 1, mesh.num_cells());
   std::printf("  functions  %zu; brute-force dimension %ld; exact rank %ld (%s)\n", B.functions.size(), brute, rank,
               rank == static_cast<long>(B.functions.size()) ? "linearly independent" : "DEPENDENT");
+  if (cofactor.formula)
+    std::printf("  formula    %ld (diagonalizable mesh); smoothing-cofactor count %ld\n", *cofactor.formula,
+                cofactor.dimension);
+  else
+    std::printf("  formula    none (not diagonalizable); smoothing-cofactor count %ld\n", cofactor.dimension);
   std::printf("  extension  %s l-edges to cross-cuts: %ld extended edges, %ld EEE equations of rank %ld in %d blocks "
               "(largest %d B-splines); %d B-splines untouched\n",
               direction, B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);

@@ -343,7 +343,10 @@ TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and b
   REQUIRE(json_number_of(r.out, "max_smoothness_residual") <= 1e-11);
   REQUIRE(json_number_of(r.out, "min_bernstein_coefficient") >= 0);  // Prop. 1
   REQUIRE(json_number_of(r.out, "extended_edges") > 0);
-  REQUIRE(has(r.out, "\"dimension_formula\": null"));
+  // Diagonalizable (an ordering of its T l-edges keeps 4 vertices on each), so the formula
+  // applies and must agree with the brute force.
+  REQUIRE(has(r.out, "\"diagonalizable\": true"));
+  REQUIRE(json_number_of(r.out, "dimension_formula") == 61);
   const std::string exported = slurp(box.dir() / "pt.json");
   size_t exported_functions = 0;  // one "bernstein" list per function
   for (size_t at = exported.find("\"bernstein\""); at != std::string::npos; at = exported.find("\"bernstein\"", at + 1))

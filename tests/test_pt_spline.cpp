@@ -101,6 +101,11 @@ TEST_CASE("PT-splines: count = brute-force dimension, independent, in S(T), on a
   suite.emplace_back("hierarchical (shipped)", load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/hierarchical.toml").cells);
   suite.emplace_back("rays and a segment (shipped)",
                      load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/ray_and_segment.toml").cells);
+  // The dimensional-instability pair: same topology, dimensions 30 and 29 at degree 2.
+  suite.emplace_back("pinwheel, special coordinates (shipped)",
+                     load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/pinwheel_special.toml").cells);
+  suite.emplace_back("pinwheel, generic coordinates (shipped)",
+                     load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/pinwheel_generic.toml").cells);
   std::mt19937 rng(2024);
   for (int t = 0; t < 3; ++t) suite.emplace_back("random halvings " + std::to_string(t), random_halvings(rng, 12 + 3 * t));
   for (const auto& [name, cells] : suite) {
