@@ -1,0 +1,155 @@
+// LR B-splines (basis/lr_spline), checked by properties that do not depend on the refinement
+// code: tensor-product B-splines after global lines, partition of unity with their weights,
+// each one a polynomial on every cell of the LR-mesh; and the shipped LR-mesh on which they
+// are linearly dependent (more of them than the brute-force dimension) while the PT-splines
+// of the same T-mesh are a basis.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <random>
+
+#include "basis/lr_spline.hpp"
+#include "basis/pt_spline.hpp"
+#include "basis/sparse_rank.hpp"
+#include "basis/spline_dimension.hpp"
+#include "cases/case_file.hpp"
+#include "tmesh_testing.hpp"
+
+using namespace knotwork;
+using knotwork::testing::q;
+
+namespace {
+
+// The LR B-splines as functions (weight 1 each) of a PtSplineBasis, to evaluate them and
+// take their per-cell Bernstein coefficients with code that knows nothing of LR refinement.
+PtSplineBasis as_functions(const LrMesh& lr) {
+  PtSplineBasis B;
+  B.m = lr.m();
+  B.n = lr.n();
+  for (const auto& s : lr.splines()) {
+    B.splines.push_back({s.x, s.y});
+    B.functions.push_back({{static_cast<int>(B.splines.size()) - 1, mpq_class(1)}});
+  }
+  return B;
+}
+
+long exact_rank(const PtSplineBasis& B, const RectangularPartition& mesh) {
+  const int per_cell = (B.m + 1) * (B.n + 1);
+  std::vector<SparseRationalRow> rows;
+  for (const auto& f : pt_cell_polynomials_exact(B, mesh)) {
+    SparseRationalRow r;
+    for (const auto& [k, c] : f)
+      for (int a = 0; a < per_cell; ++a)
+        if (c[a] != 0) r.terms.emplace_back(static_cast<long>(k) * per_cell + a, c[a]);
+    rows.push_back(std::move(r));
+  }
+  return rank_exact(rows, static_cast<long>(mesh.num_cells()) * per_cell);
+}
+
+void check_partition_of_unity_and_cells(const LrMesh& lr) {
+  const RectangularPartition mesh(lr.cells());
+  const PtSplineBasis B = as_functions(lr);
+  mpq_class X = 0, Y = 0;  // the rectangle is [0, X] x [0, Y]
+  for (const auto& c : mesh.cells()) X = std::max(X, c.x1), Y = std::max(Y, c.y1);
+  std::mt19937 rng(3);
+  for (int k = 0; k < 40; ++k) {  // points with denominators 97 and 89: never on a knot line
+    const mpq_class x = q(std::uniform_int_distribution<long>(1, 96)(rng), 97) * X;
+    const mpq_class y = q(std::uniform_int_distribution<long>(1, 88)(rng), 89) * Y;
+    mpq_class sum = 0;
+    for (size_t f = 0; f < lr.splines().size(); ++f) sum += lr.splines()[f].weight * pt_evaluate(B, f, x, y);
+    REQUIRE(sum == 1);
+  }
+  int not_polynomial = 0;
+  for (int f = 0; f < static_cast<int>(B.functions.size()); ++f)
+    not_polynomial += !testing::polynomial_per_cell(
+        mesh, lr.m(), lr.n(), [&](const mpq_class& x, const mpq_class& y) { return pt_evaluate(B, f, x, y); });
+  REQUIRE(not_polynomial == 0);
+}
+
+std::vector<mpq_class> integers(int to) {
+  std::vector<mpq_class> v;
+  for (int i = 0; i <= to; ++i) v.push_back(i);
+  return v;
+}
+
+// The meshlines of cases/tmeshes/lr_dependent.toml, in its insertion order.
+const std::vector<AxisSegment> kDependent = {{true, q(1, 2), 2, 5},
+                                             {false, q(9, 2), q(1, 2), 5},
+                                             {true, q(11, 4), 0, q(9, 2)},
+                                             {false, q(7, 2), 0, 3},
+                                             {false, q(17, 4), q(1, 2), 5}};
+
+}  // namespace
+
+TEST_CASE("LR B-splines: global lines give the tensor-product B-splines", "[lr]") {
+  for (int p : {1, 2, 3}) {
+    LrMesh lr(integers(3), integers(2), p, p);
+    lr.insert({true, q(3, 2), 0, 2});
+    lr.insert({false, q(1, 2), 0, 3});
+    // Knots 0 1 3/2 2 3 in x and 0 1/2 1 2 in y, open: (4 + p) (3 + p) B-splines, weight 1.
+    REQUIRE(lr.splines().size() == static_cast<size_t>((4 + p) * (3 + p)));
+    for (const auto& s : lr.splines()) REQUIRE(s.weight == 1);
+    check_partition_of_unity_and_cells(lr);
+  }
+}
+
+TEST_CASE("LR B-splines: partition of unity and polynomial pieces on random LR refinements", "[lr]") {
+  std::mt19937 rng(17);
+  for (int t = 0; t < 6; ++t) {
+    const int p = 2 + t % 2;
+    LrMesh lr(integers(5), integers(5), p, p);
+    int inserted = 0;
+    for (int k = 0; k < 60 && inserted < 6; ++k) {
+      // Split a random B-spline's support at the midpoint of one of its knot intervals.
+      const LrBSpline s = lr.splines()[rng() % lr.splines().size()];
+      const bool vertical = rng() % 2;
+      const auto& t_knots = vertical ? s.x : s.y;
+      const auto& other = vertical ? s.y : s.x;
+      const size_t i = rng() % (t_knots.size() - 1);
+      if (t_knots[i] == t_knots[i + 1]) continue;
+      mpq_class c = (t_knots[i] + t_knots[i + 1]) / 2;
+      c.canonicalize();
+      try {
+        lr.insert({vertical, c, other.front(), other.back()});
+        ++inserted;
+      } catch (const std::invalid_argument&) {  // c was already a knot line there
+      }
+    }
+    INFO("refinement " << t << ", degree " << p << ", " << lr.inserted().size() << " meshlines");
+    REQUIRE(inserted > 0);
+    check_partition_of_unity_and_cells(lr);
+  }
+}
+
+TEST_CASE("LR B-splines: a meshline that splits no support is refused", "[lr]") {
+  LrMesh lr(integers(4), integers(4), 2, 2);
+  // Length 1 < the height 3 of every support it crosses.
+  REQUIRE_THROWS_WITH(lr.insert({true, q(5, 2), 1, 2}), Catch::Contains("not an LR refinement"));
+  REQUIRE_THROWS_WITH(lr.insert({true, 7, 0, 4}), Catch::Contains("leaves the rectangle"));
+}
+
+TEST_CASE("The shipped LR-mesh: 89 dependent LR B-splines, 88 independent PT-splines", "[lr][pt]") {
+  LrMesh lr(integers(5), integers(5), 3, 3);
+  for (const auto& s : kDependent) lr.insert(s);
+  // The same T-mesh as the case file.
+  auto key = [](const RationalBox& b) { return std::vector<mpq_class>{b.x0, b.y0, b.x1, b.y1}; };
+  std::vector<std::vector<mpq_class>> mine, shipped;
+  for (const auto& c : lr.cells()) mine.push_back(key(c));
+  for (const auto& c : load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/lr_dependent.toml").cells)
+    shipped.push_back(key(c));
+  std::sort(mine.begin(), mine.end());
+  std::sort(shipped.begin(), shipped.end());
+  REQUIRE(mine == shipped);
+
+  const RectangularPartition mesh(lr.cells());
+  const long dim = spline_space_dimension(mesh, 3, 3, 2, 2, RankMethod::kExact).dimension;
+  REQUIRE(dim == 88);
+  check_partition_of_unity_and_cells(lr);  // so they all lie in S(T)...
+  REQUIRE(lr.splines().size() == 89);      // ...and are more than its dimension: dependent
+  REQUIRE(exact_rank(as_functions(lr), mesh) == 88);
+
+  const PtSplineBasis pt = pt_spline_basis(mesh, 3, 3);
+  REQUIRE(static_cast<long>(pt.functions.size()) == dim);
+  REQUIRE(exact_rank(pt, mesh) == dim);
+  REQUIRE(pt_smoothness_residual(to_double(pt_cell_polynomials_exact(pt, mesh)), mesh, 3, 3) <= 1e-11);
+}
