@@ -216,6 +216,19 @@ TEST_CASE("dimension: T-mesh files, results and bad input", "[cli][dimension]") 
   const Result e = box.run(std::string("dimension --exact ") + KNOTWORK_SOURCE_DIR + "/cases/tmeshes/hierarchical.toml");
   REQUIRE(e.out.find("dimension  61") != std::string::npos);
 
+  // The dimensional-instability pair (the ratio argument in the files): 30 and 29, by the
+  // brute force and by smoothing cofactors, and no topological formula for either.
+  for (const auto& [name, dim] : std::vector<std::pair<std::string, int>>{{"special", 30}, {"generic", 29}}) {
+    const Result pw =
+        box.run(std::string("dimension --json ") + KNOTWORK_SOURCE_DIR + "/cases/tmeshes/pinwheel_" + name + ".toml");
+    INFO(name << ": " << pw.err);
+    REQUIRE(pw.code == 0);
+    for (const std::string key : {"dimension_bruteforce", "dimension_cofactor"})
+      REQUIRE(pw.out.find("\"" + key + "\": " + std::to_string(dim)) != std::string::npos);
+    REQUIRE(pw.out.find("\"diagonalizable\": false") != std::string::npos);
+    REQUIRE(pw.out.find("\"dimension_formula\": null") != std::string::npos);
+  }
+
   auto rejected = [&](const std::string& text, const std::vector<std::string>& mentions) {
     box.file("mesh.toml", text);
     expect_one_line_error(box.run("dimension mesh.toml"), mentions);

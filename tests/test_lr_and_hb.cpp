@@ -1,8 +1,10 @@
+// The two constructions PT-splines are compared with, where they fail and PT-splines do not.
 // LR B-splines (basis/lr_spline), checked by properties that do not depend on the refinement
 // code: tensor-product B-splines after global lines, partition of unity with their weights,
 // each one a polynomial on every cell of the LR-mesh; and the shipped LR-mesh on which they
-// are linearly dependent (more of them than the brute-force dimension) while the PT-splines
-// of the same T-mesh are a basis.
+// are linearly dependent (more of them than the brute-force dimension). Hierarchical
+// B-splines (Kraft's selection, written here) on the shipped two-level mesh where they are
+// independent but fewer than the dimension.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -64,6 +66,10 @@ void check_partition_of_unity_and_cells(const LrMesh& lr) {
     not_polynomial += !testing::polynomial_per_cell(
         mesh, lr.m(), lr.n(), [&](const mpq_class& x, const mpq_class& y) { return pt_evaluate(B, f, x, y); });
   REQUIRE(not_polynomial == 0);
+}
+
+long brute_force_dimension(const RectangularPartition& mesh, int p) {
+  return spline_space_dimension(mesh, p, p, p - 1, p - 1, RankMethod::kExact).dimension;
 }
 
 std::vector<mpq_class> integers(int to) {
@@ -142,11 +148,93 @@ TEST_CASE("The shipped LR-mesh: 89 dependent LR B-splines, 88 independent PT-spl
   REQUIRE(mine == shipped);
 
   const RectangularPartition mesh(lr.cells());
-  const long dim = spline_space_dimension(mesh, 3, 3, 2, 2, RankMethod::kExact).dimension;
+  const long dim = brute_force_dimension(mesh, 3);
   REQUIRE(dim == 88);
   check_partition_of_unity_and_cells(lr);  // so they all lie in S(T)...
   REQUIRE(lr.splines().size() == 89);      // ...and are more than its dimension: dependent
   REQUIRE(exact_rank(as_functions(lr), mesh) == 88);
+
+  const PtSplineBasis pt = pt_spline_basis(mesh, 3, 3);
+  REQUIRE(static_cast<long>(pt.functions.size()) == dim);
+  REQUIRE(exact_rank(pt, mesh) == dim);
+  REQUIRE(pt_smoothness_residual(to_double(pt_cell_polynomials_exact(pt, mesh)), mesh, 3, 3) <= 1e-11);
+}
+
+namespace {
+
+// Kraft's hierarchical B-splines of degree p on the integer grid [0, N]^2 refined once (in
+// halves) on the coarse cells `refined`: the level-0 B-splines whose support is not inside
+// the refined region and the level-1 ones whose support is. Also the T-mesh's cells.
+struct TwoLevelHb {
+  PtSplineBasis functions;
+  std::vector<RationalBox> cells;
+};
+TwoLevelHb two_level_hb(int N, int p, const std::vector<std::pair<int, int>>& refined) {
+  auto is_refined = [&](int i, int j) {
+    return std::find(refined.begin(), refined.end(), std::pair{i, j}) != refined.end();
+  };
+  TwoLevelHb hb;
+  hb.functions.m = hb.functions.n = p;
+  for (int level = 0; level < 2; ++level) {
+    const int cells = N << level;  // per direction, each of width 1 / 2^level
+    std::vector<mpq_class> knots(p, 0);
+    for (int k = 0; k <= cells; ++k) knots.push_back(q(k, 1 << level));
+    knots.insert(knots.end(), p, mpq_class(N));
+    for (int i = 0; i < cells + p; ++i)
+      for (int j = 0; j < cells + p; ++j) {
+        bool inside = true;  // the support's coarse cells all refined
+        for (int a = std::max(0, i - p); a <= std::min(cells - 1, i); ++a)
+          for (int b = std::max(0, j - p); b <= std::min(cells - 1, j); ++b)
+            inside = inside && is_refined(a >> level, b >> level);
+        if (inside != (level == 1)) continue;
+        hb.functions.splines.push_back({{knots.begin() + i, knots.begin() + i + p + 2},
+                                        {knots.begin() + j, knots.begin() + j + p + 2}});
+        hb.functions.functions.push_back({{static_cast<int>(hb.functions.splines.size()) - 1, mpq_class(1)}});
+      }
+  }
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j) {
+      if (!is_refined(i, j)) {
+        hb.cells.push_back({i, j, i + 1, j + 1});
+        continue;
+      }
+      for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b)
+          hb.cells.push_back({q(2 * i + a, 2), q(2 * j + b, 2), q(2 * i + a + 1, 2), q(2 * j + b + 1, 2)});
+    }
+  return hb;
+}
+
+}  // namespace
+
+TEST_CASE("Hierarchical B-splines: complete on a refined block, incomplete on the shipped mesh", "[hb][pt]") {
+  // A refined 2 x 2 block: the hierarchical B-splines are a basis (65 = dimension).
+  const TwoLevelHb block = two_level_hb(5, 3, {{1, 1}, {2, 1}, {1, 2}, {2, 2}});
+  const RectangularPartition block_mesh(block.cells);
+  REQUIRE(block.functions.functions.size() == 65);
+  REQUIRE(brute_force_dimension(block_mesh, 3) == 65);
+  REQUIRE(exact_rank(block.functions, block_mesh) == 65);
+
+  // The 3 x 3 block without its corner (cases/tmeshes/hierarchical_hb_incomplete.toml).
+  const TwoLevelHb hb = two_level_hb(5, 3, {{1, 1}, {2, 1}, {3, 1}, {1, 2}, {2, 2}, {3, 2}, {1, 3}, {2, 3}});
+  auto key = [](const RationalBox& b) { return std::vector<mpq_class>{b.x0, b.y0, b.x1, b.y1}; };
+  std::vector<std::vector<mpq_class>> mine, shipped;
+  for (const auto& c : hb.cells) mine.push_back(key(c));
+  for (const auto& c : load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/hierarchical_hb_incomplete.toml").cells)
+    shipped.push_back(key(c));
+  std::sort(mine.begin(), mine.end());
+  std::sort(shipped.begin(), shipped.end());
+  REQUIRE(mine == shipped);
+  const RectangularPartition mesh(hb.cells);
+  const long dim = brute_force_dimension(mesh, 3);
+  REQUIRE(dim == 70);
+  REQUIRE(hb.functions.functions.size() == 69);
+  REQUIRE(exact_rank(hb.functions, mesh) == 69);  // independent, one short: incomplete
+  int not_polynomial = 0;  // ...and in the space: each one polynomial per cell
+  for (int f = 0; f < 69; ++f)
+    not_polynomial += !testing::polynomial_per_cell(
+        mesh, 3, 3, [&](const mpq_class& x, const mpq_class& y) { return pt_evaluate(hb.functions, f, x, y); });
+  REQUIRE(not_polynomial == 0);
 
   const PtSplineBasis pt = pt_spline_basis(mesh, 3, 3);
   REQUIRE(static_cast<long>(pt.functions.size()) == dim);
