@@ -75,8 +75,8 @@ int main(int argc, char** argv) {
 
   knotwork::AdaptOptions adapt;
   CLI::App* adapt_cmd = app.add_subcommand(
-      "adapt", "Adaptive refinement by knot segments: solve, estimate (residual), mark (Doerfler), refine, repeat");
-  adapt_cmd->add_option("case", adapt.case_file, "Case file (TOML) with [space] family = \"knot_segments\"")->required();
+      "adapt", "Adaptive refinement by knot segments or PT-splines: solve, estimate (residual), mark (Doerfler), refine, repeat");
+  adapt_cmd->add_option("case", adapt.case_file, "Case file (TOML) with [space] family = \"knot_segments\" or \"pt\"")->required();
   adapt_cmd->add_option("--steps", adapt.steps, "Number of solves (overrides [adapt] steps; default 10)");
   adapt_cmd->add_option("--theta", adapt.theta,
                         "Doerfler fraction: mark the fewest cells holding this share of the estimated error squared "
