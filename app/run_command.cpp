@@ -63,7 +63,8 @@ int run_command(const RunOptions& o) {
     j.set("case", c.path).set("space", describe_space(c))
         .set("degree", Json::array().push(double(c.space.degree[0])).push(double(c.space.degree[1])))
         .set("cells", d.mesh().num_cells()).set("dofs", s.num_functions).set("free_dofs", s.num_free)
-        .set("matrix_nonzeros", s.matrix_nonzeros).set("factor_nonzeros", s.cholesky.factor_nonzeros);
+        .set("matrix_nonzeros", s.matrix_nonzeros).set("factor_nonzeros", s.cholesky.factor_nonzeros)
+        .set("refinement_correction", s.cholesky.refinement_correction);
     if (s.errors) j.set("l2_error", s.errors->l2).set("h1_seminorm_error", s.errors->h1_semi).set("h1_error", s.errors->h1);
     else j.set_null("l2_error").set_null("h1_seminorm_error").set_null("h1_error");
     j.set("timings", timings).set("outputs", Json::strings(outputs));

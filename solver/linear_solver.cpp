@@ -1,6 +1,8 @@
 #include "solver/linear_solver.hpp"
 
 #include <Eigen/CholmodSupport>
+#include <cstdio>
+#include <string>
 #include <chrono>
 #include <vector>
 
@@ -28,6 +30,7 @@ std::string to_string(Ordering o) {
 struct SparseCholesky::Impl {
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
   std::vector<int> outer, inner;  // pattern of the last analysis
+  Eigen::SparseMatrix<double> lower;  // the last matrix factored, for the residual
 };
 
 SparseCholesky::SparseCholesky(Ordering ordering) : impl_(std::make_unique<Impl>()) {
@@ -61,6 +64,7 @@ void SparseCholesky::factorize(const Eigen::SparseMatrix<double>& A) {
   }
   const auto t1 = clock::now();
   impl_->llt.factorize(A);
+  impl_->lower = A;
   stats_.factorize_seconds = std::chrono::duration<double>(clock::now() - t1).count();
   const cholmod_common& cm = impl_->llt.cholmod();
   if (cm.status == CHOLMOD_OUT_OF_MEMORY || cm.status == CHOLMOD_TOO_LARGE)
@@ -77,7 +81,19 @@ void SparseCholesky::factorize(const Eigen::SparseMatrix<double>& A) {
 Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) {
   const auto t0 = std::chrono::steady_clock::now();
   Eigen::VectorXd x = impl_->llt.solve(b);
+  const Eigen::VectorXd r = b - impl_->lower.selfadjointView<Eigen::Lower>() * x;
+  const Eigen::VectorXd dx = impl_->llt.solve(r);
+  x += dx;
+  const double size = x.lpNorm<Eigen::Infinity>();
+  stats_.refinement_correction = size > 0 ? dx.lpNorm<Eigen::Infinity>() / size : 0;
   stats_.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!(stats_.refinement_correction <= kNumericallySingularCorrection)) {
+    char text[96];
+    std::snprintf(text, sizeof text, "%.1e", stats_.refinement_correction);
+    throw std::runtime_error(std::string("the stiffness matrix is numerically singular: one step of iterative "
+                                         "refinement changed the solution by ") +
+                             text + " (relative), so it cannot be trusted (nearly dependent basis functions?)");
+  }
   return x;
 }
 

@@ -19,7 +19,14 @@ struct CholeskyStats {
   double flops = 0;            // of the numeric factorization
   double peak_bytes = 0;       // CHOLMOD's own peak memory
   int analyses = 0;            // symbolic analyses performed so far
+  // Relative size (max norm) of the correction one step of iterative refinement made to the
+  // last solution: about cond(A) * 1e-16, so a measure of how many digits it has.
+  double refinement_correction = 0;
 };
+
+// Above this refinement correction the solution has fewer than ~2 correct digits: the
+// matrix is numerically singular (e.g. nearly dependent basis functions), and solve throws.
+constexpr double kNumericallySingularCorrection = 1e-2;
 
 // SPD solve with SuiteSparse CHOLMOD's supernodal Cholesky, through Eigen's CholmodSupport.
 // The matrix is given by its lower triangle. The symbolic analysis (ordering, elimination
@@ -30,6 +37,10 @@ class SparseCholesky {
   ~SparseCholesky();
   // Throws std::runtime_error if the matrix is not positive definite.
   void factorize(const Eigen::SparseMatrix<double>& lower);
+  // The solution after one step of iterative refinement (residual in double precision).
+  // CHOLMOD factors a numerically singular matrix without complaint and returns a wrong
+  // solution; the refinement step exposes it: throws std::runtime_error when its relative
+  // correction exceeds kNumericallySingularCorrection.
   Eigen::VectorXd solve(const Eigen::VectorXd& b);
   const CholeskyStats& stats() const { return stats_; }
 
