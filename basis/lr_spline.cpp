@@ -8,10 +8,8 @@ namespace knotwork {
 namespace {
 
 std::vector<mpq_class> open_knots(const std::vector<mpq_class>& coordinates, int degree) {
-  std::vector<mpq_class> k(degree, coordinates.front());
-  k.insert(k.end(), coordinates.begin(), coordinates.end());
-  k.insert(k.end(), degree, coordinates.back());
-  return k;
+  return open_knot_vector({coordinates.begin() + 1, coordinates.end() - 1}, coordinates.front(), coordinates.back(),
+                          degree);
 }
 
 // B[t] = a B[first p+2 knots of t + c] + b B[last p+2] (knot insertion into one B-spline).
@@ -53,24 +51,30 @@ void LrMesh::insert(const AxisSegment& segment) {
       s.to > along.back())
     throw std::invalid_argument("LR meshline " + s.position.get_str() + " from " + s.from.get_str() + " to " +
                                 s.to.get_str() + " is empty or leaves the rectangle");
-  auto& intervals = lines_[s.vertical][s.position];
+  // The merged meshline, checked before the mesh changes (a refused insertion leaves it as it was).
+  const auto existing = lines_[s.vertical].find(s.position);
+  std::vector<std::pair<mpq_class, mpq_class>> intervals;
+  if (existing != lines_[s.vertical].end()) intervals = existing->second;
   intervals.push_back({s.from, s.to});
   std::sort(intervals.begin(), intervals.end());
   std::vector<std::pair<mpq_class, mpq_class>> merged;
   for (const auto& iv : intervals)
     if (!merged.empty() && iv.first <= merged.back().second) merged.back().second = std::max(merged.back().second, iv.second);
     else merged.push_back(iv);
-  intervals = merged;
+  auto covers = [&](const mpq_class& from, const mpq_class& to) {
+    return std::any_of(merged.begin(), merged.end(), [&](const auto& iv) { return iv.first <= from && to <= iv.second; });
+  };
   const bool splits_one = std::any_of(splines_.begin(), splines_.end(), [&](const LrBSpline& b) {
     const auto& t = s.vertical ? b.x : b.y;
     const auto& o = s.vertical ? b.y : b.x;
     return t.front() < s.position && s.position < t.back() && std::find(t.begin(), t.end(), s.position) == t.end() &&
-           traverses(s.vertical, s.position, o.front(), o.back());
+           covers(o.front(), o.back());
   });
   if (!splits_one)
     throw std::invalid_argument("LR meshline " + std::string(s.vertical ? "x = " : "y = ") + s.position.get_str() +
                                 " from " + s.from.get_str() + " to " + s.to.get_str() +
                                 " traverses the support of no B-spline: not an LR refinement");
+  lines_[s.vertical][s.position] = std::move(merged);
   inserted_.push_back(s);
   refine();
 }

@@ -3,6 +3,7 @@
 #include "basis/sparse_rank.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 
@@ -12,10 +13,7 @@ namespace knotwork {
 namespace {
 
 std::vector<mpq_class> open_knots(const std::set<mpq_class>& breaks, int p) {
-  std::vector<mpq_class> t(p, *breaks.begin());
-  t.insert(t.end(), breaks.begin(), breaks.end());
-  t.insert(t.end(), p, *breaks.rbegin());
-  return t;
+  return open_knot_vector({std::next(breaks.begin()), std::prev(breaks.end())}, *breaks.begin(), *breaks.rbegin(), p);
 }
 
 // Values of all B-splines of degree p at x (x not a knot, or the domain's right end).

@@ -65,13 +65,6 @@ mpq_class top_derivative_jump(const std::vector<mpq_class>& t, const mpq_class& 
   return above - below;
 }
 
-std::vector<mpq_class> open_knots(const std::vector<mpq_class>& interior, const mpq_class& a, const mpq_class& b, int p) {
-  std::vector<mpq_class> t(p + 1, a);
-  t.insert(t.end(), interior.begin(), interior.end());
-  t.insert(t.end(), p + 1, b);
-  return t;
-}
-
 // The partition with x and y exchanged.
 RectangularPartition transposed(const RectangularPartition& mesh) {
   std::vector<RationalBox> cells;
@@ -336,7 +329,7 @@ PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, c
   // Global y knots: every y-coordinate, simple, except the C^0 lines (multiplicity n).
   std::vector<mpq_class> interior_y;
   for (int iy = 1; iy < g.ny(); ++iy) interior_y.insert(interior_y.end(), contains(c0.y, g.Y[iy]) ? n : 1, g.Y[iy]);
-  const std::vector<mpq_class> KY = open_knots(interior_y, g.Y.front(), g.Y.back(), n);
+  const std::vector<mpq_class> KY = open_knot_vector(interior_y, g.Y.front(), g.Y.back(), n);
   const int ny = static_cast<int>(KY.size()) - n - 1;
   std::vector<std::vector<int>> columns_of_row_spline(ny);  // spline indices per j
   for (int j = 0; j < ny; ++j) {
@@ -349,7 +342,7 @@ PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, c
       for (int s = s0; s < s1 && across; ++s) across = g.at(ix - 1, s) != g.at(ix, s);
       if (across) interior_x.insert(interior_x.end(), contains(c0.x, g.X[ix]) ? m : 1, g.X[ix]);
     }
-    const std::vector<mpq_class> KX = open_knots(interior_x, g.X.front(), g.X.back(), m);
+    const std::vector<mpq_class> KX = open_knot_vector(interior_x, g.X.front(), g.X.back(), m);
     for (size_t i = 0; i + m + 1 < KX.size(); ++i) {
       columns_of_row_spline[j].push_back(static_cast<int>(B.splines.size()));
       B.splines.push_back({std::vector<mpq_class>(KX.begin() + i, KX.begin() + i + m + 2), ky});
@@ -720,7 +713,7 @@ int make_non_negative(PtSplineBasis& B, const RectangularPartition& mesh) {
     for (int s = 0; s < g.nx() && cut; ++s) cut = g.at(s, iy - 1) != g.at(s, iy);
     if (cut) cy.insert(cy.end(), contains(B.c0.y, g.Y[iy]) ? B.n : 1, g.Y[iy]);
   }
-  const auto KX = open_knots(cx, g.X.front(), g.X.back(), B.m), KY = open_knots(cy, g.Y.front(), g.Y.back(), B.n);
+  const auto KX = open_knot_vector(cx, g.X.front(), g.X.back(), B.m), KY = open_knot_vector(cy, g.Y.front(), g.Y.back(), B.n);
   const int first_cross = static_cast<int>(B.splines.size());
   std::vector<std::vector<std::pair<int, mpq_class>>> cross;
   for (size_t j = 0; j + B.n + 1 < KY.size(); ++j)

@@ -107,6 +107,14 @@ std::vector<RationalBox> grid_cells(const std::vector<mpq_class>& xs, const std:
   return cells;
 }
 
+std::vector<mpq_class> open_knot_vector(const std::vector<mpq_class>& interior, const mpq_class& a, const mpq_class& b,
+                                        int p) {
+  std::vector<mpq_class> t(p + 1, a);
+  t.insert(t.end(), interior.begin(), interior.end());
+  t.insert(t.end(), p + 1, b);
+  return t;
+}
+
 std::vector<RationalBox> insert_segments(std::vector<RationalBox> cells, const std::vector<AxisSegment>& segments) {
   if (segments.empty()) return cells;
   mpq_class X0 = cells.at(0).x0, Y0 = cells[0].y0, X1 = cells[0].x1, Y1 = cells[0].y1;

@@ -58,6 +58,10 @@ struct AxisSegment {
   mpq_class position, from, to;
 };
 std::vector<RationalBox> grid_cells(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& ys);
+// The open knot vector on [a, b] of degree p: a and b repeated p + 1 times around `interior`
+// (which carries its own multiplicities).
+std::vector<mpq_class> open_knot_vector(const std::vector<mpq_class>& interior, const mpq_class& a, const mpq_class& b,
+                                        int p);
 std::vector<RationalBox> insert_segments(std::vector<RationalBox> cells, const std::vector<AxisSegment>& segments);
 
 }  // namespace knotwork

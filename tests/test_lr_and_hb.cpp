@@ -118,7 +118,7 @@ TEST_CASE("LR B-splines: partition of unity and polynomial pieces on random LR r
       try {
         lr.insert({vertical, c, other.front(), other.back()});
         ++inserted;
-      } catch (const std::invalid_argument&) {  // c was already a knot line there
+      } catch (const std::invalid_argument&) {  // refused: the mesh is left as it was
       }
     }
     INFO("refinement " << t << ", degree " << p << ", " << lr.inserted().size() << " meshlines");
@@ -132,6 +132,13 @@ TEST_CASE("LR B-splines: a meshline that splits no support is refused", "[lr]") 
   // Length 1 < the height 3 of every support it crosses.
   REQUIRE_THROWS_WITH(lr.insert({true, q(5, 2), 1, 2}), Catch::Contains("not an LR refinement"));
   REQUIRE_THROWS_WITH(lr.insert({true, 7, 0, 4}), Catch::Contains("leaves the rectangle"));
+  // A refused meshline leaves nothing behind. The y-supports of the biquadratic B-splines
+  // are [0,1], [0,2], [0,3], [1,4], [2,4], [3,4]: x = 5/2 from 0 to 1/2 and from 1/2 to 1
+  // contain none and are refused, though together they would contain [0, 1].
+  REQUIRE_THROWS_WITH(lr.insert({true, q(5, 2), 0, q(1, 2)}), Catch::Contains("not an LR refinement"));
+  REQUIRE_THROWS_WITH(lr.insert({true, q(5, 2), q(1, 2), 1}), Catch::Contains("not an LR refinement"));
+  REQUIRE(lr.splines().size() == 36);  // the 6 x 6 biquadratic tensor B-splines of the 4 x 4 grid
+  REQUIRE(lr.inserted().empty());
 }
 
 TEST_CASE("The shipped LR-mesh: 89 dependent LR B-splines, 88 independent PT-splines", "[lr][pt]") {
