@@ -184,10 +184,18 @@ std::vector<RationalBox> insert_segments(std::vector<RationalBox> cells, const s
       while (parent[i] != i) i = parent[i] = parent[parent[i]];
       return i;
     };
+    std::vector<std::pair<size_t, size_t>> separated;  // fine cells on the two sides of a piece
     for (size_t j = 0; j < ny; ++j)
       for (size_t i = 0; i < nx; ++i) {
-        if (i + 1 < nx && !cut(true, xs[i + 1], ys[j], ys[j + 1])) parent[find(j * nx + i)] = find(j * nx + i + 1);
-        if (j + 1 < ny && !cut(false, ys[j + 1], xs[i], xs[i + 1])) parent[find(j * nx + i)] = find((j + 1) * nx + i);
+        const size_t here = j * nx + i;
+        if (i + 1 < nx) {
+          if (cut(true, xs[i + 1], ys[j], ys[j + 1])) separated.push_back({here, here + 1});
+          else parent[find(here)] = find(here + 1);
+        }
+        if (j + 1 < ny) {
+          if (cut(false, ys[j + 1], xs[i], xs[i + 1])) separated.push_back({here, here + nx});
+          else parent[find(here)] = find(here + nx);
+        }
       }
     std::vector<RationalBox> region(nx * ny);
     std::vector<mpq_class> area(nx * ny);
@@ -207,36 +215,33 @@ std::vector<RationalBox> insert_segments(std::vector<RationalBox> cells, const s
         }
         area[r] += (f.x1 - f.x0) * (f.y1 - f.y0);
       }
-    // A piece with the same region on both sides is a slit: its segment ends inside the cell.
-    bool slit = false;
-    for (size_t j = 0; j < ny; ++j)
-      for (size_t i = 0; i < nx; ++i) {
-        if (i + 1 < nx && find(j * nx + i) == find(j * nx + i + 1)) slit = slit || cut(true, xs[i + 1], ys[j], ys[j + 1]);
-        if (j + 1 < ny && find(j * nx + i) == find((j + 1) * nx + i))
-          slit = slit || cut(false, ys[j + 1], xs[i], xs[i + 1]);
-      }
-    for (size_t r : order) {
+    // A piece with the same region on both sides is a slit; a region that is not a rectangle
+    // wraps around an end. Either way some segment ends inside the cell.
+    const bool slit = std::any_of(separated.begin(), separated.end(),
+                                  [&](const auto& p) { return find(p.first) == find(p.second); });
+    const bool rectangles = std::all_of(order.begin(), order.end(), [&](size_t r) {
       const RationalBox& b = region[r];
-      if (!slit && area[r] == (b.x1 - b.x0) * (b.y1 - b.y0)) continue;
-      // Name a segment with an end inside the cell that no perpendicular line crosses.
-      size_t culprit = cutting.front();
-      bool found = false;
-      for (size_t k : cutting) {
-        if (found) break;
+      return area[r] == (b.x1 - b.x0) * (b.y1 - b.y0);
+    });
+    if (slit || !rectangles) {
+      // Name the first segment with an end inside the cell that no perpendicular piece crosses.
+      auto dangles = [&](size_t k) {
         const AxisSegment& s = segs[k];
+        const mpq_class& b0 = s.vertical ? c.y0 : c.x0;
+        const mpq_class& b1 = s.vertical ? c.y1 : c.x1;
         for (const mpq_class& e : {s.from, s.to}) {
-          const mpq_class& b0 = s.vertical ? c.y0 : c.x0;
-          const mpq_class& b1 = s.vertical ? c.y1 : c.x1;
           if (!(b0 < e && e < b1)) continue;
-          bool crossed = false;
-          for (size_t q : cutting)
-            crossed = crossed || (segs[q].vertical != s.vertical && segs[q].position == e && segs[q].from < s.position &&
-                                  s.position < segs[q].to);
-          if (!crossed && !found) culprit = k, found = true;
+          const bool crossed = std::any_of(cutting.begin(), cutting.end(), [&](size_t q) {
+            return segs[q].vertical != s.vertical && segs[q].position == e && segs[q].from < s.position &&
+                   s.position < segs[q].to;
+          });
+          if (!crossed) return true;
         }
-      }
-      throw std::invalid_argument(name(culprit) + " ends inside cell " + box(c) +
-                                  ": a segment must end on an edge of the mesh");
+        return false;
+      };
+      const auto culprit = std::find_if(cutting.begin(), cutting.end(), dangles);
+      throw std::invalid_argument(name(culprit != cutting.end() ? *culprit : cutting.front()) + " ends inside cell " +
+                                  box(c) + ": a segment must end on an edge of the mesh");
     }
     for (size_t r : order) out.push_back(region[r]);
   }
