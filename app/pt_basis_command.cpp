@@ -215,7 +215,7 @@ int pt_basis_command(const BasisOptions& o) {
   }
 
   const char* direction = B.horizontal ? "horizontal" : "vertical";
-  const ConformalityCount cofactor = conformality_count(partition_topology(mesh), p.m, p.n);
+  const ConformalityCount cofactor = conformality_count(topo, p.m, p.n);
   if (o.json) {
     Json j = Json::object();
     j.set("file", o.case_file)

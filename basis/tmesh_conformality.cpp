@@ -18,13 +18,12 @@ ConformalityCount conformality_count(const PartitionTopology& t, int m, int n) {
     if (k.kind == Kind::kLine) c.tensor_part += degree(k) + 1;
     if (k.kind != Kind::kSegment) continue;
     t_edges.push_back(&k);
+    std::vector<mpq_class> power(k.vertices.size(), mpq_class(1));  // t_v^j, j = 0, 1, ...
     for (int j = 0; j <= degree(k); ++j) {
       SparseRationalRow row;
-      for (int v : k.vertices) {
-        const mpq_class& s = k.vertical ? t.vertices[v].y : t.vertices[v].x;
-        mpq_class power = 1;
-        for (int e = 0; e < j; ++e) power *= s;
-        row.terms.emplace_back(v, power);
+      for (size_t i = 0; i < k.vertices.size(); ++i) {
+        row.terms.emplace_back(k.vertices[i], power[i]);
+        power[i] *= k.vertical ? t.vertices[k.vertices[i]].y : t.vertices[k.vertices[i]].x;
       }
       rows.push_back(std::move(row));
     }
