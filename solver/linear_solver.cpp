@@ -1,9 +1,9 @@
 #include "solver/linear_solver.hpp"
 
 #include <Eigen/CholmodSupport>
+#include <chrono>
 #include <cstdio>
 #include <string>
-#include <chrono>
 #include <vector>
 
 #include "solver/input_error.hpp"
@@ -90,7 +90,7 @@ Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) {
   if (!(stats_.refinement_correction <= kNumericallySingularCorrection)) {
     char text[96];
     std::snprintf(text, sizeof text, "%.1e", stats_.refinement_correction);
-    throw std::runtime_error(std::string("the stiffness matrix is numerically singular: one step of iterative "
+    throw std::runtime_error(std::string("the matrix is numerically singular: one step of iterative "
                                          "refinement changed the solution by ") +
                              text + " (relative), so it cannot be trusted (nearly dependent basis functions?)");
   }

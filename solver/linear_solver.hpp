@@ -20,7 +20,8 @@ struct CholeskyStats {
   double peak_bytes = 0;       // CHOLMOD's own peak memory
   int analyses = 0;            // symbolic analyses performed so far
   // Relative size (max norm) of the correction one step of iterative refinement made to the
-  // last solution: about cond(A) * 1e-16, so a measure of how many digits it has.
+  // last solution: it grows with cond(A) (measured on a Gram matrix: 1.7e-10 at cond 1.5e12,
+  // 2.4e-9 at 1.6e14, 0.05 at 1.4e15), so it says how many digits the solution has.
   double refinement_correction = 0;
 };
 
