@@ -195,8 +195,7 @@ double mesh_size(const Discretization& d) {
 std::string describe_space(const CaseDescription& c) {
   const auto& s = c.space;
   if (c.family == "pt") {
-    const char* ext = c.pt.extension == PtExtension::kHorizontal ? "horizontal"
-                      : c.pt.extension == PtExtension::kVertical ? "vertical" : "auto";
+    const char* ext = pt_extension_name(c.pt.extension);
     std::string start = !c.pt.tmesh_file.empty() ? "T-mesh " + c.pt.tmesh_file
                         : !c.pt.cells.empty()    ? std::to_string(c.pt.cells.size()) + " given cells"
                                                  : "tensor start";

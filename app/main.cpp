@@ -119,7 +119,9 @@ int main(int argc, char** argv) {
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
   basis_cmd->add_flag("--pt", basis.pt, "PT-splines of the T-mesh file (edge extension + Extended Edge Elimination)");
   basis_cmd->add_option("--extension", basis.pt_extension,
-                        "--pt: extend the horizontal or vertical l-edges to cross-cuts (auto: fewer extended edges)")
+                        "--pt: minimal (l-edges lengthened as LR meshlines, certified), horizontal or vertical "
+                        "(those l-edges extended to cross-cuts), or auto: minimal, else the full extension with "
+                        "fewer extended edges")
       ->capture_default_str();
   basis_cmd->add_flag("!--no-prop1", basis.pt_non_negative,
                       "--pt: keep the EEE combinations instead of the non-negative basis of Prop. 1");

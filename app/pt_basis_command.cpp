@@ -123,11 +123,9 @@ int pt_basis_command(const BasisOptions& o) {
   if (!o.vtk_file.empty() && p.m != p.n)
     throw InputError(o.case_file + ": degree: --vtk writes Bezier cells of one degree, and this T-mesh has degree [" +
                      std::to_string(p.m) + ", " + std::to_string(p.n) + "]");
-  PtExtension extension = PtExtension::kAuto;
-  if (o.pt_extension == "horizontal") extension = PtExtension::kHorizontal;
-  else if (o.pt_extension == "vertical") extension = PtExtension::kVertical;
-  else if (o.pt_extension != "auto")
-    throw InputError("--extension: '" + o.pt_extension + "' is not one of auto, horizontal, vertical");
+  const std::optional<PtExtension> parsed = parse_pt_extension(o.pt_extension);
+  if (!parsed) throw InputError("--extension: '" + o.pt_extension + "' is not one of auto, minimal, horizontal, vertical");
+  const PtExtension extension = *parsed;
   const RectangularPartition mesh(p.cells);  // load_partition validated the cells
   PtSplineBasis B = pt_spline_basis(mesh, p.m, p.n, extension);
   const long brute = spline_space_dimension(mesh, p.m, p.n, p.m - 1, p.n - 1).dimension;
@@ -214,7 +212,7 @@ int pt_basis_command(const BasisOptions& o) {
     });
   }
 
-  const char* direction = B.horizontal ? "horizontal" : "vertical";
+  const char* direction = pt_extension_name(B.extension);
   const ConformalityCount cofactor = conformality_count(topo, p.m, p.n);
   if (o.json) {
     Json j = Json::object();
@@ -236,6 +234,7 @@ int pt_basis_command(const BasisOptions& o) {
         .set("support_cells_max", stats.max)
         .set("support_cells_mean", stats.mean)
         .set("extension", direction)
+        .set("minimal_refused", B.minimal_refused)
         .set("extended_edges", B.extended_edges)
         .set("eee_equations", B.equations)
         .set("eee_rank", B.rank)
@@ -267,9 +266,11 @@ int pt_basis_command(const BasisOptions& o) {
                 cofactor.dimension);
   else
     std::printf("  formula    none (not diagonalizable); smoothing-cofactor count %ld\n", cofactor.dimension);
-  std::printf("  extension  %s l-edges to cross-cuts: %ld extended edges, %ld EEE equations of rank %ld in %d blocks "
-              "(largest %d B-splines); %d B-splines untouched\n",
-              direction, B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
+  std::printf("  extension  %s%s: %zu local B-splines, %ld extended edges, %ld EEE equations of rank %ld in %d "
+              "blocks (largest %d B-splines); %d B-splines untouched\n",
+              direction, B.extension == PtExtension::kMinimal ? " (LR meshlines)" : " l-edges to cross-cuts",
+              B.splines.size(), B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
+  if (!B.minimal_refused.empty()) std::printf("  note       minimal extension not used: %s\n", B.minimal_refused.c_str());
   std::printf("  smoothness largest relative jump %.3e\n", residual);
   std::printf("  values     min %.6g (smallest Bernstein coefficient %.6g)%s; partition-of-unity error %.3e\n", min_value,
               lowest_coefficient.get_d(), o.pt_non_negative ? " after Prop. 1" : "", pu_error);

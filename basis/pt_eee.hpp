@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -108,7 +109,16 @@ using EeeRow = std::vector<std::pair<int, mpq_class>>;
 void eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows, const Grid& g,
                               const RectangularPartition& mesh);
 
-// The construction on an LR-mesh extension of T (pt_minimal_extension.cpp).
-PtSplineBasis build_minimal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0);
+// The construction on an LR-mesh extension of T (pt_minimal_extension.cpp); nullopt when an
+// l-edge cannot be inserted even as a full line. The LR B-splines of the extension need not
+// span all of S(T^e): the result can miss functions, and whether it does depends on the
+// order of insertion (on adaptive L-shape meshes one order or the other misses one function
+// in about one case in four), hence the variants, tried in turn by pt_spline_basis.
+struct MinimalVariant {
+  bool shortest_first = false;
+  int extra_steps = 0;
+};
+std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0,
+                                           const MinimalVariant& variant);
 
 }  // namespace knotwork::pt_detail

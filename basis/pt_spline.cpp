@@ -11,8 +11,10 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "basis/lr_spline.hpp"
 #include "basis/pt_eee.hpp"
 #include "basis/sparse_rank.hpp"
+#include "basis/spline_dimension.hpp"
 
 namespace knotwork {
 
@@ -100,7 +102,7 @@ void condition_block(std::vector<SparseVector>& F, const std::vector<double>& we
 PtSplineBasis build_horizontal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0) {
   const Grid g = make_grid(mesh);
   PtSplineBasis B;
-  B.m = m, B.n = n, B.horizontal = true, B.c0 = c0;
+  B.m = m, B.n = n, B.extension = PtExtension::kHorizontal, B.c0 = c0;
   // Global y knots: every y-coordinate, simple, except the C^0 lines (multiplicity n).
   std::vector<mpq_class> interior_y;
   for (int iy = 1; iy < g.ny(); ++iy) interior_y.insert(interior_y.end(), contains(c0.y, g.Y[iy]) ? n : 1, g.Y[iy]);
@@ -308,6 +310,51 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
 
 }  // namespace
 
+std::optional<PtExtension> parse_pt_extension(const std::string& name) {
+  for (PtExtension e : {PtExtension::kAuto, PtExtension::kMinimal, PtExtension::kHorizontal, PtExtension::kVertical})
+    if (name == pt_extension_name(e)) return e;
+  return std::nullopt;
+}
+
+const char* pt_extension_name(PtExtension extension) {
+  switch (extension) {
+    case PtExtension::kAuto: return "auto";
+    case PtExtension::kMinimal: return "minimal";
+    case PtExtension::kHorizontal: return "horizontal";
+    case PtExtension::kVertical: return "vertical";
+  }
+  return "?";
+}
+
+namespace {
+
+// Why `B` is not a basis of S(T), or empty when it is: its functions lie in S(T) by
+// construction; there must be as many as the brute-force dimension, and their exact cell
+// polynomials must be independent. Both ranks are modular, so a certificate is never wrong:
+// dim <= unknowns - rank mod p (rank mod p <= rank over Q) and count = rank mod p <= rank.
+std::string certificate_failure(const PtSplineBasis& B, const RectangularPartition& mesh, long dimension) {
+  try {
+    const long count = static_cast<long>(B.functions.size());
+    if (count != dimension) return std::to_string(count) + " functions for a space of dimension " + std::to_string(dimension);
+    const long per_cell = static_cast<long>(B.m + 1) * (B.n + 1);
+    std::vector<SparseRationalRow> rows;
+    for (const auto& cells : cell_polynomials<mpq_class>(B, mesh)) {
+      SparseRationalRow r;
+      for (const auto& [k, coefficients] : cells)
+        for (long a = 0; a < per_cell; ++a)
+          if (coefficients[a] != 0) r.terms.emplace_back(k * per_cell + a, coefficients[a]);
+      rows.push_back(std::move(r));
+    }
+    const long rank = rank_modular(rows, per_cell * mesh.num_cells());
+    if (rank != count) return "the " + std::to_string(count) + " functions have rank " + std::to_string(rank);
+  } catch (const std::runtime_error& e) {  // two primes disagreed
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
 PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, PtExtension extension, const C0Lines& c0) {
   if (m < 1 || n < 1) throw std::invalid_argument("PT-splines need degrees m, n >= 1");
   {
@@ -324,18 +371,43 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
                                       " is not a line of the T-mesh from boundary to boundary");
       }
   }
+  std::string refused;
+  if (extension == PtExtension::kAuto || extension == PtExtension::kMinimal) {
+    long dimension = -1;
+    try {
+      dimension = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kModular, c0).dimension;
+    } catch (const std::runtime_error& e) {  // two primes disagreed: no certificate possible
+      refused = e.what();
+    }
+    for (const MinimalVariant variant : {MinimalVariant{false, 0}, MinimalVariant{true, 0}, MinimalVariant{false, 1},
+                                         MinimalVariant{true, 1}}) {
+      if (dimension < 0) break;
+      std::optional<PtSplineBasis> minimal = build_minimal(mesh, m, n, c0, variant);
+      const std::string why =
+          minimal ? certificate_failure(*minimal, mesh, dimension) : "an l-edge could not be inserted even as a full line";
+      if (why.empty()) return std::move(*minimal);
+      if (refused.empty()) refused = why;  // the first attempt's reason
+    }
+    refused += " (and in the three other insertion orders)";
+    if (extension == PtExtension::kMinimal) throw std::runtime_error("minimal PT-spline extension: " + refused);
+  }
   const RectangularPartition flipped = transposed(mesh);
   if (extension == PtExtension::kAuto) {
     const long h = horizontal_extended_edges(mesh, make_grid(mesh));
     const long v = horizontal_extended_edges(flipped, make_grid(flipped));
     extension = v < h ? PtExtension::kVertical : PtExtension::kHorizontal;
   }
-  if (extension == PtExtension::kHorizontal) return build_horizontal(mesh, m, n, c0);
+  if (extension == PtExtension::kHorizontal) {
+    PtSplineBasis B = build_horizontal(mesh, m, n, c0);
+    B.minimal_refused = refused;
+    return B;
+  }
   PtSplineBasis B = build_horizontal(flipped, n, m, C0Lines{c0.y, c0.x});
   for (auto& s : B.splines) std::swap(s.x, s.y);
   std::swap(B.m, B.n);
   B.c0 = c0;
-  B.horizontal = false;
+  B.extension = PtExtension::kVertical;
+  B.minimal_refused = refused;
   return B;
 }
 
@@ -382,36 +454,49 @@ void eliminate(const std::vector<SparseVector>& keys, const std::vector<SparseVe
 
 namespace {
 
-// Each function's trace on the boundary of the rectangle, in coordinates (side, knots along the
-// side): on each side the traces of the B-splines are B-splines of one knot vector.
+// Each function's trace on the boundary of the rectangle, in coordinates (side, B-spline of
+// the side's knot vector): the union, with the largest multiplicity, of the knot vectors of
+// the traces on that side. The traces are refined into it by knot insertion: with the LR
+// B-splines of the minimal extension two traces need not be windows of one knot vector.
 std::vector<SparseVector> trace_keys(const PtSplineBasis& B, const RectangularPartition& mesh) {
   const Grid g = make_grid(mesh);
   const mpq_class &x0 = g.X.front(), &x1 = g.X.back(), &y0 = g.Y.front(), &y1 = g.Y.back();
-  std::map<std::pair<int, std::vector<mpq_class>>, int> coordinate;
-  std::vector<std::vector<int>> coordinates_of(B.splines.size());
   auto all_equal = [](const std::vector<mpq_class>& t, size_t from, size_t to, const mpq_class& v) {
     for (size_t i = from; i < to; ++i)
       if (t[i] != v) return false;
     return true;
   };
+  std::vector<std::vector<std::pair<int, const std::vector<mpq_class>*>>> traces(B.splines.size());
+  std::map<mpq_class, long> multiplicity[4];
   for (size_t s = 0; s < B.splines.size(); ++s) {
     const auto& sp = B.splines[s];
     auto add = [&](int side, const std::vector<mpq_class>& along) {
-      const auto key = std::make_pair(side, along);
-      auto it = coordinate.find(key);
-      if (it == coordinate.end()) it = coordinate.emplace(key, static_cast<int>(coordinate.size())).first;
-      coordinates_of[s].push_back(it->second);
+      traces[s].emplace_back(side, &along);
+      for (const mpq_class& v : along) {
+        long& mult = multiplicity[side][v];
+        mult = std::max<long>(mult, std::count(along.begin(), along.end(), v));
+      }
     };
     if (all_equal(sp.y, 0, B.n + 1, y0)) add(0, sp.x);
     if (all_equal(sp.x, 1, B.m + 2, x1)) add(1, sp.y);
     if (all_equal(sp.y, 1, B.n + 2, y1)) add(2, sp.x);
     if (all_equal(sp.x, 0, B.m + 1, x0)) add(3, sp.y);
   }
+  std::vector<mpq_class> fine[4];
+  for (int side = 0; side < 4; ++side)
+    for (const auto& [v, mult] : multiplicity[side]) fine[side].insert(fine[side].end(), mult, v);
+  std::map<std::pair<int, int>, int> coordinate;  // (side, window) -> id, by first use
+  std::vector<SparseVector> trace_of(B.splines.size());
+  for (size_t s = 0; s < B.splines.size(); ++s)
+    for (const auto& [side, along] : traces[s])
+      for (const auto& [window, c] : refine_bspline(*along, fine[side])) {
+        const auto it = coordinate.emplace(std::make_pair(side, window), static_cast<int>(coordinate.size())).first;
+        axpy(trace_of[s], c, SparseVector{{it->second, mpq_class(1)}});
+      }
   std::vector<SparseVector> keys;
   for (const auto& f : B.functions) {
     SparseVector key;
-    for (const auto& [s, c] : f)
-      for (int id : coordinates_of[s]) axpy(key, c, SparseVector{{id, mpq_class(1)}});
+    for (const auto& [s, c] : f) axpy(key, c, trace_of[s]);
     keys.push_back(std::move(key));
   }
   return keys;

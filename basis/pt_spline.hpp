@@ -1,6 +1,8 @@
 #pragma once
 #include <gmpxx.h>
 
+#include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -11,19 +13,29 @@ namespace knotwork {
 // PT-splines over an arbitrary T-mesh T (Sec. 3 of the PT-spline paper), highest smoothness
 // S(m, n, m-1, n-1, T), by edge extension and Extended Edge Elimination (EEE):
 //
-// 1. Extension T^e: every horizontal T l-edge and ray is extended to a cross-cut (or every
+// 1. Extension T^e. Minimal (the default): the l-edges of T are inserted as LR meshlines into
+//    the tensor mesh of T's cross-cuts, each lengthened only until it splits a B-spline; the
+//    local B-splines are the LR B-splines of T^e (basis/pt_minimal_extension.cpp). The result
+//    is certified (number of functions = brute-force dimension of S(T), exact independence of
+//    their cell polynomials) and, should that fail, replaced by the full extension:
+//    every horizontal T l-edge and ray is extended to a cross-cut (or every
 //    vertical one: the direction with fewer extended edges). This is the extension of the
 //    proof of Lemma 2. Over T^e every horizontal line is global, so each f in S(T^e) is
 //    f = sum_j g_j(x) N_j(y) with N_j the B-splines on all y-coordinates, and g_j a spline
 //    on the x-coordinates of the vertical lines of T that cross all of supp N_j. The basis
 //    of S(T^e) is therefore the local tensor-product B-splines M_{j,i}(x) N_j(y).
-// 2. EEE: f lies in S(T) iff across every extended edge (a global line y = Y_k inside a cell
-//    of T) the jump of d^n f / dy^n vanishes. These equations couple only the B-splines
+// 2. EEE: f lies in S(T) iff across every extended edge (a line of T^e inside a cell of T,
+//    y = Y_k for the full extension) the jump of d^n f / dy^n (d^m f / dx^m) vanishes. These equations couple only the B-splines
 //    whose supports meet the edge; they are split into independent blocks (connected
 //    components) and each block's null space is computed exactly over Q.
 // 3. The basis of S(T): the B-splines that meet no extended edge, untouched, and one
 //    combination per null vector of each block (Theorem 3).
-enum class PtExtension { kAuto, kHorizontal, kVertical };
+// kAuto: minimal, certified, else the full extension in the direction with fewer extended
+// edges. kMinimal: minimal or std::runtime_error (saying why). kHorizontal, kVertical: full.
+enum class PtExtension { kAuto, kMinimal, kHorizontal, kVertical };
+// "auto", "minimal", "horizontal", "vertical"; nullopt for anything else.
+std::optional<PtExtension> parse_pt_extension(const std::string& name);
+const char* pt_extension_name(PtExtension extension);
 
 struct PtLocalBSpline {
   std::vector<mpq_class> x, y;  // m + 2 and n + 2 local knots
@@ -32,13 +44,14 @@ struct PtLocalBSpline {
 struct PtSplineBasis {
   int m = 0, n = 0;
   C0Lines c0;  // knots of multiplicity m (in x) or n (in y): the space is only C^0 across them
-  bool horizontal = true;              // horizontal l-edges were extended to cross-cuts
+  PtExtension extension = PtExtension::kHorizontal;  // the one used: kMinimal, kHorizontal, kVertical
+  std::string minimal_refused;  // kAuto fell back to a full extension: why (else empty)
   // The local B-splines the functions combine: the basis of S(T^e), followed by the
   // cross-cut B-splines once make_non_negative has run.
   std::vector<PtLocalBSpline> splines;
   // The basis of S(T): each function a combination (spline index, coefficient).
   std::vector<std::vector<std::pair<int, mpq_class>>> functions;
-  long extended_edges = 0;  // pairs (cell of T, extended line through its interior)
+  long extended_edges = 0;  // pairs (cell of T, line of T^e through its interior)
   long equations = 0, rank = 0;
   int blocks = 0, largest_block = 0;  // EEE blocks; the largest one's number of B-splines
   int untouched = 0;                  // B-splines of T^e kept as they are

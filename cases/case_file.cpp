@@ -473,11 +473,9 @@ void read_pt_space(const Reader& r, const toml::table& s, CaseDescription& c) {
   if (const toml::node* sg = s.get("segments")) c.pt.segments = read_axis_segments(r, *sg, "[space] segments");
   if (const toml::node* x = s.get("extension")) {
     const std::string e = r.string(*x, "[space] extension");
-    if (e == "auto") c.pt.extension = PtExtension::kAuto;
-    else if (e == "horizontal") c.pt.extension = PtExtension::kHorizontal;
-    else if (e == "vertical") c.pt.extension = PtExtension::kVertical;
-    else r.fail("[space] extension", "'" + e + "' is not one of auto, horizontal, vertical (" +
-                                         closest(e, {"auto", "horizontal", "vertical"}) + ")");
+    if (const auto parsed = parse_pt_extension(e)) c.pt.extension = *parsed;
+    else r.fail("[space] extension", "'" + e + "' is not one of auto, minimal, horizontal, vertical (" +
+                                         closest(e, {"auto", "minimal", "horizontal", "vertical"}) + ")");
   }
   read_quadrature(r, s, c);
 }

@@ -342,7 +342,15 @@ TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and b
   REQUIRE(json_number_of(r.out, "rank") == 61);
   REQUIRE(json_number_of(r.out, "max_smoothness_residual") <= 1e-11);
   REQUIRE(json_number_of(r.out, "min_bernstein_coefficient") >= 0);  // Prop. 1
-  REQUIRE(json_number_of(r.out, "extended_edges") > 0);
+  // The minimal extension: T itself is an LR-mesh (every l-edge of the hierarchical mesh
+  // splits a B-spline when inserted), so nothing is extended and the LR B-splines are the basis.
+  REQUIRE(has(r.out, "\"extension\": \"minimal\""));
+  REQUIRE(json_number_of(r.out, "extended_edges") == 0);
+  // The full extension reaches the same dimension through extended edges.
+  const Result full = box.run("basis --pt --json --extension horizontal " + kSource + "/cases/tmeshes/hierarchical.toml");
+  REQUIRE(json_number_of(full.out, "functions") == 61);
+  REQUIRE(json_number_of(full.out, "rank") == 61);
+  REQUIRE(json_number_of(full.out, "extended_edges") > 0);
   // Diagonalizable (an ordering of its T l-edges keeps 4 vertices on each), so the formula
   // applies and must agree with the brute force.
   REQUIRE(has(r.out, "\"diagonalizable\": true"));
@@ -352,8 +360,8 @@ TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and b
   for (size_t at = exported.find("\"bernstein\""); at != std::string::npos; at = exported.find("\"bernstein\"", at + 1))
     ++exported_functions;
   REQUIRE(exported_functions == 61);
-  // Without Prop. 1 the EEE combinations change sign.
-  const Result raw = box.run("basis --pt --json --no-prop1 " + kSource + "/cases/tmeshes/hierarchical.toml");
+  // Without Prop. 1 the EEE combinations of the full extension change sign.
+  const Result raw = box.run("basis --pt --json --no-prop1 --extension horizontal " + kSource + "/cases/tmeshes/hierarchical.toml");
   REQUIRE(json_number_of(raw.out, "min_bernstein_coefficient") < 0);
   // Bad input: one line naming what is wrong, nothing written.
   expect_one_line_error(box.run("basis --pt --extension diagonal " + kSource + "/cases/tmeshes/hierarchical.toml"),

@@ -60,7 +60,7 @@ bool polynomial_per_cell(const PtSplineBasis& B, int f, const RectangularPartiti
 }
 
 void check_basis(const RectangularPartition& mesh, int m, int n, PtExtension ext, const C0Lines& c0 = {}) {
-  INFO("degree " << m << "x" << n << ", extension " << (ext == PtExtension::kHorizontal ? "horizontal" : "vertical")
+  INFO("degree " << m << "x" << n << ", extension " << pt_extension_name(ext)
                  << ", " << mesh.num_cells() << " cells, " << c0.x.size() + c0.y.size() << " C0 lines");
   const PtSplineBasis B = pt_spline_basis(mesh, m, n, ext, c0);
   const long dim = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kExact, c0).dimension;
@@ -112,7 +112,8 @@ TEST_CASE("PT-splines: count = brute-force dimension, independent, in S(T), on a
     INFO(name);
     const RectangularPartition mesh(cells);
     for (const auto& [m, n] : std::vector<std::pair<int, int>>{{1, 1}, {2, 2}, {3, 2}})
-      for (PtExtension ext : {PtExtension::kHorizontal, PtExtension::kVertical}) check_basis(mesh, m, n, ext);
+      for (PtExtension ext : {PtExtension::kAuto, PtExtension::kHorizontal, PtExtension::kVertical})
+        check_basis(mesh, m, n, ext);
   }
 }
 
@@ -126,7 +127,7 @@ TEST_CASE("PT-splines with C0 lines (a folded geometry's knot lines): the space 
     const RectangularPartition one(random_halvings(rng, 10 + 2 * t, halves));
     const RectangularPartition two(random_halvings(rng, 10 + 2 * t, quarters));
     for (const auto& [m, n] : std::vector<std::pair<int, int>>{{2, 2}, {3, 2}})
-      for (PtExtension ext : {PtExtension::kHorizontal, PtExtension::kVertical}) {
+      for (PtExtension ext : {PtExtension::kAuto, PtExtension::kHorizontal, PtExtension::kVertical}) {
         check_basis(one, m, n, ext, C0Lines{{h}, {}});
         check_basis(two, m, n, ext, C0Lines{{h}, {h}});
       }
@@ -140,6 +141,52 @@ TEST_CASE("PT-splines with C0 lines (a folded geometry's knot lines): the space 
   const RectangularPartition t(random_halvings(rng, 0, {{0, 0, h, h}, {h, 0, 1, h}, {0, h, 1, 1}}));
   REQUIRE_THROWS_WITH(pt_spline_basis(t, 2, 2, PtExtension::kAuto, C0Lines{{h}, {}}),
                       Catch::Contains("C0 line x = 1/2 is not a line of the T-mesh"));
+}
+
+TEST_CASE("PT-splines: the minimal extension is certified, or refused with the reason, and smaller than the full one",
+          "[pt]") {
+  // The LR-dependent mesh is its own LR-mesh, with 89 LR B-splines for dimension 88
+  // (test_lr_and_hb): the certified minimal extension is not T itself but lengthens meshlines
+  // beyond it, and has extended edges to eliminate.
+  const RectangularPartition dependent(load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/lr_dependent.toml").cells);
+  check_basis(dependent, 3, 3, PtExtension::kMinimal);
+  const PtSplineBasis lengthened = pt_spline_basis(dependent, 3, 3, PtExtension::kMinimal);
+  REQUIRE(lengthened.extended_edges > 0);
+  REQUIRE(lengthened.functions.size() == 88);
+  // Graded meshes (cells near one corner halved again and again, as adaptive refinement does):
+  // the minimal extension must be certified and need fewer B-splines and much smaller EEE
+  // blocks (measured, 130 cells: 170 vs 275 B-splines, largest block 26 vs 208 at degree 2;
+  // 191 vs 305 and 28 vs 238 at degree 3).
+  std::mt19937 rng(5);
+  std::vector<mpq_class> eighths;
+  for (int i = 0; i <= 8; ++i) eighths.push_back(mpq_class(i, 8));
+  std::vector<RationalBox> cells = grid_cells(eighths, eighths);
+  for (int level = 1; level <= 6; ++level) {
+    std::vector<RationalBox> next;
+    const mpq_class reach(3, 4 << level);
+    for (const auto& c : cells) {
+      const bool near = c.x0 < reach && c.y0 < reach && rng() % 4 != 0;  // a ragged front
+      if (!near) {
+        next.push_back(c);
+        continue;
+      }
+      const mpq_class xm = (c.x0 + c.x1) / 2, ym = (c.y0 + c.y1) / 2;
+      for (const RationalBox& q : {RationalBox{c.x0, c.y0, xm, ym}, RationalBox{xm, c.y0, c.x1, ym},
+                                   RationalBox{c.x0, ym, xm, c.y1}, RationalBox{xm, ym, c.x1, c.y1}})
+        next.push_back(q);
+    }
+    cells = std::move(next);
+  }
+  const RectangularPartition graded(cells);
+  for (int p : {2, 3}) {
+    INFO("degree " << p << ", " << graded.num_cells() << " cells");
+    check_basis(graded, p, p, PtExtension::kMinimal);
+    const PtSplineBasis minimal = pt_spline_basis(graded, p, p, PtExtension::kMinimal);
+    const PtSplineBasis full = pt_spline_basis(graded, p, p, PtExtension::kHorizontal);
+    REQUIRE(minimal.functions.size() == full.functions.size());
+    REQUIRE(minimal.splines.size() < full.splines.size());
+    REQUIRE(4 * minimal.largest_block < full.largest_block);
+  }
 }
 
 TEST_CASE("PT-splines: a B-spline of the extended mesh that meets an extended edge is not in S(T)", "[pt]") {
