@@ -195,6 +195,9 @@ std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int
     }
   }
   eliminate_extended_edges(B, rows, g, mesh);
+  // The untouched B-splines (the first functions) keep their LR weights: where T^e = T they
+  // are the weighted LR B-splines, a partition of unity.
+  for (int f = 0; f < B.untouched; ++f) B.functions[f].front().second = lr.splines()[B.functions[f].front().first].weight;
   return B;
 }
 

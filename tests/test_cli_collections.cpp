@@ -360,6 +360,10 @@ TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and b
   for (size_t at = exported.find("\"bernstein\""); at != std::string::npos; at = exported.find("\"bernstein\"", at + 1))
     ++exported_functions;
   REQUIRE(exported_functions == 61);
+  // Nothing extended: the functions are the LR B-splines with their weights, a partition of
+  // unity (as evaluated by the command, at sample points of every cell).
+  const Result weighted = box.run("basis --pt --json --no-prop1 " + kSource + "/cases/tmeshes/hierarchical.toml");
+  REQUIRE(json_number_of(weighted.out, "partition_of_unity_error") < 1e-12);
   // Without Prop. 1 the EEE combinations of the full extension change sign.
   const Result raw = box.run("basis --pt --json --no-prop1 --extension horizontal " + kSource + "/cases/tmeshes/hierarchical.toml");
   REQUIRE(json_number_of(raw.out, "min_bernstein_coefficient") < 0);
