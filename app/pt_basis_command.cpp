@@ -128,6 +128,7 @@ int pt_basis_command(const BasisOptions& o) {
   const PtExtension extension = *parsed;
   const RectangularPartition mesh(p.cells);  // load_partition validated the cells
   PtSplineBasis B = pt_spline_basis(mesh, p.m, p.n, extension);
+  const long local_bsplines = static_cast<long>(B.splines.size());  // before Prop. 1 appends the cross-cut ones
   const long brute = spline_space_dimension(mesh, p.m, p.n, p.m - 1, p.n - 1).dimension;
   int cross_cut_functions = 0;
   if (o.pt_non_negative) cross_cut_functions = make_non_negative(B, mesh);
@@ -235,6 +236,7 @@ int pt_basis_command(const BasisOptions& o) {
         .set("support_cells_mean", stats.mean)
         .set("extension", direction)
         .set("minimal_refused", B.minimal_refused)
+        .set("local_bsplines", local_bsplines)
         .set("extended_edges", B.extended_edges)
         .set("eee_equations", B.equations)
         .set("eee_rank", B.rank)
@@ -266,10 +268,10 @@ int pt_basis_command(const BasisOptions& o) {
                 cofactor.dimension);
   else
     std::printf("  formula    none (not diagonalizable); smoothing-cofactor count %ld\n", cofactor.dimension);
-  std::printf("  extension  %s%s: %zu local B-splines, %ld extended edges, %ld EEE equations of rank %ld in %d "
+  std::printf("  extension  %s%s: %ld local B-splines, %ld extended edges, %ld EEE equations of rank %ld in %d "
               "blocks (largest %d B-splines); %d B-splines untouched\n",
               direction, B.extension == PtExtension::kMinimal ? " (LR meshlines)" : " l-edges to cross-cuts",
-              B.splines.size(), B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
+              local_bsplines, B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
   if (!B.minimal_refused.empty()) std::printf("  note       minimal extension not used: %s\n", B.minimal_refused.c_str());
   std::printf("  smoothness largest relative jump %.3e\n", residual);
   std::printf("  values     min %.6g (smallest Bernstein coefficient %.6g)%s; partition-of-unity error %.3e\n", min_value,
