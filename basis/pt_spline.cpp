@@ -382,9 +382,14 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
     for (const MinimalVariant variant : {MinimalVariant{false, 0}, MinimalVariant{true, 0}, MinimalVariant{false, 1},
                                          MinimalVariant{true, 1}}) {
       if (dimension < 0) break;
-      std::optional<PtSplineBasis> minimal = build_minimal(mesh, m, n, c0, variant);
-      const std::string why =
-          minimal ? certificate_failure(*minimal, mesh, dimension) : "an l-edge could not be inserted even as a full line";
+      std::optional<PtSplineBasis> minimal;
+      std::string why;
+      try {
+        minimal = build_minimal(mesh, m, n, c0, variant);
+        why = minimal ? certificate_failure(*minimal, mesh, dimension) : "an l-edge could not be inserted even as a full line";
+      } catch (const std::logic_error& e) {  // a block's modular rank fell below its rank over Q
+        why = e.what();
+      }
       if (why.empty()) return std::move(*minimal);
       if (refused.empty()) refused = why;  // the first attempt's reason
     }
