@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <random>
 
 #include "basis/lr_spline.hpp"
@@ -125,6 +126,53 @@ TEST_CASE("LR B-splines: partition of unity and polynomial pieces on random LR r
     REQUIRE(inserted > 0);
     check_partition_of_unity_and_cells(lr);
   }
+}
+
+TEST_CASE("LR B-splines with C0 lines: the fold stays a knot of full multiplicity, partition of unity", "[lr]") {
+  std::mt19937 rng(23);
+  for (int p : {2, 3}) {
+    LrMesh lr(integers(4), integers(4), p, p, C0Lines{{2}, {}});
+    for (int k = 0; k < 8; ++k) {
+      const bool vertical = rng() % 2;
+      const mpq_class at = q(2 * static_cast<long>(rng() % 4) + 1, 2);  // 1/2, 3/2, 5/2, 7/2
+      const mpq_class from = rng() % 2, to = from + 3;
+      lr.try_insert({vertical, at, from, to});  // refusals leave the mesh as it was
+    }
+    INFO("degree " << p << ", " << lr.inserted().size() << " meshlines");
+    REQUIRE(!lr.inserted().empty());
+    for (const auto& s : lr.splines())
+      if (s.x.front() < 2 && 2 < s.x.back()) REQUIRE(std::count(s.x.begin(), s.x.end(), mpq_class(2)) == p);
+    check_partition_of_unity_and_cells(lr);
+  }
+  REQUIRE_THROWS_WITH(LrMesh(integers(4), integers(4), 2, 2, C0Lines{{q(5, 2)}, {}}), Catch::Contains("not an interior line"));
+}
+
+TEST_CASE("refine_bspline: a B-spline is the sum of its refined pieces", "[lr]") {
+  // Cox-de Boor by recursion on the definition, written here.
+  std::function<mpq_class(const std::vector<mpq_class>&, const mpq_class&)> value =
+      [&](const std::vector<mpq_class>& t, const mpq_class& x) -> mpq_class {
+    if (t.size() == 2) return t[0] <= x && x < t[1] ? 1 : 0;
+    const std::vector<mpq_class> left(t.begin(), t.end() - 1), right(t.begin() + 1, t.end());
+    const size_t p = t.size() - 2;
+    mpq_class v = 0;
+    if (t[p] != t[0]) v += (x - t[0]) / (t[p] - t[0]) * value(left, x);
+    if (t[p + 1] != t[1]) v += (t[p + 1] - x) / (t[p + 1] - t[1]) * value(right, x);
+    return v;
+  };
+  const std::vector<mpq_class> fine = {0, 0, 0, q(1, 3), q(1, 2), q(1, 2), 1, q(3, 2), 2, q(5, 2), 3, 3, 3};
+  const std::vector<std::vector<mpq_class>> coarse = {
+      {0, 0, 0, 1}, {0, q(1, 2), 2, 3}, {q(1, 2), q(1, 2), q(3, 2), 3}, {1, 2, 3, 3}, {0, 0, 1, 3}};
+  for (const auto& t : coarse) {
+    const auto pieces = refine_bspline(t, fine);
+    REQUIRE(pieces.size() > 1);
+    for (long k = 1; k < 60; ++k) {  // x = 3k/61 hits no knot
+      const mpq_class x = q(3 * k, 61);
+      mpq_class sum = 0;
+      for (const auto& [window, c] : pieces) sum += c * value({fine.begin() + window, fine.begin() + window + 4}, x);
+      REQUIRE(sum == value(t, x));
+    }
+  }
+  REQUIRE_THROWS(refine_bspline({0, 1, 1, 1}, fine));  // 1 is a simple knot of `fine`
 }
 
 TEST_CASE("LR B-splines: a meshline that splits no support is refused", "[lr]") {
