@@ -25,8 +25,8 @@ namespace knotwork {
 //    on the x-coordinates of the vertical lines of T that cross all of supp N_j. The basis
 //    of S(T^e) is therefore the local tensor-product B-splines M_{j,i}(x) N_j(y).
 // 2. EEE: f lies in S(T) iff across every extended edge (a line of T^e inside a cell of T,
-//    y = Y_k for the full extension) the jump of d^n f / dy^n (d^m f / dx^m) vanishes. These equations couple only the B-splines
-//    whose supports meet the edge; they are split into independent blocks (connected
+//    y = Y_k for the full extension) the jump of d^n f / dy^n (d^m f / dx^m) vanishes. These
+//    equations couple only the B-splines whose supports meet the edge; they are split into independent blocks (connected
 //    components) and each block's null space is computed exactly over Q.
 // 3. The basis of S(T): the B-splines that meet no extended edge, untouched, and one
 //    combination per null vector of each block (Theorem 3).
