@@ -7,7 +7,6 @@ namespace knotwork {
 
 namespace {
 
-
 // B[t] = a B[first p+2 knots of t + c] + b B[last p+2] (knot insertion into one B-spline).
 std::pair<mpq_class, mpq_class> split_weights(const std::vector<mpq_class>& t, const mpq_class& c) {
   const int p = static_cast<int>(t.size()) - 2;

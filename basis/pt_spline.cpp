@@ -381,7 +381,7 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
     }
     for (const MinimalVariant variant : {MinimalVariant{false, 0}, MinimalVariant{true, 0}, MinimalVariant{false, 1},
                                          MinimalVariant{true, 1}}) {
-      if (dimension < 0) break;
+      if (dimension < 0) break;  // no certificate: no attempt
       std::optional<PtSplineBasis> minimal;
       std::string why;
       try {
@@ -391,9 +391,8 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
         why = e.what();
       }
       if (why.empty()) return std::move(*minimal);
-      if (refused.empty()) refused = why;  // the first attempt's reason
+      if (refused.empty()) refused = why + " (and in the three other insertion orders)";  // the first reason
     }
-    refused += " (and in the three other insertion orders)";
     if (extension == PtExtension::kMinimal) throw std::runtime_error("minimal PT-spline extension: " + refused);
   }
   const RectangularPartition flipped = transposed(mesh);
