@@ -9,6 +9,11 @@ namespace knotwork {
 
 namespace {
 
+class DenominatorMultipleOfPrime : public std::runtime_error {
+ public:
+  DenominatorMultipleOfPrime() : std::runtime_error("a denominator is a multiple of the prime") {}
+};
+
 // ---- arithmetic modulo a prime below 2^61 ----
 struct ModP {
   uint64_t p;
@@ -29,7 +34,7 @@ struct ModP {
   }
   uint64_t of(const mpq_class& q) const {
     const uint64_t d = of(q.get_den());
-    if (d == 0) throw std::runtime_error("a coordinate's denominator is a multiple of the prime");
+    if (d == 0) throw DenominatorMultipleOfPrime();
     return mul(of(q.get_num()), inv(d));
   }
 };
@@ -39,13 +44,16 @@ using Constraint = SparseRationalRow;
 // Incremental sparse row echelon form: each new row is reduced by the pivots whose
 // leading column it meets, until it is zero (dependent) or becomes a new pivot.
 template <class Field>
-long sparse_rank(const std::vector<Constraint>& rows, long columns, const Field& F) {
+long sparse_rank(const std::vector<Constraint>& rows, long columns, const Field& F,
+                 std::vector<bool>* independent = nullptr) {
   using Value = typename Field::Value;
   using Row = std::vector<std::pair<long, Value>>;  // sorted by column, leading entry 1
   std::vector<int> pivot_of(columns, -1);
   std::vector<Row> pivots;
   Row row, merged;
-  for (const Constraint& c : rows) {
+  if (independent) independent->assign(rows.size(), false);
+  for (size_t index = 0; index < rows.size(); ++index) {
+    const Constraint& c = rows[index];
     row.clear();
     for (const auto& [col, q] : c.terms) {
       Value v = F.of(q);
@@ -68,6 +76,7 @@ long sparse_rank(const std::vector<Constraint>& rows, long columns, const Field&
         for (auto& [col, v] : row) v = F.mul(v, inv);
         pivot_of[lead] = static_cast<int>(pivots.size());
         pivots.push_back(row);
+        if (independent) (*independent)[index] = true;
         break;
       }
       const Value factor = row.front().second;
@@ -117,13 +126,26 @@ struct RationalField {
 
 }  // namespace
 
-long rank_modular(const std::vector<SparseRationalRow>& rows, long columns) {
-  const long r1 = sparse_rank(rows, columns, ModularField{{(1ULL << 61) - 1}});
-  const long r2 = sparse_rank(rows, columns, ModularField{{2305843009213693921ULL}});
-  if (r1 != r2)
-    throw std::runtime_error("modular ranks disagree (" + std::to_string(r1) + " vs " + std::to_string(r2) +
+// Primes below 2^61 (Miller-Rabin with the first 12 prime bases, deterministic below 3e24).
+// A prime that divides a denominator of the rows cannot reduce them: the next one is used.
+constexpr uint64_t kPrimes[] = {(1ULL << 61) - 1, 2305843009213693921ULL, 2305843009213693907ULL,
+                                2305843009213693723ULL, 2305843009213693693ULL};
+
+long rank_modular(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent) {
+  long ranks[2];
+  int found = 0;
+  for (uint64_t p : kPrimes) {
+    try {
+      ranks[found] = sparse_rank(rows, columns, ModularField{{p}}, found == 0 ? independent : nullptr);
+      if (++found == 2) break;
+    } catch (const DenominatorMultipleOfPrime&) {  // try the next prime
+    }
+  }
+  if (found < 2) throw std::runtime_error("modular rank: the denominators are multiples of the primes; use the exact method");
+  if (ranks[0] != ranks[1])
+    throw std::runtime_error("modular ranks disagree (" + std::to_string(ranks[0]) + " vs " + std::to_string(ranks[1]) +
                              "): use the exact method");
-  return r1;
+  return ranks[0];
 }
 
 long rank_exact(const std::vector<SparseRationalRow>& rows, long columns) {

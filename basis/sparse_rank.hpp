@@ -11,10 +11,13 @@ struct SparseRationalRow {
   std::vector<std::pair<long, mpq_class>> terms;
 };
 
-// Rank of the rows by sparse Gaussian elimination modulo two unrelated primes below 2^61.
-// Rank mod p <= rank over Q, with equality unless p divides some minor; the two must agree
-// (std::runtime_error otherwise: then use rank_exact).
-long rank_modular(const std::vector<SparseRationalRow>& rows, long columns);
+// Rank of the rows by sparse Gaussian elimination modulo two unrelated primes below 2^61
+// (the next of a short list when one divides a denominator of the rows). Rank mod p <= rank
+// over Q, with equality unless p divides some minor; the two must agree (std::runtime_error
+// otherwise: then use rank_exact). If `independent` is given, it receives
+// for each row whether it is independent (mod the first prime) of the rows before it: those
+// rows are independent over Q too, whatever the primes.
+long rank_modular(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent = nullptr);
 
 // Rank over Q by sparse elimination with GMP rationals (exact; slower).
 long rank_exact(const std::vector<SparseRationalRow>& rows, long columns);

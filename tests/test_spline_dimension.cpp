@@ -79,6 +79,19 @@ TEST_CASE("Modular rank equals the exact rational rank on random T-meshes", "[di
   }
 }
 
+TEST_CASE("Modular rank: a breakpoint whose denominator is a multiple of the primes", "[dimension]") {
+  // 2^61 - 1 and 2305843009213693921 are the first two primes of the modular rank: a
+  // coordinate with that denominator cannot be reduced modulo them, so the next primes are
+  // used (this threw before). Expected: the tensor-product count, as above.
+  const mpq_class tiny(mpz_class(1), (mpz_class(1) << 61) - 1);
+  const mpq_class other(mpz_class(1), mpz_class("2305843009213693921"));
+  const RectangularPartition g = grid({0, tiny, q(1, 2), 1}, {0, other, 1});
+  for (int m : {1, 2}) {
+    INFO("degree " << m);
+    REQUIRE(spline_space_dimension(g, m, m, m - 1, m - 1).dimension == (m + 3) * (m + 2));
+  }
+}
+
 TEST_CASE("Bilinear C0 splines on a T-mesh: one function per crossing or boundary vertex", "[dimension]") {
   std::mt19937 rng(13);
   for (int trial = 0; trial < 30; ++trial) {
