@@ -243,6 +243,7 @@ int pt_basis_command(const BasisOptions& o) {
         .set("eee_blocks", B.blocks)
         .set("eee_largest_block", B.largest_block)
         .set("untouched_bsplines", B.untouched)
+        .set("dropped_dependent", B.dropped_dependent)
         .set("cross_cuts", topo.count(PartitionTopology::KnotKind::kLine))
         .set("rays", topo.count(PartitionTopology::KnotKind::kRay))
         .set("t_l_edges", topo.count(PartitionTopology::KnotKind::kSegment))
@@ -272,6 +273,9 @@ int pt_basis_command(const BasisOptions& o) {
               "blocks (largest %d B-splines); %d B-splines untouched\n",
               direction, B.extension == PtExtension::kMinimal ? " (LR meshlines)" : " l-edges to cross-cuts",
               local_bsplines, B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
+  if (B.dropped_dependent > 0)
+    std::printf("  dependent  %d of them dropped: the local B-splines of the extension are dependent but span\n",
+                B.dropped_dependent);
   if (!B.minimal_refused.empty()) std::printf("  note       minimal extension not used: %s\n", B.minimal_refused.c_str());
   std::printf("  smoothness largest relative jump %.3e\n", residual);
   std::printf("  values     min %.6g (smallest Bernstein coefficient %.6g)%s; partition-of-unity error %.3e\n", min_value,

@@ -113,7 +113,7 @@ void eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows,
 // l-edge cannot be inserted even as a full line. The LR B-splines of the extension need not
 // span all of S(T^e): the result can miss functions, and whether it does depends on the
 // order of insertion (on 12 adaptive L-shape meshes at degrees 2 and 3, longest-first missed
-// a function in 6 of the 24 cases, shortest-first in 3, both in 1), hence the variants,
+// a function in 6 of the 24 cases, shortest-first in 3, both in 2), hence the variants,
 // tried in turn by pt_spline_basis.
 struct MinimalVariant {
   bool shortest_first = false;

@@ -328,26 +328,50 @@ const char* pt_extension_name(PtExtension extension) {
 
 namespace {
 
-// Why `B` is not a basis of S(T), or empty when it is: its functions lie in S(T) by
-// construction; there must be as many as the brute-force dimension, and their exact cell
-// polynomials must be independent. Both ranks are modular, so a certificate is never wrong:
-// dim <= unknowns - rank mod p (rank mod p <= rank over Q) and count = rank mod p <= rank.
-std::string certificate_failure(const PtSplineBasis& B, const RectangularPartition& mesh, long dimension) {
+// Makes `B` a certified basis of S(T), or says why it cannot be one. Its functions lie in S(T)
+// by construction. Their exact cell polynomials are eliminated modulo a prime, smallest
+// support first, and each function that depends on the ones before it is dropped: the LR
+// B-splines of T^e can be dependent and still span S(T^e) (on Dokken-Lyche-Pettersen's mesh
+// they do, with T^e = T). The independent rest must be as many as the brute-force
+// dimension. Both ranks are modular, so a certificate is never wrong: dim <= unknowns -
+// rank mod p (rank mod p <= rank over Q), and rows independent mod p are independent over Q.
+std::string certify(PtSplineBasis& B, const RectangularPartition& mesh, long dimension) {
   try {
     const long count = static_cast<long>(B.functions.size());
-    if (count != dimension) return std::to_string(count) + " functions for a space of dimension " + std::to_string(dimension);
+    if (count < dimension) return std::to_string(count) + " functions for a space of dimension " + std::to_string(dimension);
     const long per_cell = static_cast<long>(B.m + 1) * (B.n + 1);
+    const auto polynomials = cell_polynomials<mpq_class>(B, mesh);
+    std::vector<long> order(count);
+    std::iota(order.begin(), order.end(), 0L);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](long a, long b) { return polynomials[a].size() < polynomials[b].size(); });
     std::vector<SparseRationalRow> rows;
-    for (const auto& cells : cell_polynomials<mpq_class>(B, mesh)) {
+    for (long f : order) {
       SparseRationalRow r;
-      for (const auto& [k, coefficients] : cells)
+      for (const auto& [k, coefficients] : polynomials[f])
         for (long a = 0; a < per_cell; ++a)
           if (coefficients[a] != 0) r.terms.emplace_back(k * per_cell + a, coefficients[a]);
       rows.push_back(std::move(r));
     }
-    const long rank = rank_modular(rows, per_cell * mesh.num_cells());
-    if (rank != count) return "the " + std::to_string(count) + " functions have rank " + std::to_string(rank);
-  } catch (const std::runtime_error& e) {  // two primes disagreed
+    std::vector<bool> independent;
+    const long rank = rank_modular(rows, per_cell * mesh.num_cells(), &independent);
+    if (rank != dimension)
+      return "the " + std::to_string(count) + " functions have rank " + std::to_string(rank) +
+             " for a space of dimension " + std::to_string(dimension);
+    if (rank == count) return {};
+    std::vector<bool> keep(count);
+    for (long i = 0; i < count; ++i) keep[order[i]] = independent[i];
+    std::vector<std::vector<std::pair<int, mpq_class>>> kept;
+    int untouched = 0;
+    for (long f = 0; f < count; ++f) {
+      if (!keep[f]) continue;
+      untouched += f < B.untouched;
+      kept.push_back(std::move(B.functions[f]));
+    }
+    B.functions = std::move(kept);
+    B.untouched = untouched;
+    B.dropped_dependent = static_cast<int>(count - rank);
+  } catch (const std::runtime_error& e) {  // two primes disagreed (or none could be used)
     return e.what();
   }
   return {};
@@ -376,7 +400,7 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
     long dimension = -1;
     try {
       dimension = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kModular, c0).dimension;
-    } catch (const std::runtime_error& e) {  // two primes disagreed: no certificate possible
+    } catch (const std::runtime_error& e) {  // two primes disagreed (or none could be used): no certificate
       refused = e.what();
     }
     for (const MinimalVariant variant : {MinimalVariant{false, 0}, MinimalVariant{true, 0}, MinimalVariant{false, 1},
@@ -386,7 +410,7 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
       std::string why;
       try {
         minimal = build_minimal(mesh, m, n, c0, variant);
-        why = minimal ? certificate_failure(*minimal, mesh, dimension) : "an l-edge could not be inserted even as a full line";
+        why = minimal ? certify(*minimal, mesh, dimension) : "an l-edge could not be inserted even as a full line";
       } catch (const std::logic_error& e) {  // a block's modular rank fell below its rank over Q
         why = e.what();
       }

@@ -16,8 +16,9 @@ namespace knotwork {
 // 1. Extension T^e. Minimal (the default): the l-edges of T are inserted as LR meshlines into
 //    the tensor mesh of T's cross-cuts, each lengthened only until it splits a B-spline; the
 //    local B-splines are the LR B-splines of T^e (basis/pt_minimal_extension.cpp). The result
-//    is certified (number of functions = brute-force dimension of S(T), exact independence of
-//    their cell polynomials) and, should that fail, replaced by the full extension:
+//    is certified (functions dependent on the others dropped, the rest exactly independent and
+//    as many as the brute-force dimension of S(T)) and, should that fail, replaced by the
+//    full extension:
 //    every horizontal T l-edge and ray is extended to a cross-cut (or every
 //    vertical one: the direction with fewer extended edges). This is the extension of the
 //    proof of Lemma 2. Over T^e every horizontal line is global, so each f in S(T^e) is
@@ -55,6 +56,7 @@ struct PtSplineBasis {
   long equations = 0, rank = 0;
   int blocks = 0, largest_block = 0;  // EEE blocks; the largest one's number of B-splines
   int untouched = 0;                  // B-splines of T^e kept as they are
+  int dropped_dependent = 0;          // minimal extension: functions dropped as dependent on the others
 };
 
 // The space S(m, n, m-1, n-1) of T, except only C^0 across the lines of `c0` (cross-cuts of T,

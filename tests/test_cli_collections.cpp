@@ -367,6 +367,14 @@ TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and b
   // Without Prop. 1 the EEE combinations of the full extension change sign.
   const Result raw = box.run("basis --pt --json --no-prop1 --extension horizontal " + kSource + "/cases/tmeshes/hierarchical.toml");
   REQUIRE(json_number_of(raw.out, "min_bernstein_coefficient") < 0);
+  // Dokken-Lyche-Pettersen's LR-mesh: 82 LR B-splines for dimension 81 (test_lr_and_hb);
+  // one is dropped as dependent, nothing is extended (the paper's Example 9).
+  const Result dlp = box.run("basis --pt --json " + kSource + "/cases/tmeshes/lr_dependent_dlp.toml");
+  REQUIRE(json_number_of(dlp.out, "functions") == 81);
+  REQUIRE(json_number_of(dlp.out, "rank") == 81);
+  REQUIRE(json_number_of(dlp.out, "local_bsplines") == 82);
+  REQUIRE(json_number_of(dlp.out, "dropped_dependent") == 1);
+  REQUIRE(json_number_of(dlp.out, "extended_edges") == 0);
   // Bad input: one line naming what is wrong, nothing written.
   expect_one_line_error(box.run("basis --pt --extension diagonal " + kSource + "/cases/tmeshes/hierarchical.toml"),
                         {"--extension", "diagonal"});

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <map>
 #include <random>
 
 #include "basis/lr_spline.hpp"
@@ -261,6 +262,50 @@ TwoLevelHb two_level_hb(int N, int p, const std::vector<std::pair<int, int>>& re
 }
 
 }  // namespace
+
+TEST_CASE("Dokken-Lyche-Pettersen's LR-mesh: the 82 LR B-splines of the LRsplines library, dimension 81", "[lr][pt]") {
+  // cases/tmeshes/lr_dependent_dlp.toml. The expected knot vectors and weights are those the
+  // LRsplines library (SINTEF) lists for this mesh (test/LinearIndep/Pettersen_InitPaper.lr):
+  // 82 B-splines, all of weight 1 but these nine.
+  LrMesh lr({0, 1, 2, 3, 6, 8, 9, 10}, {0, 1, 2, 4, 6, 7, 8}, 2, 2);
+  for (const AxisSegment& s : std::vector<AxisSegment>{
+           {false, 3, 3, 9}, {true, 5, 2, 7}, {true, 7, 2, 6}, {false, 5, 1, 7}, {true, 4, 1, 5}})
+    lr.insert(s);
+  using Knots = std::vector<mpq_class>;
+  const std::map<std::pair<Knots, Knots>, mpq_class> weights = {
+      {{{5, 6, 7, 8}, {2, 3, 4, 6}}, q(17, 20)}, {{{6, 7, 8, 9}, {2, 3, 4, 6}}, q(2, 3)},
+      {{{2, 3, 5, 6}, {2, 4, 5, 6}}, q(13, 16)}, {{{2, 3, 5, 6}, {4, 5, 6, 7}}, q(3, 4)},
+      {{{3, 5, 6, 7}, {3, 4, 5, 6}}, q(11, 60)}, {{{3, 4, 5, 6}, {2, 3, 4, 5}}, q(11, 60)},
+      {{{4, 5, 6, 7}, {2, 3, 4, 5}}, q(11, 20)}, {{{3, 4, 6, 8}, {1, 2, 3, 4}}, q(1, 5)},
+      {{{2, 3, 4, 6}, {1, 2, 4, 5}}, q(1, 2)}};
+  REQUIRE(lr.splines().size() == 82);
+  int weighted = 0;
+  for (const auto& s : lr.splines()) {
+    const auto w = weights.find({s.x, s.y});
+    INFO(s.x[0] << " " << s.x[1] << " " << s.x[2] << " " << s.x[3] << " x " << s.y[0] << " " << s.y[1] << " " << s.y[2]
+                << " " << s.y[3]);
+    REQUIRE(s.weight == (w == weights.end() ? mpq_class(1) : w->second));
+    weighted += w != weights.end();
+  }
+  REQUIRE(weighted == 9);
+  auto key = [](const RationalBox& b) { return std::vector<mpq_class>{b.x0, b.y0, b.x1, b.y1}; };
+  std::vector<std::vector<mpq_class>> mine, shipped;
+  for (const auto& c : lr.cells()) mine.push_back(key(c));
+  for (const auto& c : load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/lr_dependent_dlp.toml").cells)
+    shipped.push_back(key(c));
+  std::sort(mine.begin(), mine.end());
+  std::sort(shipped.begin(), shipped.end());
+  REQUIRE(mine == shipped);
+  REQUIRE(mine.size() == 61);  // the library's element count
+
+  const RectangularPartition mesh(lr.cells());
+  REQUIRE(brute_force_dimension(mesh, 2) == 81);
+  check_partition_of_unity_and_cells(lr);
+  REQUIRE(exact_rank(as_functions(lr), mesh) == 81);  // 82 in S(T), dependent, spanning
+  const PtSplineBasis pt = pt_spline_basis(mesh, 2, 2);
+  REQUIRE(pt.functions.size() == 81);
+  REQUIRE(exact_rank(pt, mesh) == 81);
+}
 
 TEST_CASE("Hierarchical B-splines: complete on a refined block, incomplete on the shipped mesh", "[hb][pt]") {
   // A refined 2 x 2 block: the hierarchical B-splines are a basis (65 = dimension).

@@ -145,14 +145,20 @@ TEST_CASE("PT-splines with C0 lines (a folded geometry's knot lines): the space 
 
 TEST_CASE("PT-splines: the minimal extension is certified, or refused with the reason, and smaller than the full one",
           "[pt]") {
-  // The LR-dependent mesh is its own LR-mesh, with 89 LR B-splines for dimension 88
-  // (test_lr_and_hb): the certified minimal extension is not T itself but lengthens meshlines
-  // beyond it, and has extended edges to eliminate.
-  const RectangularPartition dependent(load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/lr_dependent.toml").cells);
-  check_basis(dependent, 3, 3, PtExtension::kMinimal);
-  const PtSplineBasis lengthened = pt_spline_basis(dependent, 3, 3, PtExtension::kMinimal);
-  REQUIRE(lengthened.extended_edges > 0);
-  REQUIRE(lengthened.functions.size() == 88);
+  // On the two LR-meshes where the LR B-splines are dependent (89 for dimension 88, and
+  // Dokken-Lyche-Pettersen's 82 for 81: test_lr_and_hb) they still span S(T), so the minimal
+  // extension is T itself, as the paper's Example 9 says: no extended edge, one B-spline
+  // dropped as dependent on the others.
+  for (const auto& [file, degree, dimension] : {std::tuple{"lr_dependent.toml", 3, 88L}, {"lr_dependent_dlp.toml", 2, 81L}}) {
+    INFO(file);
+    const RectangularPartition dependent(load_partition(std::string(KNOTWORK_SOURCE_DIR "/cases/tmeshes/") + file).cells);
+    check_basis(dependent, degree, degree, PtExtension::kMinimal);
+    const PtSplineBasis direct = pt_spline_basis(dependent, degree, degree, PtExtension::kMinimal);
+    REQUIRE(direct.extended_edges == 0);
+    REQUIRE(direct.dropped_dependent == 1);
+    REQUIRE(static_cast<long>(direct.functions.size()) == dimension);
+    REQUIRE(static_cast<long>(direct.splines.size()) == dimension + 1);
+  }
   // Graded meshes (cells near one corner halved again and again, as adaptive refinement does):
   // the minimal extension must be certified and need fewer B-splines and much smaller EEE
   // blocks (measured, 130 cells: 170 vs 275 B-splines, largest block 26 vs 208 at degree 2;
