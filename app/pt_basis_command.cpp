@@ -148,7 +148,7 @@ int pt_basis_command(const BasisOptions& o) {
         }
     rows.push_back(std::move(r));
   }
-  const long rank = rank_modular(rows, static_cast<long>(mesh.num_cells()) * per_cell);
+  const long rank = rank_reliable(rows, static_cast<long>(mesh.num_cells()) * per_cell);
   const auto polys = to_double(exact);
   const double residual = pt_smoothness_residual(polys, mesh, p.m, p.n);
   // Values on a 5 x 5 grid of every cell (the Bernstein coefficients bound them from below),

@@ -477,7 +477,7 @@ G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& glui
     std::vector<SparseRationalRow> sparse(rows.size());
     for (size_t i = 0; i < rows.size(); ++i) sparse[i].terms = rows[i];
     d.constraints = static_cast<long>(rows.size());
-    d.rank = rank_modular(sparse, d.unknowns);
+    d.rank = rank_reliable(sparse, d.unknowns);
     d.exact = true;
   } else {
     const auto rows = g1_conditions<double>(mesh, gluing, k, r);

@@ -198,7 +198,7 @@ void eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows,
     for (int r : block_rows[root]) sparse.push_back({{rows[r].begin(), rows[r].end()}});
     // Modular rank <= rank over Q; were it lower, the boxes could not reach the nullity and
     // local_null_basis would throw rather than return too few functions.
-    const long rank = rank_modular(sparse, columns);
+    const long rank = rank_reliable(sparse, columns);
     std::vector<SparseVector> null = local_null_basis(cols, block_rows[root], rows, support, g, mesh,
                                                       static_cast<long>(cols.size()) - rank);
     for (const auto& v : null) B.functions.push_back(as_function(v));

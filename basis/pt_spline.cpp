@@ -93,7 +93,7 @@ void condition_block(std::vector<SparseVector>& F, const std::vector<double>& we
     for (int i = 0; i < near; ++i) F[qr.colsPermutation().indices()(i)] = std::move(replaced[i]);
     std::vector<SparseRationalRow> rows;
     for (const auto& f : F) rows.push_back({{f.begin(), f.end()}});
-    if (rank_modular(rows, static_cast<long>(weight.size())) != N)
+    if (rank_reliable(rows, static_cast<long>(weight.size())) != N)
       throw std::logic_error("make_numerically_independent: the change of basis lost rank");
   }
 }
@@ -333,8 +333,9 @@ namespace {
 // support first, and each function that depends on the ones before it is dropped: the LR
 // B-splines of T^e can be dependent and still span S(T^e) (on Dokken-Lyche-Pettersen's mesh
 // they do, with T^e = T). The independent rest must be as many as the brute-force
-// dimension. Both ranks are modular, so a certificate is never wrong: dim <= unknowns -
-// rank mod p (rank mod p <= rank over Q), and rows independent mod p are independent over Q.
+// dimension. The ranks are modular (over Q when the two primes disagree), so a certificate
+// is never wrong: dim <= unknowns - rank mod p (rank mod p <= rank over Q), and rows
+// independent mod p are independent over Q.
 std::string certify(PtSplineBasis& B, const RectangularPartition& mesh, long dimension) {
   try {
     const long count = static_cast<long>(B.functions.size());
@@ -354,7 +355,7 @@ std::string certify(PtSplineBasis& B, const RectangularPartition& mesh, long dim
       rows.push_back(std::move(r));
     }
     std::vector<bool> independent;
-    const long rank = rank_modular(rows, per_cell * mesh.num_cells(), &independent);
+    const long rank = rank_reliable(rows, per_cell * mesh.num_cells(), &independent);
     if (rank != dimension)
       return "the " + std::to_string(count) + " functions have rank " + std::to_string(rank) +
              " for a space of dimension " + std::to_string(dimension);
@@ -371,7 +372,7 @@ std::string certify(PtSplineBasis& B, const RectangularPartition& mesh, long dim
     B.functions = std::move(kept);
     B.untouched = untouched;
     B.dropped_dependent = static_cast<int>(count - rank);
-  } catch (const std::runtime_error& e) {  // two primes disagreed (or none could be used)
+  } catch (const std::runtime_error& e) {
     return e.what();
   }
   return {};
@@ -397,15 +398,9 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
   }
   std::string refused;
   if (extension == PtExtension::kAuto || extension == PtExtension::kMinimal) {
-    long dimension = -1;
-    try {
-      dimension = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kModular, c0).dimension;
-    } catch (const std::runtime_error& e) {  // two primes disagreed (or none could be used): no certificate
-      refused = e.what();
-    }
+    const long dimension = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kModular, c0).dimension;
     for (const MinimalVariant variant : {MinimalVariant{false, 0}, MinimalVariant{true, 0}, MinimalVariant{false, 1},
                                          MinimalVariant{true, 1}}) {
-      if (dimension < 0) break;  // no certificate: no attempt
       std::optional<PtSplineBasis> minimal;
       std::string why;
       try {

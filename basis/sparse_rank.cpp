@@ -148,8 +148,19 @@ long rank_modular(const std::vector<SparseRationalRow>& rows, long columns, std:
   return ranks[0];
 }
 
-long rank_exact(const std::vector<SparseRationalRow>& rows, long columns) {
-  return sparse_rank(rows, columns, RationalField{});
+long rank_exact(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent) {
+  return sparse_rank(rows, columns, RationalField{}, independent);
+}
+
+long rank_reliable(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent,
+                   bool* exact) {
+  if (exact) *exact = false;
+  try {
+    return rank_modular(rows, columns, independent);
+  } catch (const std::runtime_error&) {  // the primes disagree, or none could be used
+  }
+  if (exact) *exact = true;
+  return rank_exact(rows, columns, independent);
 }
 
 std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq_class>> A, int columns, long* rank) {

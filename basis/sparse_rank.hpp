@@ -19,8 +19,14 @@ struct SparseRationalRow {
 // rows are independent over Q too, whatever the primes.
 long rank_modular(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent = nullptr);
 
-// Rank over Q by sparse elimination with GMP rationals (exact; slower).
-long rank_exact(const std::vector<SparseRationalRow>& rows, long columns);
+// Rank over Q by sparse elimination with GMP rationals (exact; slower). `independent` as above.
+long rank_exact(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent = nullptr);
+
+// rank_modular, or rank_exact when the two primes disagree (coordinates can make a prime
+// unlucky: a T-mesh whose dimension jumps at special coordinates, moved off them by a
+// multiple of the prime, is special modulo that prime only). `exact` (optional) says which.
+long rank_reliable(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent = nullptr,
+                   bool* exact = nullptr);
 
 // Null space over Q of dense rows (reduced row echelon form): one vector per free column,
 // with a 1 there and the pivot columns solved for. `rank` (optional) receives the rank.

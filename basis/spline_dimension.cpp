@@ -68,7 +68,7 @@ DimensionResult spline_space_dimension(const RectangularPartition& part, int m, 
     r.rank = rank_exact(rows, r.unknowns);
     r.exact = true;
   } else {
-    r.rank = rank_modular(rows, r.unknowns);
+    r.rank = rank_reliable(rows, r.unknowns, nullptr, &r.exact);
   }
   r.dimension = r.unknowns - r.rank;
   return r;

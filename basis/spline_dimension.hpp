@@ -16,16 +16,15 @@ struct DimensionResult {
   long constraints = 0;
   long rank = 0;
   long dimension = 0;
-  bool exact = false;  // rank over Q by rational elimination, not modular
+  bool exact = false;  // rank over Q by rational elimination (asked for, or the primes disagreed)
 };
 
 enum class RankMethod {
-  kModular,  // sparse elimination modulo two 61-bit primes, which must agree (fast)
+  kModular,  // sparse elimination modulo two 61-bit primes (fast); over Q if they disagree
   kExact,    // elimination over Q with GMP rationals (exact; for small partitions)
 };
 
-// Throws std::invalid_argument for degrees < 0 or smoothness outside [-1, degree-1], and
-// std::runtime_error if the two primes disagree (an unlucky prime: never seen, but checked).
+// Throws std::invalid_argument for degrees < 0 or smoothness outside [-1, degree-1].
 // Edges on the lines of `c0` are only C^0.
 DimensionResult spline_space_dimension(const RectangularPartition& partition, int m, int n, int alpha,
                                        int beta, RankMethod method = RankMethod::kModular,

@@ -229,6 +229,30 @@ TEST_CASE("dimension: T-mesh files, results and bad input", "[cli][dimension]") 
     REQUIRE(pw.out.find("\"dimension_formula\": null") != std::string::npos);
   }
 
+  // The generic twin with its ray moved off 5/2 by (2^61 - 1) / 2^71: special modulo the
+  // first prime only, so the modular ranks disagree. Both commands used to stop with "modular
+  // ranks disagree"; they must answer over Q.
+  box.file("unlucky.toml",
+           "degree = [2, 2]\ngrid = { x = [0, 1, 5, 6], y = [0, 1, 5, 6] }\nsegments = [\n"
+           "  { direction = \"horizontal\", position = 2, from = 2, to = 5 },\n"
+           "  { direction = \"vertical\", position = 4, from = 2, to = 5 },\n"
+           "  { direction = \"horizontal\", position = 4, from = 1, to = 4 },\n"
+           "  { direction = \"vertical\", position = 2, from = 1, to = 4 },\n"
+           "  { direction = \"vertical\", position = \"5905263946596270211071/2361183241434822606848\", from = 0, to = 2 },\n"
+           "  { direction = \"horizontal\", position = \"5/2\", from = 4, to = 6 },\n"
+           "  { direction = \"vertical\", position = \"7/2\", from = 4, to = 6 },\n"
+           "  { direction = \"horizontal\", position = \"7/2\", from = 0, to = 2 },\n]\n");
+  const Result unlucky = box.run("dimension --json unlucky.toml");
+  INFO(unlucky.err);
+  REQUIRE(unlucky.code == 0);
+  REQUIRE(unlucky.out.find("\"dimension_bruteforce\": 29") != std::string::npos);
+  REQUIRE(unlucky.out.find("\"exact\": \"rational\"") != std::string::npos);
+  const Result unlucky_pt = box.run("basis --pt --json unlucky.toml");
+  INFO(unlucky_pt.err);
+  REQUIRE(unlucky_pt.code == 0);
+  REQUIRE(unlucky_pt.out.find("\"functions\": 29") != std::string::npos);
+  REQUIRE(unlucky_pt.out.find("\"rank\": 29") != std::string::npos);
+
   auto rejected = [&](const std::string& text, const std::vector<std::string>& mentions) {
     box.file("mesh.toml", text);
     expect_one_line_error(box.run("dimension mesh.toml"), mentions);

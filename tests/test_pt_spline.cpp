@@ -104,6 +104,8 @@ TEST_CASE("PT-splines: count = brute-force dimension, independent, in S(T), on a
   // The dimensional-instability pair: same topology, dimensions 30 and 29 at degree 2.
   suite.emplace_back("pinwheel, special coordinates (shipped)",
                      load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/pinwheel_special.toml").cells);
+  suite.emplace_back("pinwheel, a ray off its special point by a multiple of the first prime",
+                     testing::pinwheel_with_ray_at(testing::unlucky_ray_foot()));
   suite.emplace_back("pinwheel, generic coordinates (shipped)",
                      load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/pinwheel_generic.toml").cells);
   std::mt19937 rng(2024);

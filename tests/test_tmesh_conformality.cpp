@@ -21,14 +21,8 @@ long brute_force(const RectangularPartition& mesh, int m, int n) {
   return spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kExact).dimension;
 }
 
-// The pinwheel of cases/tmeshes/pinwheel_special.toml with the first ray's foot at x = p.
-std::vector<AxisSegment> pinwheel_segments(const mpq_class& p) {
-  return {{false, 2, 2, 5},      {true, 4, 2, 5},       {false, 4, 1, 4},      {true, 2, 1, 4},
-          {true, p, 0, 2},       {false, q(5, 2), 4, 6}, {true, q(7, 2), 4, 6}, {false, q(7, 2), 0, 2}};
-}
-std::vector<RationalBox> pinwheel(const mpq_class& p) {
-  return insert_segments(grid_cells({0, 1, 5, 6}, {0, 1, 5, 6}), pinwheel_segments(p));
-}
+using knotwork::testing::pinwheel_segments;
+std::vector<RationalBox> pinwheel(const mpq_class& p) { return testing::pinwheel_with_ray_at(p); }
 
 // What the topology of a T-mesh is, up to coordinates: vertex classes and, per l-edge, its
 // kind, direction and number of vertices.
@@ -89,6 +83,18 @@ TEST_CASE("Dimensional instability: the pinwheel's dimension jumps where the arm
     REQUIRE_FALSE(c.diagonalizable);  // each arm keeps 2 private vertices, deg + 1 = 3 needed
     REQUIRE_FALSE(c.formula.has_value());
   }
+}
+
+TEST_CASE("An unlucky prime: the pinwheel moved off its special point by a multiple of the prime", "[tmesh]") {
+  // Over Q the ray is not at 5/2, r != 1 and the dimension is 29 (above); modulo 2^61 - 1
+  // it is at 5/2 and the rank drops by one. The two primes disagree, and the modular method
+  // must then answer over Q rather than fail (it threw before).
+  const RectangularPartition mesh(pinwheel(testing::unlucky_ray_foot()));
+  const DimensionResult fast = spline_space_dimension(mesh, 2, 2, 1, 1, RankMethod::kModular);
+  REQUIRE(fast.exact);
+  REQUIRE(fast.dimension == 29);
+  REQUIRE(brute_force(mesh, 2, 2) == 29);
+  REQUIRE(conformality_count(partition_topology(mesh), 2, 2).dimension == 29);
 }
 
 TEST_CASE("Cofactor count = brute-force dimension, and the formula holds on every diagonalizable mesh", "[tmesh]") {

@@ -32,6 +32,25 @@ inline std::vector<RationalBox> random_halvings(std::mt19937& rng, int splits,
   return cells;
 }
 
+// The pinwheel of cases/tmeshes/pinwheel_special.toml with the first ray's foot at x = p
+// (dim S(2, 2, 1, 1) = 30 at p = 5/2, 29 elsewhere: test_tmesh_conformality).
+inline std::vector<AxisSegment> pinwheel_segments(const mpq_class& p) {
+  return {{false, 2, 2, 5},      {true, 4, 2, 5},       {false, 4, 1, 4},      {true, 2, 1, 4},
+          {true, p, 0, 2},       {false, q(5, 2), 4, 6}, {true, q(7, 2), 4, 6}, {false, q(7, 2), 0, 2}};
+}
+inline std::vector<RationalBox> pinwheel_with_ray_at(const mpq_class& p) {
+  return insert_segments(grid_cells({0, 1, 5, 6}, {0, 1, 5, 6}), pinwheel_segments(p));
+}
+
+// 5/2 + (2^61 - 1) / 2^71: not 5/2, but 5/2 modulo the prime 2^61 - 1, the first prime of
+// the modular ranks. The pinwheel with its ray there has dimension 29 over Q and 30 modulo
+// that prime: the two primes disagree.
+inline mpq_class unlucky_ray_foot() {
+  mpq_class p = q(5, 2) + mpq_class(mpz_class((mpz_class(1) << 61) - 1), mpz_class(1) << 71);
+  p.canonicalize();
+  return p;
+}
+
 // Whether the function `value(x, y)` (exact) is one polynomial of bidegree (m, n) on every
 // cell: on lines across each cell, 3 (order + 1) equispaced values must have zero
 // differences of order m + 1 in x (n + 1 in y) in every window, so that a break anywhere but
