@@ -204,6 +204,16 @@ std::vector<std::vector<S>> inverse_bernstein_collocation(int p, const std::vect
   return inv;
 }
 
+}  // namespace
+
+struct PtBernsteinCache {
+  std::vector<RationalBox> cells;  // the T-mesh they belong to
+  // (B-spline index * cells + cell) -> Bernstein coefficients of its x and y factors there.
+  std::unordered_map<long, std::pair<std::vector<mpq_class>, std::vector<mpq_class>>> factors;
+};
+
+namespace {
+
 template <class S>
 std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const PtSplineBasis& B,
                                                                            const RectangularPartition& mesh) {
@@ -241,11 +251,32 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
     cs.inv_y = inverse_bernstein_collocation<S>(n, sy);
   }
   std::vector<std::vector<std::pair<int, std::vector<S>>>> out(B.functions.size());
-  std::unordered_map<long, std::pair<std::vector<S>, std::vector<S>>> sample_values;
+  // On a cell, a B-spline is N(x) M(y) with N, M each a polynomial on the sampled grid
+  // interval; their Bernstein coefficients over the cell (extrapolated from that interval:
+  // the functions, not each B-spline, are polynomials on the whole cell) are computed once
+  // per (B-spline, cell), and a function's are the sum of coefficient * outer products.
+  std::unordered_map<long, std::pair<std::vector<S>, std::vector<S>>> local;
+  auto* bernstein = &local;
+  if constexpr (std::is_same_v<S, mpq_class>) {
+    auto same = [&](const std::vector<RationalBox>& cells) {
+      return std::equal(cells.begin(), cells.end(), mesh.cells().begin(), mesh.cells().end(),
+                        [](const RationalBox& a, const RationalBox& b) {
+                          return a.x0 == b.x0 && a.y0 == b.y0 && a.x1 == b.x1 && a.y1 == b.y1;
+                        });
+    };
+    if (!B.bernstein || !same(B.bernstein->cells))
+      B.bernstein = std::make_shared<PtBernsteinCache>(PtBernsteinCache{mesh.cells(), {}});
+    bernstein = &B.bernstein->factors;
+  }
+  auto univariate = [](const std::vector<std::vector<S>>& inv, const std::vector<S>& values) {
+    std::vector<S> c(values.size(), S(0));
+    for (size_t a = 0; a < values.size(); ++a)
+      for (size_t q = 0; q < values.size(); ++q)
+        if (values[q] != 0) c[a] += inv[a][q] * values[q];
+    return c;
+  };
   for (size_t f = 0; f < B.functions.size(); ++f) {
-    // Values at each cell's sample points, visiting for each B-spline only the cells of its
-    // support (a function can combine hundreds of B-splines over hundreds of cells).
-    std::map<int, std::vector<S>> values;
+    std::map<int, std::vector<S>> coefficients;
     std::vector<int> seen;
     for (const auto& [s, coef] : B.functions[f]) {
       const auto& sp = B.splines[s];
@@ -256,44 +287,35 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
           const int k = g.at(ix, iy);
           if (std::find(seen.begin(), seen.end(), k) != seen.end()) continue;
           seen.push_back(k);
-          // A B-spline's values at a cell's sample points, computed once: the functions that
-          // make_numerically_independent combines share their B-splines.
-          auto [cached, fresh_values] = sample_values.try_emplace(static_cast<long>(s) * mesh.num_cells() + k);
+          auto [cached, fresh_values] = bernstein->try_emplace(static_cast<long>(s) * mesh.num_cells() + k);
           if (fresh_values) {
             const CellSampling& cs = sampling[k];
-            cached->second.first.resize(m + 1), cached->second.second.resize(n + 1);
-            for (int q = 0; q <= m; ++q) cached->second.first[q] = bspline_value<S>(sp.x, cs.px[q]);
-            for (int q = 0; q <= n; ++q) cached->second.second[q] = bspline_value<S>(sp.y, cs.py[q]);
+            std::vector<S> vx(m + 1), vy(n + 1);
+            for (int q = 0; q <= m; ++q) vx[q] = bspline_value<S>(sp.x, cs.px[q]);
+            for (int q = 0; q <= n; ++q) vy[q] = bspline_value<S>(sp.y, cs.py[q]);
+            cached->second = {univariate(cs.inv_x, vx), univariate(cs.inv_y, vy)};
           }
-          const std::vector<S>&vx = cached->second.first, &vy = cached->second.second;
+          const std::vector<S>&bx = cached->second.first, &by = cached->second.second;
           bool any_x = false, any_y = false;
-          for (const S& v : vx) any_x = any_x || v != 0;
-          for (const S& v : vy) any_y = any_y || v != 0;
+          for (const S& v : bx) any_x = any_x || v != 0;
+          for (const S& v : by) any_y = any_y || v != 0;
           if (!any_x || !any_y) continue;
-          auto [it, fresh] = values.try_emplace(k);
+          auto [it, fresh] = coefficients.try_emplace(k);
           if (fresh) it->second.assign((m + 1) * (n + 1), S(0));
-          std::vector<S>& V = it->second;
+          std::vector<S>& C = it->second;
           for (int b = 0; b <= n; ++b) {
-            if (vy[b] == 0) continue;
+            if (by[b] == 0) continue;
+            const S cb = cf * by[b];
             for (int a = 0; a <= m; ++a)
-              if (vx[a] != 0) V[a + (m + 1) * b] += cf * vx[a] * vy[b];
+              if (bx[a] != 0) C[a + (m + 1) * b] += cb * bx[a];
           }
         }
     }
-    for (const auto& [k, V] : values) {
-      const CellSampling& cs = sampling[k];
-      // Bernstein coefficients C = inv_x V inv_y^T.
-      std::vector<S> T((m + 1) * (n + 1), S(0)), C((m + 1) * (n + 1), S(0));
-      for (int b = 0; b <= n; ++b)
-        for (int a = 0; a <= m; ++a)
-          for (int q = 0; q <= m; ++q) T[a + (m + 1) * b] += cs.inv_x[a][q] * V[q + (m + 1) * b];
+    for (auto& [k, C] : coefficients) {
       bool nonzero = false;
       S scale = 0;
-      for (int b = 0; b <= n; ++b)
-        for (int a = 0; a <= m; ++a) {
-          for (int q = 0; q <= n; ++q) C[a + (m + 1) * b] += cs.inv_y[b][q] * T[a + (m + 1) * q];
-          if (magnitude(C[a + (m + 1) * b]) > scale) scale = magnitude(C[a + (m + 1) * b]);
-        }
+      for (const S& c : C)
+        if (magnitude(c) > scale) scale = magnitude(c);
       if constexpr (std::is_same_v<S, double>) {
         // Cancellation leaves rounding noise where the function vanishes on the cell.
         double fscale = 0;

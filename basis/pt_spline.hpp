@@ -1,6 +1,7 @@
 #pragma once
 #include <gmpxx.h>
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -38,6 +39,9 @@ enum class PtExtension { kAuto, kMinimal, kHorizontal, kVertical };
 std::optional<PtExtension> parse_pt_extension(const std::string& name);
 const char* pt_extension_name(PtExtension extension);
 
+// Each B-spline's exact Bernstein factors on each cell of one T-mesh (pt_spline.cpp).
+struct PtBernsteinCache;
+
 struct PtLocalBSpline {
   std::vector<mpq_class> x, y;  // m + 2 and n + 2 local knots
 };
@@ -57,6 +61,10 @@ struct PtSplineBasis {
   int blocks = 0, largest_block = 0;  // EEE blocks; the largest one's number of B-splines
   int untouched = 0;                  // B-splines of T^e kept as they are
   int dropped_dependent = 0;          // minimal extension: functions dropped as dependent on the others
+  // Filled when the exact cell polynomials are first computed on a T-mesh (by the
+  // certificate), reused by later calls on the same T-mesh (a different one replaces it);
+  // copies share it. Valid as long as B-splines are only appended, never changed.
+  mutable std::shared_ptr<PtBernsteinCache> bernstein;
 };
 
 // The space S(m, n, m-1, n-1) of T, except only C^0 across the lines of `c0` (cross-cuts of T,
