@@ -80,6 +80,17 @@ std::vector<mpq_class> integers(int to) {
   return v;
 }
 
+// Whether the LR-mesh has the cells of cases/tmeshes/`file`, in any order.
+bool same_cells(const LrMesh& lr, const std::string& file) {
+  auto key = [](const RationalBox& b) { return std::vector<mpq_class>{b.x0, b.y0, b.x1, b.y1}; };
+  std::vector<std::vector<mpq_class>> mine, shipped;
+  for (const auto& c : lr.cells()) mine.push_back(key(c));
+  for (const auto& c : load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/" + file).cells) shipped.push_back(key(c));
+  std::sort(mine.begin(), mine.end());
+  std::sort(shipped.begin(), shipped.end());
+  return mine == shipped;
+}
+
 // The meshlines of cases/tmeshes/lr_dependent.toml, in its insertion order.
 const std::vector<AxisSegment> kDependent = {{true, q(1, 2), 2, 5},
                                              {false, q(9, 2), q(1, 2), 5},
@@ -193,15 +204,7 @@ TEST_CASE("LR B-splines: a meshline that splits no support is refused", "[lr]") 
 TEST_CASE("The shipped LR-mesh: 89 dependent LR B-splines, 88 independent PT-splines", "[lr][pt]") {
   LrMesh lr(integers(5), integers(5), 3, 3);
   for (const auto& s : kDependent) lr.insert(s);
-  // The same T-mesh as the case file.
-  auto key = [](const RationalBox& b) { return std::vector<mpq_class>{b.x0, b.y0, b.x1, b.y1}; };
-  std::vector<std::vector<mpq_class>> mine, shipped;
-  for (const auto& c : lr.cells()) mine.push_back(key(c));
-  for (const auto& c : load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/lr_dependent.toml").cells)
-    shipped.push_back(key(c));
-  std::sort(mine.begin(), mine.end());
-  std::sort(shipped.begin(), shipped.end());
-  REQUIRE(mine == shipped);
+  REQUIRE(same_cells(lr, "lr_dependent.toml"));  // the case file's T-mesh
 
   const RectangularPartition mesh(lr.cells());
   const long dim = brute_force_dimension(mesh, 3);
@@ -288,15 +291,8 @@ TEST_CASE("Dokken-Lyche-Pettersen's LR-mesh: the 82 LR B-splines of the LRspline
     weighted += w != weights.end();
   }
   REQUIRE(weighted == 9);
-  auto key = [](const RationalBox& b) { return std::vector<mpq_class>{b.x0, b.y0, b.x1, b.y1}; };
-  std::vector<std::vector<mpq_class>> mine, shipped;
-  for (const auto& c : lr.cells()) mine.push_back(key(c));
-  for (const auto& c : load_partition(KNOTWORK_SOURCE_DIR "/cases/tmeshes/lr_dependent_dlp.toml").cells)
-    shipped.push_back(key(c));
-  std::sort(mine.begin(), mine.end());
-  std::sort(shipped.begin(), shipped.end());
-  REQUIRE(mine == shipped);
-  REQUIRE(mine.size() == 61);  // the library's element count
+  REQUIRE(same_cells(lr, "lr_dependent_dlp.toml"));
+  REQUIRE(lr.cells().size() == 61);  // the library's element count
 
   const RectangularPartition mesh(lr.cells());
   REQUIRE(brute_force_dimension(mesh, 2) == 81);
