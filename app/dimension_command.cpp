@@ -57,9 +57,11 @@ int dimension_command(const DimensionOptions& o) {
   std::printf("knotwork dimension %s\n", o.file.c_str());
   std::printf("  space      S(%d, %d, %d, %d): bi-degree (%d, %d), C^%d in x, C^%d in y, %d cells\n", p.m, p.n, p.alpha,
               p.beta, p.m, p.n, p.alpha, p.beta, partition.num_cells());
+  const char* method = !r.exact ? "modulo two primes, which agree"
+                      : o.exact  ? "exact over Q"
+                                 : "exact over Q, as the two primes disagreed";
   std::printf("  dimension  %ld = %ld unknowns - rank %ld (%ld constraints; rank %s, %.3f s)\n", r.dimension,
-              r.unknowns, r.rank, r.constraints, r.exact ? (o.exact ? "exact over Q" : "exact over Q, as the two primes disagreed") : "modulo two primes, which agree",
-              seconds);
+              r.unknowns, r.rank, r.constraints, method, seconds);
   std::printf("  topology   %zu vertices (%d interior: %d T-nodes, %d crossings), %d interior edges;\n"
               "             knots: %d lines, %d rays, %d segments (%d vanished: at most m+1 vertices if horizontal,\n"
               "             n+1 if vertical, so no extra freedom)\n",

@@ -274,7 +274,7 @@ int pt_basis_command(const BasisOptions& o) {
               direction, B.extension == PtExtension::kMinimal ? " (LR meshlines)" : " l-edges to cross-cuts",
               local_bsplines, B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
   if (B.dropped_dependent > 0)
-    std::printf("  dependent  %d of them dropped: the local B-splines of the extension are dependent but span\n",
+    std::printf("  dependent  %d dropped: the local B-splines of the extension span, but are dependent\n",
                 B.dropped_dependent);
   if (!B.minimal_refused.empty()) std::printf("  note       minimal extension not used: %s\n", B.minimal_refused.c_str());
   std::printf("  smoothness largest relative jump %.3e\n", residual);
