@@ -129,6 +129,25 @@ int pt_basis_command(const BasisOptions& o) {
   const RectangularPartition mesh(p.cells);  // load_partition validated the cells
   PtSplineBasis B = pt_spline_basis(mesh, p.m, p.n, extension);
   const long local_bsplines = static_cast<long>(B.splines.size());  // before Prop. 1 appends the cross-cut ones
+  // Is T^e diagonalizable (the paper's premise for its local B-splines; knotwork's ordering
+  // test)? The full extensions cut every cell of T at every y (x) coordinate of T.
+  std::vector<RationalBox> extended = B.extension_cells;
+  if (extended.empty()) {
+    const bool horizontal = B.extension == PtExtension::kHorizontal;
+    std::set<mpq_class> lines;
+    for (const auto& c : mesh.cells()) lines.insert(horizontal ? c.y0 : c.x0);
+    for (const auto& c : mesh.cells()) {
+      mpq_class from = horizontal ? c.y0 : c.x0;
+      const mpq_class end = horizontal ? c.y1 : c.x1;
+      for (auto it = lines.upper_bound(from); from < end; ++it) {
+        const mpq_class to = it == lines.end() || *it > end ? end : *it;
+        extended.push_back(horizontal ? RationalBox{c.x0, from, c.x1, to} : RationalBox{from, c.y0, to, c.y1});
+        from = to;
+      }
+    }
+  }
+  const bool extension_diagonalizable =
+      diagonalizable_by_ordering(partition_topology(RectangularPartition(extended)), p.m, p.n);
   const long brute = spline_space_dimension(mesh, p.m, p.n, p.m - 1, p.n - 1).dimension;
   int cross_cut_functions = 0;
   if (o.pt_non_negative) cross_cut_functions = make_non_negative(B, mesh);
@@ -237,6 +256,7 @@ int pt_basis_command(const BasisOptions& o) {
         .set("extension", direction)
         .set("minimal_refused", B.minimal_refused)
         .set("local_bsplines", local_bsplines)
+        .set_bool("extension_diagonalizable", extension_diagonalizable)
         .set("extended_edges", B.extended_edges)
         .set("eee_equations", B.equations)
         .set("eee_rank", B.rank)
@@ -273,6 +293,9 @@ int pt_basis_command(const BasisOptions& o) {
               "blocks (largest %d B-splines); %d B-splines untouched\n",
               direction, B.extension == PtExtension::kMinimal ? " (LR meshlines)" : " l-edges to cross-cuts",
               local_bsplines, B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
+  std::printf("  T^e        %zu cells, %s\n", extended.size(),
+              extension_diagonalizable ? "diagonalizable (an ordering of its T l-edges keeps deg+1 vertices on each)"
+                                       : "not shown diagonalizable (no ordering keeps deg+1 vertices on each T l-edge)");
   if (B.dropped_dependent > 0)
     std::printf("  dependent  %d dropped: the local B-splines of the extension span, but are dependent\n",
                 B.dropped_dependent);

@@ -140,6 +140,7 @@ std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int
 
   PtSplineBasis B;
   B.m = m, B.n = n, B.c0 = c0, B.extension = PtExtension::kMinimal;
+  B.extension_cells = lr.cells();
   for (const LrBSpline& s : lr.splines()) B.splines.push_back({s.x, s.y});
 
   // The B-splines meeting each cell of T.

@@ -37,4 +37,8 @@ struct ConformalityCount {
 
 ConformalityCount conformality_count(const PartitionTopology& topology, int m, int n);
 
+// The ordering test of ConformalityCount::diagonalizable alone (no rank): whether the T
+// l-edges can be ordered so that each keeps deg+1 vertices off the earlier ones.
+bool diagonalizable_by_ordering(const PartitionTopology& topology, int m, int n);
+
 }  // namespace knotwork
