@@ -8,28 +8,40 @@ namespace knotwork {
 
 bool diagonalizable_by_ordering(const PartitionTopology& t, int m, int n) {
   using Kind = PartitionTopology::KnotKind;
-  auto degree = [&](const PartitionTopology::Knot& k) { return k.vertical ? n : m; };
-  std::vector<const PartitionTopology::Knot*> left;
-  for (const auto& k : t.knots)
-    if (k.kind == Kind::kSegment) left.push_back(&k);
   // Greedy from the end: an l-edge that keeps deg+1 vertices after losing its intersections
   // with ALL the others left can go last; removing it only helps the rest, so if no such
-  // l-edge exists no ordering does.
-  while (!left.empty()) {
-    auto last = std::find_if(left.begin(), left.end(), [&](const PartitionTopology::Knot* k) {
-      long own = 0;
-      for (int v : k->vertices) {
-        const bool shared = std::any_of(left.begin(), left.end(), [&](const PartitionTopology::Knot* o) {
-          return o != k && std::find(o->vertices.begin(), o->vertices.end(), v) != o->vertices.end();
-        });
-        own += shared ? 0 : 1;
-      }
-      return own >= degree(*k) + 1;
-    });
-    if (last == left.end()) return false;
-    left.erase(last);
+  // l-edge exists no ordering does. `sharing[v]`: the T l-edges left through vertex v.
+  std::vector<const PartitionTopology::Knot*> edges;
+  for (const auto& k : t.knots)
+    if (k.kind == Kind::kSegment) edges.push_back(&k);
+  std::vector<int> sharing(t.vertices.size(), 0);
+  for (const auto* k : edges)
+    for (int v : k->vertices) ++sharing[v];
+  auto own = [&](const PartitionTopology::Knot& k) {
+    long count = 0;
+    for (int v : k.vertices) count += sharing[v] == 1;
+    return count;
+  };
+  std::vector<bool> removed(edges.size(), false);
+  std::vector<std::vector<int>> edges_at(t.vertices.size());
+  for (size_t e = 0; e < edges.size(); ++e)
+    for (int v : edges[e]->vertices) edges_at[v].push_back(static_cast<int>(e));
+  std::vector<int> ready;
+  for (size_t e = 0; e < edges.size(); ++e)
+    if (own(*edges[e]) >= (edges[e]->vertical ? n : m) + 1) ready.push_back(static_cast<int>(e));
+  size_t left = edges.size();
+  while (!ready.empty()) {
+    const int e = ready.back();
+    ready.pop_back();
+    if (removed[e]) continue;
+    removed[e] = true;
+    --left;
+    for (int v : edges[e]->vertices)
+      if (--sharing[v] == 1)  // the one l-edge left through v gains a vertex of its own
+        for (int o : edges_at[v])
+          if (!removed[o] && own(*edges[o]) >= (edges[o]->vertical ? n : m) + 1) ready.push_back(o);
   }
-  return true;
+  return left == 0;
 }
 
 ConformalityCount conformality_count(const PartitionTopology& t, int m, int n) {
