@@ -137,13 +137,13 @@ int pt_basis_command(const BasisOptions& o) {
     std::set<mpq_class> lines;
     for (const auto& c : mesh.cells()) lines.insert(horizontal ? c.y0 : c.x0);
     for (const auto& c : mesh.cells()) {
-      mpq_class from = horizontal ? c.y0 : c.x0;
-      const mpq_class end = horizontal ? c.y1 : c.x1;
-      for (auto it = lines.upper_bound(from); from < end; ++it) {
-        const mpq_class to = it == lines.end() || *it > end ? end : *it;
-        extended.push_back(horizontal ? RationalBox{c.x0, from, c.x1, to} : RationalBox{from, c.y0, to, c.y1});
-        from = to;
-      }
+      const mpq_class start = horizontal ? c.y0 : c.x0, end = horizontal ? c.y1 : c.x1;
+      std::vector<mpq_class> cuts{start};
+      for (auto it = lines.upper_bound(start); it != lines.end() && *it < end; ++it) cuts.push_back(*it);
+      cuts.push_back(end);
+      for (size_t i = 0; i + 1 < cuts.size(); ++i)
+        extended.push_back(horizontal ? RationalBox{c.x0, cuts[i], c.x1, cuts[i + 1]}
+                                      : RationalBox{cuts[i], c.y0, cuts[i + 1], c.y1});
     }
   }
   const bool extension_diagonalizable =
