@@ -120,7 +120,8 @@ int main(int argc, char** argv) {
   basis_cmd->add_flag("--pt", basis.pt, "PT-splines of the T-mesh file (edge extension + Extended Edge Elimination)");
   basis_cmd->add_option("--extension", basis.pt_extension,
                         "--pt: minimal (l-edges lengthened as LR meshlines, certified), horizontal or vertical "
-                        "(those l-edges extended to cross-cuts), or auto: minimal, else the full extension with "
+                        "(those l-edges extended to cross-cuts), diagonalizable (LR meshlines lengthened until the "
+                        "extended mesh is diagonalizable, certified), or auto: minimal, else the full extension with "
                         "fewer extended edges")
       ->capture_default_str();
   basis_cmd->add_flag("!--no-prop1", basis.pt_non_negative,

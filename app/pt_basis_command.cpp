@@ -124,7 +124,7 @@ int pt_basis_command(const BasisOptions& o) {
     throw InputError(o.case_file + ": degree: --vtk writes Bezier cells of one degree, and this T-mesh has degree [" +
                      std::to_string(p.m) + ", " + std::to_string(p.n) + "]");
   const std::optional<PtExtension> parsed = parse_pt_extension(o.pt_extension);
-  if (!parsed) throw InputError("--extension: '" + o.pt_extension + "' is not one of auto, minimal, horizontal, vertical");
+  if (!parsed) throw InputError("--extension: '" + o.pt_extension + "' is not one of auto, minimal, horizontal, vertical, diagonalizable");
   const PtExtension extension = *parsed;
   const RectangularPartition mesh(p.cells);  // load_partition validated the cells
   PtSplineBasis B = pt_spline_basis(mesh, p.m, p.n, extension);
@@ -291,7 +291,7 @@ int pt_basis_command(const BasisOptions& o) {
     std::printf("  formula    none (not diagonalizable); smoothing-cofactor count %ld\n", cofactor.dimension);
   std::printf("  extension  %s%s: %ld local B-splines, %ld extended edges, %ld EEE equations of rank %ld in %d "
               "blocks (largest %d B-splines); %d B-splines untouched\n",
-              direction, B.extension == PtExtension::kMinimal ? " (LR meshlines)" : " l-edges to cross-cuts",
+              direction, !B.extension_cells.empty() ? " (LR meshlines)" : " l-edges to cross-cuts",
               local_bsplines, B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
   std::printf("  T^e        %zu cells, %s\n", extended.size(),
               extension_diagonalizable ? "diagonalizable (an ordering of its T l-edges keeps deg+1 vertices on each)"

@@ -12,9 +12,11 @@
 #include <unordered_map>
 
 #include "basis/lr_spline.hpp"
+#include "basis/partition_topology.hpp"
 #include "basis/pt_eee.hpp"
 #include "basis/sparse_rank.hpp"
 #include "basis/spline_dimension.hpp"
+#include "basis/tmesh_conformality.hpp"
 
 namespace knotwork {
 
@@ -333,7 +335,8 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
 }  // namespace
 
 std::optional<PtExtension> parse_pt_extension(const std::string& name) {
-  for (PtExtension e : {PtExtension::kAuto, PtExtension::kMinimal, PtExtension::kHorizontal, PtExtension::kVertical})
+  for (PtExtension e : {PtExtension::kAuto, PtExtension::kMinimal, PtExtension::kHorizontal, PtExtension::kVertical,
+                        PtExtension::kDiagonalizable})
     if (name == pt_extension_name(e)) return e;
   return std::nullopt;
 }
@@ -344,6 +347,7 @@ const char* pt_extension_name(PtExtension extension) {
     case PtExtension::kMinimal: return "minimal";
     case PtExtension::kHorizontal: return "horizontal";
     case PtExtension::kVertical: return "vertical";
+    case PtExtension::kDiagonalizable: return "diagonalizable";
   }
   return "?";
 }
@@ -419,6 +423,21 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
       }
   }
   std::string refused;
+  if (extension == PtExtension::kDiagonalizable) {
+    const long dimension = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kModular, c0).dimension;
+    const Grid g = make_grid(mesh);
+    std::string why = "no lengthening made T^e diagonalizable";
+    for (int k = 0; k <= std::max(g.nx(), g.ny()); ++k)
+      for (bool shortest : {false, true}) {
+        std::optional<PtSplineBasis> B = build_minimal(mesh, m, n, c0, MinimalVariant{shortest, k});
+        if (!B) continue;
+        if (!diagonalizable_by_ordering(partition_topology(RectangularPartition(B->extension_cells)), m, n)) continue;
+        why = certify(*B, mesh, dimension);
+        B->extension = PtExtension::kDiagonalizable;
+        if (why.empty()) return std::move(*B);
+      }
+    throw std::runtime_error("diagonalizable PT-spline extension: " + why);
+  }
   if (extension == PtExtension::kAuto || extension == PtExtension::kMinimal) {
     const long dimension = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kModular, c0).dimension;
     for (const MinimalVariant variant : {MinimalVariant{false, 0}, MinimalVariant{true, 0}, MinimalVariant{false, 1},

@@ -34,8 +34,12 @@ namespace knotwork {
 //    combination per null vector of each block (Theorem 3).
 // kAuto: minimal, certified, else the full extension in the direction with fewer extended
 // edges. kMinimal: minimal or std::runtime_error (saying why). kHorizontal, kVertical: full.
-enum class PtExtension { kAuto, kMinimal, kHorizontal, kVertical };
-// "auto", "minimal", "horizontal", "vertical"; nullopt for anything else.
+// kDiagonalizable: the paper's premise, a diagonalizable T^e (by the ordering test of
+// tmesh_conformality): the LR extension with every l-edge lengthened by k vertices, the
+// smallest k for which T^e passes that test and the result is certified, else
+// std::runtime_error. Less local than kMinimal where they differ (docs/PT_SPLINES.md).
+enum class PtExtension { kAuto, kMinimal, kHorizontal, kVertical, kDiagonalizable };
+// "auto", "minimal", "horizontal", "vertical", "diagonalizable"; nullopt for anything else.
 std::optional<PtExtension> parse_pt_extension(const std::string& name);
 const char* pt_extension_name(PtExtension extension);
 
@@ -49,7 +53,7 @@ struct PtLocalBSpline {
 struct PtSplineBasis {
   int m = 0, n = 0;
   C0Lines c0;  // knots of multiplicity m (in x) or n (in y): the space is only C^0 across them
-  PtExtension extension = PtExtension::kHorizontal;  // the one used: kMinimal, kHorizontal, kVertical
+  PtExtension extension = PtExtension::kHorizontal;  // the one used (never kAuto)
   std::string minimal_refused;  // kAuto fell back to a full extension: why (else empty)
   // The local B-splines the functions combine: the basis of S(T^e), followed by the
   // cross-cut B-splines once make_non_negative has run.

@@ -474,8 +474,8 @@ void read_pt_space(const Reader& r, const toml::table& s, CaseDescription& c) {
   if (const toml::node* x = s.get("extension")) {
     const std::string e = r.string(*x, "[space] extension");
     if (const auto parsed = parse_pt_extension(e)) c.pt.extension = *parsed;
-    else r.fail("[space] extension", "'" + e + "' is not one of auto, minimal, horizontal, vertical (" +
-                                         closest(e, {"auto", "minimal", "horizontal", "vertical"}) + ")");
+    else r.fail("[space] extension", "'" + e + "' is not one of auto, minimal, horizontal, vertical, diagonalizable (" +
+                                         closest(e, {"auto", "minimal", "horizontal", "vertical", "diagonalizable"}) + ")");
   }
   read_quadrature(r, s, c);
 }

@@ -11,9 +11,11 @@
 
 #include <Eigen/Dense>
 
+#include "basis/partition_topology.hpp"
 #include "basis/pt_spline.hpp"
 #include "basis/sparse_rank.hpp"
 #include "basis/spline_dimension.hpp"
+#include "basis/tmesh_conformality.hpp"
 #include "cases/case_file.hpp"
 #include "tmesh_testing.hpp"
 
@@ -87,6 +89,19 @@ void check_basis(const RectangularPartition& mesh, int m, int n, PtExtension ext
         worst = std::max(worst, std::abs(fast[f][k].second[a] - exact[f][k].second[a].get_d()) / scale);
   }
   REQUIRE(worst <= 1e-8);
+}
+
+// The paper's premise on request (kDiagonalizable): a certified basis on a diagonalizable T^e,
+// checked by a consequence the ordering test does not compute: the topological formula on T^e
+// is its brute-force dimension.
+void check_premise(const RectangularPartition& mesh, int p, const C0Lines& c0) {
+  check_basis(mesh, p, p, PtExtension::kDiagonalizable, c0);
+  const PtSplineBasis premise = pt_spline_basis(mesh, p, p, PtExtension::kDiagonalizable, c0);
+  REQUIRE(premise.extension == PtExtension::kDiagonalizable);
+  const RectangularPartition extended(premise.extension_cells);
+  const ConformalityCount c = conformality_count(partition_topology(extended), p, p);
+  REQUIRE(c.formula.has_value());
+  REQUIRE(*c.formula == spline_space_dimension(extended, p, p, p - 1, p - 1, RankMethod::kExact).dimension);
 }
 
 }  // namespace
@@ -194,7 +209,16 @@ TEST_CASE("PT-splines: the minimal extension is certified, or refused with the r
     REQUIRE(minimal.functions.size() == full.functions.size());
     REQUIRE(minimal.splines.size() < full.splines.size());
     REQUIRE(4 * minimal.largest_block < full.largest_block);
+    check_premise(graded, p, {});
   }
+  // The minimal T^e need not be diagonalizable: with a C0 line at x = 1/2, degree 3, on this
+  // 15-cell mesh it is not (17 cells); kDiagonalizable lengthens it until it is (34 cells).
+  std::mt19937 r3(3);
+  const mpq_class h(1, 2);
+  const RectangularPartition folded(random_halvings(r3, 13, {{0, 0, h, 1}, {h, 0, 1, 1}}));
+  const PtSplineBasis minimal = pt_spline_basis(folded, 3, 3, PtExtension::kMinimal, C0Lines{{h}, {}});
+  REQUIRE_FALSE(diagonalizable_by_ordering(partition_topology(RectangularPartition(minimal.extension_cells)), 3, 3));
+  check_premise(folded, 3, C0Lines{{h}, {}});
 }
 
 TEST_CASE("PT-splines: a B-spline of the extended mesh that meets an extended edge is not in S(T)", "[pt]") {
