@@ -369,11 +369,12 @@ TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and b
   REQUIRE(json_number_of(raw.out, "min_bernstein_coefficient") < 0);
   // The pinwheel T-cycle is not diagonalizable; the full extension is, by the paper's Lemma 2
   // argument (its vertical T l-edges no longer meet one another), and so is the minimal one here.
-  for (const std::string extension : {"auto", "horizontal"}) {
+  for (const std::string extension : {"auto", "horizontal", "diagonalizable"}) {
     const Result pw = box.run("basis --pt --json --extension " + extension + " " + kSource + "/cases/tmeshes/pinwheel_special.toml");
     INFO(extension << ": " << pw.err);
     REQUIRE(has(pw.out, "\"diagonalizable\": false"));
     REQUIRE(has(pw.out, "\"extension_diagonalizable\": true"));
+    REQUIRE(json_number_of(pw.out, "functions") == 30);
   }
   // Dokken-Lyche-Pettersen's LR-mesh: 82 LR B-splines for dimension 81 (test_lr_and_hb);
   // one is dropped as dependent, nothing is extended (the paper's Example 9).
