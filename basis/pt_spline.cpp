@@ -429,12 +429,16 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
     std::string why = "no lengthening made T^e diagonalizable";
     for (int k = 0; k <= std::max(g.nx(), g.ny()); ++k)
       for (bool shortest : {false, true}) {
-        std::optional<PtSplineBasis> B = build_minimal(mesh, m, n, c0, MinimalVariant{shortest, k});
-        if (!B) continue;
-        if (!diagonalizable_by_ordering(partition_topology(RectangularPartition(B->extension_cells)), m, n)) continue;
-        why = certify(*B, mesh, dimension);
-        B->extension = PtExtension::kDiagonalizable;
-        if (why.empty()) return std::move(*B);
+        try {
+          std::optional<PtSplineBasis> B = build_minimal(mesh, m, n, c0, MinimalVariant{shortest, k});
+          if (!B) continue;
+          if (!diagonalizable_by_ordering(partition_topology(RectangularPartition(B->extension_cells)), m, n)) continue;
+          why = certify(*B, mesh, dimension);
+          B->extension = PtExtension::kDiagonalizable;
+          if (why.empty()) return std::move(*B);
+        } catch (const std::logic_error& e) {  // as for kMinimal
+          why = e.what();
+        }
       }
     throw std::runtime_error("diagonalizable PT-spline extension: " + why);
   }
