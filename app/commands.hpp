@@ -59,7 +59,7 @@ struct BasisOptions {
   std::string show = "extraordinary";  // vertex:N | edge:I-J | face:N | all | extraordinary
   // --pt: the PT-spline basis of the T-mesh instead of a knot-segment collection.
   bool pt = false;
-  std::string pt_extension = "auto";  // auto | minimal | horizontal | vertical
+  std::string pt_extension = "auto";  // auto | minimal | horizontal | vertical | diagonalizable
   bool pt_non_negative = true;        // Prop. 1 (--no-prop1 keeps the EEE combinations)
   bool pt_reference = false;          // also the full-extension reference's support sizes
 };

@@ -129,25 +129,9 @@ int pt_basis_command(const BasisOptions& o) {
   const RectangularPartition mesh(p.cells);  // load_partition validated the cells
   PtSplineBasis B = pt_spline_basis(mesh, p.m, p.n, extension);
   const long local_bsplines = static_cast<long>(B.splines.size());  // before Prop. 1 appends the cross-cut ones
-  // Is T^e diagonalizable (the paper's premise for its local B-splines; knotwork's ordering
-  // test)? The full extensions cut every cell of T at every y (x) coordinate of T.
-  std::vector<RationalBox> extended = B.extension_cells;
-  if (extended.empty()) {
-    const bool horizontal = B.extension == PtExtension::kHorizontal;
-    std::set<mpq_class> lines;
-    for (const auto& c : mesh.cells()) lines.insert(horizontal ? c.y0 : c.x0);
-    for (const auto& c : mesh.cells()) {
-      const mpq_class start = horizontal ? c.y0 : c.x0, end = horizontal ? c.y1 : c.x1;
-      std::vector<mpq_class> cuts{start};
-      for (auto it = lines.upper_bound(start); it != lines.end() && *it < end; ++it) cuts.push_back(*it);
-      cuts.push_back(end);
-      for (size_t i = 0; i + 1 < cuts.size(); ++i)
-        extended.push_back(horizontal ? RationalBox{c.x0, cuts[i], c.x1, cuts[i + 1]}
-                                      : RationalBox{cuts[i], c.y0, cuts[i + 1], c.y1});
-    }
-  }
+  // Is T^e diagonalizable (the paper's premise for its local B-splines; knotwork's ordering test)?
   const bool extension_diagonalizable =
-      diagonalizable_by_ordering(partition_topology(RectangularPartition(extended)), p.m, p.n);
+      diagonalizable_by_ordering(partition_topology(RectangularPartition(B.extension_cells)), p.m, p.n);
   const long brute = spline_space_dimension(mesh, p.m, p.n, p.m - 1, p.n - 1).dimension;
   int cross_cut_functions = 0;
   if (o.pt_non_negative) cross_cut_functions = make_non_negative(B, mesh);
@@ -291,9 +275,9 @@ int pt_basis_command(const BasisOptions& o) {
     std::printf("  formula    none (not diagonalizable); smoothing-cofactor count %ld\n", cofactor.dimension);
   std::printf("  extension  %s%s: %ld local B-splines, %ld extended edges, %ld EEE equations of rank %ld in %d "
               "blocks (largest %d B-splines); %d B-splines untouched\n",
-              direction, !B.extension_cells.empty() ? " (LR meshlines)" : " l-edges to cross-cuts",
+              direction, B.extension == PtExtension::kHorizontal || B.extension == PtExtension::kVertical ? " l-edges to cross-cuts" : " (LR meshlines)",
               local_bsplines, B.extended_edges, B.equations, B.rank, B.blocks, B.largest_block, B.untouched);
-  std::printf("  T^e        %zu cells, %s\n", extended.size(),
+  std::printf("  T^e        %zu cells, %s\n", B.extension_cells.size(),
               extension_diagonalizable ? "diagonalizable (an ordering of its T l-edges keeps deg+1 vertices on each)"
                                        : "not shown diagonalizable (no ordering keeps deg+1 vertices on each T l-edge)");
   if (B.dropped_dependent > 0)

@@ -363,45 +363,82 @@ namespace {
 // is never wrong: dim <= unknowns - rank mod p (rank mod p <= rank over Q), and rows
 // independent mod p are independent over Q.
 std::string certify(PtSplineBasis& B, const RectangularPartition& mesh, long dimension) {
-  try {
-    const long count = static_cast<long>(B.functions.size());
-    if (count < dimension) return std::to_string(count) + " functions for a space of dimension " + std::to_string(dimension);
-    const long per_cell = static_cast<long>(B.m + 1) * (B.n + 1);
-    const auto polynomials = cell_polynomials<mpq_class>(B, mesh);
-    std::vector<long> order(count);
-    std::iota(order.begin(), order.end(), 0L);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](long a, long b) { return polynomials[a].size() < polynomials[b].size(); });
-    std::vector<SparseRationalRow> rows;
-    for (long f : order) {
-      SparseRationalRow r;
-      for (const auto& [k, coefficients] : polynomials[f])
-        for (long a = 0; a < per_cell; ++a)
-          if (coefficients[a] != 0) r.terms.emplace_back(k * per_cell + a, coefficients[a]);
-      rows.push_back(std::move(r));
-    }
-    std::vector<bool> independent;
-    const long rank = rank_reliable(rows, per_cell * mesh.num_cells(), &independent);
-    if (rank != dimension)
-      return "the " + std::to_string(count) + " functions have rank " + std::to_string(rank) +
-             " for a space of dimension " + std::to_string(dimension);
-    if (rank == count) return {};
-    std::vector<bool> keep(count);
-    for (long i = 0; i < count; ++i) keep[order[i]] = independent[i];
-    std::vector<std::vector<std::pair<int, mpq_class>>> kept;
-    int untouched = 0;
-    for (long f = 0; f < count; ++f) {
-      if (!keep[f]) continue;
-      untouched += f < B.untouched;
-      kept.push_back(std::move(B.functions[f]));
-    }
-    B.functions = std::move(kept);
-    B.untouched = untouched;
-    B.dropped_dependent = static_cast<int>(count - rank);
-  } catch (const std::runtime_error& e) {
-    return e.what();
+  const long count = static_cast<long>(B.functions.size());
+  if (count < dimension) return std::to_string(count) + " functions for a space of dimension " + std::to_string(dimension);
+  const long per_cell = static_cast<long>(B.m + 1) * (B.n + 1);
+  const auto polynomials = cell_polynomials<mpq_class>(B, mesh);
+  std::vector<long> order(count);
+  std::iota(order.begin(), order.end(), 0L);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](long a, long b) { return polynomials[a].size() < polynomials[b].size(); });
+  std::vector<SparseRationalRow> rows;
+  for (long f : order) {
+    SparseRationalRow r;
+    for (const auto& [k, coefficients] : polynomials[f])
+      for (long a = 0; a < per_cell; ++a)
+        if (coefficients[a] != 0) r.terms.emplace_back(k * per_cell + a, coefficients[a]);
+    rows.push_back(std::move(r));
   }
+  std::vector<bool> independent;
+  const long rank = rank_reliable(rows, per_cell * mesh.num_cells(), &independent);
+  if (rank != dimension)
+    return "the " + std::to_string(count) + " functions have rank " + std::to_string(rank) +
+           " for a space of dimension " + std::to_string(dimension);
+  if (rank == count) return {};
+  std::vector<bool> keep(count);
+  for (long i = 0; i < count; ++i) keep[order[i]] = independent[i];
+  std::vector<std::vector<std::pair<int, mpq_class>>> kept;
+  int untouched = 0;
+  for (long f = 0; f < count; ++f) {
+    if (!keep[f]) continue;
+    untouched += f < B.untouched;
+    kept.push_back(std::move(B.functions[f]));
+  }
+  B.functions = std::move(kept);
+  B.untouched = untouched;
+  B.dropped_dependent = static_cast<int>(count - rank);
   return {};
+}
+
+// One attempt at the minimal extension: the certified basis, or why there is none. With
+// `diagonalizable`, a T^e that fails the ordering test is refused too.
+std::optional<PtSplineBasis> attempt_minimal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0,
+                                             const MinimalVariant& variant, long dimension, bool diagonalizable,
+                                             std::string& why) {
+  try {
+    std::optional<PtSplineBasis> B = build_minimal(mesh, m, n, c0, variant);
+    if (!B) {
+      why = "an l-edge could not be inserted even as a full line";
+      return std::nullopt;
+    }
+    if (diagonalizable &&
+        !diagonalizable_by_ordering(partition_topology(RectangularPartition(B->extension_cells)), m, n)) {
+      why = "no lengthening made T^e diagonalizable";
+      return std::nullopt;
+    }
+    why = certify(*B, mesh, dimension);
+    if (why.empty()) return B;
+  } catch (const std::logic_error& e) {  // a block's modular rank fell below its rank over Q
+    why = e.what();
+  }
+  return std::nullopt;
+}
+
+// T^e of a full extension: every cell of T cut at every y (horizontal) or x coordinate of T.
+std::vector<RationalBox> full_extension_cells(const RectangularPartition& mesh, bool horizontal) {
+  std::set<mpq_class> lines;
+  for (const auto& c : mesh.cells()) lines.insert(horizontal ? c.y0 : c.x0);
+  std::vector<RationalBox> cells;
+  for (const auto& c : mesh.cells()) {
+    const mpq_class start = horizontal ? c.y0 : c.x0, end = horizontal ? c.y1 : c.x1;
+    std::vector<mpq_class> cuts{start};
+    for (auto it = lines.upper_bound(start); it != lines.end() && *it < end; ++it) cuts.push_back(*it);
+    cuts.push_back(end);
+    for (size_t i = 0; i + 1 < cuts.size(); ++i)
+      cells.push_back(horizontal ? RationalBox{c.x0, cuts[i], c.x1, cuts[i + 1]}
+                                 : RationalBox{cuts[i], c.y0, cuts[i + 1], c.y1});
+  }
+  return cells;
 }
 
 }  // namespace
@@ -426,35 +463,21 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
   if (extension == PtExtension::kDiagonalizable) {
     const long dimension = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kModular, c0).dimension;
     const Grid g = make_grid(mesh);
-    std::string why = "no lengthening made T^e diagonalizable";
+    std::string why;
     for (int k = 0; k <= std::max(g.nx(), g.ny()); ++k)
-      for (bool shortest : {false, true}) {
-        try {
-          std::optional<PtSplineBasis> B = build_minimal(mesh, m, n, c0, MinimalVariant{shortest, k});
-          if (!B) continue;
-          if (!diagonalizable_by_ordering(partition_topology(RectangularPartition(B->extension_cells)), m, n)) continue;
-          why = certify(*B, mesh, dimension);
+      for (bool shortest : {false, true})
+        if (auto B = attempt_minimal(mesh, m, n, c0, MinimalVariant{shortest, k}, dimension, true, why)) {
           B->extension = PtExtension::kDiagonalizable;
-          if (why.empty()) return std::move(*B);
-        } catch (const std::logic_error& e) {  // as for kMinimal
-          why = e.what();
+          return std::move(*B);
         }
-      }
     throw std::runtime_error("diagonalizable PT-spline extension: " + why);
   }
   if (extension == PtExtension::kAuto || extension == PtExtension::kMinimal) {
     const long dimension = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kModular, c0).dimension;
     for (const MinimalVariant variant : {MinimalVariant{false, 0}, MinimalVariant{true, 0}, MinimalVariant{false, 1},
                                          MinimalVariant{true, 1}}) {
-      std::optional<PtSplineBasis> minimal;
       std::string why;
-      try {
-        minimal = build_minimal(mesh, m, n, c0, variant);
-        why = minimal ? certify(*minimal, mesh, dimension) : "an l-edge could not be inserted even as a full line";
-      } catch (const std::logic_error& e) {  // a block's modular rank fell below its rank over Q
-        why = e.what();
-      }
-      if (why.empty()) return std::move(*minimal);
+      if (auto B = attempt_minimal(mesh, m, n, c0, variant, dimension, false, why)) return std::move(*B);
       if (refused.empty()) refused = why + " (and in the three other insertion orders)";  // the first reason
     }
     if (extension == PtExtension::kMinimal) throw std::runtime_error("minimal PT-spline extension: " + refused);
@@ -468,6 +491,7 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
   if (extension == PtExtension::kHorizontal) {
     PtSplineBasis B = build_horizontal(mesh, m, n, c0);
     B.minimal_refused = refused;
+    B.extension_cells = full_extension_cells(mesh, true);
     return B;
   }
   PtSplineBasis B = build_horizontal(flipped, n, m, C0Lines{c0.y, c0.x});
@@ -476,6 +500,7 @@ PtSplineBasis pt_spline_basis(const RectangularPartition& mesh, int m, int n, Pt
   B.c0 = c0;
   B.extension = PtExtension::kVertical;
   B.minimal_refused = refused;
+  B.extension_cells = full_extension_cells(mesh, false);
   return B;
 }
 

@@ -65,7 +65,7 @@ struct PtSplineBasis {
   int blocks = 0, largest_block = 0;  // EEE blocks; the largest one's number of B-splines
   int untouched = 0;                  // B-splines of T^e kept as they are
   int dropped_dependent = 0;          // minimal extension: functions dropped as dependent on the others
-  std::vector<RationalBox> extension_cells;  // T^e of the minimal extension (empty for the full ones)
+  std::vector<RationalBox> extension_cells;  // the cells of T^e
   // Filled when the exact cell polynomials are first computed on a T-mesh (by the
   // certificate), reused by later calls on the same T-mesh (a different one replaces it);
   // copies share it. Valid as long as B-splines are only appended, never changed.
