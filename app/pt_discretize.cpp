@@ -110,7 +110,7 @@ Discretization discretize_pt(const CaseDescription& c, const std::vector<Rationa
   // the last bit, whatever the T-mesh.
   d.local_mesh = std::make_unique<BezierMesh>(
       pt_bezier_mesh(*d.tmesh, to_double(pt_cell_polynomials_exact(*d.pt, *d.tmesh)), d.pt->m, d.pt->n));
-  d.pt->bernstein.reset();  // hundreds of MB of exact factors at 40k dofs, not needed again
+  d.pt->bernstein.reset();  // the exact factors are large on big meshes and not needed again
   d.geometry = std::make_unique<PatchGeometryMap>(*d.local_mesh, c.geometry);
   return d;
 }
