@@ -160,7 +160,7 @@ TEST_CASE("PT-splines with C0 lines (a folded geometry's knot lines): the space 
                       Catch::Contains("C0 line x = 1/2 is not a line of the T-mesh"));
 }
 
-TEST_CASE("PT-splines: the minimal extension is certified and smaller than the full one; on request T^e is diagonalizable",
+TEST_CASE("PT-splines: the minimal extension is certified and smaller than the full one, and on request T^e is diagonalizable",
           "[pt]") {
   // On the two LR-meshes where the LR B-splines are dependent (89 for dimension 88, and
   // Dokken-Lyche-Pettersen's 82 for 81: test_lr_and_hb) they still span S(T), so the minimal
