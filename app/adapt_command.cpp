@@ -1,17 +1,16 @@
-// knotwork adapt: estimate - mark (Doerfler) - refine (knot segments or T-mesh cells) - solve, repeated.
+// knotwork adapt: estimate - mark (Doerfler) - refine (the family's local refinement) - solve, repeated.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
 
-#include "app/commands.hpp"
 #include "app/adaptive.hpp"
-#include "app/json_writer.hpp"
-#include "app/output_stage.hpp"
+#include "app/commands.hpp"
+#include "cases/json_output.hpp"
+#include "cases/output_files.hpp"
 #include "app/progress.hpp"
 #include "app/svg_plot.hpp"
-#include "basis/partition_topology.hpp"
 #include "solver/input_error.hpp"
 #include "solver/poisson_solver.hpp"
 #include "solver/residual_estimator.hpp"
@@ -20,32 +19,6 @@
 namespace knotwork {
 
 namespace {
-
-// The knots of the partition (lines, rays, segments) as polylines in physical space, with
-// their kind (0 line, 1 ray, 2 segment) and multiplicity.
-void write_knot_lines(const std::string& path, const RectangularPartition& partition, const NurbsPatch& geometry,
-                      const std::function<int(bool vertical, double at, double from, double to)>& multiplicity_of) {
-  const PartitionTopology topo = partition_topology(partition);
-  std::vector<Eigen::MatrixX2d> lines;
-  std::vector<int> kind, multiplicity;
-  const int samples = 8;  // per edge: curved geometries stay curved
-  for (const auto& k : topo.knots) {
-    const double at = k.position.get_d();
-    std::vector<double> stops;
-    for (int v : k.vertices) stops.push_back((k.vertical ? topo.vertices[v].y : topo.vertices[v].x).get_d());
-    Eigen::MatrixX2d poly((stops.size() - 1) * samples + 1, 2);
-    int row = 0;
-    for (size_t e = 0; e + 1 < stops.size(); ++e)
-      for (int s = 0; s < samples + (e + 2 == stops.size() ? 1 : 0); ++s) {
-        const double t = stops[e] + (stops[e + 1] - stops[e]) * s / samples;
-        poly.row(row++) = patch_point(geometry, k.vertical ? at : t, k.vertical ? t : at).transpose();
-      }
-    lines.push_back(poly);
-    kind.push_back(k.kind == PartitionTopology::KnotKind::kLine ? 0 : k.kind == PartitionTopology::KnotKind::kRay ? 1 : 2);
-    multiplicity.push_back(multiplicity_of(k.vertical, at, stops.front(), stops.back()));
-  }
-  write_polylines_vtp(path, lines, {{"kind", kind}, {"multiplicity", multiplicity}});
-}
 
 std::string rate_text(double r) {
   if (std::isnan(r)) return "-";
@@ -58,8 +31,9 @@ std::string rate_text(double r) {
 
 int adapt_command(const AdaptOptions& o) {
   CaseDescription c = load_case(o.case_file);
-  if (o.degree) override_degree(c, o.degree);
-  if (o.elements) override_elements(c, o.elements);
+  const SpaceFamily& family = space_family(c);
+  family.override_options(c, o.degree, o.elements);
+  if (family.check_adapt) family.check_adapt(c);
   if (o.steps) c.adapt.steps = o.steps;
   if (o.theta) c.adapt.theta = o.theta;
   if (o.max_dofs) c.adapt.max_dofs = o.max_dofs;
@@ -72,33 +46,25 @@ int adapt_command(const AdaptOptions& o) {
   const ExactSolution* exact = c.problem.exact ? &*c.problem.exact : nullptr;
 
   std::vector<PvdEntry> pvd;
+  std::string description;
   const auto steps = adapt_case(c, ordering, [&](const std::string& what) { progress(what); },
                                 [&](const AdaptiveStepView& v) {
+    if (v.step == 0) description = v.space.description();
     if (!c.write_bezier) return;
     progress("writing ParaView output");
     Eigen::VectorXd eta = v.indicators.eta_squared.cwiseSqrt();
     Eigen::VectorXd flag = Eigen::VectorXd::Zero(eta.size());
     for (int m : v.marked) flag[m] = 1;
     const std::string name = "step_" + std::to_string(v.step);
-    const Discretization& d = v.discretization;
-    write_bezier_vtu(stage.stage(name + ".vtu"), d.mesh(), *d.geometry, v.solution.coefficients, exact,
-                     {{"error_indicator", eta}, {"marked", flag}});
-    if (v.collection) {
-      write_knot_lines(stage.stage(name + "_knots.vtp"), v.collection->partition(), c.geometry,
-                       [&](bool vertical, double at, double from, double to) {
-                         return v.collection->knot_multiplicity(vertical, at, from, to);
-                       });
-    } else {
-      // PT-spline knots are simple, except along the C0 lines.
-      const auto& c0 = d.pt->c0;
-      write_knot_lines(stage.stage(name + "_knots.vtp"), *v.tmesh, c.geometry, [&](bool vertical, double at, double, double) {
-        for (const auto& t : vertical ? c0.x : c0.y)
-          if (t.get_d() == at) return vertical ? d.pt->m : d.pt->n;
-        return 1;
-      });
-    }
+    write_bezier_vtu(stage.stage(name + ".vtu"), v.space.mesh(), v.space.geometry(), v.solution.coefficients, exact,
+                     {{"error_indicator", eta}, {"marked", flag}}, v.solution.exact_mean);
     pvd.push_back({double(v.step), 0, name + ".vtu"});
-    pvd.push_back({double(v.step), 1, name + "_knots.vtp"});
+    const KnotLines knots = v.space.knot_lines();
+    if (!knots.lines.empty()) {
+      write_polylines_vtp(stage.stage(name + "_knots.vtp"), knots.lines,
+                          {{"kind", knots.kind}, {"multiplicity", knots.multiplicity}});
+      pvd.push_back({double(v.step), 1, name + "_knots.vtp"});
+    }
   });
   std::string csv = "step,dofs,cells,marked,estimator,l2_error,h1_seminorm_error,h1_rate_vs_dofs\n";
   Json js = Json::array();
@@ -113,7 +79,8 @@ int adapt_command(const AdaptOptions& o) {
         .set("extended_segments", v.extended).set("estimator", v.estimator).set("l2_error", v.l2)
         .set("h1_seminorm_error", v.h1_semi).set("h1_rate_vs_dofs", v.h1_rate).set("seconds", v.seconds)
         .set("seconds_space", v.seconds_space).set("seconds_solve", v.seconds_solve)
-        .set("seconds_estimate", v.seconds_estimate).set("seconds_refine", v.seconds_refine);
+        .set("seconds_estimate", v.seconds_estimate).set("seconds_refine", v.seconds_refine)
+        .set("notes", Json::strings(v.notes));
     js.push(j);
     se.x.push_back(v.dofs);
     se.y.push_back(v.estimator);
@@ -127,12 +94,12 @@ int adapt_command(const AdaptOptions& o) {
   std::vector<PlotSeries> plot{se};
   if (!sl2.x.empty()) plot.insert(plot.end(), {sl2, sh1});
   Json root = Json::object();
-  root.set("case", c.path).set("space", describe_space(c)).set("theta", c.adapt.theta).set("steps", js);
+  root.set("case", c.path).set("family", c.family).set("space", description).set("theta", c.adapt.theta).set("steps", js);
   if (steps.size() >= 4 && !std::isnan(steps.back().h1_semi))
     root.set("h1_rate_last_half", fitted_h1_rate(steps, steps.size() / 2));
   write_text_file(stage.stage("adapt.csv"), csv);
   write_text_file(stage.stage("adapt.json"), root.dump() + "\n");
-  write_text_file(stage.stage("adapt.svg"), loglog_svg(c.name + (c.family == "pt" ? ": adaptive PT-splines" : ": adaptive knot segments"), "degrees of freedom", "error", plot));
+  write_text_file(stage.stage("adapt.svg"), loglog_svg(c.name + ": adaptive, " + description, "degrees of freedom", "error", plot));
   if (!pvd.empty()) write_pvd(stage.stage("adapt.pvd"), pvd);
   const auto outputs = stage.commit();
 
@@ -141,7 +108,9 @@ int adapt_command(const AdaptOptions& o) {
     std::printf("%s\n", root.dump().c_str());
     return 0;
   }
-  std::printf("knotwork adapt %s: %s, Doerfler theta = %g\n", c.path.c_str(), describe_space(c).c_str(), c.adapt.theta);
+  std::printf("knotwork adapt %s: %s, Doerfler theta = %g\n", c.path.c_str(), description.c_str(), c.adapt.theta);
+  for (size_t s = 0; s < steps.size(); ++s)
+    for (const auto& n : steps[s].notes) std::printf("  note     step %zu: %s\n", s, n.c_str());
   std::printf("%4s %8s %8s %7s %13s %13s %13s %7s\n", "step", "dofs", "cells", "marked", "estimator", "L2 error",
               "H1-semi error", "rate");
   for (size_t s = 0; s < steps.size(); ++s) {

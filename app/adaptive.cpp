@@ -19,52 +19,42 @@ constexpr double kAspect = 1.2;
 
 }  // namespace
 
-std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering,
-                                     const std::function<void(const std::string&)>& progress,
+std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering, const ProgressFunction& progress,
                                      const std::function<void(const AdaptiveStepView&)>& on_step) {
-  const bool pt = c.family == "pt";
-  if (c.family != "knot_segments" && !pt)
-    throw InputError(c.path + ": [space] family: adaptive refinement works by knot segments or PT-splines; set family = "
-                     "\"knot_segments\" or \"pt\" (got \"" + c.family + "\")");
+  const SpaceFamily& family = space_family(c);
+  if (family.check_adapt) family.check_adapt(c);
   auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };
-  say("building the starting space: " + describe_space(c));
-  std::vector<RationalBox> cells;  // family "pt": the T-mesh
-  if (pt) cells = pt_start_cells(c);
-  Discretization first = pt ? discretize_pt(c, cells) : discretize(c);
-  // Collections built by insertion are semi-regular by construction; explicit ones were
-  // checked by discretize.
-  if (!first.violations.empty())
-    throw InputError(c.path + ": [space]: adaptive refinement needs a semi-regular start, and the collection is not: " +
-                     first.violations.front());
-  std::optional<SemiRegularCollection> collection;  // family "knot_segments"
-  if (!pt) collection = *first.segments;
+  say("building the starting space ([space] family = \"" + c.family + "\")");
+  using clock = std::chrono::steady_clock;
+  auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
+  auto t_start = clock::now();
+  std::unique_ptr<SplineSpace> space = family.build(c, 0, say);
+  double t_space = since(t_start);
   std::vector<AdaptiveStep> steps;
   for (int s = 0; s < c.adapt.steps; ++s) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = clock::now();
     const std::string prefix = "step " + std::to_string(s + 1) + "/" + std::to_string(c.adapt.steps) + ": ";
-    using clock = std::chrono::steady_clock;
-    auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
-    const Discretization d = s == 0 ? std::move(first) : pt ? discretize_pt(c, cells) : discretize_collection(c, *collection);
-    const double t_space = since(t0);
+    AdaptiveStep st;
+    st.notes = space->notes();
+    for (const auto& n : st.notes) say(prefix + "note: " + n);
     auto t1 = clock::now();
-    const PoissonSolution sol = solve_case(c, d, ordering, [&](const std::string& what) { say(prefix + what); });
+    const PoissonSolution sol = solve_case(c, *space, ordering, [&](const std::string& what) { say(prefix + what); });
     const double t_solve = since(t1);
     say(prefix + "error estimator");
     t1 = clock::now();
     ErrorIndicators ind;
     try {
-      ind = residual_indicators(d.mesh(), *d.geometry, sol.coefficients, c.problem);
+      ind = residual_indicators(space->mesh(), space->geometry(), sol.coefficients, c.problem);
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": " + e.what());
     }
-    AdaptiveStep st;
     st.seconds_space = t_space;
     st.seconds_solve = t_solve;
     st.seconds_estimate = since(t1);
     st.dofs = sol.num_functions;
-    st.cells = d.mesh().num_cells();
+    st.cells = space->mesh().num_cells();
     st.estimator = std::sqrt(ind.total());
     st.l2 = st.h1_semi = st.h1_rate = NAN;
     if (sol.errors) {
@@ -77,39 +67,32 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     std::vector<int> marked;
     if (!last) marked = dorfler_marking(ind.eta_squared, c.adapt.theta);
     st.marked = static_cast<int>(marked.size());
-    if (on_step) on_step({s, d, sol, ind, marked, pt ? nullptr : &*collection, pt ? d.tmesh.get() : nullptr});
+    if (on_step) on_step({s, *space, sol, ind, marked});
     if (!last) {
-      say(prefix + "refining " + std::to_string(marked.size()) + " marked cells " +
-          (pt ? "of the T-mesh" : "by knot segments"));
-      std::vector<SemiRegularCollection::Split> split;
+      say(prefix + "refining " + std::to_string(marked.size()) + " marked cells");
+      std::vector<CellSplit> split;
       Eigen::VectorXd mu(4), mv(4);
       mu << 0, 1, 0.5, 0.5;
       mv << 0.5, 0.5, 0, 1;
       GeometryAtPoints g;
       for (int m : marked) {
-        d.geometry->evaluate(m, mu, mv, g);
+        space->geometry().evaluate(m, mu, mv, g);
         const double eu = (g.x.row(1) - g.x.row(0)).norm(), ev = (g.x.row(3) - g.x.row(2)).norm();
-        split.push_back(eu > kAspect * ev   ? SemiRegularCollection::kSplitX
-                        : ev > kAspect * eu ? SemiRegularCollection::kSplitY
-                        : s % 2 == 0        ? SemiRegularCollection::kSplitX
-                                            : SemiRegularCollection::kSplitY);
+        split.push_back(eu > kAspect * ev   ? CellSplit::kAcrossU
+                        : ev > kAspect * eu ? CellSplit::kAcrossV
+                        : s % 2 == 0        ? CellSplit::kAcrossU
+                                            : CellSplit::kAcrossV);
       }
       t1 = clock::now();
-      if (pt) {
-        // The BezierMesh cells are the T-mesh cells, in order: halve the marked ones.
-        for (size_t k = 0; k < marked.size(); ++k) {
-          RationalBox& a = cells[marked[k]];
-          RationalBox b = a;
-          if (split[k] == SemiRegularCollection::kSplitX) a.x1 = b.x0 = (a.x0 + a.x1) / 2;
-          else a.y1 = b.y0 = (a.y0 + a.y1) / 2;
-          cells.push_back(b);
-        }
-      } else {
-        for (const auto& r : collection->refine_cells(marked, split)) st.extended += r.extended;
-      }
+      std::unique_ptr<SplineSpace> next = space->refine(marked, split, &st.extended);
+      if (!next)
+        throw InputError(c.path + ": [space] family: \"" + c.family + "\" cannot refine marked cells");
+      // The family's refinement builds the next space too: both are this step's refinement time.
       st.seconds_refine = since(t1);
+      t_space = 0;
+      space = std::move(next);
     }
-    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    st.seconds = std::chrono::duration<double>(clock::now() - t0).count();
     steps.push_back(st);
     if (last) break;
   }

@@ -4,12 +4,14 @@
 #include <fstream>
 
 #include "app/commands.hpp"
-#include "app/discretize.hpp"
-#include "app/json_writer.hpp"
-#include "app/output_stage.hpp"
-#include "basis/collection_on_partition.hpp"
-#include "basis/partition_topology.hpp"
-#include "basis/spline_dimension.hpp"
+#include "app/pipeline.hpp"
+#include "app/report.hpp"
+#include "basis/knot_segments/collection_checks.hpp"
+#include "cases/json_output.hpp"
+#include "cases/output_files.hpp"
+#include "basis/knot_segments/collection_on_partition.hpp"
+#include "basis/tmesh/partition_topology.hpp"
+#include "basis/tmesh/spline_dimension.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -49,13 +51,6 @@ long bezier_rank(const BezierMesh& mesh) {
   return qr.rank();
 }
 
-std::string describe_segment(const KnotInsertion& s) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "%s %s = %g, %s in [%g, %g]", s.vertical ? "vertical" : "horizontal",
-                s.vertical ? "x" : "y", s.position, s.vertical ? "y" : "x", s.from, s.to);
-  return buf;
-}
-
 // What `knotwork basis` reports, whatever the input was.
 struct BasisReport {
   std::string file, space;
@@ -72,39 +67,15 @@ struct BasisReport {
   std::vector<std::string> input_hypotheses_failed;  // Lemma 3.4 / Prop. 4.1 on the given T-mesh
 };
 
-void write_export(const std::string& file, const std::string& source, const SemiRegularCollection& collection) {
-  Json fs = Json::array();
-  for (const auto& b : collection.splines()) {
-    Json x = Json::array(), y = Json::array();
-    for (double v : b.x) x.push(v);
-    for (double v : b.y) y.push(v);
-    fs.push(Json::object().set("x", x).set("y", y));
-  }
-  Json root = Json::object();
-  root.set("case", source)
-      .set("degree", Json::array().push(double(collection.degree_x())).push(double(collection.degree_y())))
-      .set("functions", fs);
-  write_file_atomically(file, "--export", [&](const std::string& path) {
-    std::ofstream out(path);
-    out << root.dump() << "\n";
-    if (!out) throw std::runtime_error("write failed");
-  });
-}
-
 int print_report(const BasisReport& r, const BasisOptions& o) {
   const BezierMesh& mesh = *r.mesh;
   const double pu = partition_of_unity_error(mesh);
   const long rank = bezier_rank(mesh);
   long formula = -1, brute = -1;
-  if (r.collection && r.simple_knots) {
-    try {
-      const RectangularPartition part = r.collection->partition();
-      const int dx = r.collection->degree_x(), dy = r.collection->degree_y();
-      brute = spline_space_dimension(part, dx, dy, dx - 1, dy - 1).dimension;
-      if (dx == dy) formula = weller_dimension_formula(partition_topology(part), dx);
-    } catch (const std::exception&) {
-      // no partition (the supports do not tile the domain): nothing to count over
-    }
+  if (r.collection) {
+    const CollectionChecks checks = check_collection(*r.collection, r.simple_knots);
+    formula = checks.dimension_formula;
+    brute = checks.dimension_bruteforce;
   }
   if (o.json) {
     Json j = Json::object();
@@ -150,28 +121,35 @@ int print_report(const BasisReport& r, const BasisOptions& o) {
   return 0;
 }
 
+// A case file: its space through the family interface; the family adds its own checks.
 int basis_of_case(const BasisOptions& o) {
   const CaseDescription c = load_case(o.case_file);
-  const Discretization d = discretize(c);
-  BasisReport r;
-  r.file = c.path;
-  r.space = describe_space(c);
-  r.mesh = &d.mesh();
-  r.collection = d.segments.get();
-  r.simple_knots = d.simple_knots;
-  if (!c.collection_file.empty()) {
-    r.violations = d.violations;  // discretize checked the explicit collection already
-  } else if (d.segments) {
-    for (const auto& v : d.segments->violations()) r.violations.push_back(v.reason);
+  const std::unique_ptr<SplineSpace> space = build_space(c);
+  const BezierMesh& mesh = space->mesh();
+  const std::vector<ReportField> fields = space->basis_report();
+  if (!o.export_file.empty()) space->export_functions(o.export_file, c.path);
+  const double pu = partition_of_unity_error(mesh);
+  const long rank = bezier_rank(mesh);
+  if (o.json) {
+    Json j = Json::object();
+    j.set("file", c.path).set("family", c.family).set("space", space->description())
+        .set("functions", mesh.num_functions()).set("cells", mesh.num_cells());
+    add_fields(j, fields);
+    j.set("partition_of_unity_error", pu);
+    if (rank >= 0) j.set("rank", rank); else j.set_null("rank");
+    j.set("notes", Json::strings(space->notes()));
+    std::printf("%s\n", j.dump().c_str());
+    return 0;
   }
-  r.segments = static_cast<int>(d.insertions.size());
-  for (const auto& i : d.insertions)
-    if (i.extended) r.extensions.push_back(describe_segment(i.requested) + " extended to " + describe_segment(i.inserted));
-  if (!o.export_file.empty()) {
-    if (!d.segments) throw InputError("--export: writes local knot vectors of family = \"knot_segments\" spaces");
-    write_export(o.export_file, c.path, *d.segments);
-  }
-  return print_report(r, o);
+  std::printf("knotwork basis %s\n  space      %s\n  functions  %d on %d cells\n", c.path.c_str(),
+              space->description().c_str(), mesh.num_functions(), mesh.num_cells());
+  for (const auto& n : space->notes()) std::printf("  note       %s\n", n.c_str());
+  print_field_lines(fields);
+  std::printf("  partition of unity  max error %.3e\n", pu);
+  if (rank >= 0) std::printf("  rank       %ld (%s)\n", rank, rank == mesh.num_functions() ? "linearly independent" : "DEPENDENT");
+  else std::printf("  rank       not computed (too large for the dense rank check)\n");
+  if (!o.export_file.empty()) std::printf("  output     %s\n", o.export_file.c_str());
+  return 0;
 }
 
 int basis_of_partition(const BasisOptions& o) {
@@ -193,13 +171,13 @@ int basis_of_partition(const BasisOptions& o) {
   for (const auto& v : built.collection.violations()) r.violations.push_back(v.reason);
   r.segments = static_cast<int>(built.insertions.size());
   for (const auto& i : built.insertions)
-    if (i.extended) r.extensions.push_back(describe_segment(i.requested) + " extended to " + describe_segment(i.inserted));
+    if (i.extended) r.extensions.push_back(describe_insertion(i.requested) + " extended to " + describe_insertion(i.inserted));
   r.from_partition = true;
   r.partition_reached = built.reached;
   r.input_cells = partition.num_cells();
   r.order = built.order;
   if (p.m == p.n) r.input_hypotheses_failed = weller_hypotheses_violations(partition_topology(partition), p.m);
-  if (!o.export_file.empty()) write_export(o.export_file, o.case_file, built.collection);
+  if (!o.export_file.empty()) export_collection(o.export_file, o.case_file, built.collection);
   return print_report(r, o);
 }
 
@@ -225,7 +203,7 @@ int basis_of_collection(const BasisOptions& o) {
     throw InputError(o.case_file + ": functions: the supports do not induce a partition: " + e.what());
   }
   r.mesh = &mesh;
-  if (!o.export_file.empty()) write_export(o.export_file, o.case_file, *collection);
+  if (!o.export_file.empty()) export_collection(o.export_file, o.case_file, *collection);
   return print_report(r, o);
 }
 

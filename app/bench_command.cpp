@@ -8,8 +8,8 @@
 #include <thread>
 
 #include "app/commands.hpp"
-#include "app/discretize.hpp"
-#include "app/json_writer.hpp"
+#include "app/pipeline.hpp"
+#include "cases/json_output.hpp"
 #include "cases/geometries.hpp"
 #include "solver/input_error.hpp"
 #include "solver/linear_solver.hpp"
@@ -33,7 +33,7 @@ struct BenchResult {
 BenchResult run_one(int p, int n, Ordering ordering, bool with_errors, bool floor) {
   const CaseDescription c = unit_square_benchmark_case(p, n);
   const auto t0 = std::chrono::steady_clock::now();
-  const Discretization d = discretize(c);
+  const std::unique_ptr<SplineSpace> d = build_space(c);
   const double t_space = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   PoissonSolveOptions so;
   so.ordering = ordering;
@@ -47,7 +47,7 @@ BenchResult run_one(int p, int n, Ordering ordering, bool with_errors, bool floo
       const Eigen::VectorXd x = bare.solve(F);
       floor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     };
-  const PoissonSolution s = solve_poisson(d.mesh(), *d.geometry, c.problem, so);
+  const PoissonSolution s = solve_poisson(d->mesh(), d->geometry(), c.problem, so);
   BenchResult r;
   r.floor_seconds = floor_seconds;
   r.degree = p;

@@ -73,9 +73,5 @@ int converge_command(const ConvergeOptions& o);
 int adapt_command(const AdaptOptions& o);
 int bench_command(const BenchOptions& o);
 
-struct CaseDescription;
-// family = "g1" cases (app/g1_run.cpp), called by run_command and converge_command.
-int run_g1_case(const RunOptions& o, CaseDescription& c);
-int converge_g1_case(const ConvergeOptions& o, CaseDescription& c);
 
 }  // namespace knotwork

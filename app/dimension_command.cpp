@@ -2,10 +2,10 @@
 #include <cstdio>
 
 #include "app/commands.hpp"
-#include "app/json_writer.hpp"
-#include "basis/partition_topology.hpp"
-#include "basis/spline_dimension.hpp"
-#include "basis/tmesh_conformality.hpp"
+#include "cases/json_output.hpp"
+#include "basis/tmesh/partition_topology.hpp"
+#include "basis/tmesh/spline_dimension.hpp"
+#include "basis/tmesh/tmesh_conformality.hpp"
 #include "cases/case_file.hpp"
 
 namespace knotwork {

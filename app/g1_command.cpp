@@ -9,12 +9,12 @@
 #include <regex>
 
 #include "app/commands.hpp"
-#include "app/json_writer.hpp"
-#include "app/output_stage.hpp"
-#include "basis/g1_basis.hpp"
-#include "basis/g1_space.hpp"
-#include "basis/quad_mesh.hpp"
-#include "cases/gluing_file.hpp"
+#include "cases/json_output.hpp"
+#include "cases/output_files.hpp"
+#include "basis/g1/g1_basis.hpp"
+#include "basis/g1/g1_space.hpp"
+#include "basis/g1/quad_mesh.hpp"
+#include "basis/g1/gluing_file.hpp"
 #include "solver/input_error.hpp"
 #include "solver/vtk_output.hpp"
 

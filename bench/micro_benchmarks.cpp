@@ -2,7 +2,7 @@
 //   build/bench/knotwork_micro_bench --benchmark_min_time=0.5
 #include <benchmark/benchmark.h>
 
-#include "app/discretize.hpp"
+#include "app/pipeline.hpp"
 #include "cases/geometries.hpp"
 #include "solver/assemble_poisson.hpp"
 #include "solver/error_norms.hpp"
@@ -23,13 +23,16 @@ BENCHMARK(BM_BezierExtraction)->Arg(2)->Arg(4);
 
 void BM_AssemblePoisson(benchmark::State& state) {
   const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  const Discretization d = discretize(c);
+  const std::unique_ptr<SplineSpace> space = build_space(c);
+  const SplineSpace& d = *space;
   std::vector<bool> fixed;
-  const Eigen::VectorXd g = project_dirichlet_data(d.mesh(), *d.geometry, c.problem, c.quadrature, fixed);
+  const Eigen::VectorXd g = project_dirichlet_data(d.mesh(), d.geometry(), c.problem, c.quadrature, fixed);
   const DofLayout layout = make_dof_layout(d.mesh().num_functions(), fixed);
   Eigen::SparseMatrix<double> K = lower_pattern_matrix(d.mesh(), layout);
   Eigen::VectorXd rhs;
-  for (auto _ : state) assemble_poisson(d.mesh(), *d.geometry, c.problem.source, layout, g, c.quadrature, K, rhs);
+  PoissonForm form;
+  form.source = &c.problem.source;
+  for (auto _ : state) assemble_poisson(d.mesh(), d.geometry(), form, layout, g, c.quadrature, K, rhs);
   state.SetItemsProcessed(state.iterations() * d.mesh().num_cells());
   state.counters["cells"] = d.mesh().num_cells();
 }
@@ -37,16 +40,18 @@ BENCHMARK(BM_AssemblePoisson)->Args({2, 128})->Args({4, 64})->Unit(benchmark::kM
 
 void BM_ErrorNorms(benchmark::State& state) {
   const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  const Discretization d = discretize(c);
+  const std::unique_ptr<SplineSpace> space = build_space(c);
+  const SplineSpace& d = *space;
   const Eigen::VectorXd u = Eigen::VectorXd::Ones(d.mesh().num_functions());
-  for (auto _ : state) benchmark::DoNotOptimize(error_norms(d.mesh(), *d.geometry, u, *c.problem.exact, c.quadrature));
+  for (auto _ : state) benchmark::DoNotOptimize(error_norms(d.mesh(), d.geometry(), u, *c.problem.exact, c.quadrature));
   state.SetItemsProcessed(state.iterations() * d.mesh().num_cells());
 }
 BENCHMARK(BM_ErrorNorms)->Args({2, 128})->Args({4, 64})->Unit(benchmark::kMillisecond);
 
 void BM_LowerPattern(benchmark::State& state) {
   const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  const Discretization d = discretize(c);
+  const std::unique_ptr<SplineSpace> space = build_space(c);
+  const SplineSpace& d = *space;
   const DofLayout layout = make_dof_layout(d.mesh().num_functions(), std::vector<bool>(d.mesh().num_functions(), false));
   for (auto _ : state) benchmark::DoNotOptimize(lower_pattern_matrix(d.mesh(), layout));
 }

@@ -8,9 +8,9 @@
 #include <sstream>
 #include <toml++/toml.h>
 
-#include "basis/quad_mesh.hpp"
+#include "basis/g1/quad_mesh.hpp"
 #include "cases/geometries.hpp"
-#include "cases/gluing_file.hpp"
+#include "basis/g1/gluing_file.hpp"
 #include "cases/json_input.hpp"
 #include "solver/input_error.hpp"
 
@@ -817,15 +817,17 @@ void read_g1_case(const Reader& r, const toml::table& root, CaseDescription& c) 
                                                 : "Dirichlet data on surfaces are not supported (closed surfaces only)");
   if (!mesh.closed())
     r.fail("[space] mesh", g.mesh_file + " has a boundary; Laplace-Beltrami problems are solved on closed surfaces");
+  PoissonProblem& pb = c.problem;
   if (const toml::node* n = t.get("reaction")) {
-    g.reaction = r.number(*n, "[problem] reaction");
-    if (!(g.reaction >= 0)) r.fail("[problem] reaction", "must be >= 0 (0: zero-mean solution)");
+    pb.reaction = r.number(*n, "[problem] reaction");
+    if (!(pb.reaction >= 0)) r.fail("[problem] reaction", "must be >= 0 (0: zero-mean solution)");
   }
   if (const toml::node* e = t.get("exact"))
-    g.surface_exact = differentiate_surface_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
+    pb.exact = differentiate_surface_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
+  // No source: derived from the exact solution on the discrete surface by the assembler.
   if (const toml::node* e = t.get("source"))
-    g.surface_source = Expression::parse(r.string(*e, "[problem] source"), f + ": [problem] source");
-  if (!g.surface_exact && !g.surface_source)
+    pb.source = Expression::parse(r.string(*e, "[problem] source"), f + ": [problem] source");
+  if (!pb.exact && pb.source.empty())
     r.fail("[problem] source", "missing: give `source`, or `exact` to derive it on the surface");
 }
 
@@ -951,6 +953,12 @@ void override_elements(CaseDescription& c, int elements) {
   if (static_cast<long>(elements) * elements > kMaxCells)
     throw InputError("--elements: too many elements (more than 2^26 cells)");
   c.space.elements_per_span = {elements, elements};
+}
+
+void check_uniform_levels(const CaseDescription& c, int levels) {
+  const long finest = static_cast<long>(c.space.elements_per_span[0]) << (levels - 1);
+  if (finest * (static_cast<long>(c.space.elements_per_span[1]) << (levels - 1)) > kMaxCells)
+    throw InputError("--levels: the finest level would have more than 2^26 cells");
 }
 
 }  // namespace knotwork

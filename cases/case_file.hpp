@@ -5,9 +5,9 @@
 #include <Eigen/Core>
 #include <optional>
 
-#include "basis/pt_spline.hpp"
-#include "basis/semi_regular_collection.hpp"
-#include "basis/tensor_patch.hpp"
+#include "basis/pt/pt_spline.hpp"
+#include "basis/knot_segments/semi_regular_collection.hpp"
+#include "basis/tensor/tensor_patch.hpp"
 #include "solver/poisson_problem.hpp"
 
 namespace knotwork {
@@ -37,10 +37,7 @@ struct CaseDescription {
     std::string shape = "bilinear";     // "bilinear" | "sphere" | "torus"
     Eigen::Vector3d center = Eigen::Vector3d::Zero();
     double radius = 1, major_radius = 2, minor_radius = 1;  // sphere; torus around the z axis
-    bool surface = false;               // operator = "laplace_beltrami"
-    double reaction = 0;                // -Laplace_Beltrami(u) + reaction u = f
-    std::optional<SurfaceExactSolution> surface_exact;
-    std::optional<Expression> surface_source;  // literal f(x, y, z); else derived on the surface
+    bool surface = false;               // operator = "laplace_beltrami" (problem: -Laplace_Beltrami(u) + reaction u = f)
   } g1;
   // family "pt": PT-splines over a T-mesh in the geometry's parameter domain. The start is
   // `cells` (inline or from [space] tmesh) or else the tensor grid of the geometry's knot
@@ -74,9 +71,13 @@ CaseDescription load_case(const std::string& path);
 void override_degree(CaseDescription& c, int degree);
 void override_elements(CaseDescription& c, int elements);
 
+// For families refined by doubling [space] elements per level: throws InputError when the
+// finest of `levels` levels would have more than 2^26 cells.
+void check_uniform_levels(const CaseDescription& c, int levels);
+
 }  // namespace knotwork
 
-#include "basis/rectangular_partition.hpp"
+#include "basis/tmesh/rectangular_partition.hpp"
 
 namespace knotwork {
 

@@ -56,6 +56,48 @@ void tensor_bernstein(int p, int q, const Eigen::VectorXd& u, const Eigen::Vecto
 
 namespace {
 
+// Values, first and second derivatives of the degree-p Bernstein polynomials at t, from the
+// degree p-1 and p-2 values: d/dt B^p_j = p (B^{p-1}_{j-1} - B^{p-1}_j), applied twice.
+void bernstein_up_to_second(int p, double t, std::vector<double>& b, std::vector<double>& d1,
+                            std::vector<double>& d2) {
+  b.assign(p + 1, 0.0);
+  d1.assign(p + 1, 0.0);
+  d2.assign(p + 1, 0.0);
+  std::vector<double> lower(p + 1), lower_d(p + 1);
+  if (p >= 1) bernstein_values_and_derivatives(p - 1, t, lower.data(), lower_d.data());
+  bernstein_values_and_derivatives(p, t, b.data(), d1.data());
+  if (p < 2) return;
+  for (int j = 0; j <= p; ++j) {
+    const double left = j > 0 ? lower_d[j - 1] : 0.0;
+    const double right = j < p ? lower_d[j] : 0.0;
+    d2[j] = p * (left - right);
+  }
+}
+
+}  // namespace
+
+void tensor_bernstein_second(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                             Eigen::MatrixXd& d_uu, Eigen::MatrixXd& d_uv, Eigen::MatrixXd& d_vv) {
+  const Eigen::Index n = u.size();
+  const int nb = (p + 1) * (q + 1);
+  d_uu.resize(n, nb);
+  d_uv.resize(n, nb);
+  d_vv.resize(n, nb);
+  std::vector<double> bu, du, ddu, bv, dv, ddv;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    bernstein_up_to_second(p, u[k], bu, du, ddu);
+    bernstein_up_to_second(q, v[k], bv, dv, ddv);
+    for (int c = 0; c <= q; ++c)
+      for (int a = 0; a <= p; ++a) {
+        d_uu(k, a + (p + 1) * c) = ddu[a] * bv[c];
+        d_uv(k, a + (p + 1) * c) = du[a] * dv[c];
+        d_vv(k, a + (p + 1) * c) = bu[a] * ddv[c];
+      }
+  }
+}
+
+namespace {
+
 BernsteinTable make_table(int p, int q, int nu, int nv) {
   BernsteinTable t;
   t.p = p;

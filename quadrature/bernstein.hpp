@@ -14,6 +14,11 @@ void bernstein_values_and_derivatives(int p, double t, double* values, double* d
 void tensor_bernstein(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                       Eigen::MatrixXd& value, Eigen::MatrixXd& d_u, Eigen::MatrixXd& d_v);
 
+// Second reference derivatives of the same polynomials at the same points (u_uu, u_uv, v_vv),
+// for the curvature of surfaces and the Hessian of maps.
+void tensor_bernstein_second(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                             Eigen::MatrixXd& d_uu, Eigen::MatrixXd& d_uv, Eigen::MatrixXd& d_vv);
+
 // Tabulated tensor-product Bernstein basis of bi-degree (p, q) at the tensor
 // Gauss points of a (nu x nv)-point rule on [0,1]^2.
 // Point index k = i + nu*j (i along u); function index b = a + (p+1)*c (a along u).

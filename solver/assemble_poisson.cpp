@@ -8,6 +8,11 @@
 #include <limits>
 #include <sstream>
 
+#include <Eigen/Dense>
+#include <array>
+#include <optional>
+
+#include "quadrature/bernstein.hpp"
 #include "solver/cell_basis.hpp"
 #include "solver/input_error.hpp"
 
@@ -41,10 +46,57 @@ void scatter(const int* outer, const int* inner, const std::vector<std::pair<int
 
 }  // namespace
 
-void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const Expression& source,
+namespace {
+
+// -Laplace_Beltrami(u) + reaction u at the quadrature points of a surface cell, from the exact
+// solution's ambient derivatives and the discrete surface's curvature there (PoissonForm).
+struct DerivedSurfaceSource {
+  ExpressionEvaluator value;
+  std::array<ExpressionEvaluator, 3> gradient;
+  std::vector<ExpressionEvaluator> hessian;  // row-major 3 x 3
+  explicit DerivedSurfaceSource(const ExactSolution& e)
+      : value(e.u),
+        gradient{ExpressionEvaluator(e.u_x), ExpressionEvaluator(e.u_y), ExpressionEvaluator(e.u_z)} {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) hessian.emplace_back(e.hessian[i][j]);
+  }
+  // x: points x 3, J: points x 6, second: points x 9 (x_uu, x_uv, x_vv per coordinate).
+  void operator()(const Eigen::MatrixXd& x, const Eigen::MatrixXd& J, const Eigen::MatrixXd& second, double reaction,
+                  Eigen::VectorXd& out) {
+    out.resize(x.rows());
+    for (Eigen::Index q = 0; q < x.rows(); ++q) {
+      const Eigen::Vector3d xu(J(q, 0), J(q, 2), J(q, 4)), xv(J(q, 1), J(q, 3), J(q, 5));
+      const Eigen::Vector3d xuu(second(q, 0), second(q, 3), second(q, 6));
+      const Eigen::Vector3d xuv(second(q, 1), second(q, 4), second(q, 7));
+      const Eigen::Vector3d xvv(second(q, 2), second(q, 5), second(q, 8));
+      Eigen::Matrix2d G;
+      G << xu.dot(xu), xu.dot(xv), xu.dot(xv), xv.dot(xv);
+      const Eigen::Matrix2d Gi = G.inverse();
+      const Eigen::Vector3d n = xu.cross(xv).normalized();
+      const double kappa = -(Gi(0, 0) * xuu.dot(n) + 2 * Gi(0, 1) * xuv.dot(n) + Gi(1, 1) * xvv.dot(n));
+      const double px = x(q, 0), py = x(q, 1), pz = x(q, 2);
+      Eigen::Vector3d g;
+      Eigen::Matrix3d H;
+      for (int i = 0; i < 3; ++i) {
+        g(i) = gradient[i](px, py, pz);
+        for (int j = 0; j < 3; ++j) H(i, j) = hessian[3 * i + j](px, py, pz);
+      }
+      const double laplace_beltrami = H.trace() - n.dot(H * n) - kappa * g.dot(n);
+      out[q] = -laplace_beltrami + (reaction != 0 ? reaction * value(px, py, pz) : 0.0);
+    }
+  }
+};
+
+}  // namespace
+
+void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                       const DofLayout& layout, const Eigen::VectorXd& fixed_values,
                       const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
-                      Eigen::VectorXd& rhs) {
+                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals) {
+  const int dim = geometry.dimension();
+  const bool derived = form.load && !form.source;
+  if (derived && (!form.exact || form.exact->hessian[0][0].empty() || dim != 3))
+    throw std::invalid_argument("assemble_poisson: no source, and no exact solution on a surface to derive it from");
   const int nthreads = omp_get_max_threads();
   const long nnz = matrix.nonZeros();
   const int* outer = matrix.outerIndexPtr();
@@ -52,57 +104,93 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
   double* values = matrix.valuePtr();
   std::fill(values, values + nnz, 0.0);
   rhs.setZero(layout.num_free());
+  if (integrals) integrals->setZero(mesh.num_functions());
   std::vector<std::vector<double>> thread_values(nthreads - 1, std::vector<double>());
-  std::vector<Eigen::VectorXd> thread_rhs(nthreads - 1);
+  std::vector<Eigen::VectorXd> thread_rhs(nthreads - 1), thread_integrals(nthreads - 1);
   int bad_cell = std::numeric_limits<int>::max(), bad_source_cell = bad_cell;
-  double bad_det = 0, bad_x = 0, bad_y = 0;
+  double bad_det = 0, bad_x = 0, bad_y = 0, bad_z = 0;
+  std::string failure;
 
 #pragma omp parallel
   {
     const int tid = omp_get_thread_num();
     double* my_values = values;
     Eigen::VectorXd* my_rhs = &rhs;
+    Eigen::VectorXd* my_integrals = integrals;
     if (tid > 0) {
       thread_values[tid - 1].assign(nnz, 0.0);
       thread_rhs[tid - 1].setZero(layout.num_free());
       my_values = thread_values[tid - 1].data();
       my_rhs = &thread_rhs[tid - 1];
+      if (integrals) {
+        thread_integrals[tid - 1].setZero(mesh.num_functions());
+        my_integrals = &thread_integrals[tid - 1];
+      }
     }
-    ExpressionEvaluator f(source);
+    std::optional<ExpressionEvaluator> f;
+    if (form.load && form.source) f.emplace(*form.source);
+    std::optional<DerivedSurfaceSource> derived_f;
+    if (derived) derived_f.emplace(*form.exact);
     CellBasis cb;
-    Eigen::MatrixXd G, KB, Ke;
+    Eigen::MatrixXd G, KB, Ke, second;
     Eigen::VectorXd fq, FB, Fe, ulift;
     std::vector<std::pair<int, int>> order;
 #pragma omp for schedule(dynamic, 64)
     for (int c = 0; c < mesh.num_cells(); ++c) {
       const BezierCell& cell = mesh.cell(c);
-      evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.points_u, cell.degree_u, 1),
-                          rule_points(quadrature.points_v, cell.degree_v, 1), cb);
+      const int nu = rule_points(quadrature.points_u, cell.degree_u, 1);
+      const int nv = rule_points(quadrature.points_v, cell.degree_v, 1);
+      evaluate_cell_basis(mesh, geometry, c, nu, nv, cb);
       if (!(cb.min_jacobian > 0)) {
 #pragma omp critical(knotwork_bad_cell)
         if (c < bad_cell) { bad_cell = c; bad_det = cb.min_jacobian; }
         continue;
       }
       const Eigen::Index nq = cb.measure.size(), nb = cb.value.cols();
-      fq.resize(nq);
-      for (Eigen::Index k = 0; k < nq; ++k) {
-        fq[k] = f(cb.geometry.x(k, 0), cb.geometry.x(k, 1));
+      fq.setZero(nq);
+      if (f) {
+        for (Eigen::Index k = 0; k < nq; ++k)
+          fq[k] = dim == 2 ? (*f)(cb.geometry.x(k, 0), cb.geometry.x(k, 1))
+                           : (*f)(cb.geometry.x(k, 0), cb.geometry.x(k, 1), cb.geometry.x(k, 2));
+      } else if (derived_f) {
+        const BernsteinTable& t = bernstein_table(1, 1, nu, nv);
+        if (!geometry.second_derivatives(c, t.point_u, t.point_v, second)) {
+#pragma omp critical(knotwork_bad_cell)
+          failure = "the geometry has no second derivatives, needed for the curvature of the derived source";
+          continue;
+        }
+        (*derived_f)(cb.geometry.x, cb.geometry.jacobian, second, form.source_reaction, fq);
+      }
+      for (Eigen::Index k = 0; k < nq; ++k)
         if (!std::isfinite(fq[k])) {
 #pragma omp critical(knotwork_bad_cell)
-          if (c < bad_source_cell) { bad_source_cell = c; bad_x = cb.geometry.x(k, 0); bad_y = cb.geometry.x(k, 1); }
+          if (c < bad_source_cell) {
+            bad_source_cell = c;
+            bad_x = cb.geometry.x(k, 0), bad_y = cb.geometry.x(k, 1), bad_z = dim == 3 ? cb.geometry.x(k, 2) : 0;
+          }
           fq[k] = 0;
         }
-      }
       // K_B = sum_q m_q (grad B grad B^T): one dense product on stacked, scaled gradients.
       const Eigen::ArrayXd root = cb.measure.array().sqrt();
-      G.resize(2 * nq, nb);
-      G.topRows(nq) = root.matrix().asDiagonal() * cb.grad_x;
-      G.bottomRows(nq) = root.matrix().asDiagonal() * cb.grad_y;
-      KB.noalias() = G.transpose() * G;
+      if (form.stiffness != 0) {
+        G.resize(dim * nq, nb);
+        for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.matrix().asDiagonal() * cb.grad(d);
+        KB.noalias() = form.stiffness * (G.transpose() * G);
+      } else {
+        KB.setZero(nb, nb);
+      }
+      if (form.reaction != 0) {
+        G.noalias() = root.matrix().asDiagonal() * cb.value;
+        KB.noalias() += form.reaction * (G.transpose() * G);
+      }
       FB.noalias() = cb.value.transpose() * cb.measure.cwiseProduct(fq);
       Ke.noalias() = cb.C * KB * cb.C.transpose();
       Fe.noalias() = cb.C * FB;
       const auto ids = mesh.functions(c);
+      if (my_integrals) {
+        const Eigen::VectorXd Ie = cb.C * (cb.value.transpose() * cb.measure);
+        for (size_t a = 0; a < ids.size(); ++a) (*my_integrals)[ids[a]] += Ie[a];
+      }
       order.clear();
       bool lifted = false;
       ulift.setZero(ids.size());
@@ -124,18 +212,27 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < nnz; ++i) dst[i] += src[i];
     rhs += thread_rhs[t];
+    if (integrals) *integrals += thread_integrals[t];
   }
+  if (!failure.empty()) throw std::invalid_argument(failure);
   if (bad_cell != std::numeric_limits<int>::max()) {
     std::ostringstream s;
-    s << "geometry has a non-positive Jacobian (det J = " << bad_det << ") at a quadrature point of "
-      << describe_cell(mesh, bad_cell) << ": the map folds over or is oriented clockwise";
+    if (dim == 2)
+      s << "geometry has a non-positive Jacobian (det J = " << bad_det << ") at a quadrature point of "
+        << describe_cell(mesh, bad_cell) << ": the map folds over or is oriented clockwise";
+    else
+      s << "the surface degenerates (area element " << bad_det << ") at a quadrature point of "
+        << describe_cell(mesh, bad_cell);
     throw GeometryError(s.str());
   }
   if (bad_source_cell != std::numeric_limits<int>::max()) {
     std::ostringstream s;
-    s << "source \"" << source.text() << "\" is not a finite number at (x, y) = (" << bad_x << ", "
-      << bad_y << ") in " << describe_cell(mesh, bad_source_cell);
-    throw InputError(source.where() + ": " + s.str());
+    const Expression& e = form.source ? *form.source : form.exact->u;
+    s << (form.source ? "source \"" : "the source derived from \"") << e.text() << "\" is not a finite number at (";
+    s << bad_x << ", " << bad_y;
+    if (dim == 3) s << ", " << bad_z;
+    s << ") in " << describe_cell(mesh, bad_source_cell);
+    throw InputError(e.where() + ": " + s.str());
   }
 }
 

@@ -3,22 +3,43 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
-#include "basis/bezier_mesh.hpp"
+#include "basis/core/bezier_mesh.hpp"
 #include "solver/geometry_map.hpp"
 #include "solver/poisson_problem.hpp"
 #include "solver/sparsity.hpp"
 
 namespace knotwork {
 
-// Stiffness (grad phi_i . grad phi_j) and load (f phi_i) over the free dofs, cell by cell
-// through the BezierMesh, threaded with OpenMP. The Dirichlet lifting -K_{free,fixed} u_fixed
-// goes to the right-hand side at the element level, so the full matrix never exists.
-// `matrix` must hold the lower pattern (lower_pattern_matrix); its values are overwritten. Throws InputError when the
-// geometry Jacobian is not positive at a quadrature point (naming the cell) or f is not finite.
-void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const Expression& source,
+// What assemble_poisson integrates: the form
+//   a(u, v) = stiffness (grad u, grad v) + reaction (u, v),   l(v) = (f, v),
+// with grad the physical gradient of a planar domain or the surface gradient of a surface
+// (Laplace-Beltrami): one routine for both, through the GeometryMap's dimension.
+struct PoissonForm {
+  double stiffness = 1;
+  double reaction = 0;
+  // f(x, y[, z]). Null: derived from `exact` on the discrete surface itself,
+  // f = -Laplace_Beltrami(u) + source_reaction u, with
+  //   Laplace_Beltrami(u) = trace(Hess u) - n.(Hess u) n - kappa (grad u . n),
+  // kappa = -G^{ij} (x_ij . n) the sum of the principal curvatures, so that the discrete
+  // surface's problem has `exact` as its solution (needs the exact Hessian and a geometry
+  // with second derivatives).
+  const Expression* source = nullptr;
+  const ExactSolution* exact = nullptr;
+  double source_reaction = 0;  // the problem's reaction in the derived f (the matrix's may differ: a mass pass)
+  bool load = true;  // false: the right-hand side gets only the Dirichlet lifting
+};
+
+// Matrix and load of the form over the free dofs, cell by cell through the BezierMesh,
+// threaded with OpenMP. The Dirichlet lifting -A_{free,fixed} u_fixed goes to the
+// right-hand side at the element level, so the full matrix never exists.
+// `matrix` must hold the lower pattern (lower_pattern_matrix); its values are overwritten.
+// `integrals` (optional) receives the integral of every basis function (all functions).
+// Throws GeometryError when det J (planar) or the area element (surfaces) is not positive at
+// a quadrature point (naming the cell), InputError when f is not finite.
+void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                       const DofLayout& layout, const Eigen::VectorXd& fixed_values,
                       const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
-                      Eigen::VectorXd& rhs);
+                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals = nullptr);
 
 // Adds the Neumann terms (h phi_i over the Neumann sides) to rhs (free dofs).
 void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,

@@ -1,6 +1,7 @@
 #include "solver/cell_basis.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "quadrature/bernstein.hpp"
 
@@ -30,14 +31,39 @@ void finish(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Eigen::Ma
     out.value = B;
   }
   const auto& J = out.geometry.jacobian;
-  out.det = J.col(0).array() * J.col(3).array() - J.col(1).array() * J.col(2).array();
-  out.min_jacobian = out.det.minCoeff();
+  out.dimension = out.geometry.dimension();
+  if (out.dimension == 2) {
+    out.det = J.col(0).array() * J.col(3).array() - J.col(1).array() * J.col(2).array();
+    out.min_jacobian = out.det.minCoeff();
+    out.inv_det = out.det.inverse();
+    out.grad_x.noalias() = (J.col(3).array() * out.inv_det).matrix().asDiagonal() * *Ru;
+    out.grad_x.noalias() -= (J.col(2).array() * out.inv_det).matrix().asDiagonal() * *Rv;
+    out.grad_y.noalias() = (J.col(0).array() * out.inv_det).matrix().asDiagonal() * *Rv;
+    out.grad_y.noalias() -= (J.col(1).array() * out.inv_det).matrix().asDiagonal() * *Ru;
+    out.grad_z.resize(0, 0);
+    out.measure = (rule_weight.array() * out.det.abs()).matrix();
+    return;
+  }
+  // Surface: G = [[E, F], [F, H]] with E = x_u.x_u, F = x_u.x_v, H = x_v.x_v; G^{-1} applied to
+  // the reference gradient, then mapped by J: grad = x_u (H f_u - F f_v)/det + x_v (E f_v - F f_u)/det.
+  out.gu = J.col(0).array().square() + J.col(2).array().square() + J.col(4).array().square();   // E
+  out.guv = J.col(0).array() * J.col(1).array() + J.col(2).array() * J.col(3).array() +
+            J.col(4).array() * J.col(5).array();                                                 // F
+  out.gv = J.col(1).array().square() + J.col(3).array().square() + J.col(5).array().square();   // H
+  out.det = out.gu * out.gv - out.guv.square();
+  out.min_jacobian = out.det.minCoeff() > 0 ? out.det.sqrt().minCoeff() : out.det.minCoeff();
   out.inv_det = out.det.inverse();
-  out.grad_x.noalias() = (J.col(3).array() * out.inv_det).matrix().asDiagonal() * *Ru;
-  out.grad_x.noalias() -= (J.col(2).array() * out.inv_det).matrix().asDiagonal() * *Rv;
-  out.grad_y.noalias() = (J.col(0).array() * out.inv_det).matrix().asDiagonal() * *Rv;
-  out.grad_y.noalias() -= (J.col(1).array() * out.inv_det).matrix().asDiagonal() * *Ru;
-  out.measure = (rule_weight.array() * out.det.abs()).matrix();
+  // Coefficients of x_u and x_v in the gradient, as row scalings of Ru and Rv.
+  out.s_u.noalias() = (out.gv * out.inv_det).matrix().asDiagonal() * *Ru;    // a = (H f_u - F f_v)/det
+  out.s_u.noalias() -= (out.guv * out.inv_det).matrix().asDiagonal() * *Rv;
+  out.s_v.noalias() = (out.gu * out.inv_det).matrix().asDiagonal() * *Rv;    // b = (E f_v - F f_u)/det
+  out.s_v.noalias() -= (out.guv * out.inv_det).matrix().asDiagonal() * *Ru;
+  for (int d = 0; d < 3; ++d) {
+    Eigen::MatrixXd& g = d == 0 ? out.grad_x : d == 1 ? out.grad_y : out.grad_z;
+    g.noalias() = J.col(2 * d).asDiagonal() * out.s_u;
+    g.noalias() += J.col(2 * d + 1).asDiagonal() * out.s_v;
+  }
+  out.measure = (rule_weight.array() * out.det.abs().sqrt()).matrix();
 }
 
 }  // namespace
@@ -51,8 +77,20 @@ void evaluate_cell_basis(const BezierMesh& mesh, const GeometryMap& geometry, in
   finish(t.value, t.d_u, t.d_v, t.weight, mesh.is_rational(), out);
 }
 
+void evaluate_cell_basis_at(const BezierMesh& mesh, const GeometryMap& geometry, int cell, const Eigen::VectorXd& u,
+                            const Eigen::VectorXd& v, CellBasis& out) {
+  const BezierCell& c = mesh.cell(cell);
+  Eigen::MatrixXd B, Bu, Bv;
+  tensor_bernstein(c.degree_u, c.degree_v, u, v, B, Bu, Bv);
+  rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
+  geometry.evaluate(cell, u, v, out.geometry);
+  finish(B, Bu, Bv, Eigen::VectorXd::Ones(u.size()), mesh.is_rational(), out);
+}
+
 void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell,
                          CellSide side, int n, CellBasis& out) {
+  if (geometry.dimension() != 2)
+    throw std::invalid_argument("boundary terms on surfaces in R^3 are not supported (closed surfaces only)");
   const BezierCell& c = mesh.cell(cell);
   const int p = c.degree_u, q = c.degree_v;
   const QuadratureRule1D rule = gauss_legendre(n);

@@ -1,7 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 
-#include "basis/bezier_mesh.hpp"
+#include "basis/core/bezier_mesh.hpp"
 #include "solver/geometry_map.hpp"
 
 namespace knotwork {
@@ -9,22 +9,36 @@ namespace knotwork {
 // The basis of one cell at quadrature points, in the form every integrator uses:
 // the alive functions are R = C * Btilde, with Btilde the (rational) Bernstein
 // polynomials of the cell, whose values and physical gradients are tabulated here.
+// Planar cells (dimension 2): grad = J^{-T} grad_ref and measure = w |det J|. Surface cells
+// (dimension 3): grad = J G^{-1} grad_ref with G = J^T J the first fundamental form (the
+// surface gradient, tangent to the surface) and measure = w sqrt(det G). One formula for both:
+// in the plane J G^{-1} = J^{-T}.
 struct CellBasis {
+  int dimension = 2;
   Eigen::MatrixXd C;                    // alive functions x Bernstein (rational-adjusted)
   Eigen::VectorXd bernstein_weights;    // 1 for polynomial cells
-  Eigen::MatrixXd value, grad_x, grad_y;  // points x Bernstein
-  Eigen::VectorXd measure;              // quadrature weight * |det J| (or |tangent| on a side)
+  Eigen::MatrixXd value, grad_x, grad_y, grad_z;  // points x Bernstein (grad_z: surfaces only)
+  Eigen::VectorXd measure;              // quadrature weight * |det J| or area element (|tangent| on a side)
   GeometryAtPoints geometry;
-  Eigen::MatrixX2d normal;              // outward unit normal (sides only)
-  double min_jacobian = 0;              // smallest det J at the points (volume only)
+  Eigen::MatrixX2d normal;              // outward unit normal (planar sides only)
+  // Smallest det J at the points (planar: signed, <= 0 means the map folds; surfaces: the
+  // area element sqrt(det G), <= 0 means it degenerates). Volume only.
+  double min_jacobian = 0;
+  // Physical gradient rows of Bernstein b at point k: grad(d) for d < dimension.
+  const Eigen::MatrixXd& grad(int d) const { return d == 0 ? grad_x : d == 1 ? grad_y : grad_z; }
   // Scratch reused from cell to cell (no allocation per cell once sizes settle).
-  Eigen::MatrixXd d_u, d_v;
-  Eigen::ArrayXd det, inv_det, w, wu, wv;
+  Eigen::MatrixXd d_u, d_v, s_u, s_v;
+  Eigen::ArrayXd det, inv_det, w, wu, wv, gu, gv, guv;
 };
 
 // At the tensor Gauss points of an (nu x nv) rule on the cell.
 void evaluate_cell_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu,
                          int nv, CellBasis& out);
+
+// At arbitrary reference points (u_k, v_k) of the cell; measure holds the area element alone
+// (no quadrature weight).
+void evaluate_cell_basis_at(const BezierMesh& mesh, const GeometryMap& geometry, int cell, const Eigen::VectorXd& u,
+                            const Eigen::VectorXd& v, CellBasis& out);
 
 // At an n-point Gauss rule along one side of the cell (a boundary edge).
 void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell,

@@ -1,23 +1,52 @@
 #include "solver/error_norms.hpp"
 
+#include <Eigen/Geometry>
 #include <cmath>
 
-#include "quadrature/bernstein.hpp"
 #include "solver/assemble_poisson.hpp"
 #include "solver/cell_basis.hpp"
 
 namespace knotwork {
 
+namespace {
+
+// The exact solution and its gradient at a cell's points, in the physical dimension; on
+// surfaces the ambient gradient projected onto the tangent plane.
+struct ExactAtPoints {
+  ExpressionEvaluator u, ux, uy;
+  std::optional<ExpressionEvaluator> uz;
+  explicit ExactAtPoints(const ExactSolution& e) : u(e.u), ux(e.u_x), uy(e.u_y) {
+    if (e.on_surface()) uz.emplace(e.u_z);
+  }
+  double value(const GeometryAtPoints& g, Eigen::Index k) {
+    return g.dimension() == 2 ? u(g.x(k, 0), g.x(k, 1)) : u(g.x(k, 0), g.x(k, 1), g.x(k, 2));
+  }
+  Eigen::Vector3d gradient(const GeometryAtPoints& g, Eigen::Index k) {
+    if (g.dimension() == 2) return {ux(g.x(k, 0), g.x(k, 1)), uy(g.x(k, 0), g.x(k, 1)), 0};
+    const double x = g.x(k, 0), y = g.x(k, 1), z = g.x(k, 2);
+    Eigen::Vector3d grad(ux(x, y, z), uy(x, y, z), (*uz)(x, y, z));
+    const auto& J = g.jacobian;
+    const Eigen::Vector3d n = Eigen::Vector3d(J(k, 0), J(k, 2), J(k, 4)).cross(Eigen::Vector3d(J(k, 1), J(k, 3), J(k, 5))).normalized();
+    return grad - grad.dot(n) * n;
+  }
+};
+
+}  // namespace
+
 ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coefficients, const ExactSolution& exact,
-                       const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell) {
+                       const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell,
+                       double exact_offset) {
+  if (geometry.dimension() == 3 && !exact.on_surface())
+    throw std::invalid_argument("error norms on a surface need the exact solution as a function of (x, y, z)");
   double l2 = 0, semi = 0;
   if (h1_semi_squared_per_cell) h1_semi_squared_per_cell->setZero(mesh.num_cells());
 #pragma omp parallel reduction(+ : l2, semi)
   {
-    ExpressionEvaluator u(exact.u), ux(exact.u_x), uy(exact.u_y);
+    ExactAtPoints ex(exact);
     CellBasis cb;
-    Eigen::VectorXd local, beta, uh, uhx, uhy;
+    Eigen::VectorXd local, beta, uh;
+    Eigen::MatrixXd grad_h;
 #pragma omp for schedule(dynamic, 64)
     for (int c = 0; c < mesh.num_cells(); ++c) {
       const BezierCell& cell = mesh.cell(c);
@@ -28,15 +57,16 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
       for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
       beta.noalias() = cb.C.transpose() * local;  // coefficients in the (rational) Bernstein basis
       uh.noalias() = cb.value * beta;
-      uhx.noalias() = cb.grad_x * beta;
-      uhy.noalias() = cb.grad_y * beta;
+      grad_h.resize(cb.measure.size(), cb.dimension);
+      for (int d = 0; d < cb.dimension; ++d) grad_h.col(d).noalias() = cb.grad(d) * beta;
       double cell_semi = 0;
       for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
-        const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
-        const double e = u(x, y) - uh[k];
-        const double ex = ux(x, y) - uhx[k], ey = uy(x, y) - uhy[k];
+        const double e = ex.value(cb.geometry, k) - exact_offset - uh[k];
+        const Eigen::Vector3d g = ex.gradient(cb.geometry, k);
+        double eg = 0;
+        for (int d = 0; d < cb.dimension; ++d) eg += (g[d] - grad_h(k, d)) * (g[d] - grad_h(k, d));
         l2 += cb.measure[k] * e * e;
-        cell_semi += cb.measure[k] * (ex * ex + ey * ey);
+        cell_semi += cb.measure[k] * eg;
       }
       semi += cell_semi;
       if (h1_semi_squared_per_cell) (*h1_semi_squared_per_cell)[c] = cell_semi;
@@ -49,34 +79,39 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
   return n;
 }
 
-Eigen::MatrixX3d evaluate_solution(const BezierMesh& mesh, const GeometryMap& geometry,
-                                   const Eigen::VectorXd& coefficients, int c,
-                                   const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
-  const BezierCell& cell = mesh.cell(c);
-  const Eigen::Index n = u.size();
-  Eigen::MatrixXd B, Bu, Bv;
-  tensor_bernstein(cell.degree_u, cell.degree_v, u, v, B, Bu, Bv);
-  Eigen::VectorXd wb;
-  Eigen::MatrixXd C;
-  rational_cell_extraction(mesh, c, wb, C);
+std::pair<double, double> exact_integral_and_measure(const BezierMesh& mesh, const GeometryMap& geometry,
+                                                     const ExactSolution& exact, const QuadratureOptions& quadrature) {
+  double integral = 0, measure = 0;
+#pragma omp parallel reduction(+ : integral, measure)
+  {
+    ExactAtPoints ex(exact);
+    CellBasis cb;
+#pragma omp for schedule(dynamic, 64)
+    for (int c = 0; c < mesh.num_cells(); ++c) {
+      const BezierCell& cell = mesh.cell(c);
+      evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
+                          rule_points(quadrature.error_points_v, cell.degree_v, 2), cb);
+      for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
+        integral += cb.measure[k] * ex.value(cb.geometry, k);
+        measure += cb.measure[k];
+      }
+    }
+  }
+  return {integral, measure};
+}
+
+Eigen::MatrixXd evaluate_solution(const BezierMesh& mesh, const GeometryMap& geometry,
+                                  const Eigen::VectorXd& coefficients, int c,
+                                  const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
+  CellBasis cb;
+  evaluate_cell_basis_at(mesh, geometry, c, u, v, cb);
   const auto ids = mesh.functions(c);
   Eigen::VectorXd local(ids.size());
   for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
-  const Eigen::VectorXd beta = wb.asDiagonal() * (C.transpose() * local);  // weighted Bernstein coeffs
-  GeometryAtPoints g;
-  geometry.evaluate(c, u, v, g);
-  Eigen::MatrixX3d out(n, 3);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double W = B.row(k).dot(wb), Wu = Bu.row(k).dot(wb), Wv = Bv.row(k).dot(wb);
-    const double val = B.row(k).dot(beta) / W;
-    const double du_ = (Bu.row(k).dot(beta) - val * Wu) / W;
-    const double dv_ = (Bv.row(k).dot(beta) - val * Wv) / W;
-    const auto& J = g.jacobian;
-    const double det = J(k, 0) * J(k, 3) - J(k, 1) * J(k, 2);
-    out(k, 0) = val;
-    out(k, 1) = (J(k, 3) * du_ - J(k, 2) * dv_) / det;
-    out(k, 2) = (J(k, 0) * dv_ - J(k, 1) * du_) / det;
-  }
+  const Eigen::VectorXd beta = cb.C.transpose() * local;
+  Eigen::MatrixXd out(u.size(), 1 + cb.dimension);
+  out.col(0).noalias() = cb.value * beta;
+  for (int d = 0; d < cb.dimension; ++d) out.col(1 + d).noalias() = cb.grad(d) * beta;
   return out;
 }
 

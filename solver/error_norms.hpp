@@ -1,7 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 
-#include "basis/bezier_mesh.hpp"
+#include "basis/core/bezier_mesh.hpp"
 #include "solver/expression.hpp"
 #include "solver/geometry_map.hpp"
 #include "solver/poisson_problem.hpp"
@@ -15,16 +15,25 @@ struct ErrorNorms {
 };
 
 // Errors of the discrete solution (one coefficient per function) against the exact
-// solution, by Gauss quadrature per cell (error_points, default degree+2 per direction).
+// solution, by Gauss quadrature per cell (error_points, default degree+2 per direction), on
+// planar domains and surfaces alike (on a surface the exact gradient is projected onto the
+// tangent plane: the surface gradient). `exact_offset` is subtracted from u first (the mean
+// removed when the problem fixes the solution's mean to zero).
 // `h1_semi_squared_per_cell` (optional) receives |u - u_h|^2_H1 of every cell: where the
 // error sits (the sum is h1_semi^2).
 ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coefficients, const ExactSolution& exact,
-                       const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell = nullptr);
+                       const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell = nullptr,
+                       double exact_offset = 0);
 
-// u_h and its physical gradient at reference points (u, v) of one cell: (value, dx, dy) rows.
-Eigen::MatrixX3d evaluate_solution(const BezierMesh& mesh, const GeometryMap& geometry,
-                                   const Eigen::VectorXd& coefficients, int cell,
-                                   const Eigen::VectorXd& u, const Eigen::VectorXd& v);
+// Integral of the exact solution over the domain (or surface) and the domain's measure.
+std::pair<double, double> exact_integral_and_measure(const BezierMesh& mesh, const GeometryMap& geometry,
+                                                     const ExactSolution& exact, const QuadratureOptions& quadrature);
+
+// u_h and its physical (surface) gradient at reference points (u, v) of one cell: rows
+// (value, dx, dy) in the plane, (value, dx, dy, dz) on surfaces.
+Eigen::MatrixXd evaluate_solution(const BezierMesh& mesh, const GeometryMap& geometry,
+                                  const Eigen::VectorXd& coefficients, int cell,
+                                  const Eigen::VectorXd& u, const Eigen::VectorXd& v);
 
 }  // namespace knotwork

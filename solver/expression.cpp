@@ -152,15 +152,16 @@ ExactSolution differentiate_exact_solution(const Expression& u) {
   return result;
 }
 
-SurfaceExactSolution differentiate_surface_solution(const Expression& u) {
+ExactSolution differentiate_surface_solution(const Expression& u) {
   const Differentiator d(u);
-  SurfaceExactSolution r;
+  ExactSolution r;
   r.u = u;
   const GiNaC::symbol* v[3] = {&d.x(), &d.y(), &d.z()};
   const char* names = "xyz";
+  Expression* gradient[3] = {&r.u_x, &r.u_y, &r.u_z};
   for (int i = 0; i < 3; ++i) {
     const GiNaC::ex di = d.f().diff(*v[i]);
-    r.gradient[i] = d.to_expression(di, std::string("u_") + names[i]);
+    *gradient[i] = d.to_expression(di, std::string("u_") + names[i]);
     for (int j = i; j < 3; ++j)
       r.hessian[i][j] = r.hessian[j][i] =
           d.to_expression(di.diff(*v[j]), std::string("u_") + names[i] + names[j]);

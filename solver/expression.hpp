@@ -38,21 +38,20 @@ class ExpressionEvaluator {
 };
 
 // u and what the solver needs from it, derived symbolically (GiNaC) so that nobody
-// differentiates by hand: -(u_xx + u_yy) for the source, u_x and u_y for norms and fluxes.
+// differentiates by hand. In the plane: -(u_xx + u_yy) for the source, u_x and u_y for norms
+// and fluxes. On a surface in R^3: the ambient gradient (u_x, u_y, u_z) and Hessian, from
+// which the surface operators follow on the discrete surface (solver/assemble_poisson).
 struct ExactSolution {
   Expression u, u_x, u_y, minus_laplacian;
+  Expression u_z;                                    // surfaces only
+  std::array<std::array<Expression, 3>, 3> hessian;  // surfaces only
+  bool on_surface() const { return !u_z.empty(); }
 };
 // Throws InputError if u cannot be differentiated (unknown function, non-smooth parts GiNaC
 // rejects). The derived expressions are checked against GiNaC's own evaluation.
 ExactSolution differentiate_exact_solution(const Expression& u);
-
-// The same for a function of (x, y, z) restricted to a surface: its ambient gradient and
-// Hessian, from which the surface operators follow (solver/surface_poisson).
-struct SurfaceExactSolution {
-  Expression u;
-  std::array<Expression, 3> gradient;
-  std::array<std::array<Expression, 3>, 3> hessian;
-};
-SurfaceExactSolution differentiate_surface_solution(const Expression& u);
+// The same for a function of (x, y, z) restricted to a surface (u_z and the Hessian; no
+// minus_laplacian, which depends on the surface).
+ExactSolution differentiate_surface_solution(const Expression& u);
 
 }  // namespace knotwork

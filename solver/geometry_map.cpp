@@ -1,15 +1,12 @@
 #include "solver/geometry_map.hpp"
 
-#include "basis/bezier_ops.hpp"
+#include "basis/core/bezier_ops.hpp"
 #include "quadrature/bernstein.hpp"
 
 namespace knotwork {
 
-namespace {
-
-// x = (w x, w y) / w and its reference derivatives by the quotient rule.
-void dehomogenize(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, const Eigen::MatrixX3d& hv,
-                  GeometryAtPoints& out) {
+void dehomogenize_map(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, const Eigen::MatrixX3d& hv,
+                      GeometryAtPoints& out) {
   const Eigen::Index n = h.rows();
   out.x.resize(n, 2);
   out.jacobian.resize(n, 4);
@@ -23,64 +20,6 @@ void dehomogenize(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, const E
     out.jacobian(k, 2) = (hu(k, 1) - y * hu(k, 2)) / w;
     out.jacobian(k, 3) = (hv(k, 1) - y * hv(k, 2)) / w;
   }
-}
-
-}  // namespace
-
-NurbsGeometryMap::NurbsGeometryMap(const TensorDiscretization& d)
-    : pu_(d.geometry_u.degree()),
-      pv_(d.geometry_v.degree()),
-      nu_(d.geometry_u.num_functions()),
-      elements_u_(d.elements_u),
-      spans_u_(d.geometry_u.element_spans()),
-      spans_v_(d.geometry_v.element_spans()),
-      cu_(bezier_extraction(d.geometry_u)),
-      cv_(bezier_extraction(d.geometry_v)),
-      net_(d.geometry_homogeneous) {}
-
-void NurbsGeometryMap::homogeneous_bezier(int cell, Eigen::MatrixX3d& out) const {
-  const int iu = cell % elements_u_, iv = cell / elements_u_;
-  const int su = spans_u_[iu] - pu_, sv = spans_v_[iv] - pv_;
-  out.resize((pu_ + 1) * (pv_ + 1), 3);
-  thread_local Eigen::MatrixXd local, half, bez;
-  local.resize(pu_ + 1, pv_ + 1);
-  for (int k = 0; k < 3; ++k) {
-    for (int av = 0; av <= pv_; ++av)
-      for (int au = 0; au <= pu_; ++au) local(au, av) = net_((su + au) + nu_ * (sv + av), k);
-    half.noalias() = cu_[iu].transpose() * local;
-    bez.noalias() = half * cv_[iv];
-    out.col(k) = Eigen::Map<const Eigen::VectorXd>(bez.data(), bez.size());
-  }
-}
-
-void NurbsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
-  const BernsteinTable& t = bernstein_table(pu_, pv_, nu, nv);
-  thread_local Eigen::MatrixX3d bez, h, hu, hv;
-  homogeneous_bezier(cell, bez);
-  h.noalias() = t.value * bez;
-  hu.noalias() = t.d_u * bez;
-  hv.noalias() = t.d_v * bez;
-  dehomogenize(h, hu, hv, out);
-}
-
-void NurbsGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
-                                GeometryAtPoints& out) const {
-  Eigen::MatrixXd B, Bu, Bv;
-  tensor_bernstein(pu_, pv_, u, v, B, Bu, Bv);
-  Eigen::MatrixX3d bez;
-  homogeneous_bezier(cell, bez);
-  dehomogenize(B * bez, Bu * bez, Bv * bez, out);
-}
-
-BezierGeometryCell NurbsGeometryMap::bezier_cell(int cell) const {
-  Eigen::MatrixX3d bez;
-  homogeneous_bezier(cell, bez);
-  BezierGeometryCell g;
-  g.degree_u = pu_;
-  g.degree_v = pv_;
-  g.weights = bez.col(2);
-  g.points = bez.leftCols<2>().array().colwise() / bez.col(2).array();
-  return g;
 }
 
 PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch) : mesh_(mesh), patch_(std::move(patch)) {}
@@ -110,7 +49,7 @@ void PatchGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen:
         hv.row(k) += du[a] * dv[q + 1 + b] * P * (c.v1 - c.v0);
       }
   }
-  dehomogenize(h, hu, hv, out);
+  dehomogenize_map(h, hu, hv, out);
 }
 
 bool PatchGeometryMap::second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
@@ -214,24 +153,31 @@ BezierGeometryCell AnalyticGeometryMap::bezier_cell(int cell) const {
 }
 
 BezierCellsGeometryMap::BezierCellsGeometryMap(std::vector<BezierGeometryCell> cells) : cells_(std::move(cells)) {
+  if (!cells_.empty()) dimension_ = static_cast<int>(cells_[0].points.cols());
+  if (dimension_ != 2 && dimension_ != 3)
+    throw std::invalid_argument("Bezier geometry cells: points in R^2 or R^3 needed, got " + std::to_string(dimension_) +
+                                " coordinates");
   for (size_t c = 0; c < cells_.size(); ++c) {
     const auto& g = cells_[c];
     if (g.points.rows() != (g.degree_u + 1) * (g.degree_v + 1))
       throw std::invalid_argument("Bezier geometry cell " + std::to_string(c) + ": (p+1)(q+1) control points needed");
+    if (g.points.cols() != dimension_)
+      throw std::invalid_argument("Bezier geometry cell " + std::to_string(c) + ": " + std::to_string(g.points.cols()) +
+                                  " coordinates, the first cell has " + std::to_string(dimension_));
     if (g.weights.size() == 0) cells_[c].weights = Eigen::VectorXd::Ones(g.points.rows());
   }
 }
 
 namespace {
-// Point and Jacobian (dx/du, dx/dv, dy/du, dy/dv) from tabulated Bernstein values.
-void bezier_map(const Eigen::MatrixX2d& points, const Eigen::MatrixXd& value, const Eigen::MatrixXd& d_u,
+// Point and Jacobian (dx/du, dx/dv, dy/du, dy/dv[, dz/du, dz/dv]) from tabulated Bernstein values.
+void bezier_map(const Eigen::MatrixXd& points, const Eigen::MatrixXd& value, const Eigen::MatrixXd& d_u,
                 const Eigen::MatrixXd& d_v, GeometryAtPoints& out) {
-  out.x = value * points;
-  out.jacobian.resize(value.rows(), 4);
-  out.jacobian.col(0) = d_u * points.col(0);
-  out.jacobian.col(1) = d_v * points.col(0);
-  out.jacobian.col(2) = d_u * points.col(1);
-  out.jacobian.col(3) = d_v * points.col(1);
+  out.x.noalias() = value * points;
+  out.jacobian.resize(value.rows(), 2 * points.cols());
+  for (Eigen::Index d = 0; d < points.cols(); ++d) {
+    out.jacobian.col(2 * d).noalias() = d_u * points.col(d);
+    out.jacobian.col(2 * d + 1).noalias() = d_v * points.col(d);
+  }
 }
 }  // namespace
 
@@ -247,6 +193,20 @@ void BezierCellsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, Geometry
   const BezierGeometryCell& g = cells_[cell];
   const BernsteinTable& t = bernstein_table(g.degree_u, g.degree_v, nu, nv);
   bezier_map(g.points, t.value, t.d_u, t.d_v, out);
+}
+
+bool BezierCellsGeometryMap::second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                                Eigen::MatrixXd& out) const {
+  const BezierGeometryCell& g = cells_[cell];
+  Eigen::MatrixXd uu, uv, vv;
+  tensor_bernstein_second(g.degree_u, g.degree_v, u, v, uu, uv, vv);
+  out.resize(u.size(), 3 * g.points.cols());
+  for (Eigen::Index d = 0; d < g.points.cols(); ++d) {
+    out.col(3 * d).noalias() = uu * g.points.col(d);
+    out.col(3 * d + 1).noalias() = uv * g.points.col(d);
+    out.col(3 * d + 2).noalias() = vv * g.points.col(d);
+  }
+  return true;
 }
 
 }  // namespace knotwork

@@ -17,11 +17,15 @@ struct BoundaryCondition {
   Expression value;  // g (Dirichlet) or h = du/dn (Neumann) when not from_exact
 };
 
-// -Laplace(u) = f in the domain, with the boundary conditions above.
+// -Laplace(u) + reaction u = f in the domain (planar) or on the surface (Laplace-Beltrami),
+// with the boundary conditions above. On a closed surface with reaction = 0 the operator has
+// the constants as kernel: u is sought with zero mean and f is made compatible by removing its
+// mean (solve_poisson reports both).
 struct PoissonProblem {
-  Expression source;
+  Expression source;  // empty on a surface: derived from `exact` on the discrete surface (PoissonForm)
   std::optional<ExactSolution> exact;
   std::vector<BoundaryCondition> boundary;
+  double reaction = 0;
 };
 
 struct QuadratureOptions {

@@ -1,11 +1,53 @@
 #include "solver/poisson_solver.hpp"
 
 #include <chrono>
+#include <cmath>
 
 #include "solver/assemble_poisson.hpp"
 #include "solver/sparsity.hpp"
 
 namespace knotwork {
+
+namespace {
+
+bool has_boundary(const BezierMesh& mesh) {
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    for (int b : mesh.cell(c).boundary)
+      if (b >= 0) return true;
+  return false;
+}
+
+// Closed surface, reaction 0: the mass matrix gives the constant 1 in the basis (M one = the
+// integrals of the functions), hence the area and the mean of f; the stiffness matrix with
+// one coefficient pinned gives a solution, shifted to zero mean.
+struct ZeroMeanData {
+  Eigen::VectorXd one, integrals, load;
+  double area = 0, source_mean = 0;
+  int pin = 0;
+};
+
+ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& load_form,
+                            const QuadratureOptions& quadrature, Ordering ordering) {
+  const int n = mesh.num_functions();
+  const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
+  Eigen::SparseMatrix<double> M = lower_pattern_matrix(mesh, all);
+  PoissonForm mass = load_form;
+  mass.stiffness = 0;
+  mass.reaction = 1;
+  ZeroMeanData z;
+  assemble_poisson(mesh, geometry, mass, all, Eigen::VectorXd::Zero(n), quadrature, M, z.load, &z.integrals);
+  SparseCholesky chol(ordering);
+  chol.factorize(M);
+  z.one = chol.solve(z.integrals);
+  z.area = z.one.dot(z.integrals);
+  z.source_mean = z.one.dot(z.load) / z.area;
+  Eigen::Index pin;
+  z.one.cwiseAbs().maxCoeff(&pin);
+  z.pin = static_cast<int>(pin);
+  return z;
+}
+
+}  // namespace
 
 PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry,
                               const PoissonProblem& problem, const PoissonSolveOptions& options) {
@@ -16,14 +58,27 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   auto say = [&](const std::string& s) {
     if (options.progress) options.progress(s);
   };
+  if (problem.reaction < 0) throw std::invalid_argument("reaction must be >= 0");
   PoissonSolution sol;
   sol.num_functions = mesh.num_functions();
+  PoissonForm form;
+  form.reaction = problem.reaction;
+  form.source_reaction = problem.reaction;
+  form.source = problem.source.empty() ? nullptr : &problem.source;
+  form.exact = problem.exact ? &*problem.exact : nullptr;
+  sol.zero_mean = problem.reaction == 0 && !has_boundary(mesh);
 
   say("setup");
   auto t = clock::now();
   std::vector<bool> fixed;
-  const Eigen::VectorXd fixed_values =
-      project_dirichlet_data(mesh, geometry, problem, options.quadrature, fixed);
+  Eigen::VectorXd fixed_values = project_dirichlet_data(mesh, geometry, problem, options.quadrature, fixed);
+  ZeroMeanData zero_mean;
+  if (sol.zero_mean) {
+    zero_mean = zero_mean_data(mesh, geometry, form, options.quadrature, options.ordering);
+    fixed[zero_mean.pin] = true;
+    sol.area = zero_mean.area;
+    sol.source_mean = zero_mean.source_mean;
+  }
   const DofLayout layout = make_dof_layout(mesh.num_functions(), fixed);
   Eigen::SparseMatrix<double> K = lower_pattern_matrix(mesh, layout);
   sol.num_free = layout.num_free();
@@ -33,8 +88,17 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   say("assembly");
   t = clock::now();
   Eigen::VectorXd rhs;
-  assemble_poisson(mesh, geometry, problem.source, layout, fixed_values, options.quadrature, K, rhs);
-  add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs);
+  if (sol.zero_mean) {
+    // The load, with f's mean removed, comes from the mass pass.
+    PoissonForm stiffness = form;
+    stiffness.load = false;
+    assemble_poisson(mesh, geometry, stiffness, layout, fixed_values, options.quadrature, K, rhs);
+    const Eigen::VectorXd compatible = zero_mean.load - zero_mean.source_mean * zero_mean.integrals;
+    for (int d = 0; d < layout.num_free(); ++d) rhs[d] = compatible[layout.function_of_dof[d]];
+  } else {
+    assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, rhs);
+    add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs);
+  }
   sol.timings.assembly = seconds_since(t);
   if (options.on_system) options.on_system(K, rhs);
 
@@ -52,13 +116,19 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     sol.timings.solve = sol.cholesky.solve_seconds;
     for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = x[d];
   }
+  if (sol.zero_mean) sol.coefficients -= (zero_mean.integrals.dot(sol.coefficients) / sol.area) * zero_mean.one;
   if (!sol.coefficients.allFinite())
     throw std::runtime_error("the discrete solution has non-finite values");
 
   if (options.compute_errors && problem.exact) {
     say("error norms");
     t = clock::now();
-    sol.errors = error_norms(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature);
+    if (sol.zero_mean) {
+      // Over the area the mass matrix measured (as the solution's mean is).
+      sol.exact_mean = exact_integral_and_measure(mesh, geometry, *problem.exact, options.quadrature).first / sol.area;
+    }
+    sol.errors = error_norms(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature,
+                             options.cell_errors ? &sol.cell_h1_squared : nullptr, sol.exact_mean);
     sol.timings.errors = seconds_since(t);
   }
   return sol;

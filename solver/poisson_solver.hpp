@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "basis/bezier_mesh.hpp"
+#include "basis/core/bezier_mesh.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/geometry_map.hpp"
 #include "solver/linear_solver.hpp"
@@ -26,6 +26,7 @@ struct PoissonSolveOptions {
   QuadratureOptions quadrature;
   Ordering ordering = Ordering::kAmd;  // measured fastest on IGA matrices: docs/PERFORMANCE.md
   bool compute_errors = true;  // when the problem has an exact solution
+  bool cell_errors = false;    // also |u - u_h|^2_H1 per cell (PoissonSolution::cell_h1_squared)
   std::function<void(const std::string&)> progress;  // called at the start of each phase
   // Keep one solver across solves on the same mesh (other sources or boundary data): its
   // symbolic analysis is reused while the matrix pattern stays the same. Null: a new one.
@@ -42,11 +43,20 @@ struct PoissonSolution {
   long matrix_nonzeros = 0;      // stored (lower triangle)
   CholeskyStats cholesky;
   std::optional<ErrorNorms> errors;
+  Eigen::VectorXd cell_h1_squared;  // with cell_errors: where the error sits (sums to h1_semi^2)
   PoissonTimings timings;
+  // Closed surfaces with reaction = 0 (zero-mean solution): the surface's area, the mean
+  // removed from f, and the exact solution's mean, removed before the errors are measured.
+  bool zero_mean = false;
+  double area = 0, source_mean = 0, exact_mean = 0;
 };
 
-// The whole Galerkin pipeline on one BezierMesh: Dirichlet projection, assembly with
-// lifting, Neumann terms, CHOLMOD, error norms.
+// The whole Galerkin pipeline on one BezierMesh, planar or on a surface: Dirichlet projection,
+// assembly with lifting, Neumann terms, CHOLMOD, error norms. A mesh without boundary sides
+// (a closed surface) and reaction = 0 is solved for the zero-mean solution: one coefficient
+// is pinned (the one with the largest weight in the representation of the constant 1, so the
+// reduced matrix is positive definite), then the constant that gives zero mean is subtracted;
+// the same solution as the Lagrange multiplier formulation.
 PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry,
                               const PoissonProblem& problem, const PoissonSolveOptions& options);
 

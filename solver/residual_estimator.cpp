@@ -8,7 +8,7 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "basis/bspline_basis.hpp"
+#include "basis/core/bspline_basis.hpp"
 #include "quadrature/gauss_legendre.hpp"
 #include "solver/error_norms.hpp"
 
@@ -81,6 +81,7 @@ std::vector<SharedSide> shared_sides(const BezierMesh& mesh) {
 
 ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
                                     const Eigen::VectorXd& coefficients, const PoissonProblem& problem) {
+  if (geometry.dimension() != 2) throw std::invalid_argument("the residual estimator is written for planar domains, not surfaces");
   if (mesh.is_rational()) throw std::invalid_argument("the residual estimator needs a polynomial (non-rational) space");
   for (int c = 0; c < mesh.num_cells(); ++c)
     if (mesh.cell(c).patch != 0) throw std::invalid_argument("the residual estimator needs a single-patch mesh");

@@ -2,7 +2,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "basis/bezier_mesh.hpp"
+#include "basis/core/bezier_mesh.hpp"
 #include "solver/geometry_map.hpp"
 #include "solver/poisson_problem.hpp"
 

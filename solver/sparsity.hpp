@@ -2,7 +2,7 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
-#include "basis/bezier_mesh.hpp"
+#include "basis/core/bezier_mesh.hpp"
 
 namespace knotwork {
 

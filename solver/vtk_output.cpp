@@ -19,7 +19,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "basis/bezier_ops.hpp"
+#include "basis/core/bezier_ops.hpp"
 #include "solver/error_norms.hpp"
 
 namespace knotwork {
@@ -79,14 +79,19 @@ struct NodeValues {
   Eigen::VectorXd u, exact;
 };
 
+// u(x) - offset at a physical point of the plane or of a surface.
+double exact_at(ExpressionEvaluator& ev, const Eigen::MatrixXd& x, Eigen::Index k, double offset) {
+  return (x.cols() == 2 ? ev(x(k, 0), x(k, 1)) : ev(x(k, 0), x(k, 1), x(k, 2))) - offset;
+}
+
 NodeValues node_values(const BezierMesh& mesh, const GeometryMap& geometry, const Eigen::VectorXd& coeffs,
                        const ExactSolution* exact, int cell, const Eigen::VectorXd& u,
-                       const Eigen::VectorXd& v, const Eigen::MatrixX2d& x, ExpressionEvaluator* ev) {
+                       const Eigen::VectorXd& v, const Eigen::MatrixXd& x, ExpressionEvaluator* ev, double offset) {
   NodeValues r;
   r.u = evaluate_solution(mesh, geometry, coeffs, cell, u, v).col(0);
   if (exact) {
     r.exact.resize(u.size());
-    for (Eigen::Index k = 0; k < u.size(); ++k) r.exact[k] = (*ev)(x(k, 0), x(k, 1));
+    for (Eigen::Index k = 0; k < u.size(); ++k) r.exact[k] = exact_at(*ev, x, k, offset);
   }
   return r;
 }
@@ -94,7 +99,8 @@ NodeValues node_values(const BezierMesh& mesh, const GeometryMap& geometry, cons
 }  // namespace
 
 void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
-                      const Eigen::VectorXd& coeffs, const ExactSolution* exact, const CellFields& cell_fields) {
+                      const Eigen::VectorXd& coeffs, const ExactSolution* exact, const CellFields& cell_fields,
+                      double exact_offset) {
   vtkNew<vtkUnstructuredGrid> grid;
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
@@ -135,7 +141,7 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
     // Field coefficients f with sum w_b B_b f_b / W = value at every node.
     GeometryAtPoints at;
     geometry.evaluate(c, nu, nv, at);
-    const NodeValues val = node_values(mesh, geometry, coeffs, exact, c, nu, nv, at.x, ex ? &*ex.u : nullptr);
+    const NodeValues val = node_values(mesh, geometry, coeffs, exact, c, nu, nv, at.x, ex ? &*ex.u : nullptr, exact_offset);
     const Eigen::VectorXd W = collocation * g.weights;
     auto to_bezier = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
       return (inverse * W.cwiseProduct(v)).cwiseQuotient(g.weights);
@@ -150,7 +156,7 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
         const int b = i + (p + 1) * j;
         const vtkIdType id = offset + vtkHigherOrderQuadrilateral::PointIndexFromIJK(i, j, order);
         ids[vtkHigherOrderQuadrilateral::PointIndexFromIJK(i, j, order)] = id;
-        points->SetPoint(id, g.points(b, 0), g.points(b, 1), 0.0);
+        points->SetPoint(id, g.points(b, 0), g.points(b, 1), g.points.cols() == 3 ? g.points(b, 2) : 0.0);
         weights->SetValue(id, g.weights[b]);
         solution->SetValue(id, fu[b]);
         if (ex) ex.set(id, fe[b], fu[b]);
@@ -221,7 +227,7 @@ void write_bezier_surface_vtu(const std::string& path, const BezierSurface& s) {
 }
 
 void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
-                       const Eigen::VectorXd& coeffs, const ExactSolution* exact, int samples) {
+                       const Eigen::VectorXd& coeffs, const ExactSolution* exact, int samples, double exact_offset) {
   const int s = samples, nc = mesh.num_cells(), per_cell = (s + 1) * (s + 1);
   const vtkIdType total = static_cast<vtkIdType>(nc) * per_cell;
   vtkNew<vtkUnstructuredGrid> grid;
@@ -241,14 +247,15 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   for (int c = 0; c < nc; ++c) {
     GeometryAtPoints at;
     geometry.evaluate(c, u, v, at);
-    const Eigen::MatrixX3d uh = evaluate_solution(mesh, geometry, coeffs, c, u, v);
+    const Eigen::MatrixXd uh = evaluate_solution(mesh, geometry, coeffs, c, u, v);
+    const bool surface = at.x.cols() == 3;
     const vtkIdType base = static_cast<vtkIdType>(c) * per_cell;
     for (int k = 0; k < per_cell; ++k) {
-      points->SetPoint(base + k, at.x(k, 0), at.x(k, 1), 0.0);
+      points->SetPoint(base + k, at.x(k, 0), at.x(k, 1), surface ? at.x(k, 2) : 0.0);
       solution->SetValue(base + k, uh(k, 0));
-      const double grad[3] = {uh(k, 1), uh(k, 2), 0.0};
+      const double grad[3] = {uh(k, 1), uh(k, 2), surface ? uh(k, 3) : 0.0};
       gradient->SetTuple(base + k, grad);
-      if (ex) ex.set(base + k, (*ex.u)(at.x(k, 0), at.x(k, 1)), uh(k, 0));
+      if (ex) ex.set(base + k, exact_at(*ex.u, at.x, k, exact_offset), uh(k, 0));
     }
     for (int j = 0; j < s; ++j)
       for (int i = 0; i < s; ++i) {

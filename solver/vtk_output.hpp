@@ -4,7 +4,7 @@
 #include <utility>
 #include <vector>
 
-#include "basis/bezier_mesh.hpp"
+#include "basis/core/bezier_mesh.hpp"
 #include "solver/expression.hpp"
 #include "solver/geometry_map.hpp"
 
@@ -22,9 +22,11 @@ namespace knotwork {
 // Per-cell scalar fields (e.g. an error indicator), one value per BezierMesh cell.
 using CellFields = std::vector<std::pair<std::string, Eigen::VectorXd>>;
 
+// Planar domains and surfaces in R^3 alike; `exact_offset` is subtracted from the exact
+// solution (the mean removed by zero-mean problems).
 void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
                       const Eigen::VectorXd& coefficients, const ExactSolution* exact,
-                      const CellFields& cell_fields = {});
+                      const CellFields& cell_fields = {}, double exact_offset = 0);
 
 // Polynomial Bezier quadrilaterals in R^3 given by their Bernstein coefficients (surfaces,
 // or planar domains, with no geometry map behind them): per cell its degree (both
@@ -41,7 +43,8 @@ void write_bezier_surface_vtu(const std::string& path, const BezierSurface& surf
 // The robust fallback: every cell cut into samples x samples linear quads with exact
 // values at their corners.
 void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
-                       const Eigen::VectorXd& coefficients, const ExactSolution* exact, int samples);
+                       const Eigen::VectorXd& coefficients, const ExactSolution* exact, int samples,
+                       double exact_offset = 0);
 
 // Polylines in the plane (.vtp), e.g. the knot lines of a mesh, each with integer cell data
 // (one array per name, one value per line).

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "basis/quad_mesh.hpp"
+#include "basis/g1/quad_mesh.hpp"
 
 namespace knotwork::test {
 

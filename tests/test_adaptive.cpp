@@ -19,7 +19,8 @@ CaseDescription shipped(const std::string& name) { return load_case(std::string(
 std::pair<int, double> uniform_error_beyond(CaseDescription c, int dofs) {
   for (int n = c.space.elements_per_span[0];; n *= 2) {
     c.space.elements_per_span = {n, n};
-    const Discretization d = discretize(c);
+    const auto d_space = build_space(c);
+    const SplineSpace& d = *d_space;
     if (d.mesh().num_functions() < dofs) continue;
     const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
     return {s.num_functions, s.errors->h1_semi};
@@ -64,10 +65,11 @@ TEST_CASE("The estimator vanishes when the discrete solution is exact", "[adapti
   c.problem.exact = differentiate_exact_solution(Expression::parse("x^2*y - y^2 + 3*x", "test"));
   c.problem.source = c.problem.exact->minus_laplacian;
   c.segments = {{true, 0.3, 0.0, 0.75, 1}, {false, 0.6, 0.1, 0.9, 1}};
-  const Discretization d = discretize(c);
+  const auto d_space = build_space(c);
+  const SplineSpace& d = *d_space;
   const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
   REQUIRE(s.errors->h1_semi < 1e-11);
-  const ErrorIndicators ind = residual_indicators(d.mesh(), *d.geometry, s.coefficients, c.problem);
+  const ErrorIndicators ind = residual_indicators(d.mesh(), d.geometry(), s.coefficients, c.problem);
   CHECK(std::sqrt(ind.total()) < 1e-9);
   CHECK(ind.max_gradient_jump < 1e-9);
 }
@@ -75,9 +77,10 @@ TEST_CASE("The estimator vanishes when the discrete solution is exact", "[adapti
 TEST_CASE("The estimator bounds the error on the L-shape, and jumps appear only at the C0 fold", "[adaptive]") {
   CaseDescription c = shipped("lshape_adaptive.toml");
   c.space.elements_per_span = {4, 4};
-  const Discretization d = discretize(c);
+  const auto d_space = build_space(c);
+  const SplineSpace& d = *d_space;
   const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
-  const ErrorIndicators ind = residual_indicators(d.mesh(), *d.geometry, s.coefficients, c.problem);
+  const ErrorIndicators ind = residual_indicators(d.mesh(), d.geometry(), s.coefficients, c.problem);
   // Reliability |u - u_h|_1 <= C eta with a moderate constant, and not wildly pessimistic.
   const double ratio = std::sqrt(ind.total()) / s.errors->h1_semi;
   INFO("efficiency index " << ratio);
@@ -91,11 +94,11 @@ TEST_CASE("The estimator bounds the error on the L-shape, and jumps appear only 
     if (b.u0 != 0.0 || b.v0 != 0.5) continue;  // a cell far from the fold and the corner
     Eigen::VectorXd u(1), v(1), u2(1), v2(1);
     u << 1.0, v << 0.5;
-    const Eigen::MatrixX3d left = evaluate_solution(mesh, *d.geometry, s.coefficients, cell, u, v);
+    const Eigen::MatrixX3d left = evaluate_solution(mesh, d.geometry(), s.coefficients, cell, u, v);
     for (int other = 0; other < mesh.num_cells(); ++other)
       if (mesh.cell(other).u0 == b.u1 && mesh.cell(other).v0 == b.v0) {
         u2 << 0.0, v2 << 0.5;
-        const Eigen::MatrixX3d right = evaluate_solution(mesh, *d.geometry, s.coefficients, other, u2, v2);
+        const Eigen::MatrixX3d right = evaluate_solution(mesh, d.geometry(), s.coefficients, other, u2, v2);
         CHECK((left.row(0) - right.row(0)).norm() < 1e-10);
       }
   }

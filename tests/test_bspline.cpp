@@ -3,8 +3,8 @@
 #include <cmath>
 #include <random>
 
-#include "basis/bezier_ops.hpp"
-#include "basis/bspline_basis.hpp"
+#include "basis/core/bezier_ops.hpp"
+#include "basis/core/bspline_basis.hpp"
 #include "quadrature/bernstein.hpp"
 
 using namespace knotwork;

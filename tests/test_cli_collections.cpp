@@ -6,8 +6,8 @@
 #include <map>
 #include <random>
 
-#include "basis/g1_space.hpp"
-#include "basis/quad_mesh.hpp"
+#include "basis/g1/g1_space.hpp"
+#include "basis/g1/quad_mesh.hpp"
 #include "cases/json_input.hpp"
 #include "tests/cli_sandbox.hpp"
 

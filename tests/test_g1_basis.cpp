@@ -9,8 +9,8 @@
 #include <set>
 #include <sstream>
 
-#include "basis/g1_basis.hpp"
-#include "basis/sparse_rank.hpp"
+#include "basis/g1/g1_basis.hpp"
+#include "basis/exact/sparse_rank.hpp"
 #include "tests/g1_test_meshes.hpp"
 
 using namespace knotwork;

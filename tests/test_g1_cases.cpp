@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "app/g1_discretize.hpp"
+#include "basis/g1/g1_discretization.hpp"
 #include "solver/poisson_solver.hpp"
 #include "tests/cli_sandbox.hpp"
 #include "tests/g1_test_meshes.hpp"
@@ -24,25 +24,20 @@ struct Measured {
   int dofs;
 };
 
-// One level solved here with the library (not through g1_run.cpp): h is the largest cell
+// One level solved here with the library (not through the command line): h is the largest cell
 // diagonal, computed from the geometry cells.
 Measured solve(const CaseDescription& c, int level) {
   const G1Discretization d = discretize_g1(c, level);
   Measured m{0, 0, 0, 0, d.mesh.num_functions()};
   const int k = d.basis.k, last = (k + 1) * (k + 1) - 1;
-  for (const auto& cell : d.cells) m.h = std::max(m.h, (cell.points.row(0) - cell.points.row(last)).norm());
-  Eigen::VectorXd x;
-  if (d.planar) {
-    const PoissonSolution s = solve_poisson(d.mesh, *d.planar, c.problem, PoissonSolveOptions{});
-    m.l2 = s.errors->l2, m.h1 = s.errors->h1_semi, x = s.coefficients;
-  } else {
-    SurfaceProblem p;
-    p.exact = c.g1.surface_exact;
-    p.reaction = c.g1.reaction;
-    const SurfaceSolution s = solve_surface_poisson(d.mesh, d.cells, p, QuadratureOptions{});
-    m.l2 = s.errors->l2, m.h1 = s.errors->h1_semi, x = s.coefficients;
+  for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
+    const Eigen::MatrixXd points = d.geometry->bezier_cell(cell).points;
+    m.h = std::max(m.h, (points.row(0) - points.row(last)).norm());
   }
-  m.jump = g1_gradient_jump(d, x);
+  // Planar Poisson and Laplace-Beltrami alike: one solver.
+  const PoissonSolution s = solve_poisson(d.mesh, *d.geometry, c.problem, PoissonSolveOptions{});
+  m.l2 = s.errors->l2, m.h1 = s.errors->h1_semi;
+  m.jump = g1_gradient_jump(d, s.coefficients);
   return m;
 }
 
@@ -95,9 +90,9 @@ TEST_CASE("Case (a): the error concentrates along the G1 interfaces", "[g1][case
   std::vector<double> share;
   for (int level = 1; level <= 2; ++level) {
     const G1Discretization d = discretize_g1(c, level);
-    const PoissonSolution s = solve_poisson(d.mesh, *d.planar, c.problem, PoissonSolveOptions{});
+    const PoissonSolution s = solve_poisson(d.mesh, *d.geometry, c.problem, PoissonSolveOptions{});
     Eigen::VectorXd e;
-    error_norms(d.mesh, *d.planar, s.coefficients, *c.problem.exact, QuadratureOptions{}, &e);
+    error_norms(d.mesh, *d.geometry, s.coefficients, *c.problem.exact, QuadratureOptions{}, &e);
     REQUIRE(e.size() == d.mesh.num_cells());
     REQUIRE(std::sqrt(e.sum()) == Approx(s.errors->h1_semi).epsilon(1e-12));  // the split adds up
     double near = 0;
@@ -106,7 +101,7 @@ TEST_CASE("Case (a): the error concentrates along the G1 interfaces", "[g1][case
     v << 0.5;
     for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
       GeometryAtPoints g;
-      d.planar->evaluate(cell, u, v, g);
+      d.geometry->evaluate(cell, u, v, g);
       const Eigen::Vector2d p = g.x.row(0).transpose();
       double distance = INFINITY;
       for (int edge = 0; edge < d.coarse.num_edges(); ++edge) {
@@ -187,7 +182,7 @@ TEST_CASE("The fitted G1 geometry keeps straight sides straight and corners", "[
       for (int i = 0; i <= k; ++i) {
         const int a = side == kSideBottom ? i : side == kSideRight ? k : side == kSideTop ? k - i : 0;
         const int b = side == kSideBottom ? 0 : side == kSideRight ? i : side == kSideTop ? k : k - i;
-        const Eigen::RowVector3d p = d.cells[cell].points.row(a + (k + 1) * b);
+        const Eigen::RowVector2d p = d.geometry->bezier_cell(cell).points.row(a + (k + 1) * b);
         worst = std::max(worst, std::min({std::abs(p.x()), std::abs(p.x() - 1), std::abs(p.y()), std::abs(p.y() - 1)}));
       }
     }

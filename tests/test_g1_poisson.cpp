@@ -4,7 +4,7 @@
 // solution must reproduce it to rounding (a patch test across extraordinary vertices).
 #include <catch2/catch.hpp>
 
-#include "basis/g1_basis.hpp"
+#include "basis/g1/g1_basis.hpp"
 #include "solver/poisson_solver.hpp"
 #include "tests/g1_test_meshes.hpp"
 

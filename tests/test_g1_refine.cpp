@@ -6,9 +6,9 @@
 
 #include <Eigen/LU>
 
-#include "basis/bspline_basis.hpp"
-#include "basis/g1_basis.hpp"
-#include "basis/g1_refine.hpp"
+#include "basis/core/bspline_basis.hpp"
+#include "basis/g1/g1_basis.hpp"
+#include "basis/g1/g1_refine.hpp"
 #include "tests/g1_test_meshes.hpp"
 
 using namespace knotwork;

@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "basis/g1_space.hpp"
-#include "basis/quad_mesh.hpp"
+#include "basis/g1/g1_space.hpp"
+#include "basis/g1/quad_mesh.hpp"
 #include "tests/g1_test_meshes.hpp"
 
 using namespace knotwork;

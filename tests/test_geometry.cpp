@@ -3,11 +3,11 @@
 #include <numbers>
 #include <random>
 
-#include "basis/tensor_patch.hpp"
+#include "basis/tensor/tensor_patch.hpp"
 #include "cases/geometries.hpp"
 #include "quadrature/bernstein.hpp"
 #include "solver/cell_basis.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/tensor/nurbs_geometry_map.hpp"
 
 using namespace knotwork;
 

@@ -12,10 +12,10 @@
 #include <map>
 #include <random>
 
-#include "basis/lr_spline.hpp"
-#include "basis/pt_spline.hpp"
-#include "basis/sparse_rank.hpp"
-#include "basis/spline_dimension.hpp"
+#include "basis/tmesh/lr_spline.hpp"
+#include "basis/pt/pt_spline.hpp"
+#include "basis/exact/sparse_rank.hpp"
+#include "basis/tmesh/spline_dimension.hpp"
 #include "cases/case_file.hpp"
 #include "tmesh_testing.hpp"
 

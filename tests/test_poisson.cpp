@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "app/discretize.hpp"
+#include "app/pipeline.hpp"
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
 #include "solver/error_norms.hpp"
@@ -35,8 +35,9 @@ PoissonSolveOptions options_of(const CaseDescription& c) {
 }
 
 ErrorNorms solve(const CaseDescription& c) {
-  const Discretization d = discretize(c);
-  return *solve_poisson(d.mesh(), *d.geometry, c.problem, options_of(c)).errors;
+  const auto d_space = build_space(c);
+  const SplineSpace& d = *d_space;
+  return *solve_poisson(d.mesh(), d.geometry(), c.problem, options_of(c)).errors;
 }
 
 struct Rates {
@@ -48,9 +49,10 @@ Rates rates(CaseDescription c, int n0, int levels) {
   std::vector<double> h;
   for (int l = 0; l < levels; ++l) {
     c.space.elements_per_span = {n0 << l, n0 << l};
-    const Discretization d = discretize(c);
-    e.push_back(*solve_poisson(d.mesh(), *d.geometry, c.problem, options_of(c)).errors);
-    h.push_back(mesh_size(d));
+    const auto d_space = build_space(c);
+    const SplineSpace& d = *d_space;
+    e.push_back(*solve_poisson(d.mesh(), d.geometry(), c.problem, options_of(c)).errors);
+    h.push_back(d.mesh_size());
   }
   const size_t a = e.size() - 2, b = e.size() - 1;
   const double lh = std::log(h[a] / h[b]);
@@ -142,7 +144,8 @@ TEST_CASE("Non-uniform refinement toward the L-shape corner beats uniform refine
   CaseDescription uniform = shipped("lshape");
   uniform.space.elements_per_span = {16, 16};
   const CaseDescription graded = shipped("lshape_graded");
-  const Discretization du = discretize(uniform), dg = discretize(graded);
+  const auto du_space = build_space(uniform), dg_space = build_space(graded);
+  const SplineSpace &du = *du_space, &dg = *dg_space;
   // u: 2 spans x 8 elements + p, +1 for the C0 fold at u = 1/2 (multiplicity p), +1 per inserted
   // knot (p - r = 1); v: 8 elements + p + 6 inserted knots.
   REQUIRE(dg.mesh().num_functions() == (2 * 8 + 2 + 1 + 12) * (8 + 2 + 6));
@@ -165,7 +168,8 @@ TEST_CASE("Knot-segment spaces through case files: patch test on the folded L-sh
   const CaseDescription local = shipped("lshape_knot_segments");
   CaseDescription uniform = shipped("lshape");
   uniform.space.elements_per_span = {8, 8};
-  const Discretization dl = discretize(local), du = discretize(uniform);
+  const auto dl_space = build_space(local), du_space = build_space(uniform);
+  const SplineSpace &du = *du_space, &dl = *dl_space;
   const double el = solve(local).h1_semi, eu = solve(uniform).h1_semi;
   INFO("knot segments: " << dl.mesh().num_functions() << " dofs, H1 " << el << "; uniform: "
                          << du.mesh().num_functions() << " dofs, H1 " << eu);
@@ -199,7 +203,8 @@ TEST_CASE("Analytic geometry map: polar quarter annulus with B-splines converges
     std::vector<ErrorNorms> e;
     for (int n : {8, 16}) {
       c.space.elements_per_span = {n, n};
-      const Discretization d = discretize(c);
+      const auto d_space = build_space(c);
+      const SplineSpace& d = *d_space;
       const AnalyticGeometryMap g(d.mesh(), polar);
       e.push_back(*solve_poisson(d.mesh(), g, c.problem, options_of(c)).errors);
     }
@@ -212,17 +217,18 @@ TEST_CASE("Analytic geometry map: polar quarter annulus with B-splines converges
 
 TEST_CASE("A solver kept across solves on one mesh skips the second analysis", "[poisson][solver]") {
   CaseDescription c = shipped("square_sinsin");
-  const Discretization d = discretize(c);
+  const auto d_space = build_space(c);
+  const SplineSpace& d = *d_space;
   PoissonSolveOptions o = options_of(c);
   o.solver = std::make_shared<SparseCholesky>();
-  const PoissonSolution first = solve_poisson(d.mesh(), *d.geometry, c.problem, o);
+  const PoissonSolution first = solve_poisson(d.mesh(), d.geometry(), c.problem, o);
   c.problem.source = Expression::parse("1", "test");  // another load, same matrix pattern
   c.problem.exact.reset();
   for (auto& bc : c.problem.boundary) {
     bc.from_exact = false;
     bc.value = Expression::parse("0", "test");
   }
-  const PoissonSolution second = solve_poisson(d.mesh(), *d.geometry, c.problem, o);
+  const PoissonSolution second = solve_poisson(d.mesh(), d.geometry(), c.problem, o);
   REQUIRE(first.cholesky.analyses == 1);
   REQUIRE(second.cholesky.analyses == 1);
   REQUIRE(second.timings.analysis == 0);
@@ -232,7 +238,7 @@ TEST_CASE("A solver kept across solves on one mesh skips the second analysis", "
   // (7, 7) of the 16 x 16 mesh.
   Eigen::VectorXd one(1);
   one << 1.0;
-  const double centre = evaluate_solution(d.mesh(), *d.geometry, second.coefficients, 7 + 16 * 7, one, one)(0, 0);
+  const double centre = evaluate_solution(d.mesh(), d.geometry(), second.coefficients, 7 + 16 * 7, one, one)(0, 0);
   REQUIRE(centre == Approx(0.0736713).epsilon(1e-4));
 }
 

@@ -9,9 +9,10 @@
 #include <random>
 
 #include "app/adaptive.hpp"
-#include "app/discretize.hpp"
-#include "basis/pt_bezier_mesh.hpp"
-#include "basis/pt_spline.hpp"
+#include "app/pipeline.hpp"
+#include "basis/pt/pt_space.hpp"
+#include "basis/pt/pt_bezier_mesh.hpp"
+#include "basis/pt/pt_spline.hpp"
 #include "solver/geometry_map.hpp"
 #include "quadrature/bernstein.hpp"
 #include "solver/input_error.hpp"
@@ -64,18 +65,20 @@ std::string square_case(int degree, const std::string& exact) {
 TEST_CASE("PT BezierMesh: every extraction row reproduces the exact PT function", "[pt][poisson]") {
   const CaseText file(square_case(2, "x*y"));
   const CaseDescription c = file.load();
-  const Discretization d = discretize(c);
-  REQUIRE(d.pt);
-  const BezierMesh& mesh = d.mesh();
-  REQUIRE(mesh.num_functions() == static_cast<int>(d.pt->functions.size()));
-  REQUIRE(mesh.num_cells() == d.tmesh->num_cells());
+  const auto space = build_space(c);
+  const PtSplineBasis* pt = pt_basis_of(*space);
+  const RectangularPartition* tmesh = pt_tmesh_of(*space);
+  REQUIRE(pt);
+  const BezierMesh& mesh = space->mesh();
+  REQUIRE(mesh.num_functions() == static_cast<int>(pt->functions.size()));
+  REQUIRE(mesh.num_cells() == tmesh->num_cells());
   std::mt19937 rng(5);
   std::uniform_int_distribution<int> pick(1, 15);
   double worst = 0;
   int checked = 0;
   for (int k = 0; k < mesh.num_cells(); ++k) {
     const BezierCell& cell = mesh.cell(k);
-    const RationalBox& box = d.tmesh->cells()[k];
+    const RationalBox& box = tmesh->cells()[k];
     for (int trial = 0; trial < 2; ++trial) {
       const mpq_class s(pick(rng), 16), t(pick(rng), 16);
       const mpq_class x = box.x0 + s * (box.x1 - box.x0), y = box.y0 + t * (box.y1 - box.y0);
@@ -88,12 +91,12 @@ TEST_CASE("PT BezierMesh: every extraction row reproduces the exact PT function"
         double v = 0;
         for (int j = 0; j <= cell.degree_v; ++j)
           for (int i = 0; i <= cell.degree_u; ++i) v += mesh.extraction(k)(a, i + (cell.degree_u + 1) * j) * bu[i] * bv[j];
-        worst = std::max(worst, std::abs(v - pt_evaluate(*d.pt, ids[a], x, y).get_d()));
+        worst = std::max(worst, std::abs(v - pt_evaluate(*pt, ids[a], x, y).get_d()));
         alive[ids[a]] = true;
       }
       // The functions not listed on the cell vanish there.
       for (int f = 0; f < mesh.num_functions(); ++f)
-        if (!alive[f]) worst = std::max(worst, std::abs(pt_evaluate(*d.pt, f, x, y).get_d()));
+        if (!alive[f]) worst = std::max(worst, std::abs(pt_evaluate(*pt, f, x, y).get_d()));
       ++checked;
     }
   }
@@ -108,7 +111,8 @@ TEST_CASE("PT Poisson: a solution in the space is reproduced to rounding", "[pt]
     INFO("degree " << p << ", u = " << exact);
     const CaseText file(square_case(p, exact));
     const CaseDescription c = file.load();
-    const Discretization d = discretize(c);
+    const auto d_space = build_space(c);
+    const SplineSpace& d = *d_space;
     const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
     REQUIRE(s.errors->l2 < 1e-11);
     REQUIRE(s.errors->h1_semi < 1e-10);
@@ -129,33 +133,31 @@ TEST_CASE("PT Poisson: without the numerical change of basis the solver refuses 
   c.pt.segments.clear();
   c.space.elements_per_span = {8, 8};
   const std::vector<RationalBox> cells = pt_start_cells(c);
+  // The space by hand (the family's steps, with and without the numerical change of basis).
+  auto solve_on = [&](PtSplineBasis pt, const RectangularPartition& tmesh, bool change_of_basis) {
+    make_boundary_traces_independent(pt, tmesh);
+    if (change_of_basis) make_numerically_independent(pt, tmesh);
+    const BezierMesh mesh = pt_bezier_mesh(tmesh, to_double(pt_cell_polynomials_exact(pt, tmesh)), 2, 2);
+    const PatchGeometryMap geometry(mesh, c.geometry);
+    PoissonSolveOptions so;
+    so.quadrature = c.quadrature;
+    return solve_poisson(mesh, geometry, c.problem, so);
+  };
+  const RectangularPartition tmesh(cells);
   for (bool change_of_basis : {false, true}) {
     INFO("make_numerically_independent: " << change_of_basis);
-    Discretization d;
-    d.tmesh = std::make_unique<RectangularPartition>(cells);
-    d.pt = std::make_unique<PtSplineBasis>(pt_spline_basis(*d.tmesh, 2, 2, PtExtension::kVertical));
-    make_boundary_traces_independent(*d.pt, *d.tmesh);
-    if (change_of_basis) make_numerically_independent(*d.pt, *d.tmesh);
-    d.local_mesh = std::make_unique<BezierMesh>(
-        pt_bezier_mesh(*d.tmesh, to_double(pt_cell_polynomials_exact(*d.pt, *d.tmesh)), 2, 2));
-    d.geometry = std::make_unique<PatchGeometryMap>(*d.local_mesh, c.geometry);
+    PtSplineBasis full = pt_spline_basis(tmesh, 2, 2, PtExtension::kVertical);
     if (change_of_basis) {
-      const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
+      const PoissonSolution s = solve_on(std::move(full), tmesh, true);
       REQUIRE(s.errors->l2 < 1e-11);
       REQUIRE(s.cholesky.refinement_correction < 1e-10);
     } else {
-      REQUIRE_THROWS_WITH(solve_case(c, d, Ordering::kAmd, {}), Catch::Contains("numerically singular"));
+      REQUIRE_THROWS_WITH(solve_on(std::move(full), tmesh, false), Catch::Contains("numerically singular"));
     }
   }
-  Discretization d;
-  d.tmesh = std::make_unique<RectangularPartition>(cells);
-  d.pt = std::make_unique<PtSplineBasis>(pt_spline_basis(*d.tmesh, 2, 2));
-  REQUIRE(d.pt->extension == PtExtension::kMinimal);
-  make_boundary_traces_independent(*d.pt, *d.tmesh);
-  d.local_mesh = std::make_unique<BezierMesh>(
-      pt_bezier_mesh(*d.tmesh, to_double(pt_cell_polynomials_exact(*d.pt, *d.tmesh)), 2, 2));
-  d.geometry = std::make_unique<PatchGeometryMap>(*d.local_mesh, c.geometry);
-  const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
+  PtSplineBasis minimal = pt_spline_basis(tmesh, 2, 2);
+  REQUIRE(minimal.extension == PtExtension::kMinimal);
+  const PoissonSolution s = solve_on(std::move(minimal), tmesh, false);
   REQUIRE(s.errors->l2 < 1e-11);
   REQUIRE(s.cholesky.refinement_correction < 1e-10);
 }
@@ -170,7 +172,8 @@ TEST_CASE("PT Poisson: optimal rates when every cell of a T-mesh is halved", "[p
     std::vector<double> l2, h1;
     for (int e : {2, 4, 8}) {
       c.space.elements_per_span = {e, e};
-      const Discretization d = discretize(c);
+      const auto d_space = build_space(c);
+      const SplineSpace& d = *d_space;
       const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
       l2.push_back(s.errors->l2);
       h1.push_back(s.errors->h1_semi);
@@ -187,9 +190,10 @@ TEST_CASE("PT Poisson on the L-shape: C0 across the fold, adaptive refinement be
   REQUIRE(c.family == "pt");
   // The fold u = 1/2 is C0: without it the space could not approximate the corner (and the
   // functions would be C1 in the parameter domain across a kink of the map).
-  const Discretization d = discretize(c);
-  REQUIRE(d.pt->c0.x.size() == 1);
-  REQUIRE(d.pt->c0.x[0] == mpq_class(1, 2));
+  const auto d_space = build_space(c);
+  const SplineSpace& d = *d_space;
+  REQUIRE(pt_basis_of(d)->c0.x.size() == 1);
+  REQUIRE(pt_basis_of(d)->c0.x[0] == mpq_class(1, 2));
   c.adapt.steps = 14;
   c.adapt.max_dofs = 100000;
   const auto steps = adapt_case(c, Ordering::kAmd, {});
@@ -200,7 +204,8 @@ TEST_CASE("PT Poisson on the L-shape: C0 across the fold, adaptive refinement be
   int uniform_dofs = 0;
   for (int e = 2;; e *= 2) {
     u.space.elements_per_span = {e, e};
-    const Discretization du = discretize(u);
+    const auto du_space = build_space(u);
+    const SplineSpace& du = *du_space;
     if (du.mesh().num_functions() < steps.back().dofs) continue;
     const PoissonSolution s = solve_case(u, du, Ordering::kAmd, {});
     uniform = s.errors->h1_semi, uniform_dofs = s.num_functions;
@@ -218,7 +223,7 @@ TEST_CASE("PT case files: bad T-meshes give one-line errors naming the field", "
                         "\n[problem]\nexact = \"x\"\n");
     try {
       const CaseDescription c = file.load();
-      discretize(c);
+      build_space(c);
     } catch (const InputError& e) {
       return std::string(e.what());
     }

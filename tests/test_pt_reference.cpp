@@ -7,8 +7,8 @@
 
 #include <random>
 
-#include "basis/pt_reference.hpp"
-#include "basis/spline_dimension.hpp"
+#include "basis/pt/pt_reference.hpp"
+#include "basis/tmesh/spline_dimension.hpp"
 #include "cases/case_file.hpp"
 #include "tmesh_testing.hpp"
 

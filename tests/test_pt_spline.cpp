@@ -11,11 +11,11 @@
 
 #include <Eigen/Dense>
 
-#include "basis/partition_topology.hpp"
-#include "basis/pt_spline.hpp"
-#include "basis/sparse_rank.hpp"
-#include "basis/spline_dimension.hpp"
-#include "basis/tmesh_conformality.hpp"
+#include "basis/tmesh/partition_topology.hpp"
+#include "basis/pt/pt_spline.hpp"
+#include "basis/exact/sparse_rank.hpp"
+#include "basis/tmesh/spline_dimension.hpp"
+#include "basis/tmesh/tmesh_conformality.hpp"
 #include "cases/case_file.hpp"
 #include "tmesh_testing.hpp"
 

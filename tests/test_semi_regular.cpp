@@ -4,12 +4,12 @@
 #include <random>
 #include <set>
 
-#include "basis/bspline_basis.hpp"
+#include "basis/core/bspline_basis.hpp"
 #include "quadrature/bernstein.hpp"
-#include "basis/partition_topology.hpp"
-#include "basis/collection_on_partition.hpp"
-#include "basis/semi_regular_collection.hpp"
-#include "basis/spline_dimension.hpp"
+#include "basis/tmesh/partition_topology.hpp"
+#include "basis/knot_segments/collection_on_partition.hpp"
+#include "basis/knot_segments/semi_regular_collection.hpp"
+#include "basis/tmesh/spline_dimension.hpp"
 #include "solver/geometry_map.hpp"
 #include "solver/poisson_solver.hpp"
 

@@ -3,8 +3,8 @@
 #include <random>
 #include <set>
 
-#include "basis/rectangular_partition.hpp"
-#include "basis/spline_dimension.hpp"
+#include "basis/tmesh/rectangular_partition.hpp"
+#include "basis/tmesh/spline_dimension.hpp"
 #include "tmesh_testing.hpp"
 
 using namespace knotwork;
@@ -135,7 +135,7 @@ TEST_CASE("Partitions that are not a tiling are refused, naming the cells", "[di
   REQUIRE_THROWS(parse_rational("1..2"));
 }
 
-#include "basis/partition_topology.hpp"
+#include "basis/tmesh/partition_topology.hpp"
 
 TEST_CASE("Partition topology: Euler's formula and T-node bookkeeping on random T-meshes", "[dimension][topology]") {
   std::mt19937 rng(15);

@@ -7,8 +7,8 @@
 #include <random>
 #include <tuple>
 
-#include "basis/spline_dimension.hpp"
-#include "basis/tmesh_conformality.hpp"
+#include "basis/tmesh/spline_dimension.hpp"
+#include "basis/tmesh/tmesh_conformality.hpp"
 #include "tmesh_testing.hpp"
 
 using namespace knotwork;

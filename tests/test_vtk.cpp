@@ -13,7 +13,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "app/discretize.hpp"
+#include "app/pipeline.hpp"
 #include "cases/case_file.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/poisson_solver.hpp"
@@ -26,7 +26,7 @@ namespace {
 
 struct Solved {
   CaseDescription c;
-  Discretization d;
+  std::unique_ptr<SplineSpace> d;
   PoissonSolution s;
 };
 
@@ -36,8 +36,8 @@ Solved solve_shipped(const std::string& name, int p, int n, bool rational = true
   r.c.space.degree = {p, p};
   r.c.space.elements_per_span = {n, n};
   r.c.space.rational = rational;
-  r.d = discretize(r.c);
-  r.s = solve_poisson(r.d.mesh(), *r.d.geometry, r.c.problem, PoissonSolveOptions{});
+  r.d = build_space(r.c);
+  r.s = solve_poisson(r.d->mesh(), r.d->geometry(), r.c.problem, PoissonSolveOptions{});
   return r;
 }
 
@@ -60,7 +60,7 @@ TEST_CASE("Bezier .vtu round trip: cell types, degrees, active attributes, exact
   for (int p : {2, 3}) {
     Solved r = solve_shipped("quarter_annulus", p, 3);
     const std::string path = dir + "/bezier.vtu";
-    write_bezier_vtu(path, r.d.mesh(), *r.d.geometry, r.s.coefficients, &*r.c.problem.exact);
+    write_bezier_vtu(path, r.d->mesh(), r.d->geometry(), r.s.coefficients, &*r.c.problem.exact);
     {  // ParaView 5.11 uses the arrays only if they are the active attributes in the header.
       std::ifstream in(path);
       std::string head(4096, '\0');
@@ -69,7 +69,7 @@ TEST_CASE("Bezier .vtu round trip: cell types, degrees, active attributes, exact
       REQUIRE(head.find("HigherOrderDegrees=\"HigherOrderDegrees\"") != std::string::npos);
     }
     auto grid = read(path);
-    REQUIRE(grid->GetNumberOfCells() == r.d.mesh().num_cells());
+    REQUIRE(grid->GetNumberOfCells() == r.d->mesh().num_cells());
     REQUIRE(grid->GetPointData()->GetRationalWeights() != nullptr);
     vtkDataArray* deg = grid->GetCellData()->GetHigherOrderDegrees();
     REQUIRE(deg != nullptr);
@@ -89,8 +89,8 @@ TEST_CASE("Bezier .vtu round trip: cell types, degrees, active attributes, exact
       u << 0.0, 0.37, 1.0;
       v << 0.0, 0.81, 0.5;
       GeometryAtPoints at;
-      r.d.geometry->evaluate(static_cast<int>(c), u, v, at);
-      const Eigen::MatrixX3d uh = evaluate_solution(r.d.mesh(), *r.d.geometry, r.s.coefficients, static_cast<int>(c), u, v);
+      r.d->geometry().evaluate(static_cast<int>(c), u, v, at);
+      const Eigen::MatrixX3d uh = evaluate_solution(r.d->mesh(), r.d->geometry(), r.s.coefficients, static_cast<int>(c), u, v);
       for (int k = 0; k < 3; ++k) {
         double pc[3] = {u[k], v[k], 0}, x[3], w[64];
         int sub = 0;
@@ -109,7 +109,7 @@ TEST_CASE("Bezier .vtu round trip: cell types, degrees, active attributes, exact
 TEST_CASE("Sampled .vtu round trip and .pvd collection", "[vtk]") {
   const std::string dir = temp_dir();
   Solved r = solve_shipped("square_sinsin", 2, 4);
-  write_sampled_vtu(dir + "/s.vtu", r.d.mesh(), *r.d.geometry, r.s.coefficients, &*r.c.problem.exact, 3);
+  write_sampled_vtu(dir + "/s.vtu", r.d->mesh(), r.d->geometry(), r.s.coefficients, &*r.c.problem.exact, 3);
   auto grid = read(dir + "/s.vtu");
   REQUIRE(grid->GetNumberOfCells() == 16 * 9);
   REQUIRE(grid->GetCellType(0) == VTK_QUAD);
@@ -134,7 +134,7 @@ TEST_CASE("B-spline space on a NURBS geometry: Bezier output interpolates the so
   // are interpolants: exact at the cell's equispaced nodes, close in between.
   const std::string dir = temp_dir();
   Solved r = solve_shipped("quarter_annulus", 2, 4, false);
-  write_bezier_vtu(dir + "/b.vtu", r.d.mesh(), *r.d.geometry, r.s.coefficients, &*r.c.problem.exact);
+  write_bezier_vtu(dir + "/b.vtu", r.d->mesh(), r.d->geometry(), r.s.coefficients, &*r.c.problem.exact);
   auto grid = read(dir + "/b.vtu");
   vtkDataArray* sol = grid->GetPointData()->GetArray("solution");
   vtkNew<vtkGenericCell> cell;
@@ -142,7 +142,7 @@ TEST_CASE("B-spline space on a NURBS geometry: Bezier output interpolates the so
   Eigen::VectorXd u(1), v(1);
   u << 0.5;
   v << 0.5;
-  const Eigen::MatrixX3d uh = evaluate_solution(r.d.mesh(), *r.d.geometry, r.s.coefficients, 5, u, v);
+  const Eigen::MatrixX3d uh = evaluate_solution(r.d->mesh(), r.d->geometry(), r.s.coefficients, 5, u, v);
   double pc[3] = {0.5, 0.5, 0}, x[3], w[64];
   int sub = 0;
   cell->EvaluateLocation(sub, pc, x, w);

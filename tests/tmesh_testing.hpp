@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "basis/rectangular_partition.hpp"
+#include "basis/tmesh/rectangular_partition.hpp"
 
 namespace knotwork::testing {
 

@@ -1,0 +1,26 @@
+#pragma once
+// The pipeline every command shares, written once against the family interface: a case's
+// space (through its family), the solve, and the benchmark case.
+#include <memory>
+#include <string>
+
+#include "cases/case_file.hpp"
+#include "cases/spline_space.hpp"
+#include "solver/poisson_solver.hpp"
+
+namespace knotwork {
+
+// The case's space refined `level` times uniformly (converge's level; 0: as the case says),
+// through its registered family. Throws InputError naming the case and field.
+std::unique_ptr<SplineSpace> build_space(const CaseDescription& c, int level = 0, const ProgressFunction& progress = {});
+
+// Solves the case's problem on the space: the family's own refusal first (check_solvable),
+// then the one Galerkin pipeline. A GeometryError gets the case file and "[geometry]" in
+// front of its message; a solver failure the case file.
+PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
+                           const ProgressFunction& progress = {});
+
+// The benchmark problem: unit square, u = sin(pi x) sin(pi y), degree p, n x n elements.
+CaseDescription unit_square_benchmark_case(int p, int n);
+
+}  // namespace knotwork

@@ -1,0 +1,66 @@
+#include "app/report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace knotwork {
+
+namespace {
+
+void set_value(Json& j, const std::string& key, const ReportValue& v) {
+  if (std::holds_alternative<std::monostate>(v)) j.set_null(key);
+  else if (const double* d = std::get_if<double>(&v)) j.set(key, *d);
+  else if (const long* l = std::get_if<long>(&v)) j.set(key, *l);
+  else if (const std::string* s = std::get_if<std::string>(&v)) j.set(key, *s);
+  else if (const bool* b = std::get_if<bool>(&v)) j.set_bool(key, *b);
+  else j.set(key, Json::strings(std::get<std::vector<std::string>>(v)));
+}
+
+}  // namespace
+
+void add_fields(Json& object, const std::vector<ReportField>& fields) {
+  // Members of nested objects, in the order their first member appears.
+  std::vector<std::string> order;
+  std::map<std::string, Json> nested;
+  for (const ReportField& f : fields) {
+    const size_t dot = f.key.find('.');
+    if (dot == std::string::npos) {
+      set_value(object, f.key, f.value);
+      continue;
+    }
+    const std::string outer = f.key.substr(0, dot);
+    if (!nested.count(outer)) {
+      order.push_back(outer);
+      nested.emplace(outer, Json::object());
+    }
+    set_value(nested.at(outer), f.key.substr(dot + 1), f.value);
+  }
+  for (const auto& name : order) object.set(name, nested.at(name));
+}
+
+void print_field_lines(const std::vector<ReportField>& fields) {
+  for (const ReportField& f : fields)
+    if (!f.text.empty()) std::printf("  %-8s %s\n", (f.label.empty() ? f.key : f.label).c_str(), f.text.c_str());
+}
+
+double field_number(const ReportField& f) {
+  if (const double* d = std::get_if<double>(&f.value)) return *d;
+  if (const long* l = std::get_if<long>(&f.value)) return static_cast<double>(*l);
+  return NAN;
+}
+
+std::string field_csv(const ReportField& f) {
+  if (const double* d = std::get_if<double>(&f.value)) return std::isfinite(*d) ? json_number(*d) : "";
+  if (const long* l = std::get_if<long>(&f.value)) return std::to_string(*l);
+  if (const std::string* s = std::get_if<std::string>(&f.value)) return *s;
+  if (const bool* b = std::get_if<bool>(&f.value)) return *b ? "true" : "false";
+  if (const auto* list = std::get_if<std::vector<std::string>>(&f.value)) {
+    std::string r;
+    for (const auto& s : *list) r += (r.empty() ? "" : ";") + s;
+    return r;
+  }
+  return "";
+}
+
+}  // namespace knotwork

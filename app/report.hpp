@@ -1,0 +1,20 @@
+#pragma once
+// The family's report fields (cases/spline_space.hpp) in the commands' JSON and text output.
+#include <string>
+#include <vector>
+
+#include "cases/json_output.hpp"
+#include "cases/spline_space.hpp"
+
+namespace knotwork {
+
+// Adds the fields to a JSON object ("a.b" keys become member b of object a).
+void add_fields(Json& object, const std::vector<ReportField>& fields);
+// Prints the fields that have a text line, as "  label    text".
+void print_field_lines(const std::vector<ReportField>& fields);
+// The value of a numeric field as a double (NaN for null, text or lists).
+double field_number(const ReportField& field);
+// A field's value as CSV text ("" for null; lists joined by ';').
+std::string field_csv(const ReportField& field);
+
+}  // namespace knotwork

@@ -1,0 +1,21 @@
+#pragma once
+#include <Eigen/Core>
+
+#include "basis/core/bspline_basis.hpp"
+
+namespace knotwork {
+
+// A single NURBS patch: open knot vectors in u and v, control points numbered
+// i + n_u * j (u fastest), positive weights.
+struct NurbsPatch {
+  BSplineBasis1D basis_u, basis_v;
+  Eigen::MatrixX2d control_points;
+  Eigen::VectorXd weights;
+  // Throws std::invalid_argument naming what is wrong (counts, weights, open knots).
+  void validate() const;
+};
+
+// The patch's point at parameters (u, v).
+Eigen::Vector2d patch_point(const NurbsPatch& patch, double u, double v);
+
+}  // namespace knotwork

@@ -1,0 +1,866 @@
+#include "basis/g1/g1_basis.hpp"
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include "basis/core/bspline_basis.hpp"
+#include "basis/exact/sparse_rank.hpp"
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseQR>
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCore>
+
+namespace knotwork {
+
+namespace {
+
+// The local unknowns of one system, in order; corner-block unknowns come first.
+struct LocalColumns {
+  std::vector<long> global;
+  std::unordered_map<long, int> position;
+  void add(long c) {
+    if (position.emplace(c, static_cast<int>(global.size())).second) global.push_back(c);
+  }
+  int size() const { return static_cast<int>(global.size()); }
+};
+
+void add_corner_block(LocalColumns& cols, int face, int corner, int k, int r) {
+  for (int b = 0; b < 2; ++b)
+    for (int a = 0; a < 2; ++a) cols.add(g1_corner_unknown(face, corner, a, b, k, r));
+}
+
+// The strip of a face side (corner c to c+1): two rows, corner blocks excluded.
+void add_strip(LocalColumns& cols, int face, int corner, int k, int r) {
+  const int n = 2 * k - r + 1;
+  for (int b = 0; b < 2; ++b)
+    for (int a = 2; a <= n - 3; ++a) cols.add(g1_corner_unknown(face, corner, a, b, k, r));
+}
+
+void add_edge_strips(LocalColumns& cols, const QuadMesh& mesh, int e, int k, int r) {
+  const auto& E = mesh.edge(e);
+  for (int side = 0; side < 2; ++side)
+    if (E.face[side] >= 0) add_strip(cols, E.face[side], E.corner[side], k, r);
+}
+
+template <class Scalar>
+using Rows = std::vector<std::vector<std::pair<long, Scalar>>>;
+
+// Rows restricted to the local columns (other unknowns are zero in the local system).
+template <class Scalar>
+std::vector<std::vector<Scalar>> restrict_rows(const Rows<Scalar>& rows, const LocalColumns& cols) {
+  std::vector<std::vector<Scalar>> out;
+  for (const auto& row : rows) {
+    std::vector<Scalar> dense(cols.size(), Scalar(0));
+    bool any = false;
+    for (const auto& [c, x] : row) {
+      const auto it = cols.position.find(c);
+      if (it == cols.position.end()) continue;
+      dense[it->second] += x;
+      any = true;
+    }
+    if (any) out.push_back(std::move(dense));
+  }
+  return out;
+}
+
+constexpr double kTolerance = 1e-10;
+
+// Null space in floating point: right singular vectors of singular values below
+// kTolerance * largest (orthonormal columns).
+Eigen::MatrixXd null_space(const std::vector<std::vector<double>>& rows, int m) {
+  if (rows.empty()) return Eigen::MatrixXd::Identity(m, m);
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), m);
+  for (size_t i = 0; i < rows.size(); ++i)
+    for (int j = 0; j < m; ++j) A(static_cast<Eigen::Index>(i), j) = rows[i][j];
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  svd.setThreshold(kTolerance);
+  return svd.matrixV().rightCols(m - svd.rank());
+}
+
+// Functions with independent Taylor data (the first `taylor` local unknowns) among the
+// null-space vectors: column elimination on the Taylor rows, exactly.
+std::vector<std::vector<mpq_class>> taylor_independent(std::vector<std::vector<mpq_class>> Z, int taylor) {
+  std::vector<bool> used(Z.size(), false);
+  std::vector<size_t> chosen;
+  for (int t = 0; t < taylor; ++t) {
+    size_t j = 0;
+    while (j < Z.size() && (used[j] || Z[j][t] == 0)) ++j;
+    if (j == Z.size()) continue;
+    used[j] = true;
+    chosen.push_back(j);
+    const mpq_class inv = 1 / Z[j][t];
+    for (auto& x : Z[j]) x *= inv;
+    for (size_t l = 0; l < Z.size(); ++l) {
+      if (l == j || Z[l][t] == 0) continue;
+      const mpq_class f = Z[l][t];
+      for (size_t i = 0; i < Z[l].size(); ++i)
+        if (Z[j][i] != 0) Z[l][i] -= f * Z[j][i];
+    }
+  }
+  std::vector<std::vector<mpq_class>> out;
+  for (size_t j : chosen) out.push_back(std::move(Z[j]));
+  return out;
+}
+
+// The same in floating point: Z times the right singular vectors of its Taylor rows.
+Eigen::MatrixXd taylor_independent(const Eigen::MatrixXd& Z, int taylor) {
+  if (Z.cols() == 0) return Z;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Z.topRows(taylor), Eigen::ComputeFullV);
+  const auto& sv = svd.singularValues();
+  Eigen::Index rank = 0;
+  for (Eigen::Index i = 0; i < sv.size(); ++i) rank += sv(i) > kTolerance * std::max(sv(0), 1.0);
+  return Z * svd.matrixV().leftCols(rank);
+}
+
+double to_double(const mpq_class& x) { return x.get_d(); }
+double to_double(double x) { return x; }
+
+// A local solution (std::vector<mpq_class> or Eigen::VectorXd over `cols`) as a function.
+template <class Vector>
+G1BasisFunction make_function(G1BasisFunction::Kind kind, int owner, const LocalColumns& cols, const Vector& x) {
+  G1BasisFunction f{kind, owner, {}};
+  for (int i = 0; i < cols.size(); ++i)
+    if (x[i] != 0) f.coefficients.emplace_back(cols.global[i], to_double(x[i]));
+  return f;
+}
+
+// The Taylor part (the first `taylor` local unknowns: corner blocks) of an exact solution.
+std::map<long, mpq_class> taylor_part(const LocalColumns& cols, const std::vector<mpq_class>& x, int taylor) {
+  std::map<long, mpq_class> t;
+  for (int i = 0; i < taylor; ++i)
+    if (x[i] != 0) t.emplace(cols.global[i], x[i]);
+  return t;
+}
+
+// y -= f * x on sparse vectors, dropping the entries that become zero.
+void subtract_scaled(std::map<long, mpq_class>& y, const mpq_class& f, const std::map<long, mpq_class>& x) {
+  for (const auto& [c, v] : x) {
+    mpq_class& z = y[c];
+    z -= f * v;
+    if (z == 0) y.erase(c);
+  }
+}
+
+template <class Scalar>
+Rows<Scalar> edge_rows(const QuadMesh& mesh, const GluingData& gluing, int k, int r, int e) {
+  if constexpr (std::is_same_v<Scalar, mpq_class>)
+    return g1_condition_rows_exact(mesh, gluing, k, r, e);
+  else
+    return g1_condition_rows(mesh, gluing, k, r, e);
+}
+
+// Span of the Taylor data (corner-block coefficients) of the functions kept so far, over Q:
+// a fully reduced echelon form, so that reducing a vector needs one pass.
+class ExactTaylorSpan {
+ public:
+  // Records t and returns true when it is independent of the span.
+  bool add(std::map<long, mpq_class> t) {
+    for (const auto& [p, e] : stored_)
+      if (const auto it = t.find(p); it != t.end()) subtract_scaled(t, mpq_class(it->second), e);
+    if (t.empty()) return false;
+    const long p = t.begin()->first;
+    const mpq_class inv = 1 / t.begin()->second;
+    for (auto& [c, x] : t) x *= inv;
+    for (auto& [q, e] : stored_)
+      if (const auto it = e.find(p); it != e.end()) subtract_scaled(e, mpq_class(it->second), t);
+    stored_.emplace(p, std::move(t));
+    return true;
+  }
+
+ private:
+  std::map<long, std::map<long, mpq_class>> stored_;  // pivot -> vector with 1 there
+};
+
+// The same in floating point, for the functions beyond the vertex functions: an orthonormal
+// basis of their Taylor data modulo the vertex functions' (which live on disjoint vertex
+// blocks, so the quotient is a projection per vertex block).
+struct FloatTaylorSpan {
+  std::map<long, Eigen::MatrixXd> vertex_basis;  // vertex -> orthonormal columns on its corner blocks
+  std::vector<std::map<long, double>> extra;     // orthonormal, over corner unknowns
+};
+
+struct PairSystem {
+  LocalColumns cols;
+  std::vector<int> block_vertex;  // per Taylor column: the vertex of its corner block
+  int taylor = 0;
+  std::set<int> edges;            // the interior edges at either end
+};
+
+// The system on the faces around the given vertices: their corner blocks, then the strips of
+// their interior edges.
+PairSystem patch_system(const QuadMesh& mesh, const std::vector<int>& vertices, int k, int r) {
+  PairSystem sys;
+  for (const int v : vertices) {
+    const auto& ring = mesh.ring(v);
+    for (size_t i = 0; i < ring.faces.size(); ++i) {
+      add_corner_block(sys.cols, ring.faces[i], ring.corners[i], k, r);
+      sys.block_vertex.resize(sys.cols.size(), v);
+    }
+    for (int x : ring.edges)
+      if (!mesh.edge(x).boundary()) sys.edges.insert(x);
+  }
+  sys.taylor = sys.cols.size();
+  for (int x : sys.edges) add_edge_strips(sys.cols, mesh, x, k, r);
+  return sys;
+}
+
+PairSystem pair_system(const QuadMesh& mesh, int e, int k, int r) {
+  return patch_system(mesh, {mesh.edge(e).v[0], mesh.edge(e).v[1]}, k, r);
+}
+
+// Last resort when Taylor data are coupled beyond single edges (r = k - 1 on meshes with
+// extraordinary vertices, for instance): functions of the global null space whose Taylor
+// data complete the span of `functions`; their supports are not local. This is the
+// floating-point version (the exact one is inline in build).
+void complete_globally(const QuadMesh& mesh, const GluingData& gluing, int k, int r, long missing,
+                       std::vector<G1BasisFunction>& functions) {
+  const int n = 2 * k - r + 1;
+  const long m = static_cast<long>(mesh.num_faces()) * n * n;
+  std::unordered_map<long, int> corner;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int c = 0; c < 4; ++c)
+      for (int b = 0; b < 2; ++b)
+        for (int a = 0; a < 2; ++a) corner.emplace(g1_corner_unknown(f, c, a, b, k, r), static_cast<int>(corner.size()));
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(dense_rows(g1_condition_rows(mesh, gluing, k, r), m), Eigen::ComputeFullV);
+  svd.setThreshold(kTolerance);
+  const Eigen::MatrixXd N = svd.matrixV().rightCols(m - svd.rank());
+  // Taylor parts (rows: corner unknowns) of the functions so far and of the null space.
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(corner.size()),
+                                            static_cast<Eigen::Index>(functions.size()));
+  for (size_t j = 0; j < functions.size(); ++j)
+    for (const auto& [c, x] : functions[j].coefficients)
+      if (const auto it = corner.find(c); it != corner.end()) T(it->second, static_cast<Eigen::Index>(j)) = x;
+  Eigen::MatrixXd R(T.rows(), N.cols());
+  for (const auto& [c, i] : corner) R.row(i) = N.row(c);
+  if (T.cols() > 0) {
+    const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(T).householderQ() *
+                              Eigen::MatrixXd::Identity(T.rows(), std::min(T.rows(), T.cols()));
+    for (int pass = 0; pass < 2; ++pass) R -= Q * (Q.transpose() * R);
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> complement(R, Eigen::ComputeThinV);
+  const auto& cs = complement.singularValues();
+  if (cs.size() < missing || cs(missing - 1) <= kTolerance)
+    throw std::runtime_error("the Taylor data of S_" + std::to_string(k) + "^{1," + std::to_string(r) +
+                             "} could not be completed: rank tolerance too coarse for these gluing data");
+  LocalColumns cols;
+  for (long c = 0; c < m; ++c) cols.add(c);
+  for (long j = 0; j < missing; ++j) {
+    functions.push_back(make_function(G1BasisFunction::Kind::coupled, -1, cols,
+                                      Eigen::VectorXd(N * complement.matrixV().col(j))));
+  }
+}
+
+template <class Scalar>
+void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
+  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
+  std::vector<Rows<Scalar>> rows(mesh.num_edges());
+  for (int e = 0; e < mesh.num_edges(); ++e)
+    if (!mesh.edge(e).boundary()) rows[e] = edge_rows<Scalar>(mesh, gluing, k, r, e);
+  constexpr bool exact = std::is_same_v<Scalar, mpq_class>;
+  ExactTaylorSpan exact_span;
+  FloatTaylorSpan float_span;
+
+  std::vector<G1BasisFunction> vertex_functions;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const auto& ring = mesh.ring(v);
+    LocalColumns cols;
+    for (size_t i = 0; i < ring.faces.size(); ++i) add_corner_block(cols, ring.faces[i], ring.corners[i], k, r);
+    const int taylor = cols.size();
+    std::set<int> edges(ring.edges.begin(), ring.edges.end());
+    Rows<Scalar> vertex_rows;
+    for (int e : edges) {
+      if (mesh.edge(e).boundary()) continue;
+      add_edge_strips(cols, mesh, e, k, r);
+      vertex_rows.insert(vertex_rows.end(), rows[e].begin(), rows[e].end());
+    }
+    const auto A = restrict_rows(vertex_rows, cols);
+    if constexpr (exact) {
+      for (const auto& x : taylor_independent(null_space_exact(A, cols.size()), taylor)) {
+        vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, x));
+        exact_span.add(taylor_part(cols, x, taylor));
+      }
+    } else {
+      const Eigen::MatrixXd Z = taylor_independent(null_space(A, cols.size()), taylor);
+      for (Eigen::Index j = 0; j < Z.cols(); ++j)
+        vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, Z.col(j)));
+      Eigen::HouseholderQR<Eigen::MatrixXd> qr(Z.topRows(taylor));
+      float_span.vertex_basis[v] =
+          qr.householderQ() * Eigen::MatrixXd::Identity(taylor, std::min<Eigen::Index>(Z.cols(), taylor));
+    }
+  }
+
+  std::vector<G1BasisFunction> edge_functions;
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    LocalColumns cols;
+    add_edge_strips(cols, mesh, e, k, r);
+    const auto A = restrict_rows(rows[e], cols);
+    if constexpr (exact) {
+      for (const auto& x : null_space_exact(A, cols.size()))
+        edge_functions.push_back(make_function(G1BasisFunction::Kind::edge, e, cols, x));
+    } else {
+      const Eigen::MatrixXd Z = null_space(A, cols.size());
+      for (Eigen::Index j = 0; j < Z.cols(); ++j)
+        edge_functions.push_back(make_function(G1BasisFunction::Kind::edge, e, cols, Z.col(j)));
+    }
+  }
+  const long face_count = static_cast<long>(mesh.num_faces()) * std::max(n - 4, 0) * std::max(n - 4, 0);
+
+  // Below the separability of an edge, the Taylor data at its two ends are coupled and the
+  // vertex functions miss part of the Taylor map's image: solutions on the faces around
+  // both ends supply it (kind vertex_pair, one edge at a time, while something is missing).
+  const long wanted = basis.space.dimension - static_cast<long>(edge_functions.size()) - face_count;
+  long have = static_cast<long>(vertex_functions.size());
+  // Exact: the solutions whose Taylor data add to the span, until nothing is missing.
+  auto keep_independent = [&](G1BasisFunction::Kind kind, int owner, const LocalColumns& cols,
+                              const std::vector<std::vector<mpq_class>>& solutions, int taylor) {
+    for (const auto& x : solutions) {
+      if (have == wanted) return;
+      if (!exact_span.add(taylor_part(cols, x, taylor))) continue;
+      vertex_functions.push_back(make_function(kind, owner, cols, x));
+      ++have;
+    }
+  };
+  for (int e = 0; e < mesh.num_edges() && have < wanted; ++e) {
+    if (mesh.edge(e).boundary()) continue;
+    const PairSystem sys = pair_system(mesh, e, k, r);
+    Rows<Scalar> pair_rows;
+    for (int x : sys.edges) pair_rows.insert(pair_rows.end(), rows[x].begin(), rows[x].end());
+    const auto A = restrict_rows(pair_rows, sys.cols);
+    if constexpr (exact) {
+      keep_independent(G1BasisFunction::Kind::vertex_pair, e, sys.cols, null_space_exact(A, sys.cols.size()), sys.taylor);
+    } else {
+      const Eigen::MatrixXd Z = null_space(A, sys.cols.size());
+      // Taylor rows modulo the vertex functions, block by block.
+      Eigen::MatrixXd R = Z.topRows(sys.taylor);
+      for (const int v : {mesh.edge(e).v[0], mesh.edge(e).v[1]}) {
+        std::vector<Eigen::Index> at;
+        for (int i = 0; i < sys.taylor; ++i)
+          if (sys.block_vertex[i] == v) at.push_back(i);
+        const Eigen::MatrixXd& Q = float_span.vertex_basis[v];
+        Eigen::MatrixXd block(static_cast<Eigen::Index>(at.size()), Z.cols());
+        for (size_t i = 0; i < at.size(); ++i) block.row(static_cast<Eigen::Index>(i)) = R.row(at[i]);
+        block -= Q * (Q.transpose() * block);
+        for (size_t i = 0; i < at.size(); ++i) R.row(at[i]) = block.row(static_cast<Eigen::Index>(i));
+      }
+      // ... and modulo the pair functions kept so far (twice, for orthogonality).
+      for (int pass = 0; pass < 2; ++pass)
+        for (const auto& q : float_span.extra) {
+          Eigen::RowVectorXd dot = Eigen::RowVectorXd::Zero(Z.cols());
+          std::vector<std::pair<int, double>> local;
+          for (int i = 0; i < sys.taylor; ++i) {
+            const auto it = q.find(sys.cols.global[i]);
+            if (it != q.end()) local.emplace_back(i, it->second);
+          }
+          for (const auto& [i, x] : local) dot += x * R.row(i);
+          for (const auto& [i, x] : local) R.row(i) -= x * dot;
+        }
+      Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const auto& sv = svd.singularValues();
+      for (Eigen::Index j = 0; j < sv.size() && have < wanted; ++j) {
+        if (sv(j) <= kTolerance) break;
+        vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex_pair, e, sys.cols,
+                                                 Eigen::VectorXd(Z * svd.matrixV().col(j))));
+        std::map<long, double> q;
+        for (int i = 0; i < sys.taylor; ++i)
+          if (svd.matrixU()(i, j) != 0) q.emplace(sys.cols.global[i], svd.matrixU()(i, j));
+        float_span.extra.push_back(std::move(q));
+        ++have;
+      }
+    }
+  }
+
+  // Still short (Taylor data coupled across more than one edge): exact solutions on the faces
+  // around the four corners of one face at a time, still local (kind coupled).
+  if constexpr (exact) {
+    for (int f = 0; f < mesh.num_faces() && have < wanted; ++f) {
+      const auto& q = mesh.face(f);
+      const PairSystem sys = patch_system(mesh, {q[0], q[1], q[2], q[3]}, k, r);
+      Rows<Scalar> patch_rows;
+      for (int x : sys.edges) patch_rows.insert(patch_rows.end(), rows[x].begin(), rows[x].end());
+      keep_independent(G1BasisFunction::Kind::coupled, -1, sys.cols,
+                       null_space_exact(restrict_rows(patch_rows, sys.cols), sys.cols.size()), sys.taylor);
+    }
+  }
+  if (have < wanted) {
+    if constexpr (exact) {
+      // Exactly, on every corner block and strip (face interiors are in no condition).
+      LocalColumns cols;
+      for (int f = 0; f < mesh.num_faces(); ++f)
+        for (int c = 0; c < 4; ++c) add_corner_block(cols, f, c, k, r);
+      const int taylor = cols.size();
+      for (int e = 0; e < mesh.num_edges(); ++e) add_edge_strips(cols, mesh, e, k, r);
+      Rows<Scalar> all;
+      for (const auto& x : rows) all.insert(all.end(), x.begin(), x.end());
+      // The exact global system is dense here: refuse what cannot fit rather than exhaust memory.
+      if (static_cast<double>(all.size()) * cols.size() > 3e7)
+        throw std::runtime_error("the local constructions leave " + std::to_string(wanted - have) +
+                                 " functions of S_" + std::to_string(k) + "^{1," + std::to_string(r) +
+                                 "} undetermined, and the global completion is too large for this mesh (" +
+                                 std::to_string(mesh.num_faces()) + " faces)");
+      keep_independent(G1BasisFunction::Kind::coupled, -1, cols, null_space_exact(restrict_rows(all, cols), cols.size()),
+                       taylor);
+    } else {
+      complete_globally(mesh, gluing, k, r, wanted - have, vertex_functions);
+    }
+  }
+  basis.functions = std::move(vertex_functions);
+  for (auto& f : edge_functions) basis.functions.push_back(std::move(f));
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int i = 2; i <= n - 3; ++i)
+      for (int j = 2; j <= n - 3; ++j)
+        basis.functions.push_back({G1BasisFunction::Kind::face, f, {{g1_unknown(f, i, j, k, r), 1.0}}});
+}
+
+// The functions of each vertex and edge (by owner), for the changes of basis below.
+struct FunctionsByOwner {
+  std::vector<std::vector<int>> vertex, edge;
+  std::vector<int> pairs;
+  FunctionsByOwner(const QuadMesh& mesh, const G1Basis& basis) : vertex(mesh.num_vertices()), edge(mesh.num_edges()) {
+    for (size_t j = 0; j < basis.functions.size(); ++j) {
+      const auto& f = basis.functions[j];
+      if (f.kind == G1BasisFunction::Kind::edge) edge[f.owner].push_back(static_cast<int>(j));
+      if (f.kind == G1BasisFunction::Kind::vertex) vertex[f.owner].push_back(static_cast<int>(j));
+      if (f.kind == G1BasisFunction::Kind::vertex_pair) pairs.push_back(static_cast<int>(j));
+    }
+  }
+};
+
+// Adds the coefficients of the functions to the local columns.
+void add_columns(const G1Basis& basis, const std::vector<int>& which, LocalColumns& cols) {
+  for (int j : which)
+    for (const auto& [c, x] : basis.functions[j].coefficients) cols.add(c);
+}
+
+// The functions as dense columns over `cols` (which holds all their coefficients).
+Eigen::MatrixXd dense_columns(const G1Basis& basis, const std::vector<int>& which, LocalColumns& cols) {
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(cols.size(), static_cast<Eigen::Index>(which.size()));
+  for (size_t i = 0; i < which.size(); ++i)
+    for (const auto& [c, x] : basis.functions[which[i]].coefficients) M(cols.position[c], static_cast<Eigen::Index>(i)) = x;
+  return M;
+}
+
+// Replaces function `id` by the dense column x over `cols`. Entries at rounding level are
+// dropped, to keep the supports sparse, and so are the unknowns in `zero` (exact zeros).
+void store_column(G1Basis& basis, int id, const Eigen::Ref<const Eigen::VectorXd>& x, const LocalColumns& cols,
+                  const std::set<long>* zero = nullptr) {
+  const double drop = 1e-14 * x.cwiseAbs().maxCoeff();
+  auto& coefficients = basis.functions[id].coefficients;
+  coefficients.clear();
+  for (int row = 0; row < cols.size(); ++row)
+    if (std::abs(x(row)) > drop && !(zero && zero->count(cols.global[row]))) coefficients.emplace_back(cols.global[row], x(row));
+}
+
+// Removes from the columns of X their least-squares part in the span of O.
+void project_out(Eigen::MatrixXd& X, const Eigen::MatrixXd& O) {
+  if (O.cols() > 0) X -= O * O.colPivHouseholderQr().solve(X);
+}
+
+// Two changes of basis within each vertex's functions, which keep the span:
+// - a vertex function plus any edge function of its edges is as good a vertex function; keep
+//   the one orthogonal to them (coefficient space), which removes the large bumps along the
+//   edges that the echelon form leaves (the paper's printed functions have them too);
+// - the first is the one with value 1 at the vertex, and the others vanish there (what users
+//   plot, and what the paper lists first).
+void tidy_vertex_functions(const QuadMesh& mesh, G1Basis& basis) {
+  const FunctionsByOwner by(mesh, basis);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const std::vector<int>& ids = by.vertex[v];
+    if (ids.empty()) continue;
+    std::vector<int> others;
+    for (int e : std::set<int>(mesh.ring(v).edges.begin(), mesh.ring(v).edges.end()))
+      others.insert(others.end(), by.edge[e].begin(), by.edge[e].end());
+    LocalColumns cols;
+    cols.add(g1_corner_unknown(mesh.ring(v).faces[0], mesh.ring(v).corners[0], 0, 0, basis.k, basis.r));  // row 0
+    add_columns(basis, ids, cols);
+    add_columns(basis, others, cols);
+    Eigen::MatrixXd X = dense_columns(basis, ids, cols);
+    project_out(X, dense_columns(basis, others, cols));
+    Eigen::Index best;
+    const double pivot_size = X.row(0).cwiseAbs().maxCoeff(&best);  // row 0: the value at the vertex
+    if (pivot_size > 0) {
+      X.col(0).swap(X.col(best));
+      X.col(0) /= X(0, 0);
+      for (Eigen::Index i = 1; i < X.cols(); ++i) X.col(i) -= X(0, i) * X.col(0);
+    }
+    for (size_t i = 0; i < ids.size(); ++i) store_column(basis, ids[i], X.col(static_cast<Eigen::Index>(i)), cols);
+  }
+}
+
+// A vertex-pair function plus any vertex function of its edge's ends or edge function around
+// them is as good a vertex-pair function: keep the part orthogonal to those (coefficient
+// space). Without this the exact echelon-form solutions can lie close to the span of the
+// others, and the stiffness matrix is needlessly ill-conditioned (condition 6e7 instead of
+// 1.8e3 at two subdivisions of the three-quad mesh).
+void tidy_pair_functions(const QuadMesh& mesh, G1Basis& basis) {
+  const FunctionsByOwner by(mesh, basis);
+  for (const int j : by.pairs) {
+    const auto& E = mesh.edge(basis.functions[j].owner);
+    std::set<int> around;
+    for (const int v : {E.v[0], E.v[1]}) {
+      around.insert(by.vertex[v].begin(), by.vertex[v].end());
+      for (int e : mesh.ring(v).edges) around.insert(by.edge[e].begin(), by.edge[e].end());
+    }
+    const std::vector<int> others(around.begin(), around.end()), self{j};
+    LocalColumns cols;
+    add_columns(basis, self, cols);
+    add_columns(basis, others, cols);
+    Eigen::MatrixXd x = dense_columns(basis, self, cols);
+    project_out(x, dense_columns(basis, others, cols));
+    store_column(basis, j, x.col(0), cols);
+  }
+}
+
+// At a boundary vertex, the traces on the boundary of its vertex (and vertex-pair) functions
+// can be linearly dependent (e.g. where the boundary is straight). Dirichlet data are
+// imposed on the traces, so each group is changed, within its span, into functions with
+// independent traces and functions with zero trace (column-pivoted QR of the trace rows).
+void separate_boundary_traces(const QuadMesh& mesh, G1Basis& basis) {
+  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
+  std::set<long> trace_unknowns;  // row 0 of every boundary side
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (!E.boundary()) continue;
+    for (int a = 0; a < n; ++a) trace_unknowns.insert(g1_corner_unknown(E.face[0], E.corner[0], a, 0, k, r));
+  }
+  std::map<int, std::vector<int>> groups;  // boundary vertex -> functions
+  for (size_t j = 0; j < basis.functions.size(); ++j) {
+    const auto& f = basis.functions[j];
+    int v = -1;
+    if (f.kind == G1BasisFunction::Kind::vertex) v = f.owner;
+    if (f.kind == G1BasisFunction::Kind::vertex_pair) {
+      const auto& E = mesh.edge(f.owner);
+      v = mesh.boundary_vertex(E.v[0]) ? E.v[0] : E.v[1];
+    }
+    if (v >= 0 && mesh.boundary_vertex(v)) groups[v].push_back(static_cast<int>(j));
+  }
+  for (const auto& [v, ids] : groups) {
+    LocalColumns cols;
+    add_columns(basis, ids, cols);
+    const Eigen::MatrixXd X = dense_columns(basis, ids, cols);
+    std::vector<int> trace_rows;
+    for (int row = 0; row < cols.size(); ++row)
+      if (trace_unknowns.count(cols.global[row])) trace_rows.push_back(row);
+    if (trace_rows.empty()) continue;
+    const Eigen::MatrixXd T = X(trace_rows, Eigen::all);
+    const Eigen::Index m = X.cols();
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(T);
+    qr.setThreshold(1e-10);
+    const Eigen::Index rank = qr.rank();
+    if (rank == m) continue;
+    // T P = Q [R11 R12]: the columns P [-R11^{-1} R12; I] have zero trace.
+    const Eigen::MatrixXd R = qr.matrixR().topRows(rank).template triangularView<Eigen::Upper>();
+    const Eigen::MatrixXd W = R.leftCols(rank).template triangularView<Eigen::Upper>().solve(R.rightCols(m - rank));
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(m, m - rank);
+    const auto& P = qr.colsPermutation().indices();
+    for (Eigen::Index c = 0; c < m - rank; ++c) {
+      Z(P(rank + c), c) = 1;
+      for (Eigen::Index i = 0; i < rank; ++i) Z(P(i), c) = -W(i, c);
+    }
+    const Eigen::MatrixXd Y = X * Z;
+    // Exactly zero on the boundary rows (rounding there would make the trace nonzero).
+    for (Eigen::Index c = 0; c < m - rank; ++c) store_column(basis, ids[P(rank + c)], Y.col(c), cols, &trace_unknowns);
+  }
+}
+
+}  // namespace
+
+G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating) {
+  G1Basis basis;
+  basis.k = k;
+  basis.r = r;
+  basis.space = g1_space_dimension(mesh, gluing, k, r, floating);  // also validates k, r, gluing
+  basis.exact = gluing.exact() && !floating;
+  if (basis.exact)
+    build<mpq_class>(mesh, gluing, basis);
+  else
+    build<double>(mesh, gluing, basis);
+  tidy_vertex_functions(mesh, basis);
+  tidy_pair_functions(mesh, basis);
+  separate_boundary_traces(mesh, basis);
+  // Largest coefficient +1: comparable scales for assembly and plots, a definite sign.
+  for (auto& f : basis.functions) {
+    double largest = 0;
+    for (const auto& [c, v] : f.coefficients)
+      if (std::abs(v) > std::abs(largest)) largest = v;
+    for (auto& [c, v] : f.coefficients) v /= largest;
+  }
+  for (const auto& f : basis.functions) ++basis.counts[static_cast<int>(f.kind)];
+  const long count = static_cast<long>(basis.functions.size());
+  if (count != basis.space.dimension)
+    throw std::runtime_error("the basis has " + std::to_string(count) + " functions but dim S_" + std::to_string(k) +
+                             "^{1," + std::to_string(r) + "} = " + std::to_string(basis.space.dimension) +
+                             " (the rank tolerance does not separate these gluing data)");
+  return basis;
+}
+
+double g1_residual_max(const QuadMesh& mesh, const GluingData& gluing, const G1Basis& basis) {
+  // Rows per edge; a function is checked on the edges of the faces it lives on (on every
+  // other edge both sides of every row are zero).
+  std::vector<std::vector<std::vector<std::pair<long, double>>>> rows(mesh.num_edges());
+  for (int e = 0; e < mesh.num_edges(); ++e)
+    if (!mesh.edge(e).boundary()) rows[e] = g1_condition_rows(mesh, gluing, basis.k, basis.r, e);
+  double worst = 0;
+  std::unordered_map<long, double> x;
+  for (const auto& f : basis.functions) {
+    x.clear();
+    double scale = 0;
+    for (const auto& [c, v] : f.coefficients) {
+      x[c] = v;
+      scale = std::max(scale, std::abs(v));
+    }
+    if (scale == 0) return INFINITY;  // a zero function is no basis function
+    std::set<int> edges;
+    for (int face : support_faces(f, basis.k, basis.r))
+      for (int side = 0; side < 4; ++side) edges.insert(mesh.face_edge(face, side));
+    for (int e : edges)
+      for (const auto& row : rows[e]) {
+        double sum = 0, size = 0;
+        for (const auto& [c, a] : row) {
+          size += std::abs(a);
+          const auto it = x.find(c);
+          if (it != x.end()) sum += a * it->second;
+        }
+        if (size > 0) worst = std::max(worst, std::abs(sum) / (size * scale));
+      }
+  }
+  return worst;
+}
+
+long g1_basis_rank(const G1Basis& basis, std::string* method) {
+  const Eigen::Index m = basis.unknowns(), n = static_cast<Eigen::Index>(basis.functions.size());
+  if (n == 0) return 0;
+  if (static_cast<double>(m) * static_cast<double>(n) <= 2.5e7) {
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, n);
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (const auto& [c, v] : basis.functions[j].coefficients) M(c, j) = v;
+    Eigen::BDCSVD<Eigen::MatrixXd> svd(M);
+    svd.setThreshold(kTolerance);
+    if (method) *method = "SVD, singular values above 1e-10 * largest";
+    return svd.rank();
+  }
+  // Too large for a dense SVD: sparse rank-revealing QR.
+  Eigen::SparseMatrix<double> M(m, n);
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (const auto& [c, v] : basis.functions[j].coefficients) entries.emplace_back(c, j, v);
+  M.setFromTriplets(entries.begin(), entries.end());
+  M.makeCompressed();
+  Eigen::SparseQR<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> qr;
+  qr.setPivotThreshold(1e-10);
+  qr.compute(M);
+  if (method) *method = "sparse QR, pivots above 1e-10";
+  return qr.rank();
+}
+
+std::vector<int> g1_inseparable_edges(const QuadMesh& mesh, const GluingData& gluing, int k, int r) {
+  std::vector<int> out;
+  const bool exact = gluing.exact();
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (E.boundary()) continue;
+    // Corner blocks at v[0] first, then at v[1], then the strips.
+    LocalColumns cols;
+    add_corner_block(cols, E.face[0], E.corner[0], k, r);
+    add_corner_block(cols, E.face[1], (E.corner[1] + 1) % 4, k, r);
+    add_corner_block(cols, E.face[0], (E.corner[0] + 1) % 4, k, r);
+    add_corner_block(cols, E.face[1], E.corner[1], k, r);
+    add_edge_strips(cols, mesh, e, k, r);
+    bool separable;
+    if (exact) {
+      const auto Z = null_space_exact(restrict_rows(g1_condition_rows_exact(mesh, gluing, k, r, e), cols), cols.size());
+      // Rank of the Taylor rows [from, to) of the null-space vectors, exactly.
+      auto rank = [&](int from, int to) {
+        std::vector<std::vector<mpq_class>> T(to - from, std::vector<mpq_class>(Z.size()));
+        for (size_t j = 0; j < Z.size(); ++j)
+          for (int i = from; i < to; ++i) T[i - from][j] = Z[j][i];
+        long r = 0;
+        null_space_exact(std::move(T), static_cast<int>(Z.size()), &r);
+        return r;
+      };
+      separable = rank(0, 16) == rank(0, 8) + rank(8, 16);
+    } else {
+      const Eigen::MatrixXd Z = null_space(restrict_rows(g1_condition_rows(mesh, gluing, k, r, e), cols), cols.size());
+      auto rank = [&](int from, int to) {
+        Eigen::JacobiSVD<Eigen::MatrixXd> svd(Z.middleRows(from, to - from));
+        svd.setThreshold(kTolerance);
+        return static_cast<long>(svd.rank());
+      };
+      separable = rank(0, 16) == rank(0, 8) + rank(8, 16);
+    }
+    if (!separable) out.push_back(e);
+  }
+  return out;
+}
+
+G1Basis c0_multipatch_basis(const QuadMesh& mesh, int k, int r) {
+  if (k < 1 || r < 0 || r >= k) throw std::invalid_argument("c0_multipatch_basis: need 0 <= r < k");
+  G1Basis basis;
+  basis.k = k;
+  basis.r = r;
+  const int n = 2 * k - r + 1;
+  basis.space.unknowns = static_cast<long>(mesh.num_faces()) * n * n;
+  // Union-find over the coefficients: along an interior edge, the side rows of both faces
+  // are the same univariate spline (f1(u, 0) = f0(0, u)), coefficient by coefficient.
+  std::vector<long> parent(basis.space.unknowns);
+  for (long i = 0; i < basis.space.unknowns; ++i) parent[i] = i;
+  auto find = [&](long x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (E.boundary()) continue;
+    for (int a = 0; a < n; ++a) {
+      const long x = find(g1_corner_unknown(E.face[0], E.corner[0], a, 0, k, r));
+      const long y = find(g1_corner_unknown(E.face[1], (E.corner[1] + 1) % 4, 0, a, k, r));
+      if (x != y) parent[std::max(x, y)] = std::min(x, y);
+    }
+  }
+  std::map<long, int> function_of_root;
+  for (long i = 0; i < basis.space.unknowns; ++i) {
+    const long root = find(i);
+    auto [it, added] = function_of_root.emplace(root, static_cast<int>(basis.functions.size()));
+    if (added) basis.functions.push_back({G1BasisFunction::Kind::face, static_cast<int>(i / (n * n)), {}});
+    basis.functions[it->second].coefficients.emplace_back(i, 1.0);
+  }
+  basis.space.dimension = static_cast<long>(basis.functions.size());
+  basis.counts[static_cast<int>(G1BasisFunction::Kind::face)] = basis.space.dimension;
+  basis.exact = true;
+  return basis;
+}
+
+std::vector<int> support_faces(const G1BasisFunction& f, int k, int r) {
+  const long per_face = static_cast<long>(2 * k - r + 1) * (2 * k - r + 1);
+  std::set<int> faces;
+  for (const auto& [c, v] : f.coefficients)
+    if (v != 0) faces.insert(static_cast<int>(c / per_face));
+  return {faces.begin(), faces.end()};
+}
+
+BezierMesh g1_bezier_mesh(const QuadMesh& mesh, const G1Basis& basis) {
+  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
+  const auto extraction = bezier_extraction(BSplineBasis1D(k, g1_face_knots(k, r)));  // two elements, (k+1) x (k+1)
+  const int first[2] = {0, n - k - 1};                                  // first function alive per half
+
+  // Per face: the functions living on it, with their coefficients there.
+  const long per_face = static_cast<long>(n) * n;
+  std::vector<std::map<int, std::vector<std::pair<int, double>>>> on_face(mesh.num_faces());
+  for (size_t j = 0; j < basis.functions.size(); ++j)
+    for (const auto& [c, v] : basis.functions[j].coefficients)
+      on_face[c / per_face][static_cast<int>(j)].emplace_back(static_cast<int>(c % per_face), v);
+
+  BezierMesh out;
+  out.reserve(4 * mesh.num_faces(), 0);
+  out.set_num_functions(static_cast<int>(basis.functions.size()));
+  out.set_boundary_names({"boundary"});
+  const int B = (k + 1) * (k + 1);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int ht = 0; ht < 2; ++ht)
+      for (int hs = 0; hs < 2; ++hs) {
+        BezierCell cell;
+        cell.patch = f;
+        cell.index_u = hs;
+        cell.index_v = ht;
+        cell.u0 = 0.5 * hs;
+        cell.u1 = cell.u0 + 0.5;
+        cell.v0 = 0.5 * ht;
+        cell.v1 = cell.v0 + 0.5;
+        cell.degree_u = cell.degree_v = k;
+        // Face sides: corner 0 -> 1 is t = 0, 1 -> 2 is s = 1, 2 -> 3 is t = 1, 3 -> 0 is s = 0.
+        const bool touches[4] = {ht == 0, hs == 1, ht == 1, hs == 0};
+        const CellSide sides[4] = {kSideBottom, kSideRight, kSideTop, kSideLeft};
+        for (int c = 0; c < 4; ++c)
+          if (touches[c] && mesh.edge(mesh.face_edge(f, c)).boundary()) cell.boundary[sides[c]] = 0;
+        std::vector<int> ids;
+        std::vector<Eigen::RowVectorXd> rows;
+        for (const auto& [j, coefficients] : on_face[f]) {
+          Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(B);
+          for (const auto& [local, v] : coefficients) {
+            const int i = local / n - first[hs], jj = local % n - first[ht];
+            if (i < 0 || i > k || jj < 0 || jj > k) continue;
+            for (int c = 0; c <= k; ++c)
+              for (int a = 0; a <= k; ++a) row(a + (k + 1) * c) += v * extraction[hs](i, a) * extraction[ht](jj, c);
+          }
+          if (row.cwiseAbs().maxCoeff() == 0) continue;
+          ids.push_back(j);
+          rows.push_back(std::move(row));
+        }
+        Eigen::MatrixXd C(static_cast<Eigen::Index>(rows.size()), B);
+        for (size_t i = 0; i < rows.size(); ++i) C.row(static_cast<Eigen::Index>(i)) = rows[i];
+        out.add_cell(cell, ids, out.add_extraction(std::move(C)));
+      }
+  return out;
+}
+
+}  // namespace knotwork
+
+namespace knotwork {
+
+std::vector<Eigen::MatrixXd> g1_cell_bernstein(const BezierMesh& mesh, const Eigen::MatrixXd& c) {
+  std::vector<Eigen::MatrixXd> out(mesh.num_cells());
+  for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+    const auto ids = mesh.functions(cell);
+    const Eigen::MatrixXd& C = mesh.extraction(cell);
+    out[cell] = Eigen::MatrixXd::Zero(C.cols(), c.cols());
+    for (size_t a = 0; a < ids.size(); ++a) out[cell] += C.row(static_cast<Eigen::Index>(a)).transpose() * c.row(ids[a]);
+  }
+  return out;
+}
+
+Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, double* deviation) {
+  return g1_fit(
+      mesh, basis,
+      [&](int f, double s, double t) -> Eigen::Vector3d {
+        const auto& v = mesh.face(f);
+        return (1 - s) * (1 - t) * mesh.vertex(v[0]) + s * (1 - t) * mesh.vertex(v[1]) + s * t * mesh.vertex(v[2]) +
+               (1 - s) * t * mesh.vertex(v[3]);
+      },
+      deviation);
+}
+
+Eigen::MatrixX3d g1_fit(const QuadMesh& mesh, const G1Basis& basis,
+                        const std::function<Eigen::Vector3d(int face, double s, double t)>& target_point,
+                        double* deviation) {
+  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
+  // Greville abscissae: a B-spline combination with these as coefficients is the identity,
+  // so the bilinear face has the bilinear map at (xi_i, xi_j) as its coefficients.
+  const std::vector<double> knots = g1_face_knots(k, r);
+  std::vector<double> xi(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    for (int l = 1; l <= k; ++l) xi[i] += knots[i + l];
+    xi[i] /= k;
+  }
+  Eigen::MatrixX3d target(basis.unknowns(), 3);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) target.row(g1_unknown(f, i, j, k, r)) = target_point(f, xi[i], xi[j]).transpose();
+  Eigen::SparseMatrix<double> M(basis.unknowns(), static_cast<Eigen::Index>(basis.functions.size()));
+  std::vector<Eigen::Triplet<double>> entries;
+  for (size_t j = 0; j < basis.functions.size(); ++j)
+    for (const auto& [u, x] : basis.functions[j].coefficients) entries.emplace_back(u, static_cast<int>(j), x);
+  M.setFromTriplets(entries.begin(), entries.end());
+  // The boundary curve (row 0 of every boundary side) weighs 10^6 times more: a straight
+  // side of the mesh stays straight wherever the space allows it (the target is on the
+  // segment), instead of trading boundary accuracy for interior accuracy.
+  Eigen::VectorXd weight = Eigen::VectorXd::Ones(basis.unknowns());
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (!E.boundary()) continue;
+    for (int a = 0; a < n; ++a) weight(g1_corner_unknown(E.face[0], E.corner[0], a, 0, k, r)) = 1e6;
+  }
+  const Eigen::SparseMatrix<double> normal = M.transpose() * weight.asDiagonal() * M;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("G1 least-squares fit: the normal equations are singular");
+  const Eigen::MatrixX3d c = solver.solve(Eigen::MatrixX3d(M.transpose() * weight.asDiagonal() * target));
+  if (deviation) *deviation = (M * c - target).rowwise().norm().maxCoeff();
+  return c;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,129 @@
+// Family "g1": G1 macro-patch splines (Blidia-Mourrain-Villamizar) on a quad mesh of any
+// topology, planar or a closed surface; the geometry is the G1 spline fitted once to the
+// coarse mesh and restricted exactly to the subdivided cells. Refinement is uniform
+// subdivision (one more per convergence level).
+#include <cmath>
+#include <cstdio>
+
+#include "basis/g1/g1_discretization.hpp"
+#include "basis/g1/gluing_file.hpp"
+#include "cases/spline_space.hpp"
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+std::string describe_g1(const CaseDescription& c) {
+  const auto& g = c.g1;
+  return std::string(g.c0 ? "C0 multipatch baseline" : "G1 macro-patch splines (Blidia-Mourrain-Villamizar)") +
+         ", degree " + std::to_string(g.degree) + ", C^" + std::to_string(g.split_smoothness) + " 4-split, " +
+         (is_named_gluing(g.gluing) ? g.gluing : std::string("file")) + " gluing, " +
+         (g.surface ? "Laplace-Beltrami on a " + g.shape + " surface" : std::string("planar Poisson"));
+}
+
+std::string format(const char* f, double a) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, a);
+  return b;
+}
+
+class G1Space final : public SplineSpace {
+ public:
+  G1Space(const CaseDescription& c, int level, const ProgressFunction& progress)
+      : case_(&c), d_(discretize_g1(c, level, progress)) {}
+  const BezierMesh& mesh() const override { return d_.mesh; }
+  const GeometryMap& geometry() const override { return *d_.geometry; }
+  std::string description() const override { return describe_g1(*case_); }
+  std::vector<ReportField> report() const override {
+    const auto& n = d_.basis.counts;
+    const CaseDescription& c = *case_;
+    const std::string regularity = c.g1.surface ? "min |x_u x x_v|/max" : "min det J/max";
+    std::vector<ReportField> r{
+        {.key = "faces",
+         .value = long(d_.level.mesh.num_faces()),
+         .text = std::to_string(d_.level.mesh.num_faces()) + " faces after " + std::to_string(d_.levels) +
+                 " subdivisions, " + std::to_string(d_.mesh.num_cells()) + " Bezier cells",
+         .label = "mesh",
+         .column = true,
+         .width = 6},
+        {.key = "subdivisions", .value = long(d_.levels)},
+        {.key = "counts.vertex",
+         .value = n[0],
+         .text = "vertex " + std::to_string(n[0]) + ", edge " + std::to_string(n[1]) + ", face " + std::to_string(n[2]) +
+                 ", vertex-pair " + std::to_string(n[3]) + ", coupled " + std::to_string(n[4]) + " functions",
+         .label = "basis"},
+        {.key = "counts.edge", .value = n[1]},
+        {.key = "counts.face", .value = n[2]},
+        {.key = "counts.vertex_pair", .value = n[3]},
+        {.key = "counts.coupled", .value = n[4]},
+        {.key = "fit_deviation",
+         .value = d_.fit_deviation,
+         .text = "fitted to the " + c.g1.shape + " faces (largest coefficient deviation " +
+                 format("%.3e", d_.fit_deviation) + "); " + regularity + " " + format("%.3e", d_.min_regularity) +
+                 " (face " + std::to_string(d_.worst_face + 1) + ")" +
+                 (c.g1.surface ? ", distance to the " + c.g1.shape + " " + format("%g", d_.shape_distance) : ""),
+         .label = "geometry"},
+        {.key = "boundary_deviation", .value = d_.boundary_deviation},
+        {.key = "shape_distance", .value = d_.shape_distance},
+        {.key = "worst_face", .value = long(d_.worst_face + 1)},
+        {.key = "min_regularity", .value = d_.min_regularity},
+        {.key = "min_regularity_cell_nodes", .value = d_.min_regularity_nodes},
+    };
+    return r;
+  }
+  std::vector<std::string> notes() const override {
+    if (d_.min_regularity_nodes > 1e-8) return {};
+    char b[400];
+    std::snprintf(b, sizeof b,
+                  "%s = %.3g (relative) at (%.6g, %.6g, %.6g), a cell corner or side midpoint: the fitted geometry is "
+                  "singular there (regular at every quadrature point); expect reduced rates",
+                  case_->g1.surface ? "|x_u x x_v|" : "det J", d_.min_regularity_nodes, d_.singular_point.x(),
+                  d_.singular_point.y(), d_.singular_point.z());
+    return {b};
+  }
+  std::vector<ReportField> check_solution(const Eigen::VectorXd& coefficients) const override {
+    const double jump = g1_gradient_jump(d_, coefficients);
+    return {{.key = "c1_jump",
+             .value = jump,
+             .text = "largest gradient jump across interfaces " + format("%.3e", jump) + " (relative)",
+             .label = "C1",
+             .column = true,
+             .width = 10}};
+  }
+
+ private:
+  const CaseDescription* case_;
+  G1Discretization d_;
+};
+
+}  // namespace
+
+SpaceFamily g1_family() {
+  SpaceFamily f;
+  f.name = "g1";
+  f.build = [](const CaseDescription& c, int level, const ProgressFunction& progress) -> std::unique_ptr<SplineSpace> {
+    return std::make_unique<G1Space>(c, level, progress);
+  };
+  f.override_options = [](CaseDescription& c, int degree, int elements) {
+    if (elements)
+      throw InputError("--elements: not used with family = \"g1\" (refine with [space] refine; converge subdivides)");
+    if (!degree) return;
+    if (degree < 2 || degree > 12) throw InputError("--degree: must be in [2, 12] for G1 spaces");
+    if (c.g1.split_smoothness > degree - 1)
+      throw InputError("--degree: " + std::to_string(degree) + " is too low for the case's split_smoothness " +
+                       std::to_string(c.g1.split_smoothness) + " (needs degree >= split_smoothness + 1)");
+    c.g1.degree = degree;
+    c.space.degree = {degree, degree};
+  };
+  f.check_converge = [](const CaseDescription&, int levels) {
+    if (levels > 7) throw InputError("--levels: must be in [1, 7] for G1 spaces, got " + std::to_string(levels));
+  };
+  f.check_adapt = [](const CaseDescription& c) {
+    throw InputError(c.path + ": [space] family: \"g1\" refines only by uniform subdivision; adaptive refinement needs a "
+                     "family that refines cells locally (family = \"knot_segments\" or \"pt\")");
+  };
+  return f;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,123 @@
+#pragma once
+#include <gmpxx.h>
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "basis/g1/quad_mesh.hpp"
+
+namespace knotwork {
+
+// A function on [0, 1] that is a polynomial on [0, 1/2] and on [1/2, 1], each piece given
+// by its coefficients in powers of u (the global parameter, not shifted). Exact rational
+// coefficients when the data are rational (`exact`), doubles always.
+struct PiecewisePolynomial {
+  std::array<std::vector<double>, 2> pieces;
+  std::optional<std::array<std::vector<mpq_class>, 2>> exact;
+  static PiecewisePolynomial constant(const mpq_class& v);
+  static PiecewisePolynomial from_exact(std::array<std::vector<mpq_class>, 2> pieces);
+  static PiecewisePolynomial from_double(std::array<std::vector<double>, 2> pieces);
+  double operator()(double u) const;
+  mpq_class exact_value(const mpq_class& u) const;  // requires exact
+  int degree() const;
+};
+
+// Gluing data [a, b, c] of every interior edge, in the edge's own orientation: u = 0 at
+// QuadMesh::Edge::v[0]. Across the edge, with f1 on edge.face[0] and f0 on edge.face[1] in
+// their corner frames at v[0] (MATH.md section 2):
+//   f1(u, 0) = f0(0, u),   c(u) dv f1(u, 0) = b(u) du f0(0, u) + a(u) dv f0(0, u).
+struct EdgeGluing {
+  PiecewisePolynomial a, b, c;
+};
+struct GluingData {
+  std::vector<std::optional<EdgeGluing>> edges;  // per mesh edge; empty on boundary edges
+  bool exact() const;                            // every coefficient rational
+};
+
+// The symmetric gluing (Blidia-Mourrain-Villamizar eq. 11) with Hermite functions of degree 2,
+// C^0 at 1/2: a = 2cos(2pi/n0) d0(u) - 2cos(2pi/n1) d1(u), b = -1, c = 1, n the number of
+// edges at each end; at a boundary vertex shared by F faces the angle pi/F replaces 2pi/n.
+// c1_blend: the Hermite functions C^1 at 1/2 instead (d0 = 1 - 2u^2 | 2(1-u)^2): with a
+// C^1 split (r >= 1) the paper's C^0 blend forces every G1 geometry to be singular at the
+// midpoint of an edge whose a has a kink there (docs/G1_POISSON.md); these data do not.
+GluingData symmetric_gluing(const QuadMesh& mesh, bool c1_blend = false);
+
+// The general construction (eqs. 8 and 10, c = 1) from a fan of vectors per vertex: the
+// mesh's own edge directions, projected to the tangent plane at the vertex. At each end,
+// a and b take the values of eq. (8) and are blended along the edge by the Hermite
+// functions d0, d1 of degree 2, C^1 at 1/2 (d0 + d1 = 1), so Condition 3.1 holds by
+// construction and constant data stay constant. On planar meshes whose coordinates are
+// multiples of 2^-20 (e.g. 0.375, 1.25) the data are exact rationals; otherwise floating
+// point.
+// Throws std::invalid_argument naming the vertex where two consecutive edges are parallel.
+// regular_fans_where_rational ("regular_fans" in files): at interior vertices where the
+// symmetric angle 2pi/n has a rational cosine (valence 3, 4, 6) the regular fan's values
+// a = 2cos(2pi/n), b = -1 replace the mesh's own directions, so that the data stay exact (on
+// meshes with short binary coordinates) and as regular as the symmetric ones where they can;
+// they follow the mesh at the other vertices (e.g. valence 5) and on the boundary (so that a
+// corner of the domain stays a corner and a straight side stays straight).
+GluingData geometric_gluing(const QuadMesh& mesh, bool regular_fans_where_rational = false);
+
+// The data of an edge as seen from its other end: (a, b, c)(u) -> (a, c, b)(1 - u).
+EdgeGluing reversed(const EdgeGluing& g);
+
+// Condition 3.1 at every interior vertex: the product of [[0, 1], [b_i(0), a_i(0)]] over the
+// edges around it (a = a/c, b = b/c at the vertex's end) is the identity. Returns one
+// message per failing vertex ("vertex 5 (valence 3): product [[...]] is not the identity").
+// At a crossing vertex (valence 4, a = 0 at it on every edge) also Condition 3.2, eqs. (6)
+// and (7) ("vertex 5 (crossing, valence 4): Condition 3.2 fails ...").
+// Also reports interior edges without data and c = 0 at an end.
+std::vector<std::string> gluing_violations(const QuadMesh& mesh, const GluingData& gluing, double tolerance = 1e-10);
+
+// The spline space S_k^{1,r}(M): per face R_k^r (degree k in s and t, knots 0, 1/2, 1, C^r
+// at 1/2: (2k - r + 1)^2 B-spline coefficients), constrained by the G1 conditions across
+// every interior edge, imposed as polynomial identities on both halves of the edge.
+struct G1SpaceDimension {
+  long unknowns = 0, constraints = 0, rank = 0, dimension = 0;
+  bool exact = false;       // rank of the rational system (modulo two primes that agree)
+  double tolerance = 0;     // otherwise: singular values below tolerance * largest are zero
+};
+// `floating` forces the floating-point path (an independent cross-check of the exact one).
+G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false);
+
+// dim Syz_k^{r-1,r,r} of one edge's data (Sec. 4.2): triples (A, B, C), A of degree k-1 and
+// C^{r-1} at 1/2, B and C of degree k and C^r (A the derivative along the edge, B and C the
+// cross-boundary derivatives), with A a + B b - C c = 0. Exact for rational data.
+long gluing_syzygy_dimension(const EdgeGluing& g, int k, int r);
+
+// Theorem 7.1: (2k-r-3)^2 F2 + sum over edges of dim Syz + 4 F2 - 9 F1 + 3 F0 + F+ (F+ the
+// crossing vertices, where a = 0 on every edge). Stated for k at or above the separability
+// of every edge; the count of the theorem is for closed meshes (boundary edges and
+// vertices count differently, Remark 4.14): nullopt on meshes with a boundary.
+std::optional<long> theorem_7_1_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
+
+// The rows of conditions (2) and (3) of one interior edge (all interior edges when edge < 0),
+// as sparse rows over the unknowns g1_unknown(...): point evaluations at k + deg + 1 points
+// of each half of the edge, enough to make them polynomial identities there. The exact
+// version requires gluing.exact().
+std::vector<std::vector<std::pair<long, double>>> g1_condition_rows(const QuadMesh& mesh, const GluingData& gluing,
+                                                                    int k, int r, int edge = -1);
+std::vector<std::vector<std::pair<long, mpq_class>>> g1_condition_rows_exact(const QuadMesh& mesh,
+                                                                             const GluingData& gluing, int k, int r,
+                                                                             int edge = -1);
+
+// Sparse rows (column, value) as a dense matrix with `columns` columns.
+Eigen::MatrixXd dense_rows(const std::vector<std::vector<std::pair<long, double>>>& rows, long columns);
+
+// Index of coefficient (i, j) (i along s, j along t) of face f among the unknowns.
+inline long g1_unknown(int f, int i, int j, int k, int r) {
+  const int n = 2 * k - r + 1;
+  return static_cast<long>(f) * n * n + static_cast<long>(i) * n + j;
+}
+
+// The same for the coefficient a steps along the u direction and b steps along the v
+// direction of the face's frame at `corner` (MATH.md section 2: corner 0 at (s, t) = (0, 0),
+// u along s; corners counter-clockwise).
+long g1_corner_unknown(int face, int corner, int a, int b, int k, int r);
+
+// The knot vector of each direction of a face: 0^(k+1), (1/2)^(k-r), 1^(k+1).
+std::vector<double> g1_face_knots(int k, int r);
+
+}  // namespace knotwork

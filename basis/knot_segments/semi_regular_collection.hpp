@@ -1,0 +1,151 @@
+#pragma once
+#include <array>
+#include <map>
+#include <set>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "basis/core/bezier_mesh.hpp"
+#include "basis/core/bspline_basis.hpp"
+#include "basis/tmesh/rectangular_partition.hpp"
+
+namespace knotwork {
+
+// One tensor-product B-spline with its own local knot vectors (Weller): dx+2 values in x,
+// dy+2 in y. B(x, y) = N(x_knots | x) N(y_knots | y).
+struct LocalBSpline {
+  std::vector<double> x, y;
+  bool operator==(const LocalBSpline& o) const { return x == o.x && y == o.y; }
+  bool operator<(const LocalBSpline& o) const { return x != o.x ? x < o.x : y < o.y; }
+};
+
+// A knot segment (or ray, or line) to insert: x = position for vertical ones, from <= y <= to
+// (horizontal: y = position, from <= x <= to), with a multiplicity in [1, degree+1].
+struct KnotInsertion {
+  bool vertical = true;
+  double position = 0, from = 0, to = 0;
+  int multiplicity = 1;
+};
+
+// True when no local knot vector repeats a value strictly inside it: every interior knot
+// of the collection has multiplicity 1 (the hypothesis of Weller's Prop. 4.2).
+bool interior_knots_simple(const std::vector<LocalBSpline>& splines);
+
+// What a refinement did: the segment as inserted after any extension.
+struct InsertionReport {
+  KnotInsertion requested, inserted;
+  bool extended = false;
+  int splits = 0;  // B-splines split
+};
+
+// Why a cell is not semi-regular (Def. 3.3), or which B-spline is degenerate (Def. 3.1).
+struct Violation {
+  int cell = -1;          // index in partition() (-1 for collection-wide problems)
+  std::string reason;     // e.g. "cell [0.25,0.5]x[0.5,0.75]: B-splines 12 and 17 share ..."
+};
+
+// A classical tensor-product spline: coefficients(i, j) multiplies N_i(x) N_j(y).
+struct TensorProductSpline {
+  BSplineBasis1D basis_x, basis_y;
+  Eigen::MatrixXd coefficients;
+  double operator()(double x, double y) const;
+};
+
+// A semi-regular collection of tensor-product B-splines over a rectangle (Weller 1994):
+// local refinement by knot segments that keeps a linearly independent partition of unity.
+class SemiRegularCollection {
+ public:
+  // All tensor-product B-splines of bi-degree (dx, dy) on open knot vectors: the starting
+  // point of refinement. Interior breakpoint i has multiplicity mult_x[i-1] (default 1).
+  static SemiRegularCollection tensor_product(int dx, int dy, const std::vector<double>& breaks_x,
+                                              const std::vector<double>& breaks_y,
+                                              const std::vector<int>& mult_x = {},
+                                              const std::vector<int>& mult_y = {});
+
+  // A collection given explicitly (e.g. read from a file), to be checked with violations().
+  // The domain is the bounding box of the supports. Throws std::invalid_argument for knot
+  // vectors of the wrong length or not non-decreasing.
+  static SemiRegularCollection from_splines(int dx, int dy, std::vector<LocalBSpline> splines);
+
+  int degree_x() const { return dx_; }
+  int degree_y() const { return dy_; }
+  // In lexicographic order of their knot vectors (the order coefficients refer to).
+  const std::vector<LocalBSpline>& splines() const;
+  int size() const { return static_cast<int>(set_.size()); }
+  // Bounding box of the supports: x0, y0, x1, y1.
+  std::array<double, 4> domain() const { return {x0_, y0_, x1_, y1_}; }
+
+  // Inserts the segment by splitting every B-spline it crosses completely (and repeating
+  // until no B-spline is crossed by a knot it does not use). If the result would not be
+  // non-degenerate and semi-regular, the segment is extended one knot step at a time (both
+  // ends) until it is, at worst to a full knot line. A segment the mesh already has is a
+  // no-op (splits = 0). Only the region whose B-splines changed is re-checked, so the cost
+  // grows with the refinement, not with the collection (the collection must be
+  // semi-regular before). Throws std::invalid_argument for a
+  // segment outside the domain or of zero length, a multiplicity outside [1, degree+1], or
+  // one that overlaps an existing knot of another multiplicity.
+  InsertionReport insert(const KnotInsertion& segment);
+
+  // Refines the given cells of partition() (indices): a vertical and a horizontal segment
+  // through each cell's middle, spanning the cell, extended where needed.
+  std::vector<InsertionReport> refine_cells(const std::vector<int>& cells);
+  // Refines each listed cell by halving it in the given direction only (kSplitX: a vertical
+  // segment through the middle; kSplitY: a horizontal one; kSplitBoth: both).
+  enum Split { kSplitX = 1, kSplitY = 2, kSplitBoth = 3 };
+  std::vector<InsertionReport> refine_cells(const std::vector<int>& cells, const std::vector<Split>& split);
+
+  // Multiplicity of the mesh's knot at `position` over [from, to] (0 if it is not a knot
+  // there all along): what the inserted segments and the starting grid say.
+  int knot_multiplicity(bool vertical, double position, double from, double to) const {
+    return covering_multiplicity(vertical, position, from, to);
+  }
+
+  // The partition induced by the B-splines (cells in row order of their lower-left corners).
+  RectangularPartition partition() const;
+  // Def. 3.1 and Def. 3.3 checked cell by cell; empty when the collection is semi-regular.
+  std::vector<Violation> violations() const;
+
+  // Value of sum_k coefficients[k] B_k at (x, y) by Weller's evaluation (eqs. 3.4-3.5): on the
+  // point's cell, d+1 univariate de Boor runs over the vectors Y^(i), then one over X (or
+  // the transpose, case (b)). Throws if the point is outside or the cell is not regular.
+  double evaluate(std::span<const double> coefficients, double x, double y) const;
+
+  // The same spline as a classical tensor-product B-spline (Sec. 2): every knot extended to
+  // a knot line with its maximal multiplicity, each B_k rewritten there by knot insertion.
+  // For export to tools that know only tensor-product splines.
+  TensorProductSpline to_tensor_product(std::span<const double> coefficients) const;
+
+  // Every B-spline's polynomial piece on every cell of the partition, as Bernstein
+  // coefficients: the BezierMesh the solver and the checks read. Boundary ids 0..3 as for
+  // a patch (bottom, right, top, left).
+  BezierMesh bezier_mesh() const;
+
+ private:
+  struct Piece {
+    double from, to;
+    int multiplicity;
+  };
+  // What one insertion attempt changed, to check it locally and to undo it.
+  struct Change {
+    std::vector<LocalBSpline> removed, added;
+  };
+  int dx_ = 2, dy_ = 2;
+  std::set<LocalBSpline> set_;
+  mutable std::vector<LocalBSpline> cache_;
+  mutable bool cache_valid_ = false;
+  double x0_ = 0, x1_ = 1, y0_ = 0, y1_ = 1;
+  // Every knot line/segment of the mesh so far, per orientation and position.
+  std::map<double, std::vector<Piece>> vlines_, hlines_;
+  void add_line(const KnotInsertion& s);
+  // Largest multiplicity the lines at `position` give on all of [lo, hi] (min over the
+  // interval of the max over the pieces covering each point); 0 if some part is uncovered.
+  int covering_multiplicity(bool vertical, double position, double lo, double hi) const;
+  // Splits B-splines (starting from `work`) until none is crossed by a line it does not use.
+  void split_until_stable(std::vector<LocalBSpline> work, Change& change);
+  // Def. 3.3 on the cells inside the supports that changed; empty when they are fine.
+  std::string local_violation(const Change& change) const;
+  void undo(const Change& change);
+};
+
+}  // namespace knotwork

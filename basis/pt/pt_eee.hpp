@@ -1,0 +1,125 @@
+#pragma once
+// Internal to basis/: what the PT-spline constructions (pt_spline.cpp, pt_minimal_extension.cpp)
+// share: the grid of all coordinates, exact B-spline values and jumps, sparse rational vectors,
+// and the Extended Edge Elimination solve itself.
+#include <gmpxx.h>
+
+#include <algorithm>
+#include <map>
+#include <numeric>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "basis/pt/pt_spline.hpp"
+#include "basis/tmesh/rectangular_partition.hpp"
+
+namespace knotwork::pt_detail {
+
+// Value of the B-spline with local knots t (degree t.size() - 2) at x, not at a knot.
+template <class S>
+S bspline_value(const std::vector<mpq_class>& knots, const S& x) {
+  const int p = static_cast<int>(knots.size()) - 2;
+  std::vector<S> t(knots.size());
+  for (size_t i = 0; i < knots.size(); ++i) {
+    if constexpr (std::is_same_v<S, double>) t[i] = knots[i].get_d();
+    else t[i] = knots[i];
+  }
+  if (x < t.front() || x >= t.back()) return S(0);
+  std::vector<S> N(p + 1, S(0));
+  for (int i = 0; i <= p; ++i)
+    if (t[i] <= x && x < t[i + 1]) N[i] = 1;
+  for (int q = 1; q <= p; ++q)
+    for (int i = 0; i + q <= p; ++i) {
+      S v = 0;
+      if (t[i + q] != t[i]) v += (x - t[i]) / (t[i + q] - t[i]) * N[i];
+      if (t[i + q + 1] != t[i + 1]) v += (t[i + q + 1] - x) / (t[i + q + 1] - t[i + 1]) * N[i + 1];
+      N[i] = v;
+    }
+  return N[0];
+}
+
+// The jump of the p-th derivative (p = degree) of the B-spline with local knots t across the
+// knot value k: the p-th derivative is piecewise constant on the knot intervals.
+mpq_class top_derivative_jump(const std::vector<mpq_class>& t, const mpq_class& k);
+
+// The full grid of all coordinates, and which cell of T covers each grid cell.
+struct Grid {
+  std::vector<mpq_class> X, Y;
+  std::vector<int> owner;  // ix + (X.size() - 1) * iy
+  int nx() const { return static_cast<int>(X.size()) - 1; }
+  int ny() const { return static_cast<int>(Y.size()) - 1; }
+  int at(int ix, int iy) const { return owner[ix + nx() * iy]; }
+  int index_x(const mpq_class& v) const { return static_cast<int>(std::lower_bound(X.begin(), X.end(), v) - X.begin()); }
+  int index_y(const mpq_class& v) const { return static_cast<int>(std::lower_bound(Y.begin(), Y.end(), v) - Y.begin()); }
+};
+
+Grid make_grid(const RectangularPartition& mesh);
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int a) { return parent[a] == a ? a : parent[a] = find(parent[a]); }
+  void join(int a, int b) { parent[find(a)] = find(b); }
+};
+
+inline bool contains(const std::vector<mpq_class>& lines, const mpq_class& v) {
+  return std::find(lines.begin(), lines.end(), v) != lines.end();
+}
+
+using SparseVector = std::map<int, mpq_class>;
+void axpy(SparseVector& y, const mpq_class& a, const SparseVector& x);
+inline std::vector<std::pair<int, mpq_class>> as_function(const SparseVector& v) { return {v.begin(), v.end()}; }
+
+// Sparse vectors in echelon form (pivot: the leading index). add() reduces `key` by the
+// vectors added so far, carrying `companion` along with the same operations, and keeps the
+// reduced pair as a new pivot when the key is not zero; returns whether it was not. Pivots are
+// never changed, so a sequence of adds is a triangular change of basis.
+class SparseEchelon {
+ public:
+  bool add(SparseVector& key, SparseVector& companion) {
+    for (auto it = key.begin(); it != key.end();) {
+      const auto p = pivots_.find(it->first);
+      if (p == pivots_.end()) {
+        ++it;
+        continue;
+      }
+      const int lead = it->first;
+      const mpq_class factor = -it->second / p->second.first.at(lead);
+      axpy(key, factor, p->second.first);
+      axpy(companion, factor, p->second.second);
+      it = key.upper_bound(lead);
+    }
+    if (key.empty()) return false;
+    pivots_.emplace(key.begin()->first, std::make_pair(key, companion));
+    return true;
+  }
+
+ private:
+  std::map<int, std::pair<SparseVector, SparseVector>> pivots_;  // leading index -> (key, companion)
+};
+
+// One EEE equation: sum over (B-spline index, coefficient) = 0.
+using EeeRow = std::vector<std::pair<int, mpq_class>>;
+
+// Solves the EEE equations over B.splines block by block (B-splines linked by a common
+// equation) and fills B.functions: the B-splines no equation touches, untouched, then a local
+// basis of each block's null space (exact). Also sets equations, rank, blocks, largest_block,
+// untouched. Every knot of B.splines must be a coordinate of `mesh` (g = make_grid(mesh)).
+void eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows, const Grid& g,
+                              const RectangularPartition& mesh);
+
+// The construction on an LR-mesh extension of T (pt_minimal_extension.cpp); nullopt when an
+// l-edge cannot be inserted even as a full line. The LR B-splines of the extension need not
+// span all of S(T^e): the result can miss functions, and whether it does depends on the
+// order of insertion (on 12 adaptive L-shape meshes at degrees 2 and 3, longest-first missed
+// a function in 6 of the 24 cases, shortest-first in 3, both in 2), hence the variants,
+// tried in turn by pt_spline_basis.
+struct MinimalVariant {
+  bool shortest_first = false;
+  int extra_steps = 0;
+};
+std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0,
+                                           const MinimalVariant& variant);
+
+}  // namespace knotwork::pt_detail

@@ -1,0 +1,210 @@
+// Family "pt": PT-splines over a T-mesh of the geometry's parameter domain, as a BezierMesh;
+// refined locally by halving marked cells of the T-mesh and building the space anew.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include "basis/pt/pt_bezier_mesh.hpp"
+#include "basis/pt/pt_space.hpp"
+#include "basis/pt/pt_spline.hpp"
+#include "basis/tmesh/knot_polylines.hpp"
+#include "cases/spline_space.hpp"
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// The geometry's breakpoints, exactly (doubles are dyadic rationals), and which interior
+// ones are C0 (multiplicity >= degree): the space must only be C0 there.
+struct GeometryLines {
+  std::vector<mpq_class> breaks[2];
+  C0Lines c0;
+};
+
+GeometryLines geometry_lines(const NurbsPatch& g) {
+  GeometryLines out;
+  for (int d = 0; d < 2; ++d) {
+    const BSplineBasis1D& b = d == 0 ? g.basis_u : g.basis_v;
+    const auto bp = b.breakpoints();
+    const auto mult = b.multiplicities();
+    for (size_t i = 0; i < bp.size(); ++i) {
+      out.breaks[d].push_back(mpq_class(bp[i]));
+      if (i > 0 && i + 1 < bp.size() && mult[i] >= b.degree()) (d == 0 ? out.c0.x : out.c0.y).push_back(mpq_class(bp[i]));
+    }
+  }
+  return out;
+}
+
+// Short decimal when it is exact (0.5), else the fraction (1/3).
+std::string text(const mpq_class& q) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.12g", q.get_d());
+  return mpq_class(std::stod(b)) == q ? std::string(b) : q.get_str();
+}
+
+}  // namespace
+
+std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
+  const GeometryLines lines = geometry_lines(c.geometry);
+  std::vector<RationalBox> start = c.pt.cells;
+  const std::string where = c.path + ": [space] " + (c.pt.tmesh_file.empty() ? "cells" : "tmesh: " + c.pt.tmesh_file);
+  if (start.empty()) {
+    for (size_t j = 0; j + 1 < lines.breaks[1].size(); ++j)
+      for (size_t i = 0; i + 1 < lines.breaks[0].size(); ++i)
+        start.push_back({lines.breaks[0][i], lines.breaks[1][j], lines.breaks[0][i + 1], lines.breaks[1][j + 1]});
+  } else {
+    mpq_class X0 = start[0].x0, Y0 = start[0].y0, X1 = start[0].x1, Y1 = start[0].y1;
+    for (const auto& b : start) {
+      X0 = std::min(X0, b.x0), Y0 = std::min(Y0, b.y0);
+      X1 = std::max(X1, b.x1), Y1 = std::max(Y1, b.y1);
+    }
+    if (X0 != lines.breaks[0].front() || X1 != lines.breaks[0].back() || Y0 != lines.breaks[1].front() ||
+        Y1 != lines.breaks[1].back())
+      throw InputError(where + ": the cells cover [" + text(X0) + ", " + text(X1) + "] x [" + text(Y0) + ", " + text(Y1) +
+                       "], not the geometry's parameter domain [" + text(lines.breaks[0].front()) + ", " +
+                       text(lines.breaks[0].back()) + "] x [" + text(lines.breaks[1].front()) + ", " +
+                       text(lines.breaks[1].back()) + "]");
+  }
+  const int ex = c.space.elements_per_span[0] << level, ey = c.space.elements_per_span[1] << level;
+  // The T-mesh checks compare every pair of cells and the basis is built in exact
+  // arithmetic: 4096 cells take 2.3 s, so 20000 would take minutes and more far longer.
+  if (static_cast<double>(start.size()) * ex * ey > 20000)
+    throw InputError(c.path + ": [space] elements: " + std::to_string(static_cast<long>(start.size()) * ex * ey) +
+                     " cells, more than the 20000 a PT-spline space is built for here");
+  std::vector<RationalBox> cells;
+  for (const auto& b : start)
+    for (int j = 0; j < ey; ++j)
+      for (int i = 0; i < ex; ++i)
+        cells.push_back({b.x0 + (b.x1 - b.x0) * i / ex, b.y0 + (b.y1 - b.y0) * j / ey, b.x0 + (b.x1 - b.x0) * (i + 1) / ex,
+                         b.y0 + (b.y1 - b.y0) * (j + 1) / ey});
+  for (auto& b : cells)
+    for (mpq_class* v : {&b.x0, &b.y0, &b.x1, &b.y1}) v->canonicalize();
+  try {
+    cells = insert_segments(std::move(cells), c.pt.segments);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.path + ": [space] segments: " + e.what());
+  }
+  // A cell must not straddle a knot line of the geometry: the map is one polynomial per cell.
+  for (const auto& b : cells)
+    for (int d = 0; d < 2; ++d)
+      for (const mpq_class& t : lines.breaks[d])
+        if ((d == 0 ? b.x0 : b.y0) < t && t < (d == 0 ? b.x1 : b.y1))
+          throw InputError(where + ": the cell [" + text(b.x0) + ", " + text(b.y0) + ", " + text(b.x1) + ", " + text(b.y1) +
+                           "] straddles the geometry's knot line " + (d == 0 ? "u = " : "v = ") + text(t) +
+                           "; split it there");
+  return cells;
+}
+
+namespace {
+
+
+class PtSpace final : public SplineSpace {
+ public:
+  // PT-splines on the given T-mesh of the case's parameter domain, ready to solve: the
+  // geometry's C0 knot lines are C0 lines of the space. Throws InputError naming the case.
+  PtSpace(const CaseDescription& c, std::vector<RationalBox> cells, int elements)
+      : case_(&c), cells_(std::move(cells)), elements_(elements) {
+    const GeometryLines lines = geometry_lines(c.geometry);
+    try {
+      tmesh_ = std::make_unique<RectangularPartition>(cells_);
+      pt_ = std::make_unique<PtSplineBasis>(
+          pt_spline_basis(*tmesh_, c.space.degree[0], c.space.degree[1], c.pt.extension, lines.c0));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(c.path + ": [space]: " + e.what());
+    }
+    make_boundary_traces_independent(*pt_, *tmesh_);
+    make_numerically_independent(*pt_, *tmesh_);
+    // Exact Bernstein coefficients, rounded once: assembly sees functions that are C^(m-1) to
+    // the last bit, whatever the T-mesh.
+    mesh_ = pt_bezier_mesh(*tmesh_, to_double(pt_cell_polynomials_exact(*pt_, *tmesh_)), pt_->m, pt_->n);
+    pt_->bernstein.reset();  // the exact factors are large on big meshes and not needed again
+    geometry_ = std::make_unique<PatchGeometryMap>(mesh_, c.geometry);
+  }
+  const BezierMesh& mesh() const override { return mesh_; }
+  const GeometryMap& geometry() const override { return *geometry_; }
+  std::string description() const override {
+    const CaseDescription& c = *case_;
+    std::string start = !c.pt.tmesh_file.empty() ? "T-mesh " + c.pt.tmesh_file
+                        : !c.pt.cells.empty()    ? std::to_string(c.pt.cells.size()) + " given cells"
+                                                 : "tensor start";
+    if (!c.pt.segments.empty()) start += " + " + std::to_string(c.pt.segments.size()) + " segments";
+    return "PT-splines, degree " + std::to_string(c.space.degree[0]) + "x" + std::to_string(c.space.degree[1]) + ", " +
+           start + ", extension " + pt_extension_name(c.pt.extension);
+  }
+  std::vector<ReportField> report() const override {
+    return {{.key = "elements", .value = long(elements_), .column = true, .width = 9},
+            {.key = "extension_used", .value = std::string(pt_extension_name(pt_->extension))}};
+  }
+  // The minimal extension was refused and a full one used: never silently.
+  std::vector<std::string> notes() const override {
+    if (pt_->minimal_refused.empty()) return {};
+    return {"the minimal PT extension was refused (" + pt_->minimal_refused + "); the " +
+            pt_extension_name(pt_->extension) + " full extension is used instead (less local)"};
+  }
+  std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& split,
+                                      int* extended) const override {
+    // The BezierMesh cells are the T-mesh cells, in order: halve the marked ones.
+    std::vector<RationalBox> cells = cells_;
+    for (size_t k = 0; k < marked.size(); ++k) {
+      RationalBox& a = cells[marked[k]];
+      RationalBox b = a;
+      if (split[k] == CellSplit::kAcrossU) a.x1 = b.x0 = (a.x0 + a.x1) / 2;
+      else a.y1 = b.y0 = (a.y0 + a.y1) / 2;
+      cells.push_back(b);
+    }
+    if (extended) *extended = 0;
+    return std::make_unique<PtSpace>(*case_, std::move(cells), elements_);
+  }
+  // PT-spline knots are simple, except along the C0 lines.
+  KnotLines knot_lines() const override {
+    KnotPolylines k = knot_polylines(*tmesh_, case_->geometry, [&](bool vertical, double at, double, double) {
+      for (const auto& t : vertical ? pt_->c0.x : pt_->c0.y)
+        if (t.get_d() == at) return vertical ? pt_->m : pt_->n;
+      return 1;
+    });
+    return {std::move(k.lines), std::move(k.kind), std::move(k.multiplicity)};
+  }
+
+ const PtSplineBasis& basis() const { return *pt_; }
+  const RectangularPartition& tmesh() const { return *tmesh_; }
+
+ private:
+  const CaseDescription* case_;
+  std::vector<RationalBox> cells_;
+  int elements_;
+  std::unique_ptr<RectangularPartition> tmesh_;
+  std::unique_ptr<PtSplineBasis> pt_;
+  BezierMesh mesh_;
+  std::unique_ptr<PatchGeometryMap> geometry_;
+};
+
+}  // namespace
+
+const PtSplineBasis* pt_basis_of(const SplineSpace& space) {
+  const auto* pt = dynamic_cast<const PtSpace*>(&space);
+  return pt ? &pt->basis() : nullptr;
+}
+
+const RectangularPartition* pt_tmesh_of(const SplineSpace& space) {
+  const auto* pt = dynamic_cast<const PtSpace*>(&space);
+  return pt ? &pt->tmesh() : nullptr;
+}
+
+SpaceFamily pt_family() {
+  SpaceFamily f;
+  f.name = "pt";
+  f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
+    return std::make_unique<PtSpace>(c, pt_start_cells(c, level), c.space.elements_per_span[0] << level);
+  };
+  f.override_options = [](CaseDescription& c, int degree, int elements) {
+    if (degree) override_degree(c, degree);
+    if (elements) override_elements(c, elements);
+  };
+  f.check_converge = [](const CaseDescription& c, int levels) { check_uniform_levels(c, levels); };
+  return f;
+}
+
+}  // namespace knotwork

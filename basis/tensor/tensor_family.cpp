@@ -1,0 +1,96 @@
+// Family "tensor": tensor-product B-splines and NURBS on one patch, k-refined from the case's
+// geometry (uniform elements per knot span, optional extra knots), isoparametric when rational.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "basis/tensor/nurbs_geometry_map.hpp"
+#include "cases/spline_space.hpp"
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// Refuses discretizations that cannot fit in memory before allocating anything: cell
+// function lists, the matrix (lower triangle, one copy per thread during assembly) and the
+// Cholesky factor, estimated as nnz(A) * log2(n) entries (measured with AMD on 2D IGA
+// matrices: 0.73-0.75 * log2(n), docs/PERFORMANCE.md; the estimate keeps a margin).
+void check_memory(const CaseDescription& c, const TensorSpaceOptions& s) {
+  double cells = 1, functions = 1;
+  for (int d = 0; d < 2; ++d) {
+    const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
+    const double elements = double(g.num_elements()) * s.elements_per_span[d] + s.extra_knots[d].size();
+    cells *= elements;
+    functions *= elements + s.degree[d];
+  }
+  const double per_cell = double(s.degree[0] + 1) * (s.degree[1] + 1);
+  const double coupling = double(2 * s.degree[0] + 1) * (2 * s.degree[1] + 1) / 2;
+  const double nnz = functions * coupling;
+  const double factor = nnz * std::max(1.0, std::log2(functions));
+  const double bytes = cells * per_cell * 4 + nnz * 12 * 3 + factor * 8;
+  const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  if (physical > 0 && bytes > 0.9 * physical) {
+    char msg[200];
+    std::snprintf(msg, sizeof msg, "about %.0f GB needed for %.3g cells of degree %dx%d, more than this machine's %.0f GB",
+                  bytes / 1e9, cells, s.degree[0], s.degree[1], physical / 1e9);
+    throw InputError(c.path + ": [space] elements: " + msg);
+  }
+}
+
+std::string describe(const TensorSpaceOptions& s) {
+  const int ru = s.continuity[0] < 0 ? s.degree[0] - 1 : s.continuity[0];
+  const int rv = s.continuity[1] < 0 ? s.degree[1] - 1 : s.continuity[1];
+  std::string r = std::string(s.rational ? "NURBS" : "B-spline") + ", degree " + std::to_string(s.degree[0]) + "x" +
+                  std::to_string(s.degree[1]) + ", C^" + std::to_string(ru);
+  if (rv != ru) r += "/C^" + std::to_string(rv);
+  return r + " at new knots";
+}
+
+class TensorSpace final : public SplineSpace {
+ public:
+  TensorSpace(const CaseDescription& c, const TensorSpaceOptions& options) : options_(options) {
+    check_memory(c, options);
+    try {
+      d_ = build_tensor_discretization(c.geometry, options);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(c.path + ": [space]: " + e.what());
+    }
+    geometry_ = std::make_unique<NurbsGeometryMap>(d_);
+  }
+  const BezierMesh& mesh() const override { return d_.mesh; }
+  const GeometryMap& geometry() const override { return *geometry_; }
+  std::string description() const override { return describe(options_); }
+  std::vector<ReportField> report() const override {
+    return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
+  }
+
+ private:
+  TensorSpaceOptions options_;
+  TensorDiscretization d_;
+  std::unique_ptr<NurbsGeometryMap> geometry_;
+};
+
+}  // namespace
+
+SpaceFamily tensor_family() {
+  SpaceFamily f;
+  f.name = "tensor";
+  f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
+    TensorSpaceOptions s = c.space;
+    s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
+    return std::make_unique<TensorSpace>(c, s);
+  };
+  f.override_options = [](CaseDescription& c, int degree, int elements) {
+    if (degree) override_degree(c, degree);
+    if (elements) override_elements(c, elements);
+  };
+  f.check_adapt = [](const CaseDescription& c) {
+    throw InputError(c.path + ": [space] family: \"tensor\" refines only uniformly; adaptive refinement needs a family "
+                     "that refines cells locally (family = \"knot_segments\" or \"pt\")");
+  };
+  return f;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,170 @@
+#include "basis/tensor/tensor_patch.hpp"
+
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+namespace knotwork {
+
+namespace {
+
+struct DirectionPlan {
+  BSplineBasis1D space, geometry;
+};
+
+DirectionPlan plan_direction(const BSplineBasis1D& g, int p, int r, int elements, bool rational,
+                             const std::vector<double>& extra, const char* name) {
+  const int pg = g.degree();
+  if (p < 1) throw std::invalid_argument(std::string("degree in ") + name + " must be >= 1");
+  if (r < 0 || r > p - 1)
+    throw std::invalid_argument(std::string("continuity in ") + name + " must be in [0, degree-1] = [0, " +
+                                std::to_string(p - 1) + "], got " + std::to_string(r));
+  if (rational && p < pg)
+    throw std::invalid_argument(
+        std::string("degree ") + std::to_string(p) + " in " + name + " is below the geometry degree " +
+        std::to_string(pg) + ": an isoparametric NURBS space needs degree >= " + std::to_string(pg) +
+        "; set rational = false to use B-splines of degree " + std::to_string(p) +
+        " on the exact geometry");
+  const auto bp = g.breakpoints();
+  const auto mult = g.multiplicities();
+  std::vector<double> ks(p + 1, bp.front()), kg(std::max(p, pg) + 1, bp.front());
+  for (size_t i = 0; i + 1 < bp.size(); ++i) {
+    if (i > 0) {  // original interior knot: keep min(its continuity, r)
+      const int c_old = pg - mult[i];
+      ks.insert(ks.end(), p - std::min(c_old, r), bp[i]);
+      kg.insert(kg.end(), p >= pg ? p - std::min(c_old, r) : mult[i], bp[i]);
+    }
+    for (int e = 1; e < elements; ++e) {
+      const double t = bp[i] + (bp[i + 1] - bp[i]) * e / elements;
+      ks.insert(ks.end(), p - r, t);
+      kg.insert(kg.end(), p >= pg ? p - r : 1, t);
+    }
+  }
+  std::vector<double> added;
+  for (double t : extra) {
+    if (!(std::isfinite(t) && t > bp.front() && t < bp.back()))
+      throw std::invalid_argument(std::string("extra knot ") + std::to_string(t) + " in " + name +
+                                  " is not inside the parameter domain (" + std::to_string(bp.front()) + ", " +
+                                  std::to_string(bp.back()) + ")");
+    if (std::find(ks.begin(), ks.end(), t) != ks.end() || std::find(added.begin(), added.end(), t) != added.end())
+      continue;  // already a knot: nothing to refine
+    added.push_back(t);
+    ks.insert(ks.end(), p - r, t);
+    kg.insert(kg.end(), p >= pg ? p - r : 1, t);
+  }
+  std::sort(ks.begin(), ks.end());
+  std::sort(kg.begin(), kg.end());
+  ks.insert(ks.end(), p + 1, bp.back());
+  kg.insert(kg.end(), std::max(p, pg) + 1, bp.back());
+  return {BSplineBasis1D(p, std::move(ks)), BSplineBasis1D(std::max(p, pg), std::move(kg))};
+}
+
+// Indices of identical (to 1e-13) matrices, so the 2D pool holds each product once.
+std::vector<int> deduplicate(const std::vector<Eigen::MatrixXd>& ms, std::vector<int>& representative) {
+  std::vector<int> id(ms.size());
+  for (size_t i = 0; i < ms.size(); ++i) {
+    id[i] = -1;
+    for (size_t r = 0; r < representative.size(); ++r)
+      if ((ms[representative[r]] - ms[i]).cwiseAbs().maxCoeff() < 1e-13) {
+        id[i] = static_cast<int>(r);
+        break;
+      }
+    if (id[i] < 0) {
+      id[i] = static_cast<int>(representative.size());
+      representative.push_back(static_cast<int>(i));
+    }
+  }
+  return id;
+}
+
+Eigen::MatrixXd kronecker(const Eigen::MatrixXd& cu, const Eigen::MatrixXd& cv) {
+  const int pu = static_cast<int>(cu.rows()), pv = static_cast<int>(cv.rows());
+  Eigen::MatrixXd C(pu * pv, pu * pv);
+  for (int av = 0; av < pv; ++av)
+    for (int au = 0; au < pu; ++au)
+      for (int bv = 0; bv < pv; ++bv)
+        for (int bu = 0; bu < pu; ++bu) C(au + pu * av, bu + pu * bv) = cu(au, bu) * cv(av, bv);
+  return C;
+}
+
+}  // namespace
+
+TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
+                                                 const TensorSpaceOptions& o) {
+  patch.validate();
+  TensorDiscretization d;
+  const int ru = o.continuity[0] < 0 ? o.degree[0] - 1 : o.continuity[0];
+  const int rv = o.continuity[1] < 0 ? o.degree[1] - 1 : o.continuity[1];
+  if (o.elements_per_span[0] < 1 || o.elements_per_span[1] < 1)
+    throw std::invalid_argument("elements must be >= 1");
+  auto pu = plan_direction(patch.basis_u, o.degree[0], ru, o.elements_per_span[0], o.rational, o.extra_knots[0], "u");
+  auto pv = plan_direction(patch.basis_v, o.degree[1], rv, o.elements_per_span[1], o.rational, o.extra_knots[1], "v");
+  d.space_u = pu.space;
+  d.space_v = pv.space;
+  d.geometry_u = pu.geometry;
+  d.geometry_v = pv.geometry;
+
+  // Refine the homogeneous control net (w x, w y, w) onto the geometry bases.
+  const Eigen::SparseMatrix<double> Tu = refinement_matrix(patch.basis_u, d.geometry_u);
+  const Eigen::SparseMatrix<double> Tv = refinement_matrix(patch.basis_v, d.geometry_v);
+  const int nu = patch.basis_u.num_functions(), nv = patch.basis_v.num_functions();
+  const int gu = d.geometry_u.num_functions(), gv = d.geometry_v.num_functions();
+  d.geometry_homogeneous.resize(static_cast<Eigen::Index>(gu) * gv, 3);
+  for (int k = 0; k < 3; ++k) {
+    Eigen::VectorXd h(static_cast<Eigen::Index>(nu) * nv);
+    for (Eigen::Index i = 0; i < h.size(); ++i)
+      h[i] = k < 2 ? patch.weights[i] * patch.control_points(i, k) : patch.weights[i];
+    const Eigen::MatrixXd H = Eigen::Map<const Eigen::MatrixXd>(h.data(), nu, nv);
+    const Eigen::MatrixXd R = Tu * (Tv * H.transpose()).transpose();
+    d.geometry_homogeneous.col(k) = Eigen::Map<const Eigen::VectorXd>(R.data(), R.size());
+  }
+
+  BezierMesh& mesh = d.mesh;
+  const int p = o.degree[0], q = o.degree[1];
+  const int su = d.space_u.num_functions(), sv = d.space_v.num_functions();
+  mesh.set_num_functions(su * sv);
+  mesh.set_boundary_names({"bottom", "right", "top", "left"});
+  if (o.rational) mesh.set_weights(d.geometry_homogeneous.col(2));  // geometry and space bases coincide
+
+  const auto Cu = bezier_extraction(d.space_u), Cv = bezier_extraction(d.space_v);
+  std::vector<int> rep_u, rep_v;
+  const auto idu = deduplicate(Cu, rep_u), idv = deduplicate(Cv, rep_v);
+  std::map<std::pair<int, int>, int> pool_index;
+  const auto spans_u = d.space_u.element_spans(), spans_v = d.space_v.element_spans();
+  d.elements_u = static_cast<int>(spans_u.size());
+  d.elements_v = static_cast<int>(spans_v.size());
+  const auto& U = d.space_u.knots();
+  const auto& V = d.space_v.knots();
+  std::vector<int> ids((p + 1) * (q + 1));
+  mesh.reserve(d.elements_u * d.elements_v, static_cast<long>(d.elements_u) * d.elements_v * (p + 1) * (q + 1));
+  for (int iv = 0; iv < d.elements_v; ++iv)
+    for (int iu = 0; iu < d.elements_u; ++iu) {
+      auto key = std::make_pair(idu[iu], idv[iv]);
+      auto it = pool_index.find(key);
+      if (it == pool_index.end())
+        it = pool_index.emplace(key, mesh.add_extraction(kronecker(Cu[rep_u[idu[iu]]], Cv[rep_v[idv[iv]]]))).first;
+      BezierCell cell;
+      cell.index_u = iu;
+      cell.index_v = iv;
+      cell.u0 = U[spans_u[iu]];
+      cell.u1 = U[spans_u[iu] + 1];
+      cell.v0 = V[spans_v[iv]];
+      cell.v1 = V[spans_v[iv] + 1];
+      cell.degree_u = p;
+      cell.degree_v = q;
+      if (iv == 0) cell.boundary[kSideBottom] = 0;
+      if (iu == d.elements_u - 1) cell.boundary[kSideRight] = 1;
+      if (iv == d.elements_v - 1) cell.boundary[kSideTop] = 2;
+      if (iu == 0) cell.boundary[kSideLeft] = 3;
+      for (int av = 0; av <= q; ++av)
+        for (int au = 0; au <= p; ++au)
+          ids[au + (p + 1) * av] = (spans_u[iu] - p + au) + su * (spans_v[iv] - q + av);
+      mesh.add_cell(cell, ids, it->second);
+    }
+  return d;
+}
+
+}  // namespace knotwork

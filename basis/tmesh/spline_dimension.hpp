@@ -1,0 +1,33 @@
+#pragma once
+#include <cstdint>
+
+#include "basis/tmesh/rectangular_partition.hpp"
+
+namespace knotwork {
+
+// Brute-force dimension of S(m, n, alpha, beta) over a rectangular partition: piecewise
+// polynomials of bi-degree (m, n), C^alpha in x across vertical edges and C^beta in y
+// across horizontal ones. Unknowns: the (m+1)(n+1) monomial coefficients of every cell.
+// Constraints: d^k/dx^k (p_left - p_right)(x0, y) = 0 as a polynomial in y (k <= alpha) on
+// every shared vertical segment, likewise in y. Dimension = unknowns - rank.
+// This is the oracle the spline constructions are tested against.
+struct DimensionResult {
+  long unknowns = 0;
+  long constraints = 0;
+  long rank = 0;
+  long dimension = 0;
+  bool exact = false;  // rank over Q by rational elimination (asked for, or the primes disagreed)
+};
+
+enum class RankMethod {
+  kModular,  // sparse elimination modulo two 61-bit primes (fast); over Q if they disagree
+  kExact,    // elimination over Q with GMP rationals (exact; for small partitions)
+};
+
+// Throws std::invalid_argument for degrees < 0 or smoothness outside [-1, degree-1].
+// Edges on the lines of `c0` are only C^0.
+DimensionResult spline_space_dimension(const RectangularPartition& partition, int m, int n, int alpha,
+                                       int beta, RankMethod method = RankMethod::kModular,
+                                       const C0Lines& c0 = {});
+
+}  // namespace knotwork

@@ -1,0 +1,102 @@
+#pragma once
+// The family interface: the one seam between the spline families (basis/<family>/) and the
+// commands that use them (run, converge, adapt, bench; the Python module later). A family
+// builds its BezierMesh and geometry from a case, refines where it can, describes itself and
+// reports its own checks; everything else (assembly, solve, norms, estimator, output) is
+// written once against BezierMesh and GeometryMap. docs/ARCHITECTURE.md says how to add one.
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "basis/core/bezier_mesh.hpp"
+#include "cases/case_file.hpp"
+#include "solver/geometry_map.hpp"
+
+namespace knotwork {
+
+// A value a family adds to the reports of run, converge, adapt and basis. The key is the
+// JSON key ("c1_jump"; "counts.vertex" is member `vertex` of object `counts`); monostate is
+// JSON null.
+using ReportValue = std::variant<std::monostate, double, long, std::string, bool, std::vector<std::string>>;
+struct ReportField {
+  std::string key{};
+  ReportValue value{};
+  std::string text{};   // a line of the text summary, "label    text" ("": JSON only)
+  std::string label{};  // its label ("mesh", "C1"; default: the key)
+  bool column = false;  // also a column of converge's level table (numbers)
+  int width = 0;        // its width there (0: 12)
+};
+
+// Knot lines of a mesh in physical space, for ParaView (adapt writes one .vtp per step).
+struct KnotLines {
+  std::vector<Eigen::MatrixX2d> lines;
+  std::vector<int> kind;          // 0 line, 1 ray, 2 segment
+  std::vector<int> multiplicity;  // per line
+};
+
+// How a marked cell is halved by adaptive refinement.
+enum class CellSplit { kAcrossU, kAcrossV };
+
+using ProgressFunction = std::function<void(const std::string&)>;
+
+// A spline space of some family, built from a case: what the solver needs and what the
+// family says about it.
+class SplineSpace {
+ public:
+  virtual ~SplineSpace() = default;
+  virtual const BezierMesh& mesh() const = 0;
+  virtual const GeometryMap& geometry() const = 0;
+  // One line: "NURBS, degree 2x2, C^1 at new knots".
+  virtual std::string description() const = 0;
+  // Facts about the space for the reports (before solving), and notes that must be seen
+  // (a segment extended, a construction that fell back to another).
+  virtual std::vector<ReportField> report() const { return {}; }
+  virtual std::vector<std::string> notes() const { return {}; }
+  // Throws InputError when the space must not be solved on (and the case did not allow it).
+  virtual void check_solvable() const {}
+  // Checks of a solution only the family can make (G1: the C1 jump across interfaces).
+  virtual std::vector<ReportField> check_solution(const Eigen::VectorXd& /*coefficients*/) const { return {}; }
+  // `knotwork basis`: the family's own checks of the space (semi-regularity, dimension
+  // counts), next to the partition of unity and rank every space gets.
+  virtual std::vector<ReportField> basis_report() const { return {}; }
+  // `knotwork basis --export FILE`: writes every function (the format is the family's);
+  // throws InputError when the family has no export.
+  virtual void export_functions(const std::string& file, const std::string& source) const;
+  // The h of convergence tables: the largest cell diagonal in physical space.
+  virtual double mesh_size() const;
+  // Adaptive refinement: the space with the marked cells halved as told, or null when the
+  // family cannot refine locally. `extended` (optional) counts what the family had to add
+  // beyond the marked cells (knot segments lengthened to stay semi-regular).
+  virtual std::unique_ptr<SplineSpace> refine(const std::vector<int>& /*marked*/, const std::vector<CellSplit>& /*split*/,
+                                              int* /*extended*/ = nullptr) const {
+    return nullptr;
+  }
+  virtual KnotLines knot_lines() const { return {}; }
+};
+
+// A family: its name in [space] family, and how it builds a case's space.
+struct SpaceFamily {
+  std::string name;
+  // The case's space refined `level` times uniformly (converge's level; 0: as written).
+  // Throws InputError naming the case file and field when it cannot be built.
+  std::function<std::unique_ptr<SplineSpace>(const CaseDescription&, int level, const ProgressFunction&)> build;
+  // --degree / --elements on the command line (InputError when they do not apply).
+  std::function<void(CaseDescription&, int degree, int elements)> override_options;
+  // Throw InputError when a convergence study or adaptive refinement is not possible for
+  // this case (before any work is done); null: always possible.
+  std::function<void(const CaseDescription&, int levels)> check_converge;
+  std::function<void(const CaseDescription&)> check_adapt;
+};
+
+// Every registered family (cases/families.cpp: one line per family).
+const std::vector<SpaceFamily>& space_families();
+// The case's family; throws InputError naming [space] family if it is not registered.
+const SpaceFamily& space_family(const CaseDescription& c);
+
+// The largest cell diagonal of a mesh through its geometry (the default mesh_size).
+double largest_cell_diagonal(const BezierMesh& mesh, const GeometryMap& geometry);
+
+}  // namespace knotwork
