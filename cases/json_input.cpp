@@ -1,9 +1,13 @@
+// JSON input through nlohmann-json's SAX parser, into knotwork's own JsonValue (numbers keep
+// their source text so callers can read decimals exactly). What nlohmann accepts and what
+// it refuses is RFC 8259; knotwork adds its own refusals: duplicate keys, nesting deeper than
+// 200 levels, numbers out of the double range.
 #include "cases/json_input.hpp"
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
@@ -13,199 +17,142 @@ namespace knotwork {
 
 namespace {
 
-class JsonParser {
+using json = nlohmann::json;
+
+// "<line>:<column>" of a byte offset in the text (1-based).
+std::string line_and_column(const std::string& text, size_t offset) {
+  size_t line = 1, column = 1;
+  for (size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') line = 1 + line, column = 1;
+    else ++column;
+  }
+  return std::to_string(line) + ":" + std::to_string(column);
+}
+
+class Builder final : public nlohmann::json_sax<json> {
  public:
-  JsonParser(const std::string& text, const std::string& path) : s_(text), path_(path) {}
+  Builder(const std::string& text, const std::string& path) : text_(text), path_(path) {}
 
-  JsonValue document() {
-    JsonValue v = value(0);
-    skip_space();
-    if (pos_ != s_.size()) fail("unexpected text after the end of the document");
-    return v;
-  }
+  JsonValue result() { return std::move(root_); }
 
- private:
-  const std::string& s_;
-  const std::string& path_;
-  size_t pos_ = 0;
-
-  [[noreturn]] void fail(const std::string& what) const {
-    size_t line = 1, column = 1;
-    for (size_t i = 0; i < pos_ && i < s_.size(); ++i) {
-      if (s_[i] == '\n') { ++line; column = 1; } else { ++column; }
-    }
-    throw InputError(path_ + ":" + std::to_string(line) + ":" + std::to_string(column) + ": JSON syntax error: " + what);
-  }
-
-  void skip_space() {
-    while (pos_ < s_.size() && (s_[pos_] == ' ' || s_[pos_] == '\t' || s_[pos_] == '\n' || s_[pos_] == '\r')) ++pos_;
-  }
-
-  bool take(char c) {
-    skip_space();
-    if (pos_ < s_.size() && s_[pos_] == c) { ++pos_; return true; }
-    return false;
-  }
-
-  void expect(char c, const char* context) {
-    if (!take(c)) fail(std::string("expected '") + c + "' " + context);
-  }
-
-  JsonValue value(int depth) {
-    if (depth > 200) fail("nesting deeper than 200 levels");
-    skip_space();
-    if (pos_ >= s_.size()) fail("unexpected end of the document");
-    const char c = s_[pos_];
+  bool null() override { return put(JsonValue{}); }
+  bool boolean(bool b) override {
     JsonValue v;
-    if (c == '{') {
-      ++pos_;
-      v.kind = JsonValue::Kind::kObject;
-      std::set<std::string> keys;
-      if (take('}')) return v;
-      do {
-        skip_space();
-        if (pos_ >= s_.size() || s_[pos_] != '"') fail("expected a key in double quotes");
-        const size_t key_at = pos_;
-        std::string key = string_body();
-        if (!keys.insert(key).second) { pos_ = key_at; fail("duplicate key \"" + key + "\""); }
-        expect(':', "after a key");
-        v.members.emplace_back(std::move(key), value(depth + 1));
-      } while (take(','));
-      expect('}', "or ',' in an object");
-      return v;
-    }
-    if (c == '[') {
-      ++pos_;
-      v.kind = JsonValue::Kind::kArray;
-      if (take(']')) return v;
-      do v.items.push_back(value(depth + 1));
-      while (take(','));
-      expect(']', "or ',' in an array");
-      return v;
-    }
-    if (c == '"') {
-      v.kind = JsonValue::Kind::kString;
-      v.text = string_body();
-      return v;
-    }
-    if (literal("true")) { v.kind = JsonValue::Kind::kBool; v.boolean = true; return v; }
-    if (literal("false")) { v.kind = JsonValue::Kind::kBool; return v; }
-    if (literal("null")) return v;
-    if (c == '-' || (c >= '0' && c <= '9')) return number();
-    fail(std::string("unexpected character '") + c + "'");
+    v.kind = JsonValue::Kind::kBool;
+    v.boolean = b;
+    return put(std::move(v));
   }
-
-  bool literal(const char* word) {
-    const std::string w(word);
-    if (s_.compare(pos_, w.size(), w) != 0) return false;
-    pos_ += w.size();
-    return true;
-  }
-
-  JsonValue number() {
-    const size_t start = pos_;
-    auto digits = [&] {
-      const size_t from = pos_;
-      while (pos_ < s_.size() && s_[pos_] >= '0' && s_[pos_] <= '9') ++pos_;
-      return pos_ - from;
-    };
-    if (s_[pos_] == '-') ++pos_;
-    if (pos_ < s_.size() && s_[pos_] == '0') ++pos_;
-    else if (digits() == 0) fail("a number needs digits");
-    bool integral = true;
-    if (pos_ < s_.size() && s_[pos_] == '.') {
-      ++pos_;
-      integral = false;
-      if (digits() == 0) fail("a number needs digits after '.'");
-    }
-    if (pos_ < s_.size() && (s_[pos_] == 'e' || s_[pos_] == 'E')) {
-      ++pos_;
-      integral = false;
-      if (pos_ < s_.size() && (s_[pos_] == '+' || s_[pos_] == '-')) ++pos_;
-      if (digits() == 0) fail("a number needs digits in its exponent");
-    }
+  bool number_integer(number_integer_t i) override { return integer(std::to_string(i), static_cast<double>(i)); }
+  bool number_unsigned(number_unsigned_t u) override { return integer(std::to_string(u), static_cast<double>(u)); }
+  bool number_float(number_float_t d, const string_t& s) override {
+    if (!std::isfinite(d)) return refuse("number out of range: " + s);
     JsonValue v;
     v.kind = JsonValue::Kind::kNumber;
-    v.text = s_.substr(start, pos_ - start);
-    v.number = std::strtod(v.text.c_str(), nullptr);
-    v.integral = integral;
-    if (!std::isfinite(v.number)) { pos_ = start; fail("number out of range: " + v.text); }
-    return v;
+    v.number = d;
+    // An integer too large for 64 bits arrives here too; it is still written without fraction.
+    v.integral = s.find_first_of(".eE") == std::string::npos;
+    v.text = s;
+    return put(std::move(v));
+  }
+  bool string(string_t& s) override {
+    JsonValue v;
+    v.kind = JsonValue::Kind::kString;
+    v.text = std::move(s);
+    return put(std::move(v));
+  }
+  bool binary(binary_t&) override { return refuse("binary values are not JSON text"); }
+  bool start_object(std::size_t) override { return open(JsonValue::Kind::kObject); }
+  bool key(string_t& k) override {
+    if (!stack_.back().keys.insert(k).second) return refuse("duplicate key \"" + k + "\"" + where());
+    stack_.back().pending_key = std::move(k);
+    return true;
+  }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override { return open(JsonValue::Kind::kArray); }
+  bool end_array() override { return close(); }
+  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& ex) override {
+    // nlohmann's message: "[json.exception.parse_error.101] parse error at line L, column C: what".
+    // Other errors: "[json.exception.out_of_range.406] what". The message keeps one line of
+    // printable ASCII (the last bytes read may be invalid UTF-8).
+    std::string what = ex.what();
+    const size_t parse = what.find("parse error");
+    const size_t colon = parse == std::string::npos ? std::string::npos : what.find(": ", parse);
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    else if (const size_t bracket = what.find("] "); what.rfind("[json.exception", 0) == 0 && bracket != std::string::npos)
+      what = what.substr(bracket + 2);
+    for (char& c : what)
+      if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+    const size_t offset = position > 0 ? position - 1 : 0;
+    throw InputError(path_ + ":" + line_and_column(text_, offset) + ": JSON syntax error: " + what);
   }
 
-  // The string starting at pos_ (a '"'), escapes decoded to UTF-8.
-  std::string string_body() {
-    ++pos_;
-    std::string out;
-    while (true) {
-      if (pos_ >= s_.size()) fail("unterminated string");
-      const unsigned char c = static_cast<unsigned char>(s_[pos_]);
-      if (c == '"') { ++pos_; return out; }
-      if (c < 0x20) fail("control character in a string (write \\n, \\t, ...)");
-      if (c != '\\') { out += static_cast<char>(c); ++pos_; continue; }
-      if (++pos_ >= s_.size()) fail("unterminated string");
-      const char e = s_[pos_++];
-      switch (e) {
-        case '"': out += '"'; break;
-        case '\\': out += '\\'; break;
-        case '/': out += '/'; break;
-        case 'b': out += '\b'; break;
-        case 'f': out += '\f'; break;
-        case 'n': out += '\n'; break;
-        case 'r': out += '\r'; break;
-        case 't': out += '\t'; break;
-        case 'u': {
-          unsigned code = hex4();
-          if (code >= 0xD800 && code < 0xDC00) {  // a surrogate pair
-            if (!literal("\\u")) fail("unpaired surrogate in \\u escape");
-            const unsigned low = hex4();
-            if (low < 0xDC00 || low >= 0xE000) fail("unpaired surrogate in \\u escape");
-            code = 0x10000 + ((code - 0xD800) << 10) + (low - 0xDC00);
-          }
-          append_utf8(out, code);
-          break;
-        }
-        default: --pos_; fail(std::string("unknown escape '\\") + e + "'");
-      }
+  // Set when a handler refused the document (nlohmann then stops without an error of its own).
+  const std::string& refusal() const { return refusal_; }
+
+ private:
+  struct Open {
+    JsonValue value;
+    std::set<std::string> keys;
+    std::string pending_key;
+  };
+
+  bool integer(std::string text, double value) {
+    JsonValue v;
+    v.kind = JsonValue::Kind::kNumber;
+    v.number = value;
+    v.integral = true;
+    v.text = std::move(text);
+    return put(std::move(v));
+  }
+  bool open(JsonValue::Kind kind) {
+    if (stack_.size() >= 200) return refuse("nesting deeper than 200 levels");
+    stack_.push_back({});
+    stack_.back().value.kind = kind;
+    return true;
+  }
+  bool close() {
+    JsonValue v = std::move(stack_.back().value);
+    stack_.pop_back();
+    return put(std::move(v));
+  }
+  bool put(JsonValue v) {
+    if (stack_.empty()) {
+      root_ = std::move(v);
+      return true;
     }
+    Open& top = stack_.back();
+    if (top.value.kind == JsonValue::Kind::kArray) top.value.items.push_back(std::move(v));
+    else top.value.members.emplace_back(std::move(top.pending_key), std::move(v));
+    return true;
+  }
+  bool refuse(const std::string& why) {
+    refusal_ = why;
+    return false;
+  }
+  // " in <key path>" of the object being read, for messages without a position.
+  std::string where() const {
+    std::string path;
+    for (size_t i = 0; i + 1 < stack_.size(); ++i)
+      if (stack_[i].value.kind == JsonValue::Kind::kObject) path += (path.empty() ? "" : ".") + stack_[i].pending_key;
+      else path += "[" + std::to_string(stack_[i].value.items.size()) + "]";
+    return path.empty() ? " in the top-level object" : " in " + path;
   }
 
-  unsigned hex4() {
-    if (pos_ + 4 > s_.size()) fail("\\u needs four hex digits");
-    unsigned v = 0;
-    for (int i = 0; i < 4; ++i) {
-      const char h = s_[pos_++];
-      v <<= 4;
-      if (h >= '0' && h <= '9') v |= h - '0';
-      else if (h >= 'a' && h <= 'f') v |= h - 'a' + 10;
-      else if (h >= 'A' && h <= 'F') v |= h - 'A' + 10;
-      else fail("\\u needs four hex digits");
-    }
-    return v;
-  }
-
-  static void append_utf8(std::string& out, unsigned code) {
-    if (code < 0x80) {
-      out += static_cast<char>(code);
-    } else if (code < 0x800) {
-      out += static_cast<char>(0xC0 | (code >> 6));
-      out += static_cast<char>(0x80 | (code & 0x3F));
-    } else if (code < 0x10000) {
-      out += static_cast<char>(0xE0 | (code >> 12));
-      out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
-      out += static_cast<char>(0x80 | (code & 0x3F));
-    } else {
-      out += static_cast<char>(0xF0 | (code >> 18));
-      out += static_cast<char>(0x80 | ((code >> 12) & 0x3F));
-      out += static_cast<char>(0x80 | ((code >> 6) & 0x3F));
-      out += static_cast<char>(0x80 | (code & 0x3F));
-    }
-  }
+  const std::string& text_;
+  const std::string& path_;
+  std::vector<Open> stack_;
+  JsonValue root_;
+  std::string refusal_;
 };
 
 }  // namespace
 
-JsonValue parse_json(const std::string& text, const std::string& path) { return JsonParser(text, path).document(); }
+JsonValue parse_json(const std::string& text, const std::string& path) {
+  Builder builder(text, path);
+  const bool ok = json::sax_parse(text, &builder, json::input_format_t::json, true, false);
+  if (!ok) throw InputError(path + ": JSON: " + (builder.refusal().empty() ? "not a JSON document" : builder.refusal()));
+  return builder.result();
+}
 
 JsonValue read_json_file(const std::string& path) {
   if (std::filesystem::is_directory(path)) throw InputError(path + ": is a directory, not a JSON file");

@@ -1,16 +1,22 @@
 #pragma once
+// JSON output of the commands (--json, convergence.json, exported bases), through
+// nlohmann-json: this header stays light (nlohmann's is compiled in json_output.cpp only).
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace knotwork {
 
-// A minimal JSON builder for the CLI's --json output: values are appended in order,
-// non-finite numbers become null.
+// A JSON value built in order: members keep their insertion order; non-finite numbers
+// become null; doubles that are integers print as integers (2, not 2.0).
 class Json {
  public:
   static Json object();
   static Json array();
   static Json strings(const std::vector<std::string>& items);  // an array of strings
+  Json(const Json& other);
+  Json& operator=(const Json& other);
+  ~Json();
   Json& set(const std::string& key, const Json& value);  // object member
   Json& set(const std::string& key, double value);
   Json& set(const std::string& key, long value);
@@ -22,17 +28,16 @@ class Json {
   Json& push(const Json& value);  // array element
   Json& push(double value);
   Json& push(const std::string& value);
+  // Indented by `indent` spaces; invalid UTF-8 in strings is replaced, never thrown on.
   std::string dump(int indent = 2) const;
 
  private:
-  bool is_object_ = true;
-  std::vector<std::pair<std::string, std::string>> items_;  // key (empty for arrays), rendered value
-  std::string render(int indent, int level) const;
-  std::vector<Json> children_;
-  std::vector<int> child_of_item_;
+  struct Impl;
+  explicit Json(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
 };
 
+// A number as CSV/JSON text (%.17g; "null" when not finite).
 std::string json_number(double v);
-std::string json_string(const std::string& s);
 
 }  // namespace knotwork

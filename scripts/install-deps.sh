@@ -13,7 +13,7 @@ packages=(
   build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas-dev
   libvtk9-dev
-  catch2 libtomlplusplus-dev libcli11-dev
+  catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libmuparser-dev libginac-dev libgmp-dev
   libbenchmark-dev
 )
