@@ -11,7 +11,7 @@ using namespace knotwork;
 
 namespace {
 
-// The definition itself (MATH.md §0), recursive, with 0/0 := 0: an oracle that shares
+// The definition itself (docs/MATH.md §0), recursive, with 0/0 := 0: an oracle that shares
 // no code with the library. Right end of the domain belongs to the last non-empty span.
 double cox_de_boor(const std::vector<double>& U, int i, int p, double t, double end) {
   if (p == 0) {

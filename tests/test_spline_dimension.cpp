@@ -204,7 +204,7 @@ TEST_CASE("Weller's formula needs its hypotheses: a short knot segment breaks it
 }
 
 // A vanished T l-edge carries no extra freedom: inserting it leaves the brute-force dimension
-// unchanged; one vertex more than the threshold adds one function (V - (m+1), MATH.md §3).
+// unchanged; one vertex more than the threshold adds one function (V - (m+1), docs/MATH.md §3).
 TEST_CASE("Vanished T l-edges: no extra freedom, one more vertex adds one function", "[dimension][topology]") {
   auto grid_with_segment = [](bool with_segment) {
     std::vector<RationalBox> cells;

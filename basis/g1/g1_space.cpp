@@ -112,7 +112,7 @@ void univariate(int k, int r, const Scalar& u, std::vector<Scalar>& value, std::
   }
 }
 
-// Corner frames of a face (MATH.md section 2): (s, t) = origin + u * du + v * dv.
+// Corner frames of a face (docs/MATH.md §2): (s, t) = origin + u * du + v * dv.
 constexpr int kOrigin[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
 constexpr int kDu[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
 constexpr int kDv[4][2] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}};

@@ -26,7 +26,7 @@ struct PiecewisePolynomial {
 
 // Gluing data [a, b, c] of every interior edge, in the edge's own orientation: u = 0 at
 // QuadMesh::Edge::v[0]. Across the edge, with f1 on edge.face[0] and f0 on edge.face[1] in
-// their corner frames at v[0] (MATH.md section 2):
+// their corner frames at v[0] (docs/MATH.md §2):
 //   f1(u, 0) = f0(0, u),   c(u) dv f1(u, 0) = b(u) du f0(0, u) + a(u) dv f0(0, u).
 struct EdgeGluing {
   PiecewisePolynomial a, b, c;
@@ -113,7 +113,7 @@ inline long g1_unknown(int f, int i, int j, int k, int r) {
 }
 
 // The same for the coefficient a steps along the u direction and b steps along the v
-// direction of the face's frame at `corner` (MATH.md section 2: corner 0 at (s, t) = (0, 0),
+// direction of the face's frame at `corner` (docs/MATH.md §2: corner 0 at (s, t) = (0, 0),
 // u along s; corners counter-clockwise).
 long g1_corner_unknown(int face, int corner, int a, int b, int k, int r);
 

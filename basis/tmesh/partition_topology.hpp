@@ -39,7 +39,7 @@ struct PartitionTopology {
   int crossings() const;  // interior vertices of valence 4
   int count(KnotKind kind) const;
   // T l-edges (knot segments) that carry no extra freedom in S(m, n, m-1, n-1): a horizontal
-  // one with at most m+1 vertices, a vertical one with at most n+1 (MATH.md section 3).
+  // one with at most m+1 vertices, a vertical one with at most n+1 (docs/MATH.md §3).
   int vanished_segments(int m, int n) const;
 };
 
