@@ -144,7 +144,7 @@ int basis_of_case(const BasisOptions& o) {
   std::printf("knotwork basis %s\n  space      %s\n  functions  %d on %d cells\n", c.path.c_str(),
               space->description().c_str(), mesh.num_functions(), mesh.num_cells());
   for (const auto& n : space->notes()) std::printf("  note       %s\n", n.c_str());
-  print_field_lines(fields);
+  print_field_lines(fields, 10);
   std::printf("  partition of unity  max error %.3e\n", pu);
   if (rank >= 0) std::printf("  rank       %ld (%s)\n", rank, rank == mesh.num_functions() ? "linearly independent" : "DEPENDENT");
   else std::printf("  rank       not computed (too large for the dense rank check)\n");

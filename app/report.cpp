@@ -39,9 +39,9 @@ void add_fields(Json& object, const std::vector<ReportField>& fields) {
   for (const auto& name : order) object.set(name, nested.at(name));
 }
 
-void print_field_lines(const std::vector<ReportField>& fields) {
+void print_field_lines(const std::vector<ReportField>& fields, int width) {
   for (const ReportField& f : fields)
-    if (!f.text.empty()) std::printf("  %-8s %s\n", (f.label.empty() ? f.key : f.label).c_str(), f.text.c_str());
+    if (!f.text.empty()) std::printf("  %-*s %s\n", width, (f.label.empty() ? f.key : f.label).c_str(), f.text.c_str());
 }
 
 double field_number(const ReportField& f) {

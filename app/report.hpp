@@ -10,8 +10,8 @@ namespace knotwork {
 
 // Adds the fields to a JSON object ("a.b" keys become member b of object a).
 void add_fields(Json& object, const std::vector<ReportField>& fields);
-// Prints the fields that have a text line, as "  label    text".
-void print_field_lines(const std::vector<ReportField>& fields);
+// Prints the fields that have a text line, as "  label    text" (label padded to `width`).
+void print_field_lines(const std::vector<ReportField>& fields, int width = 8);
 // The value of a numeric field as a double (NaN for null, text or lists).
 double field_number(const ReportField& field);
 // A field's value as CSV text ("" for null; lists joined by ';').

@@ -147,11 +147,11 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
         continue;
       }
       const Eigen::Index nq = cb.measure.size(), nb = cb.value.cols();
-      fq.setZero(nq);
-      if (f) {
-        for (Eigen::Index k = 0; k < nq; ++k)
-          fq[k] = dim == 2 ? (*f)(cb.geometry.x(k, 0), cb.geometry.x(k, 1))
-                           : (*f)(cb.geometry.x(k, 0), cb.geometry.x(k, 1), cb.geometry.x(k, 2));
+      fq.resize(nq);
+      if (f && dim == 2) {
+        for (Eigen::Index k = 0; k < nq; ++k) fq[k] = (*f)(cb.geometry.x(k, 0), cb.geometry.x(k, 1));
+      } else if (f) {
+        for (Eigen::Index k = 0; k < nq; ++k) fq[k] = (*f)(cb.geometry.x(k, 0), cb.geometry.x(k, 1), cb.geometry.x(k, 2));
       } else if (derived_f) {
         const BernsteinTable& t = bernstein_table(1, 1, nu, nv);
         if (!geometry.second_derivatives(c, t.point_u, t.point_v, second)) {
@@ -160,6 +160,8 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
           continue;
         }
         (*derived_f)(cb.geometry.x, cb.geometry.jacobian, second, form.source_reaction, fq);
+      } else {
+        fq.setZero();
       }
       for (Eigen::Index k = 0; k < nq; ++k)
         if (!std::isfinite(fq[k])) {
@@ -175,7 +177,8 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
       if (form.stiffness != 0) {
         G.resize(dim * nq, nb);
         for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.matrix().asDiagonal() * cb.grad(d);
-        KB.noalias() = form.stiffness * (G.transpose() * G);
+        if (form.stiffness == 1) KB.noalias() = G.transpose() * G;
+        else KB.noalias() = form.stiffness * (G.transpose() * G);
       } else {
         KB.setZero(nb, nb);
       }

@@ -57,16 +57,24 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
       for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
       beta.noalias() = cb.C.transpose() * local;  // coefficients in the (rational) Bernstein basis
       uh.noalias() = cb.value * beta;
-      grad_h.resize(cb.measure.size(), cb.dimension);
+      grad_h.resize(cb.measure.size(), cb.dimension);  // (n x 2) in the plane, (n x 3) on surfaces
       for (int d = 0; d < cb.dimension; ++d) grad_h.col(d).noalias() = cb.grad(d) * beta;
       double cell_semi = 0;
-      for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
-        const double e = ex.value(cb.geometry, k) - exact_offset - uh[k];
-        const Eigen::Vector3d g = ex.gradient(cb.geometry, k);
-        double eg = 0;
-        for (int d = 0; d < cb.dimension; ++d) eg += (g[d] - grad_h(k, d)) * (g[d] - grad_h(k, d));
-        l2 += cb.measure[k] * e * e;
-        cell_semi += cb.measure[k] * eg;
+      if (cb.dimension == 2) {
+        for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
+          const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
+          const double e = ex.u(x, y) - exact_offset - uh[k];
+          const double gx = ex.ux(x, y) - grad_h(k, 0), gy = ex.uy(x, y) - grad_h(k, 1);
+          l2 += cb.measure[k] * e * e;
+          cell_semi += cb.measure[k] * (gx * gx + gy * gy);
+        }
+      } else {
+        for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
+          const double e = ex.value(cb.geometry, k) - exact_offset - uh[k];
+          const Eigen::Vector3d g = ex.gradient(cb.geometry, k) - grad_h.row(k).transpose();
+          l2 += cb.measure[k] * e * e;
+          cell_semi += cb.measure[k] * g.squaredNorm();
+        }
       }
       semi += cell_semi;
       if (h1_semi_squared_per_cell) (*h1_semi_squared_per_cell)[c] = cell_semi;
