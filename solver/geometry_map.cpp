@@ -1,6 +1,10 @@
 #include "solver/geometry_map.hpp"
 
+#include <algorithm>
+#include <sstream>
+
 #include "basis/core/bezier_ops.hpp"
+#include "solver/input_error.hpp"
 #include "quadrature/bernstein.hpp"
 
 namespace knotwork {
@@ -22,7 +26,28 @@ void dehomogenize_map(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, con
   }
 }
 
-PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch) : mesh_(mesh), patch_(std::move(patch)) {}
+PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch) : mesh_(mesh), patch_(std::move(patch)) {
+  // Each cell is mapped by the patch's polynomial on the span that holds the cell's middle:
+  // a cell across a knot of the patch would be mapped wrongly on one side of it.
+  const std::vector<double> bu = patch_.basis_u.breakpoints(), bv = patch_.basis_v.breakpoints();
+  const double eu = 1e-12 * (bu.back() - bu.front()), ev = 1e-12 * (bv.back() - bv.front());
+  auto straddled = [](const std::vector<double>& b, double lo, double hi, double eps) -> const double* {
+    const auto it = std::upper_bound(b.begin(), b.end(), lo + eps);
+    return it != b.end() && *it < hi - eps ? &*it : nullptr;
+  };
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    const BezierCell& cell = mesh.cell(c);
+    const double* u = straddled(bu, cell.u0, cell.u1, eu);
+    const double* v = straddled(bv, cell.v0, cell.v1, ev);
+    if (!u && !v) continue;
+    std::ostringstream s;
+    s << "cell " << c << " ([" << cell.u0 << ", " << cell.u1 << "] x [" << cell.v0 << ", " << cell.v1
+      << "]) straddles the geometry's knot " << (u ? "u = " : "v = ") << (u ? *u : *v)
+      << ": the map is a different polynomial on each side, so every cell must lie inside one knot span "
+         "(put a knot there)";
+    throw GeometryError(s.str());
+  }
+}
 
 void PatchGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                                 GeometryAtPoints& out) const {

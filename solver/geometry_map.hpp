@@ -55,7 +55,8 @@ void dehomogenize_map(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, con
 // A NURBS patch evaluated directly at any parameter point, for cells that do not follow the
 // patch's own knot grid (knot-segment and T-mesh spaces in the patch's parameter domain).
 // Bezier output interpolates the map at the cell's equispaced nodes (exact for polynomial
-// patches of at most the cell's degree).
+// patches of at most the cell's degree). Every cell must lie inside one knot span of the
+// patch: the constructor throws GeometryError naming the first cell that straddles a knot.
 class PatchGeometryMap final : public GeometryMap {
  public:
   PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch);

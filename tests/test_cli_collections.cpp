@@ -91,6 +91,35 @@ TEST_CASE("run on an explicit collection, refused unless --allow-non-semi-regula
   expect_rejected(box, bad_case, {"bad.toml", "semi-regular"}, "", "adapt");
 }
 
+static double json_number_of(const std::string& out, const std::string& key) {
+  const auto at = out.find("\"" + key + "\": ");
+  REQUIRE(at != std::string::npos);
+  return std::stod(out.substr(at + key.size() + 4));
+}
+
+TEST_CASE("an explicit collection on the L-shape: cells must not straddle the geometry's fold", "[cli][semi-regular][geometry]") {
+  // The one-patch L-shape is bilinear on each side of its C0 fold u = 1/2, so a linear u is
+  // in the degree-1 space whose cells end at the fold: reproduced to rounding. Cells across
+  // the fold would be mapped by one side's polynomial: refused, naming the cell and the knot.
+  Sandbox box;
+  auto lshape_case = [&](const std::string& breaks) {
+    box.file("coll.json", R"({"degree": [1, 1], "functions": [)"
+                          R"({"x": [0, 0, )" + breaks + R"(], "y": [0, 0, 1]}, {"x": [0, 0, )" + breaks +
+                          R"(], "y": [0, 1, 1]}, {"x": [0, )" + breaks + R"(, 1], "y": [0, 0, 1]}, {"x": [0, )" +
+                          breaks + R"(, 1], "y": [0, 1, 1]}, {"x": [)" + breaks + R"(, 1, 1], "y": [0, 0, 1]}, {"x": [)" +
+                          breaks + R"(, 1, 1], "y": [0, 1, 1]}]})");
+    return std::string("[geometry]\ntype = \"lshape\"\n[space]\nfamily = \"knot_segments\"\ncollection = \"coll.json\"\n"
+                       "[problem]\nexact = \"1 + 2*x - 3*y\"\n");
+  };
+  box.file("fold.toml", lshape_case("0.5"));
+  const Result fold = box.run("run -q --no-output --json fold.toml");
+  INFO(fold.err);
+  REQUIRE(fold.code == 0);
+  REQUIRE(json_number_of(fold.out, "l2_error") < 1e-12);
+  expect_rejected(box, lshape_case("0.4"),
+                  {"bad.toml", "[space] collection", "coll.json", "straddles the geometry's knot u = 0.5"});
+}
+
 TEST_CASE("bad input: collection files", "[cli][bad-input][semi-regular]") {
   Sandbox box;
   auto collection_case = [&](const std::string& json) {
@@ -325,11 +354,6 @@ TEST_CASE("nothing typed into a quad mesh or gluing file crashes knotwork basis 
 }
 
 // A number printed in the JSON object by `key`.
-static double json_number_of(const std::string& out, const std::string& key) {
-  const auto at = out.find("\"" + key + "\": ");
-  REQUIRE(at != std::string::npos);
-  return std::stod(out.substr(at + key.size() + 4));
-}
 
 TEST_CASE("basis --pt: the PT-spline basis of a T-mesh, checked, exported, and bad input", "[cli][pt]") {
   Sandbox box;

@@ -145,6 +145,10 @@ class KnotSegmentSpace final : public SplineSpace {
     for (const auto& v : collection_->violations()) violations_.push_back(v.reason);
     try {
       finish();
+    } catch (const GeometryError& e) {
+      throw InputError(where + ": " + e.what());
+    } catch (const InputError&) {
+      throw;
     } catch (const std::runtime_error& e) {
       throw InputError(where + ": the supports do not induce a partition: " + e.what());
     }
