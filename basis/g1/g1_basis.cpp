@@ -13,11 +13,16 @@
 #include "basis/core/bspline_basis.hpp"
 #include "basis/exact/sparse_rank.hpp"
 #include <Eigen/SparseCholesky>
-#include <Eigen/SparseQR>
+#include <Eigen/SPQRSupport>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
 
 namespace knotwork {
+
+namespace {
+// SuiteSparseQR works on 64-bit indices (its cholmod_l interface).
+using LongSparse = Eigen::SparseMatrix<double, Eigen::ColMajor, long>;
+}  // namespace
 
 namespace {
 
@@ -585,10 +590,14 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
   tidy_pair_functions(mesh, basis);
   separate_boundary_traces(mesh, basis);
   // Largest coefficient +1: comparable scales for assembly and plots, a definite sign.
-  for (auto& f : basis.functions) {
+  for (size_t n = 0; n < basis.functions.size(); ++n) {
+    auto& f = basis.functions[n];
     double largest = 0;
     for (const auto& [c, v] : f.coefficients)
       if (std::abs(v) > std::abs(largest)) largest = v;
+    if (!(std::abs(largest) > 0) || !std::isfinite(largest))
+      throw std::runtime_error("the G1 construction produced function " + std::to_string(n) +
+                               " with no nonzero (or a non-finite) coefficient; these gluing data break it");
     for (auto& [c, v] : f.coefficients) v /= largest;
   }
   for (const auto& f : basis.functions) ++basis.counts[static_cast<int>(f.kind)];
@@ -645,17 +654,21 @@ long g1_basis_rank(const G1Basis& basis, std::string* method) {
     if (method) *method = "SVD, singular values above 1e-10 * largest";
     return svd.rank();
   }
-  // Too large for a dense SVD: sparse rank-revealing QR.
-  Eigen::SparseMatrix<double> M(m, n);
-  std::vector<Eigen::Triplet<double>> entries;
+  // Too large for a dense SVD: SuiteSparseQR's rank-revealing sparse QR. Every function's
+  // largest coefficient is 1, so the columns have 2-norms between 1 and sqrt(their size).
+  LongSparse M(m, n);
+  std::vector<Eigen::Triplet<double, long>> entries;
   for (Eigen::Index j = 0; j < n; ++j)
     for (const auto& [c, v] : basis.functions[j].coefficients) entries.emplace_back(c, j, v);
   M.setFromTriplets(entries.begin(), entries.end());
   M.makeCompressed();
-  Eigen::SparseQR<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> qr;
-  qr.setPivotThreshold(1e-10);
+  double largest_column = 0;
+  for (Eigen::Index j = 0; j < n; ++j) largest_column = std::max(largest_column, M.col(j).norm());
+  Eigen::SPQR<LongSparse> qr;
+  qr.setPivotThreshold(kTolerance * largest_column);
   qr.compute(M);
-  if (method) *method = "sparse QR, pivots above 1e-10";
+  if (qr.info() != Eigen::Success) throw std::runtime_error("G1 basis rank: SuiteSparseQR failed");
+  if (method) *method = "SuiteSparseQR, columns below 1e-10 * the largest column norm are dependent";
   return qr.rank();
 }
 
@@ -855,10 +868,22 @@ Eigen::MatrixX3d g1_fit(const QuadMesh& mesh, const G1Basis& basis,
     if (!E.boundary()) continue;
     for (int a = 0; a < n; ++a) weight(g1_corner_unknown(E.face[0], E.corner[0], a, 0, k, r)) = 1e6;
   }
-  const Eigen::SparseMatrix<double> normal = M.transpose() * weight.asDiagonal() * M;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
-  if (solver.info() != Eigen::Success) throw std::runtime_error("G1 least-squares fit: the normal equations are singular");
-  const Eigen::MatrixX3d c = solver.solve(Eigen::MatrixX3d(M.transpose() * weight.asDiagonal() * target));
+  // Least squares by SuiteSparseQR on the weighted rows (not the normal equations, which would
+  // square the condition number and the 10^6 weight with it).
+  const Eigen::VectorXd root = weight.cwiseSqrt();
+  LongSparse A = LongSparse(root.asDiagonal() * M);
+  A.makeCompressed();
+  Eigen::SPQR<LongSparse> solver;
+  solver.compute(A);
+  if (solver.info() != Eigen::Success) throw std::runtime_error("G1 least-squares fit: SuiteSparseQR failed");
+  if (solver.rank() < A.cols())
+    throw std::runtime_error("G1 least-squares fit: the basis functions' coefficients are rank deficient (rank " +
+                             std::to_string(solver.rank()) + " of " + std::to_string(A.cols()) + ")");
+  Eigen::MatrixX3d c(A.cols(), 3);
+  for (int d = 0; d < 3; ++d) {
+    const Eigen::VectorXd b = root.cwiseProduct(target.col(d));
+    c.col(d) = solver.solve(b);
+  }
   if (deviation) *deviation = (M * c - target).rowwise().norm().maxCoeff();
   return c;
 }
