@@ -6,8 +6,10 @@
 
 #include <cmath>
 #include <random>
+#include <regex>
 
 #include "basis/g1/g1_discretization.hpp"
+#include "cases/spline_space.hpp"
 #include "solver/poisson_solver.hpp"
 #include "tests/cli_sandbox.hpp"
 #include "tests/g1_test_meshes.hpp"
@@ -25,15 +27,12 @@ struct Measured {
 };
 
 // One level solved here with the library (not through the command line): h is the largest cell
-// diagonal, computed from the geometry cells.
+// diagonal (both diagonals of every cell, as converge measures it; one diagonal alone gave
+// rates that depend on which cell is largest at each level).
 Measured solve(const CaseDescription& c, int level) {
   const G1Discretization d = discretize_g1(c, level);
   Measured m{0, 0, 0, 0, d.mesh.num_functions()};
-  const int k = d.basis.k, last = (k + 1) * (k + 1) - 1;
-  for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
-    const Eigen::MatrixXd points = d.geometry->bezier_cell(cell).points;
-    m.h = std::max(m.h, (points.row(0) - points.row(last)).norm());
-  }
+  m.h = largest_cell_diagonal(d.mesh, *d.geometry);
   // Planar Poisson and Laplace-Beltrami alike: one solver.
   const PoissonSolution s = solve_poisson(d.mesh, *d.geometry, c.problem, PoissonSolveOptions{});
   m.l2 = s.errors->l2, m.h1 = s.errors->h1_semi;
@@ -45,9 +44,12 @@ double rate(double e0, double e1, double h0, double h1) { return std::log(e0 / e
 
 }  // namespace
 
-// Observed (docs/G1_POISSON.md), symmetric data with the C1 blend: rates 4.61, 4.58 (L2) and
-// 3.67, 3.64 (H1) at levels 2 and 3, below the optimal 5 and 4; the asserted bounds are what
-// this code establishes, not the theory.
+// Theory: C1 spaces converge optimally (h^(k+1) in L2, h^k in H1) when the gluing data are
+// analysis-suitable (Collin-Sangalli-Takacs 2016); the symmetric data are not at an
+// extraordinary vertex, and their locked strip along the first half of each edge costs half an
+// order (docs/G1_POISSON.md): for k = 4 the expected rates are 4.5 (L2) and 3.5 (H1). Windows
+// of 0.2 around them between the last two levels, and at least k, k - 1 over the study.
+// (Observed: 4.53 and 3.57 between levels 2 and 3.)
 TEST_CASE("G1 Poisson, case (a): errors fall at high order, the solution is C1 across interfaces", "[g1][cases]") {
   const CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
   std::vector<Measured> m;
@@ -56,8 +58,10 @@ TEST_CASE("G1 Poisson, case (a): errors fall at high order, the solution is C1 a
     INFO("h " << x.h << " dofs " << x.dofs << " L2 " << x.l2 << " H1 " << x.h1 << " jump " << x.jump);
     REQUIRE(x.jump < 1e-9);
   }
-  REQUIRE(rate(m[2].l2, m[3].l2, m[2].h, m[3].h) > 4.3);
-  REQUIRE(rate(m[2].h1, m[3].h1, m[2].h, m[3].h) > 3.3);
+  const double l2_rate = rate(m[2].l2, m[3].l2, m[2].h, m[3].h), h1_rate = rate(m[2].h1, m[3].h1, m[2].h, m[3].h);
+  INFO("rates between levels 2 and 3: L2 " << l2_rate << ", H1 " << h1_rate);
+  REQUIRE(std::abs(l2_rate - 4.5) < 0.2);
+  REQUIRE(std::abs(h1_rate - 3.5) < 0.2);
   // Over the whole study: at least h^4 in L2 and h^3 in H1 on average.
   REQUIRE(rate(m[0].l2, m[3].l2, m[0].h, m[3].h) > 4);
   REQUIRE(rate(m[0].h1, m[3].h1, m[0].h, m[3].h) > 3);
@@ -137,32 +141,43 @@ TEST_CASE("Laplace-Beltrami on the G1 sphere from a cube: rates with the zero-me
     INFO("h " << x.h << " dofs " << x.dofs << " L2 " << x.l2 << " H1 " << x.h1 << " jump " << x.jump);
     REQUIRE(x.jump < 1e-9);
   }
-  // Observed 5.53, 4.83 (L2) and 4.44, 3.83 (H1); optimal for k = 4: 5 and 4.
-  REQUIRE(rate(m[1].l2, m[2].l2, m[1].h, m[2].h) > 4.3);
-  REQUIRE(rate(m[1].h1, m[2].h1, m[1].h, m[2].h) > 3.4);
+  // Theory for k = 4: between the locked rates of the symmetric data at the valence-3
+  // vertices (4.5 in L2, 3.5 in H1) and the optimal ones (5, 4), up to 0.2 either way while
+  // the study is pre-asymptotic. (Observed 4.83 and 3.83 between levels 1 and 2.)
+  const double l2_rate = rate(m[1].l2, m[2].l2, m[1].h, m[2].h), h1_rate = rate(m[1].h1, m[2].h1, m[1].h, m[2].h);
+  INFO("rates between levels 1 and 2: L2 " << l2_rate << ", H1 " << h1_rate);
+  REQUIRE(l2_rate > 4.5 - 0.2);
+  REQUIRE(l2_rate < 5 + 0.2);
+  REQUIRE(h1_rate > 3.5 - 0.2);
+  REQUIRE(h1_rate < 4 + 0.2);
 }
 
-// The cases that converge optimally (docs/G1_POISSON.md): observed 5.07/4.07 (torus) and
-// 5.02/3.99 (mixed valences) between levels 0 and 1.
+// Theory: optimal rates k + 1 = 5 (L2) and k = 4 (H1) for analysis-suitable gluing data, as on
+// the all-valence-4 torus (a = 0, b = -1, c = 1). The regular-fan data of the mixed-valence
+// square are not shown to be analysis-suitable here; docs/G1_POISSON.md measures optimal rates
+// on it, and the same window applies: 0.3 either way at the first refinement (pre-asymptotic).
+// (Observed 5.07/4.07 on the torus and 5.02/3.99 on the square.)
 TEST_CASE("Torus and the mixed-valence square: optimal rates from the first refinement", "[g1][cases]") {
   for (const char* name : {"/cases/g1_torus.toml", "/cases/g1_mixed_valences.toml"}) {
     const CaseDescription c = load_case(kSource + name);
     const Measured m0 = solve(c, 0), m1 = solve(c, 1);
     INFO(name << ": L2 " << m0.l2 << " -> " << m1.l2 << ", H1 " << m0.h1 << " -> " << m1.h1);
-    REQUIRE(rate(m0.l2, m1.l2, m0.h, m1.h) > 4.7);
-    REQUIRE(rate(m0.h1, m1.h1, m0.h, m1.h) > 3.7);
+    REQUIRE(std::abs(rate(m0.l2, m1.l2, m0.h, m1.h) - 5) < 0.3);
+    REQUIRE(std::abs(rate(m0.h1, m1.h1, m0.h, m1.h) - 4) < 0.3);
     REQUIRE(m1.jump < 1e-9);
   }
 }
 
-// Case (b), k = 5: observed 5.55 (L2) and 4.41 (H1) between levels 0 and 1, below the optimal
-// 6 and 5 (the map is singular at the valence-5 vertex; docs/G1_POISSON.md).
+// Case (b), k = 5, geometric gluing whose map is singular at the valence-5 vertex
+// (docs/G1_POISSON.md): theory gives no optimal rate there; the half-order loss of a locked
+// vertex predicts 5.5 (L2) and 4.5 (H1), and the window is 0.3 either way at the first
+// refinement. (Observed 5.55 and 4.41.)
 TEST_CASE("Pentagon (valence 5, k = 5): high order, below optimal, C1", "[g1][cases]") {
   const CaseDescription c = load_case(kSource + "/cases/g1_pentagon.toml");
   const Measured m0 = solve(c, 0), m1 = solve(c, 1);
   INFO("L2 " << m0.l2 << " -> " << m1.l2 << ", H1 " << m0.h1 << " -> " << m1.h1);
-  REQUIRE(rate(m0.l2, m1.l2, m0.h, m1.h) > 5.2);
-  REQUIRE(rate(m0.h1, m1.h1, m0.h, m1.h) > 4.1);
+  REQUIRE(std::abs(rate(m0.l2, m1.l2, m0.h, m1.h) - 5.5) < 0.3);
+  REQUIRE(std::abs(rate(m0.h1, m1.h1, m0.h, m1.h) - 4.5) < 0.3);
   REQUIRE(m1.jump < 1e-9);
 }
 
@@ -227,6 +242,19 @@ TEST_CASE("G1 cases through the binary: run, converge with a .pvd over levels, a
   // A planar case with z != 0.
   rejected("planar.toml", space + "mesh = \"" + meshes + "cube_centered.obj\"\n[problem]\nexact = \"x\"\n",
            {"planar.toml", "[space] mesh", "vertex 1 has z = -1", "laplace_beltrami"});
+  // A convergence study whose finest level cannot fit in memory: refused before any level is
+  // solved, with the estimate (the torus, 32 faces, refine 6 and 7 levels: 32 * 4^12 faces).
+  {
+    std::string text = slurp(fs::path(kSource) / "cases/g1_torus.toml");
+    const size_t at = text.find("[space]");
+    REQUIRE(at != std::string::npos);
+    text.insert(at + 8, "refine = 6\n");
+    text = std::regex_replace(text, std::regex("mesh = \"meshes/"), "mesh = \"" + meshes);
+    box.file("huge.toml", text);
+    const Result huge = box.run("converge huge.toml --levels 7 --quiet --out never");
+    expect_one_line_error(huge, {"huge.toml", "[space] refine", "GB needed", "more than this machine's"});
+    REQUIRE(!fs::exists(box.dir() / "never"));  // refused before the output folder, so before any level
+  }
   // The degree below the separability of the gluing data: the edge is named.
   rejected("low.toml", space + "mesh = \"" + meshes + "pentagon.obj\"\ngluing = \"geometric\"\ndegree = 4\n[problem]\nexact = \"x\"\n",
            {"low.toml", "[space] degree", "separability of edge 1-2"});

@@ -7,6 +7,7 @@
 
 #include "basis/g1/g1_discretization.hpp"
 #include "basis/g1/gluing_file.hpp"
+#include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
@@ -28,10 +29,27 @@ std::string format(const char* f, double a) {
   return b;
 }
 
+// Before anything is built: every subdivision quadruples the faces; each face has 4 cells
+// and at most (2k - r + 1)^2 functions (the face space's dimension, an upper bound).
+void check_g1_memory(const CaseDescription& c, int level) {
+  QuadMesh mesh;
+  try {
+    mesh = QuadMesh::read_obj(c.g1.mesh_file);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.path + ": [space] mesh: " + e.what());
+  }
+  const int levels = c.g1.refine + level;
+  const double faces = double(mesh.num_faces()) * std::pow(4.0, levels);
+  const int k = c.g1.degree, n = 2 * k - c.g1.split_smoothness + 1;
+  char what[160];
+  std::snprintf(what, sizeof what, "%.3g faces (%d subdivisions) of degree %d", faces, levels, k);
+  check_memory(c.path + ": [space] refine", galerkin_bytes(4 * faces, faces * n * n, k, k), what);
+}
+
 class G1Space final : public SplineSpace {
  public:
   G1Space(const CaseDescription& c, int level, const ProgressFunction& progress)
-      : case_(&c), d_(discretize_g1(c, level, progress)) {}
+      : case_(&c), d_((check_g1_memory(c, level), discretize_g1(c, level, progress))) {}
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *d_.geometry; }
   std::string description() const override { return describe_g1(*case_); }
@@ -116,8 +134,9 @@ SpaceFamily g1_family() {
     c.g1.degree = degree;
     c.space.degree = {degree, degree};
   };
-  f.check_converge = [](const CaseDescription&, int levels) {
+  f.check_converge = [](const CaseDescription& c, int levels) {
     if (levels > 7) throw InputError("--levels: must be in [1, 7] for G1 spaces, got " + std::to_string(levels));
+    check_g1_memory(c, levels - 1);  // the finest level, before the first is solved
   };
   f.check_adapt = [](const CaseDescription& c) {
     throw InputError(c.path + ": [space] family: \"g1\" refines only by uniform subdivision; adaptive refinement needs a "

@@ -10,12 +10,17 @@
 #include "basis/pt/pt_space.hpp"
 #include "basis/pt/pt_spline.hpp"
 #include "basis/tmesh/knot_polylines.hpp"
+#include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
 
 namespace {
+
+// The T-mesh checks compare every pair of cells and the basis is built in exact arithmetic:
+// 4096 cells take 2.3 s, so 20000 would take minutes and more far longer.
+constexpr int kMaxPtCells = 20000;
 
 // The geometry's breakpoints, exactly (doubles are dyadic rationals), and which interior
 // ones are C0 (multiplicity >= degree): the space must only be C0 there.
@@ -69,11 +74,9 @@ std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
                        text(lines.breaks[1].back()) + "]");
   }
   const int ex = c.space.elements_per_span[0] << level, ey = c.space.elements_per_span[1] << level;
-  // The T-mesh checks compare every pair of cells and the basis is built in exact
-  // arithmetic: 4096 cells take 2.3 s, so 20000 would take minutes and more far longer.
-  if (static_cast<double>(start.size()) * ex * ey > 20000)
+  if (static_cast<double>(start.size()) * ex * ey > kMaxPtCells)
     throw InputError(c.path + ": [space] elements: " + std::to_string(static_cast<long>(start.size()) * ex * ey) +
-                     " cells, more than the 20000 a PT-spline space is built for here");
+                     " cells, more than the " + std::to_string(kMaxPtCells) + " a PT-spline space is built for here");
   std::vector<RationalBox> cells;
   for (const auto& b : start)
     for (int j = 0; j < ey; ++j)
@@ -101,12 +104,22 @@ std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
 namespace {
 
 
+// Exact arithmetic dominates: peaks of 0.99 GB at 15045 and 2.5 GB at 40314 functions (p = 3,
+// adaptive L-shape, about one function per cell; docs/PT_SPLINES.md), i.e. about 65 kB per
+// cell, plus the Galerkin part.
+void check_pt_memory(const CaseDescription& c, size_t cells) {
+  const int m = c.space.degree[0], n = c.space.degree[1];
+  const double bytes = 65e3 * double(cells) + galerkin_bytes(double(cells), double(cells) + (m + 1) * (n + 1), m, n);
+  check_memory(c.path + ": [space]", bytes, std::to_string(cells) + " T-mesh cells of PT-splines");
+}
+
 class PtSpace final : public SplineSpace {
  public:
   // PT-splines on the given T-mesh of the case's parameter domain, ready to solve: the
   // geometry's C0 knot lines are C0 lines of the space. Throws InputError naming the case.
   PtSpace(const CaseDescription& c, std::vector<RationalBox> cells, int elements)
       : case_(&c), cells_(std::move(cells)), elements_(elements) {
+    check_pt_memory(c, cells_.size());
     const GeometryLines lines = geometry_lines(c.geometry);
     try {
       tmesh_ = std::make_unique<RectangularPartition>(cells_);
@@ -203,7 +216,16 @@ SpaceFamily pt_family() {
     if (degree) override_degree(c, degree);
     if (elements) override_elements(c, elements);
   };
-  f.check_converge = [](const CaseDescription& c, int levels) { check_uniform_levels(c, levels); };
+  f.check_converge = [](const CaseDescription& c, int levels) {
+    check_uniform_levels(c, levels);
+    // Each level quadruples the cells: refuse a study whose finest level cannot be built.
+    const double finest = double(pt_start_cells(c, 0).size()) * std::pow(4.0, levels - 1);
+    if (finest > kMaxPtCells)
+      throw InputError("--levels: the finest level would have " + std::to_string(static_cast<long>(finest)) +
+                       " T-mesh cells, more than the " + std::to_string(kMaxPtCells) +
+                       " a PT-spline space is built for here");
+    check_pt_memory(c, static_cast<size_t>(finest));
+  };
   return f;
 }
 

@@ -1,11 +1,9 @@
 // Family "tensor": tensor-product B-splines and NURBS on one patch, k-refined from the case's
 // geometry (uniform elements per knot span, optional extra knots), isoparametric when rational.
-#include <unistd.h>
-
-#include <cmath>
 #include <cstdio>
 
 #include "basis/tensor/nurbs_geometry_map.hpp"
+#include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
@@ -13,11 +11,8 @@ namespace knotwork {
 
 namespace {
 
-// Refuses discretizations that cannot fit in memory before allocating anything: cell
-// function lists, the matrix (lower triangle, one copy per thread during assembly) and the
-// Cholesky factor, estimated as nnz(A) * log2(n) entries (measured with AMD on 2D IGA
-// matrices: 0.73-0.75 * log2(n), docs/PERFORMANCE.md; the estimate keeps a margin).
-void check_memory(const CaseDescription& c, const TensorSpaceOptions& s) {
+// Refuses discretizations that cannot fit in memory before allocating anything.
+void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s) {
   double cells = 1, functions = 1;
   for (int d = 0; d < 2; ++d) {
     const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
@@ -25,18 +20,9 @@ void check_memory(const CaseDescription& c, const TensorSpaceOptions& s) {
     cells *= elements;
     functions *= elements + s.degree[d];
   }
-  const double per_cell = double(s.degree[0] + 1) * (s.degree[1] + 1);
-  const double coupling = double(2 * s.degree[0] + 1) * (2 * s.degree[1] + 1) / 2;
-  const double nnz = functions * coupling;
-  const double factor = nnz * std::max(1.0, std::log2(functions));
-  const double bytes = cells * per_cell * 4 + nnz * 12 * 3 + factor * 8;
-  const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-  if (physical > 0 && bytes > 0.9 * physical) {
-    char msg[200];
-    std::snprintf(msg, sizeof msg, "about %.0f GB needed for %.3g cells of degree %dx%d, more than this machine's %.0f GB",
-                  bytes / 1e9, cells, s.degree[0], s.degree[1], physical / 1e9);
-    throw InputError(c.path + ": [space] elements: " + msg);
-  }
+  char what[120];
+  std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d", cells, s.degree[0], s.degree[1]);
+  check_memory(c.path + ": [space] elements", galerkin_bytes(cells, functions, s.degree[0], s.degree[1]), what);
 }
 
 std::string describe(const TensorSpaceOptions& s) {
@@ -51,7 +37,7 @@ std::string describe(const TensorSpaceOptions& s) {
 class TensorSpace final : public SplineSpace {
  public:
   TensorSpace(const CaseDescription& c, const TensorSpaceOptions& options) : options_(options) {
-    check_memory(c, options);
+    check_tensor_memory(c, options);
     try {
       d_ = build_tensor_discretization(c.geometry, options);
     } catch (const std::invalid_argument& e) {
@@ -85,6 +71,12 @@ SpaceFamily tensor_family() {
   f.override_options = [](CaseDescription& c, int degree, int elements) {
     if (degree) override_degree(c, degree);
     if (elements) override_elements(c, elements);
+  };
+  f.check_converge = [](const CaseDescription& c, int levels) {
+    check_uniform_levels(c, levels);
+    TensorSpaceOptions finest = c.space;
+    finest.elements_per_span = {finest.elements_per_span[0] << (levels - 1), finest.elements_per_span[1] << (levels - 1)};
+    check_tensor_memory(c, finest);  // the finest level, before the first is solved
   };
   f.check_adapt = [](const CaseDescription& c) {
     throw InputError(c.path + ": [space] family: \"tensor\" refines only uniformly; adaptive refinement needs a family "

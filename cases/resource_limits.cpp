@@ -1,0 +1,30 @@
+#include "cases/resource_limits.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+double galerkin_bytes(double cells, double functions, int p, int q) {
+  const double per_cell = double(p + 1) * (q + 1);
+  const double coupling = double(2 * p + 1) * (2 * q + 1) / 2;
+  const double nnz = functions * coupling;
+  const double factor = nnz * std::max(1.0, std::log2(std::max(functions, 2.0)));
+  return cells * per_cell * 4 + nnz * 12 * 3 + factor * 8;
+}
+
+void check_memory(const std::string& where, double bytes, const std::string& what) {
+  const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  if (!(physical > 0) || bytes <= 0.9 * physical) return;
+  char msg[300];
+  std::snprintf(msg, sizeof msg, ": about %.0f GB needed for %s, more than this machine's %.0f GB", bytes / 1e9,
+                what.c_str(), physical / 1e9);
+  throw InputError(where + msg);
+}
+
+}  // namespace knotwork

@@ -1,0 +1,18 @@
+#pragma once
+// Refusals before work that could not finish on this machine: every family estimates the
+// memory its space and solve need and calls check_memory before allocating anything.
+#include <string>
+
+namespace knotwork {
+
+// Memory of the Galerkin pipeline for `cells` cells of bi-degree (p, q) and `functions`
+// functions: cell function lists, the matrix (lower triangle, a copy per thread during
+// assembly) and the Cholesky factor, estimated as nnz(A) log2(n) entries (measured with AMD
+// on 2D IGA matrices: 0.73-0.75 log2(n), docs/PERFORMANCE.md; the estimate keeps a margin).
+double galerkin_bytes(double cells, double functions, int p, int q);
+
+// Throws InputError "<where>: about X GB needed for <what>, more than this machine's Y GB"
+// when `bytes` exceeds 90% of the physical memory.
+void check_memory(const std::string& where, double bytes, const std::string& what);
+
+}  // namespace knotwork
