@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <stdexcept>
 
@@ -33,48 +34,10 @@ struct BernsteinDerivatives {
   std::vector<double> out;
 };
 
-// Cell sides that touch, as (cell on the low side, cell on the high side, overlap interval).
-struct SharedSide {
-  int low, high;
-  bool vertical;  // the side lies on u = const (between a left and a right cell)
-  double at, from, to;
-};
-
-std::vector<SharedSide> shared_sides(const BezierMesh& mesh) {
-  struct End {
-    double from, to;
-    int cell;
-  };
-  // Per line position: cells ending there (their high side) and cells starting there.
-  std::map<double, std::vector<End>> vert_low, vert_high, hor_low, hor_high;
-  for (int c = 0; c < mesh.num_cells(); ++c) {
-    const BezierCell& b = mesh.cell(c);
-    if (b.boundary[kSideRight] < 0) vert_low[b.u1].push_back({b.v0, b.v1, c});
-    if (b.boundary[kSideLeft] < 0) vert_high[b.u0].push_back({b.v0, b.v1, c});
-    if (b.boundary[kSideTop] < 0) hor_low[b.v1].push_back({b.u0, b.u1, c});
-    if (b.boundary[kSideBottom] < 0) hor_high[b.v0].push_back({b.u0, b.u1, c});
-  }
-  std::vector<SharedSide> out;
-  auto match = [&](std::map<double, std::vector<End>>& low, std::map<double, std::vector<End>>& high, bool vertical) {
-    for (auto& [at, lows] : low) {
-      auto& highs = high[at];
-      auto by_from = [](const End& a, const End& b) { return a.from < b.from; };
-      std::sort(lows.begin(), lows.end(), by_from);
-      std::sort(highs.begin(), highs.end(), by_from);
-      size_t i = 0, j = 0;
-      while (i < lows.size() && j < highs.size()) {
-        const double from = std::max(lows[i].from, highs[j].from), to = std::min(lows[i].to, highs[j].to);
-        if (to > from) out.push_back({lows[i].cell, highs[j].cell, vertical, at, from, to});
-        if (lows[i].to < highs[j].to)
-          ++i;
-        else
-          ++j;
-      }
-    }
-  };
-  match(vert_low, vert_high, true);
-  match(hor_low, hor_high, false);
-  return out;
+// The point of a cell's side at reference coordinate t along it.
+void side_point(CellSide side, double t, double& u, double& v) {
+  u = side == kSideBottom || side == kSideTop ? t : side == kSideRight ? 1 : 0;
+  v = side == kSideLeft || side == kSideRight ? t : side == kSideTop ? 1 : 0;
 }
 
 }  // namespace
@@ -83,8 +46,8 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
                                     const Eigen::VectorXd& coefficients, const PoissonProblem& problem) {
   if (geometry.dimension() != 2) throw std::invalid_argument("the residual estimator is written for planar domains, not surfaces");
   if (mesh.is_rational()) throw std::invalid_argument("the residual estimator needs a polynomial (non-rational) space");
-  for (int c = 0; c < mesh.num_cells(); ++c)
-    if (mesh.cell(c).patch != 0) throw std::invalid_argument("the residual estimator needs a single-patch mesh");
+  if (!mesh.has_interfaces())
+    throw std::invalid_argument("the residual estimator needs the mesh's cell interfaces, and this family gives none");
   {
     Eigen::MatrixXd probe;
     const Eigen::VectorXd half = Eigen::VectorXd::Constant(1, 0.5);
@@ -175,40 +138,27 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
   }
   ind.residual_part = residual_sum;
   // Gradient jumps across interior sides, half to each neighbour.
-  const std::vector<SharedSide> sides = shared_sides(mesh);
+  const std::vector<CellInterface>& sides = mesh.interfaces();
   std::vector<double> side_value(sides.size()), side_max(sides.size());
 #pragma omp parallel for schedule(dynamic, 32)
   for (size_t s = 0; s < sides.size(); ++s) {
-    const SharedSide& e = sides[s];
-    const BezierCell& lo = mesh.cell(e.low);
-    const BezierCell& hi = mesh.cell(e.high);
+    const CellInterface& e = sides[s];
+    const BezierCell& lo = mesh.cell(e.cell_a);
     const int n = std::max({lo.degree_u, lo.degree_v}) + 2;
     const QuadratureRule1D rule = gauss_legendre(n);
-    Eigen::VectorXd ul(n), vl(n), uh(n), vh(n);
+    Eigen::VectorXd ua(n), va(n), ub(n), vb(n);
     for (int k = 0; k < n; ++k) {
-      const double t = e.from + rule.nodes[k] * (e.to - e.from);
-      if (e.vertical) {
-        ul[k] = 1;
-        vl[k] = (t - lo.v0) / (lo.v1 - lo.v0);
-        uh[k] = 0;
-        vh[k] = (t - hi.v0) / (hi.v1 - hi.v0);
-      } else {
-        vl[k] = 1;
-        ul[k] = (t - lo.u0) / (lo.u1 - lo.u0);
-        vh[k] = 0;
-        uh[k] = (t - hi.u0) / (hi.u1 - hi.u0);
-      }
+      side_point(e.side_a, e.a_from + rule.nodes[k] * (e.a_to - e.a_from), ua[k], va[k]);
+      side_point(e.side_b, e.b_from + rule.nodes[k] * (e.b_to - e.b_from), ub[k], vb[k]);
     }
-    const Eigen::MatrixX3d a = evaluate_solution(mesh, geometry, coefficients, e.low, ul, vl);
-    const Eigen::MatrixX3d b = evaluate_solution(mesh, geometry, coefficients, e.high, uh, vh);
+    const Eigen::MatrixX3d a = evaluate_solution(mesh, geometry, coefficients, e.cell_a, ua, va);
+    const Eigen::MatrixX3d b = evaluate_solution(mesh, geometry, coefficients, e.cell_b, ub, vb);
     GeometryAtPoints g;
-    geometry.evaluate(e.low, ul, vl, g);
+    geometry.evaluate(e.cell_a, ua, va, g);
+    const int col = e.side_a == kSideBottom || e.side_a == kSideTop ? 0 : 1;  // the tangent's reference direction
     double length = 0, integral = 0, biggest = 0;
     for (int k = 0; k < n; ++k) {
-      // |dx/dt| along the side: the reference tangent divided by the cell's parameter length.
-      const double scale = e.vertical ? 1.0 / (lo.v1 - lo.v0) : 1.0 / (lo.u1 - lo.u0);
-      const int col = e.vertical ? 1 : 0;
-      const double ds = std::hypot(g.jacobian(k, col), g.jacobian(k, 2 + col)) * scale * (e.to - e.from) * rule.weights[k];
+      const double ds = std::hypot(g.jacobian(k, col), g.jacobian(k, 2 + col)) * std::abs(e.a_to - e.a_from) * rule.weights[k];
       const double jump = std::hypot(a(k, 1) - b(k, 1), a(k, 2) - b(k, 2));
       length += ds;
       integral += ds * jump * jump;
@@ -218,8 +168,8 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
     side_max[s] = biggest;
   }
   for (size_t s = 0; s < sides.size(); ++s) {
-    ind.eta_squared[sides[s].low] += side_value[s];
-    ind.eta_squared[sides[s].high] += side_value[s];
+    ind.eta_squared[sides[s].cell_a] += side_value[s];
+    ind.eta_squared[sides[s].cell_b] += side_value[s];
     ind.jump_part += 2 * side_value[s];
     ind.max_gradient_jump = std::max(ind.max_gradient_jump, side_max[s]);
   }

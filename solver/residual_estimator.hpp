@@ -23,9 +23,9 @@ struct ErrorIndicators {
   double total() const { return eta_squared.sum(); }
 };
 
-// Needs a single-patch polynomial BezierMesh whose cells carry their parameter boxes
-// (knot-segment and T-mesh spaces) and a geometry with second derivatives; throws
-// std::invalid_argument otherwise.
+// Needs a planar, polynomial BezierMesh with its cell interfaces (BezierMesh::interfaces, built
+// by the family: one patch or many, G1 included) and a geometry with second derivatives;
+// throws std::invalid_argument otherwise.
 ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
                                     const Eigen::VectorXd& coefficients, const PoissonProblem& problem);
 

@@ -10,6 +10,7 @@
 
 #include "basis/g1/g1_discretization.hpp"
 #include "cases/spline_space.hpp"
+#include "solver/residual_estimator.hpp"
 #include "solver/poisson_solver.hpp"
 #include "tests/cli_sandbox.hpp"
 #include "tests/g1_test_meshes.hpp"
@@ -122,6 +123,45 @@ TEST_CASE("Case (a): the error concentrates along the G1 interfaces", "[g1][case
   INFO("share of the H1 error squared within 1/8 of the interior edges: " << share[0] << ", " << share[1]);
   REQUIRE(share[1] > 0.8);
   REQUIRE(share[1] > share[0]);
+}
+
+TEST_CASE("G1 cell interfaces: every shared side matched point for point, and the estimator sees a C1 solution", "[g1][cases][adaptive]") {
+  const CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
+  for (int level = 0; level <= 1; ++level) {
+    const G1Discretization d = discretize_g1(c, level);
+    const QuadMesh& m = d.level.mesh;
+    int interior_edges = 0;
+    for (int e = 0; e < m.num_edges(); ++e) interior_edges += !m.edge(e).boundary();
+    // 4 inside each face (the 4-split) and 2 along each interior edge (its two halves).
+    REQUIRE(d.mesh.has_interfaces());
+    REQUIRE(static_cast<int>(d.mesh.interfaces().size()) == 4 * m.num_faces() + 2 * interior_edges);
+    // Both sides of every interface are the same curve, point for point, through the geometry.
+    double worst = 0;
+    for (const CellInterface& f : d.mesh.interfaces()) {
+      Eigen::VectorXd ua(3), va(3), ub(3), vb(3);
+      for (int k = 0; k < 3; ++k) {
+        const double w = 0.1 + 0.4 * k;
+        auto put = [](CellSide side, double t, double& u, double& v) {
+          u = side == kSideBottom || side == kSideTop ? t : side == kSideRight ? 1 : 0;
+          v = side == kSideLeft || side == kSideRight ? t : side == kSideTop ? 1 : 0;
+        };
+        put(f.side_a, f.a_from + w * (f.a_to - f.a_from), ua[k], va[k]);
+        put(f.side_b, f.b_from + w * (f.b_to - f.b_from), ub[k], vb[k]);
+      }
+      GeometryAtPoints ga, gb;
+      d.geometry->evaluate(f.cell_a, ua, va, ga);
+      d.geometry->evaluate(f.cell_b, ub, vb, gb);
+      worst = std::max(worst, (ga.x - gb.x).cwiseAbs().maxCoeff());
+    }
+    REQUIRE(worst < 1e-12);
+    // The residual estimator on the multi-patch mesh: the discrete solution is C1, so the
+    // gradient jumps across all interfaces are rounding, and the residual part carries eta.
+    const PoissonSolution s = solve_poisson(d.mesh, *d.geometry, c.problem, PoissonSolveOptions{});
+    const ErrorIndicators ind = residual_indicators(d.mesh, *d.geometry, s.coefficients, c.problem);
+    INFO("level " << level << ": largest gradient jump " << ind.max_gradient_jump << ", eta " << std::sqrt(ind.total()));
+    REQUIRE(ind.max_gradient_jump < 1e-9);
+    REQUIRE(ind.residual_part > 0);
+  }
 }
 
 TEST_CASE("The C0 multipatch baseline on the same mesh is not C1 (the jump check sees it)", "[g1][cases]") {

@@ -18,6 +18,20 @@ struct BezierCell {
   std::array<int, 4> boundary{-1, -1, -1, -1};  // boundary id per CellSide, -1 if interior
 };
 
+// Two cells that meet along part of a side: the piece [a_from, a_to] of cell_a's side (in
+// the cell's reference coordinate along that side: u on bottom/top, v on left/right) is the
+// same curve as [b_from, b_to] of cell_b's side, point for point (b_from > b_to when the
+// two run opposite ways). Built once by the family, which knows its topology (multi-patch
+// and G1 meshes included); the residual estimator walks them.
+struct CellInterface {
+  int cell_a = -1;
+  CellSide side_a = kSideBottom;
+  double a_from = 0, a_to = 1;
+  int cell_b = -1;
+  CellSide side_b = kSideBottom;
+  double b_from = 0, b_to = 1;
+};
+
 // The contract between every spline construction and the solver: cell by cell, which
 // global functions are alive and which combination of the cell's Bernstein polynomials
 // each one is (N_active = C_e * B, B ordered a + (p+1)*c with a along u).
@@ -39,6 +53,10 @@ class BezierMesh {
   void set_num_functions(int n) { num_functions_ = n; }
   void set_weights(Eigen::VectorXd weights) { weights_ = std::move(weights); }
   void set_boundary_names(std::vector<std::string> names) { boundary_names_ = std::move(names); }
+  void set_interfaces(std::vector<CellInterface> interfaces) {
+    interfaces_ = std::move(interfaces);
+    has_interfaces_ = true;
+  }
 
   int num_functions() const { return num_functions_; }
   int num_cells() const { return static_cast<int>(cells_.size()); }
@@ -52,6 +70,10 @@ class BezierMesh {
   const Eigen::VectorXd& weights() const { return weights_; }
   const std::vector<std::string>& boundary_names() const { return boundary_names_; }
   int max_functions_per_cell() const { return max_active_; }
+  // The interior sides shared by two cells; has_interfaces() is false when the family did
+  // not provide them (an empty list is a single cell).
+  bool has_interfaces() const { return has_interfaces_; }
+  const std::vector<CellInterface>& interfaces() const { return interfaces_; }
   int max_degree() const { return max_degree_; }
 
  private:
@@ -62,6 +84,8 @@ class BezierMesh {
   std::vector<int> ids_;
   Eigen::VectorXd weights_;
   std::vector<std::string> boundary_names_;
+  std::vector<CellInterface> interfaces_;
+  bool has_interfaces_ = false;
   int num_functions_ = 0;
   int max_active_ = 0;
   int max_degree_ = 0;
@@ -72,5 +96,10 @@ class BezierMesh {
 // For polynomial meshes wb = 1 and C_hat = C_e.
 void rational_cell_extraction(const BezierMesh& mesh, int cell, Eigen::VectorXd& bernstein_weights,
                               Eigen::MatrixXd& extraction);
+
+// The interfaces of a mesh whose cells tile one patch's parameter domain (tensor, knot-segment
+// and T-mesh spaces), from the cells' parameter boxes: a right side meets the left sides
+// that overlap it on the same line, a top side the bottom sides (hanging nodes included).
+std::vector<CellInterface> interfaces_from_parameter_boxes(const BezierMesh& mesh);
 
 }  // namespace knotwork

@@ -93,6 +93,53 @@ RegularityExtremes regularity_extremes(const std::vector<Eigen::MatrixX3d>& cell
 
 }  // namespace
 
+std::vector<CellInterface> g1_cell_interfaces(const QuadMesh& mesh) {
+  // Corner frames: origin and direction of each face corner's outgoing edge in (s, t), the
+  // same as the corner's cell side (bottom, right, top, left).
+  static constexpr double kOrigin[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  static constexpr double kDir[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+  // Cell of face f holding the face point (s, t) (4 cells, 4 f + 2 ht + hs), and the cell's
+  // reference coordinate along `side` at that point.
+  auto locate = [](int f, int side, double s, double t, int half_s, int half_t) {
+    const int cell = 4 * f + 2 * half_t + half_s;
+    const double along = side == kSideBottom || side == kSideTop ? 2 * s - half_s : 2 * t - half_t;
+    return std::pair{cell, along};
+  };
+  std::vector<CellInterface> out;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    // Inside the face: the 2 x 2 cells of the 4-split.
+    for (int h = 0; h < 2; ++h) {
+      out.push_back({4 * f + 2 * h, kSideRight, 0, 1, 4 * f + 2 * h + 1, kSideLeft, 0, 1});
+      out.push_back({4 * f + h, kSideTop, 0, 1, 4 * f + 2 + h, kSideBottom, 0, 1});
+    }
+  }
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const auto& E = mesh.edge(e);
+    if (E.boundary()) continue;
+    // Face 0 runs v0 -> v1 from corner[0]; face 1 runs v1 -> v0 from corner[1]. Each half of
+    // the edge is a side of one cell in each face.
+    const int c0 = E.corner[0], c1 = E.corner[1];
+    for (int half = 0; half < 2; ++half) {
+      const double w0 = 0.5 * half, w1 = 0.5 * half + 0.5, mid = 0.5 * (w0 + w1);
+      auto point = [&](int c, double w) {
+        return std::pair{kOrigin[c][0] + w * kDir[c][0], kOrigin[c][1] + w * kDir[c][1]};
+      };
+      const auto [sm0, tm0] = point(c0, mid);
+      const auto [sm1, tm1] = point(c1, 1 - mid);
+      const int hs0 = sm0 < 0.5 ? 0 : 1, ht0 = tm0 < 0.5 ? 0 : 1, hs1 = sm1 < 0.5 ? 0 : 1, ht1 = tm1 < 0.5 ? 0 : 1;
+      const auto [s00, t00] = point(c0, w0);
+      const auto [s01, t01] = point(c0, w1);
+      const auto [s10, t10] = point(c1, 1 - w0);
+      const auto [s11, t11] = point(c1, 1 - w1);
+      const auto a_from = locate(E.face[0], c0, s00, t00, hs0, ht0), a_to = locate(E.face[0], c0, s01, t01, hs0, ht0);
+      const auto b_from = locate(E.face[1], c1, s10, t10, hs1, ht1), b_to = locate(E.face[1], c1, s11, t11, hs1, ht1);
+      out.push_back({a_from.first, static_cast<CellSide>(c0), a_from.second, a_to.second, b_from.first,
+                     static_cast<CellSide>(c1), b_from.second, b_to.second});
+    }
+  }
+  return out;
+}
+
 G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
                                const std::function<void(const std::string&)>& progress) {
   auto say = [&](const std::string& s) {
@@ -132,6 +179,7 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
     throw InputError(c.path + ": [space]: " + e.what());
   }
   d.mesh = g1_bezier_mesh(d.level.mesh, d.basis);
+  d.mesh.set_interfaces(g1_cell_interfaces(d.level.mesh));
 
   // Geometry per fine cell: the coarse cell it lies in, restricted.
   std::vector<Eigen::MatrixX3d> cells(d.mesh.num_cells());

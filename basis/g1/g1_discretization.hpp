@@ -37,6 +37,11 @@ struct G1Discretization {
   double boundary_deviation = 0;      // planar: largest distance of a boundary point from its straight edge
 };
 
+// The cell interfaces of the BezierMesh of a G1 space on `mesh` (4 cells per face, cell
+// 4 f + 2 ht + hs): inside each face, and across every interior edge of the quad mesh with
+// the orientation of the two faces' corner frames.
+std::vector<CellInterface> g1_cell_interfaces(const QuadMesh& mesh);
+
 // Throws InputError naming the case file and field (bad gluing data, a degree below an
 // edge's separability, a fit that is not regular: naming the face).
 G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,

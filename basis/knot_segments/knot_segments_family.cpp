@@ -212,6 +212,7 @@ class KnotSegmentSpace final : public SplineSpace {
 
   void finish() {
     mesh_ = collection_->bezier_mesh();
+    mesh_.set_interfaces(interfaces_from_parameter_boxes(mesh_));
     geometry_ = std::make_unique<PatchGeometryMap>(mesh_, case_->geometry);
   }
 

@@ -134,6 +134,7 @@ class PtSpace final : public SplineSpace {
     // the last bit, whatever the T-mesh.
     mesh_ = pt_bezier_mesh(*tmesh_, to_double(pt_cell_polynomials_exact(*pt_, *tmesh_)), pt_->m, pt_->n);
     pt_->bernstein.reset();  // the exact factors are large on big meshes and not needed again
+    mesh_.set_interfaces(interfaces_from_parameter_boxes(mesh_));
     geometry_ = std::make_unique<PatchGeometryMap>(mesh_, c.geometry);
   }
   const BezierMesh& mesh() const override { return mesh_; }
