@@ -290,6 +290,7 @@ SemiRegularCollection SemiRegularCollection::from_splines(int dx, int dy, std::v
 }
 
 const std::vector<LocalBSpline>& SemiRegularCollection::splines() const {
+  const std::lock_guard<std::mutex> guard(*cache_lock_);
   if (!cache_valid_) {
     cache_.assign(set_.begin(), set_.end());
     cache_valid_ = true;

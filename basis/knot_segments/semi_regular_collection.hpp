@@ -1,6 +1,8 @@
 #pragma once
 #include <array>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <set>
 #include <span>
 #include <string>
@@ -132,8 +134,11 @@ class SemiRegularCollection {
   };
   int dx_ = 2, dy_ = 2;
   std::set<LocalBSpline> set_;
+  // splines() lists set_ lazily; the lock makes concurrent const calls safe (the threaded
+  // assembly and estimator may reach it). Copies share the lock, which only serializes.
   mutable std::vector<LocalBSpline> cache_;
   mutable bool cache_valid_ = false;
+  mutable std::shared_ptr<std::mutex> cache_lock_ = std::make_shared<std::mutex>();
   double x0_ = 0, x1_ = 1, y0_ = 0, y1_ = 1;
   // Every knot line/segment of the mesh so far, per orientation and position.
   std::map<double, std::vector<Piece>> vlines_, hlines_;

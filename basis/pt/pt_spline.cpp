@@ -9,6 +9,7 @@
 #include <set>
 #include <stdexcept>
 #include <tuple>
+#include <mutex>
 #include <unordered_map>
 
 #include "basis/tmesh/lr_spline.hpp"
@@ -259,7 +260,9 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
   // per (B-spline, cell), and a function's are the sum of coefficient * outer products.
   std::unordered_map<long, std::pair<std::vector<S>, std::vector<S>>> local;
   auto* bernstein = &local;
+  std::unique_lock<std::mutex> cache_guard;
   if constexpr (std::is_same_v<S, mpq_class>) {
+    cache_guard = std::unique_lock<std::mutex>(*B.bernstein_lock);
     auto same = [&](const std::vector<RationalBox>& cells) {
       return std::equal(cells.begin(), cells.end(), mesh.cells().begin(), mesh.cells().end(),
                         [](const RationalBox& a, const RationalBox& b) {

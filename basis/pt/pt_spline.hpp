@@ -2,6 +2,7 @@
 #include <gmpxx.h>
 
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
@@ -68,8 +69,10 @@ struct PtSplineBasis {
   std::vector<RationalBox> extension_cells;  // the cells of T^e
   // Filled when the exact cell polynomials are first computed on a T-mesh (by the
   // certificate), reused by later calls on the same T-mesh (a different one replaces it);
-  // copies share it. Valid as long as B-splines are only appended, never changed.
+  // copies share it. Valid as long as B-splines are only appended, never changed. Calls that
+  // use it hold bernstein_lock for their whole computation: safe, and serialized, across threads.
   mutable std::shared_ptr<PtBernsteinCache> bernstein;
+  mutable std::shared_ptr<std::mutex> bernstein_lock = std::make_shared<std::mutex>();
 };
 
 // The space S(m, n, m-1, n-1) of T, except only C^0 across the lines of `c0` (cross-cuts of T,

@@ -39,6 +39,7 @@ LrMesh::LrMesh(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& y
 }
 
 const std::vector<LrBSpline>& LrMesh::splines() const {
+  const std::lock_guard<std::mutex> guard(*listed_lock_);
   if (listed_stale_) {
     listed_.clear();
     for (const auto& [k, w] : splines_) listed_.push_back({k.first, k.second, w});

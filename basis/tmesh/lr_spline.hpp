@@ -2,6 +2,8 @@
 #include <gmpxx.h>
 
 #include <map>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "basis/tmesh/rectangular_partition.hpp"
@@ -54,8 +56,11 @@ class LrMesh {
   std::vector<mpq_class> xs_, ys_;
   std::map<mpq_class, std::vector<std::pair<mpq_class, mpq_class>>> lines_[2];  // [vertical]: position -> intervals
   std::map<Knots, mpq_class> splines_;  // knots -> weight
+  // splines() lists splines_ lazily; the lock makes concurrent const calls safe. Copies
+  // share the lock, which only serializes.
   mutable std::vector<LrBSpline> listed_;
   mutable bool listed_stale_ = true;
+  mutable std::shared_ptr<std::mutex> listed_lock_ = std::make_shared<std::mutex>();
   std::vector<AxisSegment> inserted_;
 };
 
