@@ -33,7 +33,7 @@ int adapt_command(const AdaptOptions& o) {
   CaseDescription c = load_case(o.case_file);
   const SpaceFamily& family = space_family(c);
   family.override_options(c, o.degree, o.elements);
-  if (family.check_adapt) family.check_adapt(c);
+  check_adaptive_family(c);
   if (o.steps) c.adapt.steps = o.steps;
   if (o.theta) c.adapt.theta = o.theta;
   if (o.max_dofs) c.adapt.max_dofs = o.max_dofs;

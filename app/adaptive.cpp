@@ -22,7 +22,7 @@ constexpr double kAspect = 1.2;
 std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering, const ProgressFunction& progress,
                                      const std::function<void(const AdaptiveStepView&)>& on_step) {
   const SpaceFamily& family = space_family(c);
-  if (family.check_adapt) family.check_adapt(c);
+  check_adaptive_family(c);
   auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };

@@ -24,4 +24,16 @@ const SpaceFamily& space_family(const CaseDescription& c) {
   throw InputError(c.path + ": [space] family: '" + c.family + "' is not a registered family (" + names + ")");
 }
 
+void check_adaptive_family(const CaseDescription& c) {
+  const SpaceFamily& family = space_family(c);
+  if (!family.local_refinement) {
+    std::string names;
+    for (const SpaceFamily& f : space_families())
+      if (f.local_refinement) names += (names.empty() ? "\"" : ", \"") + f.name + "\"";
+    throw InputError(c.path + ": [space] family: \"" + c.family +
+                     "\" does not refine cells locally, which adaptive refinement needs (families that do: " + names + ")");
+  }
+  if (family.check_adapt) family.check_adapt(c);
+}
+
 }  // namespace knotwork

@@ -85,11 +85,17 @@ struct SpaceFamily {
   std::function<std::unique_ptr<SplineSpace>(const CaseDescription&, int level, const ProgressFunction&)> build;
   // --degree / --elements on the command line (InputError when they do not apply).
   std::function<void(CaseDescription&, int degree, int elements)> override_options;
+  // Whether SplineSpace::refine halves marked cells (what `adapt` needs).
+  bool local_refinement = false;
   // Throw InputError when a convergence study or adaptive refinement is not possible for
   // this case (before any work is done); null: always possible.
   std::function<void(const CaseDescription&, int levels)> check_converge;
   std::function<void(const CaseDescription&)> check_adapt;
 };
+
+// Throws InputError naming [space] family unless the case's family refines cells locally
+// (and its own check_adapt passes); the message lists the families that do.
+void check_adaptive_family(const CaseDescription& c);
 
 // Every registered family (cases/families.cpp: one line per family).
 const std::vector<SpaceFamily>& space_families();

@@ -138,10 +138,6 @@ SpaceFamily g1_family() {
     if (levels > 7) throw InputError("--levels: must be in [1, 7] for G1 spaces, got " + std::to_string(levels));
     check_g1_memory(c, levels - 1);  // the finest level, before the first is solved
   };
-  f.check_adapt = [](const CaseDescription& c) {
-    throw InputError(c.path + ": [space] family: \"g1\" refines only by uniform subdivision; adaptive refinement needs a "
-                     "family that refines cells locally (family = \"knot_segments\" or \"pt\")");
-  };
   return f;
 }
 

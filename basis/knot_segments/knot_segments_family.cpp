@@ -233,6 +233,7 @@ SpaceFamily knot_segments_family() {
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
     return std::make_unique<KnotSegmentSpace>(c, level);
   };
+  f.local_refinement = true;
   f.override_options = [](CaseDescription& c, int degree, int elements) {
     if (degree) override_degree(c, degree);
     if (elements) override_elements(c, elements);

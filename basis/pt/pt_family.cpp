@@ -213,6 +213,7 @@ SpaceFamily pt_family() {
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
     return std::make_unique<PtSpace>(c, pt_start_cells(c, level), c.space.elements_per_span[0] << level);
   };
+  f.local_refinement = true;
   f.override_options = [](CaseDescription& c, int degree, int elements) {
     if (degree) override_degree(c, degree);
     if (elements) override_elements(c, elements);

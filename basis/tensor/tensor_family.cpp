@@ -78,10 +78,6 @@ SpaceFamily tensor_family() {
     finest.elements_per_span = {finest.elements_per_span[0] << (levels - 1), finest.elements_per_span[1] << (levels - 1)};
     check_tensor_memory(c, finest);  // the finest level, before the first is solved
   };
-  f.check_adapt = [](const CaseDescription& c) {
-    throw InputError(c.path + ": [space] family: \"tensor\" refines only uniformly; adaptive refinement needs a family "
-                     "that refines cells locally (family = \"knot_segments\" or \"pt\")");
-  };
   return f;
 }
 
