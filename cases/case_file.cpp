@@ -716,6 +716,7 @@ void read_g1_case(const Reader& r, const toml::table& root, CaseDescription& c) 
   } catch (const std::invalid_argument& e) {
     r.fail("[space] mesh", e.what());
   }
+  g.faces = mesh.num_faces();
   if (const toml::node* d = s.get("degree")) g.degree = static_cast<int>(r.integer(*d, "[space] degree"));
   if (g.degree < 2 || g.degree > 12) r.fail("[space] degree", "must be in [2, 12] (one integer: the bidegree k of the patches)");
   if (const toml::node* d = s.get("split_smoothness"))

@@ -30,6 +30,7 @@ struct CaseDescription {
   // Laplace-Beltrami on a closed surface ([problem] operator).
   struct G1 {
     std::string mesh_file;              // resolved against the case file's folder
+    int faces = 0;                      // of the coarse mesh (read and checked with the case)
     int degree = 4, split_smoothness = 1;
     std::string gluing = "symmetric";   // "symmetric", "geometric" or a JSON file (resolved)
     int refine = 0;                     // subdivisions before solving (converge adds one per level)

@@ -1,5 +1,5 @@
 #pragma once
-#include "basis/tensor/tensor_patch.hpp"
+#include "basis/core/nurbs_patch.hpp"
 
 namespace knotwork {
 

@@ -1,5 +1,6 @@
 #include "quadrature/bernstein.hpp"
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -56,22 +57,15 @@ void tensor_bernstein(int p, int q, const Eigen::VectorXd& u, const Eigen::Vecto
 
 namespace {
 
-// Values, first and second derivatives of the degree-p Bernstein polynomials at t, from the
-// degree p-1 and p-2 values: d/dt B^p_j = p (B^{p-1}_{j-1} - B^{p-1}_j), applied twice.
-void bernstein_up_to_second(int p, double t, std::vector<double>& b, std::vector<double>& d1,
-                            std::vector<double>& d2) {
-  b.assign(p + 1, 0.0);
-  d1.assign(p + 1, 0.0);
-  d2.assign(p + 1, 0.0);
-  std::vector<double> lower(p + 1), lower_d(p + 1);
-  if (p >= 1) bernstein_values_and_derivatives(p - 1, t, lower.data(), lower_d.data());
-  bernstein_values_and_derivatives(p, t, b.data(), d1.data());
+// Values, first and second derivatives of the degree-p Bernstein polynomials at t: the first
+// from bernstein_values_and_derivatives, the second by the same rule applied to the degree p-1
+// derivatives (d/dt B^p_j = p (B^{p-1}_{j-1} - B^{p-1}_j)). `lower`, `lower_d`: p entries of scratch.
+void bernstein_up_to_second(int p, double t, double* b, double* d1, double* d2, double* lower, double* lower_d) {
+  bernstein_values_and_derivatives(p, t, b, d1);
+  std::fill(d2, d2 + p + 1, 0.0);
   if (p < 2) return;
-  for (int j = 0; j <= p; ++j) {
-    const double left = j > 0 ? lower_d[j - 1] : 0.0;
-    const double right = j < p ? lower_d[j] : 0.0;
-    d2[j] = p * (left - right);
-  }
+  bernstein_values_and_derivatives(p - 1, t, lower, lower_d);
+  for (int j = 0; j <= p; ++j) d2[j] = p * ((j > 0 ? lower_d[j - 1] : 0.0) - (j < p ? lower_d[j] : 0.0));
 }
 
 }  // namespace
@@ -83,10 +77,11 @@ void tensor_bernstein_second(int p, int q, const Eigen::VectorXd& u, const Eigen
   d_uu.resize(n, nb);
   d_uv.resize(n, nb);
   d_vv.resize(n, nb);
-  std::vector<double> bu, du, ddu, bv, dv, ddv;
+  const int m = std::max(p, q) + 1;
+  std::vector<double> bu(m), du(m), ddu(m), bv(m), dv(m), ddv(m), lower(m), lower_d(m);
   for (Eigen::Index k = 0; k < n; ++k) {
-    bernstein_up_to_second(p, u[k], bu, du, ddu);
-    bernstein_up_to_second(q, v[k], bv, dv, ddv);
+    bernstein_up_to_second(p, u[k], bu.data(), du.data(), ddu.data(), lower.data(), lower_d.data());
+    bernstein_up_to_second(q, v[k], bv.data(), dv.data(), ddv.data(), lower.data(), lower_d.data());
     for (int c = 0; c <= q; ++c)
       for (int a = 0; a <= p; ++a) {
         d_uu(k, a + (p + 1) * c) = ddu[a] * bv[c];

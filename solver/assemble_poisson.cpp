@@ -53,12 +53,12 @@ namespace {
 struct DerivedSurfaceSource {
   ExpressionEvaluator value;
   std::array<ExpressionEvaluator, 3> gradient;
-  std::vector<ExpressionEvaluator> hessian;  // row-major 3 x 3
+  std::vector<ExpressionEvaluator> hessian;  // the upper triangle: xx, xy, xz, yy, yz, zz
   explicit DerivedSurfaceSource(const ExactSolution& e)
       : value(e.u),
         gradient{ExpressionEvaluator(e.u_x), ExpressionEvaluator(e.u_y), ExpressionEvaluator(e.u_z)} {
     for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) hessian.emplace_back(e.hessian[i][j]);
+      for (int j = i; j < 3; ++j) hessian.emplace_back(e.hessian[i][j]);
   }
   // x: points x 3, J: points x 6, second: points x 9 (x_uu, x_uv, x_vv per coordinate).
   void operator()(const Eigen::MatrixXd& x, const Eigen::MatrixXd& J, const Eigen::MatrixXd& second, double reaction,
@@ -77,9 +77,9 @@ struct DerivedSurfaceSource {
       const double px = x(q, 0), py = x(q, 1), pz = x(q, 2);
       Eigen::Vector3d g;
       Eigen::Matrix3d H;
-      for (int i = 0; i < 3; ++i) {
+      for (int i = 0, h = 0; i < 3; ++i) {
         g(i) = gradient[i](px, py, pz);
-        for (int j = 0; j < 3; ++j) H(i, j) = hessian[3 * i + j](px, py, pz);
+        for (int j = i; j < 3; ++j, ++h) H(i, j) = H(j, i) = hessian[h](px, py, pz);
       }
       const double laplace_beltrami = H.trace() - n.dot(H * n) - kappa * g.dot(n);
       out[q] = -laplace_beltrami + (reaction != 0 ? reaction * value(px, py, pz) : 0.0);

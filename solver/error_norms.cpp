@@ -10,8 +10,8 @@ namespace knotwork {
 
 namespace {
 
-// The exact solution and its gradient at a cell's points, in the physical dimension; on
-// surfaces the ambient gradient projected onto the tangent plane.
+// The exact solution at a cell's points, and on surfaces its ambient gradient projected onto
+// the tangent plane.
 struct ExactAtPoints {
   ExpressionEvaluator u, ux, uy;
   std::optional<ExpressionEvaluator> uz;
@@ -21,8 +21,8 @@ struct ExactAtPoints {
   double value(const GeometryAtPoints& g, Eigen::Index k) {
     return g.dimension() == 2 ? u(g.x(k, 0), g.x(k, 1)) : u(g.x(k, 0), g.x(k, 1), g.x(k, 2));
   }
-  Eigen::Vector3d gradient(const GeometryAtPoints& g, Eigen::Index k) {
-    if (g.dimension() == 2) return {ux(g.x(k, 0), g.x(k, 1)), uy(g.x(k, 0), g.x(k, 1)), 0};
+  // Surfaces only (the planar loop evaluates u_x, u_y itself).
+  Eigen::Vector3d surface_gradient(const GeometryAtPoints& g, Eigen::Index k) {
     const double x = g.x(k, 0), y = g.x(k, 1), z = g.x(k, 2);
     Eigen::Vector3d grad(ux(x, y, z), uy(x, y, z), (*uz)(x, y, z));
     const auto& J = g.jacobian;
@@ -71,7 +71,7 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
       } else {
         for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
           const double e = ex.value(cb.geometry, k) - exact_offset - uh[k];
-          const Eigen::Vector3d g = ex.gradient(cb.geometry, k) - grad_h.row(k).transpose();
+          const Eigen::Vector3d g = ex.surface_gradient(cb.geometry, k) - grad_h.row(k).transpose();
           l2 += cb.measure[k] * e * e;
           cell_semi += cb.measure[k] * g.squaredNorm();
         }
@@ -87,10 +87,10 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
   return n;
 }
 
-std::pair<double, double> exact_integral_and_measure(const BezierMesh& mesh, const GeometryMap& geometry,
-                                                     const ExactSolution& exact, const QuadratureOptions& quadrature) {
-  double integral = 0, measure = 0;
-#pragma omp parallel reduction(+ : integral, measure)
+double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const ExactSolution& exact,
+                      const QuadratureOptions& quadrature) {
+  double integral = 0;
+#pragma omp parallel reduction(+ : integral)
   {
     ExactAtPoints ex(exact);
     CellBasis cb;
@@ -99,13 +99,10 @@ std::pair<double, double> exact_integral_and_measure(const BezierMesh& mesh, con
       const BezierCell& cell = mesh.cell(c);
       evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
                           rule_points(quadrature.error_points_v, cell.degree_v, 2), cb);
-      for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
-        integral += cb.measure[k] * ex.value(cb.geometry, k);
-        measure += cb.measure[k];
-      }
+      for (Eigen::Index k = 0; k < cb.measure.size(); ++k) integral += cb.measure[k] * ex.value(cb.geometry, k);
     }
   }
-  return {integral, measure};
+  return integral;
 }
 
 Eigen::MatrixXd evaluate_solution(const BezierMesh& mesh, const GeometryMap& geometry,

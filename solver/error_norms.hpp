@@ -26,9 +26,9 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell = nullptr,
                        double exact_offset = 0);
 
-// Integral of the exact solution over the domain (or surface) and the domain's measure.
-std::pair<double, double> exact_integral_and_measure(const BezierMesh& mesh, const GeometryMap& geometry,
-                                                     const ExactSolution& exact, const QuadratureOptions& quadrature);
+// Integral of the exact solution over the domain (or surface), by the error rule.
+double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const ExactSolution& exact,
+                      const QuadratureOptions& quadrature);
 
 // u_h and its physical (surface) gradient at reference points (u, v) of one cell: rows
 // (value, dx, dy) in the plane, (value, dx, dy, dz) on surfaces.

@@ -125,7 +125,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     t = clock::now();
     if (sol.zero_mean) {
       // Over the area the mass matrix measured (as the solution's mean is).
-      sol.exact_mean = exact_integral_and_measure(mesh, geometry, *problem.exact, options.quadrature).first / sol.area;
+      sol.exact_mean = exact_integral(mesh, geometry, *problem.exact, options.quadrature) / sol.area;
     }
     sol.errors = error_norms(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature,
                              options.cell_errors ? &sol.cell_h1_squared : nullptr, sol.exact_mean);

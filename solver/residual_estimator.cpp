@@ -4,35 +4,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <memory>
 #include <numeric>
 #include <stdexcept>
 
-#include "basis/core/bspline_basis.hpp"
+#include "quadrature/bernstein.hpp"
 #include "quadrature/gauss_legendre.hpp"
 #include "solver/error_norms.hpp"
 
 namespace knotwork {
 
 namespace {
-
-// Bernstein polynomials of degree p on [0,1] and their first two derivatives at t.
-struct BernsteinDerivatives {
-  explicit BernsteinDerivatives(int p) : p(p), basis(p, knots(p)), out(3 * (p + 1)) {}
-  static std::vector<double> knots(int p) {
-    std::vector<double> k(p + 1, 0.0);
-    k.insert(k.end(), p + 1, 1.0);
-    return k;
-  }
-  const double* at(double t) {
-    basis.evaluate_derivatives(p, t, 2, out.data());
-    return out.data();
-  }
-  int p;
-  BSplineBasis1D basis;
-  std::vector<double> out;
-};
 
 // The point of a cell's side at reference coordinate t along it.
 void side_point(CellSide side, double t, double& u, double& v) {
@@ -75,9 +57,8 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
 #pragma omp parallel reduction(+ : residual_sum)
   {
     ExpressionEvaluator f(problem.source);
-    std::map<int, BernsteinDerivatives> bern;
     GeometryAtPoints g;
-    Eigen::MatrixXd second;
+    Eigen::MatrixXd second, B, Bu, Bv, Buu, Buv, Bvv;
 #pragma omp for schedule(dynamic, 32)
     for (int c = 0; c < mesh.num_cells(); ++c) {
       const BezierCell& cell = mesh.cell(c);
@@ -98,30 +79,20 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       Eigen::VectorXd local(ids.size());
       for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
       const Eigen::VectorXd beta = mesh.extraction(c).transpose() * local;  // Bernstein coefficients
-      auto& bu = bern.try_emplace(p, p).first->second;
-      auto& bv = bern.try_emplace(-1 - q, q).first->second;  // separate key: both may be evaluated together
+      // u_h's reference derivatives at the points: u_u, u_v, u_uu, u_uv, u_vv.
+      tensor_bernstein(p, q, u, v, B, Bu, Bv);
+      tensor_bernstein_second(p, q, u, v, Buu, Buv, Bvv);
+      const Eigen::VectorXd U_u = Bu * beta, U_v = Bv * beta, U_uu = Buu * beta, U_uv = Buv * beta, U_vv = Bvv * beta;
       double integral = 0;
       for (int k = 0; k < n; ++k) {
-        std::vector<double> du(bu.at(u[k]), bu.at(u[k]) + 3 * (p + 1));
-        const double* dv = bv.at(v[k]);
-        double U[6] = {0, 0, 0, 0, 0, 0};  // u_u, u_v, u_uu, u_uv, u_vv (reference)
-        for (int b = 0; b <= q; ++b)
-          for (int a = 0; a <= p; ++a) {
-            const double cf = beta[a + (p + 1) * b];
-            U[0] += cf * du[p + 1 + a] * dv[b];
-            U[1] += cf * du[a] * dv[q + 1 + b];
-            U[2] += cf * du[2 * (p + 1) + a] * dv[b];
-            U[3] += cf * du[p + 1 + a] * dv[q + 1 + b];
-            U[4] += cf * du[a] * dv[2 * (q + 1) + b];
-          }
         // Physical derivatives: grad = J^-T (u_u, u_v); Hess_ref = J^T Hess J + sum_i u_xi Hess(x_i).
         Eigen::Matrix2d J;
         J << g.jacobian(k, 0), g.jacobian(k, 1), g.jacobian(k, 2), g.jacobian(k, 3);
         const double det = J.determinant();
         const Eigen::Matrix2d Jinv = J.inverse();
-        const Eigen::Vector2d grad = Jinv.transpose() * Eigen::Vector2d(U[0], U[1]);
+        const Eigen::Vector2d grad = Jinv.transpose() * Eigen::Vector2d(U_u[k], U_v[k]);
         Eigen::Matrix2d H;
-        H << U[2], U[3], U[3], U[4];
+        H << U_uu[k], U_uv[k], U_uv[k], U_vv[k];
         for (int d = 0; d < 2; ++d) {
           Eigen::Matrix2d Hx;
           Hx << second(k, 3 * d), second(k, 3 * d + 1), second(k, 3 * d + 1), second(k, 3 * d + 2);

@@ -32,24 +32,23 @@ std::string format(const char* f, double a) {
 // Before anything is built: every subdivision quadruples the faces; each face has 4 cells
 // and at most (2k - r + 1)^2 functions (the face space's dimension, an upper bound).
 void check_g1_memory(const CaseDescription& c, int level) {
-  QuadMesh mesh;
-  try {
-    mesh = QuadMesh::read_obj(c.g1.mesh_file);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(c.path + ": [space] mesh: " + e.what());
-  }
   const int levels = c.g1.refine + level;
-  const double faces = double(mesh.num_faces()) * std::pow(4.0, levels);
+  const double faces = double(c.g1.faces) * std::pow(4.0, levels);
   const int k = c.g1.degree, n = 2 * k - c.g1.split_smoothness + 1;
   char what[160];
   std::snprintf(what, sizeof what, "%.3g faces (%d subdivisions) of degree %d", faces, levels, k);
   check_memory(c.path + ": [space] refine", galerkin_bytes(4 * faces, faces * n * n, k, k), what);
 }
 
+G1Discretization checked_discretization(const CaseDescription& c, int level, const ProgressFunction& progress) {
+  check_g1_memory(c, level);
+  return discretize_g1(c, level, progress);
+}
+
 class G1Space final : public SplineSpace {
  public:
   G1Space(const CaseDescription& c, int level, const ProgressFunction& progress)
-      : case_(&c), d_((check_g1_memory(c, level), discretize_g1(c, level, progress))) {}
+      : case_(&c), d_(checked_discretization(c, level, progress)) {}
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *d_.geometry; }
   std::string description() const override { return describe_g1(*case_); }

@@ -41,6 +41,7 @@ class KnotSegmentSpace final : public SplineSpace {
     return "knot segments (Weller), degree " + degree_text(c) + ", " + std::to_string(c.segments.size()) + " segments";
   }
   std::vector<ReportField> report() const override {
+    if (elements_ == 0) return {};
     return {{.key = "elements", .value = long(elements_), .column = true, .width = 9}};
   }
   std::vector<std::string> notes() const override {
@@ -82,14 +83,12 @@ class KnotSegmentSpace final : public SplineSpace {
     return std::make_unique<KnotSegmentSpace>(*case_, std::move(next));
   }
   std::vector<ReportField> basis_report() const override {
-    const CollectionChecks checks = check_collection(*collection_, simple_knots());
+    const CollectionChecks checks = check_collection(*collection_, simple_knots_);
     std::vector<std::string> extensions;
     for (const auto& i : insertions_)
       if (i.extended) extensions.push_back(describe_insertion(i.requested) + " extended to " + describe_insertion(i.inserted));
     std::string violation_lines;
     for (const auto& v : checks.violations) violation_lines += "\n    " + v;
-    std::string extension_lines;
-    for (const auto& e : extensions) extension_lines += "\n    " + e;
     auto count = [](long n) { return n >= 0 ? ReportValue(n) : ReportValue(); };
     std::string dimension;
     if (checks.dimension_bruteforce >= 0) {
@@ -107,7 +106,7 @@ class KnotSegmentSpace final : public SplineSpace {
         {.key = "extended_segments",
          .value = long(extensions.size()),
          .text = insertions_.empty() ? "" : std::to_string(insertions_.size()) + ", " + std::to_string(extensions.size()) +
-                                                " of them extended to keep the basis semi-regular" + extension_lines,
+                                                " of them extended to keep the basis semi-regular (see the notes)",
          .label = "segments"},
         {.key = "extensions", .value = extensions},
     };
@@ -143,6 +142,7 @@ class KnotSegmentSpace final : public SplineSpace {
       throw InputError(where + ": " + msg);
     }
     for (const auto& v : collection_->violations()) violations_.push_back(v.reason);
+    simple_knots_ = interior_knots_simple(c.collection);
     try {
       finish();
     } catch (const GeometryError& e) {
@@ -175,6 +175,7 @@ class KnotSegmentSpace final : public SplineSpace {
           // A geometry knot keeps min(its continuity, d-1); new knots are C^(d-1).
           const int continuity = e == 0 ? std::min(g.degree() - mult[i], deg - 1) : deg - 1;
           mults[dir].push_back(deg - continuity);
+          simple_knots_ = simple_knots_ && deg - continuity == 1;
         }
       }
       breaks[dir].push_back(bp.back());
@@ -187,27 +188,12 @@ class KnotSegmentSpace final : public SplineSpace {
     for (size_t i = 0; i < c.segments.size(); ++i) {
       try {
         insertions_.push_back(collection_->insert(c.segments[i]));
+        simple_knots_ = simple_knots_ && c.segments[i].multiplicity == 1;
       } catch (const std::invalid_argument& e) {
         throw InputError(c.path + ": [space] segments[" + std::to_string(i) + "]: " + e.what());
       }
     }
     finish();
-  }
-
-  // Every interior knot of multiplicity 1: the dimension counts of S(d-1) apply.
-  bool simple_knots() const {
-    const CaseDescription& c = *case_;
-    if (!c.collection_file.empty()) return interior_knots_simple(c.collection);
-    for (const auto& s : c.segments)
-      if (s.multiplicity != 1) return false;
-    for (int dir = 0; dir < 2; ++dir) {
-      const BSplineBasis1D& g = dir == 0 ? c.geometry.basis_u : c.geometry.basis_v;
-      const int deg = c.space.degree[dir];
-      const auto mult = g.multiplicities();
-      for (size_t i = 1; i + 1 < mult.size(); ++i)
-        if (deg - std::min(g.degree() - mult[i], deg - 1) != 1) return false;
-    }
-    return true;
   }
 
   void finish() {
@@ -222,7 +208,8 @@ class KnotSegmentSpace final : public SplineSpace {
   std::unique_ptr<PatchGeometryMap> geometry_;
   std::vector<InsertionReport> insertions_;
   std::vector<std::string> violations_;
-  int elements_ = 0;
+  bool simple_knots_ = true;  // every interior knot of multiplicity 1: the counts of S(d-1) apply
+  int elements_ = 0;          // per span, for a tensor start (0: an explicit or refined collection)
 };
 
 }  // namespace

@@ -103,7 +103,6 @@ std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
 
 namespace {
 
-
 // Exact arithmetic dominates: peaks of 0.99 GB at 15045 and 2.5 GB at 40314 functions (p = 3,
 // adaptive L-shape, about one function per cell; docs/PT_SPLINES.md), i.e. about 65 kB per
 // cell, plus the Galerkin part.
@@ -117,12 +116,12 @@ class PtSpace final : public SplineSpace {
  public:
   // PT-splines on the given T-mesh of the case's parameter domain, ready to solve: the
   // geometry's C0 knot lines are C0 lines of the space. Throws InputError naming the case.
-  PtSpace(const CaseDescription& c, std::vector<RationalBox> cells, int elements)
-      : case_(&c), cells_(std::move(cells)), elements_(elements) {
-    check_pt_memory(c, cells_.size());
+  PtSpace(const CaseDescription& c, const std::vector<RationalBox>& cells, int elements)
+      : case_(&c), elements_(elements) {
+    check_pt_memory(c, cells.size());
     const GeometryLines lines = geometry_lines(c.geometry);
     try {
-      tmesh_ = std::make_unique<RectangularPartition>(cells_);
+      tmesh_ = std::make_unique<RectangularPartition>(cells);
       pt_ = std::make_unique<PtSplineBasis>(
           pt_spline_basis(*tmesh_, c.space.degree[0], c.space.degree[1], c.pt.extension, lines.c0));
     } catch (const std::invalid_argument& e) {
@@ -161,7 +160,7 @@ class PtSpace final : public SplineSpace {
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& split,
                                       int* extended) const override {
     // The BezierMesh cells are the T-mesh cells, in order: halve the marked ones.
-    std::vector<RationalBox> cells = cells_;
+    std::vector<RationalBox> cells = tmesh_->cells();
     for (size_t k = 0; k < marked.size(); ++k) {
       RationalBox& a = cells[marked[k]];
       RationalBox b = a;
@@ -170,7 +169,7 @@ class PtSpace final : public SplineSpace {
       cells.push_back(b);
     }
     if (extended) *extended = 0;
-    return std::make_unique<PtSpace>(*case_, std::move(cells), elements_);
+    return std::make_unique<PtSpace>(*case_, cells, elements_);
   }
   // PT-spline knots are simple, except along the C0 lines.
   KnotLines knot_lines() const override {
@@ -182,12 +181,11 @@ class PtSpace final : public SplineSpace {
     return {std::move(k.lines), std::move(k.kind), std::move(k.multiplicity)};
   }
 
- const PtSplineBasis& basis() const { return *pt_; }
+  const PtSplineBasis& basis() const { return *pt_; }
   const RectangularPartition& tmesh() const { return *tmesh_; }
 
  private:
   const CaseDescription* case_;
-  std::vector<RationalBox> cells_;
   int elements_;
   std::unique_ptr<RectangularPartition> tmesh_;
   std::unique_ptr<PtSplineBasis> pt_;
