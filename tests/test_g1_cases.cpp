@@ -47,8 +47,9 @@ double rate(double e0, double e1, double h0, double h1) { return std::log(e0 / e
 
 // Theory: C1 spaces converge optimally (h^(k+1) in L2, h^k in H1) when the gluing data are
 // analysis-suitable (Collin-Sangalli-Takacs 2016); the symmetric data are not at an
-// extraordinary vertex, and their locked strip along the first half of each edge costs half an
-// order (docs/G1_POISSON.md): for k = 4 the expected rates are 4.5 (L2) and 3.5 (H1). Windows
+// extraordinary vertex, and their locked strip along the first half of each edge is expected to
+// cost half an order (the two-patch model of issue #22 gives 4.50 and 3.57 with these data):
+// for k = 4 the expected rates are 4.5 (L2) and 3.5 (H1). Windows
 // of 0.2 around them between the last two levels, and at least k, k - 1 over the study.
 // (Observed: 4.53 and 3.57 between levels 2 and 3.)
 TEST_CASE("G1 Poisson, case (a): errors fall at high order, the solution is C1 across interfaces", "[g1][cases]") {
@@ -209,15 +210,19 @@ TEST_CASE("Torus and the mixed-valence square: optimal rates from the first refi
 }
 
 // Case (b), k = 5, geometric gluing whose map is singular at the valence-5 vertex
-// (docs/G1_POISSON.md): theory gives no optimal rate there; the half-order loss of a locked
-// vertex predicts 5.5 (L2) and 4.5 (H1), and the window is 0.3 either way at the first
-// refinement. (Observed 5.55 and 4.41.)
+// (docs/G1_POISSON.md): the optimal-rate theory needs a regular map, so it guarantees nothing
+// here. The window is what theory bounds: no more than optimal (k + 1 = 6 in L2, k = 5 in
+// H1, + 0.3 at the pre-asymptotic first refinement) and, as a floor, at most one order lost
+// (k and k - 1). (Observed 5.55 and 4.41.)
 TEST_CASE("Pentagon (valence 5, k = 5): high order, below optimal, C1", "[g1][cases]") {
   const CaseDescription c = load_case(kSource + "/cases/g1_pentagon.toml");
   const Measured m0 = solve(c, 0), m1 = solve(c, 1);
   INFO("L2 " << m0.l2 << " -> " << m1.l2 << ", H1 " << m0.h1 << " -> " << m1.h1);
-  REQUIRE(std::abs(rate(m0.l2, m1.l2, m0.h, m1.h) - 5.5) < 0.3);
-  REQUIRE(std::abs(rate(m0.h1, m1.h1, m0.h, m1.h) - 4.5) < 0.3);
+  const double l2_rate = rate(m0.l2, m1.l2, m0.h, m1.h), h1_rate = rate(m0.h1, m1.h1, m0.h, m1.h);
+  REQUIRE(l2_rate > 5);
+  REQUIRE(l2_rate < 6 + 0.3);
+  REQUIRE(h1_rate > 4);
+  REQUIRE(h1_rate < 5 + 0.3);
   REQUIRE(m1.jump < 1e-9);
 }
 
