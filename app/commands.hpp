@@ -1,6 +1,9 @@
 #pragma once
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "cases/basis_tool.hpp"
 
 namespace knotwork {
 
@@ -46,28 +49,10 @@ struct DimensionOptions {
   bool json = false;
 };
 
-struct BasisOptions {
-  std::string case_file;
-  std::string export_file;
-  bool json = false;
-  // --g1 MESH.obj: the G1 macro-patch space S_k^{1,r} on a quad mesh instead.
-  std::string g1_mesh;
-  int degree = 4;
-  int split_smoothness = 1;
-  std::string gluing = "symmetric";  // symmetric | geometric | FILE.json
-  std::string vtk_file;               // the fitted G1 surface and the --show functions
-  std::string show = "extraordinary";  // vertex:N | edge:I-J | face:N | all | extraordinary
-  // --pt: the PT-spline basis of the T-mesh instead of a knot-segment collection.
-  bool pt = false;
-  std::string pt_extension = "auto";  // auto | minimal | horizontal | vertical | diagonalizable
-  bool pt_non_negative = true;        // Prop. 1 (--no-prop1 keeps the EEE combinations)
-  bool pt_reference = false;          // also the full-extension reference's support sizes
-};
 
 int run_command(const RunOptions& o);
-int basis_command(const BasisOptions& o);
-int g1_basis_command(const BasisOptions& o);
-int pt_basis_command(const BasisOptions& o);
+// `request.file` through the family tool that is asked for or claims it, else as a case file.
+int basis_command(const BasisRequest& request, const std::vector<std::unique_ptr<BasisTool>>& tools);
 int dimension_command(const DimensionOptions& o);
 int converge_command(const ConvergeOptions& o);
 int adapt_command(const AdaptOptions& o);

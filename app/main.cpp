@@ -8,6 +8,7 @@
 #include <string>
 
 #include "app/commands.hpp"
+#include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
 namespace {
@@ -36,6 +37,14 @@ void print_error(const std::string& message) {
   std::fprintf(stderr, "knotwork: error: %s\n", line.c_str());
 }
 
+// The registered families that refine cells locally, for adapt's help.
+std::string local_families() {
+  std::string names;
+  for (const auto& f : knotwork::space_families())
+    if (f.local_refinement) names += (names.empty() ? "\"" : ", \"") + f.name + "\"";
+  return names;
+}
+
 }  // namespace
 
 // CHOLMOD runs OpenMP regions of its own next to OpenBLAS's threads; with libgomp's
@@ -58,7 +67,7 @@ int main(int argc, char** argv) {
   knotwork::RunOptions run;
   CLI::App* run_cmd = app.add_subcommand("run", "Solve one case and write ParaView files");
   run_cmd->add_option("case", run.case_file,
-                     "Case file (TOML), e.g. cases/square_sinsin.toml, or a G1 case such as cases/g1_sphere_xy.toml")
+                     "Case file (TOML or JSON), e.g. cases/square_sinsin.toml; cases/README.md lists the shipped ones")
       ->required();
   add_common(run_cmd, run);
   run_cmd->add_flag("--no-output", run.no_output, "Write no files (timing and errors only)");
@@ -69,14 +78,17 @@ int main(int argc, char** argv) {
   CLI::App* conv_cmd = app.add_subcommand("converge", "Uniform h-refinement study: errors and observed rates per level");
   conv_cmd->add_option("case", conv.case_file, "Case file (TOML) with [problem] exact")->required();
   conv_cmd->add_option("--levels", conv.levels,
-                      "Number of levels; level l has elements * 2^l per span (G1 cases: the quad mesh subdivided l times)")
+                      "Number of levels; level l is the case's space refined uniformly l times (elements doubled "
+                      "per direction, or the quad mesh subdivided)")
       ->capture_default_str();
   add_common(conv_cmd, conv);
 
   knotwork::AdaptOptions adapt;
   CLI::App* adapt_cmd = app.add_subcommand(
-      "adapt", "Adaptive refinement by knot segments or PT-splines: solve, estimate (residual), mark (Doerfler), refine, repeat");
-  adapt_cmd->add_option("case", adapt.case_file, "Case file (TOML) with [space] family = \"knot_segments\" or \"pt\"")->required();
+      "adapt", "Adaptive refinement: solve, estimate (residual), mark (Doerfler), refine marked cells, repeat");
+  adapt_cmd->add_option("case", adapt.case_file, "Case file (TOML or JSON) whose [space] family refines cells locally (" +
+                                                     local_families() + ")")
+      ->required();
   adapt_cmd->add_option("--steps", adapt.steps, "Number of solves (overrides [adapt] steps; default 10)");
   adapt_cmd->add_option("--theta", adapt.theta,
                         "Doerfler fraction: mark the fewest cells holding this share of the estimated error squared "
@@ -95,39 +107,29 @@ int main(int argc, char** argv) {
   bench_cmd->add_flag("--floor", bench.floor,
                       "Also time bare CHOLMOD with its default settings on the same matrix (the floor)");
 
-  knotwork::BasisOptions basis;
+  knotwork::BasisRequest basis;
   CLI::App* basis_cmd = app.add_subcommand(
-      "basis", "Check a spline basis: semi-regularity, partition of unity, rank, dimension (or, with --g1, the G1 basis on a quad mesh)");
-  basis_cmd->add_option("file", basis.case_file,
+      "basis", "Check a spline basis: partition of unity, rank, dimension and the family's own checks");
+  basis_cmd->add_option("file", basis.file,
                         "Case file, T-mesh file (cells = [...], degree) or collection file (functions = [...], degree); "
                         "TOML or JSON");
-  basis_cmd->add_option("--g1", basis.g1_mesh,
-                        "Quad mesh (Wavefront OBJ): the G1 spline space S_k^{1,r} on it (4-split macro-patches)");
-  basis_cmd->add_option("--degree", basis.degree, "--g1: degree k of the face splines (>= 2)")->capture_default_str();
-  basis_cmd->add_option("--split-smoothness", basis.split_smoothness, "--g1: smoothness r at the 4-split, 0 <= r < k")->capture_default_str();
-  basis_cmd->add_option("--gluing", basis.gluing, "--g1: symmetric | symmetric_c1 | geometric | regular_fans | FILE.json (per-edge a, b, c)")->capture_default_str();
-  basis_cmd->add_option("--export", basis.export_file,
-                        "Write every function to this JSON file (local knot vectors; with --g1, per-face B-spline coefficients)");
-  basis_cmd->add_option("--vtk", basis.vtk_file,
-                        "--g1: write the G1 surface fitted to the mesh, with the --show functions as fields, to this .vtu; "
-                        "--pt: the T-mesh cells with the --show functions");
-  basis_cmd->add_option("--show", basis.show,
-                        "--g1 --vtk: functions to write: vertex:N (OBJ index), edge:I-J, face:N (1-based), all, or "
-                        "extraordinary (the first interior vertex of valence != 4); --pt --vtk: all, 0-based indices such as 0,5, "
-                        "or by default the four functions with the largest supports")
-      ->capture_default_str();
+  basis_cmd->add_option("--export", basis.export_file, "Write every function to this JSON file (the format is the family's)");
+  CLI::Option* vtk_option = basis_cmd->add_option("--vtk", basis.vtk_file);
+  CLI::Option* show_option = basis_cmd->add_option("--show", basis.show);
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
-  basis_cmd->add_flag("--pt", basis.pt, "PT-splines of the T-mesh file (edge extension + Extended Edge Elimination)");
-  basis_cmd->add_option("--extension", basis.pt_extension,
-                        "--pt: minimal (l-edges lengthened as LR meshlines, certified), horizontal or vertical "
-                        "(those l-edges extended to cross-cuts), diagonalizable (LR meshlines lengthened until the "
-                        "extended mesh is diagonalizable, certified), or auto: minimal, else the full extension with "
-                        "fewer extended edges")
-      ->capture_default_str();
-  basis_cmd->add_flag("!--no-prop1", basis.pt_non_negative,
-                      "--pt: keep the EEE combinations instead of the non-negative basis of Prop. 1");
-  basis_cmd->add_flag("--reference", basis.pt_reference,
-                      "--pt: also build the full-extension reference and report its support sizes (slow)");
+  // Each family adds its own mode (such as the G1 space on a quad mesh) and its options, and
+  // says what --vtk writes for it.
+  std::vector<std::unique_ptr<knotwork::BasisTool>> basis_tools;
+  for (const auto& f : knotwork::space_families())
+    if (f.add_basis_tool) basis_tools.push_back(f.add_basis_tool(*basis_cmd));
+  std::string writers, shows;
+  for (const auto& t : basis_tools)
+    if (!t->show_help().empty()) {
+      writers += (writers.empty() ? "" : ", ") + t->selector();
+      shows += "; " + t->selector() + ": " + t->show_help();
+    }
+  vtk_option->description("Write the basis with the --show functions as fields to this .vtu (" + writers + ")");
+  show_option->description("--vtk: the functions to write" + shows);
 
   knotwork::DimensionOptions dim;
   CLI::App* dim_cmd = app.add_subcommand(
@@ -155,13 +157,7 @@ int main(int argc, char** argv) {
     if (*adapt_cmd) return knotwork::adapt_command(adapt);
     if (*bench_cmd) return knotwork::bench_command(bench);
     if (*dim_cmd) return knotwork::dimension_command(dim);
-    if (*basis_cmd) {
-      if (basis.g1_mesh.empty() == basis.case_file.empty())
-        throw knotwork::InputError("basis: give one input, a case/T-mesh/collection file or --g1 MESH.obj");
-      if (!basis.g1_mesh.empty()) return knotwork::g1_basis_command(basis);
-      if (basis.pt) return knotwork::pt_basis_command(basis);
-      return knotwork::basis_command(basis);
-    }
+    if (*basis_cmd) return knotwork::basis_command(basis, basis_tools);
   } catch (const knotwork::InputError& e) {
     print_error(e.what());
     return 2;

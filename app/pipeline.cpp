@@ -1,6 +1,5 @@
 #include "app/pipeline.hpp"
 
-#include "cases/geometries.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -28,17 +27,11 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
   }
 }
 
+// Written as a case file, so that it is read and validated like one.
 CaseDescription unit_square_benchmark_case(int p, int n) {
-  CaseDescription c;
-  c.path = "bench";
-  c.name = "bench";
-  c.geometry = rectangle_patch(0, 0, 1, 1);
-  c.space.degree = {p, p};
-  c.space.elements_per_span = {n, n};
-  c.problem.exact = differentiate_exact_solution(Expression::parse("sin(pi*x)*sin(pi*y)", "bench"));
-  c.problem.source = c.problem.exact->minus_laplacian;
-  c.problem.boundary.assign(4, BoundaryCondition{});
-  return c;
+  const std::string text = "[geometry]\ntype = \"rectangle\"\n[space]\ndegree = " + std::to_string(p) +
+                           "\nelements = " + std::to_string(n) + "\n[problem]\nexact = \"sin(pi*x)*sin(pi*y)\"\n";
+  return load_case_text(text, "bench");
 }
 
 }  // namespace knotwork

@@ -72,7 +72,7 @@ int run_command(const RunOptions& o) {
         .set("checks", t_checks).set("output", t_output).set("total_without_output", total);
     Json j = Json::object();
     j.set("case", c.path).set("family", c.family).set("space", description)
-        .set("degree", Json::array().push(double(c.space.degree[0])).push(double(c.space.degree[1])))
+        .set("degree", Json::array().push(double(space->degree()[0])).push(double(space->degree()[1])))
         .set("cells", space->mesh().num_cells()).set("dofs", s.num_functions).set("free_dofs", s.num_free)
         .set("matrix_nonzeros", s.matrix_nonzeros).set("factor_nonzeros", s.cholesky.factor_nonzeros)
         .set("refinement_correction", s.cholesky.refinement_correction);

@@ -1,55 +1,62 @@
 #pragma once
+// A case as read from its file: the sections every family shares ([problem], [output],
+// [adapt], quadrature) and the family's own section, which only the family reads and
+// interprets (basis/<family>/<family>_case.*). load_case dispatches on [space] family.
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-#include <optional>
-
-#include "basis/pt/pt_spline.hpp"
-#include "basis/knot_segments/semi_regular_collection.hpp"
-#include "basis/tensor/tensor_patch.hpp"
+#include "basis/core/nurbs_patch.hpp"
+#include "basis/tmesh/rectangular_partition.hpp"
 #include "solver/poisson_problem.hpp"
 
 namespace knotwork {
+
+// A family's part of a case (its [space], and for some families [geometry] and [problem]
+// details). Copied with the case.
+struct CaseSection {
+  virtual ~CaseSection() = default;
+  virtual std::unique_ptr<CaseSection> clone() const = 0;
+};
+
+// Owns the family's section; copying a case copies it.
+class FamilySection {
+ public:
+  FamilySection() = default;
+  FamilySection(const FamilySection& o) : p_(o.p_ ? o.p_->clone() : nullptr) {}
+  FamilySection& operator=(const FamilySection& o) {
+    if (this != &o) p_ = o.p_ ? o.p_->clone() : nullptr;
+    return *this;
+  }
+  FamilySection(FamilySection&&) noexcept = default;
+  FamilySection& operator=(FamilySection&&) noexcept = default;
+  template <class T>
+  T& emplace() {
+    auto p = std::make_unique<T>();
+    T& r = *p;
+    p_ = std::move(p);
+    return r;
+  }
+  template <class T>
+  T* get() const { return dynamic_cast<T*>(p_.get()); }
+
+ private:
+  std::unique_ptr<CaseSection> p_;
+};
 
 // Everything a case file says, validated. See cases/README.md for the keys.
 struct CaseDescription {
   std::string path;  // as given
   std::string name;  // file name without extension
   std::string title;
+  std::string family = "tensor";  // [space] family: a registered family (cases/families.cpp)
+  // [geometry] of the families whose domain is one NURBS patch (type rectangle,
+  // quarter_annulus, lshape or nurbs); empty geometry_type for the others.
   std::string geometry_type;
   NurbsPatch geometry;
-  TensorSpaceOptions space;
-  std::string family = "tensor";         // or "knot_segments", "g1", "pt"
-  std::vector<KnotInsertion> segments;  // knot_segments: inserted in order, parameter coordinates
-  std::string collection_file;             // knot_segments given explicitly ([space] collection)
-  std::vector<LocalBSpline> collection;    // its functions, not yet checked for semi-regularity
-  bool allow_non_semi_regular = false;     // --allow-non-semi-regular: solve on it anyway
-  // family "g1": the G1 macro-patch space on a quad mesh; the geometry is the G1 spline
-  // fitted to the mesh ([geometry] shape) and the problem is planar Poisson or
-  // Laplace-Beltrami on a closed surface ([problem] operator).
-  struct G1 {
-    std::string mesh_file;              // resolved against the case file's folder
-    int faces = 0;                      // of the coarse mesh (read and checked with the case)
-    int degree = 4, split_smoothness = 1;
-    std::string gluing = "symmetric";   // "symmetric", "geometric" or a JSON file (resolved)
-    int refine = 0;                     // subdivisions before solving (converge adds one per level)
-    bool c0 = false;                    // [space] smoothness = "c0": the plain C0 multipatch baseline
-    std::string shape = "bilinear";     // "bilinear" | "sphere" | "torus"
-    Eigen::Vector3d center = Eigen::Vector3d::Zero();
-    double radius = 1, major_radius = 2, minor_radius = 1;  // sphere; torus around the z axis
-    bool surface = false;               // operator = "laplace_beltrami" (problem: -Laplace_Beltrami(u) + reaction u = f)
-  } g1;
-  // family "pt": PT-splines over a T-mesh in the geometry's parameter domain. The start is
-  // `cells` (inline or from [space] tmesh) or else the tensor grid of the geometry's knot
-  // spans; every start cell is cut into space.elements_per_span parts, then `segments` are
-  // inserted (exact rationals).
-  struct Pt {
-    std::vector<RationalBox> cells;
-    std::vector<AxisSegment> segments;
-    std::string tmesh_file;  // resolved; empty for inline cells or the tensor start
-    PtExtension extension = PtExtension::kAuto;
-  } pt;
+  FamilySection section;                // the family's own settings
+  bool allow_non_semi_regular = false;  // --allow-non-semi-regular: solve on an unverified space anyway
   QuadratureOptions quadrature;
   PoissonProblem problem;
   std::string output_directory;  // default results/<name>
@@ -63,24 +70,26 @@ struct CaseDescription {
   } adapt;
 };
 
-// Reads and validates a case file. Throws InputError with a one-line message naming the
-// file and the field (TOML syntax errors with line and column; unknown keys with the
-// closest valid one).
+// The family's section of a case; std::logic_error when the case is of another family
+// (a programming error: families only see their own cases).
+template <class T>
+T& family_section(CaseDescription& c) {
+  if (T* s = c.section.get<T>()) return *s;
+  throw std::logic_error(c.path + ": the case is of family \"" + c.family + "\", not the one asked for");
+}
+template <class T>
+const T& family_section(const CaseDescription& c) {
+  if (const T* s = c.section.get<T>()) return *s;
+  throw std::logic_error(c.path + ": the case is of family \"" + c.family + "\", not the one asked for");
+}
+
+// Reads and validates a case file through its family's reader (cases/load_case.cpp).
+// Throws InputError with a one-line message naming the file and the field (TOML syntax
+// errors with line and column; unknown keys with the closest valid one).
 CaseDescription load_case(const std::string& path);
-
-// Applies --degree / --elements style overrides with the same validation as the file.
-void override_degree(CaseDescription& c, int degree);
-void override_elements(CaseDescription& c, int elements);
-
-// For families refined by doubling [space] elements per level: throws InputError when the
-// finest of `levels` levels would have more than 2^26 cells.
-void check_uniform_levels(const CaseDescription& c, int levels);
-
-}  // namespace knotwork
-
-#include "basis/tmesh/rectangular_partition.hpp"
-
-namespace knotwork {
+// The same from TOML text (`name` stands for the file in messages; relative paths in it
+// resolve against the current folder).
+CaseDescription load_case_text(const std::string& toml_text, const std::string& name);
 
 // A rectangular partition (T-mesh) file:
 //   cells = [[x0, y0, x1, y1], ...]   numbers or exact rational strings such as "14/9"
@@ -99,19 +108,8 @@ PartitionDescription load_partition(const std::string& path, bool need_degree = 
 // `smoothness` unless alpha = m - 1 and beta = n - 1; `space` says which construction.
 void require_highest_smoothness(const PartitionDescription& p, const std::string& path, const std::string& space);
 
-// A collection of tensor-product B-splines given by their local knot vectors (the format
-// `knotwork basis --export` writes; JSON or TOML):
-//   degree = [dx, dy]
-//   functions = [{x = [dx+2 knots], y = [dy+2 knots]}, ...]
-struct CollectionDescription {
-  int dx = 2, dy = 2;
-  std::vector<LocalBSpline> splines;
-};
-CollectionDescription load_collection(const std::string& path);
-
-// What an input file describes, from its top-level keys: `functions` (a collection),
-// `cells` (a T-mesh) or else a case. Throws InputError if the file cannot be parsed.
-enum class InputKind { kCase, kPartition, kCollection };
-InputKind input_kind(const std::string& path);
+// Whether the file's top level has one of `keys` (the basis tools tell file kinds apart by
+// it). Throws InputError when the file cannot be parsed.
+bool document_has_key(const std::string& path, const std::vector<std::string>& keys);
 
 }  // namespace knotwork

@@ -5,6 +5,7 @@
 // reports its own checks; everything else (assembly, solve, norms, estimator, output) is
 // written once against BezierMesh and GeometryMap. docs/ARCHITECTURE.md says how to add one.
 #include <Eigen/Core>
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -51,6 +52,8 @@ class SplineSpace {
   virtual const GeometryMap& geometry() const = 0;
   // One line: "NURBS, degree 2x2, C^1 at new knots".
   virtual std::string description() const = 0;
+  // The polynomial degree per parameter direction (the reports' `degree`).
+  virtual std::array<int, 2> degree() const = 0;
   // Facts about the space for the reports (before solving), and notes that must be seen
   // (a segment extended, a construction that fell back to another).
   virtual std::vector<ReportField> report() const { return {}; }
@@ -77,9 +80,24 @@ class SplineSpace {
   virtual KnotLines knot_lines() const { return {}; }
 };
 
-// A family: its name in [space] family, and how it builds a case's space.
+struct CaseDocument;  // cases/case_reader.hpp
+class BasisTool;     // cases/basis_tool.hpp
+}  // namespace knotwork
+namespace CLI {
+class App;
+}
+namespace knotwork {
+
+// A family: its name in [space] family, how it reads its cases and builds their spaces.
 struct SpaceFamily {
   std::string name;
+  // Reads the case's [space] (and whatever else of the file the family owns: [geometry] and
+  // [problem] for one-patch families through the shared readers) into c.section. Throws
+  // InputError naming the file and the field.
+  std::function<void(const CaseDocument&, CaseDescription&)> read_case;
+  // The keys its [space] takes (read_case refuses others; other families' cases are told
+  // which family takes a key).
+  std::vector<std::string> space_keys;
   // The case's space refined `level` times uniformly (converge's level; 0: as written).
   // Throws InputError naming the case file and field when it cannot be built.
   std::function<std::unique_ptr<SplineSpace>(const CaseDescription&, int level, const ProgressFunction&)> build;
@@ -91,6 +109,9 @@ struct SpaceFamily {
   // this case (before any work is done); null: always possible.
   std::function<void(const CaseDescription&, int levels)> check_converge;
   std::function<void(const CaseDescription&)> check_adapt;
+  // The family's own mode of `knotwork basis`: adds its options to the command and returns
+  // the tool that holds them; null: the family has none.
+  std::function<std::unique_ptr<BasisTool>(CLI::App& basis)> add_basis_tool;
 };
 
 // Throws InputError naming [space] family unless the case's family refines cells locally

@@ -2,7 +2,11 @@
 // marking, and the observed rates on the L-shape and an interior layer.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <map>
 
+#include "basis/knot_segments/knot_segments_case.hpp"
+#include "basis/tensor/nurbs_geometry_map.hpp"
+#include "basis/tensor/tensor_case.hpp"
 #include "app/adaptive.hpp"
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
@@ -17,8 +21,8 @@ CaseDescription shipped(const std::string& name) { return load_case(std::string(
 // Uniform refinement of the same case (tensor-product start, no segments): H1 error at the
 // first level with at least `dofs` functions.
 std::pair<int, double> uniform_error_beyond(CaseDescription c, int dofs) {
-  for (int n = c.space.elements_per_span[0];; n *= 2) {
-    c.space.elements_per_span = {n, n};
+  for (int n = patch_space(c).elements_per_span[0];; n *= 2) {
+    patch_space(c).elements_per_span = {n, n};
     const auto d_space = build_space(c);
     const SplineSpace& d = *d_space;
     if (d.mesh().num_functions() < dofs) continue;
@@ -58,13 +62,62 @@ TEST_CASE("Second derivatives of a NURBS geometry agree with finite differences"
     }
 }
 
+TEST_CASE("The tensor family's NURBS map gives the same second derivatives as the patch evaluated directly", "[adaptive]") {
+  // Two independent routes: Bezier extraction of the refined geometry (NurbsGeometryMap)
+  // against B-spline derivatives of the original patch (PatchGeometryMap).
+  TensorSpaceOptions o;
+  o.degree = {3, 3};
+  o.elements_per_span = {3, 2};
+  const NurbsPatch patch = quarter_annulus_patch(1.0, 2.0);
+  const TensorDiscretization d = build_tensor_discretization(patch, o);
+  const NurbsGeometryMap tensor(d);
+  const PatchGeometryMap direct(d.mesh, patch);
+  Eigen::VectorXd u(3), v(3);
+  u << 0.1, 0.5, 0.93;
+  v << 0.77, 0.2, 0.5;
+  for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
+    Eigen::MatrixXd a, b;
+    REQUIRE(tensor.second_derivatives(cell, u, v, a));
+    REQUIRE(direct.second_derivatives(cell, u, v, b));
+    REQUIRE((a - b).cwiseAbs().maxCoeff() < 1e-11 * (1 + b.cwiseAbs().maxCoeff()));
+  }
+}
+
+TEST_CASE("The estimator on a tensor space equals the one on the same space built from knot segments", "[adaptive]") {
+  // The same B-spline space on the L-shape (degree 2, 4 elements per span), once by the tensor
+  // family and once as the knot-segment family's tensor start: different cell numbering,
+  // extraction and geometry code, so equal indicators check both.
+  const std::string tail = "degree = 2\nelements = 4\n[problem]\nexact = \"(x^2+y^2)^(1/3)*sin(2/3*(atan2(-y,-x)+pi))\"\n";
+  const CaseDescription t = load_case_text("[geometry]\ntype = \"lshape\"\n[space]\nrational = false\n" + tail, "tensor.toml");
+  const CaseDescription k =
+      load_case_text("[geometry]\ntype = \"lshape\"\n[space]\nfamily = \"knot_segments\"\n" + tail, "segments.toml");
+  std::map<std::array<double, 2>, double> by_cell;
+  for (const CaseDescription* c : {&t, &k}) {
+    const auto space = build_space(*c);
+    const PoissonSolution s = solve_case(*c, *space, Ordering::kAmd, {});
+    const ErrorIndicators ind = residual_indicators(space->mesh(), space->geometry(), s.coefficients, c->problem);
+    REQUIRE(ind.jump_part > 0);
+    for (int e = 0; e < space->mesh().num_cells(); ++e) {
+      const BezierCell& b = space->mesh().cell(e);
+      const std::array<double, 2> key{b.u0, b.v0};
+      if (c == &t) {
+        by_cell[key] = ind.eta_squared[e];
+      } else {
+        REQUIRE(by_cell.count(key) == 1);
+        CHECK(ind.eta_squared[e] == Approx(by_cell[key]).epsilon(1e-8));
+      }
+    }
+    if (c == &k) REQUIRE(static_cast<int>(by_cell.size()) == space->mesh().num_cells());
+  }
+}
+
 TEST_CASE("The estimator vanishes when the discrete solution is exact", "[adaptive]") {
   // On the unit square u = x^2 y - y^2 + 3x is a biquadratic polynomial: u_h = u on any
   // knot-segment mesh, so f + Laplace(u_h) = 0 and no gradient jumps.
   CaseDescription c = shipped("interior_layer.toml");
   c.problem.exact = differentiate_exact_solution(Expression::parse("x^2*y - y^2 + 3*x", "test"));
   c.problem.source = c.problem.exact->minus_laplacian;
-  c.segments = {{true, 0.3, 0.0, 0.75, 1}, {false, 0.6, 0.1, 0.9, 1}};
+  knot_segments_section(c).segments = {{true, 0.3, 0.0, 0.75, 1}, {false, 0.6, 0.1, 0.9, 1}};
   const auto d_space = build_space(c);
   const SplineSpace& d = *d_space;
   const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
@@ -76,7 +129,7 @@ TEST_CASE("The estimator vanishes when the discrete solution is exact", "[adapti
 
 TEST_CASE("The estimator bounds the error on the L-shape, and jumps appear only at the C0 fold", "[adaptive]") {
   CaseDescription c = shipped("lshape_adaptive.toml");
-  c.space.elements_per_span = {4, 4};
+  patch_space(c).elements_per_span = {4, 4};
   const auto d_space = build_space(c);
   const SplineSpace& d = *d_space;
   const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
@@ -131,7 +184,7 @@ TEST_CASE("Doerfler marking takes the fewest largest indicators reaching theta",
 TEST_CASE("Adaptive knot segments on the L-shape: H1 error ~ N^(-p/2), uniform ~ N^(-1/3)", "[adaptive][slow]") {
   for (int p : {2, 3}) {
     CaseDescription c = shipped("lshape_adaptive.toml");
-    c.space.degree = {p, p};
+    patch_space(c).degree = {p, p};
     c.adapt.steps = 60;
     c.adapt.max_dofs = p == 2 ? 3000 : 3500;
     const auto steps = adapt_case(c, Ordering::kAmd, {});

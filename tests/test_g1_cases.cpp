@@ -8,6 +8,7 @@
 #include <random>
 #include <regex>
 
+#include "basis/g1/g1_case.hpp"
 #include "basis/g1/g1_discretization.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/residual_estimator.hpp"
@@ -75,14 +76,14 @@ TEST_CASE("G1 Poisson, case (a): errors fall at high order, the solution is C1 a
 // blend has the same values at the vertices and no kink: the fitted map stays regular.
 TEST_CASE("G1 geometry with the paper's C0-blended symmetric data is singular at edge midpoints", "[g1][cases]") {
   CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
-  c.g1.gluing = "symmetric";
+  g1_section(c).gluing = "symmetric";
   const G1Discretization paper = discretize_g1(c, 0);
   REQUIRE(paper.min_regularity > 0);                          // positive at the Gauss points
   REQUIRE(std::abs(paper.min_regularity_nodes) < 1e-12);      // zero at a side midpoint ...
   REQUIRE(paper.singular_point.x() == Approx(0).margin(1e-12));  // ... on the edge from the vertex to (0, 1)
   REQUIRE(paper.singular_point.y() > 0.3);
   REQUIRE(paper.singular_point.y() < 0.6);
-  c.g1.gluing = "symmetric_c1";
+  g1_section(c).gluing = "symmetric_c1";
   const G1Discretization smooth = discretize_g1(c, 0);
   REQUIRE(smooth.min_regularity_nodes > 0.9);
 }
@@ -167,7 +168,7 @@ TEST_CASE("G1 cell interfaces: every shared side matched point for point, and th
 
 TEST_CASE("The C0 multipatch baseline on the same mesh is not C1 (the jump check sees it)", "[g1][cases]") {
   CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
-  c.g1.c0 = true;
+  g1_section(c).c0 = true;
   const Measured m = solve(c, 1);
   INFO("C0 gradient jump " << m.jump);
   REQUIRE(m.jump > 1e-4);  // the G1 spaces stay below 1e-9 (test above); this is O(h^k), not rounding

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "basis/tensor/tensor_case.hpp"
 #include "app/pipeline.hpp"
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
@@ -20,8 +21,9 @@ CaseDescription with_exact(NurbsPatch geometry, int p, int n, const std::string&
   CaseDescription c;
   c.path = "test";
   c.geometry = std::move(geometry);
-  c.space.degree = {p, p};
-  c.space.elements_per_span = {n, n};
+  c.section.emplace<PatchSpaceSection>();  // family "tensor"
+  patch_space(c).degree = {p, p};
+  patch_space(c).elements_per_span = {n, n};
   c.problem.exact = differentiate_exact_solution(Expression::parse(u, "test"));
   c.problem.source = c.problem.exact->minus_laplacian;
   c.problem.boundary.assign(4, BoundaryCondition{});
@@ -48,7 +50,7 @@ Rates rates(CaseDescription c, int n0, int levels) {
   std::vector<ErrorNorms> e;
   std::vector<double> h;
   for (int l = 0; l < levels; ++l) {
-    c.space.elements_per_span = {n0 << l, n0 << l};
+    patch_space(c).elements_per_span = {n0 << l, n0 << l};
     const auto d_space = build_space(c);
     const SplineSpace& d = *d_space;
     e.push_back(*solve_poisson(d.mesh(), d.geometry(), c.problem, options_of(c)).errors);
@@ -91,7 +93,7 @@ TEST_CASE("Patch test: linear solutions are reproduced to roundoff", "[poisson]"
   }
   // B-splines on an affine map, with Neumann data on two sides.
   CaseDescription c = with_exact(rectangle_patch(-1, 0, 2, 1), 1, 5, u);
-  c.space.rational = false;
+  patch_space(c).rational = false;
   c.problem.boundary[1].kind = BoundaryKind::kNeumann;
   c.problem.boundary[2].kind = BoundaryKind::kNeumann;
   const ErrorNorms r = solve(c);
@@ -105,8 +107,8 @@ TEST_CASE("Patch test: linear solutions are reproduced to roundoff", "[poisson]"
 TEST_CASE("Optimal convergence on the unit square, p = 1..4", "[poisson][rates]") {
   for (int p = 1; p <= 4; ++p) {
     CaseDescription c = shipped("square_sinsin");
-    c.space.degree = {p, p};
-    c.space.continuity = {-1, -1};
+    patch_space(c).degree = {p, p};
+    patch_space(c).continuity = {-1, -1};
     const Rates r = rates(c, 8, 3);
     INFO("p = " << p << ": L2 rate " << r.l2 << ", H1 rate " << r.h1);
     REQUIRE(r.l2 >= p + 1 - 0.2);
@@ -119,8 +121,8 @@ TEST_CASE("Optimal convergence on the unit square, p = 1..4", "[poisson][rates]"
 TEST_CASE("Optimal convergence on the quarter annulus, p = 1..4", "[poisson][rates]") {
   for (int p = 1; p <= 4; ++p) {
     CaseDescription c = shipped("quarter_annulus");
-    c.space.degree = {p, p};
-    c.space.rational = p >= 2;  // degree 1 cannot hold the circle: B-splines on the exact geometry
+    patch_space(c).degree = {p, p};
+    patch_space(c).rational = p >= 2;  // degree 1 cannot hold the circle: B-splines on the exact geometry
     const Rates r = rates(c, 8, 3);
     INFO("p = " << p << ": L2 rate " << r.l2 << ", H1 rate " << r.h1);
     REQUIRE(r.l2 >= p + 1 - 0.2);
@@ -142,7 +144,7 @@ TEST_CASE("L-shape: uniform refinement converges in H1 like h^(2/3)", "[poisson]
 
 TEST_CASE("Non-uniform refinement toward the L-shape corner beats uniform refinement", "[poisson][rates]") {
   CaseDescription uniform = shipped("lshape");
-  uniform.space.elements_per_span = {16, 16};
+  patch_space(uniform).elements_per_span = {16, 16};
   const CaseDescription graded = shipped("lshape_graded");
   const auto du_space = build_space(uniform), dg_space = build_space(graded);
   const SplineSpace &du = *du_space, &dg = *dg_space;
@@ -167,7 +169,7 @@ TEST_CASE("Knot-segment spaces through case files: patch test on the folded L-sh
   // The singular solution: segments toward the corner beat uniform refinement with more dofs.
   const CaseDescription local = shipped("lshape_knot_segments");
   CaseDescription uniform = shipped("lshape");
-  uniform.space.elements_per_span = {8, 8};
+  patch_space(uniform).elements_per_span = {8, 8};
   const auto dl_space = build_space(local), du_space = build_space(uniform);
   const SplineSpace &du = *du_space, &dl = *dl_space;
   const double el = solve(local).h1_semi, eu = solve(uniform).h1_semi;
@@ -179,7 +181,7 @@ TEST_CASE("Knot-segment spaces through case files: patch test on the folded L-sh
 
 TEST_CASE("Continuity option: C0 quadratics still converge optimally", "[poisson][rates]") {
   CaseDescription c = shipped("square_sinsin");
-  c.space.continuity = {0, 0};
+  patch_space(c).continuity = {0, 0};
   const Rates r = rates(c, 4, 3);
   REQUIRE(r.l2 >= 3 - 0.2);
   REQUIRE(r.h1 >= 2 - 0.2);
@@ -199,10 +201,10 @@ TEST_CASE("Analytic geometry map: polar quarter annulus with B-splines converges
   };
   for (int p = 1; p <= 3; ++p) {
     CaseDescription c = with_exact(rectangle_patch(0, 0, 1, 1), p, 4, "-(x^2+y^2-1)*(x^2+y^2-4)*x*y^2");
-    c.space.rational = false;
+    patch_space(c).rational = false;
     std::vector<ErrorNorms> e;
     for (int n : {8, 16}) {
-      c.space.elements_per_span = {n, n};
+      patch_space(c).elements_per_span = {n, n};
       const auto d_space = build_space(c);
       const SplineSpace& d = *d_space;
       const AnalyticGeometryMap g(d.mesh(), polar);

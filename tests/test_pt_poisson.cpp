@@ -8,6 +8,7 @@
 #include <fstream>
 #include <random>
 
+#include "basis/pt/pt_case.hpp"
 #include "app/adaptive.hpp"
 #include "app/pipeline.hpp"
 #include "basis/pt/pt_space.hpp"
@@ -129,9 +130,9 @@ TEST_CASE("PT Poisson: without the numerical change of basis the solver refuses 
   // even without the change of basis.
   const CaseText file(square_case(2, "x^2*y^2 + 3*x*y - y^2 + 1"));
   CaseDescription c = file.load();
-  c.pt.cells = pt_start_cells(c);
-  c.pt.segments.clear();
-  c.space.elements_per_span = {8, 8};
+  pt_section(c).cells = pt_start_cells(c);
+  pt_section(c).segments.clear();
+  patch_space(c).elements_per_span = {8, 8};
   const std::vector<RationalBox> cells = pt_start_cells(c);
   // The space by hand (the family's steps, with and without the numerical change of basis).
   auto solve_on = [&](PtSplineBasis pt, const RectangularPartition& tmesh, bool change_of_basis) {
@@ -167,11 +168,11 @@ TEST_CASE("PT Poisson: optimal rates when every cell of a T-mesh is halved", "[p
   for (int p : {2, 3}) {
     const CaseText file(square_case(p, "sin(pi*x)*sin(pi*y)"));
     CaseDescription c = file.load();
-    c.pt.cells = pt_start_cells(c);  // the T-mesh, then halved uniformly
-    c.pt.segments.clear();
+    pt_section(c).cells = pt_start_cells(c);  // the T-mesh, then halved uniformly
+    pt_section(c).segments.clear();
     std::vector<double> l2, h1;
     for (int e : {2, 4, 8}) {
-      c.space.elements_per_span = {e, e};
+      patch_space(c).elements_per_span = {e, e};
       const auto d_space = build_space(c);
       const SplineSpace& d = *d_space;
       const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
@@ -203,7 +204,7 @@ TEST_CASE("PT Poisson on the L-shape: C0 across the fold, adaptive refinement be
   double uniform = 0;
   int uniform_dofs = 0;
   for (int e = 2;; e *= 2) {
-    u.space.elements_per_span = {e, e};
+    patch_space(u).elements_per_span = {e, e};
     const auto du_space = build_space(u);
     const SplineSpace& du = *du_space;
     if (du.mesh().num_functions() < steps.back().dofs) continue;

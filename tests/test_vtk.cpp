@@ -13,6 +13,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "basis/tensor/tensor_case.hpp"
 #include "app/pipeline.hpp"
 #include "cases/case_file.hpp"
 #include "solver/error_norms.hpp"
@@ -33,9 +34,9 @@ struct Solved {
 Solved solve_shipped(const std::string& name, int p, int n, bool rational = true) {
   Solved r;
   r.c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name + ".toml");
-  r.c.space.degree = {p, p};
-  r.c.space.elements_per_span = {n, n};
-  r.c.space.rational = rational;
+  patch_space(r.c).degree = {p, p};
+  patch_space(r.c).elements_per_span = {n, n};
+  patch_space(r.c).rational = rational;
   r.d = build_space(r.c);
   r.s = solve_poisson(r.d->mesh(), r.d->geometry(), r.c.problem, PoissonSolveOptions{});
   return r;

@@ -1,6 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <array>
+#include <mutex>
 #include <span>
 #include <string>
 #include <vector>
@@ -53,10 +54,11 @@ class BezierMesh {
   void set_num_functions(int n) { num_functions_ = n; }
   void set_weights(Eigen::VectorXd weights) { weights_ = std::move(weights); }
   void set_boundary_names(std::vector<std::string> names) { boundary_names_ = std::move(names); }
-  void set_interfaces(std::vector<CellInterface> interfaces) {
-    interfaces_ = std::move(interfaces);
-    has_interfaces_ = true;
-  }
+  void set_interfaces(std::vector<CellInterface> interfaces) { interfaces_.set(std::move(interfaces)); }
+  // For meshes whose interfaces are cheap to derive but costly to keep when nothing asks for
+  // them (a million-cell tensor mesh): the rule runs on the first call of interfaces().
+  using InterfaceRule = std::vector<CellInterface> (*)(const BezierMesh&);
+  void set_interface_rule(InterfaceRule rule) { interfaces_.set_rule(rule); }
 
   int num_functions() const { return num_functions_; }
   int num_cells() const { return static_cast<int>(cells_.size()); }
@@ -72,8 +74,8 @@ class BezierMesh {
   int max_functions_per_cell() const { return max_active_; }
   // The interior sides shared by two cells; has_interfaces() is false when the family did
   // not provide them (an empty list is a single cell).
-  bool has_interfaces() const { return has_interfaces_; }
-  const std::vector<CellInterface>& interfaces() const { return interfaces_; }
+  bool has_interfaces() const { return interfaces_.given(); }
+  const std::vector<CellInterface>& interfaces() const { return interfaces_.get(*this); }
   int max_degree() const { return max_degree_; }
 
  private:
@@ -84,8 +86,49 @@ class BezierMesh {
   std::vector<int> ids_;
   Eigen::VectorXd weights_;
   std::vector<std::string> boundary_names_;
-  std::vector<CellInterface> interfaces_;
-  bool has_interfaces_ = false;
+  // The list, or the rule that makes it on first use (thread-safe; a copy of the mesh copies
+  // what is there and the rule).
+  class Interfaces {
+   public:
+    Interfaces() = default;
+    Interfaces(const Interfaces& o) { *this = o; }
+    Interfaces& operator=(const Interfaces& o) {
+      if (this == &o) return *this;
+      std::scoped_lock lock(o.mutex_);
+      list_ = o.list_;
+      rule_ = o.rule_;
+      built_ = o.built_;
+      given_ = o.given_;
+      return *this;
+    }
+    void set(std::vector<CellInterface> list) {
+      list_ = std::move(list);
+      rule_ = nullptr;
+      built_ = given_ = true;
+    }
+    void set_rule(InterfaceRule rule) {
+      list_.clear();
+      rule_ = rule;
+      built_ = false;
+      given_ = true;
+    }
+    bool given() const { return given_; }
+    const std::vector<CellInterface>& get(const BezierMesh& mesh) const {
+      std::scoped_lock lock(mutex_);
+      if (!built_ && rule_) {
+        list_ = rule_(mesh);
+        built_ = true;
+      }
+      return list_;
+    }
+
+   private:
+    mutable std::mutex mutex_;
+    mutable std::vector<CellInterface> list_;
+    InterfaceRule rule_ = nullptr;
+    mutable bool built_ = false;
+    bool given_ = false;
+  } interfaces_;
   int num_functions_ = 0;
   int max_active_ = 0;
   int max_degree_ = 0;

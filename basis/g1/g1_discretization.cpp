@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "basis/core/bezier_ops.hpp"
+#include "basis/g1/g1_case.hpp"
 #include "quadrature/bernstein.hpp"
 #include "basis/g1/gluing_file.hpp"
 #include "solver/error_norms.hpp"
@@ -15,7 +16,7 @@ namespace knotwork {
 namespace {
 
 GluingData case_gluing(const CaseDescription& c, const QuadMesh& mesh) {
-  const auto& g = c.g1;
+  const auto& g = g1_section(c);
   GluingData gluing;
   try {
     gluing = make_gluing(g.gluing, mesh, g.mesh_file);
@@ -31,7 +32,7 @@ GluingData case_gluing(const CaseDescription& c, const QuadMesh& mesh) {
 
 // The target of the least-squares fit at face point (s, t): the bilinear face, projected
 // onto the case's shape.
-Eigen::Vector3d target_point(const CaseDescription::G1& g, const QuadMesh& mesh, int f, double s, double t) {
+Eigen::Vector3d target_point(const G1Section& g, const QuadMesh& mesh, int f, double s, double t) {
   const auto& v = mesh.face(f);
   const Eigen::Vector3d p = (1 - s) * (1 - t) * mesh.vertex(v[0]) + s * (1 - t) * mesh.vertex(v[1]) +
                             s * t * mesh.vertex(v[2]) + (1 - s) * t * mesh.vertex(v[3]);
@@ -44,7 +45,7 @@ Eigen::Vector3d target_point(const CaseDescription::G1& g, const QuadMesh& mesh,
   return p;
 }
 
-double shape_distance(const CaseDescription::G1& g, const Eigen::Vector3d& p) {
+double shape_distance(const G1Section& g, const Eigen::Vector3d& p) {
   const Eigen::Vector3d q = p - g.center;
   if (g.shape == "sphere") return std::abs(q.norm() - g.radius);
   if (g.shape == "torus") {
@@ -145,7 +146,7 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
   auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };
-  const auto& g = c.g1;
+  const auto& g = g1_section(c);
   G1Discretization d;
   try {
     d.coarse = QuadMesh::read_obj(g.mesh_file);

@@ -5,18 +5,22 @@
 #include <cmath>
 #include <cstdio>
 
+#include "basis/g1/g1_case.hpp"
 #include "basis/g1/g1_discretization.hpp"
 #include "basis/g1/gluing_file.hpp"
 #include "cases/resource_limits.hpp"
+#include "cases/basis_tool.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
 
+std::unique_ptr<BasisTool> g1_basis_tool(CLI::App& basis);  // g1_basis_tool.cpp
+
 namespace {
 
 std::string describe_g1(const CaseDescription& c) {
-  const auto& g = c.g1;
+  const auto& g = g1_section(c);
   return std::string(g.c0 ? "C0 multipatch baseline" : "G1 macro-patch splines (Blidia-Mourrain-Villamizar)") +
          ", degree " + std::to_string(g.degree) + ", C^" + std::to_string(g.split_smoothness) + " 4-split, " +
          (is_named_gluing(g.gluing) ? g.gluing : std::string("file")) + " gluing, " +
@@ -32,9 +36,10 @@ std::string format(const char* f, double a) {
 // Before anything is built: every subdivision quadruples the faces; each face has 4 cells
 // and at most (2k - r + 1)^2 functions (the face space's dimension, an upper bound).
 void check_g1_memory(const CaseDescription& c, int level) {
-  const int levels = c.g1.refine + level;
-  const double faces = double(c.g1.faces) * std::pow(4.0, levels);
-  const int k = c.g1.degree, n = 2 * k - c.g1.split_smoothness + 1;
+  const G1Section& g = g1_section(c);
+  const int levels = g.refine + level;
+  const double faces = double(g.faces) * std::pow(4.0, levels);
+  const int k = g.degree, n = 2 * k - g.split_smoothness + 1;
   char what[160];
   std::snprintf(what, sizeof what, "%.3g faces (%d subdivisions) of degree %d", faces, levels, k);
   check_memory(c.path + ": [space] refine", galerkin_bytes(4 * faces, faces * n * n, k, k), what);
@@ -52,10 +57,11 @@ class G1Space final : public SplineSpace {
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *d_.geometry; }
   std::string description() const override { return describe_g1(*case_); }
+  std::array<int, 2> degree() const override { return {g1_section(*case_).degree, g1_section(*case_).degree}; }
   std::vector<ReportField> report() const override {
     const auto& n = d_.basis.counts;
     const CaseDescription& c = *case_;
-    const std::string regularity = c.g1.surface ? "min |x_u x x_v|/max" : "min det J/max";
+    const std::string regularity = g1_section(c).surface ? "min |x_u x x_v|/max" : "min det J/max";
     std::vector<ReportField> r{
         {.key = "faces",
          .value = long(d_.level.mesh.num_faces()),
@@ -76,10 +82,10 @@ class G1Space final : public SplineSpace {
         {.key = "counts.coupled", .value = n[4]},
         {.key = "fit_deviation",
          .value = d_.fit_deviation,
-         .text = "fitted to the " + c.g1.shape + " faces (largest coefficient deviation " +
+         .text = "fitted to the " + g1_section(c).shape + " faces (largest coefficient deviation " +
                  format("%.3e", d_.fit_deviation) + "); " + regularity + " " + format("%.3e", d_.min_regularity) +
                  " (face " + std::to_string(d_.worst_face + 1) + ")" +
-                 (c.g1.surface ? ", distance to the " + c.g1.shape + " " + format("%g", d_.shape_distance) : ""),
+                 (g1_section(c).surface ? ", distance to the " + g1_section(c).shape + " " + format("%g", d_.shape_distance) : ""),
          .label = "geometry"},
         {.key = "boundary_deviation", .value = d_.boundary_deviation},
         {.key = "shape_distance", .value = d_.shape_distance},
@@ -95,7 +101,7 @@ class G1Space final : public SplineSpace {
     std::snprintf(b, sizeof b,
                   "%s = %.3g (relative) at (%.6g, %.6g, %.6g), a cell corner or side midpoint: the fitted geometry is "
                   "singular there (regular at every quadrature point); expect reduced rates",
-                  case_->g1.surface ? "|x_u x x_v|" : "det J", d_.min_regularity_nodes, d_.singular_point.x(),
+                  g1_section(*case_).surface ? "|x_u x x_v|" : "det J", d_.min_regularity_nodes, d_.singular_point.x(),
                   d_.singular_point.y(), d_.singular_point.z());
     return {b};
   }
@@ -119,6 +125,9 @@ class G1Space final : public SplineSpace {
 SpaceFamily g1_family() {
   SpaceFamily f;
   f.name = "g1";
+  f.read_case = read_g1_case;
+  f.space_keys = g1_space_keys();
+  f.add_basis_tool = g1_basis_tool;
   f.build = [](const CaseDescription& c, int level, const ProgressFunction& progress) -> std::unique_ptr<SplineSpace> {
     return std::make_unique<G1Space>(c, level, progress);
   };
@@ -127,11 +136,10 @@ SpaceFamily g1_family() {
       throw InputError("--elements: not used with family = \"g1\" (refine with [space] refine; converge subdivides)");
     if (!degree) return;
     if (degree < 2 || degree > 12) throw InputError("--degree: must be in [2, 12] for G1 spaces");
-    if (c.g1.split_smoothness > degree - 1)
+    if (g1_section(c).split_smoothness > degree - 1)
       throw InputError("--degree: " + std::to_string(degree) + " is too low for the case's split_smoothness " +
-                       std::to_string(c.g1.split_smoothness) + " (needs degree >= split_smoothness + 1)");
-    c.g1.degree = degree;
-    c.space.degree = {degree, degree};
+                       std::to_string(g1_section(c).split_smoothness) + " (needs degree >= split_smoothness + 1)");
+    g1_section(c).degree = degree;
   };
   f.check_converge = [](const CaseDescription& c, int levels) {
     if (levels > 7) throw InputError("--levels: must be in [1, 7] for G1 spaces, got " + std::to_string(levels));

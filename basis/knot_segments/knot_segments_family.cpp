@@ -5,24 +5,29 @@
 #include <optional>
 
 #include "basis/knot_segments/collection_checks.hpp"
+#include "basis/knot_segments/knot_segments_case.hpp"
 #include "basis/knot_segments/semi_regular_collection.hpp"
 #include "basis/tmesh/knot_polylines.hpp"
+#include "cases/basis_tool.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
 
+std::unique_ptr<BasisTool> knot_segments_basis_tool(CLI::App& basis);  // knot_segments_basis_tool.cpp
+
 namespace {
 
 std::string degree_text(const CaseDescription& c) {
-  return std::to_string(c.space.degree[0]) + "x" + std::to_string(c.space.degree[1]);
+  const auto& d = patch_space(c).degree;
+  return std::to_string(d[0]) + "x" + std::to_string(d[1]);
 }
 
 class KnotSegmentSpace final : public SplineSpace {
  public:
   // The case's own space at uniform level `level` (elements per span doubled `level` times).
   KnotSegmentSpace(const CaseDescription& c, int level) : case_(&c) {
-    if (!c.collection_file.empty()) build_explicit(c);
+    if (!knot_segments_section(c).collection_file.empty()) build_explicit(c);
     else build_from_segments(c, level);
   }
   // The case's geometry on a given collection (a step of adaptive refinement).
@@ -35,11 +40,13 @@ class KnotSegmentSpace final : public SplineSpace {
   const GeometryMap& geometry() const override { return *geometry_; }
   std::string description() const override {
     const CaseDescription& c = *case_;
-    if (!c.collection_file.empty())
-      return "knot segments (Weller), degree " + degree_text(c) + ", collection of " + std::to_string(c.collection.size()) +
-             " B-splines from " + c.collection_file;
-    return "knot segments (Weller), degree " + degree_text(c) + ", " + std::to_string(c.segments.size()) + " segments";
+    const KnotSegmentsSection& k = knot_segments_section(c);
+    if (!k.collection_file.empty())
+      return "knot segments (Weller), degree " + degree_text(c) + ", collection of " + std::to_string(k.collection.size()) +
+             " B-splines from " + k.collection_file;
+    return "knot segments (Weller), degree " + degree_text(c) + ", " + std::to_string(k.segments.size()) + " segments";
   }
+  std::array<int, 2> degree() const override { return patch_space(*case_).degree; }
   std::vector<ReportField> report() const override {
     if (elements_ == 0) return {};
     return {{.key = "elements", .value = long(elements_), .column = true, .width = 9}};
@@ -62,12 +69,13 @@ class KnotSegmentSpace final : public SplineSpace {
     const std::string more = violations_.size() > 1 ? " (and " + std::to_string(violations_.size() - 1) +
                                                           " more; knotwork basis lists them)"
                                                     : "";
+    const std::string& file = knot_segments_section(c).collection_file;
     if (!c.allow_non_semi_regular)
-      throw InputError(c.path + ": [space] collection: " + c.collection_file + " is not semi-regular: " +
+      throw InputError(c.path + ": [space] collection: " + file + " is not semi-regular: " +
                        violations_.front() + more + "; refusing to solve (--allow-non-semi-regular solves anyway)");
     std::fprintf(stderr, "knotwork: warning: %s: the collection is not semi-regular (%s%s); solving anyway as asked: "
                          "the functions may be linearly dependent and the matrix singular\n",
-                 c.collection_file.c_str(), violations_.front().c_str(), more.c_str());
+                 file.c_str(), violations_.front().c_str(), more.c_str());
   }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& split,
                                       int* extended) const override {
@@ -126,9 +134,10 @@ class KnotSegmentSpace final : public SplineSpace {
   // A collection given explicitly ([space] collection): its domain must be the geometry's
   // parameter domain; semi-regularity is checked here and enforced before solving.
   void build_explicit(const CaseDescription& c) {
-    const std::string where = c.path + ": [space] collection: " + c.collection_file;
+    const KnotSegmentsSection& k = knot_segments_section(c);
+    const std::string where = c.path + ": [space] collection: " + k.collection_file;
     try {
-      collection_ = SemiRegularCollection::from_splines(c.space.degree[0], c.space.degree[1], c.collection);
+      collection_ = SemiRegularCollection::from_splines(k.space.degree[0], k.space.degree[1], k.collection);
     } catch (const std::invalid_argument& e) {
       throw InputError(where + ": " + e.what());
     }
@@ -142,7 +151,7 @@ class KnotSegmentSpace final : public SplineSpace {
       throw InputError(where + ": " + msg);
     }
     for (const auto& v : collection_->violations()) violations_.push_back(v.reason);
-    simple_knots_ = interior_knots_simple(c.collection);
+    simple_knots_ = interior_knots_simple(k.collection);
     try {
       finish();
     } catch (const GeometryError& e) {
@@ -158,14 +167,15 @@ class KnotSegmentSpace final : public SplineSpace {
   // knots of low continuity become knot lines of the needed multiplicity, e.g. the L-shape's
   // C0 fold), then the listed segments.
   void build_from_segments(const CaseDescription& c, int level) {
-    const int dx = c.space.degree[0], dy = c.space.degree[1];
+    const KnotSegmentsSection& k = knot_segments_section(c);
+    const int dx = k.space.degree[0], dy = k.space.degree[1];
     std::array<std::vector<double>, 2> breaks;
     std::array<std::vector<int>, 2> mults;  // per interior breakpoint
-    elements_ = c.space.elements_per_span[0] << level;
+    elements_ = k.space.elements_per_span[0] << level;
     for (int dir = 0; dir < 2; ++dir) {
       const BSplineBasis1D& g = dir == 0 ? c.geometry.basis_u : c.geometry.basis_v;
       const int deg = dir == 0 ? dx : dy;
-      const int per_span = c.space.elements_per_span[dir] << level;
+      const int per_span = k.space.elements_per_span[dir] << level;
       const auto bp = g.breakpoints();
       const auto mult = g.multiplicities();
       for (size_t i = 0; i + 1 < bp.size(); ++i) {
@@ -185,10 +195,10 @@ class KnotSegmentSpace final : public SplineSpace {
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
     }
-    for (size_t i = 0; i < c.segments.size(); ++i) {
+    for (size_t i = 0; i < k.segments.size(); ++i) {
       try {
-        insertions_.push_back(collection_->insert(c.segments[i]));
-        simple_knots_ = simple_knots_ && c.segments[i].multiplicity == 1;
+        insertions_.push_back(collection_->insert(k.segments[i]));
+        simple_knots_ = simple_knots_ && k.segments[i].multiplicity == 1;
       } catch (const std::invalid_argument& e) {
         throw InputError(c.path + ": [space] segments[" + std::to_string(i) + "]: " + e.what());
       }
@@ -217,19 +227,22 @@ class KnotSegmentSpace final : public SplineSpace {
 SpaceFamily knot_segments_family() {
   SpaceFamily f;
   f.name = "knot_segments";
+  f.read_case = read_knot_segments_case;
+  f.space_keys = knot_segments_space_keys();
+  f.add_basis_tool = knot_segments_basis_tool;
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
     return std::make_unique<KnotSegmentSpace>(c, level);
   };
   f.local_refinement = true;
   f.override_options = [](CaseDescription& c, int degree, int elements) {
-    if (degree) override_degree(c, degree);
-    if (elements) override_elements(c, elements);
+    KnotSegmentsSection& k = knot_segments_section(c);
+    override_patch_space(k.space, degree, elements, k.collection_file);
   };
   f.check_converge = [](const CaseDescription& c, int levels) {
-    if (!c.collection_file.empty())
+    if (!knot_segments_section(c).collection_file.empty())
       throw InputError(c.path + ": [space] collection: a convergence study refines uniformly, and a collection given "
                        "explicitly has fixed functions (use knotwork run, or knotwork adapt to refine it)");
-    check_uniform_levels(c, levels);
+    check_uniform_levels(patch_space(c), levels);
   };
   return f;
 }

@@ -7,14 +7,18 @@
 #include <string>
 
 #include "basis/pt/pt_bezier_mesh.hpp"
+#include "basis/pt/pt_case.hpp"
 #include "basis/pt/pt_space.hpp"
 #include "basis/pt/pt_spline.hpp"
 #include "basis/tmesh/knot_polylines.hpp"
 #include "cases/resource_limits.hpp"
+#include "cases/basis_tool.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
+
+std::unique_ptr<BasisTool> pt_basis_tool(CLI::App& basis);  // pt_basis_tool.cpp
 
 namespace {
 
@@ -53,9 +57,10 @@ std::string text(const mpq_class& q) {
 }  // namespace
 
 std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
+  const PtSection& pt = pt_section(c);
   const GeometryLines lines = geometry_lines(c.geometry);
-  std::vector<RationalBox> start = c.pt.cells;
-  const std::string where = c.path + ": [space] " + (c.pt.tmesh_file.empty() ? "cells" : "tmesh: " + c.pt.tmesh_file);
+  std::vector<RationalBox> start = pt.cells;
+  const std::string where = c.path + ": [space] " + (pt.tmesh_file.empty() ? "cells" : "tmesh: " + pt.tmesh_file);
   if (start.empty()) {
     for (size_t j = 0; j + 1 < lines.breaks[1].size(); ++j)
       for (size_t i = 0; i + 1 < lines.breaks[0].size(); ++i)
@@ -73,7 +78,7 @@ std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
                        text(lines.breaks[0].back()) + "] x [" + text(lines.breaks[1].front()) + ", " +
                        text(lines.breaks[1].back()) + "]");
   }
-  const int ex = c.space.elements_per_span[0] << level, ey = c.space.elements_per_span[1] << level;
+  const int ex = pt.space.elements_per_span[0] << level, ey = pt.space.elements_per_span[1] << level;
   if (static_cast<double>(start.size()) * ex * ey > kMaxPtCells)
     throw InputError(c.path + ": [space] elements: " + std::to_string(static_cast<long>(start.size()) * ex * ey) +
                      " cells, more than the " + std::to_string(kMaxPtCells) + " a PT-spline space is built for here");
@@ -86,7 +91,7 @@ std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
   for (auto& b : cells)
     for (mpq_class* v : {&b.x0, &b.y0, &b.x1, &b.y1}) v->canonicalize();
   try {
-    cells = insert_segments(std::move(cells), c.pt.segments);
+    cells = insert_segments(std::move(cells), pt.segments);
   } catch (const std::invalid_argument& e) {
     throw InputError(c.path + ": [space] segments: " + e.what());
   }
@@ -107,7 +112,7 @@ namespace {
 // adaptive L-shape, about one function per cell; docs/PT_SPLINES.md), i.e. about 65 kB per
 // cell, plus the Galerkin part.
 void check_pt_memory(const CaseDescription& c, size_t cells) {
-  const int m = c.space.degree[0], n = c.space.degree[1];
+  const auto [m, n] = pt_section(c).space.degree;
   const double bytes = 65e3 * double(cells) + galerkin_bytes(double(cells), double(cells) + (m + 1) * (n + 1), m, n);
   check_memory(c.path + ": [space]", bytes, std::to_string(cells) + " T-mesh cells of PT-splines");
 }
@@ -119,11 +124,12 @@ class PtSpace final : public SplineSpace {
   PtSpace(const CaseDescription& c, const std::vector<RationalBox>& cells, int elements)
       : case_(&c), elements_(elements) {
     check_pt_memory(c, cells.size());
+    const PtSection& pt = pt_section(c);
     const GeometryLines lines = geometry_lines(c.geometry);
     try {
       tmesh_ = std::make_unique<RectangularPartition>(cells);
       pt_ = std::make_unique<PtSplineBasis>(
-          pt_spline_basis(*tmesh_, c.space.degree[0], c.space.degree[1], c.pt.extension, lines.c0));
+          pt_spline_basis(*tmesh_, pt.space.degree[0], pt.space.degree[1], pt.extension, lines.c0));
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
     }
@@ -139,14 +145,15 @@ class PtSpace final : public SplineSpace {
   const BezierMesh& mesh() const override { return mesh_; }
   const GeometryMap& geometry() const override { return *geometry_; }
   std::string description() const override {
-    const CaseDescription& c = *case_;
-    std::string start = !c.pt.tmesh_file.empty() ? "T-mesh " + c.pt.tmesh_file
-                        : !c.pt.cells.empty()    ? std::to_string(c.pt.cells.size()) + " given cells"
+    const PtSection& pt = pt_section(*case_);
+    std::string start = !pt.tmesh_file.empty() ? "T-mesh " + pt.tmesh_file
+                        : !pt.cells.empty()    ? std::to_string(pt.cells.size()) + " given cells"
                                                  : "tensor start";
-    if (!c.pt.segments.empty()) start += " + " + std::to_string(c.pt.segments.size()) + " segments";
-    return "PT-splines, degree " + std::to_string(c.space.degree[0]) + "x" + std::to_string(c.space.degree[1]) + ", " +
-           start + ", extension " + pt_extension_name(c.pt.extension);
+    if (!pt.segments.empty()) start += " + " + std::to_string(pt.segments.size()) + " segments";
+    return "PT-splines, degree " + std::to_string(pt.space.degree[0]) + "x" + std::to_string(pt.space.degree[1]) + ", " +
+           start + ", extension " + pt_extension_name(pt.extension);
   }
+  std::array<int, 2> degree() const override { return {pt_->m, pt_->n}; }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(elements_), .column = true, .width = 9},
             {.key = "extension_used", .value = std::string(pt_extension_name(pt_->extension))}};
@@ -208,16 +215,18 @@ const RectangularPartition* pt_tmesh_of(const SplineSpace& space) {
 SpaceFamily pt_family() {
   SpaceFamily f;
   f.name = "pt";
+  f.read_case = read_pt_case;
+  f.space_keys = pt_space_keys();
+  f.add_basis_tool = pt_basis_tool;
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
-    return std::make_unique<PtSpace>(c, pt_start_cells(c, level), c.space.elements_per_span[0] << level);
+    return std::make_unique<PtSpace>(c, pt_start_cells(c, level), pt_section(c).space.elements_per_span[0] << level);
   };
   f.local_refinement = true;
   f.override_options = [](CaseDescription& c, int degree, int elements) {
-    if (degree) override_degree(c, degree);
-    if (elements) override_elements(c, elements);
+    override_patch_space(pt_section(c).space, degree, elements);
   };
   f.check_converge = [](const CaseDescription& c, int levels) {
-    check_uniform_levels(c, levels);
+    check_uniform_levels(pt_section(c).space, levels);
     // Each level quadruples the cells: refuse a study whose finest level cannot be built.
     const double finest = double(pt_start_cells(c, 0).size()) * std::pow(4.0, levels - 1);
     if (finest > kMaxPtCells)

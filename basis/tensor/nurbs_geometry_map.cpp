@@ -61,4 +61,28 @@ BezierGeometryCell NurbsGeometryMap::bezier_cell(int cell) const {
   return g;
 }
 
+// From the cell's homogeneous Bezier net: H = (w x, w y, w) and its first and second
+// derivatives, then the quotient rule for x = H / w, one coordinate at a time.
+bool NurbsGeometryMap::second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                          Eigen::MatrixXd& out) const {
+  thread_local Eigen::MatrixX3d bez;
+  thread_local Eigen::MatrixXd B, Bu, Bv, Buu, Buv, Bvv;
+  homogeneous_bezier(cell, bez);
+  tensor_bernstein(pu_, pv_, u, v, B, Bu, Bv);
+  tensor_bernstein_second(pu_, pv_, u, v, Buu, Buv, Bvv);
+  const Eigen::MatrixX3d H = B * bez, Hu = Bu * bez, Hv = Bv * bez, Huu = Buu * bez, Huv = Buv * bez, Hvv = Bvv * bez;
+  out.resize(u.size(), 6);
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    const double w = H(k, 2);
+    for (int d = 0; d < 2; ++d) {
+      const double g = H(k, d) / w;
+      const double gu = (Hu(k, d) - g * Hu(k, 2)) / w, gv = (Hv(k, d) - g * Hv(k, 2)) / w;
+      out(k, 3 * d + 0) = (Huu(k, d) - 2 * gu * Hu(k, 2) - g * Huu(k, 2)) / w;
+      out(k, 3 * d + 1) = (Huv(k, d) - gu * Hv(k, 2) - gv * Hu(k, 2) - g * Huv(k, 2)) / w;
+      out(k, 3 * d + 2) = (Hvv(k, d) - 2 * gv * Hv(k, 2) - g * Hvv(k, 2)) / w;
+    }
+  }
+  return true;
+}
+
 }  // namespace knotwork

@@ -15,6 +15,8 @@ class NurbsGeometryMap final : public GeometryMap {
   void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                 GeometryAtPoints& out) const override;
   BezierGeometryCell bezier_cell(int cell) const override;
+  bool second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                          Eigen::MatrixXd& out) const override;
   // Homogeneous Bezier control points (w x, w y, w) of a cell, one row per Bernstein.
   void homogeneous_bezier(int cell, Eigen::MatrixX3d& out) const;
 

@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "basis/tensor/nurbs_geometry_map.hpp"
+#include "basis/tensor/tensor_case.hpp"
 #include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
@@ -43,11 +44,14 @@ class TensorSpace final : public SplineSpace {
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
     }
+    // The residual estimator's neighbours, derived only if something asks (most runs never do).
+    d_.mesh.set_interface_rule(&interfaces_from_parameter_boxes);
     geometry_ = std::make_unique<NurbsGeometryMap>(d_);
   }
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
   std::string description() const override { return describe(options_); }
+  std::array<int, 2> degree() const override { return options_.degree; }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
   }
@@ -63,18 +67,19 @@ class TensorSpace final : public SplineSpace {
 SpaceFamily tensor_family() {
   SpaceFamily f;
   f.name = "tensor";
+  f.read_case = read_tensor_case;
+  f.space_keys = tensor_space_keys();
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
-    TensorSpaceOptions s = c.space;
+    TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
     return std::make_unique<TensorSpace>(c, s);
   };
   f.override_options = [](CaseDescription& c, int degree, int elements) {
-    if (degree) override_degree(c, degree);
-    if (elements) override_elements(c, elements);
+    override_patch_space(patch_space(c), degree, elements);
   };
   f.check_converge = [](const CaseDescription& c, int levels) {
-    check_uniform_levels(c, levels);
-    TensorSpaceOptions finest = c.space;
+    check_uniform_levels(patch_space(c), levels);
+    TensorSpaceOptions finest = patch_space(c);
     finest.elements_per_span = {finest.elements_per_span[0] << (levels - 1), finest.elements_per_span[1] << (levels - 1)};
     check_tensor_memory(c, finest);  // the finest level, before the first is solved
   };

@@ -8,7 +8,9 @@
 #include <map>
 #include <regex>
 
-#include "app/commands.hpp"
+#include <CLI/CLI.hpp>
+
+#include "cases/basis_tool.hpp"
 #include "cases/json_output.hpp"
 #include "cases/output_files.hpp"
 #include "basis/g1/g1_basis.hpp"
@@ -21,6 +23,14 @@
 namespace knotwork {
 
 namespace {
+
+// The request with the tool's own options.
+struct BasisOptions : BasisRequest {
+  std::string g1_mesh;
+  int degree = 4;
+  int split_smoothness = 1;
+  std::string gluing = "symmetric";  // symmetric | symmetric_c1 | geometric | regular_fans | FILE.json
+};
 
 const char* kind_name(G1BasisFunction::Kind k) {
   switch (k) {
@@ -169,6 +179,8 @@ void write_vtk(const std::string& file, const QuadMesh& mesh, const G1Basis& bas
 }  // namespace
 
 int g1_basis_command(const BasisOptions& o) {
+  if (!o.file.empty())
+    throw InputError("basis --g1: give one input, the quad mesh; drop '" + o.file + "' (or drop --g1 to check that file)");
   if (o.degree < 2 || o.degree > 10) throw InputError("--degree: k must be in [2, 10] for G1 splines, got " + std::to_string(o.degree));
   if (o.split_smoothness < 0 || o.split_smoothness >= o.degree)
     throw InputError("--split-smoothness: r must be in [0, k-1] = [0, " + std::to_string(o.degree - 1) + "], got " +
@@ -289,5 +301,46 @@ int g1_basis_command(const BasisOptions& o) {
                 o.vtk_file.c_str(), deviation, show_description.c_str());
   return 0;
 }
+
+namespace {
+
+class G1BasisTool final : public BasisTool {
+ public:
+  explicit G1BasisTool(CLI::App& basis) {
+    options_.push_back(basis.add_option("--g1", o_.g1_mesh,
+                                        "Quad mesh (Wavefront OBJ): the G1 spline space S_k^{1,r} on it (4-split macro-patches)"));
+    options_.push_back(basis.add_option("--degree", o_.degree, "--g1: degree k of the face splines (>= 2)")->capture_default_str());
+    options_.push_back(basis.add_option("--split-smoothness", o_.split_smoothness, "--g1: smoothness r at the 4-split, 0 <= r < k")
+                           ->capture_default_str());
+    options_.push_back(basis.add_option("--gluing", o_.gluing,
+                                        "--g1: symmetric | symmetric_c1 | geometric | regular_fans | FILE.json (per-edge a, b, c)")
+                           ->capture_default_str());
+  }
+  bool requested() const override { return options_[0]->count() > 0; }
+  std::string selector() const override { return "--g1 MESH.obj"; }
+  std::string show_help() const override {
+    return "the G1 surface fitted to the mesh with vertex:N (OBJ index), edge:I-J, face:N (1-based), all, or "
+           "extraordinary (default: the first interior vertex of valence != 4)";
+  }
+  void refuse_unused_options() const override {
+    for (size_t i = 1; i < options_.size(); ++i)
+      if (options_[i]->count()) throw InputError(options_[i]->get_name() + ": only with --g1 MESH.obj");
+  }
+  int run(const BasisRequest& request) const override {
+    BasisOptions o = o_;
+    static_cast<BasisRequest&>(o) = request;
+    if (o.show.empty()) o.show = "extraordinary";
+    else if (o.vtk_file.empty()) throw InputError("--show " + o.show + ": needs --vtk FILE.vtu");
+    return g1_basis_command(o);
+  }
+
+ private:
+  BasisOptions o_;
+  std::vector<CLI::Option*> options_;
+};
+
+}  // namespace
+
+std::unique_ptr<BasisTool> g1_basis_tool(CLI::App& basis) { return std::make_unique<G1BasisTool>(basis); }
 
 }  // namespace knotwork

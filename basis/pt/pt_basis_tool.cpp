@@ -7,7 +7,9 @@
 #include <fstream>
 #include <set>
 
-#include "app/commands.hpp"
+#include <CLI/CLI.hpp>
+
+#include "cases/basis_tool.hpp"
 #include "cases/json_output.hpp"
 #include "cases/output_files.hpp"
 #include "basis/tmesh/partition_topology.hpp"
@@ -24,6 +26,13 @@
 namespace knotwork {
 
 namespace {
+
+// The request with the tool's own options.
+struct BasisOptions : BasisRequest {
+  std::string pt_extension = "auto";  // auto | minimal | horizontal | vertical | diagonalizable
+  bool pt_non_negative = true;        // Prop. 1 (--no-prop1 keeps the EEE combinations)
+  bool pt_reference = false;          // also the full-extension reference's support sizes
+};
 
 struct SupportStats {
   int max = 0;
@@ -61,7 +70,7 @@ std::vector<int> shown_functions(const std::string& show, const PtCellPolynomial
   std::vector<int> out;
   if (show == "all") {
     for (int f = 0; f < nf; ++f) out.push_back(f);
-  } else if (show == "extraordinary") {
+  } else if (show == "largest" || show == "extraordinary") {
     for (int f = 0; f < nf; ++f) out.push_back(f);
     std::stable_sort(out.begin(), out.end(), [&](int a, int b) { return polys[a].size() > polys[b].size(); });
     out.resize(std::min(nf, 4));
@@ -116,12 +125,13 @@ void write_vtk(const std::string& file, const RectangularPartition& mesh, const 
 }  // namespace
 
 int pt_basis_command(const BasisOptions& o) {
-  const PartitionDescription p = load_partition(o.case_file);
-  require_highest_smoothness(p, o.case_file, "PT-splines span S(m, n, m-1, n-1)");
+  if (o.file.empty()) throw InputError("basis --pt: give the T-mesh file (cells = [...], degree)");
+  const PartitionDescription p = load_partition(o.file);
+  require_highest_smoothness(p, o.file, "PT-splines span S(m, n, m-1, n-1)");
   if (!o.vtk_file.empty() && std::filesystem::path(o.vtk_file).extension() != ".vtu")
     throw InputError(o.vtk_file + ": --vtk: the file must end in .vtu");
   if (!o.vtk_file.empty() && p.m != p.n)
-    throw InputError(o.case_file + ": degree: --vtk writes Bezier cells of one degree, and this T-mesh has degree [" +
+    throw InputError(o.file + ": degree: --vtk writes Bezier cells of one degree, and this T-mesh has degree [" +
                      std::to_string(p.m) + ", " + std::to_string(p.n) + "]");
   const std::optional<PtExtension> parsed = parse_pt_extension(o.pt_extension);
   if (!parsed) throw InputError("--extension: '" + o.pt_extension + "' is not one of auto, minimal, horizontal, vertical, diagonalizable");
@@ -204,7 +214,7 @@ int pt_basis_command(const BasisOptions& o) {
       fs.push(Json::object().set("cells", on).set("bernstein", coefficients));
     }
     Json root = Json::object();
-    root.set("tmesh", o.case_file)
+    root.set("tmesh", o.file)
         .set("degree", Json::array().push(double(p.m)).push(double(p.n)))
         .set("bernstein_order", "a + (m+1)*b on each cell [x0,x1]x[y0,y1], a along x")
         .set("cells", cells)
@@ -220,7 +230,7 @@ int pt_basis_command(const BasisOptions& o) {
   const ConformalityCount cofactor = conformality_count(topo, p.m, p.n);
   if (o.json) {
     Json j = Json::object();
-    j.set("file", o.case_file)
+    j.set("file", o.file)
         .set("space", "PT-splines S(" + std::to_string(p.m) + ", " + std::to_string(p.n) + ", " + std::to_string(p.m - 1) +
                           ", " + std::to_string(p.n - 1) + ")")
         .set("cells", mesh.num_cells())
@@ -264,7 +274,7 @@ int pt_basis_command(const BasisOptions& o) {
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
-  std::printf("knotwork basis %s --pt\n", o.case_file.c_str());
+  std::printf("knotwork basis %s --pt\n", o.file.c_str());
   std::printf("  space      PT-splines S(%d, %d, %d, %d) on %d cells\n", p.m, p.n, p.m - 1, p.n - 1, mesh.num_cells());
   std::printf("  functions  %zu; brute-force dimension %ld; exact rank %ld (%s)\n", B.functions.size(), brute, rank,
               rank == static_cast<long>(B.functions.size()) ? "linearly independent" : "DEPENDENT");
@@ -295,5 +305,50 @@ int pt_basis_command(const BasisOptions& o) {
   if (!o.vtk_file.empty()) std::printf("  output     %s (%zu functions as fields)\n", o.vtk_file.c_str(), show.size());
   return 0;
 }
+
+namespace {
+
+class PtBasisTool final : public BasisTool {
+ public:
+  explicit PtBasisTool(CLI::App& basis) {
+    options_.push_back(basis.add_flag("--pt", pt_, "PT-splines of the T-mesh file (edge extension + Extended Edge Elimination)"));
+    options_.push_back(basis.add_option("--extension", o_.pt_extension,
+                                        "--pt: minimal (l-edges lengthened as LR meshlines, certified), horizontal or vertical "
+                                        "(those l-edges extended to cross-cuts), diagonalizable (LR meshlines lengthened until the "
+                                        "extended mesh is diagonalizable, certified), or auto: minimal, else the full extension with "
+                                        "fewer extended edges")
+                           ->capture_default_str());
+    options_.push_back(basis.add_flag("!--no-prop1", o_.pt_non_negative,
+                                      "--pt: keep the EEE combinations instead of the non-negative basis of Prop. 1"));
+    options_.push_back(basis.add_flag("--reference", o_.pt_reference,
+                                      "--pt: also build the full-extension reference and report its support sizes (slow)"));
+  }
+  bool requested() const override { return options_[0]->count() > 0; }
+  std::string selector() const override { return "--pt TMESH"; }
+  std::string show_help() const override {
+    return "the T-mesh cells with all, 0-based indices such as 0,5, or largest (default: the four functions with the "
+           "largest supports)";
+  }
+  void refuse_unused_options() const override {
+    for (size_t i = 1; i < options_.size(); ++i)
+      if (options_[i]->count()) throw InputError(options_[i]->get_name() + ": only with --pt");
+  }
+  int run(const BasisRequest& request) const override {
+    BasisOptions o = o_;
+    static_cast<BasisRequest&>(o) = request;
+    if (o.show.empty()) o.show = "largest";
+    else if (o.vtk_file.empty()) throw InputError("--show " + o.show + ": needs --vtk FILE.vtu");
+    return pt_basis_command(o);
+  }
+
+ private:
+  BasisOptions o_;
+  bool pt_ = false;
+  std::vector<CLI::Option*> options_;
+};
+
+}  // namespace
+
+std::unique_ptr<BasisTool> pt_basis_tool(CLI::App& basis) { return std::make_unique<PtBasisTool>(basis); }
 
 }  // namespace knotwork

@@ -1,0 +1,37 @@
+#pragma once
+// A case of family "g1": the G1 macro-patch space on a quad mesh; the geometry is the G1
+// spline fitted to the mesh ([geometry] shape) and the problem is planar Poisson or
+// Laplace-Beltrami on a closed surface ([problem] operator). See cases/README.md.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "cases/case_file.hpp"
+
+namespace knotwork {
+
+struct CaseDocument;
+
+struct G1Section : CaseSection {
+  std::string mesh_file;  // resolved against the case file's folder
+  int faces = 0;          // of the coarse mesh (read and checked with the case)
+  int degree = 4, split_smoothness = 1;
+  std::string gluing = "symmetric";  // "symmetric", "geometric" or a JSON file (resolved)
+  int refine = 0;                    // subdivisions before solving (converge adds one per level)
+  bool c0 = false;                   // [space] smoothness = "c0": the plain C0 multipatch baseline
+  std::string shape = "bilinear";    // "bilinear" | "sphere" | "torus"
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 1, major_radius = 2, minor_radius = 1;  // sphere; torus around the z axis
+  bool surface = false;  // operator = "laplace_beltrami" (problem: -Laplace_Beltrami(u) + reaction u = f)
+  std::unique_ptr<CaseSection> clone() const override { return std::make_unique<G1Section>(*this); }
+};
+
+inline G1Section& g1_section(CaseDescription& c) { return family_section<G1Section>(c); }
+inline const G1Section& g1_section(const CaseDescription& c) { return family_section<G1Section>(c); }
+
+// The keys [space] takes.
+const std::vector<std::string>& g1_space_keys();
+
+void read_g1_case(const CaseDocument& doc, CaseDescription& c);
+
+}  // namespace knotwork

@@ -1,0 +1,42 @@
+#pragma once
+// The [space] of the families that live on one NURBS patch (tensor, and the local
+// refinements of it: knot segments, PT): degree and elements per geometry knot span, and
+// for the tensor family continuity, rational and extra knots.
+#include <string>
+#include <vector>
+
+#include "basis/tensor/tensor_patch.hpp"
+#include "cases/case_file.hpp"
+
+namespace knotwork {
+
+struct CaseDocument;
+
+struct PatchSpaceSection : CaseSection {
+  TensorSpaceOptions space;
+  std::unique_ptr<CaseSection> clone() const override { return std::make_unique<PatchSpaceSection>(*this); }
+};
+
+// The patch space options of a case of any family whose section derives from
+// PatchSpaceSection; std::logic_error for other families.
+TensorSpaceOptions& patch_space(CaseDescription& c);
+const TensorSpaceOptions& patch_space(const CaseDescription& c);
+
+// Family "tensor": [geometry], [space], [problem].
+// The keys [space] takes.
+const std::vector<std::string>& tensor_space_keys();
+
+void read_tensor_case(const CaseDocument& doc, CaseDescription& c);
+
+// [space] degree (required) and elements (required unless `elements_optional`).
+void read_patch_degree_elements(const CaseDocument& doc, TensorSpaceOptions& s, bool elements_optional);
+
+// --degree / --elements with the same validation as the file; `fixed_by` non-empty: the
+// case's functions are fixed by that file, and both are refused.
+void override_patch_space(TensorSpaceOptions& s, int degree, int elements, const std::string& fixed_by = "");
+
+// For families refined by doubling [space] elements per level: throws InputError when the
+// finest of `levels` levels would have more than 2^26 cells.
+void check_uniform_levels(const TensorSpaceOptions& s, int levels);
+
+}  // namespace knotwork

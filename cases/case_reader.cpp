@@ -1,0 +1,525 @@
+// The validated reading of case files shared by every family: values with their field
+// names in messages, the JSON route, and the sections of one-patch domains ([geometry],
+// [problem]). The families' own [space] readers are in basis/<family>/<family>_case.cpp.
+#include "cases/case_reader.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "cases/geometries.hpp"
+#include "cases/json_input.hpp"
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+const std::vector<std::string> kSides = {"bottom", "right", "top", "left"};
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+// A JSON value as a document node (nulls refused: no field takes them).
+DocumentNode from_json(const JsonValue& v, const std::string& path, const std::string& field) {
+  using K = JsonValue::Kind;
+  switch (v.kind) {
+    case K::kNull: throw InputError(path + ": " + field + ": null is not a valid value here");
+    case K::kBool: return DocumentNode::boolean(v.boolean);
+    case K::kString: return DocumentNode::string(v.text);
+    case K::kNumber:
+      if (v.integral && std::abs(v.number) < 9.0e18) return DocumentNode::integer(std::stoll(v.text));
+      return DocumentNode::floating(v.number);
+    case K::kArray: {
+      DocumentNode a = DocumentNode::array();
+      for (size_t i = 0; i < v.items.size(); ++i) a.push_back(from_json(v.items[i], path, field + "[" + std::to_string(i) + "]"));
+      return a;
+    }
+    case K::kObject: break;
+  }
+  DocumentNode t = DocumentNode::table();
+  for (const auto& [key, member] : v.members) t.insert(key, from_json(member, path, field.empty() ? key : field + "." + key));
+  return t;
+}
+
+// A TOML node as a document node. toml++ gives dates and times too: no field takes them.
+DocumentNode from_toml(const toml::node& n, const std::string& path, const std::string& field) {
+  if (const toml::table* t = n.as_table()) {
+    DocumentNode out = DocumentNode::table();
+    for (const auto& [k, v] : *t) {
+      const std::string key(k.str());
+      out.insert(key, from_toml(v, path, field.empty() ? key : field + "." + key));
+    }
+    return out;
+  }
+  if (const toml::array* a = n.as_array()) {
+    DocumentNode out = DocumentNode::array();
+    for (size_t i = 0; i < a->size(); ++i) out.push_back(from_toml(*a->get(i), path, field + "[" + std::to_string(i) + "]"));
+    return out;
+  }
+  if (auto s = n.value_exact<std::string>()) return DocumentNode::string(*s);
+  if (auto i = n.value_exact<int64_t>()) return DocumentNode::integer(*i);
+  if (auto d = n.value_exact<double>()) return DocumentNode::floating(*d);
+  if (auto b = n.value_exact<bool>()) return DocumentNode::boolean(*b);
+  std::ostringstream s;
+  s << path << ":" << n.source().begin.line << ":" << n.source().begin.column << ": " << field
+    << ": dates and times are not valid values here";
+  throw InputError(s.str());
+}
+
+bool is_json_file(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return ext == ".json";
+}
+
+[[noreturn]] void toml_syntax_error(const std::string& name, const toml::parse_error& e) {
+  std::ostringstream s;
+  s << name << ":" << e.source().begin.line << ":" << e.source().begin.column << ": TOML syntax error: " << e.description();
+  throw InputError(s.str());
+}
+
+}  // namespace
+
+std::string closest_name(const std::string& key, const std::vector<std::string>& valid) {
+  std::string best;
+  size_t best_d = 1000;
+  for (const auto& v : valid) {
+    const size_t d = edit_distance(key, v);
+    if (d < best_d) { best_d = d; best = v; }
+  }
+  std::string all;
+  for (const auto& v : valid) all += (all.empty() ? "" : ", ") + v;
+  return best_d <= std::max<size_t>(2, key.size() / 2) ? "did you mean '" + best + "'?"
+                                                        : "valid keys: " + all;
+}
+
+
+void CaseReader::fail(const std::string& field, const std::string& what) const {
+  throw InputError(path_ + ": " + field + ": " + what);
+}
+
+void CaseReader::check_keys(const DocumentNode& t, const std::string& section, const std::vector<std::string>& valid) const {
+  for (const auto& [k, v] : t) {
+    const std::string& key = k;
+    if (std::find(valid.begin(), valid.end(), key) != valid.end()) continue;
+    const std::string field = section.empty() ? key : "[" + section + "] " + key;
+    if (section == "space") {
+      std::string owners;
+      for (const auto& [family, keys] : other_families_keys_)
+        if (std::find(keys.begin(), keys.end(), key) != keys.end()) owners += (owners.empty() ? "\"" : ", \"") + family + "\"";
+      if (!owners.empty()) fail(field, "unknown key for family = \"" + family_ + "\" (only family = " + owners + " takes it)");
+    }
+    fail(field, "unknown key (" + closest_name(key, valid) + ")");
+  }
+}
+
+const DocumentNode& CaseReader::table(const DocumentNode& t, const std::string& key, bool required) const {
+  static const DocumentNode empty = DocumentNode::table();
+  const DocumentNode* n = t.get(key);
+  if (!n) {
+    if (required) fail("[" + key + "]", "missing section");
+    return empty;
+  }
+  if (!n->is_table()) fail(key, "must be a table ([" + key + "])");
+  return *n->as_table();
+}
+
+double CaseReader::number(const DocumentNode& n, const std::string& field) const {
+  double v;
+  if (auto i = n.value_exact<int64_t>()) v = static_cast<double>(*i);
+  else if (auto d = n.value_exact<double>()) v = *d;
+  else if (auto s = n.value_exact<std::string>()) v = rational_string(*s, field);
+  else fail(field, "must be a number");
+  if (!std::isfinite(v)) fail(field, "must be a finite number (got nan or inf)");
+  return v;
+}
+
+// An exact rational such as "-1/3" (geometries written from exact data use them).
+double CaseReader::rational_string(const std::string& s, const std::string& field) const {
+  const auto slash = s.find('/');
+  try {
+    size_t used = 0;
+    if (slash == std::string::npos) {
+      const double v = std::stod(s, &used);
+      if (used == s.size()) return v;
+    } else {
+      const double a = std::stod(s.substr(0, slash), &used);
+      if (used == slash) {
+        size_t used2 = 0;
+        const double b = std::stod(s.substr(slash + 1), &used2);
+        if (used2 == s.size() - slash - 1 && b != 0) return a / b;
+      }
+    }
+  } catch (const std::exception&) {
+  }
+  fail(field, "\"" + s + "\" is not a number");
+}
+
+mpq_class CaseReader::rational(const DocumentNode& x, const std::string& field) const {
+  try {
+    if (auto i64 = x.value_exact<int64_t>()) return mpq_class(static_cast<long>(*i64));
+    if (auto s = x.value_exact<std::string>()) return parse_rational(*s);
+    if (auto f = x.value_exact<double>()) {
+      if (!std::isfinite(*f)) fail(field, "coordinates must be finite (got nan or inf)");
+      return mpq_class(*f);  // write "1/10", not 0.1, for exact decimals
+    }
+  } catch (const std::invalid_argument& e) {
+    fail(field, e.what());
+  }
+  fail(field, "must be a number or a rational string such as \"14/9\"");
+}
+
+long CaseReader::integer(const DocumentNode& n, const std::string& field) const {
+  if (auto i = n.value_exact<int64_t>()) return static_cast<long>(*i);
+  fail(field, "must be an integer");
+}
+
+std::array<long, 2> CaseReader::integer_pair(const DocumentNode& n, const std::string& field) const {
+  if (auto a = n.as_array()) {
+    if (a->size() != 2) fail(field, "must be an integer or a pair [u, v]");
+    return {integer(*a->get(0), field), integer(*a->get(1), field)};
+  }
+  const long v = integer(n, field);
+  return {v, v};
+}
+
+std::vector<double> CaseReader::numbers(const DocumentNode& n, const std::string& field) const {
+  const DocumentNode* a = n.as_array();
+  if (!a) fail(field, "must be an array of numbers");
+  std::vector<double> r;
+  for (size_t i = 0; i < a->size(); ++i) r.push_back(number(*a->get(i), field + "[" + std::to_string(i) + "]"));
+  return r;
+}
+
+Eigen::MatrixX2d CaseReader::points(const DocumentNode& n, const std::string& field) const {
+  const DocumentNode* a = n.as_array();
+  if (!a) fail(field, "must be an array of [x, y] points");
+  Eigen::MatrixX2d p(a->size(), 2);
+  for (size_t i = 0; i < a->size(); ++i) {
+    const std::string f = field + "[" + std::to_string(i) + "]";
+    const auto xy = numbers(*a->get(i), f);
+    if (xy.size() != 2) fail(f, "must be a point [x, y]");
+    p(i, 0) = xy[0];
+    p(i, 1) = xy[1];
+  }
+  return p;
+}
+
+std::string CaseReader::string(const DocumentNode& n, const std::string& field) const {
+  if (auto s = n.value_exact<std::string>()) return *s;
+  fail(field, "must be a string");
+}
+
+bool CaseReader::boolean(const DocumentNode& n, const std::string& field) const {
+  if (auto b = n.value_exact<bool>()) return *b;
+  fail(field, "must be true or false");
+}
+
+std::string CaseReader::resolve(const std::string& file) const {
+  const std::filesystem::path f = file;
+  return (f.is_relative() ? std::filesystem::path(path_).parent_path() / f : f).string();
+}
+
+DocumentNode parse_document(const std::string& path) {
+  if (is_json_file(path)) {
+    const JsonValue doc = read_json_file(path);
+    if (doc.kind != JsonValue::Kind::kObject) throw InputError(path + ": the JSON document must be an object {...}");
+    return from_json(doc, path, "");
+  }
+  std::ifstream probe(path);
+  if (!probe) {
+    const std::string why = std::filesystem::exists(path) ? "cannot be read" : "no such file";
+    throw InputError(path + ": cannot open case file (" + why + ")");
+  }
+  if (std::filesystem::is_directory(path)) throw InputError(path + ": is a directory, not a case file");
+  try {
+    return from_toml(toml::parse_file(path), path, "");
+  } catch (const toml::parse_error& e) {
+    toml_syntax_error(path, e);
+  }
+}
+
+DocumentNode parse_document_text(const std::string& text, const std::string& name) {
+  try {
+    return from_toml(toml::parse(text, name), name, "");
+  } catch (const toml::parse_error& e) {
+    toml_syntax_error(name, e);
+  }
+}
+
+namespace {
+
+NurbsPatch read_nurbs(const CaseReader& r, const DocumentNode& g, const std::string& section) {
+  r.check_keys(g, section, {"type", "degrees", "knots_u", "knots_v", "control_points", "weights", "file"});
+  const DocumentNode* src = &g;
+  DocumentNode from_file = DocumentNode::table();
+  std::string field_prefix = "[" + section + "] ";
+  if (const DocumentNode* f = g.get("file")) {
+    std::filesystem::path file = r.string(*f, field_prefix + "file");
+    if (file.is_relative()) file = std::filesystem::path(r.path()).parent_path() / file;
+    from_file = parse_document(file.string());
+    CaseReader(file.string()).check_keys(from_file, "", {"degrees", "knots_u", "knots_v", "control_points", "weights"});
+    src = &from_file;
+    field_prefix = "(file " + file.string() + ") ";
+  }
+  auto need = [&](const char* key) -> const DocumentNode& {
+    const DocumentNode* n = src->get(key);
+    if (!n) r.fail(field_prefix + key, "missing required key for a nurbs geometry");
+    return *n;
+  };
+  const auto deg = r.integer_pair(need("degrees"), field_prefix + "degrees");
+  for (long d : deg)
+    if (d < 1 || d > kMaxCaseDegree) r.fail(field_prefix + "degrees", "must be in [1, 10]");
+  NurbsPatch p;
+  try {
+    p.basis_u = BSplineBasis1D(static_cast<int>(deg[0]), r.numbers(need("knots_u"), field_prefix + "knots_u"));
+  } catch (const std::invalid_argument& e) { r.fail(field_prefix + "knots_u", e.what()); }
+  try {
+    p.basis_v = BSplineBasis1D(static_cast<int>(deg[1]), r.numbers(need("knots_v"), field_prefix + "knots_v"));
+  } catch (const std::invalid_argument& e) { r.fail(field_prefix + "knots_v", e.what()); }
+  p.control_points = r.points(need("control_points"), field_prefix + "control_points");
+  if (const DocumentNode* w = src->get("weights")) {
+    const auto ws = r.numbers(*w, field_prefix + "weights");
+    p.weights = Eigen::Map<const Eigen::VectorXd>(ws.data(), ws.size());
+  } else {
+    p.weights.setOnes(p.control_points.rows());
+  }
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const std::string field = what.rfind("weight", 0) == 0 ? "weights"
+                              : what.rfind("knots_u", 0) == 0 ? "knots_u"
+                              : what.rfind("knots_v", 0) == 0 ? "knots_v" : "control_points";
+    r.fail(field_prefix + field, what);
+  }
+  return p;
+}
+
+int side_index(const CaseReader& r, const std::string& side, const std::string& field) {
+  for (size_t i = 0; i < kSides.size(); ++i)
+    if (kSides[i] == side) return static_cast<int>(i);
+  r.fail(field, "unknown side '" + side + "' (" + closest_name(side, kSides) + "; sides are bottom, right, top, left)");
+}
+
+}  // namespace
+
+void read_patch_geometry(const CaseDocument& doc, CaseDescription& c) {
+  const CaseReader& r = doc.reader;
+  const DocumentNode& g = r.table(doc.root, "geometry", true);
+  const DocumentNode* type = g.get("type");
+  if (!type) r.fail("[geometry] type", "missing (rectangle, quarter_annulus, lshape or nurbs)");
+  c.geometry_type = r.string(*type, "[geometry] type");
+  if (c.geometry_type == "rectangle") {
+    r.check_keys(g, "geometry", {"type", "corners"});
+    Eigen::MatrixX2d corners(2, 2);
+    corners << 0, 0, 1, 1;
+    if (const DocumentNode* n = g.get("corners")) corners = r.points(*n, "[geometry] corners");
+    if (corners.rows() != 2) r.fail("[geometry] corners", "must be [[x0, y0], [x1, y1]]");
+    if (!(corners(1, 0) > corners(0, 0) && corners(1, 1) > corners(0, 1)))
+      r.fail("[geometry] corners", "need x1 > x0 and y1 > y0");
+    c.geometry = rectangle_patch(corners(0, 0), corners(0, 1), corners(1, 0), corners(1, 1));
+  } else if (c.geometry_type == "quarter_annulus") {
+    r.check_keys(g, "geometry", {"type", "inner_radius", "outer_radius"});
+    const double ri = g.get("inner_radius") ? r.number(*g.get("inner_radius"), "[geometry] inner_radius") : 1.0;
+    const double ro = g.get("outer_radius") ? r.number(*g.get("outer_radius"), "[geometry] outer_radius") : 2.0;
+    if (!(ri > 0)) r.fail("[geometry] inner_radius", "must be > 0");
+    if (!(ro > ri)) r.fail("[geometry] outer_radius", "must be > inner_radius");
+    c.geometry = quarter_annulus_patch(ri, ro);
+  } else if (c.geometry_type == "lshape") {
+    r.check_keys(g, "geometry", {"type"});
+    c.geometry = lshape_patch();
+  } else if (c.geometry_type == "nurbs") {
+    c.geometry = read_nurbs(r, g, "geometry");
+  } else {
+    r.fail("[geometry] type", "unknown geometry '" + c.geometry_type + "' (" +
+                                  closest_name(c.geometry_type, {"rectangle", "quarter_annulus", "lshape", "nurbs"}) + ")");
+  }
+}
+
+void check_degree(const CaseReader& r, const std::array<long, 2>& d, const std::string& field) {
+  for (long v : d)
+    if (v < 1 || v > kMaxCaseDegree) r.fail(field, "must be in [1, 10], got " + std::to_string(v));
+}
+
+void check_elements(const CaseReader& r, const std::array<long, 2>& e, const std::string& field) {
+  for (long v : e)
+    if (v < 1) r.fail(field, "must be >= 1, got " + std::to_string(v));
+  if (e[0] * e[1] > kMaxCaseCells || e[0] > kMaxCaseCells || e[1] > kMaxCaseCells)
+    r.fail(field, "too many elements (more than 2^26 cells)");
+}
+
+void read_quadrature(const CaseReader& r, const DocumentNode& s, CaseDescription& c, bool pair) {
+  auto read_points = [&](const char* key, int& pu, int& pv) {
+    if (const DocumentNode* k = s.get(key)) {
+      const std::string field = std::string("[space] ") + key;
+      const auto q = pair ? r.integer_pair(*k, field) : std::array<long, 2>{r.integer(*k, field), r.integer(*k, field)};
+      for (long v : q)
+        if (v < 1 || v > 30) r.fail(field, "must be in [1, 30]");
+      pu = static_cast<int>(q[0]);
+      pv = static_cast<int>(q[1]);
+    }
+  };
+  read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
+  read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
+}
+
+// cells = [[x0, y0, x1, y1], ...] with exact coordinates (`field` names the key).
+std::vector<RationalBox> read_cells(const CaseReader& r, const DocumentNode& node, const std::string& field) {
+  const DocumentNode* a = node.as_array();
+  if (!a) r.fail(field, "must be a list of cells [[x0, y0, x1, y1], ...]");
+  std::vector<RationalBox> cells;
+  for (size_t i = 0; i < a->size(); ++i) {
+    const std::string f = field + "[" + std::to_string(i) + "]";
+    const DocumentNode* c = a->get(i)->as_array();
+    if (!c || c->size() != 4) r.fail(f, "must be [x0, y0, x1, y1]");
+    mpq_class v[4];
+    for (size_t k = 0; k < 4; ++k) v[k] = r.rational(*c->get(k), f);
+    cells.push_back({v[0], v[1], v[2], v[3]});
+  }
+  return cells;
+}
+
+// segments = [{direction = "vertical", position, from, to}, ...] with exact coordinates.
+std::vector<AxisSegment> read_axis_segments(const CaseReader& r, const DocumentNode& node, const std::string& field) {
+  const DocumentNode* a = node.as_array();
+  if (!a) r.fail(field, "must be a list of { direction, position, from, to }");
+  std::vector<AxisSegment> out;
+  for (size_t i = 0; i < a->size(); ++i) {
+    const std::string f = field + "[" + std::to_string(i) + "]";
+    const DocumentNode* t = a->get(i)->as_table();
+    if (!t) r.fail(f, "must be a table { direction = \"vertical\", position = ..., from = ..., to = ... }");
+    r.check_keys(*t, f.front() == '[' ? f.substr(1) : f, {"direction", "position", "from", "to"});
+    for (const char* key : {"direction", "position", "from", "to"})
+      if (!t->get(key)) r.fail(f + " " + key, "missing");
+    const std::string dir = r.string(*t->get("direction"), f + " direction");
+    if (dir != "vertical" && dir != "horizontal") r.fail(f + " direction", "must be \"vertical\" or \"horizontal\"");
+    AxisSegment s;
+    s.vertical = dir == "vertical";
+    s.position = r.rational(*t->get("position"), f + " position");
+    s.from = r.rational(*t->get("from"), f + " from");
+    s.to = r.rational(*t->get("to"), f + " to");
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
+  const CaseReader& r = doc.reader;
+  const DocumentNode& t = r.table(doc.root, "problem", true);
+  r.check_keys(t, "problem", {"exact", "source", "dirichlet", "neumann"});
+  PoissonProblem& pb = c.problem;
+  const std::string& f = r.path();
+  if (const DocumentNode* e = t.get("exact")) {
+    const Expression u = Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact");
+    pb.exact = differentiate_exact_solution(u);
+  }
+  if (const DocumentNode* s = t.get("source"))
+    pb.source = Expression::parse(r.string(*s, "[problem] source"), f + ": [problem] source");
+  else if (pb.exact)
+    pb.source = pb.exact->minus_laplacian;
+  else
+    r.fail("[problem] source", "missing: give `source`, or `exact` to derive it from");
+
+  pb.boundary.assign(4, BoundaryCondition{});
+  std::set<int> neumann;
+  if (const DocumentNode* n = t.get("neumann")) {
+    if (const DocumentNode* a = n->as_array()) {
+      for (size_t i = 0; i < a->size(); ++i) {
+        const int s = side_index(r, r.string(*a->get(i), "[problem] neumann"), "[problem] neumann");
+        pb.boundary[s].kind = BoundaryKind::kNeumann;
+        neumann.insert(s);
+      }
+    } else if (const DocumentNode* nt = n->as_table()) {
+      for (const auto& [k, v] : *nt) {
+        const std::string field = "[problem] neumann." + k;
+        const int s = side_index(r, k, field);
+        const std::string val = r.string(v, field);
+        pb.boundary[s].kind = BoundaryKind::kNeumann;
+        if (val != "exact") {
+          pb.boundary[s].from_exact = false;
+          pb.boundary[s].value = Expression::parse(val, f + ": " + field);
+        }
+        neumann.insert(s);
+      }
+    } else {
+      r.fail("[problem] neumann", "must be a list of sides or a table side = \"flux expression\"");
+    }
+  }
+  if (neumann.size() == 4)
+    r.fail("[problem] neumann", "every side is Neumann: the solution would only be defined up to a "
+                                "constant; keep at least one Dirichlet side");
+  if (const DocumentNode* d = t.get("dirichlet")) {
+    if (auto s = d->value_exact<std::string>()) {
+      const Expression g = Expression::parse(*s, f + ": [problem] dirichlet");
+      for (auto& bc : pb.boundary)
+        if (bc.kind == BoundaryKind::kDirichlet) { bc.from_exact = false; bc.value = g; }
+    } else if (const DocumentNode* dt = d->as_table()) {
+      for (const auto& [k, v] : *dt) {
+        const std::string field = "[problem] dirichlet." + k;
+        const int s = side_index(r, k, field);
+        if (neumann.count(s)) r.fail(field, "side is also listed under neumann");
+        const std::string val = r.string(v, field);
+        if (val != "exact") {
+          pb.boundary[s].from_exact = false;
+          pb.boundary[s].value = Expression::parse(val, f + ": " + field);
+        }
+      }
+    } else {
+      r.fail("[problem] dirichlet", "must be an expression or a table side = \"expression\"");
+    }
+  }
+  for (size_t s = 0; s < 4; ++s)
+    if (pb.boundary[s].from_exact && !pb.exact)
+      r.fail("[problem] " + std::string(pb.boundary[s].kind == BoundaryKind::kDirichlet ? "dirichlet" : "neumann"),
+             "side '" + kSides[s] + "' takes its data from the exact solution, but [problem] exact is not given");
+}
+
+void read_output(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
+  r.check_keys(t, "output", {"directory", "bezier", "sampled", "samples"});
+  if (const DocumentNode* d = t.get("directory")) c.output_directory = r.string(*d, "[output] directory");
+  auto flag = [&](const char* key, bool& out) {
+    if (const DocumentNode* n = t.get(key)) {
+      auto b = n->value_exact<bool>();
+      if (!b) r.fail(std::string("[output] ") + key, "must be true or false");
+      out = *b;
+    }
+  };
+  flag("bezier", c.write_bezier);
+  flag("sampled", c.write_sampled);
+  if (const DocumentNode* s = t.get("samples")) {
+    c.samples = static_cast<int>(r.integer(*s, "[output] samples"));
+    if (c.samples < 1 || c.samples > 64) r.fail("[output] samples", "must be in [1, 64]");
+  }
+}
+
+void read_adapt(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
+  r.check_keys(t, "adapt", {"steps", "theta", "max_dofs"});
+  if (const DocumentNode* n = t.get("steps")) {
+    c.adapt.steps = static_cast<int>(r.integer(*n, "[adapt] steps"));
+    if (c.adapt.steps < 1 || c.adapt.steps > 200) r.fail("[adapt] steps", "must be in [1, 200]");
+  }
+  if (const DocumentNode* n = t.get("theta")) {
+    c.adapt.theta = r.number(*n, "[adapt] theta");
+    if (!(c.adapt.theta > 0 && c.adapt.theta <= 1)) r.fail("[adapt] theta", "must be in (0, 1]");
+  }
+  if (const DocumentNode* n = t.get("max_dofs")) {
+    c.adapt.max_dofs = r.integer(*n, "[adapt] max_dofs");
+    if (c.adapt.max_dofs < 1) r.fail("[adapt] max_dofs", "must be positive");
+  }
+}
+
+}  // namespace knotwork

@@ -1,0 +1,92 @@
+#pragma once
+// What a family's case reader works with: the parsed document (TOML or JSON, one tree:
+// cases/document_node.hpp) and a reader that validates values and prefixes every message
+// with the file and the field. Everything after reading sees only CaseDescription.
+#include <Eigen/Core>
+#include <array>
+#include <gmpxx.h>
+#include <string>
+#include "cases/document_node.hpp"
+#include <vector>
+
+#include "basis/tmesh/rectangular_partition.hpp"
+#include "cases/case_file.hpp"
+
+namespace knotwork {
+
+constexpr int kMaxCaseDegree = 10;
+constexpr long kMaxCaseCells = 1L << 26;  // ~67M cells: beyond any machine this runs on
+
+// "did you mean 'x'?" for the closest of `valid`, or the list of valid names.
+std::string closest_name(const std::string& key, const std::vector<std::string>& valid);
+
+class CaseReader {
+ public:
+  explicit CaseReader(std::string path) : path_(std::move(path)) {}
+  [[noreturn]] void fail(const std::string& field, const std::string& what) const;
+  // Unknown keys are refused with the closest valid one (`section` "" is the top level).
+  void check_keys(const DocumentNode& t, const std::string& section, const std::vector<std::string>& valid) const;
+  // A section ([key]); an empty table when absent and not required.
+  const DocumentNode& table(const DocumentNode& t, const std::string& key, bool required) const;
+  double number(const DocumentNode& n, const std::string& field) const;
+  // Exact: integers, rational strings ("14/9", "0.1" = 1/10), or a float's exact binary value.
+  mpq_class rational(const DocumentNode& x, const std::string& field) const;
+  long integer(const DocumentNode& n, const std::string& field) const;
+  std::array<long, 2> integer_pair(const DocumentNode& n, const std::string& field) const;  // int or [u, v]
+  std::vector<double> numbers(const DocumentNode& n, const std::string& field) const;
+  Eigen::MatrixX2d points(const DocumentNode& n, const std::string& field) const;
+  std::string string(const DocumentNode& n, const std::string& field) const;
+  bool boolean(const DocumentNode& n, const std::string& field) const;
+  // A file name relative to the case file's folder.
+  std::string resolve(const std::string& file) const;
+  const std::string& path() const { return path_; }
+  // Keys of [space] that other families take: an unknown [space] key that one of them knows
+  // is refused with "only with family = ..." (load_case fills it from the registry).
+  void set_other_families_keys(std::string family, std::vector<std::pair<std::string, std::vector<std::string>>> family_keys) {
+    family_ = std::move(family);
+    other_families_keys_ = std::move(family_keys);
+  }
+
+ private:
+  std::string family_;
+  std::vector<std::pair<std::string, std::vector<std::string>>> other_families_keys_;
+  double rational_string(const std::string& s, const std::string& field) const;
+  std::string path_;
+};
+
+// A parsed case and its reader: what SpaceFamily::read_case gets.
+struct CaseDocument {
+  const CaseReader& reader;
+  const DocumentNode& root;
+};
+
+// TOML, or JSON (by the .json extension) through nlohmann-json with the same validation:
+// the JSON object becomes a DocumentNode. Throws InputError naming the file (syntax errors
+// with line and column).
+DocumentNode parse_document(const std::string& path);
+DocumentNode parse_document_text(const std::string& toml_text, const std::string& name);
+
+// The sections every family shares: [output] and [adapt].
+void read_output(const CaseReader& r, const DocumentNode& output, CaseDescription& c);
+void read_adapt(const CaseReader& r, const DocumentNode& adapt, CaseDescription& c);
+
+// Shared section readers for the families whose domain is one NURBS patch.
+// [geometry] type = rectangle | quarter_annulus | lshape | nurbs (required).
+void read_patch_geometry(const CaseDocument& doc, CaseDescription& c);
+// [problem] exact/source/dirichlet/neumann on the four sides bottom, right, top, left.
+void read_patch_problem(const CaseDocument& doc, CaseDescription& c);
+// [space] quadrature_points / error_quadrature_points (int or pair; `pair` false: one int).
+void read_quadrature(const CaseReader& r, const DocumentNode& space, CaseDescription& c, bool pair = true);
+// [space] degree (int or pair) in [1, 10], [space] elements >= 1 with at most 2^26 cells.
+void check_degree(const CaseReader& r, const std::array<long, 2>& d, const std::string& field);
+void check_elements(const CaseReader& r, const std::array<long, 2>& e, const std::string& field);
+
+// cells = [[x0, y0, x1, y1], ...] with exact coordinates (`field` names the key).
+std::vector<RationalBox> read_cells(const CaseReader& r, const DocumentNode& node, const std::string& field);
+// segments = [{direction = "vertical", position, from, to}, ...] with exact coordinates.
+std::vector<AxisSegment> read_axis_segments(const CaseReader& r, const DocumentNode& node, const std::string& field);
+// A T-mesh from `cells`, or from `grid` = {x = [...], y = [...]} and `segments` (`prefix`
+// goes in front of the field names), validated as a partition of a rectangle.
+std::vector<RationalBox> read_tmesh(const CaseReader& r, const DocumentNode& t, const std::string& prefix);
+
+}  // namespace knotwork
