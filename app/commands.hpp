@@ -19,7 +19,7 @@ struct CommonOptions {
 struct RunOptions : CommonOptions {
   std::string case_file;
   bool no_output = false;
-  bool allow_non_semi_regular = false;
+  bool allow_unverified_space = false;
 };
 
 struct ConvergeOptions : CommonOptions {

@@ -71,8 +71,9 @@ int main(int argc, char** argv) {
       ->required();
   add_common(run_cmd, run);
   run_cmd->add_flag("--no-output", run.no_output, "Write no files (timing and errors only)");
-  run_cmd->add_flag("--allow-non-semi-regular", run.allow_non_semi_regular,
-                    "Solve on a [space] collection that is not semi-regular (its functions may be dependent)");
+  run_cmd->add_flag("--allow-unverified-space,--allow-non-semi-regular", run.allow_unverified_space,
+                    "Solve on a space that failed its family's own check (a given collection that is not "
+                    "semi-regular: its functions may be dependent and the matrix singular)");
 
   knotwork::ConvergeOptions conv;
   CLI::App* conv_cmd = app.add_subcommand("converge", "Uniform h-refinement study: errors and observed rates per level");
@@ -117,7 +118,7 @@ int main(int argc, char** argv) {
   CLI::Option* vtk_option = basis_cmd->add_option("--vtk", basis.vtk_file);
   CLI::Option* show_option = basis_cmd->add_option("--show", basis.show);
   basis_cmd->add_flag("--json", basis.json, "Print one JSON object");
-  // Each family adds its own mode (such as the G1 space on a quad mesh) and its options, and
+  // Each family adds its own mode (a space on a quad mesh, on a T-mesh file, ...) and its options, and
   // says what --vtk writes for it.
   std::vector<std::unique_ptr<knotwork::BasisTool>> basis_tools;
   for (const auto& f : knotwork::space_families())

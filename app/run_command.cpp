@@ -25,7 +25,7 @@ int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
   const SpaceFamily& family = space_family(c);
   family.override_options(c, o.degree, o.elements);
-  c.allow_non_semi_regular = o.allow_non_semi_regular;
+  c.allow_unverified_space = o.allow_unverified_space;
   const Ordering ordering = parse_ordering(o.ordering);
   std::optional<OutputStage> stage;
   if (!o.no_output) stage.emplace(o.out.empty() ? c.output_directory : o.out);

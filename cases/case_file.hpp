@@ -56,7 +56,7 @@ struct CaseDescription {
   std::string geometry_type;
   NurbsPatch geometry;
   FamilySection section;                // the family's own settings
-  bool allow_non_semi_regular = false;  // --allow-non-semi-regular: solve on an unverified space anyway
+  bool allow_unverified_space = false;  // --allow-unverified-space: solve although the family's check failed
   QuadratureOptions quadrature;
   PoissonProblem problem;
   std::string output_directory;  // default results/<name>

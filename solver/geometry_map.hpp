@@ -53,7 +53,7 @@ void dehomogenize_map(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, con
                       GeometryAtPoints& out);
 
 // A NURBS patch evaluated directly at any parameter point, for cells that do not follow the
-// patch's own knot grid (knot-segment and T-mesh spaces in the patch's parameter domain).
+// patch's own knot grid (locally refined spaces in the patch's parameter domain).
 // Bezier output interpolates the map at the cell's equispaced nodes (exact for polynomial
 // patches of at most the cell's degree). Every cell must lie inside one knot span of the
 // patch: the constructor throws GeometryError naming the first cell that straddles a knot.
@@ -89,7 +89,7 @@ class AnalyticGeometryMap final : public GeometryMap {
 };
 
 // A map given cell by cell as polynomial Bezier patches in R^2 or R^3 (e.g. the coordinates
-// of a G1 spline surface, `g1_cell_bernstein`): exact, with its own Bezier cells for output.
+// of a spline surface built by a family): exact, with its own Bezier cells for output.
 // Every cell must have the same number of point columns (the dimension).
 class BezierCellsGeometryMap final : public GeometryMap {
  public:

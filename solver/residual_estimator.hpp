@@ -24,7 +24,7 @@ struct ErrorIndicators {
 };
 
 // Needs a planar, polynomial BezierMesh with its cell interfaces (BezierMesh::interfaces, built
-// by the family: one patch or many, G1 included) and a geometry with second derivatives;
+// by the family: one patch or many, planar multi-patch meshes included) and a geometry with second derivatives;
 // throws std::invalid_argument otherwise.
 ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
                                     const Eigen::VectorXd& coefficients, const PoissonProblem& problem);

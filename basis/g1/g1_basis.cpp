@@ -1,3 +1,8 @@
+// The local G1 basis of S_k^{1,r} on a quad mesh: vertex, edge, vertex-pair and face
+// functions from local null spaces of the G1 conditions (exactly over Q when the gluing
+// data are rational), then changes of basis within each vertex that keep the span. Its
+// checks, the C0 baseline, the BezierMesh and the fit are in the g1_basis_*.cpp files
+// named in basis/g1/README.md.
 #include "basis/g1/g1_basis.hpp"
 
 #include <Eigen/QR>
@@ -12,17 +17,10 @@
 
 #include "basis/core/bspline_basis.hpp"
 #include "basis/exact/sparse_rank.hpp"
-#include <Eigen/SparseCholesky>
-#include <Eigen/SPQRSupport>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
 
 namespace knotwork {
-
-namespace {
-// SuiteSparseQR works on 64-bit indices (its cholmod_l interface).
-using LongSparse = Eigen::SparseMatrix<double, Eigen::ColMajor, long>;
-}  // namespace
 
 namespace {
 
@@ -609,69 +607,6 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
   return basis;
 }
 
-double g1_residual_max(const QuadMesh& mesh, const GluingData& gluing, const G1Basis& basis) {
-  // Rows per edge; a function is checked on the edges of the faces it lives on (on every
-  // other edge both sides of every row are zero).
-  std::vector<std::vector<std::vector<std::pair<long, double>>>> rows(mesh.num_edges());
-  for (int e = 0; e < mesh.num_edges(); ++e)
-    if (!mesh.edge(e).boundary()) rows[e] = g1_condition_rows(mesh, gluing, basis.k, basis.r, e);
-  double worst = 0;
-  std::unordered_map<long, double> x;
-  for (const auto& f : basis.functions) {
-    x.clear();
-    double scale = 0;
-    for (const auto& [c, v] : f.coefficients) {
-      x[c] = v;
-      scale = std::max(scale, std::abs(v));
-    }
-    if (scale == 0) return INFINITY;  // a zero function is no basis function
-    std::set<int> edges;
-    for (int face : support_faces(f, basis.k, basis.r))
-      for (int side = 0; side < 4; ++side) edges.insert(mesh.face_edge(face, side));
-    for (int e : edges)
-      for (const auto& row : rows[e]) {
-        double sum = 0, size = 0;
-        for (const auto& [c, a] : row) {
-          size += std::abs(a);
-          const auto it = x.find(c);
-          if (it != x.end()) sum += a * it->second;
-        }
-        if (size > 0) worst = std::max(worst, std::abs(sum) / (size * scale));
-      }
-  }
-  return worst;
-}
-
-long g1_basis_rank(const G1Basis& basis, std::string* method) {
-  const Eigen::Index m = basis.unknowns(), n = static_cast<Eigen::Index>(basis.functions.size());
-  if (n == 0) return 0;
-  if (static_cast<double>(m) * static_cast<double>(n) <= 2.5e7) {
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, n);
-    for (Eigen::Index j = 0; j < n; ++j)
-      for (const auto& [c, v] : basis.functions[j].coefficients) M(c, j) = v;
-    Eigen::BDCSVD<Eigen::MatrixXd> svd(M);
-    svd.setThreshold(kTolerance);
-    if (method) *method = "SVD, singular values above 1e-10 * largest";
-    return svd.rank();
-  }
-  // Too large for a dense SVD: SuiteSparseQR's rank-revealing sparse QR. Every function's
-  // largest coefficient is 1, so the columns have 2-norms between 1 and sqrt(their size).
-  LongSparse M(m, n);
-  std::vector<Eigen::Triplet<double, long>> entries;
-  for (Eigen::Index j = 0; j < n; ++j)
-    for (const auto& [c, v] : basis.functions[j].coefficients) entries.emplace_back(c, j, v);
-  M.setFromTriplets(entries.begin(), entries.end());
-  M.makeCompressed();
-  double largest_column = 0;
-  for (Eigen::Index j = 0; j < n; ++j) largest_column = std::max(largest_column, M.col(j).norm());
-  Eigen::SPQR<LongSparse> qr;
-  qr.setPivotThreshold(kTolerance * largest_column);
-  qr.compute(M);
-  if (qr.info() != Eigen::Success) throw std::runtime_error("G1 basis rank: SuiteSparseQR failed");
-  if (method) *method = "SuiteSparseQR, columns below 1e-10 * the largest column norm are dependent";
-  return qr.rank();
-}
-
 std::vector<int> g1_inseparable_edges(const QuadMesh& mesh, const GluingData& gluing, int k, int r) {
   std::vector<int> out;
   const bool exact = gluing.exact();
@@ -710,182 +645,6 @@ std::vector<int> g1_inseparable_edges(const QuadMesh& mesh, const GluingData& gl
     if (!separable) out.push_back(e);
   }
   return out;
-}
-
-G1Basis c0_multipatch_basis(const QuadMesh& mesh, int k, int r) {
-  if (k < 1 || r < 0 || r >= k) throw std::invalid_argument("c0_multipatch_basis: need 0 <= r < k");
-  G1Basis basis;
-  basis.k = k;
-  basis.r = r;
-  const int n = 2 * k - r + 1;
-  basis.space.unknowns = static_cast<long>(mesh.num_faces()) * n * n;
-  // Union-find over the coefficients: along an interior edge, the side rows of both faces
-  // are the same univariate spline (f1(u, 0) = f0(0, u)), coefficient by coefficient.
-  std::vector<long> parent(basis.space.unknowns);
-  for (long i = 0; i < basis.space.unknowns; ++i) parent[i] = i;
-  auto find = [&](long x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (int e = 0; e < mesh.num_edges(); ++e) {
-    const auto& E = mesh.edge(e);
-    if (E.boundary()) continue;
-    for (int a = 0; a < n; ++a) {
-      const long x = find(g1_corner_unknown(E.face[0], E.corner[0], a, 0, k, r));
-      const long y = find(g1_corner_unknown(E.face[1], (E.corner[1] + 1) % 4, 0, a, k, r));
-      if (x != y) parent[std::max(x, y)] = std::min(x, y);
-    }
-  }
-  std::map<long, int> function_of_root;
-  for (long i = 0; i < basis.space.unknowns; ++i) {
-    const long root = find(i);
-    auto [it, added] = function_of_root.emplace(root, static_cast<int>(basis.functions.size()));
-    if (added) basis.functions.push_back({G1BasisFunction::Kind::face, static_cast<int>(i / (n * n)), {}});
-    basis.functions[it->second].coefficients.emplace_back(i, 1.0);
-  }
-  basis.space.dimension = static_cast<long>(basis.functions.size());
-  basis.counts[static_cast<int>(G1BasisFunction::Kind::face)] = basis.space.dimension;
-  basis.exact = true;
-  return basis;
-}
-
-std::vector<int> support_faces(const G1BasisFunction& f, int k, int r) {
-  const long per_face = static_cast<long>(2 * k - r + 1) * (2 * k - r + 1);
-  std::set<int> faces;
-  for (const auto& [c, v] : f.coefficients)
-    if (v != 0) faces.insert(static_cast<int>(c / per_face));
-  return {faces.begin(), faces.end()};
-}
-
-BezierMesh g1_bezier_mesh(const QuadMesh& mesh, const G1Basis& basis) {
-  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
-  const auto extraction = bezier_extraction(BSplineBasis1D(k, g1_face_knots(k, r)));  // two elements, (k+1) x (k+1)
-  const int first[2] = {0, n - k - 1};                                  // first function alive per half
-
-  // Per face: the functions living on it, with their coefficients there.
-  const long per_face = static_cast<long>(n) * n;
-  std::vector<std::map<int, std::vector<std::pair<int, double>>>> on_face(mesh.num_faces());
-  for (size_t j = 0; j < basis.functions.size(); ++j)
-    for (const auto& [c, v] : basis.functions[j].coefficients)
-      on_face[c / per_face][static_cast<int>(j)].emplace_back(static_cast<int>(c % per_face), v);
-
-  BezierMesh out;
-  out.reserve(4 * mesh.num_faces(), 0);
-  out.set_num_functions(static_cast<int>(basis.functions.size()));
-  out.set_boundary_names({"boundary"});
-  const int B = (k + 1) * (k + 1);
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int ht = 0; ht < 2; ++ht)
-      for (int hs = 0; hs < 2; ++hs) {
-        BezierCell cell;
-        cell.patch = f;
-        cell.index_u = hs;
-        cell.index_v = ht;
-        cell.u0 = 0.5 * hs;
-        cell.u1 = cell.u0 + 0.5;
-        cell.v0 = 0.5 * ht;
-        cell.v1 = cell.v0 + 0.5;
-        cell.degree_u = cell.degree_v = k;
-        // Face sides: corner 0 -> 1 is t = 0, 1 -> 2 is s = 1, 2 -> 3 is t = 1, 3 -> 0 is s = 0.
-        const bool touches[4] = {ht == 0, hs == 1, ht == 1, hs == 0};
-        const CellSide sides[4] = {kSideBottom, kSideRight, kSideTop, kSideLeft};
-        for (int c = 0; c < 4; ++c)
-          if (touches[c] && mesh.edge(mesh.face_edge(f, c)).boundary()) cell.boundary[sides[c]] = 0;
-        std::vector<int> ids;
-        std::vector<Eigen::RowVectorXd> rows;
-        for (const auto& [j, coefficients] : on_face[f]) {
-          Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(B);
-          for (const auto& [local, v] : coefficients) {
-            const int i = local / n - first[hs], jj = local % n - first[ht];
-            if (i < 0 || i > k || jj < 0 || jj > k) continue;
-            for (int c = 0; c <= k; ++c)
-              for (int a = 0; a <= k; ++a) row(a + (k + 1) * c) += v * extraction[hs](i, a) * extraction[ht](jj, c);
-          }
-          if (row.cwiseAbs().maxCoeff() == 0) continue;
-          ids.push_back(j);
-          rows.push_back(std::move(row));
-        }
-        Eigen::MatrixXd C(static_cast<Eigen::Index>(rows.size()), B);
-        for (size_t i = 0; i < rows.size(); ++i) C.row(static_cast<Eigen::Index>(i)) = rows[i];
-        out.add_cell(cell, ids, out.add_extraction(std::move(C)));
-      }
-  return out;
-}
-
-}  // namespace knotwork
-
-namespace knotwork {
-
-std::vector<Eigen::MatrixXd> g1_cell_bernstein(const BezierMesh& mesh, const Eigen::MatrixXd& c) {
-  std::vector<Eigen::MatrixXd> out(mesh.num_cells());
-  for (int cell = 0; cell < mesh.num_cells(); ++cell) {
-    const auto ids = mesh.functions(cell);
-    const Eigen::MatrixXd& C = mesh.extraction(cell);
-    out[cell] = Eigen::MatrixXd::Zero(C.cols(), c.cols());
-    for (size_t a = 0; a < ids.size(); ++a) out[cell] += C.row(static_cast<Eigen::Index>(a)).transpose() * c.row(ids[a]);
-  }
-  return out;
-}
-
-Eigen::MatrixX3d g1_fit_bilinear(const QuadMesh& mesh, const G1Basis& basis, double* deviation) {
-  return g1_fit(
-      mesh, basis,
-      [&](int f, double s, double t) -> Eigen::Vector3d {
-        const auto& v = mesh.face(f);
-        return (1 - s) * (1 - t) * mesh.vertex(v[0]) + s * (1 - t) * mesh.vertex(v[1]) + s * t * mesh.vertex(v[2]) +
-               (1 - s) * t * mesh.vertex(v[3]);
-      },
-      deviation);
-}
-
-Eigen::MatrixX3d g1_fit(const QuadMesh& mesh, const G1Basis& basis,
-                        const std::function<Eigen::Vector3d(int face, double s, double t)>& target_point,
-                        double* deviation) {
-  const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
-  // Greville abscissae: a B-spline combination with these as coefficients is the identity,
-  // so the bilinear face has the bilinear map at (xi_i, xi_j) as its coefficients.
-  const std::vector<double> knots = g1_face_knots(k, r);
-  std::vector<double> xi(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    for (int l = 1; l <= k; ++l) xi[i] += knots[i + l];
-    xi[i] /= k;
-  }
-  Eigen::MatrixX3d target(basis.unknowns(), 3);
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) target.row(g1_unknown(f, i, j, k, r)) = target_point(f, xi[i], xi[j]).transpose();
-  Eigen::SparseMatrix<double> M(basis.unknowns(), static_cast<Eigen::Index>(basis.functions.size()));
-  std::vector<Eigen::Triplet<double>> entries;
-  for (size_t j = 0; j < basis.functions.size(); ++j)
-    for (const auto& [u, x] : basis.functions[j].coefficients) entries.emplace_back(u, static_cast<int>(j), x);
-  M.setFromTriplets(entries.begin(), entries.end());
-  // The boundary curve (row 0 of every boundary side) weighs 10^6 times more: a straight
-  // side of the mesh stays straight wherever the space allows it (the target is on the
-  // segment), instead of trading boundary accuracy for interior accuracy.
-  Eigen::VectorXd weight = Eigen::VectorXd::Ones(basis.unknowns());
-  for (int e = 0; e < mesh.num_edges(); ++e) {
-    const auto& E = mesh.edge(e);
-    if (!E.boundary()) continue;
-    for (int a = 0; a < n; ++a) weight(g1_corner_unknown(E.face[0], E.corner[0], a, 0, k, r)) = 1e6;
-  }
-  // Least squares by SuiteSparseQR on the weighted rows (not the normal equations, which would
-  // square the condition number and the 10^6 weight with it).
-  const Eigen::VectorXd root = weight.cwiseSqrt();
-  LongSparse A = LongSparse(root.asDiagonal() * M);
-  A.makeCompressed();
-  Eigen::SPQR<LongSparse> solver;
-  solver.compute(A);
-  if (solver.info() != Eigen::Success) throw std::runtime_error("G1 least-squares fit: SuiteSparseQR failed");
-  if (solver.rank() < A.cols())
-    throw std::runtime_error("G1 least-squares fit: the basis functions' coefficients are rank deficient (rank " +
-                             std::to_string(solver.rank()) + " of " + std::to_string(A.cols()) + ")");
-  Eigen::MatrixX3d c(A.cols(), 3);
-  for (int d = 0; d < 3; ++d) {
-    const Eigen::VectorXd b = root.cwiseProduct(target.col(d));
-    c.col(d) = solver.solve(b);
-  }
-  if (deviation) *deviation = (M * c - target).rowwise().norm().maxCoeff();
-  return c;
 }
 
 }  // namespace knotwork

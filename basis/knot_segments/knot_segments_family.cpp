@@ -70,7 +70,7 @@ class KnotSegmentSpace final : public SplineSpace {
                                                           " more; knotwork basis lists them)"
                                                     : "";
     const std::string& file = knot_segments_section(c).collection_file;
-    if (!c.allow_non_semi_regular)
+    if (!c.allow_unverified_space)
       throw InputError(c.path + ": [space] collection: " + file + " is not semi-regular: " +
                        violations_.front() + more + "; refusing to solve (--allow-non-semi-regular solves anyway)");
     std::fprintf(stderr, "knotwork: warning: %s: the collection is not semi-regular (%s%s); solving anyway as asked: "
