@@ -33,6 +33,7 @@ int adapt_command(const AdaptOptions& o) {
   CaseDescription c = load_case(o.case_file);
   const SpaceFamily& family = space_family(c);
   family.override_options(c, o.degree, o.elements);
+  override_solver(c, o.solver, o.tolerance);
   check_adaptive_family(c);
   if (o.steps) c.adapt.steps = o.steps;
   if (o.theta) c.adapt.theta = o.theta;

@@ -27,27 +27,39 @@ struct BenchResult {
   double cholmod_peak_bytes = 0, l2 = 0;
   double floor_seconds = NAN;  // bare CHOLMOD, default settings: analyze + factorize + solve
   long peak_rss_kb = 0;
+  // --solver iterative: CG with the tensor space's fast diagonalization.
+  int iterations = 0;
+  double preconditioner = 0, cg = 0, relative_residual = 0;
 };
 
 // The benchmark problem: unit square, u = sin(pi x) sin(pi y), homogeneous Dirichlet.
-BenchResult run_one(int p, int n, Ordering ordering, bool with_errors, bool floor) {
-  const CaseDescription c = unit_square_benchmark_case(p, n);
+BenchResult run_one(int p, int n, Ordering ordering, bool with_errors, bool floor, const BenchOptions& o) {
+  CaseDescription c = unit_square_benchmark_case(p, n);
   const auto t0 = std::chrono::steady_clock::now();
   const std::unique_ptr<SplineSpace> d = build_space(c);
   const double t_space = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  PoissonSolveOptions so;
-  so.ordering = ordering;
-  so.compute_errors = with_errors;
   double floor_seconds = NAN;
-  if (floor)
-    so.on_system = [&](const Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& F) {
-      const auto t = std::chrono::steady_clock::now();
-      SparseCholesky bare(Ordering::kCholmodDefault);
-      bare.factorize(K);
-      const Eigen::VectorXd x = bare.solve(F);
-      floor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-    };
-  const PoissonSolution s = solve_poisson(d->mesh(), d->geometry(), c.problem, so);
+  PoissonSolution s;
+  if (o.solver == "iterative") {
+    c.solver.method = "iterative";
+    c.solver.preconditioner = "fast_diagonalization";
+    c.solver.tolerance = o.tolerance;
+    if (!with_errors) c.problem.exact.reset();
+    s = solve_case(c, *d, ordering);
+  } else {
+    PoissonSolveOptions so;
+    so.ordering = ordering;
+    so.compute_errors = with_errors;
+    if (floor)
+      so.on_system = [&](const Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& F) {
+        const auto t = std::chrono::steady_clock::now();
+        SparseCholesky bare(Ordering::kCholmodDefault);
+        bare.factorize(K);
+        const Eigen::VectorXd x = bare.solve(F);
+        floor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+      };
+    s = solve_poisson(d->mesh(), d->geometry(), c.problem, so);
+  }
   BenchResult r;
   r.floor_seconds = floor_seconds;
   r.degree = p;
@@ -62,15 +74,19 @@ BenchResult run_one(int p, int n, Ordering ordering, bool with_errors, bool floo
   r.analysis = s.timings.analysis;
   r.factorization = s.timings.factorization;
   r.solve = s.timings.solve;
+  r.preconditioner = s.timings.preconditioner;
+  r.cg = s.timings.iterations;
+  r.iterations = s.iterative.iterations;
+  r.relative_residual = s.iterative.relative_residual;
   r.errors = s.timings.errors;
-  r.total = r.setup + r.assembly + r.analysis + r.factorization + r.solve + r.errors;
+  r.total = r.setup + r.assembly + r.analysis + r.factorization + r.solve + r.preconditioner + r.cg + r.errors;
   r.cholmod_peak_bytes = s.cholesky.peak_bytes;
   r.l2 = s.errors ? s.errors->l2 : NAN;
   return r;
 }
 
 // Each configuration runs in a child process so that its peak memory is its own.
-BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool floor) {
+BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool floor, const BenchOptions& o) {
   int fds[2];
   if (pipe(fds) != 0) throw std::runtime_error("bench: pipe failed");
   const pid_t pid = fork();
@@ -80,7 +96,7 @@ BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool
     BenchResult r;
     int code = 0;
     try {
-      r = run_one(p, n, ordering, with_errors, floor);
+      r = run_one(p, n, ordering, with_errors, floor, o);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "knotwork bench: p=%d n=%d failed: %s\n", p, n, e.what());
       code = 1;
@@ -118,16 +134,31 @@ int bench_command(const BenchOptions& o) {
     configs.emplace_back(p, n);
   }
   const Ordering ordering = parse_ordering(o.ordering);
+  if (o.solver != "direct" && o.solver != "iterative")
+    throw InputError("--solver: '" + o.solver + "' is not direct or iterative");
+  if (!(o.tolerance > 0 && o.tolerance < 1)) throw InputError("--tolerance: must be in (0, 1)");
+  if (o.solver == "iterative" && o.floor) throw InputError("--floor: times CHOLMOD, not used with --solver iterative");
+  const bool cg = o.solver == "iterative";
   std::vector<BenchResult> results;
-  if (!o.json)
+  if (!o.json && cg)
+    std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, CG + fast diagonalization "
+                "to backward error %.0e\n%3s %6s %9s %10s %6s %8s %8s %8s %8s %7s %8s %9s\n",
+                std::thread::hardware_concurrency(), o.tolerance, "p", "n", "dofs", "nnz(A)", "iters", "setup", "assemb",
+                "precond", "CG", "errors", "total", "peak RSS");
+  else if (!o.json)
     std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, ordering %s\n"
                 "%3s %6s %9s %10s %11s %8s %8s %8s %8s %7s %7s %8s %9s %9s%s\n",
                 std::thread::hardware_concurrency(), o.ordering.c_str(), "p", "n", "dofs", "nnz(A)", "nnz(L)",
                 "setup", "assemb", "analyze", "factor", "solve", "errors", "total", "CHOLMOD", "peak RSS", o.floor ? "    floor" : "");
   for (const auto& [p, n] : configs) {
-    const BenchResult r = run_isolated(p, n, ordering, o.with_errors, o.floor);
+    const BenchResult r = run_isolated(p, n, ordering, o.with_errors, o.floor, o);
     results.push_back(r);
-    if (!o.json) {
+    if (!o.json && cg) {
+      std::printf("%3d %6d %9ld %10ld %6d %8.3f %8.3f %8.3f %8.3f %7.3f %8.3f %6.0f MB\n", r.degree, r.elements, r.dofs,
+                  r.matrix_nonzeros, r.iterations, r.setup, r.assembly, r.preconditioner, r.cg, r.errors, r.total,
+                  r.peak_rss_kb / 1e3);
+      std::fflush(stdout);
+    } else if (!o.json) {
       std::printf("%3d %6d %9ld %10ld %11.0f %8.3f %8.3f %8.3f %8.3f %7.3f %7.3f %8.3f %7.0f MB %6.0f MB", r.degree,
                   r.elements, r.dofs, r.matrix_nonzeros, r.factor_nonzeros, r.setup, r.assembly, r.analysis,
                   r.factorization, r.solve, r.errors, r.total, r.cholmod_peak_bytes / 1e6, r.peak_rss_kb / 1e3);
@@ -146,6 +177,11 @@ int bench_command(const BenchOptions& o) {
           .set("factorization", r.factorization).set("solve", r.solve).set("errors", r.errors).set("total", r.total)
           .set("cholmod_peak_bytes", r.cholmod_peak_bytes).set("peak_rss_bytes", r.peak_rss_kb * 1024.0)
           .set("l2_error", r.l2).set("cholmod_default_floor_seconds", r.floor_seconds);
+      if (cg)
+        j.set("solver", Json::object().set("method", "iterative").set("preconditioner", "fast_diagonalization")
+                            .set("iterations", r.iterations).set("relative_residual", r.relative_residual)
+                            .set("tolerance", o.tolerance))
+            .set("preconditioner", r.preconditioner).set("iterations", r.cg);
       arr.push(j);
     }
     Json root = Json::object();

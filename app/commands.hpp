@@ -14,6 +14,8 @@ struct CommonOptions {
   int degree = 0;              // 0: as in the case
   int elements = 0;            // 0: as in the case
   std::string ordering = "amd";
+  std::string solver;    // "": [solver] method of the case
+  double tolerance = 0;  // 0: [solver] tolerance of the case
 };
 
 struct RunOptions : CommonOptions {
@@ -41,6 +43,8 @@ struct BenchOptions {
   std::string ordering = "amd";
   bool with_errors = true;
   bool floor = false;  // also time bare CHOLMOD (default settings) on the same matrix
+  std::string solver = "direct";  // direct | iterative (CG + the space's preconditioner)
+  double tolerance = 1e-15;
 };
 
 struct DimensionOptions {

@@ -40,6 +40,7 @@ int converge_command(const ConvergeOptions& o) {
   CaseDescription c = load_case(o.case_file);
   const SpaceFamily& family = space_family(c);
   family.override_options(c, o.degree, o.elements);
+  override_solver(c, o.solver, o.tolerance);
   if (o.levels < 1 || o.levels > 12) throw InputError("--levels: must be in [1, 12], got " + std::to_string(o.levels));
   if (family.check_converge) family.check_converge(c, o.levels);
   if (!c.problem.exact) throw InputError(c.path + ": [problem] exact: a convergence study needs the exact solution");
@@ -51,6 +52,8 @@ int converge_command(const ConvergeOptions& o) {
   const ExactSolution* exact = &*c.problem.exact;
   std::string description;
 
+  SolverReport first_solver, iterative_solver;  // of level 0, and of a level solved by CG
+  int iterative_levels = 0;
   for (int l = 0; l < o.levels; ++l) {
     progress.set_prefix("level " + std::to_string(l + 1) + "/" + std::to_string(o.levels) + ": ");
     progress("building the space");
@@ -58,7 +61,10 @@ int converge_command(const ConvergeOptions& o) {
     const auto say = [&](const std::string& what) { progress(what); };
     const std::unique_ptr<SplineSpace> space = family.build(c, l, say);
     if (l == 0) description = space->description();
-    const PoissonSolution s = solve_case(c, *space, ordering, say);
+    SolverReport solver;
+    const PoissonSolution s = solve_case(c, *space, ordering, say, &solver);
+    if (l == 0) first_solver = solver;
+    if (solver.method == "iterative") iterative_solver = solver, ++iterative_levels;
     Level lv;
     lv.h = space->mesh_size();
     lv.dofs = s.num_functions;
@@ -69,6 +75,11 @@ int converge_command(const ConvergeOptions& o) {
     lv.h1 = s.errors->h1;
     lv.fields = space->report();
     for (auto& f : space->check_solution(s.coefficients)) lv.fields.push_back(std::move(f));
+    // The CG count of the level (null where the level was solved directly: `auto` decides by size).
+    if (c.solver.method != "direct" && !space->structured_preconditioner().empty())
+      lv.fields.push_back({.key = "cg_iterations",
+                           .value = solver.method == "iterative" ? ReportValue(long(s.iterative.iterations)) : ReportValue{},
+                           .label = "CG", .column = true, .width = 13});
     if (!levels.empty()) {
       const Level& prev = levels.back();
       lv.l2_rate = std::log(prev.l2 / lv.l2) / std::log(prev.h / lv.h);
@@ -132,7 +143,12 @@ int converge_command(const ConvergeOptions& o) {
     sh1.label = buf;
   }
   Json root = Json::object();
-  root.set("case", c.path).set("family", c.family).set("space", description).set("levels", jl);
+  Json sj = Json::object();
+  sj.set("method", c.solver.method).set("iterative_levels", iterative_levels);
+  if (iterative_levels > 0)
+    sj.set("preconditioner", iterative_solver.preconditioner).set("tolerance", c.solver.tolerance);
+  root.set("case", c.path).set("family", c.family).set("space", description).set("solver", sj).set("levels", jl);
+  if (!first_solver.note.empty()) root.set("notes", Json::strings({first_solver.note}));
   write_text_file(stage.stage("convergence.csv"), csv);
   write_text_file(stage.stage("convergence.json"), root.dump() + "\n");
   write_text_file(stage.stage("convergence.svg"),
@@ -147,6 +163,10 @@ int converge_command(const ConvergeOptions& o) {
     return 0;
   }
   std::printf("knotwork converge %s: %s\n", c.path.c_str(), description.c_str());
+  if (!first_solver.note.empty()) std::printf("  note     %s\n", first_solver.note.c_str());
+  if (iterative_levels > 0)
+    std::printf("  solver   CG + %s to backward error %.0e%s\n", iterative_solver.preconditioner.c_str(), c.solver.tolerance,
+                iterative_levels < static_cast<int>(levels.size()) ? " (levels with a count under CG; CHOLMOD elsewhere)" : "");
   std::printf("%5s", "level");
   for (const ReportField* f : columns) std::printf(" %*s", f->width > 0 ? f->width : 12, f->key.c_str());
   std::printf(" %12s %10s %14s %8s %14s %8s\n", "h", "dofs", "L2 error", "rate", "H1-semi error", "rate");
@@ -158,6 +178,7 @@ int converge_command(const ConvergeOptions& o) {
       const int w = f->width > 0 ? f->width : 12;
       const double x = mine ? field_number(*mine) : NAN;
       if (mine && std::holds_alternative<long>(mine->value)) std::printf(" %*ld", w, std::get<long>(mine->value));
+      else if (!mine || std::holds_alternative<std::monostate>(mine->value)) std::printf(" %*s", w, "-");
       else std::printf(" %*.2e", w, x);
     }
     std::printf(" %12.5e %10d %14.6e %8s %14.6e %8s\n", v.h, v.dofs, v.l2, rate_text(v.l2_rate).c_str(), v.h1_semi,

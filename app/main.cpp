@@ -19,6 +19,9 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
   cmd->add_option("--out", o.out, "Output directory (overrides [output] directory; default results/<case name>)");
   cmd->add_option("--ordering", o.ordering, "Fill-reducing ordering for CHOLMOD: amd (fastest measured), metis, nesdis, or default (CHOLMOD's own choice)")
       ->capture_default_str();
+  cmd->add_option("--solver", o.solver,
+                  "Linear solve: direct (CHOLMOD), iterative (preconditioned CG) or auto (overrides [solver] method)");
+  cmd->add_option("--tolerance", o.tolerance, "Iterative solve: backward error to reach (overrides [solver] tolerance; default 1e-15)");
   cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of the summary");
   cmd->add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
 }
@@ -104,6 +107,9 @@ int main(int argc, char** argv) {
   bench_cmd->add_flag("--quick", bench.quick, "Small configurations only (2:64 2:128 4:32 4:64)");
   bench_cmd->add_option("--ordering", bench.ordering, "amd, metis, nesdis, or default (CHOLMOD's own choice)")->capture_default_str();
   bench_cmd->add_flag("--json", bench.json, "Print JSON instead of the table");
+  bench_cmd->add_option("--solver", bench.solver, "direct (CHOLMOD) or iterative (CG + fast diagonalization)")
+      ->capture_default_str();
+  bench_cmd->add_option("--tolerance", bench.tolerance, "--solver iterative: backward error to reach")->capture_default_str();
   bench_cmd->add_flag("!--no-errors", bench.with_errors, "Skip the error norms");
   bench_cmd->add_flag("--floor", bench.floor,
                       "Also time bare CHOLMOD with its default settings on the same matrix (the floor)");

@@ -8,16 +8,69 @@ std::unique_ptr<SplineSpace> build_space(const CaseDescription& c, int level, co
   return space_family(c).build(c, level, progress);
 }
 
+namespace {
+
+// "auto" picks CG for spaces with a structured preconditioner from this many functions on
+// (docs/SOLVERS.md: where the measured times cross), and CHOLMOD otherwise.
+constexpr int kAutoIterativeFunctions = 10000;
+
+SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) {
+  SolverReport r;
+  const std::string structured = space.structured_preconditioner();
+  if (c.solver.method == "auto")
+    r.method = !structured.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
+  else
+    r.method = c.solver.method;
+  if (r.method == "direct") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
+  const std::string& asked = c.solver.preconditioner;
+  if (asked == "auto") {
+    r.preconditioner = structured.empty() ? "jacobi" : structured;
+    if (structured.empty())
+      r.note = "[solver] preconditioner = \"auto\": jacobi, since family \"" + c.family + "\" has no structured preconditioner";
+  } else if (asked == "jacobi") {
+    r.preconditioner = "jacobi";
+  } else if (asked == structured) {
+    r.preconditioner = asked;
+  } else {
+    throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" does not apply to family \"" + c.family +
+                     "\" (" + (structured.empty() ? std::string("use \"jacobi\" or method = \"direct\"")
+                                                   : "it has \"" + structured + "\"; or use \"jacobi\"") + ")");
+  }
+  return r;
+}
+
+}  // namespace
+
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
-                           const ProgressFunction& progress) {
+                           const ProgressFunction& progress, SolverReport* report) {
   space.check_solvable();
   PoissonSolveOptions so;
   so.quadrature = c.quadrature;
   so.ordering = ordering;
   so.progress = progress;
   so.cell_errors = true;
+  const SolverReport chosen = resolve_solver(c, space);
+  if (report) *report = chosen;
+  if (chosen.method == "iterative") {
+    so.iterative = true;
+    so.tolerance = c.solver.tolerance;
+    so.max_iterations = c.solver.max_iterations;
+    if (chosen.preconditioner != "jacobi") {
+      const std::string name = chosen.preconditioner, path = c.path;
+      so.preconditioner = [&space, name, path](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
+        std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(layout, lower);
+        if (!p)
+          throw InputError(path + ": [solver] preconditioner: \"" + name +
+                           "\" does not apply to this problem's unknowns (they are not a tensor product: use \"jacobi\" "
+                           "or method = \"direct\")");
+        return p;
+      };
+    }
+  }
   try {
     return solve_poisson(space.mesh(), space.geometry(), c.problem, so);
+  } catch (const NotConverged& e) {
+    throw InputError(c.path + ": [solver]: " + e.what() + "; raise max_iterations, loosen tolerance or use method = \"direct\"");
   } catch (const GeometryError& e) {
     throw InputError(c.path + ": [geometry]: " + e.what());
   } catch (const InputError&) {

@@ -17,8 +17,13 @@ std::unique_ptr<SplineSpace> build_space(const CaseDescription& c, int level = 0
 // Solves the case's problem on the space: the family's own refusal first (check_solvable),
 // then the one Galerkin pipeline. A GeometryError gets the case file and "[geometry]" in
 // front of its message; a solver failure the case file.
+// How the linear system was solved: [solver] method and preconditioner as resolved for this
+// space ("auto" decided), and a note when the choice is not the one asked for by name.
+struct SolverReport {
+  std::string method, preconditioner, note;
+};
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
-                           const ProgressFunction& progress = {});
+                           const ProgressFunction& progress = {}, SolverReport* report = nullptr);
 
 // The benchmark problem: unit square, u = sin(pi x) sin(pi y), degree p, n x n elements.
 CaseDescription unit_square_benchmark_case(int p, int n);

@@ -25,6 +25,7 @@ int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
   const SpaceFamily& family = space_family(c);
   family.override_options(c, o.degree, o.elements);
+  override_solver(c, o.solver, o.tolerance);
   c.allow_unverified_space = o.allow_unverified_space;
   const Ordering ordering = parse_ordering(o.ordering);
   std::optional<OutputStage> stage;
@@ -37,7 +38,8 @@ int run_command(const RunOptions& o) {
   const double t_space = since(t);
   const std::string description = space->description();
 
-  PoissonSolution s = solve_case(c, *space, ordering, [&](const std::string& what) { progress(what); });
+  SolverReport solver;
+  PoissonSolution s = solve_case(c, *space, ordering, [&](const std::string& what) { progress(what); }, &solver);
   s.timings.setup += t_space;
   std::vector<ReportField> fields = space->report();
   t = clock::now();
@@ -63,12 +65,14 @@ int run_command(const RunOptions& o) {
     t_output = since(t);
   }
   const PoissonTimings& tm = s.timings;
-  const double total = tm.setup + tm.assembly + tm.analysis + tm.factorization + tm.solve + tm.errors;
+  const double total =
+      tm.setup + tm.assembly + tm.analysis + tm.factorization + tm.solve + tm.preconditioner + tm.iterations + tm.errors;
 
   if (o.json) {
     Json timings = Json::object();
     timings.set("setup", tm.setup).set("assembly", tm.assembly).set("analysis", tm.analysis)
-        .set("factorization", tm.factorization).set("solve", tm.solve).set("errors", tm.errors)
+        .set("factorization", tm.factorization).set("solve", tm.solve).set("preconditioner", tm.preconditioner)
+        .set("iterations", tm.iterations).set("errors", tm.errors)
         .set("checks", t_checks).set("output", t_output).set("total_without_output", total);
     Json j = Json::object();
     j.set("case", c.path).set("family", c.family).set("space", description)
@@ -79,8 +83,17 @@ int run_command(const RunOptions& o) {
     if (s.errors) j.set("l2_error", s.errors->l2).set("h1_seminorm_error", s.errors->h1_semi).set("h1_error", s.errors->h1);
     else j.set_null("l2_error").set_null("h1_seminorm_error").set_null("h1_error");
     if (s.zero_mean) j.set("area", s.area).set("source_mean", s.source_mean).set("exact_mean", s.exact_mean);
+    Json sj = Json::object();
+    sj.set("method", solver.method);
+    if (solver.method == "iterative")
+      sj.set("preconditioner", solver.preconditioner).set("iterations", s.iterative.iterations)
+          .set("relative_residual", s.iterative.relative_residual).set("backward_error", s.iterative.backward_error)
+          .set("tolerance", c.solver.tolerance);
+    j.set("solver", sj);
     add_fields(j, fields);
-    j.set("notes", Json::strings(space->notes()));
+    std::vector<std::string> notes = space->notes();
+    if (!solver.note.empty()) notes.push_back(solver.note);
+    j.set("notes", Json::strings(notes));
     j.set("timings", timings).set("outputs", Json::strings(outputs));
     std::printf("%s\n", j.dump().c_str());
     return 0;
@@ -88,17 +101,27 @@ int run_command(const RunOptions& o) {
   std::printf("knotwork run %s%s\n", c.path.c_str(), c.title.empty() ? "" : ("  (" + c.title + ")").c_str());
   std::printf("  space    %s, %d cells\n", description.c_str(), space->mesh().num_cells());
   for (const auto& n : space->notes()) std::printf("  note     %s\n", n.c_str());
+  if (!solver.note.empty()) std::printf("  note     %s\n", solver.note.c_str());
   std::printf("  dofs     %d functions, %d unknowns after %s, %ld stored matrix entries\n", s.num_functions, s.num_free,
               s.zero_mean ? "pinning one (zero mean)" : "Dirichlet elimination", s.matrix_nonzeros);
   print_field_lines(fields);
   if (s.zero_mean)
     std::printf("  surface  area %.6f; mean %.3e removed from the source and %.3e from the exact solution\n", s.area,
                 s.source_mean, s.exact_mean);
+  if (solver.method == "iterative")
+    std::printf("  solver   CG + %s: %d iterations, backward error %.2e (tolerance %.0e), relative residual %.2e\n",
+                solver.preconditioner.c_str(), s.iterative.iterations, s.iterative.backward_error, c.solver.tolerance,
+                s.iterative.relative_residual);
   if (s.errors)
     std::printf("  errors   L2 %.6e   H1-seminorm %.6e   H1 %.6e\n", s.errors->l2, s.errors->h1_semi, s.errors->h1);
-  std::printf("  time     setup %.3f s, assembly %.3f s, analysis %.3f s, factorization %.3f s, solve %.3f s, errors %.3f s"
-              " (total %.3f s); output %.3f s\n",
-              tm.setup, tm.assembly, tm.analysis, tm.factorization, tm.solve, tm.errors, total, t_output);
+  if (solver.method == "iterative")
+    std::printf("  time     setup %.3f s, assembly %.3f s, preconditioner %.3f s, iterations %.3f s, errors %.3f s"
+                " (total %.3f s); output %.3f s\n",
+                tm.setup, tm.assembly, tm.preconditioner, tm.iterations, tm.errors, total, t_output);
+  else
+    std::printf("  time     setup %.3f s, assembly %.3f s, analysis %.3f s, factorization %.3f s, solve %.3f s, errors %.3f s"
+                " (total %.3f s); output %.3f s\n",
+                tm.setup, tm.assembly, tm.analysis, tm.factorization, tm.solve, tm.errors, total, t_output);
   for (const auto& p : outputs) std::printf("  output   %s\n", p.c_str());
   return 0;
 }

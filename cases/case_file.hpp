@@ -62,6 +62,13 @@ struct CaseDescription {
   std::string output_directory;  // default results/<name>
   bool write_bezier = true, write_sampled = true;
   int samples = 4;  // linear sub-cells per cell and direction in the sampled output
+  // [solver]: the linear solve (docs/SOLVERS.md; --solver and --tolerance override).
+  struct Solver {
+    std::string method = "auto";          // direct (CHOLMOD) | iterative (CG) | auto (docs/SOLVERS.md)
+    std::string preconditioner = "auto";  // auto | fast_diagonalization | jacobi
+    double tolerance = 1e-15;             // CG: backward error of the solution (IterativeStats)
+    int max_iterations = 1000;
+  } solver;
   // [adapt]: the estimate-mark-refine loop of `knotwork adapt` (command-line flags override).
   struct Adapt {
     int steps = 10;          // solves, the first on the case's own mesh
@@ -90,6 +97,12 @@ CaseDescription load_case(const std::string& path);
 // The same from TOML text (`name` stands for the file in messages; relative paths in it
 // resolve against the current folder).
 CaseDescription load_case_text(const std::string& toml_text, const std::string& name);
+
+// --solver / --tolerance with the same validation as [solver] (0: not given).
+void override_solver(CaseDescription& c, const std::string& method, double tolerance);
+// The names [solver] method and preconditioner take.
+const std::vector<std::string>& solver_methods();
+const std::vector<std::string>& solver_preconditioners();
 
 // A rectangular partition (T-mesh) file:
 //   cells = [[x0, y0, x1, y1], ...]   numbers or exact rational strings such as "14/9"

@@ -3,6 +3,7 @@
 // [problem]). The families' own [space] readers are in basis/<family>/<family>_case.cpp.
 #include "cases/case_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -519,6 +520,63 @@ void read_adapt(const CaseReader& r, const DocumentNode& t, CaseDescription& c) 
   if (const DocumentNode* n = t.get("max_dofs")) {
     c.adapt.max_dofs = r.integer(*n, "[adapt] max_dofs");
     if (c.adapt.max_dofs < 1) r.fail("[adapt] max_dofs", "must be positive");
+  }
+}
+
+const std::vector<std::string>& solver_methods() {
+  static const std::vector<std::string> names{"direct", "iterative", "auto"};
+  return names;
+}
+
+const std::vector<std::string>& solver_preconditioners() {
+  static const std::vector<std::string> names{"auto", "fast_diagonalization", "jacobi"};
+  return names;
+}
+
+namespace {
+
+// `what` names the field in messages ("[solver] method" or "--solver").
+std::string checked_name(const std::string& value, const std::vector<std::string>& valid, const std::string& what,
+                         const std::string& file) {
+  if (std::find(valid.begin(), valid.end(), value) != valid.end()) return value;
+  std::string all;
+  for (const auto& v : valid) all += (all.empty() ? "" : ", ") + v;
+  std::string hint = closest_name(value, valid);
+  if (hint.rfind("valid keys", 0) == 0) hint = "one of " + all;
+  throw InputError((file.empty() ? "" : file + ": ") + what + ": '" + value + "' is not a choice (" + hint + ")");
+}
+
+void check_tolerance(double t, const std::string& what, const std::string& file) {
+  if (!(t > 0 && t < 1))
+    throw InputError((file.empty() ? "" : file + ": ") + what + ": must be in (0, 1) (the backward error CG stops at), got " +
+                     std::to_string(t));
+}
+
+}  // namespace
+
+void read_solver(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
+  r.check_keys(t, "solver", {"method", "preconditioner", "tolerance", "max_iterations"});
+  if (const DocumentNode* n = t.get("method"))
+    c.solver.method = checked_name(r.string(*n, "[solver] method"), solver_methods(), "[solver] method", r.path());
+  if (const DocumentNode* n = t.get("preconditioner"))
+    c.solver.preconditioner = checked_name(r.string(*n, "[solver] preconditioner"), solver_preconditioners(),
+                                           "[solver] preconditioner", r.path());
+  if (const DocumentNode* n = t.get("tolerance")) {
+    c.solver.tolerance = r.number(*n, "[solver] tolerance");
+    check_tolerance(c.solver.tolerance, "[solver] tolerance", r.path());
+  }
+  if (const DocumentNode* n = t.get("max_iterations")) {
+    const long m = r.integer(*n, "[solver] max_iterations");
+    if (m < 1 || m > 1000000) r.fail("[solver] max_iterations", "must be in [1, 1000000], got " + std::to_string(m));
+    c.solver.max_iterations = static_cast<int>(m);
+  }
+}
+
+void override_solver(CaseDescription& c, const std::string& method, double tolerance) {
+  if (!method.empty()) c.solver.method = checked_name(method, solver_methods(), "--solver", "");
+  if (tolerance != 0) {
+    check_tolerance(tolerance, "--tolerance", "");
+    c.solver.tolerance = tolerance;
   }
 }
 

@@ -69,6 +69,7 @@ DocumentNode parse_document_text(const std::string& toml_text, const std::string
 // The sections every family shares: [output] and [adapt].
 void read_output(const CaseReader& r, const DocumentNode& output, CaseDescription& c);
 void read_adapt(const CaseReader& r, const DocumentNode& adapt, CaseDescription& c);
+void read_solver(const CaseReader& r, const DocumentNode& solver, CaseDescription& c);
 
 // Shared section readers for the families whose domain is one NURBS patch.
 // [geometry] type = rectangle | quarter_annulus | lshape | nurbs (required).

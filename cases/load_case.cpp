@@ -12,7 +12,7 @@ namespace {
 
 CaseDescription read_case(const DocumentNode& root, const std::string& path) {
   CaseReader r(path);
-  r.check_keys(root, "", {"title", "description", "geometry", "space", "problem", "output", "adapt"});
+  r.check_keys(root, "", {"title", "description", "geometry", "space", "problem", "output", "adapt", "solver"});
   CaseDescription c;
   c.path = path;
   c.name = std::filesystem::path(path).stem().string();
@@ -39,6 +39,7 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
   r.set_other_families_keys(c.family, std::move(others));
   family->read_case(CaseDocument{r, root}, c);
   read_output(r, r.table(root, "output", false), c);
+  read_solver(r, r.table(root, "solver", false), c);
   if (root.get("adapt")) {
     if (!family->local_refinement)
       r.fail("[adapt]", "not used with family = \"" + c.family + "\" (it does not refine cells locally; `knotwork adapt` "

@@ -15,6 +15,8 @@
 #include "basis/core/bezier_mesh.hpp"
 #include "cases/case_file.hpp"
 #include "solver/geometry_map.hpp"
+#include "solver/iterative_solver.hpp"
+#include "solver/sparsity.hpp"
 
 namespace knotwork {
 
@@ -78,6 +80,14 @@ class SplineSpace {
     return nullptr;
   }
   virtual KnotLines knot_lines() const { return {}; }
+  // A preconditioner that knows the space's structure, for the iterative solve: its name
+  // ([solver] preconditioner), "" when the family has none, and the preconditioner for the
+  // free dofs of `layout` (null when it does not apply to them).
+  virtual std::string structured_preconditioner() const { return ""; }
+  virtual std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& /*layout*/,
+                                                                         const Eigen::SparseMatrix<double>& /*lower*/) const {
+    return nullptr;
+  }
 };
 
 struct CaseDocument;  // cases/case_reader.hpp

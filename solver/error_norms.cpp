@@ -39,9 +39,10 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
                        double exact_offset) {
   if (geometry.dimension() == 3 && !exact.on_surface())
     throw std::invalid_argument("error norms on a surface need the exact solution as a function of (x, y, z)");
-  double l2 = 0, semi = 0;
-  if (h1_semi_squared_per_cell) h1_semi_squared_per_cell->setZero(mesh.num_cells());
-#pragma omp parallel reduction(+ : l2, semi)
+  // Per-cell contributions, summed in cell order afterwards: the norms are bitwise the same
+  // whatever the number of threads and however the cells were shared among them.
+  Eigen::VectorXd cell_l2 = Eigen::VectorXd::Zero(mesh.num_cells()), cell_semi_all = cell_l2;
+#pragma omp parallel
   {
     ExactAtPoints ex(exact);
     CellBasis cb;
@@ -59,7 +60,7 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
       uh.noalias() = cb.value * beta;
       grad_h.resize(cb.measure.size(), cb.dimension);  // (n x 2) in the plane, (n x 3) on surfaces
       for (int d = 0; d < cb.dimension; ++d) grad_h.col(d).noalias() = cb.grad(d) * beta;
-      double cell_semi = 0;
+      double cell_semi = 0, l2 = 0;
       if (cb.dimension == 2) {
         for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
           const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
@@ -76,10 +77,13 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
           cell_semi += cb.measure[k] * g.squaredNorm();
         }
       }
-      semi += cell_semi;
-      if (h1_semi_squared_per_cell) (*h1_semi_squared_per_cell)[c] = cell_semi;
+      cell_l2[c] = l2;
+      cell_semi_all[c] = cell_semi;
     }
   }
+  double l2 = 0, semi = 0;
+  for (int c = 0; c < mesh.num_cells(); ++c) l2 += cell_l2[c], semi += cell_semi_all[c];
+  if (h1_semi_squared_per_cell) *h1_semi_squared_per_cell = std::move(cell_semi_all);
   ErrorNorms n;
   n.l2 = std::sqrt(l2);
   n.h1_semi = std::sqrt(semi);
@@ -89,8 +93,8 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
 
 double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const ExactSolution& exact,
                       const QuadratureOptions& quadrature) {
-  double integral = 0;
-#pragma omp parallel reduction(+ : integral)
+  Eigen::VectorXd per_cell = Eigen::VectorXd::Zero(mesh.num_cells());  // summed in cell order below
+#pragma omp parallel
   {
     ExactAtPoints ex(exact);
     CellBasis cb;
@@ -99,9 +103,13 @@ double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const
       const BezierCell& cell = mesh.cell(c);
       evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
                           rule_points(quadrature.error_points_v, cell.degree_v, 2), cb);
+      double integral = 0;
       for (Eigen::Index k = 0; k < cb.measure.size(); ++k) integral += cb.measure[k] * ex.value(cb.geometry, k);
+      per_cell[c] = integral;
     }
   }
+  double integral = 0;
+  for (int c = 0; c < mesh.num_cells(); ++c) integral += per_cell[c];
   return integral;
 }
 

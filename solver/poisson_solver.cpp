@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "solver/assemble_poisson.hpp"
 #include "solver/sparsity.hpp"
@@ -103,7 +104,25 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   if (options.on_system) options.on_system(K, rhs);
 
   sol.coefficients = fixed_values;
-  if (layout.num_free() > 0) {
+  if (layout.num_free() > 0 && options.iterative) {
+    say("preconditioner");
+    t = clock::now();
+    std::unique_ptr<Preconditioner> pc = options.preconditioner ? options.preconditioner(layout, K) : nullptr;
+    if (!pc) pc = jacobi_preconditioner(K);
+    sol.timings.preconditioner = seconds_since(t);
+    say("iterations");
+    t = clock::now();
+    const Eigen::VectorXd x = preconditioned_cg(K, rhs, *pc, options.tolerance, options.max_iterations, sol.iterative);
+    sol.timings.iterations = seconds_since(t);
+    if (!sol.iterative.converged) {
+      char b[200];
+      std::snprintf(b, sizeof b, "CG stopped after %d iterations%s at backward error %.3e (relative residual %.3e), above the tolerance %.1e",
+                    sol.iterative.iterations, sol.iterative.stagnated ? " (no progress in the last 30)" : "",
+                    sol.iterative.backward_error, sol.iterative.relative_residual, options.tolerance);
+      throw NotConverged(b);
+    }
+    for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = x[d];
+  } else if (layout.num_free() > 0) {
     say("factorization");
     const std::shared_ptr<SparseCholesky> cholesky =
         options.solver ? options.solver : std::make_shared<SparseCholesky>(options.ordering);

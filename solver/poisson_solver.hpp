@@ -8,8 +8,10 @@
 #include "basis/core/bezier_mesh.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/geometry_map.hpp"
+#include "solver/iterative_solver.hpp"
 #include "solver/linear_solver.hpp"
 #include "solver/poisson_problem.hpp"
+#include "solver/sparsity.hpp"
 
 namespace knotwork {
 
@@ -19,6 +21,8 @@ struct PoissonTimings {
   double analysis = 0;       // CHOLMOD symbolic analysis (0 when reused)
   double factorization = 0;  // CHOLMOD numeric factorization
   double solve = 0;          // triangular solves
+  double preconditioner = 0;  // iterative path: building the preconditioner
+  double iterations = 0;      // iterative path: the CG iterations
   double errors = 0;         // error norms
 };
 
@@ -31,6 +35,12 @@ struct PoissonSolveOptions {
   // Keep one solver across solves on the same mesh (other sources or boundary data): its
   // symbolic analysis is reused while the matrix pattern stays the same. Null: a new one.
   std::shared_ptr<SparseCholesky> solver;
+  // The linear solve: CHOLMOD, or preconditioned CG to `tolerance` (relative residual) in at
+  // most `max_iterations`, with the preconditioner `preconditioner` builds (null: Jacobi).
+  bool iterative = false;
+  double tolerance = 1e-15;  // on the backward error (IterativeStats)
+  int max_iterations = 1000;
+  std::function<std::unique_ptr<Preconditioner>(const DofLayout&, const Eigen::SparseMatrix<double>&)> preconditioner;
   // Called with the assembled system (lower triangle of K over the free dofs, and F)
   // before it is factored: for inspecting or exporting it, or benchmarking solvers on it.
   std::function<void(const Eigen::SparseMatrix<double>&, const Eigen::VectorXd&)> on_system;
@@ -42,6 +52,7 @@ struct PoissonSolution {
   int num_free = 0;              // unknowns of the linear system
   long matrix_nonzeros = 0;      // stored (lower triangle)
   CholeskyStats cholesky;
+  IterativeStats iterative;  // the iterative path's count and final relative residual
   std::optional<ErrorNorms> errors;
   Eigen::VectorXd cell_h1_squared;  // with cell_errors: where the error sits (sums to h1_semi^2)
   PoissonTimings timings;
@@ -57,6 +68,12 @@ struct PoissonSolution {
 // is pinned (the one with the largest weight in the representation of the constant 1, so the
 // reduced matrix is positive definite), then the constant that gives zero mean is subtracted;
 // the same solution as the Lagrange multiplier formulation.
+// The iterative path stopped at max_iterations above the tolerance (or broke down): the
+// message has the residual reached; no solution is returned.
+struct NotConverged : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry,
                               const PoissonProblem& problem, const PoissonSolveOptions& options);
 

@@ -52,9 +52,9 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       extent_v[c] = (m.x.row(3) - m.x.row(2)).norm();
     }
   }
-  double residual_sum = 0;
-  // Interior residual h_K^2 ||f + Laplace(u_h)||^2 per cell.
-#pragma omp parallel reduction(+ : residual_sum)
+  // Interior residual h_K^2 ||f + Laplace(u_h)||^2 per cell (summed in cell order below, so
+  // that the total does not depend on the threads).
+#pragma omp parallel
   {
     ExpressionEvaluator f(problem.source);
     GeometryAtPoints g;
@@ -104,10 +104,10 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       }
       const double h = std::max(extent_u[c], extent_v[c]);
       ind.eta_squared[c] = h * h * integral;
-      residual_sum += h * h * integral;
     }
   }
-  ind.residual_part = residual_sum;
+  ind.residual_part = 0;
+  for (int c = 0; c < mesh.num_cells(); ++c) ind.residual_part += ind.eta_squared[c];
   // Gradient jumps across interior sides, half to each neighbour.
   const std::vector<CellInterface>& sides = mesh.interfaces();
   std::vector<double> side_value(sides.size()), side_max(sides.size());

@@ -61,6 +61,13 @@ elements = 4
 exact = "sin(pi*x)*sin(pi*y)"
 )TOML";
 
+// The first number stored under "key" in a JSON text.
+inline double json_number_of(const std::string& out, const std::string& key) {
+  const auto at = out.find("\"" + key + "\": ");
+  REQUIRE(at != std::string::npos);
+  return std::stod(out.substr(at + key.size() + 4));
+}
+
 inline std::string replace(std::string s, const std::string& from, const std::string& to) {
   const auto at = s.find(from);
   REQUIRE(at != std::string::npos);

@@ -294,3 +294,37 @@ TEST_CASE("bad input: adapt", "[cli][bad-input][adaptive]") {
   expect_rejected(box, segments + "\n[adapt]\ntheta = 0\n", {"bad.toml", "[adapt] theta"}, "", "adapt");
   expect_rejected(box, segments + "\n[adapt]\nstep = 3\n", {"bad.toml", "did you mean 'steps'"}, "", "adapt");
 }
+
+TEST_CASE("bad input: [solver] and --solver", "[cli][bad-input][solver]") {
+  Sandbox box;
+  const std::string iterative = kGood + "[solver]\nmethod = \"iterative\"\n";
+  expect_rejected(box, kGood + "[solver]\nmethod = \"iterativ\"\n", {"bad.toml", "[solver] method", "did you mean 'iterative'"});
+  expect_rejected(box, kGood + "[solver]\npreconditioner = \"multigrid\"\n", {"bad.toml", "[solver] preconditioner", "not a choice"});
+  expect_rejected(box, kGood + "[solver]\ntolerance = 0\n", {"bad.toml", "[solver] tolerance", "(0, 1)"});
+  expect_rejected(box, kGood + "[solver]\ntolerance = 1.5\n", {"bad.toml", "[solver] tolerance", "(0, 1)"});
+  expect_rejected(box, kGood + "[solver]\nmax_iterations = 0\n", {"bad.toml", "[solver] max_iterations", "[1, 1000000]"});
+  expect_rejected(box, kGood + "[solver]\nmethd = \"direct\"\n", {"bad.toml", "[solver] methd", "did you mean 'method'"});
+  // Not converged: a non-zero exit, the residual reached, and no result files.
+  expect_rejected(box, iterative + "preconditioner = \"jacobi\"\nmax_iterations = 2\n",
+                  {"bad.toml", "[solver]", "CG stopped after 2 iterations", "backward error", "above the tolerance"});
+  expect_rejected(box, kGood, {"--solver", "'cg' is not a choice"}, "--solver cg");
+  expect_rejected(box, kGood, {"--tolerance", "(0, 1)"}, "--tolerance -1");
+  // A preconditioner the family does not have: one line naming the family and what to use.
+  const std::string segments = replace(kGood, "[space]\n", "[space]\nfamily = \"knot_segments\"\n") +
+                               "[solver]\nmethod = \"iterative\"\npreconditioner = \"fast_diagonalization\"\n";
+  expect_rejected(box, segments, {"bad.toml", "[solver] preconditioner", "family \"knot_segments\"", "jacobi"});
+}
+
+TEST_CASE("run --solver iterative reports the solver, and agrees with the direct solve", "[cli][solver]") {
+  Sandbox box;
+  box.file("ok.toml", kGood);
+  const Result direct = box.run("run -q --no-output --json ok.toml --solver direct");
+  const Result cg = box.run("run -q --no-output --json ok.toml --solver iterative");
+  INFO(cg.err);
+  REQUIRE(cg.code == 0);
+  REQUIRE(cg.out.find("\"method\": \"iterative\"") != std::string::npos);
+  REQUIRE(cg.out.find("\"preconditioner\": \"fast_diagonalization\"") != std::string::npos);
+  REQUIRE(json_number_of(cg.out, "iterations") >= 1);
+  REQUIRE(json_number_of(cg.out, "backward_error") <= 1e-15);
+  REQUIRE(json_number_of(cg.out, "l2_error") == Approx(json_number_of(direct.out, "l2_error")).epsilon(1e-6));
+}

@@ -91,12 +91,6 @@ TEST_CASE("run on an explicit collection, refused unless --allow-non-semi-regula
   expect_rejected(box, bad_case, {"bad.toml", "semi-regular"}, "", "adapt");
 }
 
-static double json_number_of(const std::string& out, const std::string& key) {
-  const auto at = out.find("\"" + key + "\": ");
-  REQUIRE(at != std::string::npos);
-  return std::stod(out.substr(at + key.size() + 4));
-}
-
 TEST_CASE("an explicit collection on the L-shape: cells must not straddle the geometry's fold", "[cli][semi-regular][geometry]") {
   // The one-patch L-shape is bilinear on each side of its C0 fold u = 1/2, so a linear u is
   // in the degree-1 space whose cells end at the fold: reproduced to rounding. Cells across

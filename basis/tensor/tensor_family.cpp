@@ -2,6 +2,7 @@
 // geometry (uniform elements per knot span, optional extra knots), isoparametric when rational.
 #include <cstdio>
 
+#include "basis/tensor/fast_diagonalization.hpp"
 #include "basis/tensor/nurbs_geometry_map.hpp"
 #include "basis/tensor/tensor_case.hpp"
 #include "cases/resource_limits.hpp"
@@ -52,6 +53,11 @@ class TensorSpace final : public SplineSpace {
   const GeometryMap& geometry() const override { return *geometry_; }
   std::string description() const override { return describe(options_); }
   std::array<int, 2> degree() const override { return options_.degree; }
+  std::string structured_preconditioner() const override { return "fast_diagonalization"; }
+  std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& layout,
+                                                                 const Eigen::SparseMatrix<double>& lower) const override {
+    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower);
+  }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
   }

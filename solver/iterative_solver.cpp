@@ -1,0 +1,124 @@
+#include "solver/iterative_solver.hpp"
+
+#include <cmath>
+
+namespace knotwork {
+
+namespace {
+
+class JacobiPreconditioner final : public Preconditioner {
+ public:
+  explicit JacobiPreconditioner(Eigen::VectorXd inverse_diagonal) : inv_(std::move(inverse_diagonal)) {}
+  void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override { z = inv_.cwiseProduct(r); }
+
+ private:
+  Eigen::VectorXd inv_;
+};
+
+}  // namespace
+
+std::unique_ptr<Preconditioner> jacobi_preconditioner(const Eigen::SparseMatrix<double>& lower) {
+  Eigen::VectorXd d = lower.diagonal();
+  for (Eigen::Index i = 0; i < d.size(); ++i) d[i] = d[i] > 0 ? 1.0 / d[i] : 1.0;
+  return std::make_unique<JacobiPreconditioner>(std::move(d));
+}
+
+void symmetric_multiply(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+  // Column j of the lower triangle holds K(i, j) for i >= j: y_i += K_ij x_j (the column) and
+  // y_j += K_ij x_i (the transposed part). Serial, so the sums have one order (bitwise
+  // reproducible results); threading it is listed in docs/SOLVERS.md as future work.
+  y.setZero(x.size());
+  const int* outer = lower.outerIndexPtr();
+  const int* inner = lower.innerIndexPtr();
+  const double* value = lower.valuePtr();
+  for (Eigen::Index j = 0; j < lower.outerSize(); ++j) {
+    const double xj = x[j];
+    double sum = 0;
+    for (int k = outer[j]; k < outer[j + 1]; ++k) {
+      const int i = inner[k];
+      if (i == j) {
+        sum += value[k] * xj;
+        continue;
+      }
+      y[i] += value[k] * xj;
+      sum += value[k] * x[i];
+    }
+    y[j] += sum;
+  }
+}
+
+Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& b,
+                                  const Preconditioner& preconditioner, double tolerance, int max_iterations,
+                                  IterativeStats& stats) {
+  const Eigen::Index n = b.size();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), r = b, z(n), p(n), q(n);
+  const double b_norm = b.norm();
+  stats = {};
+  if (b_norm == 0) {
+    stats.converged = true;
+    return x;
+  }
+  // ||K||_inf: the largest absolute row sum (lower triangle stored: each entry counts in its
+  // row and, off the diagonal, in its column's row).
+  Eigen::VectorXd row_sums = Eigen::VectorXd::Zero(n);
+  {
+    const int* outer = lower.outerIndexPtr();
+    const int* inner = lower.innerIndexPtr();
+    const double* value = lower.valuePtr();
+    for (Eigen::Index j = 0; j < lower.outerSize(); ++j)
+      for (int k = outer[j]; k < outer[j + 1]; ++k) {
+        row_sums[inner[k]] += std::abs(value[k]);
+        if (inner[k] != j) row_sums[j] += std::abs(value[k]);
+      }
+  }
+  const double k_norm = row_sums.maxCoeff(), b_inf = b.lpNorm<Eigen::Infinity>();
+  auto backward_error = [&](const Eigen::VectorXd& residual) {
+    return residual.lpNorm<Eigen::Infinity>() / (k_norm * x.lpNorm<Eigen::Infinity>() + b_inf);
+  };
+  // The recurrence's residual drifts from b - K x in the last digits: when it says converged
+  // and the true residual does not, CG restarts from x with the true one.
+  // Stagnation: the backward error has not improved by 10% for 30 iterations (it sits at
+  // rounding level): stop and report instead of running to max_iterations.
+  double best = INFINITY;
+  int best_at = 0;
+  bool stagnated = false;
+  while (stats.iterations < max_iterations && !stagnated) {
+    preconditioner.apply(r, z);
+    p = z;
+    double rz = r.dot(z);
+    bool breakdown = false;
+    while (stats.iterations < max_iterations) {
+      symmetric_multiply(lower, p, q);
+      const double pq = p.dot(q);
+      if (!(pq > 0)) {  // not positive definite along p, or a NaN
+        breakdown = true;
+        break;
+      }
+      const double alpha = rz / pq;
+      x.noalias() += alpha * p;
+      r.noalias() -= alpha * q;
+      ++stats.iterations;
+      const double omega = backward_error(r);
+      if (omega <= tolerance) break;
+      if (omega < 0.9 * best) best = omega, best_at = stats.iterations;
+      if (stats.iterations - best_at >= 30) {
+        stagnated = true;
+        break;
+      }
+      preconditioner.apply(r, z);
+      const double rz_next = r.dot(z);
+      p = z + (rz_next / rz) * p;
+      rz = rz_next;
+    }
+    symmetric_multiply(lower, x, q);
+    r = b - q;
+    stats.relative_residual = r.norm() / b_norm;
+    stats.backward_error = backward_error(r);
+    stats.converged = stats.backward_error <= tolerance;
+    stats.stagnated = stagnated && !stats.converged;
+    if (stats.converged || breakdown) break;
+  }
+  return x;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,46 @@
+#pragma once
+// Preconditioned conjugate gradients on the free-dof system, for when a factorization costs
+// too much (O(N^1.5) time and O(N log N) memory in 2D). The preconditioner comes from the
+// space's family when it knows a structure (fast diagonalization for tensor-product spaces)
+// or is algebraic (Jacobi); docs/SOLVERS.md says which is used when, and why.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <string>
+
+namespace knotwork {
+
+// z = P^{-1} r on the free dofs.
+class Preconditioner {
+ public:
+  virtual ~Preconditioner() = default;
+  virtual void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const = 0;
+};
+
+// The diagonal of the matrix (lower triangle stored): needs no structure, serves every family.
+std::unique_ptr<Preconditioner> jacobi_preconditioner(const Eigen::SparseMatrix<double>& lower);
+
+struct IterativeStats {
+  int iterations = 0;
+  double relative_residual = 0;  // ||b - K x||_2 / ||b||_2 at the end
+  // The normwise backward error ||b - K x||_inf / (||K||_inf ||x||_inf + ||b||_inf): the
+  // relative size of the smallest change of K and b that x solves exactly. It is what the
+  // tolerance bounds: unlike the relative residual it can reach rounding level (about
+  // 1e-16) whatever the condition number, and a backward-stable direct solver reaches the
+  // same, so at a small tolerance the errors are the direct solve's (docs/SOLVERS.md).
+  double backward_error = 0;
+  bool converged = false;
+  bool stagnated = false;  // stopped early: no progress for 30 iterations (rounding level)
+};
+
+// CG on K (symmetric positive definite, lower triangle stored) from x = 0 until the
+// backward error of x is at most `tolerance` (measured with the true residual b - K x) or
+// max_iterations.
+Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& b,
+                                  const Preconditioner& preconditioner, double tolerance, int max_iterations,
+                                  IterativeStats& stats);
+
+// y = K x for K stored as its lower triangle (threaded over columns' row blocks).
+void symmetric_multiply(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& x, Eigen::VectorXd& y);
+
+}  // namespace knotwork
