@@ -1,7 +1,9 @@
 #include "basis/tensor/fast_diagonalization.hpp"
 
-#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "quadrature/gauss_legendre.hpp"
 
@@ -85,16 +87,34 @@ std::vector<int> free_indices(int n, const std::vector<bool>& free_line) {
   return out;
 }
 
+// LAPACK's divide-and-conquer generalized symmetric eigensolver: measured 21.5 s for the two
+// 2050 x 2050 problems of a 2048^2 mesh with Eigen's GeneralizedSelfAdjointEigenSolver.
+extern "C" void dsygvd_(const int* itype, const char* jobz, const char* uplo, const int* n, double* a, const int* lda,
+                        double* b, const int* ldb, double* w, double* work, const int* lwork, int* iwork,
+                        const int* liwork, int* info);
+
 // K restricted to the free indices, and its generalized eigenvectors (U^T M U = I).
 void diagonalize(const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const std::vector<int>& keep, Eigen::MatrixXd& U,
                  Eigen::VectorXd& lambda) {
-  const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
-  Eigen::MatrixXd m(n, n), k(n, n);
-  for (Eigen::Index a = 0; a < n; ++a)
-    for (Eigen::Index b = 0; b < n; ++b) m(a, b) = M(keep[a], keep[b]), k(a, b) = K(keep[a], keep[b]);
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(k, m);
-  U = eig.eigenvectors();
-  lambda = eig.eigenvalues();
+  const int n = static_cast<int>(keep.size());
+  Eigen::MatrixXd m(n, n);
+  U.resize(n, n);
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) m(a, b) = M(keep[a], keep[b]), U(a, b) = K(keep[a], keep[b]);
+  lambda.resize(n);
+  const int itype = 1;
+  int info = 0, lwork = -1, liwork = -1, iwork_size = 0;
+  double work_size = 0;
+  dsygvd_(&itype, "V", "L", &n, U.data(), &n, m.data(), &n, lambda.data(), &work_size, &lwork, &iwork_size, &liwork, &info);
+  lwork = static_cast<int>(work_size);
+  liwork = iwork_size;
+  std::vector<double> work(static_cast<size_t>(std::max(lwork, 1)));
+  std::vector<int> iwork(static_cast<size_t>(std::max(liwork, 1)));
+  dsygvd_(&itype, "V", "L", &n, U.data(), &n, m.data(), &n, lambda.data(), work.data(), &lwork, iwork.data(), &liwork,
+          &info);
+  if (info != 0)
+    throw std::runtime_error("fast diagonalization: LAPACK dsygvd failed (info " + std::to_string(info) +
+                             "): the univariate mass matrix is not positive definite");
 }
 
 }  // namespace
