@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <new>
 #include <string>
+#include <utility>
 
 #include "app/commands.hpp"
 #include "cases/spline_space.hpp"
@@ -50,19 +51,28 @@ std::string local_families() {
 
 }  // namespace
 
-// CHOLMOD runs OpenMP regions of its own next to OpenBLAS's threads; with libgomp's
-// default spin-waiting they fight over the cores and the factorization is ~8% slower
-// (docs/PERFORMANCE.md). libgomp reads OMP_WAIT_POLICY when it loads, before main, so
-// the only way to choose it from inside is to set it and start again. A user's own
-// setting is kept.
-void prefer_passive_openmp_waiting(char** argv) {
-  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
-  setenv("OMP_WAIT_POLICY", "passive", 1);
-  execv("/proc/self/exe", argv);  // returns only on failure: then run as we are
+// Thread defaults that do not collapse when the cores are shared (docs/PERFORMANCE.md):
+// - CHOLMOD runs OpenMP regions of its own next to OpenBLAS's threads; with libgomp's
+//   default spin-waiting they fight over the cores and the factorization is ~8% slower:
+//   OMP_WAIT_POLICY=passive.
+// - OpenBLAS's own threads spin too: beside two CPU-bound processes on the two cores the
+//   solve took 15x (CHOLMOD) and 10x (CG) longer than with one OpenBLAS thread, which
+//   costs 15-35% of the factorization when the machine is quiet: OPENBLAS_NUM_THREADS=1.
+//   Assembly and error norms keep their OpenMP threads.
+// Both libraries read these when they load, before main, so the only way to choose them
+// from inside is to set them and start again. A user's own settings are kept.
+void prefer_robust_threading(char** argv) {
+  bool changed = false;
+  for (const auto& [name, value] : {std::pair{"OMP_WAIT_POLICY", "passive"}, std::pair{"OPENBLAS_NUM_THREADS", "1"}})
+    if (std::getenv(name) == nullptr) {
+      setenv(name, value, 1);
+      changed = true;
+    }
+  if (changed) execv("/proc/self/exe", argv);  // returns only on failure: then run as we are
 }
 
 int main(int argc, char** argv) {
-  prefer_passive_openmp_waiting(argv);
+  prefer_robust_threading(argv);
   CLI::App app{"knotwork: isogeometric Poisson solver (B-splines/NURBS -> Bezier extraction -> CHOLMOD -> ParaView)"};
   app.set_version_flag("--version", "knotwork 0.1.0");
   app.require_subcommand(1);
