@@ -117,7 +117,7 @@ int main(int argc, char** argv) {
   bench_cmd->add_flag("--quick", bench.quick, "Small configurations only (2:64 2:128 4:32 4:64)");
   bench_cmd->add_option("--ordering", bench.ordering, "amd, metis, nesdis, or default (CHOLMOD's own choice)")->capture_default_str();
   bench_cmd->add_flag("--json", bench.json, "Print JSON instead of the table");
-  bench_cmd->add_option("--solver", bench.solver, "direct (CHOLMOD) or iterative (CG + fast diagonalization)")
+  bench_cmd->add_option("--solver", bench.solver, "direct (CHOLMOD) or iterative (CG with the space's preconditioner)")
       ->capture_default_str();
   bench_cmd->add_option("--tolerance", bench.tolerance, "--solver iterative: backward error to reach")->capture_default_str();
   bench_cmd->add_flag("!--no-errors", bench.with_errors, "Skip the error norms");

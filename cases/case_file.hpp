@@ -65,7 +65,7 @@ struct CaseDescription {
   // [solver]: the linear solve (docs/SOLVERS.md; --solver and --tolerance override).
   struct Solver {
     std::string method = "auto";          // direct (CHOLMOD) | iterative (CG) | auto (docs/SOLVERS.md)
-    std::string preconditioner = "auto";  // auto | fast_diagonalization | jacobi
+    std::string preconditioner = "auto";  // auto | jacobi | a family's structured one (SpaceFamily)
     double tolerance = 1e-15;             // CG: backward error of the solution (IterativeStats)
     int max_iterations = 1000;
   } solver;
@@ -100,9 +100,8 @@ CaseDescription load_case_text(const std::string& toml_text, const std::string& 
 
 // --solver / --tolerance with the same validation as [solver] (0: not given).
 void override_solver(CaseDescription& c, const std::string& method, double tolerance);
-// The names [solver] method and preconditioner take.
+// The names [solver] method takes.
 const std::vector<std::string>& solver_methods();
-const std::vector<std::string>& solver_preconditioners();
 
 // A rectangular partition (T-mesh) file:
 //   cells = [[x0, y0, x1, y1], ...]   numbers or exact rational strings such as "14/9"

@@ -418,22 +418,26 @@ std::vector<AxisSegment> read_axis_segments(const CaseReader& r, const DocumentN
   return out;
 }
 
-void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
-  const CaseReader& r = doc.reader;
-  const DocumentNode& t = r.table(doc.root, "problem", true);
-  r.check_keys(t, "problem", {"exact", "source", "dirichlet", "neumann"});
+void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
   PoissonProblem& pb = c.problem;
   const std::string& f = r.path();
-  if (const DocumentNode* e = t.get("exact")) {
-    const Expression u = Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact");
-    pb.exact = differentiate_exact_solution(u);
-  }
+  if (const DocumentNode* e = t.get("exact"))
+    pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
   if (const DocumentNode* s = t.get("source"))
     pb.source = Expression::parse(r.string(*s, "[problem] source"), f + ": [problem] source");
   else if (pb.exact)
     pb.source = pb.exact->minus_laplacian;
   else
     r.fail("[problem] source", "missing: give `source`, or `exact` to derive it from");
+}
+
+void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
+  const CaseReader& r = doc.reader;
+  const DocumentNode& t = r.table(doc.root, "problem", true);
+  r.check_keys(t, "problem", {"exact", "source", "dirichlet", "neumann"});
+  PoissonProblem& pb = c.problem;
+  const std::string& f = r.path();
+  read_planar_exact_and_source(r, t, c);
 
   pb.boundary.assign(4, BoundaryCondition{});
   std::set<int> neumann;
@@ -528,13 +532,6 @@ const std::vector<std::string>& solver_methods() {
   return names;
 }
 
-const std::vector<std::string>& solver_preconditioners() {
-  static const std::vector<std::string> names{"auto", "fast_diagonalization", "jacobi"};
-  return names;
-}
-
-namespace {
-
 // `what` names the field in messages ("[solver] method" or "--solver").
 std::string checked_name(const std::string& value, const std::vector<std::string>& valid, const std::string& what,
                          const std::string& file) {
@@ -545,6 +542,8 @@ std::string checked_name(const std::string& value, const std::vector<std::string
   if (hint.rfind("valid keys", 0) == 0) hint = "one of " + all;
   throw InputError((file.empty() ? "" : file + ": ") + what + ": '" + value + "' is not a choice (" + hint + ")");
 }
+
+namespace {
 
 void check_tolerance(double t, const std::string& what, const std::string& file) {
   if (!(t > 0 && t < 1))
@@ -558,9 +557,8 @@ void read_solver(const CaseReader& r, const DocumentNode& t, CaseDescription& c)
   r.check_keys(t, "solver", {"method", "preconditioner", "tolerance", "max_iterations"});
   if (const DocumentNode* n = t.get("method"))
     c.solver.method = checked_name(r.string(*n, "[solver] method"), solver_methods(), "[solver] method", r.path());
-  if (const DocumentNode* n = t.get("preconditioner"))
-    c.solver.preconditioner = checked_name(r.string(*n, "[solver] preconditioner"), solver_preconditioners(),
-                                           "[solver] preconditioner", r.path());
+  // Checked against the registered families' preconditioners by load_case.
+  if (const DocumentNode* n = t.get("preconditioner")) c.solver.preconditioner = r.string(*n, "[solver] preconditioner");
   if (const DocumentNode* n = t.get("tolerance")) {
     c.solver.tolerance = r.number(*n, "[solver] tolerance");
     check_tolerance(c.solver.tolerance, "[solver] tolerance", r.path());

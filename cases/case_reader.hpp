@@ -70,10 +70,16 @@ DocumentNode parse_document_text(const std::string& toml_text, const std::string
 void read_output(const CaseReader& r, const DocumentNode& output, CaseDescription& c);
 void read_adapt(const CaseReader& r, const DocumentNode& adapt, CaseDescription& c);
 void read_solver(const CaseReader& r, const DocumentNode& solver, CaseDescription& c);
+// `value` if it is one of `valid`, else InputError "<file>: <what>: 'value' is not a choice
+// (closest name)"; `file` may be empty (command-line options).
+std::string checked_name(const std::string& value, const std::vector<std::string>& valid, const std::string& what,
+                         const std::string& file);
 
 // Shared section readers for the families whose domain is one NURBS patch.
 // [geometry] type = rectangle | quarter_annulus | lshape | nurbs (required).
 void read_patch_geometry(const CaseDocument& doc, CaseDescription& c);
+// [problem] exact and source of a planar problem (source defaults to -Laplace(exact)).
+void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& problem, CaseDescription& c);
 // [problem] exact/source/dirichlet/neumann on the four sides bottom, right, top, left.
 void read_patch_problem(const CaseDocument& doc, CaseDescription& c);
 // [space] quadrature_points / error_quadrature_points (int or pair; `pair` false: one int).

@@ -40,6 +40,10 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
   family->read_case(CaseDocument{r, root}, c);
   read_output(r, r.table(root, "output", false), c);
   read_solver(r, r.table(root, "solver", false), c);
+  std::vector<std::string> preconditioners{"auto", "jacobi"};
+  for (const SpaceFamily& f : space_families())
+    if (!f.structured_preconditioner.empty()) preconditioners.push_back(f.structured_preconditioner);
+  checked_name(c.solver.preconditioner, preconditioners, "[solver] preconditioner", path);
   if (root.get("adapt")) {
     if (!family->local_refinement)
       r.fail("[adapt]", "not used with family = \"" + c.family + "\" (it does not refine cells locally; `knotwork adapt` "

@@ -122,6 +122,9 @@ struct SpaceFamily {
   // The family's own mode of `knotwork basis`: adds its options to the command and returns
   // the tool that holds them; null: the family has none.
   std::function<std::unique_ptr<BasisTool>(CLI::App& basis)> add_basis_tool;
+  // The name of its spaces' structured preconditioner ([solver] preconditioner; "" none):
+  // what SplineSpace::structured_preconditioner returns.
+  std::string structured_preconditioner;
 };
 
 // Throws InputError naming [space] family unless the case's family refines cells locally

@@ -1,8 +1,8 @@
 #pragma once
 // Preconditioned conjugate gradients on the free-dof system, for when a factorization costs
 // too much (O(N^1.5) time and O(N log N) memory in 2D). The preconditioner comes from the
-// space's family when it knows a structure (fast diagonalization for tensor-product spaces)
-// or is algebraic (Jacobi); docs/SOLVERS.md says which is used when, and why.
+// space's family when it knows a structure, or is algebraic (Jacobi); docs/SOLVERS.md says
+// which is used when, and why.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <memory>

@@ -95,14 +95,7 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
     if (g.shape != "bilinear") r.fail("[geometry] shape", "planar cases use shape = \"bilinear\"");
     if (t.get("reaction")) r.fail("[problem] reaction", "only with operator = \"laplace_beltrami\"");
     PoissonProblem& pb = c.problem;
-    if (const DocumentNode* e = t.get("exact"))
-      pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
-    if (const DocumentNode* e = t.get("source"))
-      pb.source = Expression::parse(r.string(*e, "[problem] source"), f + ": [problem] source");
-    else if (pb.exact)
-      pb.source = pb.exact->minus_laplacian;
-    else
-      r.fail("[problem] source", "missing: give `source`, or `exact` to derive it from");
+    read_planar_exact_and_source(r, t, c);
     pb.boundary.assign(1, BoundaryCondition{});  // one boundary: the whole of it
     if (const DocumentNode* d = t.get("dirichlet")) {
       const auto text = d->value_exact<std::string>();

@@ -36,6 +36,8 @@ std::string describe(const TensorSpaceOptions& s) {
   return r + " at new knots";
 }
 
+constexpr const char* kFastDiagonalization = "fast_diagonalization";
+
 class TensorSpace final : public SplineSpace {
  public:
   TensorSpace(const CaseDescription& c, const TensorSpaceOptions& options) : options_(options) {
@@ -53,7 +55,7 @@ class TensorSpace final : public SplineSpace {
   const GeometryMap& geometry() const override { return *geometry_; }
   std::string description() const override { return describe(options_); }
   std::array<int, 2> degree() const override { return options_.degree; }
-  std::string structured_preconditioner() const override { return "fast_diagonalization"; }
+  std::string structured_preconditioner() const override { return kFastDiagonalization; }
   std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& layout,
                                                                  const Eigen::SparseMatrix<double>& lower) const override {
     return fast_diagonalization(d_.space_u, d_.space_v, layout, lower);
@@ -74,6 +76,7 @@ SpaceFamily tensor_family() {
   SpaceFamily f;
   f.name = "tensor";
   f.read_case = read_tensor_case;
+  f.structured_preconditioner = kFastDiagonalization;
   f.space_keys = tensor_space_keys();
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
     TensorSpaceOptions s = patch_space(c);
