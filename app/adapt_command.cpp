@@ -6,6 +6,8 @@
 #include <functional>
 
 #include "app/adaptive.hpp"
+#include "app/studies.hpp"
+#include <optional>
 #include "app/commands.hpp"
 #include "cases/json_output.hpp"
 #include "cases/output_files.hpp"
@@ -29,44 +31,38 @@ std::string rate_text(double r) {
 
 }  // namespace
 
-int adapt_command(const AdaptOptions& o) {
-  CaseDescription c = load_case(o.case_file);
-  const SpaceFamily& family = space_family(c);
-  family.override_options(c, o.degree, o.elements);
-  override_solver(c, o.solver, o.tolerance);
+AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
+                         const ProgressFunction& progress) {
   check_adaptive_family(c);
-  if (o.steps) c.adapt.steps = o.steps;
-  if (o.theta) c.adapt.theta = o.theta;
-  if (o.max_dofs) c.adapt.max_dofs = o.max_dofs;
   if (c.adapt.steps < 1 || c.adapt.steps > 200) throw InputError("--steps: must be in [1, 200], got " + std::to_string(c.adapt.steps));
   if (!(c.adapt.theta > 0 && c.adapt.theta <= 1)) throw InputError("--theta: must be in (0, 1]");
   if (c.adapt.max_dofs < 1) throw InputError("--max-dofs: must be positive");
-  const Ordering ordering = parse_ordering(o.ordering);
-  OutputStage stage(o.out.empty() ? c.output_directory : o.out);
-  Progress progress(o.quiet);
+  std::optional<OutputStage> stage;
+  if (output_directory) stage.emplace(*output_directory);
   const ExactSolution* exact = c.problem.exact ? &*c.problem.exact : nullptr;
-
+  const auto say = [&](const std::string& what) { if (progress) progress(what); };
+  AdaptOutcome out;
   std::vector<PvdEntry> pvd;
-  std::string description;
-  const auto steps = adapt_case(c, ordering, [&](const std::string& what) { progress(what); },
-                                [&](const AdaptiveStepView& v) {
+  std::string& description = out.description;
+  out.steps = adapt_case(c, ordering, say, [&](const AdaptiveStepView& v) {
     if (v.step == 0) description = v.space.description();
-    if (!c.write_bezier) return;
-    progress("writing ParaView output");
+    if (!stage || !c.write_bezier) return;
+    say("writing ParaView output");
     Eigen::VectorXd eta = v.indicators.eta_squared.cwiseSqrt();
     Eigen::VectorXd flag = Eigen::VectorXd::Zero(eta.size());
     for (int m : v.marked) flag[m] = 1;
     const std::string name = "step_" + std::to_string(v.step);
-    write_bezier_vtu(stage.stage(name + ".vtu"), v.space.mesh(), v.space.geometry(), v.solution.coefficients, exact,
+    write_bezier_vtu(stage->stage(name + ".vtu"), v.space.mesh(), v.space.geometry(), v.solution.coefficients, exact,
                      {{"error_indicator", eta}, {"marked", flag}}, v.solution.exact_mean);
     pvd.push_back({double(v.step), 0, name + ".vtu"});
     const KnotLines knots = v.space.knot_lines();
     if (!knots.lines.empty()) {
-      write_polylines_vtp(stage.stage(name + "_knots.vtp"), knots.lines,
+      write_polylines_vtp(stage->stage(name + "_knots.vtp"), knots.lines,
                           {{"kind", knots.kind}, {"multiplicity", knots.multiplicity}});
       pvd.push_back({double(v.step), 1, name + "_knots.vtp"});
     }
   });
+  const std::vector<AdaptiveStep>& steps = out.steps;
   std::string csv = "step,dofs,cells,marked,estimator,l2_error,h1_seminorm_error,h1_rate_vs_dofs\n";
   Json js = Json::array();
   PlotSeries se{"estimator", {}, {}, "#2ca02c"}, sl2{"L2 error", {}, {}, "#1f77b4"}, sh1{"H1 seminorm error", {}, {}, "#d62728"};
@@ -94,21 +90,41 @@ int adapt_command(const AdaptOptions& o) {
   }
   std::vector<PlotSeries> plot{se};
   if (!sl2.x.empty()) plot.insert(plot.end(), {sl2, sh1});
-  Json root = Json::object();
+  Json& root = out.json;
   root.set("case", c.path).set("family", c.family).set("space", description).set("theta", c.adapt.theta).set("steps", js);
   if (steps.size() >= 4 && !std::isnan(steps.back().h1_semi))
     root.set("h1_rate_last_half", fitted_h1_rate(steps, steps.size() / 2));
-  write_text_file(stage.stage("adapt.csv"), csv);
-  write_text_file(stage.stage("adapt.json"), root.dump() + "\n");
-  write_text_file(stage.stage("adapt.svg"), loglog_svg(c.name + ": adaptive, " + description, "degrees of freedom", "error", plot));
-  if (!pvd.empty()) write_pvd(stage.stage("adapt.pvd"), pvd);
-  const auto outputs = stage.commit();
+  if (stage) {
+    write_text_file(stage->stage("adapt.csv"), csv);
+    write_text_file(stage->stage("adapt.json"), root.dump() + "\n");
+    write_text_file(stage->stage("adapt.svg"),
+                    loglog_svg(c.name + ": adaptive, " + description, "degrees of freedom", "error", plot));
+    if (!pvd.empty()) write_pvd(stage->stage("adapt.pvd"), pvd);
+    out.outputs = stage->commit();
+  }
+  root.set("outputs", Json::strings(out.outputs));
+  return out;
+}
 
+int adapt_command(const AdaptOptions& o) {
+  CaseDescription c = load_case(o.case_file);
+  space_family(c).override_options(c, o.degree, o.elements);
+  override_solver(c, o.solver, o.tolerance);
+  check_adaptive_family(c);
+  if (o.steps) c.adapt.steps = o.steps;
+  if (o.theta) c.adapt.theta = o.theta;
+  if (o.max_dofs) c.adapt.max_dofs = o.max_dofs;
+  const Ordering ordering = parse_ordering(o.ordering);
+  const std::string directory = o.out.empty() ? c.output_directory : o.out;
+  Progress progress(o.quiet);
+  const AdaptOutcome r = adapt_study(c, ordering, &directory, [&](const std::string& w) { progress(w); });
   if (o.json) {
-    root.set("outputs", Json::strings(outputs));
-    std::printf("%s\n", root.dump().c_str());
+    std::printf("%s\n", r.json.dump().c_str());
     return 0;
   }
+  const std::vector<AdaptiveStep>& steps = r.steps;
+  const std::string& description = r.description;
+  const std::vector<std::string>& outputs = r.outputs;
   std::printf("knotwork adapt %s: %s, Doerfler theta = %g\n", c.path.c_str(), description.c_str(), c.adapt.theta);
   for (size_t s = 0; s < steps.size(); ++s)
     for (const auto& n : steps[s].notes) std::printf("  note     step %zu: %s\n", s, n.c_str());

@@ -5,6 +5,7 @@
 #include "app/commands.hpp"
 #include "app/pipeline.hpp"
 #include "app/report.hpp"
+#include "app/studies.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "cases/json_output.hpp"
 #include "solver/input_error.hpp"
@@ -13,26 +14,36 @@ namespace knotwork {
 
 namespace {
 
+}  // namespace
+
+Json basis_json(const CaseDescription& c, const SplineSpace& space) {
+  const BezierMesh& mesh = space.mesh();
+  const long rank = bezier_rank(mesh);
+  Json j = Json::object();
+  j.set("file", c.path).set("family", c.family).set("space", space.description())
+      .set("functions", mesh.num_functions()).set("cells", mesh.num_cells());
+  add_fields(j, space.basis_report());
+  j.set("partition_of_unity_error", partition_of_unity_error(mesh));
+  if (rank >= 0) j.set("rank", rank); else j.set_null("rank");
+  j.set("notes", Json::strings(space.notes()));
+  return j;
+}
+
+namespace {
+
 // A case file: its space through the family interface; the family adds its own checks.
 int basis_of_case(const BasisRequest& o) {
   const CaseDescription c = load_case(o.file);
   const std::unique_ptr<SplineSpace> space = build_space(c);
   const BezierMesh& mesh = space->mesh();
-  const std::vector<ReportField> fields = space->basis_report();
   if (!o.export_file.empty()) space->export_functions(o.export_file, c.path);
-  const double pu = partition_of_unity_error(mesh);
-  const long rank = bezier_rank(mesh);
   if (o.json) {
-    Json j = Json::object();
-    j.set("file", c.path).set("family", c.family).set("space", space->description())
-        .set("functions", mesh.num_functions()).set("cells", mesh.num_cells());
-    add_fields(j, fields);
-    j.set("partition_of_unity_error", pu);
-    if (rank >= 0) j.set("rank", rank); else j.set_null("rank");
-    j.set("notes", Json::strings(space->notes()));
-    std::printf("%s\n", j.dump().c_str());
+    std::printf("%s\n", basis_json(c, *space).dump().c_str());
     return 0;
   }
+  const std::vector<ReportField> fields = space->basis_report();
+  const double pu = partition_of_unity_error(mesh);
+  const long rank = bezier_rank(mesh);
   std::printf("knotwork basis %s\n  space      %s\n  functions  %d on %d cells\n", c.path.c_str(),
               space->description().c_str(), mesh.num_functions(), mesh.num_cells());
   for (const auto& n : space->notes()) std::printf("  note       %s\n", n.c_str());

@@ -7,7 +7,8 @@
 #include "app/commands.hpp"
 #include "cases/json_output.hpp"
 #include "cases/output_files.hpp"
-#include "app/pipeline.hpp"
+#include "app/studies.hpp"
+#include <optional>
 #include "app/progress.hpp"
 #include "app/report.hpp"
 #include "app/svg_plot.hpp"
@@ -18,15 +19,6 @@ namespace knotwork {
 
 namespace {
 
-struct Level {
-  double h = 0;
-  int dofs = 0, cells = 0, free = 0;
-  double l2 = 0, h1_semi = 0, h1 = 0;
-  double l2_rate = NAN, h1_rate = NAN;
-  double seconds = 0;
-  std::vector<ReportField> fields;  // the family's (report and solution checks)
-};
-
 std::string rate_text(double r) {
   if (std::isnan(r)) return "-";
   char b[16];
@@ -34,38 +26,42 @@ std::string rate_text(double r) {
   return b;
 }
 
+const ReportField* column_of(const ConvergeLevel& v, const std::string& key) {
+  for (const auto& f : v.fields)
+    if (f.key == key) return &f;
+  return nullptr;
+}
+
 }  // namespace
 
-int converge_command(const ConvergeOptions& o) {
-  CaseDescription c = load_case(o.case_file);
+ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Ordering ordering,
+                               const std::string* output_directory, const ProgressFunction& progress) {
   const SpaceFamily& family = space_family(c);
-  family.override_options(c, o.degree, o.elements);
-  override_solver(c, o.solver, o.tolerance);
-  if (o.levels < 1 || o.levels > 12) throw InputError("--levels: must be in [1, 12], got " + std::to_string(o.levels));
-  if (family.check_converge) family.check_converge(c, o.levels);
+  if (num_levels < 1 || num_levels > 12) throw InputError("--levels: must be in [1, 12], got " + std::to_string(num_levels));
+  if (family.check_converge) family.check_converge(c, num_levels);
   if (!c.problem.exact) throw InputError(c.path + ": [problem] exact: a convergence study needs the exact solution");
-  const Ordering ordering = parse_ordering(o.ordering);
-  OutputStage stage(o.out.empty() ? c.output_directory : o.out);
-  Progress progress(o.quiet);
-  std::vector<Level> levels;
+  std::optional<OutputStage> stage;
+  if (output_directory) stage.emplace(*output_directory);
+  ConvergeOutcome out;
+  std::vector<ConvergeLevel>& levels = out.levels;
   std::vector<std::pair<double, std::string>> pvd, pvd_sampled;
   const ExactSolution* exact = &*c.problem.exact;
-  std::string description;
-
-  SolverReport first_solver, iterative_solver;  // of level 0, and of a level solved by CG
-  int iterative_levels = 0;
-  for (int l = 0; l < o.levels; ++l) {
-    progress.set_prefix("level " + std::to_string(l + 1) + "/" + std::to_string(o.levels) + ": ");
-    progress("building the space");
+  std::string& description = out.description;
+  SolverReport &first_solver = out.first_solver, &iterative_solver = out.iterative_solver;
+  int& iterative_levels = out.iterative_levels;
+  for (int l = 0; l < num_levels; ++l) {
+    const std::string prefix = "level " + std::to_string(l + 1) + "/" + std::to_string(num_levels) + ": ";
+    const auto say = [&](const std::string& what) { if (progress) progress(prefix + what); };
+    say("building the space");
     const auto t0 = std::chrono::steady_clock::now();
-    const auto say = [&](const std::string& what) { progress(what); };
     const std::unique_ptr<SplineSpace> space = family.build(c, l, say);
     if (l == 0) description = space->description();
     SolverReport solver;
     const PoissonSolution s = solve_case(c, *space, ordering, say, &solver);
     if (l == 0) first_solver = solver;
     if (solver.method == "iterative") iterative_solver = solver, ++iterative_levels;
-    Level lv;
+    ConvergeLevel lv;
+    lv.l2_rate = lv.h1_rate = NAN;
     lv.h = space->mesh_size();
     lv.dofs = s.num_functions;
     lv.free = s.num_free;
@@ -81,19 +77,19 @@ int converge_command(const ConvergeOptions& o) {
                            .value = solver.method == "iterative" ? ReportValue(long(s.iterative.iterations)) : ReportValue{},
                            .label = "CG", .column = true, .width = 13});
     if (!levels.empty()) {
-      const Level& prev = levels.back();
+      const ConvergeLevel& prev = levels.back();
       lv.l2_rate = std::log(prev.l2 / lv.l2) / std::log(prev.h / lv.h);
       lv.h1_rate = std::log(prev.h1_semi / lv.h1_semi) / std::log(prev.h / lv.h);
     }
-    progress("writing ParaView output");
     const std::string name = "level_" + std::to_string(l);
-    if (c.write_bezier) {
-      write_bezier_vtu(stage.stage(name + ".vtu"), space->mesh(), space->geometry(), s.coefficients, exact,
+    if (stage) say("writing ParaView output");
+    if (stage && c.write_bezier) {
+      write_bezier_vtu(stage->stage(name + ".vtu"), space->mesh(), space->geometry(), s.coefficients, exact,
                        {{"h1_error_squared", s.cell_h1_squared}}, s.exact_mean);
       pvd.emplace_back(l, name + ".vtu");
     }
-    if (c.write_sampled) {
-      write_sampled_vtu(stage.stage(name + "_sampled.vtu"), space->mesh(), space->geometry(), s.coefficients, exact,
+    if (stage && c.write_sampled) {
+      write_sampled_vtu(stage->stage(name + "_sampled.vtu"), space->mesh(), space->geometry(), s.coefficients, exact,
                         c.samples, s.exact_mean);
       pvd_sampled.emplace_back(l, name + "_sampled.vtu");
     }
@@ -110,13 +106,8 @@ int converge_command(const ConvergeOptions& o) {
   csv += ",h,dofs,cells,l2_error,h1_seminorm_error,h1_error,l2_rate,h1_rate\n";
   Json jl = Json::array();
   PlotSeries sl2{"L2 error", {}, {}, "#1f77b4"}, sh1{"H1 seminorm", {}, {}, "#d62728"};
-  auto column_of = [](const Level& v, const std::string& key) -> const ReportField* {
-    for (const auto& f : v.fields)
-      if (f.key == key) return &f;
-    return nullptr;
-  };
   for (size_t l = 0; l < levels.size(); ++l) {
-    const Level& v = levels[l];
+    const ConvergeLevel& v = levels[l];
     csv += std::to_string(l);
     for (const ReportField* f : columns) {
       const ReportField* mine = column_of(v, f->key);
@@ -142,26 +133,46 @@ int converge_command(const ConvergeOptions& o) {
     std::snprintf(buf, sizeof buf, "H1 semi (rate %.2f)", levels.back().h1_rate);
     sh1.label = buf;
   }
-  Json root = Json::object();
+  Json& root = out.json;
   Json sj = Json::object();
   sj.set("method", c.solver.method).set("iterative_levels", iterative_levels);
   if (iterative_levels > 0)
     sj.set("preconditioner", iterative_solver.preconditioner).set("tolerance", c.solver.tolerance);
   root.set("case", c.path).set("family", c.family).set("space", description).set("solver", sj).set("levels", jl);
   if (!first_solver.note.empty()) root.set("notes", Json::strings({first_solver.note}));
-  write_text_file(stage.stage("convergence.csv"), csv);
-  write_text_file(stage.stage("convergence.json"), root.dump() + "\n");
-  write_text_file(stage.stage("convergence.svg"),
-                  loglog_svg(c.name + ": " + description, "h (largest cell diameter)", "error", {sl2, sh1}));
-  if (!pvd.empty()) write_pvd(stage.stage("convergence.pvd"), pvd);
-  if (!pvd_sampled.empty()) write_pvd(stage.stage("convergence_sampled.pvd"), pvd_sampled);
-  const auto outputs = stage.commit();
+  if (stage) {
+    write_text_file(stage->stage("convergence.csv"), csv);
+    write_text_file(stage->stage("convergence.json"), root.dump() + "\n");
+    write_text_file(stage->stage("convergence.svg"),
+                    loglog_svg(c.name + ": " + description, "h (largest cell diameter)", "error", {sl2, sh1}));
+    if (!pvd.empty()) write_pvd(stage->stage("convergence.pvd"), pvd);
+    if (!pvd_sampled.empty()) write_pvd(stage->stage("convergence_sampled.pvd"), pvd_sampled);
+    out.outputs = stage->commit();
+  }
+  root.set("outputs", Json::strings(out.outputs));
+  return out;
+}
 
+int converge_command(const ConvergeOptions& o) {
+  CaseDescription c = load_case(o.case_file);
+  space_family(c).override_options(c, o.degree, o.elements);
+  override_solver(c, o.solver, o.tolerance);
+  const Ordering ordering = parse_ordering(o.ordering);
+  const std::string directory = o.out.empty() ? c.output_directory : o.out;
+  Progress progress(o.quiet);
+  const ConvergeOutcome r = converge_study(c, o.levels, ordering, &directory, [&](const std::string& w) { progress(w); });
   if (o.json) {
-    root.set("outputs", Json::strings(outputs));
-    std::printf("%s\n", root.dump().c_str());
+    std::printf("%s\n", r.json.dump().c_str());
     return 0;
   }
+  const std::vector<ConvergeLevel>& levels = r.levels;
+  const std::string& description = r.description;
+  const SolverReport &first_solver = r.first_solver, &iterative_solver = r.iterative_solver;
+  const int iterative_levels = r.iterative_levels;
+  const std::vector<std::string>& outputs = r.outputs;
+  std::vector<const ReportField*> columns;
+  for (const auto& f : levels.front().fields)
+    if (f.column) columns.push_back(&f);
   std::printf("knotwork converge %s: %s\n", c.path.c_str(), description.c_str());
   if (!first_solver.note.empty()) std::printf("  note     %s\n", first_solver.note.c_str());
   if (iterative_levels > 0)
@@ -171,7 +182,7 @@ int converge_command(const ConvergeOptions& o) {
   for (const ReportField* f : columns) std::printf(" %*s", f->width > 0 ? f->width : 12, f->key.c_str());
   std::printf(" %12s %10s %14s %8s %14s %8s\n", "h", "dofs", "L2 error", "rate", "H1-semi error", "rate");
   for (size_t l = 0; l < levels.size(); ++l) {
-    const Level& v = levels[l];
+    const ConvergeLevel& v = levels[l];
     std::printf("%5zu", l);
     for (const ReportField* f : columns) {
       const ReportField* mine = column_of(v, f->key);

@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "app/commands.hpp"
+#include "app/studies.hpp"
 #include "cases/json_output.hpp"
 #include "basis/tmesh/partition_topology.hpp"
 #include "basis/tmesh/spline_dimension.hpp"
@@ -10,50 +11,90 @@
 
 namespace knotwork {
 
-int dimension_command(const DimensionOptions& o) {
-  const PartitionDescription p = load_partition(o.file);
-  const RectangularPartition partition(p.cells);
+namespace {
+
+// Everything `knotwork dimension` computes for one partition.
+struct DimensionStudy {
+  explicit DimensionStudy(const PartitionDescription& description) : p(description), partition(description.cells) {}
+  PartitionDescription p;
+  RectangularPartition partition;
+  DimensionResult r;
+  double seconds = 0;
+  PartitionTopology topo;
+  bool weller_applies = false, highest = false;
+  long weller = 0;
+  std::vector<std::string> hypotheses;
+  ConformalityCount cofactor;
+};
+
+DimensionStudy dimension_study(const PartitionDescription& p, bool exact) {
+  DimensionStudy d(p);
   const auto t0 = std::chrono::steady_clock::now();
-  const DimensionResult r =
-      spline_space_dimension(partition, p.m, p.n, p.alpha, p.beta, o.exact ? RankMethod::kExact : RankMethod::kModular);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const PartitionTopology topo = partition_topology(partition);
-  using K = PartitionTopology::KnotKind;
+  d.r = spline_space_dimension(d.partition, p.m, p.n, p.alpha, p.beta, exact ? RankMethod::kExact : RankMethod::kModular);
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  d.topo = partition_topology(d.partition);
   // Weller's Prop. 4.2 count applies to C^{d-1} splines of equal bi-degree d.
-  const bool weller_applies = p.m == p.n && p.alpha == p.m - 1 && p.beta == p.n - 1;
-  const long weller = weller_applies ? weller_dimension_formula(topo, p.m) : 0;
-  const std::vector<std::string> hypotheses = weller_applies ? weller_hypotheses_violations(topo, p.m)
-                                                             : std::vector<std::string>{};
+  d.weller_applies = p.m == p.n && p.alpha == p.m - 1 && p.beta == p.n - 1;
+  if (d.weller_applies) {
+    d.weller = weller_dimension_formula(d.topo, p.m);
+    d.hypotheses = weller_hypotheses_violations(d.topo, p.m);
+  }
   // The smoothing cofactor count and the diagonalizable-mesh formula are for highest smoothness.
-  const bool highest = p.alpha == p.m - 1 && p.beta == p.n - 1;
-  const ConformalityCount cofactor = highest ? conformality_count(topo, p.m, p.n) : ConformalityCount{};
+  d.highest = p.alpha == p.m - 1 && p.beta == p.n - 1;
+  if (d.highest) d.cofactor = conformality_count(d.topo, p.m, p.n);
+  return d;
+}
+
+Json dimension_json(const std::string& file, const DimensionStudy& d) {
+  using K = PartitionTopology::KnotKind;
+  const PartitionDescription& p = d.p;
+  const DimensionResult& r = d.r;
+  const PartitionTopology& topo = d.topo;
+  Json j = Json::object();
+  j.set("file", file).set("cells", d.partition.num_cells())
+      .set("degree", Json::array().push(double(p.m)).push(double(p.n)))
+      .set("smoothness", Json::array().push(double(p.alpha)).push(double(p.beta)))
+      .set("unknowns", r.unknowns).set("constraints", r.constraints).set("rank", r.rank)
+      .set("dimension_bruteforce", r.dimension).set("exact", r.exact ? "rational" : "two primes")
+      .set("seconds", d.seconds).set("vertices", static_cast<int>(topo.vertices.size()))
+      .set("interior_vertices", topo.interior_vertices()).set("t_nodes", topo.t_nodes())
+      .set("crossings", topo.crossings()).set("interior_edges", topo.interior_edges())
+      .set("knot_lines", topo.count(K::kLine)).set("knot_rays", topo.count(K::kRay))
+      .set("knot_segments", topo.count(K::kSegment)).set("vanished_segments", topo.vanished_segments(p.m, p.n));
+  if (d.weller_applies) j.set("weller_prop_4_2", d.weller).set("weller_hypotheses_failed", Json::strings(d.hypotheses));
+  else j.set_null("weller_prop_4_2");
+  if (d.highest) {
+    j.set("dimension_cofactor", d.cofactor.dimension).set("conformality_rows", d.cofactor.conformality_rows)
+        .set("conformality_rank", d.cofactor.conformality_rank).set_bool("diagonalizable", d.cofactor.diagonalizable);
+    if (d.cofactor.formula) j.set("dimension_formula", *d.cofactor.formula); else j.set_null("dimension_formula");
+  } else {
+    j.set_null("dimension_cofactor").set_null("diagonalizable").set_null("dimension_formula");
+  }
+  return j;
+}
+
+}  // namespace
+
+Json dimension_json(const PartitionDescription& partition, const std::string& name, bool exact) {
+  return dimension_json(name, dimension_study(partition, exact));
+}
+
+int dimension_command(const DimensionOptions& o) {
+  const DimensionStudy d = dimension_study(load_partition(o.file), o.exact);
   if (o.json) {
-    Json j = Json::object();
-    j.set("file", o.file).set("cells", partition.num_cells())
-        .set("degree", Json::array().push(double(p.m)).push(double(p.n)))
-        .set("smoothness", Json::array().push(double(p.alpha)).push(double(p.beta)))
-        .set("unknowns", r.unknowns).set("constraints", r.constraints).set("rank", r.rank)
-        .set("dimension_bruteforce", r.dimension).set("exact", r.exact ? "rational" : "two primes")
-        .set("seconds", seconds).set("vertices", static_cast<int>(topo.vertices.size()))
-        .set("interior_vertices", topo.interior_vertices()).set("t_nodes", topo.t_nodes())
-        .set("crossings", topo.crossings()).set("interior_edges", topo.interior_edges())
-        .set("knot_lines", topo.count(K::kLine)).set("knot_rays", topo.count(K::kRay))
-        .set("knot_segments", topo.count(K::kSegment)).set("vanished_segments", topo.vanished_segments(p.m, p.n));
-    if (weller_applies) {
-      j.set("weller_prop_4_2", weller).set("weller_hypotheses_failed", Json::strings(hypotheses));
-    } else {
-      j.set_null("weller_prop_4_2");
-    }
-    if (highest) {
-      j.set("dimension_cofactor", cofactor.dimension).set("conformality_rows", cofactor.conformality_rows)
-          .set("conformality_rank", cofactor.conformality_rank).set_bool("diagonalizable", cofactor.diagonalizable);
-      if (cofactor.formula) j.set("dimension_formula", *cofactor.formula); else j.set_null("dimension_formula");
-    } else {
-      j.set_null("dimension_cofactor").set_null("diagonalizable").set_null("dimension_formula");
-    }
-    std::printf("%s\n", j.dump().c_str());
+    std::printf("%s\n", dimension_json(o.file, d).dump().c_str());
     return 0;
   }
+  using K = PartitionTopology::KnotKind;
+  const PartitionDescription& p = d.p;
+  const RectangularPartition& partition = d.partition;
+  const DimensionResult& r = d.r;
+  const double seconds = d.seconds;
+  const PartitionTopology& topo = d.topo;
+  const bool weller_applies = d.weller_applies, highest = d.highest;
+  const long weller = d.weller;
+  const std::vector<std::string>& hypotheses = d.hypotheses;
+  const ConformalityCount& cofactor = d.cofactor;
   std::printf("knotwork dimension %s\n", o.file.c_str());
   std::printf("  space      S(%d, %d, %d, %d): bi-degree (%d, %d), C^%d in x, C^%d in y, %d cells\n", p.m, p.n, p.alpha,
               p.beta, p.m, p.n, p.alpha, p.beta, partition.num_cells());

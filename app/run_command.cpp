@@ -4,11 +4,9 @@
 #include <optional>
 
 #include "app/commands.hpp"
-#include "cases/json_output.hpp"
-#include "cases/output_files.hpp"
-#include "app/pipeline.hpp"
 #include "app/progress.hpp"
 #include "app/report.hpp"
+#include "app/studies.hpp"
 #include "solver/input_error.hpp"
 #include "solver/vtk_output.hpp"
 
@@ -20,91 +18,108 @@ double since(std::chrono::steady_clock::time_point t) {
 }
 }  // namespace
 
-int run_command(const RunOptions& o) {
+double RunOutcome::total_without_output() const {
+  const PoissonTimings& tm = solution.timings;
+  return tm.setup + tm.assembly + tm.analysis + tm.factorization + tm.solve + tm.preconditioner + tm.iterations + tm.errors;
+}
+
+void write_run_output(const CaseDescription& c, const SplineSpace& space, const PoissonSolution& s, OutputStage& stage) {
+  const ExactSolution* exact = c.problem.exact ? &*c.problem.exact : nullptr;
+  CellFields cell_fields;
+  if (s.cell_h1_squared.size() > 0) cell_fields.emplace_back("h1_error_squared", s.cell_h1_squared);
+  if (c.write_bezier)
+    write_bezier_vtu(stage.stage("solution.vtu"), space.mesh(), space.geometry(), s.coefficients, exact, cell_fields,
+                     s.exact_mean);
+  if (c.write_sampled)
+    write_sampled_vtu(stage.stage("solution_sampled.vtu"), space.mesh(), space.geometry(), s.coefficients, exact,
+                      c.samples, s.exact_mean);
+}
+
+RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
+                     const ProgressFunction& progress) {
   using clock = std::chrono::steady_clock;
+  std::optional<OutputStage> stage;
+  if (output_directory) stage.emplace(*output_directory);
+  const auto say = [&](const std::string& what) { if (progress) progress(what); };
+  RunOutcome r;
+  say("building the space ([space] family = \"" + c.family + "\")");
+  auto t = clock::now();
+  r.space = space_family(c).build(c, 0, say);
+  const double t_space = since(t);
+  r.description = r.space->description();
+  r.solution = solve_case(c, *r.space, ordering, say, &r.solver);
+  r.solution.timings.setup += t_space;
+  r.fields = r.space->report();
+  t = clock::now();
+  const std::vector<ReportField> checks = r.space->check_solution(r.solution.coefficients);
+  r.seconds_checks = since(t);
+  r.fields.insert(r.fields.end(), checks.begin(), checks.end());
+  if (stage) {
+    say("writing ParaView output");
+    t = clock::now();
+    write_run_output(c, *r.space, r.solution, *stage);
+    r.outputs = stage->commit();
+    r.seconds_output = since(t);
+  }
+  return r;
+}
+
+Json run_json(const CaseDescription& c, const RunOutcome& r) {
+  const PoissonSolution& s = r.solution;
+  const PoissonTimings& tm = s.timings;
+  Json timings = Json::object();
+  timings.set("setup", tm.setup).set("assembly", tm.assembly).set("analysis", tm.analysis)
+      .set("factorization", tm.factorization).set("solve", tm.solve).set("preconditioner", tm.preconditioner)
+      .set("iterations", tm.iterations).set("errors", tm.errors)
+      .set("checks", r.seconds_checks).set("output", r.seconds_output).set("total_without_output", r.total_without_output());
+  Json j = Json::object();
+  j.set("case", c.path).set("family", c.family).set("space", r.description)
+      .set("degree", Json::array().push(double(r.space->degree()[0])).push(double(r.space->degree()[1])))
+      .set("cells", r.space->mesh().num_cells()).set("dofs", s.num_functions).set("free_dofs", s.num_free)
+      .set("matrix_nonzeros", s.matrix_nonzeros).set("factor_nonzeros", s.cholesky.factor_nonzeros)
+      .set("refinement_correction", s.cholesky.refinement_correction);
+  if (s.errors) j.set("l2_error", s.errors->l2).set("h1_seminorm_error", s.errors->h1_semi).set("h1_error", s.errors->h1);
+  else j.set_null("l2_error").set_null("h1_seminorm_error").set_null("h1_error");
+  if (s.zero_mean) j.set("area", s.area).set("source_mean", s.source_mean).set("exact_mean", s.exact_mean);
+  Json sj = Json::object();
+  sj.set("method", r.solver.method);
+  if (r.solver.method == "iterative")
+    sj.set("preconditioner", r.solver.preconditioner).set("iterations", s.iterative.iterations)
+        .set("relative_residual", s.iterative.relative_residual).set("backward_error", s.iterative.backward_error)
+        .set("tolerance", c.solver.tolerance);
+  j.set("solver", sj);
+  add_fields(j, r.fields);
+  std::vector<std::string> notes = r.space->notes();
+  if (!r.solver.note.empty()) notes.push_back(r.solver.note);
+  j.set("notes", Json::strings(notes));
+  j.set("timings", timings).set("outputs", Json::strings(r.outputs));
+  return j;
+}
+
+int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
-  const SpaceFamily& family = space_family(c);
-  family.override_options(c, o.degree, o.elements);
+  space_family(c).override_options(c, o.degree, o.elements);
   override_solver(c, o.solver, o.tolerance);
   c.allow_unverified_space = o.allow_unverified_space;
   const Ordering ordering = parse_ordering(o.ordering);
-  std::optional<OutputStage> stage;
-  if (!o.no_output) stage.emplace(o.out.empty() ? c.output_directory : o.out);
+  const std::string out = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);
-
-  progress("building the space ([space] family = \"" + c.family + "\")");
-  auto t = clock::now();
-  const std::unique_ptr<SplineSpace> space = family.build(c, 0, [&](const std::string& what) { progress(what); });
-  const double t_space = since(t);
-  const std::string description = space->description();
-
-  SolverReport solver;
-  PoissonSolution s = solve_case(c, *space, ordering, [&](const std::string& what) { progress(what); }, &solver);
-  s.timings.setup += t_space;
-  std::vector<ReportField> fields = space->report();
-  t = clock::now();
-  const std::vector<ReportField> checks = space->check_solution(s.coefficients);
-  const double t_checks = since(t);
-  fields.insert(fields.end(), checks.begin(), checks.end());
-
-  std::vector<std::string> outputs;
-  double t_output = 0;
-  if (stage) {
-    progress("writing ParaView output");
-    t = clock::now();
-    const ExactSolution* exact = c.problem.exact ? &*c.problem.exact : nullptr;
-    CellFields cell_fields;
-    if (s.cell_h1_squared.size() > 0) cell_fields.emplace_back("h1_error_squared", s.cell_h1_squared);
-    if (c.write_bezier)
-      write_bezier_vtu(stage->stage("solution.vtu"), space->mesh(), space->geometry(), s.coefficients, exact, cell_fields,
-                       s.exact_mean);
-    if (c.write_sampled)
-      write_sampled_vtu(stage->stage("solution_sampled.vtu"), space->mesh(), space->geometry(), s.coefficients, exact,
-                        c.samples, s.exact_mean);
-    outputs = stage->commit();
-    t_output = since(t);
-  }
-  const PoissonTimings& tm = s.timings;
-  const double total =
-      tm.setup + tm.assembly + tm.analysis + tm.factorization + tm.solve + tm.preconditioner + tm.iterations + tm.errors;
-
+  const RunOutcome r = run_study(c, ordering, o.no_output ? nullptr : &out, [&](const std::string& w) { progress(w); });
   if (o.json) {
-    Json timings = Json::object();
-    timings.set("setup", tm.setup).set("assembly", tm.assembly).set("analysis", tm.analysis)
-        .set("factorization", tm.factorization).set("solve", tm.solve).set("preconditioner", tm.preconditioner)
-        .set("iterations", tm.iterations).set("errors", tm.errors)
-        .set("checks", t_checks).set("output", t_output).set("total_without_output", total);
-    Json j = Json::object();
-    j.set("case", c.path).set("family", c.family).set("space", description)
-        .set("degree", Json::array().push(double(space->degree()[0])).push(double(space->degree()[1])))
-        .set("cells", space->mesh().num_cells()).set("dofs", s.num_functions).set("free_dofs", s.num_free)
-        .set("matrix_nonzeros", s.matrix_nonzeros).set("factor_nonzeros", s.cholesky.factor_nonzeros)
-        .set("refinement_correction", s.cholesky.refinement_correction);
-    if (s.errors) j.set("l2_error", s.errors->l2).set("h1_seminorm_error", s.errors->h1_semi).set("h1_error", s.errors->h1);
-    else j.set_null("l2_error").set_null("h1_seminorm_error").set_null("h1_error");
-    if (s.zero_mean) j.set("area", s.area).set("source_mean", s.source_mean).set("exact_mean", s.exact_mean);
-    Json sj = Json::object();
-    sj.set("method", solver.method);
-    if (solver.method == "iterative")
-      sj.set("preconditioner", solver.preconditioner).set("iterations", s.iterative.iterations)
-          .set("relative_residual", s.iterative.relative_residual).set("backward_error", s.iterative.backward_error)
-          .set("tolerance", c.solver.tolerance);
-    j.set("solver", sj);
-    add_fields(j, fields);
-    std::vector<std::string> notes = space->notes();
-    if (!solver.note.empty()) notes.push_back(solver.note);
-    j.set("notes", Json::strings(notes));
-    j.set("timings", timings).set("outputs", Json::strings(outputs));
-    std::printf("%s\n", j.dump().c_str());
+    std::printf("%s\n", run_json(c, r).dump().c_str());
     return 0;
   }
+  const PoissonSolution& s = r.solution;
+  const PoissonTimings& tm = s.timings;
+  const SolverReport& solver = r.solver;
+  const double total = r.total_without_output();
   std::printf("knotwork run %s%s\n", c.path.c_str(), c.title.empty() ? "" : ("  (" + c.title + ")").c_str());
-  std::printf("  space    %s, %d cells\n", description.c_str(), space->mesh().num_cells());
-  for (const auto& n : space->notes()) std::printf("  note     %s\n", n.c_str());
+  std::printf("  space    %s, %d cells\n", r.description.c_str(), r.space->mesh().num_cells());
+  for (const auto& n : r.space->notes()) std::printf("  note     %s\n", n.c_str());
   if (!solver.note.empty()) std::printf("  note     %s\n", solver.note.c_str());
   std::printf("  dofs     %d functions, %d unknowns after %s, %ld stored matrix entries\n", s.num_functions, s.num_free,
               s.zero_mean ? "pinning one (zero mean)" : "Dirichlet elimination", s.matrix_nonzeros);
-  print_field_lines(fields);
+  print_field_lines(r.fields);
   if (s.zero_mean)
     std::printf("  surface  area %.6f; mean %.3e removed from the source and %.3e from the exact solution\n", s.area,
                 s.source_mean, s.exact_mean);
@@ -117,12 +132,12 @@ int run_command(const RunOptions& o) {
   if (solver.method == "iterative")
     std::printf("  time     setup %.3f s, assembly %.3f s, preconditioner %.3f s, iterations %.3f s, errors %.3f s"
                 " (total %.3f s); output %.3f s\n",
-                tm.setup, tm.assembly, tm.preconditioner, tm.iterations, tm.errors, total, t_output);
+                tm.setup, tm.assembly, tm.preconditioner, tm.iterations, tm.errors, total, r.seconds_output);
   else
     std::printf("  time     setup %.3f s, assembly %.3f s, analysis %.3f s, factorization %.3f s, solve %.3f s, errors %.3f s"
                 " (total %.3f s); output %.3f s\n",
-                tm.setup, tm.assembly, tm.analysis, tm.factorization, tm.solve, tm.errors, total, t_output);
-  for (const auto& p : outputs) std::printf("  output   %s\n", p.c_str());
+                tm.setup, tm.assembly, tm.analysis, tm.factorization, tm.solve, tm.errors, total, r.seconds_output);
+  for (const auto& p : r.outputs) std::printf("  output   %s\n", p.c_str());
   return 0;
 }
 

@@ -58,7 +58,10 @@ void require_highest_smoothness(const PartitionDescription& p, const std::string
 }
 
 PartitionDescription load_partition(const std::string& path, bool need_degree) {
-  const DocumentNode root = parse_document(path);
+  return load_partition_document(parse_document(path), path, need_degree);
+}
+
+PartitionDescription load_partition_document(const DocumentNode& root, const std::string& path, bool need_degree) {
   CaseReader r(path);
   r.check_keys(root, "", {"cells", "grid", "segments", "degree", "smoothness", "title", "description"});
   PartitionDescription d;

@@ -9,6 +9,7 @@
 
 #include "basis/core/nurbs_patch.hpp"
 #include "basis/tmesh/rectangular_partition.hpp"
+#include "cases/document_node.hpp"
 #include "solver/poisson_problem.hpp"
 
 namespace knotwork {
@@ -97,6 +98,8 @@ CaseDescription load_case(const std::string& path);
 // The same from TOML text (`name` stands for the file in messages; relative paths in it
 // resolve against the current folder).
 CaseDescription load_case_text(const std::string& toml_text, const std::string& name);
+// The same from a document built in memory (the Python module's dict cases).
+CaseDescription load_case_document(const DocumentNode& root, const std::string& name);
 
 // --solver / --tolerance with the same validation as [solver] (0: not given).
 void override_solver(CaseDescription& c, const std::string& method, double tolerance);
@@ -115,6 +118,8 @@ struct PartitionDescription {
 // Throws InputError naming the file and field (or the offending cells). Without need_degree
 // the file may omit `degree` (a case's [space] tmesh gives its own).
 PartitionDescription load_partition(const std::string& path, bool need_degree = true);
+// The same from a parsed document (`name` stands for the file in messages).
+PartitionDescription load_partition_document(const DocumentNode& root, const std::string& name, bool need_degree = true);
 
 // For constructions of the highest smoothness only: throws InputError naming the file and
 // `smoothness` unless alpha = m - 1 and beta = n - 1; `space` says which construction.

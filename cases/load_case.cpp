@@ -57,6 +57,8 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
 
 CaseDescription load_case(const std::string& path) { return read_case(parse_document(path), path); }
 
+CaseDescription load_case_document(const DocumentNode& root, const std::string& name) { return read_case(root, name); }
+
 CaseDescription load_case_text(const std::string& toml_text, const std::string& name) {
   return read_case(parse_document_text(toml_text, name), name);
 }

@@ -1,0 +1,72 @@
+#pragma once
+// The three studies a user runs (one solve, a convergence study, an adaptive loop), each
+// written once and shared by the command line (app/*_command.cpp) and the Python module
+// (python/): both print or return the same JSON object, so a Python result is the CLI's.
+// `output_directory` null: nothing is written (the Python default); otherwise the files go
+// through an OutputStage, so a failed study leaves none behind.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/adaptive.hpp"
+#include "app/pipeline.hpp"
+#include "cases/json_output.hpp"
+#include "cases/output_files.hpp"
+
+namespace knotwork {
+
+struct RunOutcome {
+  std::unique_ptr<SplineSpace> space;
+  PoissonSolution solution;
+  SolverReport solver;
+  std::string description;
+  std::vector<ReportField> fields;  // the family's report and solution checks
+  std::vector<std::string> outputs;
+  double seconds_checks = 0, seconds_output = 0;
+  double total_without_output() const;
+};
+RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
+                     const ProgressFunction& progress);
+// `knotwork run --json`'s object.
+Json run_json(const CaseDescription& c, const RunOutcome& r);
+// The ParaView files of a solved case (solution.vtu and/or solution_sampled.vtu, as [output]
+// says) into `stage`.
+void write_run_output(const CaseDescription& c, const SplineSpace& space, const PoissonSolution& s, OutputStage& stage);
+
+struct ConvergeLevel {
+  double h = 0;
+  int dofs = 0, cells = 0, free = 0;
+  double l2 = 0, h1_semi = 0, h1 = 0;
+  double l2_rate = 0, h1_rate = 0;  // NaN on the first level
+  double seconds = 0;
+  std::vector<ReportField> fields;  // the family's (report and solution checks)
+};
+struct ConvergeOutcome {
+  std::vector<ConvergeLevel> levels;
+  std::string description;
+  SolverReport first_solver, iterative_solver;  // of level 0, and of a level solved by CG
+  int iterative_levels = 0;
+  Json json = Json::object();  // convergence.json's object ("outputs" added when written)
+  std::vector<std::string> outputs;
+};
+// Levels 0..levels-1 of uniform refinement; checks the level count and the exact solution.
+ConvergeOutcome converge_study(const CaseDescription& c, int levels, Ordering ordering,
+                               const std::string* output_directory, const ProgressFunction& progress);
+
+struct AdaptOutcome {
+  std::vector<AdaptiveStep> steps;
+  std::string description;
+  Json json = Json::object();  // adapt.json's object
+  std::vector<std::string> outputs;
+};
+// The adaptive loop of c.adapt (steps, theta and max_dofs checked here).
+AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
+                         const ProgressFunction& progress);
+
+// `knotwork basis --json`'s object for a case's space: the family's checks, partition of
+// unity and rank.
+Json basis_json(const CaseDescription& c, const SplineSpace& space);
+// `knotwork dimension --json`'s object for a T-mesh (partition); `name` stands for its file.
+Json dimension_json(const PartitionDescription& partition, const std::string& name, bool exact);
+
+}  // namespace knotwork
