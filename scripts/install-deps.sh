@@ -16,6 +16,7 @@ packages=(
   catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libmuparser-dev libginac-dev libgmp-dev
   libbenchmark-dev
+  pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
 )
 with_paraview=0
 if [[ "${1:-}" == "--paraview" ]]; then

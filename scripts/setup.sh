@@ -8,5 +8,8 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/build.sh"
 cd "$root"
 ./build/app/knotwork run cases/square_sinsin.toml
+PYTHONPATH="$root/build/python" /usr/bin/python3 -c \
+  'import knotwork; print("Python:", knotwork.run("cases/square_sinsin.toml"))'
 echo
 echo "Open results/square_sinsin/solution.vtu in ParaView (exact Bezier cells)."
+echo "From Python: export PYTHONPATH=$root/build/python (docs/PYTHON.md)."

@@ -1,0 +1,456 @@
+// knotwork._core: the studies of app/studies.hpp for Python, through pybind11. The public
+// API and its documentation are in knotwork/__init__.py; this file converts cases (paths or
+// dicts) in, and the studies' JSON objects, solutions and spaces out.
+// - Results are the CLI's own JSON objects (run_json, ...), so Python and `--json` agree
+//   bit for bit; arrays (coefficients, extraction matrices) are numpy views of the C++
+//   data, kept alive by the object that owns them.
+// - Every long call releases the GIL; the progress hook reacquires it to call the user's
+//   callback and to let Ctrl-C (KeyboardInterrupt) stop the study between its phases.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "app/studies.hpp"
+#include "basis/core/bezier_mesh_checks.hpp"
+#include "solver/error_norms.hpp"
+#include "solver/expression.hpp"
+#include "solver/input_error.hpp"
+
+namespace py = pybind11;
+
+extern "C" void openblas_set_num_threads(int);
+
+namespace knotwork {
+namespace {
+
+// ---- dict cases: the same document tree a TOML or JSON file becomes ----
+
+constexpr int kMaxDepth = 200;  // as for JSON files
+
+std::string member_name(const std::string& where, const std::string& key, int depth) {
+  if (depth == 0) return key;
+  if (depth == 1) return "[" + where + "] " + key;
+  return where + "." + key;
+}
+
+[[noreturn]] void refuse(const std::string& name, const std::string& where, const std::string& what) {
+  throw InputError(name + ": " + (where.empty() ? std::string("case") : where) + ": " + what);
+}
+
+DocumentNode to_document(py::handle v, const std::string& name, const std::string& where, int depth) {
+  if (depth > kMaxDepth) refuse(name, where, "nested deeper than " + std::to_string(kMaxDepth) + " levels");
+  if (v.is_none()) refuse(name, where, "None is not a value (leave the key out for the default)");
+  if (py::isinstance<py::bool_>(v)) return DocumentNode::boolean(v.cast<bool>());
+  if (py::isinstance<py::float_>(v)) return DocumentNode::floating(v.cast<double>());
+  if (PyIndex_Check(v.ptr())) {  // Python and numpy integers
+    int overflow = 0;
+    py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(v.ptr()));
+    if (!index) throw py::error_already_set();
+    const long long x = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+    if (overflow) refuse(name, where, "integer out of the 64-bit range");
+    return DocumentNode::integer(x);
+  }
+  if (py::isinstance<py::str>(v)) return DocumentNode::string(v.cast<std::string>());
+  if (py::isinstance<py::dict>(v)) {
+    DocumentNode t = DocumentNode::table();
+    for (auto item : v.cast<py::dict>()) {
+      if (!py::isinstance<py::str>(item.first))
+        refuse(name, where, "key " + py::repr(item.first).cast<std::string>() + " is not a string");
+      const std::string key = item.first.cast<std::string>();
+      t.insert(key, to_document(item.second, name, member_name(where, key, depth), depth + 1));
+    }
+    return t;
+  }
+  if (py::hasattr(v, "tolist") && py::hasattr(v, "ndim"))  // numpy arrays and scalars
+    return to_document(v.attr("tolist")(), name, where, depth);
+  if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
+    DocumentNode a = DocumentNode::array();
+    size_t i = 0;
+    for (auto item : v) {
+      a.push_back(to_document(item, name, where + "[" + std::to_string(i) + "]", depth + 1));
+      ++i;
+    }
+    return a;
+  }
+  refuse(name, where,
+         "a value of type " + py::str(py::type::of(v).attr("__name__")).cast<std::string>() +
+             " is not a case-file value (use numbers, strings, booleans, lists and dicts)");
+}
+
+// A case given as a path (str or os.PathLike) or as a dict in the case-file schema.
+CaseDescription load_any_case(py::handle c, const std::string& name) {
+  if (py::isinstance<py::dict>(c)) return load_case_document(to_document(c, name, "", 0), name);
+  if (py::isinstance<py::str>(c) || py::hasattr(c, "__fspath__"))
+    return load_case(py::module_::import("os").attr("fspath")(c).cast<std::string>());
+  throw InputError("case: give a case-file path or a dict in the case-file schema, not a " +
+                   py::str(py::type::of(c).attr("__name__")).cast<std::string>());
+}
+
+// ---- progress, Ctrl-C, and the GIL ----
+
+// Thrown through the C++ study when the callback raised or Ctrl-C was pressed. Not a
+// std::exception, so that no handler on the way turns it into an InputError.
+struct PythonRaised {};
+
+class PythonHooks {
+ public:
+  explicit PythonHooks(py::object callback) : callback_(std::move(callback)) {}
+  // Called with the GIL released; takes it for the callback and the signal check.
+  ProgressFunction progress() {
+    return [this](const std::string& what) {
+      py::gil_scoped_acquire gil;
+      try {
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        if (!callback_.is_none()) callback_(what);
+      } catch (py::error_already_set& e) {
+        error_.emplace(std::move(e));
+        throw PythonRaised{};
+      }
+    };
+  }
+  // Runs f(progress) without the GIL; a Python error raised inside is raised again here.
+  template <class F>
+  auto call(F&& f) {
+    try {
+      py::gil_scoped_release nogil;
+      return f(progress());
+    } catch (const PythonRaised&) {
+      py::error_already_set e = std::move(*error_);
+      error_.reset();
+      throw e;
+    }
+  }
+
+ private:
+  py::object callback_;
+  std::optional<py::error_already_set> error_;
+};
+
+// ---- overrides of the case, the same as the command line's options ----
+
+struct Overrides {
+  int degree = 0, elements = 0;
+  std::string solver, ordering = "amd";
+  double tolerance = 0;
+  bool allow_unverified_space = false;
+};
+
+Overrides read_overrides(const py::dict& d) {
+  Overrides o;
+  for (auto item : d) {
+    const std::string key = item.first.cast<std::string>();
+    py::handle v = item.second;
+    if (v.is_none()) continue;
+    auto positive_int = [&](int& out) {
+      if (py::isinstance<py::bool_>(v) || !PyIndex_Check(v.ptr()))
+        throw InputError(key + ": must be an integer, got " + py::repr(v).cast<std::string>());
+      const long long x = py::int_(py::reinterpret_borrow<py::object>(v)).cast<long long>();
+      if (x < 1 || x > std::numeric_limits<int>::max()) throw InputError(key + ": must be >= 1, got " + std::to_string(x));
+      out = static_cast<int>(x);
+    };
+    auto text = [&](std::string& out) {
+      if (!py::isinstance<py::str>(v)) throw InputError(key + ": must be a string, got " + py::repr(v).cast<std::string>());
+      out = v.cast<std::string>();
+    };
+    if (key == "degree") positive_int(o.degree);
+    else if (key == "elements") positive_int(o.elements);
+    else if (key == "solver") text(o.solver);
+    else if (key == "ordering") text(o.ordering);
+    else if (key == "tolerance") {
+      if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::float_>(v) || PyIndex_Check(v.ptr())))
+        throw InputError("tolerance: must be a number, got " + py::repr(v).cast<std::string>());
+      o.tolerance = py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
+      if (!(o.tolerance > 0 && o.tolerance < 1))
+        throw InputError("tolerance: must be in (0, 1), got " + py::repr(v).cast<std::string>());
+    } else if (key == "allow_unverified_space") o.allow_unverified_space = py::bool_(py::reinterpret_borrow<py::object>(v)).cast<bool>();
+    else throw std::logic_error("unknown override " + key);  // knotwork/__init__.py passes only these
+  }
+  return o;
+}
+
+CaseDescription prepared_case(py::handle case_, const std::string& name, const py::dict& overrides, Ordering* ordering) {
+  CaseDescription c = load_any_case(case_, name);
+  const Overrides o = read_overrides(overrides);
+  space_family(c).override_options(c, o.degree, o.elements);
+  override_solver(c, o.solver, o.tolerance);
+  c.allow_unverified_space = o.allow_unverified_space;
+  if (ordering) *ordering = parse_ordering(o.ordering);
+  return c;
+}
+
+std::optional<std::string> output_of(const py::object& output) {
+  if (output.is_none()) return std::nullopt;
+  return py::module_::import("os").attr("fspath")(output).cast<std::string>();
+}
+
+// ---- numpy views ----
+
+template <class T>
+py::array view(const T* data, std::vector<py::ssize_t> shape, std::vector<py::ssize_t> strides, py::handle owner) {
+  py::array a(py::dtype::of<T>(), std::move(shape), std::move(strides), data, owner);
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+// ---- the space ----
+
+// The case is shared, never moved: a family's space may keep a reference to its case.
+using SharedCase = std::shared_ptr<const CaseDescription>;
+
+struct Space {
+  SharedCase case_;
+  std::shared_ptr<const SplineSpace> space;
+  const CaseDescription& c() const { return *case_; }
+  const BezierMesh& mesh() const { return space->mesh(); }
+  int checked_cell(long cell) const {
+    if (cell < 0 || cell >= mesh().num_cells())
+      throw py::index_error("cell " + std::to_string(cell) + " out of range (the space has " +
+                            std::to_string(mesh().num_cells()) + " cells)");
+    return static_cast<int>(cell);
+  }
+};
+
+// Solution, exact solution and gradient on an (n+1) x (n+1) grid of each cell's reference
+// square, in physical space: arrays [cell, j, i] with i along u, j along v.
+py::dict sample(const CaseDescription& c, const SplineSpace& space, const PoissonSolution& s, int n) {
+  const BezierMesh& mesh = space.mesh();
+  const GeometryMap& geometry = space.geometry();
+  if (n < 1 || n > 256) throw InputError("sample: n must be in [1, 256], got " + std::to_string(n));
+  const py::ssize_t cells = mesh.num_cells(), m = n + 1, dim = geometry.dimension();
+  if (double(cells) * m * m * (2 * dim + 3) > 2.5e8)
+    throw InputError("sample: " + std::to_string(cells) + " cells x " + std::to_string(m * m) +
+                     " points would need more than 2 GB; use a smaller n");
+  py::array_t<double> points({cells, m, m, dim}), values({cells, m, m}), gradient({cells, m, m, dim});
+  std::optional<py::array_t<double>> exact;
+  if (c.problem.exact) exact.emplace(std::vector<py::ssize_t>{cells, m, m});
+  double *px = points.mutable_data(), *pu = values.mutable_data(), *pg = gradient.mutable_data();
+  double* pe = exact ? exact->mutable_data() : nullptr;
+  {
+    py::gil_scoped_release nogil;
+    Eigen::VectorXd u(m * m), v(m * m);
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < m; ++i) u[i + m * j] = double(i) / n, v[i + m * j] = double(j) / n;
+    std::optional<ExpressionEvaluator> ev;
+    if (c.problem.exact) ev.emplace(c.problem.exact->u);
+    GeometryAtPoints at;
+    for (int cell = 0; cell < cells; ++cell) {
+      geometry.evaluate(cell, u, v, at);
+      const Eigen::MatrixXd uh = evaluate_solution(mesh, geometry, s.coefficients, cell, u, v);
+      for (py::ssize_t k = 0; k < m * m; ++k) {
+        const py::ssize_t at_k = cell * m * m + k;
+        pu[at_k] = uh(k, 0);
+        for (int d = 0; d < dim; ++d) px[at_k * dim + d] = at.x(k, d), pg[at_k * dim + d] = uh(k, 1 + d);
+        if (pe)
+          pe[at_k] = (dim == 2 ? (*ev)(at.x(k, 0), at.x(k, 1)) : (*ev)(at.x(k, 0), at.x(k, 1), at.x(k, 2))) - s.exact_mean;
+      }
+    }
+  }
+  // Two triangles per little square, indices into the flattened points (for tripcolor).
+  py::array_t<long> triangles({cells * n * n * 2, py::ssize_t(3)});
+  long* t = triangles.mutable_data();
+  for (py::ssize_t cell = 0; cell < cells; ++cell)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const long a = cell * m * m + i + m * j, b = a + 1, d = a + m, e = d + 1;
+        *t++ = a, *t++ = b, *t++ = e;
+        *t++ = a, *t++ = e, *t++ = d;
+      }
+  py::dict r;
+  r["points"] = points;
+  r["solution"] = values;
+  r["gradient"] = gradient;
+  if (exact) {
+    r["exact"] = *exact;
+    r["error"] = py::array_t<double>(values.attr("__sub__")(*exact));
+  } else {
+    r["exact"] = py::none();
+    r["error"] = py::none();
+  }
+  r["triangles"] = triangles;
+  return r;
+}
+
+// ---- one solve ----
+
+struct Run {
+  SharedCase case_;
+  std::shared_ptr<RunOutcome> outcome;
+  const CaseDescription& c() const { return *case_; }
+};
+
+py::object json_to_python(const Json& j) { return py::module_::import("json").attr("loads")(j.dump(-1)); }
+
+}  // namespace
+}  // namespace knotwork
+
+PYBIND11_MODULE(_core, m) {
+  using namespace knotwork;
+  m.doc() = "knotwork's C++ core; use the package `knotwork`, which documents the API.";
+  static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      PyErr_SetString(input_error.ptr(), e.what());
+    }
+  });
+
+  py::class_<Space>(m, "Space")
+      .def_property_readonly("num_functions", [](const Space& s) { return s.mesh().num_functions(); })
+      .def_property_readonly("num_cells", [](const Space& s) { return s.mesh().num_cells(); })
+      .def_property_readonly("description", [](const Space& s) { return s.space->description(); })
+      .def_property_readonly("family", [](const Space& s) { return s.c().family; })
+      .def_property_readonly("degree", [](const Space& s) {
+        const std::array<int, 2> d = s.space->degree();
+        return py::make_tuple(d[0], d[1]);
+      })
+      .def_property_readonly("is_rational", [](const Space& s) { return s.mesh().is_rational(); })
+      .def_property_readonly("notes", [](const Space& s) { return s.space->notes(); })
+      .def("functions", [](py::object self, long cell) {
+        const Space& s = self.cast<const Space&>();
+        const std::span<const int> f = s.mesh().functions(s.checked_cell(cell));
+        return view(f.data(), {py::ssize_t(f.size())}, {py::ssize_t(sizeof(int))}, self);
+      })
+      .def("extraction", [](py::object self, long cell) {
+        const Space& s = self.cast<const Space&>();
+        const Eigen::MatrixXd& e = s.mesh().extraction(s.checked_cell(cell));
+        return view(e.data(), {py::ssize_t(e.rows()), py::ssize_t(e.cols())},
+                    {py::ssize_t(sizeof(double)), py::ssize_t(sizeof(double) * e.rows())}, self);
+      })
+      .def("weights", [](py::object self) {
+        const Space& s = self.cast<const Space&>();
+        const Eigen::VectorXd& w = s.mesh().weights();
+        return view(w.data(), {py::ssize_t(w.size())}, {py::ssize_t(sizeof(double))}, self);
+      })
+      .def("cell", [](const Space& s, long cell) {
+        const BezierCell& b = s.mesh().cell(s.checked_cell(cell));
+        py::dict d;
+        d["patch"] = b.patch;
+        d["degree"] = py::make_tuple(b.degree_u, b.degree_v);
+        d["parameter_box"] = py::make_tuple(b.u0, b.u1, b.v0, b.v1);
+        py::list sides;
+        for (int id : b.boundary)
+          sides.append(id < 0 ? py::object(py::none())
+                              : py::object(py::str(id < int(s.mesh().boundary_names().size())
+                                                       ? s.mesh().boundary_names()[id]
+                                                       : std::to_string(id))));
+        d["boundary"] = sides;
+        return d;
+      })
+      .def("partition_of_unity_error", [](const Space& s) {
+        py::gil_scoped_release nogil;
+        return partition_of_unity_error(s.mesh());
+      })
+      .def("rank", [](const Space& s) -> py::object {
+        long r;
+        {
+          py::gil_scoped_release nogil;
+          r = bezier_rank(s.mesh());
+        }
+        return r < 0 ? py::object(py::none()) : py::object(py::int_(r));
+      })
+      .def("report", [](const Space& s) {
+        std::optional<Json> j;
+        {
+          py::gil_scoped_release nogil;
+          j.emplace(basis_json(s.c(), *s.space));
+        }
+        return json_to_python(*j);
+      });
+
+  py::class_<Run>(m, "Run")
+      .def("summary", [](const Run& r) { return json_to_python(run_json(r.c(), *r.outcome)); })
+      .def_property_readonly("coefficients", [](py::object self) {
+        const Eigen::VectorXd& x = self.cast<const Run&>().outcome->solution.coefficients;
+        return view(x.data(), {py::ssize_t(x.size())}, {py::ssize_t(sizeof(double))}, self);
+      })
+      .def_property_readonly("cell_h1_error_squared", [](py::object self) {
+        const Eigen::VectorXd& x = self.cast<const Run&>().outcome->solution.cell_h1_squared;
+        return view(x.data(), {py::ssize_t(x.size())}, {py::ssize_t(sizeof(double))}, self);
+      })
+      .def_property_readonly("space", [](const Run& r) {
+        return Space{r.case_, std::shared_ptr<const SplineSpace>(r.outcome, r.outcome->space.get())};
+      })
+      .def("sample", [](const Run& r, int n) { return sample(r.c(), *r.outcome->space, r.outcome->solution, n); })
+      .def("write_paraview", [](const Run& r, py::object directory) {
+        const std::string dir = *output_of(directory);
+        py::gil_scoped_release nogil;
+        OutputStage stage(dir);
+        write_run_output(r.c(), *r.outcome->space, r.outcome->solution, stage);
+        return stage.commit();
+      });
+
+  m.def("run", [](py::object case_, const std::string& name, py::dict overrides, py::object output, py::object progress) {
+    Ordering ordering;
+    const SharedCase c = std::make_shared<const CaseDescription>(prepared_case(case_, name, overrides, &ordering));
+    const std::optional<std::string> out = output_of(output);
+    PythonHooks hooks(progress);
+    auto outcome = hooks.call([&](const ProgressFunction& p) {
+      return std::make_shared<RunOutcome>(run_study(*c, ordering, out ? &*out : nullptr, p));
+    });
+    return Run{c, std::move(outcome)};
+  });
+
+  m.def("converge", [](py::object case_, const std::string& name, int levels, py::dict overrides, py::object output,
+                       py::object progress) {
+    Ordering ordering;
+    const CaseDescription c = prepared_case(case_, name, overrides, &ordering);
+    const std::optional<std::string> out = output_of(output);
+    PythonHooks hooks(progress);
+    const Json j = hooks.call([&](const ProgressFunction& p) {
+      return converge_study(c, levels, ordering, out ? &*out : nullptr, p).json;
+    });
+    return json_to_python(j);
+  });
+
+  m.def("adapt", [](py::object case_, const std::string& name, py::dict overrides, int steps, double theta, long max_dofs,
+                    py::object output, py::object progress) {
+    Ordering ordering;
+    CaseDescription c = prepared_case(case_, name, overrides, &ordering);
+    check_adaptive_family(c);
+    if (steps) c.adapt.steps = steps;
+    if (theta) c.adapt.theta = theta;
+    if (max_dofs) c.adapt.max_dofs = max_dofs;
+    const std::optional<std::string> out = output_of(output);
+    PythonHooks hooks(progress);
+    const Json j = hooks.call([&](const ProgressFunction& p) {
+      return adapt_study(c, ordering, out ? &*out : nullptr, p).json;
+    });
+    return json_to_python(j);
+  });
+
+  m.def("space", [](py::object case_, const std::string& name, py::dict overrides, py::object progress) {
+    const SharedCase c = std::make_shared<const CaseDescription>(prepared_case(case_, name, overrides, nullptr));
+    PythonHooks hooks(progress);
+    std::shared_ptr<const SplineSpace> s =
+        hooks.call([&](const ProgressFunction& p) { return std::shared_ptr<const SplineSpace>(build_space(*c, 0, p)); });
+    return Space{c, std::move(s)};
+  });
+
+  m.def("dimension", [](py::object tmesh, const std::string& name, bool exact) {
+    PartitionDescription p;
+    std::string file = name;
+    if (py::isinstance<py::dict>(tmesh)) {
+      p = load_partition_document(to_document(tmesh, name, "", 0), name);
+    } else {
+      file = py::module_::import("os").attr("fspath")(tmesh).cast<std::string>();
+      p = load_partition(file);
+    }
+    std::optional<Json> j;
+    {
+      py::gil_scoped_release nogil;
+      j.emplace(dimension_json(p, file, exact));
+    }
+    return json_to_python(*j);
+  });
+
+  // OpenBLAS reads OPENBLAS_NUM_THREADS when it is loaded, which may have happened (numpy)
+  // before knotwork is imported: the package sets it through the library too.
+  m.def("set_blas_threads", [](int n) { openblas_set_num_threads(n); });
+}

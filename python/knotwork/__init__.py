@@ -1,0 +1,229 @@
+"""knotwork: isogeometric Poisson solves, convergence and adaptive studies from Python.
+
+A case is a case-file path (TOML or JSON, as for the command line) or a dict with the same
+keys; it is validated exactly like a file, and bad input raises :class:`InputError` with the
+CLI's one-line message. Every study returns what ``knotwork <command> --json`` prints, as
+Python dicts and lists, and the numbers are the CLI's to the last bit.
+
+    import knotwork
+    r = knotwork.run("cases/square_sinsin.toml", degree=3, elements=16)
+    print(r.dofs, r.l2_error, r.timings["assembly"])
+    study = knotwork.converge("cases/square_sinsin.toml", levels=4, degree=2)
+    print(study.column("h"), study.column("l2_error"))
+
+Long calls release the GIL (other Python threads run meanwhile), report their phases to an
+optional ``progress`` callback (called with one string per phase, e.g. "level 2/4:
+assembly"), and stop with KeyboardInterrupt on Ctrl-C at the next phase boundary (a
+factorization or a CG solve in progress completes first). Nothing is written to disk unless
+``output=`` names a directory.
+
+Threads: like the ``knotwork`` program, the module uses one OpenBLAS thread unless
+OPENBLAS_NUM_THREADS is set, and passive OpenMP waiting unless OMP_WAIT_POLICY is set
+(docs/PERFORMANCE.md: spinning threads collapse when cores are shared); OMP_NUM_THREADS
+sets the number of threads of the assembly.
+"""
+
+import os as _os
+
+_os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+_user_blas_threads = "OPENBLAS_NUM_THREADS" in _os.environ
+_os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as _np  # noqa: E402
+
+from . import _core  # noqa: E402
+from ._core import InputError  # noqa: E402
+
+if not _user_blas_threads:
+    _core.set_blas_threads(1)
+
+__all__ = ["run", "converge", "adapt", "space", "dimension", "InputError", "Result", "Study", "Space"]
+
+InputError.__doc__ = ("Bad input: a case, an option or a file that knotwork refuses. A ValueError; "
+                      "str(e) is the one-line message the command line prints.")
+Space = _core.Space
+Space.__doc__ = """A spline space built from a case (``knotwork.space(case)`` or ``Result.space``).
+
+Attributes: ``num_functions``, ``num_cells``, ``description``, ``family``, ``degree``,
+``is_rational``, ``notes``.
+Per cell ``c``: ``functions(c)`` (int32 ids of the functions alive on the cell),
+``extraction(c)`` (the matrix C with N_active = C B, B the cell's Bernstein polynomials
+ordered a + (p+1) b with a along u), ``cell(c)`` (patch, degree, parameter box and the
+boundary name of each side, bottom/right/top/left). ``weights()``: one weight per function for
+rational spaces (empty otherwise). Arrays are read-only views of the space's own data.
+Checks of ``knotwork basis``: ``partition_of_unity_error()``, ``rank()`` (numerical rank of
+all functions' Bezier coefficients; None when too large for the dense check), and
+``report()``: the whole ``knotwork basis --json`` object (family checks such as dimension
+counts included).
+"""
+
+_DICT_NAME = "<dict>"
+
+
+def _name(case, name):
+    if name is not None:
+        return str(name)
+    return _DICT_NAME if isinstance(case, dict) else ""
+
+
+def _overrides(degree, elements, solver, tolerance, ordering, allow_unverified_space):
+    return {"degree": degree, "elements": elements, "solver": solver, "tolerance": tolerance,
+            "ordering": ordering, "allow_unverified_space": allow_unverified_space}
+
+
+class Result:
+    """One solve of a case (``knotwork.run``).
+
+    The keys of ``knotwork run --json`` are in :attr:`data`; the common ones are attributes:
+    ``dofs``, ``cells``, ``l2_error``, ``h1_seminorm_error``, ``h1_error`` (None without an
+    exact solution), ``timings`` (seconds per phase: setup, assembly, analysis,
+    factorization, solve, preconditioner, iterations, errors, ...), ``solver`` (method,
+    preconditioner, iterations, residuals), ``notes``, ``family``, ``space_description``.
+    ``coefficients``: one per basis function (numpy, read-only, no copy). ``space``: the
+    :class:`Space` the case was solved on.
+    """
+
+    def __init__(self, core):
+        self._core = core
+        self.data = core.summary()
+
+    def __getattr__(self, key):
+        data = self.__dict__.get("data")
+        if data is not None and key in data:
+            return data[key]
+        raise AttributeError(f"knotwork.Result has no attribute {key!r}")
+
+    @property
+    def space_description(self):
+        return self.data["space"]
+
+    @property
+    def coefficients(self):
+        return self._core.coefficients
+
+    @property
+    def cell_h1_error_squared(self):
+        """Squared H1-seminorm error per cell (sums to h1_seminorm_error**2); empty without exact."""
+        return self._core.cell_h1_error_squared
+
+    @property
+    def space(self):
+        return self._core.space
+
+    def sample(self, n=8):
+        """The solution on an (n+1) x (n+1) grid of every cell's parameter square.
+
+        Returns a dict of numpy arrays: ``points`` [cell, j, i, dim] (physical points; dim 2,
+        or 3 on surfaces), ``solution`` and ``exact`` and ``error`` (= solution - exact)
+        [cell, j, i] (``exact``/``error`` None without an exact solution), ``gradient``
+        [cell, j, i, dim], and ``triangles`` (two per grid square, indices into the points
+        flattened to [cell*(n+1)**2 + j*(n+1) + i]) for matplotlib's ``tripcolor``::
+
+            s = r.sample(8)
+            x, y = s["points"][..., 0].ravel(), s["points"][..., 1].ravel()
+            plt.tripcolor(x, y, s["solution"].ravel(), triangles=s["triangles"], shading="gouraud")
+
+        ``pcolormesh`` works per cell: ``plt.pcolormesh(P[c, ..., 0], P[c, ..., 1], U[c])``.
+        """
+        return self._core.sample(int(n))
+
+    def write_paraview(self, directory):
+        """Writes the ParaView files of the case's [output] (solution.vtu, solution_sampled.vtu)
+        into ``directory``; returns their paths. All or nothing: a failure leaves no files."""
+        return self._core.write_paraview(directory)
+
+    def __repr__(self):
+        err = self.data.get("l2_error")
+        err = "no exact solution" if err is None else f"L2 error {err:.6e}"
+        return f"<knotwork.Result {self.data['family']}: {self.data['space']}, {self.dofs} dofs, {err}>"
+
+
+class Study(list):
+    """The levels of ``knotwork.converge`` or the steps of ``knotwork.adapt``: a list of dicts
+    with the keys of the CLI's JSON (``h``, ``dofs``, ``l2_error``, ``h1_seminorm_error``,
+    ``l2_rate``, ``h1_rate``, ... per level; ``dofs``, ``estimator``, ``marked``, ... per
+    step). The rest of the JSON object (``case``, ``family``, ``space``, ``solver``,
+    ``notes``, ``outputs``, ...) is in :attr:`info`. ``column(key)`` gives one key over all
+    entries as a float numpy array (NaN where null), ready for plotting.
+    """
+
+    def __init__(self, items, info):
+        super().__init__(items)
+        self.info = info
+
+    def column(self, key):
+        if self and key not in self[0]:
+            raise KeyError(f"{key!r}: not a key of the study's entries (they have {', '.join(self[0])})")
+        return _np.array([_np.nan if e.get(key) is None else e[key] for e in self], dtype=float)
+
+    def __repr__(self):
+        return f"<knotwork.Study {self.info.get('family')}: {self.info.get('space')}, {len(self)} entries>"
+
+
+def run(case, *, degree=None, elements=None, solver=None, tolerance=None, ordering="amd",
+        allow_unverified_space=False, output=None, progress=None, name=None):
+    """Solves a case once, like ``knotwork run``; returns a :class:`Result`.
+
+    case: a case-file path, or a dict in the case-file schema.
+    degree, elements: override [space] degree / elements (as --degree, --elements).
+    solver: "direct", "iterative" or "auto" (as --solver); tolerance: the iterative solve's
+    backward error (as --tolerance). ordering: CHOLMOD's fill-reducing ordering.
+    allow_unverified_space: as --allow-unverified-space.
+    output: a directory for the ParaView files (None: nothing is written).
+    progress: a callable taking one string per phase.
+    name: what a dict case is called in messages (default "<dict>").
+    Raises InputError for bad input, KeyboardInterrupt on Ctrl-C.
+    """
+    return Result(_core.run(case, _name(case, name),
+                            _overrides(degree, elements, solver, tolerance, ordering, allow_unverified_space),
+                            output, progress))
+
+
+def converge(case, levels=4, *, degree=None, elements=None, solver=None, tolerance=None, ordering="amd",
+             output=None, progress=None, name=None):
+    """A convergence study under uniform refinement, like ``knotwork converge``.
+
+    Returns a :class:`Study` of ``levels`` dicts (the ``levels`` of ``converge --json``).
+    The case needs an exact solution. ``output``: a directory for convergence.csv/json/svg
+    and the ParaView collection (None: nothing is written). Other arguments as for :func:`run`.
+    """
+    if isinstance(levels, bool) or not isinstance(levels, int):
+        raise InputError(f"levels: must be an integer, got {levels!r}")
+    if not 1 <= levels <= 12:
+        raise InputError(f"levels: must be in [1, 12], got {levels}")
+    j = _core.converge(case, _name(case, name), levels,
+                       _overrides(degree, elements, solver, tolerance, ordering, False), output, progress)
+    return Study(j.pop("levels"), j)
+
+
+def adapt(case, steps=None, *, theta=None, max_dofs=None, degree=None, elements=None, solver=None,
+          tolerance=None, ordering="amd", output=None, progress=None, name=None):
+    """The adaptive loop (estimate, Doerfler marking, local refinement, solve), like ``knotwork adapt``.
+
+    steps, theta, max_dofs: override the case's [adapt] (None: as the case says). Returns a
+    :class:`Study` of the steps (the ``steps`` of ``adapt --json``). The case's family must
+    refine locally. Other arguments as for :func:`converge`.
+    """
+    if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= 200):
+        raise InputError(f"steps: must be an integer in [1, 200], got {steps!r}")
+    if theta is not None and not (isinstance(theta, (int, float)) and 0 < theta <= 1):
+        raise InputError(f"theta: must be in (0, 1], got {theta!r}")
+    if max_dofs is not None and (isinstance(max_dofs, bool) or not isinstance(max_dofs, int) or max_dofs < 1):
+        raise InputError(f"max_dofs: must be a positive integer, got {max_dofs!r}")
+    j = _core.adapt(case, _name(case, name), _overrides(degree, elements, solver, tolerance, ordering, False),
+                    steps or 0, float(theta or 0), max_dofs or 0, output, progress)
+    return Study(j.pop("steps"), j)
+
+
+def space(case, *, degree=None, elements=None, progress=None, name=None):
+    """The spline space of a case (its [space], refined as the overrides say): a :class:`Space`."""
+    return _core.space(case, _name(case, name), _overrides(degree, elements, None, None, "amd", False), progress)
+
+
+def dimension(tmesh, *, exact=False, name=None):
+    """The dimension of a spline space on a T-mesh by brute force, like ``knotwork dimension --json``.
+
+    tmesh: a T-mesh (partition) file, or a dict with its keys (cells or grid + segments,
+    degree, smoothness). exact: exact rational rank instead of two primes.
+    """
+    return _core.dimension(tmesh, _name(tmesh, name) or _DICT_NAME, bool(exact))

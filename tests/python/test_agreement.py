@@ -1,0 +1,106 @@
+# The module's results are the CLI's: the same case through `knotwork <command> --json` and
+# through Python gives the same numbers (to 1e-12 relative; in fact to the last bit).
+import math
+
+import knotwork
+import pytest
+
+from conftest import CASES, cli_json
+
+# Keys that are measurements of time, or name files: not results.
+VOLATILE = {"timings", "seconds", "seconds_space", "seconds_solve", "seconds_estimate", "seconds_refine", "outputs"}
+# Quantities that are zero up to rounding (CHOLMOD's refinement correction, CG residuals, the
+# C1 jump of a G1 solution): compared to 1e-12 absolute. OpenBLAS's kernels give last-bit
+# differences between processes (CTest runs these tests with address randomization off, so
+# that each process repeats itself: docs/PYTHON.md), and a rounding-level number is nothing
+# but last bits.
+ROUNDING = {"refinement_correction", "relative_residual", "backward_error", "c1_jump"}
+
+
+def assert_same(cli_value, py_value, where="result"):
+    """Recursively equal, numbers to 1e-12 relative; VOLATILE keys skipped."""
+    if isinstance(cli_value, dict):
+        assert isinstance(py_value, dict), where
+        keys = set(cli_value) - VOLATILE
+        assert keys == set(py_value) - VOLATILE, f"{where}: keys differ"
+        for k in keys:
+            if k in ROUNDING:
+                assert abs(cli_value[k] - py_value[k]) <= 1e-12, f"{where}.{k}"
+            else:
+                assert_same(cli_value[k], py_value[k], f"{where}.{k}")
+    elif isinstance(cli_value, list):
+        assert isinstance(py_value, list) and len(cli_value) == len(py_value), where
+        for i, (a, b) in enumerate(zip(cli_value, py_value)):
+            assert_same(a, b, f"{where}[{i}]")
+    elif isinstance(cli_value, float) or isinstance(py_value, float):
+        assert py_value == pytest.approx(cli_value, rel=1e-12, abs=1e-300), where
+    else:
+        assert cli_value == py_value, where
+
+
+RUNS = [
+    ("square_sinsin.toml", ["--degree", "3", "--elements", "12"], {"degree": 3, "elements": 12}),
+    ("quarter_annulus.toml", [], {}),
+    ("quarter_annulus.toml", ["--solver", "iterative", "--tolerance", "1e-10", "--degree", "3"],
+     {"solver": "iterative", "tolerance": 1e-10, "degree": 3}),
+    ("lshape.toml", [], {}),
+    ("square_knot_segments.toml", [], {}),
+    ("lshape_adaptive_pt.toml", [], {}),
+    ("g1_pentagon.toml", [], {}),
+    ("g1_sphere_xy.toml", [], {}),
+]
+
+
+@pytest.mark.parametrize("case,args,overrides", RUNS, ids=[f"{c}{' '.join(a)}" for c, a, _ in RUNS])
+def test_run_equals_cli(case, args, overrides):
+    path = str(CASES / case)
+    expected = cli_json(["run", path, "--no-output", *args])
+    result = knotwork.run(path, **overrides)
+    assert_same(expected, result.data)
+    assert result.dofs == expected["dofs"] and result.cells == expected["cells"]
+    assert len(result.coefficients) == expected["dofs"]
+
+
+def test_converge_equals_cli(tmp_path):
+    path = str(CASES / "square_sinsin.toml")
+    expected = cli_json(["converge", path, "--levels", "3", "--degree", "2", "--out", str(tmp_path / "cli")])
+    study = knotwork.converge(path, levels=3, degree=2)
+    assert_same(expected["levels"], list(study))
+    assert_same({k: v for k, v in expected.items() if k != "levels"}, study.info)
+    assert study.info["outputs"] == []  # nothing written without output=
+
+
+def test_converge_writes_the_cli_files_when_asked(tmp_path):
+    path = str(CASES / "square_sinsin.toml")
+    study = knotwork.converge(path, levels=2, output=tmp_path / "py")
+    names = sorted(p.split("/")[-1] for p in study.info["outputs"])
+    assert "convergence.json" in names and "convergence.csv" in names and "level_1.vtu" in names
+    assert all((tmp_path / "py" / n).exists() for n in names)
+
+
+def test_adapt_equals_cli(tmp_path):
+    path = str(CASES / "lshape_adaptive.toml")
+    expected = cli_json(["adapt", path, "--steps", "4", "--out", str(tmp_path)])
+    study = knotwork.adapt(path, steps=4)
+    assert_same(expected["steps"], list(study))
+    assert len(study) == 4
+    rates = study.column("h1_rate_vs_dofs")
+    assert math.isnan(rates[0]) and all(r > 0 for r in rates[1:])
+
+
+@pytest.mark.parametrize("case", ["square_knot_segments.toml", "g1_three_quads.toml", "lshape_adaptive_pt.toml"])
+def test_space_report_equals_basis_json(case):
+    path = str(CASES / case)
+    expected = cli_json(["basis", path])
+    space = knotwork.space(path)
+    assert_same(expected, space.report())
+    assert space.num_functions == expected["functions"] and space.num_cells == expected["cells"]
+    assert space.rank() == expected["rank"]
+    assert space.partition_of_unity_error() == expected["partition_of_unity_error"]
+
+
+@pytest.mark.parametrize("tmesh", ["pinwheel_generic.toml", "ray_and_segment.toml"])
+def test_dimension_equals_cli(tmesh):
+    path = str(CASES / "tmeshes" / tmesh)
+    expected = cli_json(["dimension", path])
+    assert_same(expected, knotwork.dimension(path))
