@@ -3,9 +3,11 @@
 #include <ginac/ginac.h>
 #include <muParser.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <vector>
 
 #include "solver/input_error.hpp"
 
@@ -87,6 +89,34 @@ Expression Expression::constant(double value) {
 
 namespace {
 
+// The text of a derived expression, the same in every process. GiNaC orders the terms of
+// sums and products by hash values seeded with the addresses of type names, which move with
+// address-space randomization: printed as GiNaC stores them, a derivative came out with its
+// terms in another order from one run to the next, and so did the last bits of every source
+// value, error norm and solution computed from it. Here the operands of every sum and
+// product are sorted by their own text. Leaves (numbers, symbols, constants) print as GiNaC's
+// C printer prints them; functions by GiNaC's name, which muParser shares (sin, exp, log, ...).
+std::string canonical_text(const GiNaC::ex& e) {
+  using namespace GiNaC;
+  if (is_a<add>(e) || is_a<mul>(e)) {
+    std::vector<std::string> parts;
+    for (size_t i = 0; i < e.nops(); ++i) parts.push_back("(" + canonical_text(e.op(i)) + ")");
+    std::sort(parts.begin(), parts.end());
+    std::string r;
+    for (const auto& p : parts) r += (r.empty() ? "" : is_a<add>(e) ? "+" : "*") + p;
+    return r;
+  }
+  if (is_a<power>(e)) return "(" + canonical_text(e.op(0)) + ")^(" + canonical_text(e.op(1)) + ")";
+  if (is_a<function>(e)) {
+    std::string r = ex_to<function>(e).get_name() + "(";
+    for (size_t i = 0; i < e.nops(); ++i) r += (i ? "," : "") + canonical_text(e.op(i));
+    return r + ")";
+  }
+  std::ostringstream s;
+  s << csrc_double << e;
+  return s.str();
+}
+
 // Parses u with GiNaC (symbols x, y, z) and turns derived GiNaC expressions back into
 // Expressions, checking the round trip through text against GiNaC's own evaluation.
 class Differentiator {
@@ -117,9 +147,8 @@ class Differentiator {
 
   Expression to_expression(const GiNaC::ex& e, const std::string& what) const {
     using namespace GiNaC;
-    std::ostringstream s;
-    s << csrc_double << e;
-    Expression r = Expression::parse(s.str(), u_.where() + " (derived " + what + ")");
+    const std::string text = canonical_text(e);
+    Expression r = Expression::parse(text, u_.where() + " (derived " + what + ")");
     ExpressionEvaluator eval(r);
     const double pts[3][3] = {{0.3, 0.7, 0.2}, {-0.4, 0.25, -0.6}, {0.61, -0.83, 0.45}};
     for (const auto& pt : pts) {
@@ -129,7 +158,7 @@ class Differentiator {
       if (!std::isfinite(gv) || !std::isfinite(mv)) continue;
       if (std::abs(gv - mv) > 1e-9 * (1.0 + std::abs(gv)))
         throw std::logic_error("derived " + what + " of \"" + u_.text() +
-                               "\" evaluates differently after conversion: " + s.str());
+                               "\" evaluates differently after conversion: " + text);
     }
     return r;
   }
