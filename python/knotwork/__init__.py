@@ -53,9 +53,23 @@ boundary name of each side, bottom/right/top/left). ``weights()``: one weight pe
 rational spaces (empty otherwise). Arrays are read-only views of the space's own data.
 Checks of ``knotwork basis``: ``partition_of_unity_error()``, ``rank()`` (numerical rank of
 all functions' Bezier coefficients; None when too large for the dense check), and
-``report()``: the whole ``knotwork basis --json`` object (family checks such as dimension
-counts included).
+``dimension_check()`` (functions, rank and the family's dimension counts), and ``report()``:
+the whole ``knotwork basis --json`` object.
 """
+
+
+
+def _dimension_check(self):
+    """The dimension counts of ``knotwork basis`` for this space: ``functions`` (how many the
+    construction made), ``rank`` (their numerical rank) and the family's own counts where it
+    has them (``dimension_bruteforce``, ``dimension_formula`` for knot segments)."""
+    report = self.report()
+    counts = {"functions": report["functions"], "rank": report["rank"]}
+    counts.update({k: v for k, v in report.items() if k.startswith("dimension")})
+    return counts
+
+
+Space.dimension_check = _dimension_check
 
 _DICT_NAME = "<dict>"
 

@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-SOURCE = pathlib.Path(os.environ.get("KNOTWORK_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
+SOURCE = pathlib.Path(os.environ.get("KNOTWORK_SOURCE_DIR") or pathlib.Path(__file__).resolve().parents[2])
 BINARY = os.environ.get("KNOTWORK_BINARY", str(SOURCE / "build/app/knotwork"))
 CASES = SOURCE / "cases"
 
