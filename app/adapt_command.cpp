@@ -108,8 +108,7 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
 
 int adapt_command(const AdaptOptions& o) {
   CaseDescription c = load_case(o.case_file);
-  space_family(c).override_options(c, o.degree, o.elements);
-  override_solver(c, o.solver, o.tolerance);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance);
   check_adaptive_family(c);
   if (o.steps) c.adapt.steps = o.steps;
   if (o.theta) c.adapt.theta = o.theta;

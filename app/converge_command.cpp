@@ -72,7 +72,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     lv.fields = space->report();
     for (auto& f : space->check_solution(s.coefficients)) lv.fields.push_back(std::move(f));
     // The CG count of the level (null where the level was solved directly: `auto` decides by size).
-    if (c.solver.method != "direct" && !space->structured_preconditioner().empty())
+    if (c.solver.method == "iterative" || (c.solver.method == "auto" && !space->structured_preconditioner().empty()))
       lv.fields.push_back({.key = "cg_iterations",
                            .value = solver.method == "iterative" ? ReportValue(long(s.iterative.iterations)) : ReportValue{},
                            .label = "CG", .column = true, .width = 13});
@@ -155,8 +155,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
 
 int converge_command(const ConvergeOptions& o) {
   CaseDescription c = load_case(o.case_file);
-  space_family(c).override_options(c, o.degree, o.elements);
-  override_solver(c, o.solver, o.tolerance);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance);
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);

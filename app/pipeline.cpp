@@ -1,5 +1,6 @@
 #include "app/pipeline.hpp"
 
+#include "solver/amg_preconditioner.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -24,17 +25,20 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
   if (r.method == "direct") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
   const std::string& asked = c.solver.preconditioner;
   if (asked == "auto") {
-    r.preconditioner = structured.empty() ? "jacobi" : structured;
+    // Without a structure to use: algebraic multigrid, whose iteration count stays bounded as
+    // h shrinks where Jacobi's grows like 1/h (docs/SOLVERS.md).
+    r.preconditioner = structured.empty() ? kBoomerAmgName : structured;
     if (structured.empty())
-      r.note = "[solver] preconditioner = \"auto\": jacobi, since family \"" + c.family + "\" has no structured preconditioner";
-  } else if (asked == "jacobi") {
-    r.preconditioner = "jacobi";
+      r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc), since family \"" +
+               c.family + "\" has no structured preconditioner";
+  } else if (asked == "jacobi" || asked == kBoomerAmgName) {
+    r.preconditioner = asked;  // algebraic: they apply to every family
   } else if (asked == structured) {
     r.preconditioner = asked;
   } else {
     throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" does not apply to family \"" + c.family +
-                     "\" (" + (structured.empty() ? std::string("use \"jacobi\" or method = \"direct\"")
-                                                   : "it has \"" + structured + "\"; or use \"jacobi\"") + ")");
+                     "\" (" + (structured.empty() ? std::string("use \"boomeramg\", \"jacobi\" or method = \"direct\"")
+                                                   : "it has \"" + structured + "\"; or use \"boomeramg\" or \"jacobi\"") + ")");
   }
   return r;
 }
@@ -55,13 +59,22 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     so.iterative = true;
     so.tolerance = c.solver.tolerance;
     so.max_iterations = c.solver.max_iterations;
-    if (chosen.preconditioner != "jacobi") {
+    if (chosen.preconditioner == kBoomerAmgName) {
+      const std::string options = c.solver.petsc_options, path = c.path;
+      so.preconditioner = [options, path](const DofLayout&, const Eigen::SparseMatrix<double>& lower) {
+        try {
+          return boomeramg_preconditioner(lower, options);
+        } catch (const std::invalid_argument& e) {
+          throw InputError(path + ": [solver] petsc_options: " + e.what());
+        }
+      };
+    } else if (chosen.preconditioner != "jacobi") {
       const std::string name = chosen.preconditioner, path = c.path;
       so.preconditioner = [&space, name, path](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
         std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(layout, lower);
         if (!p)
           throw InputError(path + ": [solver] preconditioner: \"" + name +
-                           "\" does not apply to this problem's unknowns (they are not a tensor product: use \"jacobi\" "
+                           "\" does not apply to this problem's unknowns (they are not a tensor product: use \"boomeramg\", \"jacobi\" "
                            "or method = \"direct\")");
         return p;
       };

@@ -18,6 +18,11 @@ double since(std::chrono::steady_clock::time_point t) {
 }
 }  // namespace
 
+void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance) {
+  space_family(c).override_options(c, degree, elements);
+  override_solver(c, solver, tolerance);
+}
+
 double RunOutcome::total_without_output() const {
   const PoissonTimings& tm = solution.timings;
   return tm.setup + tm.assembly + tm.analysis + tm.factorization + tm.solve + tm.preconditioner + tm.iterations + tm.errors;
@@ -98,8 +103,7 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
 
 int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
-  space_family(c).override_options(c, o.degree, o.elements);
-  override_solver(c, o.solver, o.tolerance);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance);
   c.allow_unverified_space = o.allow_unverified_space;
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string out = o.out.empty() ? c.output_directory : o.out;

@@ -66,7 +66,8 @@ struct CaseDescription {
   // [solver]: the linear solve (docs/SOLVERS.md; --solver and --tolerance override).
   struct Solver {
     std::string method = "auto";          // direct (CHOLMOD) | iterative (CG) | auto (docs/SOLVERS.md)
-    std::string preconditioner = "auto";  // auto | jacobi | a family's structured one (SpaceFamily)
+    std::string preconditioner = "auto";  // auto | jacobi | boomeramg | a family's structured one (SpaceFamily)
+    std::string petsc_options;            // for boomeramg: PETSc options ("-pc_hypre_boomeramg_...")
     double tolerance = 1e-15;             // CG: backward error of the solution (IterativeStats)
     int max_iterations = 1000;
   } solver;

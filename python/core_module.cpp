@@ -177,8 +177,7 @@ Overrides read_overrides(const py::dict& d) {
 CaseDescription prepared_case(py::handle case_, const std::string& name, const py::dict& overrides, Ordering* ordering) {
   CaseDescription c = load_any_case(case_, name);
   const Overrides o = read_overrides(overrides);
-  space_family(c).override_options(c, o.degree, o.elements);
-  override_solver(c, o.solver, o.tolerance);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance);
   c.allow_unverified_space = o.allow_unverified_space;
   if (ordering) *ordering = parse_ordering(o.ordering);
   return c;

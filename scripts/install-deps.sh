@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything knotwork needs to build and test, from Debian 12 packages only.
 # OpenBLAS matters: CHOLMOD supernodal spends its time in BLAS, and Debian's
-# default reference BLAS is several times slower.
+# default reference BLAS is several times slower. petsc-dev brings hypre (the BoomerAMG
+# preconditioner) and OpenMPI, which PETSc runs on as a single process.
 # Usage: scripts/install-deps.sh [--paraview]
 #   --paraview   also install ParaView + Xvfb (only needed to render docs/ screenshots).
 #                Debian 12's python3-paraview conflicts with python3-vtk9, which libvtk9-dev
@@ -17,6 +18,7 @@ packages=(
   libmuparser-dev libginac-dev libgmp-dev
   libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
+  petsc-dev
 )
 with_paraview=0
 if [[ "${1:-}" == "--paraview" ]]; then

@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <omp.h>
 
@@ -379,7 +380,7 @@ TEST_CASE("CG + fast diagonalization: the direct solve's errors, in iterations b
     }
 }
 
-TEST_CASE("CG + Jacobi serves a family without structure, and says so", "[poisson][solver]") {
+TEST_CASE("CG + BoomerAMG serves a family without structure, and says so", "[poisson][solver]") {
   CaseDescription c = shipped("lshape_knot_segments");
   const auto space = build_space(c);
   c.solver.method = "direct";
@@ -387,9 +388,53 @@ TEST_CASE("CG + Jacobi serves a family without structure, and says so", "[poisso
   c.solver.method = "iterative";
   SolverReport report;
   const PoissonSolution cg = solve_case(c, *space, Ordering::kAmd, {}, &report);
-  REQUIRE(report.preconditioner == "jacobi");
-  REQUIRE(report.note.find("jacobi") != std::string::npos);
+  REQUIRE(report.preconditioner == "boomeramg");
+  REQUIRE(report.note.find("boomeramg") != std::string::npos);
   REQUIRE(cg.errors->h1_semi == Approx(direct.errors->h1_semi).epsilon(1e-4));
+  REQUIRE(cg.errors->l2 == Approx(direct.errors->l2).epsilon(1e-4));
+  c.solver.preconditioner = "jacobi";
+  const PoissonSolution jacobi = solve_case(c, *space, Ordering::kAmd, {}, &report);
+  REQUIRE(report.preconditioner == "jacobi");
+  REQUIRE(report.note.empty());
+  REQUIRE(jacobi.errors->h1_semi == Approx(direct.errors->h1_semi).epsilon(1e-4));
   c.solver.preconditioner = "fast_diagonalization";
   REQUIRE_THROWS_WITH(solve_case(c, *space, Ordering::kAmd), Catch::Contains("does not apply to family"));
+}
+
+TEST_CASE("BoomerAMG iterations stay bounded as h shrinks, Jacobi's grow like 1/h", "[poisson][solver]") {
+  // Multigrid theory: a count independent of h for the Laplacian; diagonal scaling leaves the
+  // condition number ~ h^-2, so CG needs ~ 1/h iterations (doubling per halving of h).
+  CaseDescription c = shipped("lshape_knot_segments");
+  c.solver.method = "iterative";
+  c.solver.tolerance = 1e-10;  // away from the rounding floor, where counts are clean
+  c.solver.max_iterations = 5000;
+  std::vector<int> amg, jacobi;
+  for (int level = 1; level < 4; ++level) {
+    const auto space = build_space(c, level);
+    c.solver.preconditioner = "boomeramg";
+    amg.push_back(solve_case(c, *space, Ordering::kAmd).iterative.iterations);
+    c.solver.preconditioner = "jacobi";
+    jacobi.push_back(solve_case(c, *space, Ordering::kAmd).iterative.iterations);
+  }
+  INFO("BoomerAMG " << amg[0] << " " << amg[1] << " " << amg[2] << ", Jacobi " << jacobi[0] << " " << jacobi[1] << " "
+                    << jacobi[2]);
+  REQUIRE(*std::max_element(amg.begin(), amg.end()) <= 1.5 * *std::min_element(amg.begin(), amg.end()));
+  REQUIRE(amg[2] <= 25);
+  REQUIRE(jacobi[2] >= 1.6 * jacobi[1]);
+}
+
+TEST_CASE("PETSc options reach BoomerAMG, and options it does not use are refused", "[poisson][solver][bad-input]") {
+  CaseDescription c = shipped("lshape_knot_segments");
+  const auto space = build_space(c);
+  c.solver.method = "iterative";
+  c.solver.preconditioner = "boomeramg";
+  c.solver.petsc_options = "-pc_hypre_boomeramg_strong_threshold 0.5 -pc_hypre_boomeramg_max_levels 3";
+  REQUIRE(solve_case(c, *space, Ordering::kAmd).iterative.converged);
+  c.solver.petsc_options = "-pc_hypre_boomeramg_strong_treshold 0.5";
+  REQUIRE_THROWS_WITH(solve_case(c, *space, Ordering::kAmd),
+                      Catch::Contains("[solver] petsc_options: -pc_hypre_boomeramg_strong_treshold: not an option"));
+  c.solver.petsc_options = "pc_hypre_boomeramg_max_levels 3";
+  REQUIRE_THROWS_WITH(solve_case(c, *space, Ordering::kAmd), Catch::Contains("is not a PETSc option"));
+  c.solver.petsc_options = "-pc_hypre_boomeramg_max_levels many";
+  REQUIRE_THROWS_WITH(solve_case(c, *space, Ordering::kAmd), Catch::Contains("[solver] petsc_options"));
 }
