@@ -1,6 +1,9 @@
-#include "solver/amg_preconditioner.hpp"
-
+// BoomerAMG through PETSc, built as a module of its own (libknotwork_amg.so) that knotwork
+// loads on first use (solver/amg_loader.cpp): PETSc brings some 85 shared libraries (MPI,
+// hypre, MUMPS, HDF5, ...), whose loading tripled the start-up time of every run.
 #include <petscksp.h>
+
+#include "solver/amg_preconditioner.hpp"
 
 #include <cstdlib>
 #include <mutex>
@@ -130,9 +133,10 @@ class BoomerAmg final : public Preconditioner {
 
 }  // namespace
 
-std::unique_ptr<Preconditioner> boomeramg_preconditioner(const Eigen::SparseMatrix<double>& lower,
-                                                         const std::string& petsc_options) {
-  return std::make_unique<BoomerAmg>(lower, petsc_options);
-}
-
 }  // namespace knotwork
+
+// The module's one entry point, found by name (dlsym); C++ exceptions pass through it.
+extern "C" __attribute__((visibility("default"))) knotwork::Preconditioner* knotwork_boomeramg(
+    const Eigen::SparseMatrix<double>& lower, const std::string& petsc_options) {
+  return new knotwork::BoomerAmg(lower, petsc_options);
+}

@@ -9,25 +9,67 @@
 
 namespace knotwork {
 
-void univariate_mass_stiffness(const BSplineBasis1D& b, Eigen::MatrixXd& mass, Eigen::MatrixXd& stiffness) {
+void univariate_mass_stiffness(const BSplineBasis1D& b, Eigen::MatrixXd& mass, Eigen::MatrixXd& stiffness,
+                               const std::vector<double>& mass_weight, const std::vector<double>& stiffness_weight) {
   const int p = b.degree(), n = b.num_functions();
   mass = Eigen::MatrixXd::Zero(n, n);
   stiffness = Eigen::MatrixXd::Zero(n, n);
   const QuadratureRule1D rule = gauss_legendre(p + 1);
   const auto& t = b.knots();
   std::vector<double> d(2 * (p + 1));
-  for (int s : b.element_spans()) {
+  const std::vector<int> spans = b.element_spans();
+  for (size_t e = 0; e < spans.size(); ++e) {
+    const int s = spans[e];
     const double a = t[s], h = t[s + 1] - t[s];
+    const double wm = mass_weight.empty() ? 1.0 : mass_weight[e], ws = stiffness_weight.empty() ? 1.0 : stiffness_weight[e];
     for (int k = 0; k < rule.size(); ++k) {
       b.evaluate_derivatives(s, a + h * rule.nodes[k], 1, d.data());
       const double w = rule.weights[k] * h;
       for (int i = 0; i <= p; ++i)
         for (int j = 0; j <= p; ++j) {
-          mass(s - p + i, s - p + j) += w * d[i] * d[j];
-          stiffness(s - p + i, s - p + j) += w * d[p + 1 + i] * d[p + 1 + j];
+          mass(s - p + i, s - p + j) += wm * w * d[i] * d[j];
+          stiffness(s - p + i, s - p + j) += ws * w * d[p + 1 + i] * d[p + 1 + j];
         }
     }
   }
+}
+
+SeparableCoefficients SeparableCoefficients::fit(int n_u, int n_v, const std::vector<double>& c11,
+                                                 const std::vector<double>& c22, std::vector<int> rows,
+                                                 std::vector<int> columns) {
+  auto all = [](int n) {
+    std::vector<int> v(n);
+    for (int i = 0; i < n; ++i) v[i] = i;
+    return v;
+  };
+  if (rows.empty()) rows = all(n_u);
+  if (columns.empty()) columns = all(n_v);
+  // log c(i, j) ~ alpha_i + beta_j in least squares: alpha_i the mean of row i over J, beta_j
+  // the mean of column j over I minus the mean over I x J (on a full grid, the normal
+  // equations' solution; for separable c, exact whatever I and J).
+  auto fit_one = [&](const std::vector<double>& c, std::vector<double>& a, std::vector<double>& b) {
+    auto log_c = [&](int i, int j) { return std::log(std::max(c[i + static_cast<size_t>(n_u) * j], 1e-300)); };
+    a.assign(n_u, 0.0);
+    b.assign(n_v, 0.0);
+    double both = 0;
+    for (int i = 0; i < n_u; ++i) {
+      for (int j : columns) a[i] += log_c(i, j);
+      a[i] /= static_cast<double>(columns.size());
+    }
+    for (int j = 0; j < n_v; ++j) {
+      for (int i : rows) b[j] += log_c(i, j);
+      b[j] /= static_cast<double>(rows.size());
+    }
+    for (int i : rows)
+      for (int j : columns) both += log_c(i, j);
+    both /= static_cast<double>(rows.size() * columns.size());
+    for (double& x : a) x = std::exp(x);
+    for (double& x : b) x = std::exp(x - both);
+  };
+  SeparableCoefficients s;
+  fit_one(c11, s.a1, s.b1);
+  fit_one(c22, s.a2, s.b2);
+  return s;
 }
 
 namespace {
@@ -120,7 +162,8 @@ void diagonalize(const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const std::
 }  // namespace
 
 std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
-                                                     const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
+                                                     const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
+                                                     const SeparableCoefficients& geometry) {
   const int nu = space_u.num_functions(), nv = space_v.num_functions();
   if (static_cast<long>(layout.dof.size()) != static_cast<long>(nu) * nv) return nullptr;
   // Free lines: i is free when function (i, j) is free for some j; the product test follows.
@@ -133,15 +176,24 @@ std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space
   for (size_t b = 0; b < iv.size(); ++b)
     for (size_t a = 0; a < iu.size(); ++a)
       if (layout.dof[iu[a] + nu * iv[b]] != static_cast<int>(a + iu.size() * b)) return nullptr;
+  // u: K_u weighted by a1 and M_u by a2; v: M_v by b1 and K_v by b2.
   Eigen::MatrixXd Mu, Ku, Mv, Kv;
-  univariate_mass_stiffness(space_u, Mu, Ku);
-  univariate_mass_stiffness(space_v, Mv, Kv);
+  univariate_mass_stiffness(space_u, Mu, Ku, geometry.a2, geometry.a1);
+  univariate_mass_stiffness(space_v, Mv, Kv, geometry.b1, geometry.b2);
   Eigen::MatrixXd Uu, Uv;
   Eigen::VectorXd lu, lv;
   diagonalize(Mu, Ku, iu, Uu, lu);
-  // The same knots and the same free indices in both directions (square grids): one
-  // decomposition serves both.
-  if (space_u.degree() == space_v.degree() && space_u.knots() == space_v.knots() && iu == iv) {
+  // The same knots, free indices and weights in both directions (square grids on maps
+  // symmetric in u and v, such as the unit square): one decomposition serves both.
+  // (Weights equal up to rounding count as equal: a preconditioner needs no last bits.)
+  auto same = [](const std::vector<double>& x, const std::vector<double>& y) {
+    if (x.size() != y.size()) return false;
+    for (size_t k = 0; k < x.size(); ++k)
+      if (std::abs(x[k] - y[k]) > 1e-12 * std::max(std::abs(x[k]), std::abs(y[k]))) return false;
+    return true;
+  };
+  if (space_u.degree() == space_v.degree() && space_u.knots() == space_v.knots() && iu == iv &&
+      same(geometry.a1, geometry.b2) && same(geometry.a2, geometry.b1)) {
     Uv = Uu;
     lv = lu;
   } else {

@@ -1,9 +1,13 @@
 #pragma once
 // The fast diagonalization preconditioner (Sangalli and Tani, 2016) of a tensor-product
-// space: the Laplacian of the parameter domain, M_v (x) K_u + K_v (x) M_u, inverted exactly
-// through the generalized eigenvectors of the univariate pairs (K_u, M_u) and (K_v, M_v),
-// then scaled by D^{-1/2} on both sides, D = diag(K) / diag(P), which folds in the
-// geometry's local size and aspect (their "diagonal scaling").
+// space: P = M_v^b1 (x) K_u^a1 + K_v^b2 (x) M_u^a2, the parameter-domain operator with the
+// separable part of the geometry folded in, inverted exactly through the generalized
+// eigenvectors of the univariate pairs (K_u^a1, M_u^a2) and (K_v^b2, M_v^b1), then scaled by
+// D^{-1/2} on both sides, D = diag(K) / diag(P) (their "diagonal scaling"). The weights
+// come from the stiffness coefficients c11 = |x_v|^2 / det J and c22 = |x_u|^2 / det J of
+// the geometry (parameter derivatives), fitted as c11 ~ a1(u) b1(v), c22 ~ a2(u) b2(v)
+// element by element (SeparableCoefficients); exact for maps such as the annulus, whose
+// coefficients separate, where CG then converges in a few iterations.
 #include <Eigen/SparseCore>
 #include <memory>
 #include <vector>
@@ -15,14 +19,30 @@
 namespace knotwork {
 
 // The univariate mass and stiffness matrices of a B-spline basis on its parameter domain
-// (dense; Gauss quadrature with p + 1 points per element: exact).
-void univariate_mass_stiffness(const BSplineBasis1D& b, Eigen::MatrixXd& mass, Eigen::MatrixXd& stiffness);
+// (dense; Gauss quadrature with p + 1 points per element: exact), each weighted by a constant
+// per element (in element_spans() order; empty: weight 1).
+void univariate_mass_stiffness(const BSplineBasis1D& b, Eigen::MatrixXd& mass, Eigen::MatrixXd& stiffness,
+                               const std::vector<double>& mass_weight = {},
+                               const std::vector<double>& stiffness_weight = {});
+
+// The geometry's stiffness coefficients as products of univariate factors, one value per
+// element and direction: c11(i, j) ~ a1[i] b1[j], c22(i, j) ~ a2[i] b2[j], fitted by least
+// squares on log c (exact when c separates). Empty: no geometry (weights 1).
+struct SeparableCoefficients {
+  std::vector<double> a1, b1, a2, b2;
+  // From c11 and c22 at element (i, j), stored at i + n_u j. With `rows` I and `columns` J
+  // (empty: all), only the cells (i, j in J) and (i in I, j) are read: a1[i] from row i's
+  // cells in J, b1[j] from column j's cells in I (still exact for separable c).
+  static SeparableCoefficients fit(int n_u, int n_v, const std::vector<double>& c11, const std::vector<double>& c22,
+                                   std::vector<int> rows = {}, std::vector<int> columns = {});
+};
 
 // For the tensor space of space_u x space_v (function i + n_u j) and the free dofs of
 // `layout`: the preconditioner, or null when the free functions are not a tensor product of
 // free univariate ones (then it does not apply). `lower` is the assembled matrix (its
 // diagonal gives the scaling).
 std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
-                                                     const DofLayout& layout, const Eigen::SparseMatrix<double>& lower);
+                                                     const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
+                                                     const SeparableCoefficients& geometry = {});
 
 }  // namespace knotwork
