@@ -4,10 +4,10 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <optional>
 
 #include "app/adaptive.hpp"
 #include "app/studies.hpp"
-#include <optional>
 #include "app/commands.hpp"
 #include "cases/json_output.hpp"
 #include "cases/output_files.hpp"
@@ -109,7 +109,6 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
 int adapt_command(const AdaptOptions& o) {
   CaseDescription c = load_case(o.case_file);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance);
-  check_adaptive_family(c);
   if (o.steps) c.adapt.steps = o.steps;
   if (o.theta) c.adapt.theta = o.theta;
   if (o.max_dofs) c.adapt.max_dofs = o.max_dofs;

@@ -12,10 +12,6 @@
 
 namespace knotwork {
 
-namespace {
-
-}  // namespace
-
 Json basis_json(const CaseDescription& c, const SplineSpace& space) {
   const BezierMesh& mesh = space.mesh();
   const long rank = bezier_rank(mesh);

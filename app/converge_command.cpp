@@ -3,12 +3,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "app/commands.hpp"
 #include "cases/json_output.hpp"
 #include "cases/output_files.hpp"
 #include "app/studies.hpp"
-#include <optional>
 #include "app/progress.hpp"
 #include "app/report.hpp"
 #include "app/svg_plot.hpp"
@@ -61,7 +61,6 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     if (l == 0) first_solver = solver;
     if (solver.method == "iterative") iterative_solver = solver, ++iterative_levels;
     ConvergeLevel lv;
-    lv.l2_rate = lv.h1_rate = NAN;
     lv.h = space->mesh_size();
     lv.dofs = s.num_functions;
     lv.free = s.num_free;

@@ -4,6 +4,7 @@
 // (python/): both print or return the same JSON object, so a Python result is the CLI's.
 // `output_directory` null: nothing is written (the Python default); otherwise the files go
 // through an OutputStage, so a failed study leaves none behind.
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,7 +42,7 @@ struct ConvergeLevel {
   double h = 0;
   int dofs = 0, cells = 0, free = 0;
   double l2 = 0, h1_semi = 0, h1 = 0;
-  double l2_rate = 0, h1_rate = 0;  // NaN on the first level
+  double l2_rate = NAN, h1_rate = NAN;  // NaN on the first level
   double seconds = 0;
   std::vector<ReportField> fields;  // the family's (report and solution checks)
 };

@@ -4,6 +4,7 @@
 
 #include "cases/case_reader.hpp"
 #include "cases/spline_space.hpp"
+#include "solver/amg_preconditioner.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -40,12 +41,13 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
   family->read_case(CaseDocument{r, root}, c);
   read_output(r, r.table(root, "output", false), c);
   read_solver(r, r.table(root, "solver", false), c);
-  std::vector<std::string> preconditioners{"auto", "jacobi", "boomeramg"};
+  std::vector<std::string> preconditioners{"auto", "jacobi", kBoomerAmgName};
   for (const SpaceFamily& f : space_families())
     if (!f.structured_preconditioner.empty()) preconditioners.push_back(f.structured_preconditioner);
   checked_name(c.solver.preconditioner, preconditioners, "[solver] preconditioner", path);
-  if (!c.solver.petsc_options.empty() && c.solver.preconditioner != "boomeramg")
-    r.fail("[solver] petsc_options", "only used with preconditioner = \"boomeramg\" (PETSc's hypre BoomerAMG)");
+  if (!c.solver.petsc_options.empty() && c.solver.preconditioner != kBoomerAmgName)
+    r.fail("[solver] petsc_options", std::string("only used with preconditioner = \"") + kBoomerAmgName +
+                                         "\" (PETSc's hypre BoomerAMG)");
   if (root.get("adapt")) {
     if (!family->local_refinement)
       r.fail("[adapt]", "not used with family = \"" + c.family + "\" (it does not refine cells locally; `knotwork adapt` "

@@ -166,8 +166,8 @@ Overrides read_overrides(const py::dict& d) {
       if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::float_>(v) || PyIndex_Check(v.ptr())))
         throw InputError("tolerance: must be a number, got " + py::repr(v).cast<std::string>());
       o.tolerance = py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
-      if (!(o.tolerance > 0 && o.tolerance < 1))
-        throw InputError("tolerance: must be in (0, 1), got " + py::repr(v).cast<std::string>());
+      // The range is checked by override_solver, as for --tolerance; 0 means "not given" there.
+      if (o.tolerance == 0) throw InputError("tolerance: must be in (0, 1), got 0");
     } else if (key == "allow_unverified_space") o.allow_unverified_space = py::bool_(py::reinterpret_borrow<py::object>(v)).cast<bool>();
     else throw std::logic_error("unknown override " + key);  // knotwork/__init__.py passes only these
   }
@@ -232,21 +232,16 @@ py::dict sample(const CaseDescription& c, const SplineSpace& space, const Poisso
   double* pe = exact ? exact->mutable_data() : nullptr;
   {
     py::gil_scoped_release nogil;
-    Eigen::VectorXd u(m * m), v(m * m);
-    for (int j = 0; j < m; ++j)
-      for (int i = 0; i < m; ++i) u[i + m * j] = double(i) / n, v[i + m * j] = double(j) / n;
     std::optional<ExpressionEvaluator> ev;
     if (c.problem.exact) ev.emplace(c.problem.exact->u);
-    GeometryAtPoints at;
+    CellSamples cs;
     for (int cell = 0; cell < cells; ++cell) {
-      geometry.evaluate(cell, u, v, at);
-      const Eigen::MatrixXd uh = evaluate_solution(mesh, geometry, s.coefficients, cell, u, v);
+      sample_cell(mesh, geometry, s.coefficients, cell, n, ev ? &*ev : nullptr, s.exact_mean, cs);
       for (py::ssize_t k = 0; k < m * m; ++k) {
         const py::ssize_t at_k = cell * m * m + k;
-        pu[at_k] = uh(k, 0);
-        for (int d = 0; d < dim; ++d) px[at_k * dim + d] = at.x(k, d), pg[at_k * dim + d] = uh(k, 1 + d);
-        if (pe)
-          pe[at_k] = (dim == 2 ? (*ev)(at.x(k, 0), at.x(k, 1)) : (*ev)(at.x(k, 0), at.x(k, 1), at.x(k, 2))) - s.exact_mean;
+        pu[at_k] = cs.uh(k, 0);
+        for (int d = 0; d < dim; ++d) px[at_k * dim + d] = cs.at.x(k, d), pg[at_k * dim + d] = cs.uh(k, 1 + d);
+        if (pe) pe[at_k] = cs.exact[k];
       }
     }
   }
@@ -412,7 +407,6 @@ PYBIND11_MODULE(_core, m) {
                     py::object output, py::object progress) {
     Ordering ordering;
     CaseDescription c = prepared_case(case_, name, overrides, &ordering);
-    check_adaptive_family(c);
     if (steps) c.adapt.steps = steps;
     if (theta) c.adapt.theta = theta;
     if (max_dofs) c.adapt.max_dofs = max_dofs;

@@ -60,7 +60,9 @@ class BoomerAmg final : public Preconditioner {
         column[next[i]] = j, value[next[i]++] = it.value();
         if (i != j) column[next[j]] = i, value[next[j]++] = it.value();
       }
-    check(MatCreateSeqAIJ(PETSC_COMM_SELF, n, n, 0, count.data(), &matrix_), "matrix");
+    check(MatCreate(PETSC_COMM_SELF, &matrix_), "matrix");
+    check(MatSetSizes(matrix_, n, n, n, n), "matrix");
+    check(MatSetType(matrix_, MATSEQAIJ), "matrix");
     check(MatSeqAIJSetPreallocationCSR(matrix_, row_start.data(), column.data(), value.data()), "matrix values");
     check(PCCreate(PETSC_COMM_SELF, &pc_), "preconditioner");
     check(PCSetType(pc_, PCHYPRE), "PCHYPRE");

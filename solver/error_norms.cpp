@@ -128,4 +128,24 @@ Eigen::MatrixXd evaluate_solution(const BezierMesh& mesh, const GeometryMap& geo
   return out;
 }
 
+double exact_at(ExpressionEvaluator& exact, const Eigen::MatrixXd& x, Eigen::Index k, double offset) {
+  return (x.cols() == 2 ? exact(x(k, 0), x(k, 1)) : exact(x(k, 0), x(k, 1), x(k, 2))) - offset;
+}
+
+void sample_cell(const BezierMesh& mesh, const GeometryMap& geometry, const Eigen::VectorXd& coefficients, int cell,
+                 int n, ExpressionEvaluator* exact, double exact_offset, CellSamples& out) {
+  const int m = n + 1;
+  if (out.n != n) {
+    out.n = n;
+    out.u.resize(m * m);
+    out.v.resize(m * m);
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < m; ++i) out.u[i + m * j] = double(i) / n, out.v[i + m * j] = double(j) / n;
+  }
+  geometry.evaluate(cell, out.u, out.v, out.at);
+  out.uh = evaluate_solution(mesh, geometry, coefficients, cell, out.u, out.v);
+  out.exact.resize(exact ? m * m : 0);
+  for (Eigen::Index k = 0; k < out.exact.size(); ++k) out.exact[k] = exact_at(*exact, out.at.x, k, exact_offset);
+}
+
 }  // namespace knotwork

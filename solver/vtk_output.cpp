@@ -79,11 +79,6 @@ struct NodeValues {
   Eigen::VectorXd u, exact;
 };
 
-// u(x) - offset at a physical point of the plane or of a surface.
-double exact_at(ExpressionEvaluator& ev, const Eigen::MatrixXd& x, Eigen::Index k, double offset) {
-  return (x.cols() == 2 ? ev(x(k, 0), x(k, 1)) : ev(x(k, 0), x(k, 1), x(k, 2))) - offset;
-}
-
 NodeValues node_values(const BezierMesh& mesh, const GeometryMap& geometry, const Eigen::VectorXd& coeffs,
                        const ExactSolution* exact, int cell, const Eigen::VectorXd& u,
                        const Eigen::VectorXd& v, const Eigen::MatrixXd& x, ExpressionEvaluator* ev, double offset) {
@@ -237,25 +232,19 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   auto solution = scalar_array("solution", total);
   auto gradient = scalar_array("solution_gradient", total, 3);
   ExactArrays ex(exact, total);
-  Eigen::VectorXd u(per_cell), v(per_cell);
-  for (int j = 0; j <= s; ++j)
-    for (int i = 0; i <= s; ++i) {
-      u[i + (s + 1) * j] = double(i) / s;
-      v[i + (s + 1) * j] = double(j) / s;
-    }
+  CellSamples cs;
   grid->Allocate(static_cast<vtkIdType>(nc) * s * s);
   for (int c = 0; c < nc; ++c) {
-    GeometryAtPoints at;
-    geometry.evaluate(c, u, v, at);
-    const Eigen::MatrixXd uh = evaluate_solution(mesh, geometry, coeffs, c, u, v);
-    const bool surface = at.x.cols() == 3;
+    sample_cell(mesh, geometry, coeffs, c, s, ex ? &*ex.u : nullptr, exact_offset, cs);
+    const Eigen::MatrixXd& x = cs.at.x;
+    const bool surface = x.cols() == 3;
     const vtkIdType base = static_cast<vtkIdType>(c) * per_cell;
     for (int k = 0; k < per_cell; ++k) {
-      points->SetPoint(base + k, at.x(k, 0), at.x(k, 1), surface ? at.x(k, 2) : 0.0);
-      solution->SetValue(base + k, uh(k, 0));
-      const double grad[3] = {uh(k, 1), uh(k, 2), surface ? uh(k, 3) : 0.0};
+      points->SetPoint(base + k, x(k, 0), x(k, 1), surface ? x(k, 2) : 0.0);
+      solution->SetValue(base + k, cs.uh(k, 0));
+      const double grad[3] = {cs.uh(k, 1), cs.uh(k, 2), surface ? cs.uh(k, 3) : 0.0};
       gradient->SetTuple(base + k, grad);
-      if (ex) ex.set(base + k, exact_at(*ex.u, at.x, k, exact_offset), uh(k, 0));
+      if (ex) ex.set(base + k, cs.exact[k], cs.uh(k, 0));
     }
     for (int j = 0; j < s; ++j)
       for (int i = 0; i < s; ++i) {

@@ -355,6 +355,15 @@ TEST_CASE("Threaded results are bitwise reproducible run to run, and error norms
   REQUIRE(norms[0].l2 == a.errors->l2);
 }
 
+// The case solved on one space by CHOLMOD and then by CG (CG's choices in *report).
+std::pair<PoissonSolution, PoissonSolution> direct_and_cg(CaseDescription c, const SplineSpace& space,
+                                                          SolverReport* report) {
+  c.solver.method = "direct";
+  PoissonSolution direct = solve_case(c, space, Ordering::kAmd);
+  c.solver.method = "iterative";
+  return {std::move(direct), solve_case(c, space, Ordering::kAmd, {}, report)};
+}
+
 TEST_CASE("CG + fast diagonalization: the direct solve's errors, in iterations bounded in h and p", "[poisson][solver]") {
   // The algebraic error must not show in the discretization error: at the default backward
   // error 1e-15 the L2 and H1 errors agree with CHOLMOD's to 1e-4 (relative). The preconditioner
@@ -368,11 +377,8 @@ TEST_CASE("CG + fast diagonalization: the direct solve's errors, in iterations b
       patch_space(c).degree = {p, p};
       patch_space(c).elements_per_span = {n, n};
       const auto space = build_space(c);
-      c.solver.method = "direct";
-      const PoissonSolution direct = solve_case(c, *space, Ordering::kAmd);
-      c.solver.method = "iterative";
       SolverReport report;
-      const PoissonSolution cg = solve_case(c, *space, Ordering::kAmd, {}, &report);
+      const auto [direct, cg] = direct_and_cg(c, *space, &report);
       INFO("p = " << p << ", n = " << n << ": " << cg.iterative.iterations << " iterations");
       REQUIRE(report.preconditioner == "fast_diagonalization");
       REQUIRE(cg.iterative.converged);
@@ -408,11 +414,9 @@ TEST_CASE("The separable fit of the geometry's coefficients reproduces separable
 TEST_CASE("CG + BoomerAMG serves a family without structure, and says so", "[poisson][solver]") {
   CaseDescription c = shipped("lshape_knot_segments");
   const auto space = build_space(c);
-  c.solver.method = "direct";
-  const PoissonSolution direct = solve_case(c, *space, Ordering::kAmd);
-  c.solver.method = "iterative";
   SolverReport report;
-  const PoissonSolution cg = solve_case(c, *space, Ordering::kAmd, {}, &report);
+  const auto [direct, cg] = direct_and_cg(c, *space, &report);
+  c.solver.method = "iterative";
   REQUIRE(report.preconditioner == "boomeramg");
   REQUIRE(report.note.find("boomeramg") != std::string::npos);
   REQUIRE(cg.errors->h1_semi == Approx(direct.errors->h1_semi).epsilon(1e-4));
