@@ -1,6 +1,7 @@
 #include "quadrature/bernstein.hpp"
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -117,11 +118,18 @@ BernsteinTable make_table(int p, int q, int nu, int nv) {
 }  // namespace
 
 const BernsteinTable& bernstein_table(int p, int q, int nu, int nv) {
+  // Called several times per cell by every thread: a thread's own short list of the tables
+  // it has used answers without the lock (the shared map is locked only on a thread's miss).
+  thread_local std::vector<std::pair<std::array<int, 4>, const BernsteinTable*>> seen;
+  const std::array<int, 4> key{p, q, nu, nv};
+  for (const auto& [k, table] : seen)
+    if (k == key) return *table;
   static std::mutex mutex;
   static std::map<std::tuple<int, int, int, int>, std::unique_ptr<BernsteinTable>> cache;
   std::lock_guard<std::mutex> lock(mutex);
   auto& slot = cache[{p, q, nu, nv}];
   if (!slot) slot = std::make_unique<BernsteinTable>(make_table(p, q, nu, nv));
+  seen.emplace_back(key, slot.get());
   return *slot;
 }
 

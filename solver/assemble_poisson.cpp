@@ -15,6 +15,7 @@
 #include "quadrature/bernstein.hpp"
 #include "solver/cell_basis.hpp"
 #include "solver/input_error.hpp"
+#include "solver/separable_cells.hpp"
 
 namespace knotwork {
 
@@ -107,6 +108,10 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
   if (integrals) integrals->setZero(mesh.num_functions());
   std::vector<std::vector<double>> thread_values(nthreads - 1, std::vector<double>());
   std::vector<Eigen::VectorXd> thread_rhs(nthreads - 1), thread_integrals(nthreads - 1);
+  std::optional<ExpressionBatch> compiled_source;  // once: GiNaC is not thread-safe
+  if (form.load && form.source) compiled_source.emplace(std::vector<Expression>{*form.source});
+  std::optional<SeparableMesh> separable;
+  if (quadrature.separable_cells) separable.emplace(mesh);
   int bad_cell = std::numeric_limits<int>::max(), bad_source_cell = bad_cell;
   double bad_det = 0, bad_x = 0, bad_y = 0, bad_z = 0;
   std::string failure;
@@ -127,13 +132,15 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
         my_integrals = &thread_integrals[tid - 1];
       }
     }
-    std::optional<ExpressionEvaluator> f;
-    if (form.load && form.source) f.emplace(*form.source);
+    std::optional<ExpressionBatch> f;
+    if (compiled_source) f.emplace(*compiled_source);
     std::optional<DerivedSurfaceSource> derived_f;
     if (derived) derived_f.emplace(*form.exact);
     CellBasis cb;
+    CellFunctions cf;
     Eigen::MatrixXd G, KB, Ke, second;
     Eigen::VectorXd fq, FB, Fe, ulift;
+    Eigen::ArrayXd root;
     std::vector<std::pair<int, int>> order;
     // A fixed assignment of cells to threads (and the thread sums added in thread order
     // below): the matrix and load are bitwise the same from run to run.
@@ -142,18 +149,22 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
       const BezierCell& cell = mesh.cell(c);
       const int nu = rule_points(quadrature.points_u, cell.degree_u, 1);
       const int nv = rule_points(quadrature.points_v, cell.degree_v, 1);
-      evaluate_cell_basis(mesh, geometry, c, nu, nv, cb);
-      if (!(cb.min_jacobian > 0)) {
+      const SeparableExtraction* rows = separable ? separable->of_cell(mesh, c) : nullptr;
+      if (rows) evaluate_cell_functions(mesh, geometry, *rows, c, nu, nv, cf);
+      else evaluate_cell_basis(mesh, geometry, c, nu, nv, cb);
+      const double min_jacobian = rows ? cf.min_jacobian : cb.min_jacobian;
+      const Eigen::VectorXd& measure = rows ? cf.measure : cb.measure;
+      const GeometryAtPoints& at = rows ? cf.geometry : cb.geometry;
+      if (!(min_jacobian > 0)) {
 #pragma omp critical(knotwork_bad_cell)
-        if (c < bad_cell) { bad_cell = c; bad_det = cb.min_jacobian; }
+        if (c < bad_cell) { bad_cell = c; bad_det = min_jacobian; }
         continue;
       }
-      const Eigen::Index nq = cb.measure.size(), nb = cb.value.cols();
+      const Eigen::Index nq = measure.size();
       fq.resize(nq);
-      if (f && dim == 2) {
-        for (Eigen::Index k = 0; k < nq; ++k) fq[k] = (*f)(cb.geometry.x(k, 0), cb.geometry.x(k, 1));
-      } else if (f) {
-        for (Eigen::Index k = 0; k < nq; ++k) fq[k] = (*f)(cb.geometry.x(k, 0), cb.geometry.x(k, 1), cb.geometry.x(k, 2));
+      if (f) {
+        f->evaluate(at.x.col(0).data(), at.x.col(1).data(), dim == 3 ? at.x.col(2).data() : nullptr, nq);
+        fq = Eigen::Map<const Eigen::VectorXd>(f->result(0), nq);
       } else if (derived_f) {
         const BernsteinTable& t = bernstein_table(1, 1, nu, nv);
         if (!geometry.second_derivatives(c, t.point_u, t.point_v, second)) {
@@ -161,7 +172,7 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
           failure = "the geometry has no second derivatives, needed for the curvature of the derived source";
           continue;
         }
-        (*derived_f)(cb.geometry.x, cb.geometry.jacobian, second, form.source_reaction, fq);
+        (*derived_f)(at.x, at.jacobian, second, form.source_reaction, fq);
       } else {
         fq.setZero();
       }
@@ -170,30 +181,44 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
 #pragma omp critical(knotwork_bad_cell)
           if (c < bad_source_cell) {
             bad_source_cell = c;
-            bad_x = cb.geometry.x(k, 0), bad_y = cb.geometry.x(k, 1), bad_z = dim == 3 ? cb.geometry.x(k, 2) : 0;
+            bad_x = at.x(k, 0), bad_y = at.x(k, 1), bad_z = dim == 3 ? at.x(k, 2) : 0;
           }
           fq[k] = 0;
         }
-      // K_B = sum_q m_q (grad B grad B^T): one dense product on stacked, scaled gradients.
-      const Eigen::ArrayXd root = cb.measure.array().sqrt();
+      // sum_q m_q (grad phi grad phi^T): one dense product on stacked, scaled gradients, of
+      // the cell's functions (separable cells) or of its Bernstein polynomials, then C K C^T.
+      if (!rows || form.reaction != 0) root = measure.array().sqrt();
+      const Eigen::MatrixXd& value = rows ? cf.value : cb.value;
+      Eigen::MatrixXd& K = rows ? Ke : KB;
       if (form.stiffness != 0) {
-        G.resize(dim * nq, nb);
-        for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.matrix().asDiagonal() * cb.grad(d);
-        if (form.stiffness == 1) KB.noalias() = G.transpose() * G;
-        else KB.noalias() = form.stiffness * (G.transpose() * G);
+        if (!rows) {
+          G.resize(dim * nq, value.cols());
+          for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.matrix().asDiagonal() * cb.grad(d);
+        }
+        // The lower triangle by a symmetric rank update (half the flops of G^T G), mirrored.
+        K.setZero(value.cols(), value.cols());
+        K.selfadjointView<Eigen::Lower>().rankUpdate((rows ? cf.scaled_gradients : G).transpose(), form.stiffness);
+        K.triangularView<Eigen::StrictlyUpper>() = K.transpose();
       } else {
-        KB.setZero(nb, nb);
+        K.setZero(value.cols(), value.cols());
       }
       if (form.reaction != 0) {
-        G.noalias() = root.matrix().asDiagonal() * cb.value;
-        KB.noalias() += form.reaction * (G.transpose() * G);
+        G.noalias() = root.matrix().asDiagonal() * value;
+        K.noalias() += form.reaction * (G.transpose() * G);
       }
-      FB.noalias() = cb.value.transpose() * cb.measure.cwiseProduct(fq);
-      Ke.noalias() = cb.C * KB * cb.C.transpose();
-      Fe.noalias() = cb.C * FB;
+      if (rows) {
+        fq.array() *= measure.array();  // the load's weights m_q f(x_q), in place
+        Fe.noalias() = value.transpose() * fq;
+      } else {
+        fq.array() *= measure.array();
+        FB.noalias() = value.transpose() * fq;
+        Ke.noalias() = cb.C * KB * cb.C.transpose();
+        Fe.noalias() = cb.C * FB;
+      }
       const auto ids = mesh.functions(c);
       if (my_integrals) {
-        const Eigen::VectorXd Ie = cb.C * (cb.value.transpose() * cb.measure);
+        const Eigen::VectorXd Ie = rows ? Eigen::VectorXd(cf.value.transpose() * measure)
+                                        : Eigen::VectorXd(cb.C * (cb.value.transpose() * measure));
         for (size_t a = 0; a < ids.size(); ++a) (*my_integrals)[ids[a]] += Ie[a];
       }
       order.clear();

@@ -128,6 +128,80 @@ void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, in
   }
 }
 
+namespace {
+
+// u_h and its reference derivatives from the Bernstein tables, then the physical gradient
+// point by point (the formulas of finish, on one function).
+void finish_field(const BezierMesh& mesh, int cell, const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu,
+                  const Eigen::MatrixXd& Bv, const Eigen::VectorXd& rule_weight, const Eigen::VectorXd& coefficients,
+                  CellField& out) {
+  const Eigen::MatrixXd& C = mesh.extraction(cell);
+  const auto ids = mesh.functions(cell);
+  out.local.resize(static_cast<Eigen::Index>(ids.size()));
+  for (size_t a = 0; a < ids.size(); ++a) out.local[a] = coefficients[ids[a]];
+  const Eigen::Index n = B.rows();
+  if (mesh.is_rational()) {
+    // R_a = w_a N_a / W with W = sum_a w_a N_a: numerator and W are polynomials in B.
+    out.weights.resize(out.local.size());
+    for (size_t a = 0; a < ids.size(); ++a) out.weights[a] = mesh.weights()[ids[a]];
+    out.local.array() *= out.weights.array();
+    out.bernstein.noalias() = C.transpose() * out.weights;
+    out.w.noalias() = B * out.bernstein;
+    out.w_u.noalias() = Bu * out.bernstein;
+    out.w_v.noalias() = Bv * out.bernstein;
+  }
+  out.bernstein.noalias() = C.transpose() * out.local;
+  out.s.noalias() = B * out.bernstein;
+  out.s_u.noalias() = Bu * out.bernstein;
+  out.s_v.noalias() = Bv * out.bernstein;
+  if (mesh.is_rational()) {
+    out.s.array() /= out.w.array();
+    out.s_u.array() = (out.s_u.array() - out.s.array() * out.w_u.array()) / out.w.array();
+    out.s_v.array() = (out.s_v.array() - out.s.array() * out.w_v.array()) / out.w.array();
+  }
+  out.value = out.s;
+  const auto& J = out.geometry.jacobian;
+  out.dimension = out.geometry.dimension();
+  out.gradient.resize(n, out.dimension);
+  out.measure.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double fu = out.s_u[k], fv = out.s_v[k];
+    if (out.dimension == 2) {
+      const double det = J(k, 0) * J(k, 3) - J(k, 1) * J(k, 2);
+      out.gradient(k, 0) = (J(k, 3) * fu - J(k, 2) * fv) / det;
+      out.gradient(k, 1) = (J(k, 0) * fv - J(k, 1) * fu) / det;
+      out.measure[k] = rule_weight[k] * std::abs(det);
+    } else {
+      const double E = J(k, 0) * J(k, 0) + J(k, 2) * J(k, 2) + J(k, 4) * J(k, 4);
+      const double F = J(k, 0) * J(k, 1) + J(k, 2) * J(k, 3) + J(k, 4) * J(k, 5);
+      const double H = J(k, 1) * J(k, 1) + J(k, 3) * J(k, 3) + J(k, 5) * J(k, 5);
+      const double det = E * H - F * F;
+      const double a = (H * fu - F * fv) / det, b = (E * fv - F * fu) / det;
+      for (int d = 0; d < 3; ++d) out.gradient(k, d) = J(k, 2 * d) * a + J(k, 2 * d + 1) * b;
+      out.measure[k] = rule_weight[k] * std::sqrt(std::abs(det));
+    }
+  }
+}
+
+}  // namespace
+
+void evaluate_cell_field(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu, int nv,
+                         const Eigen::VectorXd& coefficients, CellField& out) {
+  const BezierCell& c = mesh.cell(cell);
+  const BernsteinTable& t = bernstein_table(c.degree_u, c.degree_v, nu, nv);
+  geometry.evaluate_at_rule(cell, nu, nv, out.geometry);
+  finish_field(mesh, cell, t.value, t.d_u, t.d_v, t.weight, coefficients, out);
+}
+
+void evaluate_cell_field_at(const BezierMesh& mesh, const GeometryMap& geometry, int cell, const Eigen::VectorXd& u,
+                            const Eigen::VectorXd& v, const Eigen::VectorXd& coefficients, CellField& out) {
+  const BezierCell& c = mesh.cell(cell);
+  Eigen::MatrixXd B, Bu, Bv;
+  tensor_bernstein(c.degree_u, c.degree_v, u, v, B, Bu, Bv);
+  geometry.evaluate(cell, u, v, out.geometry);
+  finish_field(mesh, cell, B, Bu, Bv, Eigen::VectorXd::Ones(u.size()), coefficients, out);
+}
+
 std::vector<int> side_bernstein_indices(int p, int q, CellSide side) {
   std::vector<int> idx;
   if (side == kSideBottom || side == kSideTop) {

@@ -44,6 +44,26 @@ void evaluate_cell_basis_at(const BezierMesh& mesh, const GeometryMap& geometry,
 void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell,
                          CellSide side, int n, CellBasis& out);
 
+// One discrete function u_h = sum_i coefficient_i R_i on a cell, with its physical gradient
+// (the surface gradient on surfaces): what error norms and sampling need. Cheaper than
+// CellBasis, which tabulates every function: here the coefficients are taken to the
+// Bernstein basis first (C^T) and only matrix-vector products remain.
+struct CellField {
+  int dimension = 2;
+  Eigen::VectorXd value;
+  Eigen::MatrixXd gradient;  // points x dimension
+  Eigen::VectorXd measure;   // as in CellBasis
+  GeometryAtPoints geometry;
+  Eigen::VectorXd local, bernstein, weights, s, s_u, s_v, w, w_u, w_v;  // scratch
+};
+
+// At the tensor Gauss points of an (nu x nv) rule, for the global coefficient vector.
+void evaluate_cell_field(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu, int nv,
+                         const Eigen::VectorXd& coefficients, CellField& out);
+// At arbitrary reference points (measure = the area element alone).
+void evaluate_cell_field_at(const BezierMesh& mesh, const GeometryMap& geometry, int cell, const Eigen::VectorXd& u,
+                            const Eigen::VectorXd& v, const Eigen::VectorXd& coefficients, CellField& out);
+
 // Bernstein indices (a + (p+1) c) whose trace on the side is not identically zero.
 std::vector<int> side_bernstein_indices(int p, int q, CellSide side);
 

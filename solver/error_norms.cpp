@@ -8,31 +8,6 @@
 
 namespace knotwork {
 
-namespace {
-
-// The exact solution at a cell's points, and on surfaces its ambient gradient projected onto
-// the tangent plane.
-struct ExactAtPoints {
-  ExpressionEvaluator u, ux, uy;
-  std::optional<ExpressionEvaluator> uz;
-  explicit ExactAtPoints(const ExactSolution& e) : u(e.u), ux(e.u_x), uy(e.u_y) {
-    if (e.on_surface()) uz.emplace(e.u_z);
-  }
-  double value(const GeometryAtPoints& g, Eigen::Index k) {
-    return g.dimension() == 2 ? u(g.x(k, 0), g.x(k, 1)) : u(g.x(k, 0), g.x(k, 1), g.x(k, 2));
-  }
-  // Surfaces only (the planar loop evaluates u_x, u_y itself).
-  Eigen::Vector3d surface_gradient(const GeometryAtPoints& g, Eigen::Index k) {
-    const double x = g.x(k, 0), y = g.x(k, 1), z = g.x(k, 2);
-    Eigen::Vector3d grad(ux(x, y, z), uy(x, y, z), (*uz)(x, y, z));
-    const auto& J = g.jacobian;
-    const Eigen::Vector3d n = Eigen::Vector3d(J(k, 0), J(k, 2), J(k, 4)).cross(Eigen::Vector3d(J(k, 1), J(k, 3), J(k, 5))).normalized();
-    return grad - grad.dot(n) * n;
-  }
-};
-
-}  // namespace
-
 ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coefficients, const ExactSolution& exact,
                        const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell,
@@ -42,39 +17,46 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
   // Per-cell contributions, summed in cell order afterwards: the norms are bitwise the same
   // whatever the number of threads and however the cells were shared among them.
   Eigen::VectorXd cell_l2 = Eigen::VectorXd::Zero(mesh.num_cells()), cell_semi_all = cell_l2;
+  const bool surface = geometry.dimension() == 3;
+  std::vector<Expression> wanted{exact.u, exact.u_x, exact.u_y};
+  if (surface) wanted.push_back(exact.u_z);
+  const ExpressionBatch compiled(wanted);  // once: GiNaC is not thread-safe
 #pragma omp parallel
   {
-    ExactAtPoints ex(exact);
-    CellBasis cb;
-    Eigen::VectorXd local, beta, uh;
-    Eigen::MatrixXd grad_h;
+    ExpressionBatch ex(compiled);
+    CellField field;
 #pragma omp for schedule(dynamic, 64)
     for (int c = 0; c < mesh.num_cells(); ++c) {
       const BezierCell& cell = mesh.cell(c);
-      evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
-                          rule_points(quadrature.error_points_v, cell.degree_v, 2), cb);
-      const auto ids = mesh.functions(c);
-      local.resize(ids.size());
-      for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
-      beta.noalias() = cb.C.transpose() * local;  // coefficients in the (rational) Bernstein basis
-      uh.noalias() = cb.value * beta;
-      grad_h.resize(cb.measure.size(), cb.dimension);  // (n x 2) in the plane, (n x 3) on surfaces
-      for (int d = 0; d < cb.dimension; ++d) grad_h.col(d).noalias() = cb.grad(d) * beta;
+      evaluate_cell_field(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
+                          rule_points(quadrature.error_points_v, cell.degree_v, 2), coefficients, field);
+      const Eigen::VectorXd& uh = field.value;
+      const Eigen::MatrixXd& grad_h = field.gradient;
+      const Eigen::VectorXd& measure = field.measure;
+      const Eigen::MatrixXd& x = field.geometry.x;
+      ex.evaluate(x.col(0).data(), x.col(1).data(), surface ? x.col(2).data() : nullptr, x.rows());
+      const double *u = ex.result(0), *ux = ex.result(1), *uy = ex.result(2);
       double cell_semi = 0, l2 = 0;
-      if (cb.dimension == 2) {
-        for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
-          const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
-          const double e = ex.u(x, y) - exact_offset - uh[k];
-          const double gx = ex.ux(x, y) - grad_h(k, 0), gy = ex.uy(x, y) - grad_h(k, 1);
-          l2 += cb.measure[k] * e * e;
-          cell_semi += cb.measure[k] * (gx * gx + gy * gy);
+      if (!surface) {
+        for (Eigen::Index k = 0; k < measure.size(); ++k) {
+          const double e = u[k] - exact_offset - uh[k];
+          const double gx = ux[k] - grad_h(k, 0), gy = uy[k] - grad_h(k, 1);
+          l2 += measure[k] * e * e;
+          cell_semi += measure[k] * (gx * gx + gy * gy);
         }
       } else {
-        for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
-          const double e = ex.value(cb.geometry, k) - exact_offset - uh[k];
-          const Eigen::Vector3d g = ex.surface_gradient(cb.geometry, k) - grad_h.row(k).transpose();
-          l2 += cb.measure[k] * e * e;
-          cell_semi += cb.measure[k] * g.squaredNorm();
+        // The ambient gradient projected onto the tangent plane of the discrete surface.
+        const double* uz = ex.result(3);
+        const auto& J = field.geometry.jacobian;
+        for (Eigen::Index k = 0; k < measure.size(); ++k) {
+          const double e = u[k] - exact_offset - uh[k];
+          const Eigen::Vector3d n =
+              Eigen::Vector3d(J(k, 0), J(k, 2), J(k, 4)).cross(Eigen::Vector3d(J(k, 1), J(k, 3), J(k, 5))).normalized();
+          Eigen::Vector3d grad(ux[k], uy[k], uz[k]);
+          grad -= grad.dot(n) * n;
+          const Eigen::Vector3d g = grad - grad_h.row(k).transpose();
+          l2 += measure[k] * e * e;
+          cell_semi += measure[k] * g.squaredNorm();
         }
       }
       cell_l2[c] = l2;
@@ -96,7 +78,7 @@ double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const
   Eigen::VectorXd per_cell = Eigen::VectorXd::Zero(mesh.num_cells());  // summed in cell order below
 #pragma omp parallel
   {
-    ExactAtPoints ex(exact);
+    ExpressionEvaluator u(exact.u);
     CellBasis cb;
 #pragma omp for schedule(dynamic, 64)
     for (int c = 0; c < mesh.num_cells(); ++c) {
@@ -104,7 +86,7 @@ double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const
       evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
                           rule_points(quadrature.error_points_v, cell.degree_v, 2), cb);
       double integral = 0;
-      for (Eigen::Index k = 0; k < cb.measure.size(); ++k) integral += cb.measure[k] * ex.value(cb.geometry, k);
+      for (Eigen::Index k = 0; k < cb.measure.size(); ++k) integral += cb.measure[k] * exact_at(u, cb.geometry.x, k, 0.0);
       per_cell[c] = integral;
     }
   }
@@ -116,15 +98,11 @@ double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const
 Eigen::MatrixXd evaluate_solution(const BezierMesh& mesh, const GeometryMap& geometry,
                                   const Eigen::VectorXd& coefficients, int c,
                                   const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
-  CellBasis cb;
-  evaluate_cell_basis_at(mesh, geometry, c, u, v, cb);
-  const auto ids = mesh.functions(c);
-  Eigen::VectorXd local(ids.size());
-  for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
-  const Eigen::VectorXd beta = cb.C.transpose() * local;
-  Eigen::MatrixXd out(u.size(), 1 + cb.dimension);
-  out.col(0).noalias() = cb.value * beta;
-  for (int d = 0; d < cb.dimension; ++d) out.col(1 + d).noalias() = cb.grad(d) * beta;
+  CellField field;
+  evaluate_cell_field_at(mesh, geometry, c, u, v, coefficients, field);
+  Eigen::MatrixXd out(u.size(), 1 + field.dimension);
+  out.col(0) = field.value;
+  out.rightCols(field.dimension) = field.gradient;
   return out;
 }
 

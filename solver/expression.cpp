@@ -4,6 +4,8 @@
 #include <muParser.h>
 
 #include <algorithm>
+#include <map>
+#include <optional>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -170,6 +172,253 @@ class Differentiator {
 };
 
 }  // namespace
+
+namespace {
+
+// One instruction of a batch program: register `target` = f(operands), point by point.
+struct Instruction {
+  enum Kind { kConstant, kX, kY, kZ, kSum, kProduct, kIntegerPower, kPower, kFunction1, kFunction2 } kind;
+  std::vector<int> operands;
+  double constant = 0;
+  int exponent = 0;
+  double (*function1)(double) = nullptr;
+  double (*function2)(double, double) = nullptr;
+};
+
+// a^n by repeated squaring (|n| <= 64): exact for small n where pow() is slow.
+double integer_power(double a, int n) {
+  double r = 1, b = a;
+  for (unsigned m = static_cast<unsigned>(n < 0 ? -n : n); m; m >>= 1, b *= b)
+    if (m & 1) r *= b;
+  return n < 0 ? 1 / r : r;
+}
+
+double (*function_of(const std::string& name, size_t arity))(double) {
+  static const std::pair<const char*, double (*)(double)> table[] = {
+      {"sin", [](double a) { return std::sin(a); }},   {"cos", [](double a) { return std::cos(a); }},
+      {"tan", [](double a) { return std::tan(a); }},   {"asin", [](double a) { return std::asin(a); }},
+      {"acos", [](double a) { return std::acos(a); }}, {"atan", [](double a) { return std::atan(a); }},
+      {"sinh", [](double a) { return std::sinh(a); }}, {"cosh", [](double a) { return std::cosh(a); }},
+      {"tanh", [](double a) { return std::tanh(a); }}, {"exp", [](double a) { return std::exp(a); }},
+      {"log", [](double a) { return std::log(a); }},   {"abs", [](double a) { return std::abs(a); }}};
+  if (arity != 1) return nullptr;
+  for (const auto& [n, f] : table)
+    if (name == n) return f;
+  return nullptr;
+}
+
+// Compiles GiNaC expressions into one instruction list; a subexpression is keyed by its
+// canonical text (so equal ones share a register, and operand order is the same in every
+// process). Throws std::invalid_argument for what it does not know.
+class BatchCompiler {
+ public:
+  BatchCompiler(std::vector<Instruction>& program, const GiNaC::symbol& x, const GiNaC::symbol& y,
+                const GiNaC::symbol& z)
+      : program_(program), x_(x), y_(y), z_(z) {}
+  int compile(const GiNaC::ex& e) {
+    using namespace GiNaC;
+    const std::string key = canonical_text(e);
+    if (auto it = registers_.find(key); it != registers_.end()) return it->second;
+    Instruction in{};
+    if (!e.has(x_) && !e.has(y_) && !e.has(z_)) {
+      const ex v = evalf(e);
+      if (!is_a<numeric>(v) || !ex_to<numeric>(v).is_real()) throw std::invalid_argument("not a real constant");
+      in.kind = Instruction::kConstant;
+      in.constant = ex_to<numeric>(v).to_double();
+    } else if (is_a<symbol>(e)) {
+      in.kind = e.is_equal(x_) ? Instruction::kX : e.is_equal(y_) ? Instruction::kY : Instruction::kZ;
+    } else if (is_a<add>(e) || is_a<mul>(e)) {
+      std::vector<std::pair<std::string, ex>> parts;
+      for (size_t i = 0; i < e.nops(); ++i) parts.emplace_back(canonical_text(e.op(i)), e.op(i));
+      std::sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      in.kind = is_a<add>(e) ? Instruction::kSum : Instruction::kProduct;
+      for (const auto& part : parts) in.operands.push_back(compile(part.second));
+    } else if (is_a<power>(e)) {
+      const ex exponent = e.op(1);
+      in.operands.push_back(compile(e.op(0)));
+      if (is_a<numeric>(exponent) && ex_to<numeric>(exponent).is_integer() && abs(ex_to<numeric>(exponent)) <= 64) {
+        in.kind = Instruction::kIntegerPower;
+        in.exponent = ex_to<numeric>(exponent).to_int();
+      } else {
+        in.kind = Instruction::kPower;
+        in.operands.push_back(compile(exponent));
+      }
+    } else if (is_a<function>(e)) {
+      const std::string name = ex_to<function>(e).get_name();
+      for (size_t i = 0; i < e.nops(); ++i) in.operands.push_back(compile(e.op(i)));
+      if (name == "atan2" && e.nops() == 2) {
+        in.kind = Instruction::kFunction2;
+        in.function2 = [](double a, double b) { return std::atan2(a, b); };
+      } else if (auto* f = function_of(name, e.nops())) {
+        in.kind = Instruction::kFunction1;
+        in.function1 = f;
+      } else {
+        throw std::invalid_argument("function " + name);
+      }
+    } else {
+      throw std::invalid_argument("unsupported term");
+    }
+    program_.push_back(std::move(in));
+    const int r = static_cast<int>(program_.size()) - 1;
+    registers_.emplace(key, r);
+    return r;
+  }
+
+ private:
+  std::vector<Instruction>& program_;
+  const GiNaC::symbol &x_, &y_, &z_;
+  std::map<std::string, int> registers_;
+};
+
+}  // namespace
+
+struct ExpressionBatch::Impl {
+  std::vector<Expression> expressions;
+  std::vector<Instruction> program;
+  std::vector<std::vector<double>> registers;
+  // Per expression: its register in the program, or -1 and its muParser evaluator.
+  std::vector<int> output;
+  std::vector<std::optional<ExpressionEvaluator>> fallback;
+  std::vector<std::vector<double>> fallback_values;
+};
+
+ExpressionBatch::ExpressionBatch(const std::vector<Expression>& expressions) : impl_(std::make_unique<Impl>()) {
+  using namespace GiNaC;
+  symbol x("x"), y("y"), z("z");
+  symtab table;
+  table["x"] = x;
+  table["y"] = y;
+  table["z"] = z;
+  table["pi"] = Pi;
+  table["Pi"] = Pi;
+  table["e"] = exp(ex(1));
+  BatchCompiler compiler(impl_->program, x, y, z);
+  const double pts[3][3] = {{0.3, 0.7, 0.2}, {-0.4, 0.25, -0.6}, {0.61, -0.83, 0.45}};
+  for (const Expression& e : expressions) {
+    int r = -1;
+    try {
+      parser reader(table);
+      reader.strict = true;
+      r = compiler.compile(reader(e.text()));
+      // The same meaning as muParser's at a few points, or muParser it is.
+      ExpressionEvaluator reference(e);
+      for (const auto& pt : pts) {
+        std::vector<double> v(impl_->program.size());
+        for (size_t i = 0; i < impl_->program.size(); ++i) {
+          const Instruction& in = impl_->program[i];
+          double& t = v[i];
+          switch (in.kind) {
+            case Instruction::kConstant: t = in.constant; break;
+            case Instruction::kX: t = pt[0]; break;
+            case Instruction::kY: t = pt[1]; break;
+            case Instruction::kZ: t = pt[2]; break;
+            case Instruction::kSum: t = 0; for (int o : in.operands) t += v[o]; break;
+            case Instruction::kProduct: t = 1; for (int o : in.operands) t *= v[o]; break;
+            case Instruction::kIntegerPower: t = integer_power(v[in.operands[0]], in.exponent); break;
+            case Instruction::kPower: t = std::pow(v[in.operands[0]], v[in.operands[1]]); break;
+            case Instruction::kFunction1: t = in.function1(v[in.operands[0]]); break;
+            case Instruction::kFunction2: t = in.function2(v[in.operands[0]], v[in.operands[1]]); break;
+          }
+        }
+        const double mine = v[r], theirs = reference(pt[0], pt[1], pt[2]);
+        if (std::isfinite(mine) != std::isfinite(theirs) ||
+            (std::isfinite(mine) && std::abs(mine - theirs) > 1e-12 * (1 + std::abs(theirs)))) {
+          r = -1;
+          break;
+        }
+      }
+    } catch (std::exception&) {
+      r = -1;
+    }
+    impl_->output.push_back(r);
+    impl_->fallback.emplace_back();
+    if (r < 0) impl_->fallback.back().emplace(e);
+  }
+  impl_->expressions = expressions;
+  impl_->registers.resize(impl_->program.size());
+  impl_->fallback_values.resize(expressions.size());
+}
+
+ExpressionBatch::ExpressionBatch(const ExpressionBatch& other) : impl_(std::make_unique<Impl>()) {
+  const Impl& o = *other.impl_;
+  impl_->expressions = o.expressions;
+  impl_->program = o.program;
+  impl_->output = o.output;
+  impl_->registers.resize(o.program.size());
+  impl_->fallback_values.resize(o.output.size());
+  for (size_t e = 0; e < o.output.size(); ++e) {
+    impl_->fallback.emplace_back();
+    if (o.output[e] < 0) impl_->fallback.back().emplace(o.expressions[e]);
+  }
+}
+
+ExpressionBatch::~ExpressionBatch() = default;
+ExpressionBatch::ExpressionBatch(ExpressionBatch&&) noexcept = default;
+
+void ExpressionBatch::evaluate(const double* x, const double* y, const double* z, long n) {
+  Impl& m = *impl_;
+  for (size_t i = 0; i < m.program.size(); ++i) {
+    const Instruction& in = m.program[i];
+    std::vector<double>& t = m.registers[i];
+    t.resize(n);
+    auto operand = [&](int j) { return m.registers[in.operands[j]].data(); };
+    switch (in.kind) {
+      case Instruction::kConstant: std::fill(t.begin(), t.end(), in.constant); break;
+      case Instruction::kX: std::copy(x, x + n, t.begin()); break;
+      case Instruction::kY: std::copy(y, y + n, t.begin()); break;
+      case Instruction::kZ:
+        if (z) std::copy(z, z + n, t.begin());
+        else std::fill(t.begin(), t.end(), 0.0);
+        break;
+      case Instruction::kSum: {
+        std::copy(operand(0), operand(0) + n, t.begin());
+        for (size_t j = 1; j < in.operands.size(); ++j) {
+          const double* a = operand(static_cast<int>(j));
+          for (long k = 0; k < n; ++k) t[k] += a[k];
+        }
+        break;
+      }
+      case Instruction::kProduct: {
+        std::copy(operand(0), operand(0) + n, t.begin());
+        for (size_t j = 1; j < in.operands.size(); ++j) {
+          const double* a = operand(static_cast<int>(j));
+          for (long k = 0; k < n; ++k) t[k] *= a[k];
+        }
+        break;
+      }
+      case Instruction::kIntegerPower: {
+        const double* a = operand(0);
+        for (long k = 0; k < n; ++k) t[k] = integer_power(a[k], in.exponent);
+        break;
+      }
+      case Instruction::kPower: {
+        const double *a = operand(0), *b = operand(1);
+        for (long k = 0; k < n; ++k) t[k] = std::pow(a[k], b[k]);
+        break;
+      }
+      case Instruction::kFunction1: {
+        const double* a = operand(0);
+        for (long k = 0; k < n; ++k) t[k] = in.function1(a[k]);
+        break;
+      }
+      case Instruction::kFunction2: {
+        const double *a = operand(0), *b = operand(1);
+        for (long k = 0; k < n; ++k) t[k] = in.function2(a[k], b[k]);
+        break;
+      }
+    }
+  }
+  for (size_t e = 0; e < m.output.size(); ++e) {
+    if (m.output[e] >= 0) continue;
+    std::vector<double>& v = m.fallback_values[e];
+    v.resize(n);
+    for (long k = 0; k < n; ++k) v[k] = (*m.fallback[e])(x[k], y[k], z ? z[k] : 0.0);
+  }
+}
+
+const double* ExpressionBatch::result(int e) const {
+  return impl_->output[e] >= 0 ? impl_->registers[impl_->output[e]].data() : impl_->fallback_values[e].data();
+}
 
 ExactSolution differentiate_exact_solution(const Expression& u) {
   const Differentiator d(u);

@@ -2,6 +2,7 @@
 #include <array>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace knotwork {
 
@@ -31,6 +32,29 @@ class ExpressionEvaluator {
   ExpressionEvaluator(ExpressionEvaluator&&) noexcept;
   double operator()(double x, double y);  // z = 0
   double operator()(double x, double y, double z);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Several expressions at many points at once (the exact solution and its gradient at a
+// cell's quadrature points): compiled once into one program over arrays of points in which a
+// subexpression common to several of them (sin(pi*x) in u, u_x and u_y) is computed once,
+// with no interpretation per point. Built from GiNaC's reading of each text, checked against
+// muParser's at a few points; an expression GiNaC does not read (or reads with another
+// meaning) is evaluated by muParser, point by point. Not thread-safe: construct it once
+// (GiNaC is not thread-safe either) and give every thread its own copy.
+class ExpressionBatch {
+ public:
+  explicit ExpressionBatch(const std::vector<Expression>& expressions);
+  ExpressionBatch(const ExpressionBatch& other);
+  ~ExpressionBatch();
+  ExpressionBatch(ExpressionBatch&&) noexcept;
+  // Evaluates every expression at (x[k], y[k], z[k]), k < n; z may be null (z = 0).
+  void evaluate(const double* x, const double* y, const double* z, long n);
+  // Expression e at the points of the last evaluate().
+  const double* result(int e) const;
 
  private:
   struct Impl;

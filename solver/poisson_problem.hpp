@@ -31,6 +31,10 @@ struct PoissonProblem {
 struct QuadratureOptions {
   int points_u = 0, points_v = 0;              // matrix and load; 0 means degree+1
   int error_points_u = 0, error_points_v = 0;  // error norms; 0 means degree+2
+  // Cells whose functions are products f(u) g(v) are integrated from univariate tables
+  // (solver/separable_cells); false forces the dense C * B path on every cell (the tests
+  // compare the two).
+  bool separable_cells = true;
 };
 
 }  // namespace knotwork

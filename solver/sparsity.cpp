@@ -33,23 +33,28 @@ Eigen::SparseMatrix<double> lower_pattern_matrix(const BezierMesh& mesh, const D
   Eigen::SparseMatrix<double> A(n, n);
   int* outer = A.outerIndexPtr();
   outer[0] = 0;
-  auto column = [&](int j, std::vector<int>& rows) {
+  // A function meets each neighbour once per shared cell ((p+1)^2 times in the interior of a
+  // tensor mesh): a per-thread stamp (the column last seen) keeps each row once, so only the
+  // distinct rows are sorted.
+  auto column = [&](int j, std::vector<int>& rows, std::vector<int>& seen) {
     rows.clear();
     const int f = layout.function_of_dof[j];
     for (int k = start[f]; k < start[f + 1]; ++k)
       for (int g : mesh.functions(cells[k])) {
         const int d = layout.dof[g];
-        if (d >= j) rows.push_back(d);
+        if (d >= j && seen[d] != j) {
+          seen[d] = j;
+          rows.push_back(d);
+        }
       }
     std::sort(rows.begin(), rows.end());
-    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
   };
 #pragma omp parallel
   {
-    std::vector<int> rows;
+    std::vector<int> rows, seen(n, -1);
 #pragma omp for schedule(static)
     for (int j = 0; j < n; ++j) {
-      column(j, rows);
+      column(j, rows, seen);
       outer[j + 1] = static_cast<int>(rows.size());
     }
   }
@@ -59,10 +64,10 @@ Eigen::SparseMatrix<double> lower_pattern_matrix(const BezierMesh& mesh, const D
   double* values = A.valuePtr();
 #pragma omp parallel
   {
-    std::vector<int> rows;
+    std::vector<int> rows, seen(n, -1);
 #pragma omp for schedule(static)
     for (int j = 0; j < n; ++j) {
-      column(j, rows);
+      column(j, rows, seen);
       std::copy(rows.begin(), rows.end(), inner + outer[j]);
       std::fill(values + outer[j], values + outer[j + 1], 0.0);
     }

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <vector>
 
 #include "solver/expression.hpp"
 #include "solver/input_error.hpp"
@@ -52,4 +53,39 @@ TEST_CASE("Surface solutions: ambient gradient and Hessian in x, y, z", "[expres
   REQUIRE(hzz(x, y, z) == Approx(-std::sin(z)));
   REQUIRE(hxy(x, y, z) == Approx(z));
   REQUIRE(hyz(x, y, z) == Approx(x));
+}
+
+TEST_CASE("A batch of expressions gives muParser's values, sharing what they have in common", "[expression]") {
+  // The batch program is compiled from GiNaC's reading of each text; muParser, the reference
+  // for what a user's text means, evaluates the same texts point by point. The last one is
+  // muParser-only syntax (GiNaC has no comparisons): the batch evaluates it by muParser.
+  const ExactSolution ex = differentiate_exact_solution(
+      Expression::parse("(x^2+y^2)^(1/3)*sin(2/3*(atan2(-y,-x)+pi)) + exp(-x^2)*cos(y-0.3)", "t"));
+  std::vector<Expression> texts{ex.u, ex.u_x, ex.u_y, ex.minus_laplacian};
+  for (const char* t : {"sin(pi*x)*sin(pi*y)", "x^-3 + y^7 - 2^x + e^y", "sqrt(1+x^2)*cosh(y)/(2+tan(x*y))",
+                        "log(x^2+1) + asin(y/3) + acos(x/4) + atan(x) + sinh(y) + tanh(x) + pow(x, 2.5)",
+                        "x*y*z + 3 + abs(y - 0.3)", "x > 0.1 ? 1 : -1"})
+    texts.push_back(Expression::parse(t, "t"));
+  const ExpressionBatch compiled(texts);
+  ExpressionBatch batch(compiled);  // what every thread does: its own copy
+  std::vector<double> x, y, z;
+  for (int i = 0; i < 40; ++i) {
+    x.push_back(0.05 + 0.9 * std::fmod(0.37 * i, 1.0));
+    y.push_back(-0.8 + 1.7 * std::fmod(0.61 * i + 0.2, 1.0));
+    z.push_back(0.3 * i - 4);
+  }
+  batch.evaluate(x.data(), y.data(), z.data(), static_cast<long>(x.size()));
+  for (size_t e = 0; e < texts.size(); ++e) {
+    ExpressionEvaluator reference(texts[e]);
+    for (size_t k = 0; k < x.size(); ++k) {
+      INFO(texts[e].text() << " at (" << x[k] << ", " << y[k] << ", " << z[k] << ")");
+      const double r = reference(x[k], y[k], z[k]), b = batch.result(static_cast<int>(e))[k];
+      REQUIRE(std::isfinite(r));
+      REQUIRE(std::abs(b - r) <= 1e-13 * (1 + std::abs(r)));
+    }
+  }
+  // Without z the batch sets z = 0, as the scalar evaluator does in the plane.
+  batch.evaluate(x.data(), y.data(), nullptr, 5);
+  ExpressionEvaluator xyz(texts[texts.size() - 2]);
+  REQUIRE(batch.result(static_cast<int>(texts.size()) - 2)[3] == Approx(xyz(x[3], y[3])).epsilon(1e-15));
 }

@@ -164,3 +164,26 @@ TEST_CASE("Impossible spaces are refused with a reason", "[geometry]") {
   o.continuity = {3, 2};
   REQUIRE_THROWS_WITH(build_tensor_discretization(quarter_annulus_patch(1, 2), o), Catch::Contains("continuity"));
 }
+
+TEST_CASE("The tensor map at quadrature points (the patch as given, by direction) equals its Bezier route", "[geometry]") {
+  // Two routes to the same map: evaluate_at_rule sums the original patch's B-splines one
+  // direction at a time; evaluate() goes through the Bezier extraction of the geometry refined
+  // onto the space. Rational (annulus) and with an interior C0 knot (L-shape).
+  for (const NurbsPatch& patch : {quarter_annulus_patch(1, 2), lshape_patch()})
+    for (int p : {2, 4}) {
+      TensorSpaceOptions o;
+      o.degree = {p, p};
+      o.elements_per_span = {3, 2};
+      const TensorDiscretization disc = build_tensor_discretization(patch, o);
+      const NurbsGeometryMap g(disc);
+      const BernsteinTable& t = bernstein_table(1, 1, 4, 5);
+      for (int c = 0; c < disc.mesh.num_cells(); ++c) {
+        GeometryAtPoints fast, bezier;
+        g.evaluate_at_rule(c, 4, 5, fast);
+        g.evaluate(c, t.point_u, t.point_v, bezier);
+        const double scale = bezier.jacobian.cwiseAbs().maxCoeff() + bezier.x.cwiseAbs().maxCoeff();
+        REQUIRE((fast.x - bezier.x).cwiseAbs().maxCoeff() <= 1e-14 * scale);
+        REQUIRE((fast.jacobian - bezier.jacobian).cwiseAbs().maxCoeff() <= 1e-13 * scale);
+      }
+    }
+}

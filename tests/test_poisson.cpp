@@ -11,6 +11,7 @@
 #include "solver/error_norms.hpp"
 #include "solver/linear_solver.hpp"
 #include "solver/poisson_solver.hpp"
+#include "solver/separable_cells.hpp"
 
 using namespace knotwork;
 
@@ -466,4 +467,45 @@ TEST_CASE("PETSc options reach BoomerAMG, and options it does not use are refuse
   REQUIRE_THROWS_WITH(solve_case(c, *space, Ordering::kAmd), Catch::Contains("is not a PETSc option"));
   c.solver.petsc_options = "-pc_hypre_boomeramg_max_levels many";
   REQUIRE_THROWS_WITH(solve_case(c, *space, Ordering::kAmd), Catch::Contains("[solver] petsc_options"));
+}
+
+TEST_CASE("Cells of product functions are integrated from univariate tables: the dense path's solution", "[poisson]") {
+  // Tensor, knot-segment and PT functions are products f(u) g(v) on every cell (each row of
+  // the extraction factors); G1 functions in general are not. The same case solved with the
+  // univariate tables and with the dense C * B path on every cell agrees to rounding.
+  for (const char* name : {"quarter_annulus", "lshape", "lshape_knot_segments", "square_knot_segments",
+                           "lshape_adaptive_pt", "g1_three_quads", "g1_sphere_xy"}) {
+    INFO(name);
+    CaseDescription c = shipped(name);
+    const auto space = build_space(c);
+    const SeparableMesh separable(space->mesh());
+    const long factored = std::count(separable.separable.begin(), separable.separable.end(), 1);
+    const bool g1 = std::string(name).rfind("g1_", 0) == 0;
+    if (!g1) REQUIRE(factored == space->mesh().num_distinct_extractions());
+    PoissonSolveOptions dense = options_of(c), tables = options_of(c);
+    dense.quadrature.separable_cells = false;
+    const PoissonSolution a = solve_poisson(space->mesh(), space->geometry(), c.problem, dense);
+    const PoissonSolution b = solve_poisson(space->mesh(), space->geometry(), c.problem, tables);
+    REQUIRE((a.coefficients - b.coefficients).norm() <= 1e-11 * a.coefficients.norm());
+    REQUIRE(b.errors->l2 == Approx(a.errors->l2).epsilon(1e-9));
+    REQUIRE(b.errors->h1_semi == Approx(a.errors->h1_semi).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("A row of an extraction matrix factors exactly when it is a product", "[poisson]") {
+  Eigen::MatrixXd cu(3, 3), cv(2, 2);
+  cu << 1, 0.5, 0.25, 0, 0.5, 0.5, 0, 0, 0.25;
+  cv << 0.7, 0.3, 0, 1;
+  Eigen::MatrixXd C(6, 6);  // rows a_u + 3 a_v, columns b_u + 3 b_v
+  for (int av = 0; av < 2; ++av)
+    for (int au = 0; au < 3; ++au)
+      for (int bv = 0; bv < 2; ++bv)
+        for (int bu = 0; bu < 3; ++bu) C(au + 3 * av, bu + 3 * bv) = cu(au, bu) * cv(av, bv);
+  SeparableExtraction rows;
+  REQUIRE(factor_separable(C, 2, 1, rows));
+  for (int a = 0; a < 6; ++a)
+    for (int bv = 0; bv < 2; ++bv)
+      for (int bu = 0; bu < 3; ++bu) REQUIRE(rows.u(a, bu) * rows.v(a, bv) == Approx(C(a, bu + 3 * bv)).margin(1e-15));
+  C(4, 0) += 1e-6;  // a sum of two products is not one
+  REQUIRE_FALSE(factor_separable(C, 2, 1, rows));
 }

@@ -68,6 +68,10 @@ class BezierMesh {
   }
   const Eigen::MatrixXd& extraction(int c) const { return pool_[extraction_of_cell_[c]]; }
   int num_distinct_extractions() const { return static_cast<int>(pool_.size()); }
+  // The pool: cells with the same extraction_id share one matrix (work done per distinct
+  // matrix, e.g. factoring it, is done once).
+  int extraction_id(int c) const { return extraction_of_cell_[c]; }
+  const Eigen::MatrixXd& pooled_extraction(int id) const { return pool_[id]; }
   bool is_rational() const { return weights_.size() > 0; }
   const Eigen::VectorXd& weights() const { return weights_; }
   const std::vector<std::string>& boundary_names() const { return boundary_names_; }

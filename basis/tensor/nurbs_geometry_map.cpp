@@ -1,7 +1,10 @@
 #include "basis/tensor/nurbs_geometry_map.hpp"
 
 #include "basis/core/bezier_ops.hpp"
+#include "basis/core/small_products.hpp"
 #include "quadrature/bernstein.hpp"
+
+#include <atomic>
 
 namespace knotwork {
 
@@ -14,7 +17,30 @@ NurbsGeometryMap::NurbsGeometryMap(const TensorDiscretization& d)
       spans_v_(d.geometry_v.element_spans()),
       cu_(bezier_extraction(d.geometry_u)),
       cv_(bezier_extraction(d.geometry_v)),
-      net_(d.geometry_homogeneous) {}
+      net_(d.geometry_homogeneous),
+      patch_u_(d.patch.basis_u),
+      patch_v_(d.patch.basis_v) {
+  const Eigen::Index n = d.patch.weights.size();
+  patch_net_.resize(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i)
+    patch_net_.row(i) << d.patch.weights[i] * d.patch.control_points(i, 0),
+        d.patch.weights[i] * d.patch.control_points(i, 1), d.patch.weights[i];
+  // An element lies inside one span of the patch (the space's knots refine the patch's): the
+  // span holding its middle.
+  auto intervals = [](const BSplineBasis1D& space, const BSplineBasis1D& patch) {
+    std::vector<Interval> out;
+    const auto& t = space.knots();
+    for (int s : space.element_spans()) {
+      const double a = t[s], b = t[s + 1];
+      out.push_back({patch.find_span(0.5 * (a + b)), a, b - a});
+    }
+    return out;
+  };
+  intervals_u_ = intervals(d.space_u, patch_u_);
+  intervals_v_ = intervals(d.space_v, patch_v_);
+  static std::atomic<unsigned long> maps{0};
+  serial_ = ++maps;
+}
 
 void NurbsGeometryMap::homogeneous_bezier(int cell, Eigen::MatrixX3d& out) const {
   const int iu = cell % elements_u_, iv = cell / elements_u_;
@@ -25,19 +51,91 @@ void NurbsGeometryMap::homogeneous_bezier(int cell, Eigen::MatrixX3d& out) const
   for (int k = 0; k < 3; ++k) {
     for (int av = 0; av <= pv_; ++av)
       for (int au = 0; au <= pu_; ++au) local(au, av) = net_((su + au) + nu_ * (sv + av), k);
-    half.noalias() = cu_[iu].transpose() * local;
-    bez.noalias() = half * cv_[iv];
+    // Tiny products ((p+1)^2 per coordinate): coefficient-based kernels, not blocked GEMM.
+    half.noalias() = cu_[iu].transpose().lazyProduct(local);
+    bez.noalias() = half.lazyProduct(cv_[iv]);
     out.col(k) = Eigen::Map<const Eigen::VectorXd>(bez.data(), bez.size());
   }
 }
 
+namespace {
+
+// The patch's B-splines alive on `span` (and their derivatives in the element's reference
+// coordinate) at the rule's points mapped into [from, from + length]: points x (p+1).
+void patch_table(const BSplineBasis1D& basis, int span, double from, double length, const QuadratureRule1D& rule,
+                 Eigen::MatrixXd& value, Eigen::MatrixXd& derivative) {
+  const int p = basis.degree(), n = static_cast<int>(rule.nodes.size());
+  value.resize(n, p + 1);
+  derivative.resize(n, p + 1);
+  thread_local std::vector<double> d;
+  d.resize(2 * (p + 1));
+  for (int i = 0; i < n; ++i) {
+    basis.evaluate_derivatives(span, from + rule.nodes[i] * length, 1, d.data());
+    for (int a = 0; a <= p; ++a) value(i, a) = d[a], derivative(i, a) = d[p + 1 + a] * length;
+  }
+}
+
+}  // namespace
+
+const NurbsGeometryMap::RuleTables& NurbsGeometryMap::tables(bool along_u, int n) const {
+  // The serial, not the address, names the map: a new map may reuse a freed one's address.
+  struct Last {
+    unsigned long serial = 0;
+    bool along_u = false;
+    int n = -1;
+    const RuleTables* tables = nullptr;
+  };
+  thread_local Last last[2];
+  Last& mine = last[along_u ? 0 : 1];
+  if (mine.serial == serial_ && mine.n == n) return *mine.tables;
+  std::scoped_lock lock(mutex_);
+  auto& slot = tables_[{along_u, n}];
+  if (!slot) {
+    slot = std::make_unique<RuleTables>();
+    const QuadratureRule1D rule = gauss_legendre(n);
+    for (const Interval& e : along_u ? intervals_u_ : intervals_v_) {
+      slot->value.emplace_back();
+      slot->derivative.emplace_back();
+      patch_table(along_u ? patch_u_ : patch_v_, e.span, e.from, e.length, rule, slot->value.back(),
+                  slot->derivative.back());
+    }
+  }
+  mine = {serial_, along_u, n, slot.get()};
+  return *slot;
+}
+
 void NurbsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
-  const BernsteinTable& t = bernstein_table(pu_, pv_, nu, nv);
-  thread_local Eigen::MatrixX3d bez, h, hu, hv;
-  homogeneous_bezier(cell, bez);
-  h.noalias() = t.value * bez;
-  hu.noalias() = t.d_u * bez;
-  hv.noalias() = t.d_v * bez;
+  // h(u_i, v_j) = sum_ab Nu_a(u_i) Nv_b(v_j) P_ab over the patch's own (pu+1)(pv+1) control
+  // points, summed one direction at a time: the cost follows the geometry's degree, not the
+  // space's (a bilinear square costs the same at p = 2 and p = 10).
+  const int eu = cell % elements_u_, ev = cell / elements_u_;
+  const int gu = patch_u_.degree(), gv = patch_v_.degree(), n_u = patch_u_.num_functions();
+  const int su = intervals_u_[eu].span - gu, sv = intervals_v_[ev].span - gv;
+  const RuleTables& table_u = tables(true, nu);
+  const RuleTables& table_v = tables(false, nv);
+  const Eigen::MatrixXd &Nu = table_u.value[eu], &Nuu = table_u.derivative[eu];
+  const Eigen::MatrixXd &Nv = table_v.value[ev], &Nvv = table_v.derivative[ev];
+  thread_local Eigen::MatrixXd P, T, Tu, S;
+  thread_local Eigen::MatrixX3d h, hu, hv;
+  const Eigen::Index n = static_cast<Eigen::Index>(nu) * nv;
+  h.resize(n, 3);
+  hu.resize(n, 3);
+  hv.resize(n, 3);
+  P.resize(gv + 1, gu + 1);
+  for (int k = 0; k < 3; ++k) {
+    // P^T, so that T = Nu P is product_abt(Nu, P^T).
+    for (int av = 0; av <= gv; ++av)
+      for (int au = 0; au <= gu; ++au) P(av, au) = patch_net_((su + au) + n_u * (sv + av), k);
+    product_abt(Nu, P, T);  // nu x (gv+1): summed over u
+    product_abt(Nuu, P, Tu);
+    // Point i + nu j of column k is (T Nv^T)(i, j), stored column by column.
+    product_abt(T, Nv, S);
+    h.col(k) = S.reshaped();
+    product_abt(Tu, Nv, S);
+    hu.col(k) = S.reshaped();
+    product_abt(T, Nvv, S);
+    hv.col(k) = S.reshaped();
+  }
   dehomogenize_map(h, hu, hv, out);
 }
 

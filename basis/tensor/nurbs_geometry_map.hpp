@@ -1,5 +1,8 @@
 #pragma once
 #include <Eigen/Core>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "basis/tensor/tensor_patch.hpp"
@@ -7,7 +10,10 @@
 
 namespace knotwork {
 
-// The NURBS geometry of a TensorDiscretization, cell by cell through its own extraction.
+// The NURBS geometry of a TensorDiscretization. At quadrature points (the hot path) it
+// evaluates the patch as given, of its own (low) degree, one direction at a time; elsewhere
+// (arbitrary points, Bezier cells, second derivatives) through the Bezier extraction of the
+// geometry refined onto the space's elements. The tests hold the two routes to each other.
 class NurbsGeometryMap final : public GeometryMap {
  public:
   explicit NurbsGeometryMap(const TensorDiscretization& d);
@@ -25,6 +31,24 @@ class NurbsGeometryMap final : public GeometryMap {
   std::vector<int> spans_u_, spans_v_;
   std::vector<Eigen::MatrixXd> cu_, cv_;
   Eigen::MatrixX3d net_;
+  // The patch as given: its bases, homogeneous net (w x, w y, w) numbered i + n j, and per
+  // element of the space the patch's span and the element's parameter interval.
+  BSplineBasis1D patch_u_, patch_v_;
+  Eigen::MatrixX3d patch_net_;
+  struct Interval {
+    int span;
+    double from, length;
+  };
+  std::vector<Interval> intervals_u_, intervals_v_;
+  // The patch's B-splines at an n-point Gauss rule of every element, per direction: made on
+  // first use of a rule (thread-safe) and kept; each thread remembers its last lookup.
+  struct RuleTables {
+    std::vector<Eigen::MatrixXd> value, derivative;  // per element: points x (degree + 1)
+  };
+  const RuleTables& tables(bool along_u, int n) const;
+  mutable std::mutex mutex_;
+  mutable std::map<std::pair<bool, int>, std::unique_ptr<RuleTables>> tables_;
+  unsigned long serial_;
 };
 
 }  // namespace knotwork

@@ -106,6 +106,7 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
   d.space_v = pv.space;
   d.geometry_u = pu.geometry;
   d.geometry_v = pv.geometry;
+  d.patch = patch;
 
   // Refine the homogeneous control net (w x, w y, w) onto the geometry bases.
   const Eigen::SparseMatrix<double> Tu = refinement_matrix(patch.basis_u, d.geometry_u);

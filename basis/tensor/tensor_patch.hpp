@@ -27,6 +27,7 @@ struct TensorDiscretization {
   // homogeneous form (w*x, w*y, w), control net numbered i + n_u*j.
   BSplineBasis1D geometry_u, geometry_v;
   Eigen::MatrixX3d geometry_homogeneous;
+  NurbsPatch patch;  // the geometry as given, which the map evaluates at quadrature points
   int elements_u = 0, elements_v = 0;
 };
 
