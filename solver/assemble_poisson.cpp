@@ -206,11 +206,10 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
         G.noalias() = root.matrix().asDiagonal() * value;
         K.noalias() += form.reaction * (G.transpose() * G);
       }
+      fq.array() *= measure.array();  // the load's weights m_q f(x_q), in place
       if (rows) {
-        fq.array() *= measure.array();  // the load's weights m_q f(x_q), in place
         Fe.noalias() = value.transpose() * fq;
       } else {
-        fq.array() *= measure.array();
         FB.noalias() = value.transpose() * fq;
         Ke.noalias() = cb.C * KB * cb.C.transpose();
         Fe.noalias() = cb.C * FB;

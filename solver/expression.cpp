@@ -272,96 +272,16 @@ class BatchCompiler {
 
 }  // namespace
 
-struct ExpressionBatch::Impl {
-  std::vector<Expression> expressions;
-  std::vector<Instruction> program;
-  std::vector<std::vector<double>> registers;
-  // Per expression: its register in the program, or -1 and its muParser evaluator.
-  std::vector<int> output;
-  std::vector<std::optional<ExpressionEvaluator>> fallback;
-  std::vector<std::vector<double>> fallback_values;
-};
+namespace {
 
-ExpressionBatch::ExpressionBatch(const std::vector<Expression>& expressions) : impl_(std::make_unique<Impl>()) {
-  using namespace GiNaC;
-  symbol x("x"), y("y"), z("z");
-  symtab table;
-  table["x"] = x;
-  table["y"] = y;
-  table["z"] = z;
-  table["pi"] = Pi;
-  table["Pi"] = Pi;
-  table["e"] = exp(ex(1));
-  BatchCompiler compiler(impl_->program, x, y, z);
-  const double pts[3][3] = {{0.3, 0.7, 0.2}, {-0.4, 0.25, -0.6}, {0.61, -0.83, 0.45}};
-  for (const Expression& e : expressions) {
-    int r = -1;
-    try {
-      parser reader(table);
-      reader.strict = true;
-      r = compiler.compile(reader(e.text()));
-      // The same meaning as muParser's at a few points, or muParser it is.
-      ExpressionEvaluator reference(e);
-      for (const auto& pt : pts) {
-        std::vector<double> v(impl_->program.size());
-        for (size_t i = 0; i < impl_->program.size(); ++i) {
-          const Instruction& in = impl_->program[i];
-          double& t = v[i];
-          switch (in.kind) {
-            case Instruction::kConstant: t = in.constant; break;
-            case Instruction::kX: t = pt[0]; break;
-            case Instruction::kY: t = pt[1]; break;
-            case Instruction::kZ: t = pt[2]; break;
-            case Instruction::kSum: t = 0; for (int o : in.operands) t += v[o]; break;
-            case Instruction::kProduct: t = 1; for (int o : in.operands) t *= v[o]; break;
-            case Instruction::kIntegerPower: t = integer_power(v[in.operands[0]], in.exponent); break;
-            case Instruction::kPower: t = std::pow(v[in.operands[0]], v[in.operands[1]]); break;
-            case Instruction::kFunction1: t = in.function1(v[in.operands[0]]); break;
-            case Instruction::kFunction2: t = in.function2(v[in.operands[0]], v[in.operands[1]]); break;
-          }
-        }
-        const double mine = v[r], theirs = reference(pt[0], pt[1], pt[2]);
-        if (std::isfinite(mine) != std::isfinite(theirs) ||
-            (std::isfinite(mine) && std::abs(mine - theirs) > 1e-12 * (1 + std::abs(theirs)))) {
-          r = -1;
-          break;
-        }
-      }
-    } catch (std::exception&) {
-      r = -1;
-    }
-    impl_->output.push_back(r);
-    impl_->fallback.emplace_back();
-    if (r < 0) impl_->fallback.back().emplace(e);
-  }
-  impl_->expressions = expressions;
-  impl_->registers.resize(impl_->program.size());
-  impl_->fallback_values.resize(expressions.size());
-}
-
-ExpressionBatch::ExpressionBatch(const ExpressionBatch& other) : impl_(std::make_unique<Impl>()) {
-  const Impl& o = *other.impl_;
-  impl_->expressions = o.expressions;
-  impl_->program = o.program;
-  impl_->output = o.output;
-  impl_->registers.resize(o.program.size());
-  impl_->fallback_values.resize(o.output.size());
-  for (size_t e = 0; e < o.output.size(); ++e) {
-    impl_->fallback.emplace_back();
-    if (o.output[e] < 0) impl_->fallback.back().emplace(o.expressions[e]);
-  }
-}
-
-ExpressionBatch::~ExpressionBatch() = default;
-ExpressionBatch::ExpressionBatch(ExpressionBatch&&) noexcept = default;
-
-void ExpressionBatch::evaluate(const double* x, const double* y, const double* z, long n) {
-  Impl& m = *impl_;
-  for (size_t i = 0; i < m.program.size(); ++i) {
-    const Instruction& in = m.program[i];
-    std::vector<double>& t = m.registers[i];
+// Runs the program on n points, one instruction over all of them at a time.
+void run_program(const std::vector<Instruction>& program, std::vector<std::vector<double>>& registers,
+                 const double* x, const double* y, const double* z, long n) {
+  for (size_t i = 0; i < program.size(); ++i) {
+    const Instruction& in = program[i];
+    std::vector<double>& t = registers[i];
     t.resize(n);
-    auto operand = [&](int j) { return m.registers[in.operands[j]].data(); };
+    auto operand = [&](int j) { return registers[in.operands[j]].data(); };
     switch (in.kind) {
       case Instruction::kConstant: std::fill(t.begin(), t.end(), in.constant); break;
       case Instruction::kX: std::copy(x, x + n, t.begin()); break;
@@ -408,6 +328,81 @@ void ExpressionBatch::evaluate(const double* x, const double* y, const double* z
       }
     }
   }
+}
+
+}  // namespace
+
+struct ExpressionBatch::Impl {
+  std::vector<Expression> expressions;
+  std::vector<Instruction> program;
+  std::vector<std::vector<double>> registers;
+  // Per expression: its register in the program, or -1 and its muParser evaluator.
+  std::vector<int> output;
+  std::vector<std::optional<ExpressionEvaluator>> fallback;
+  std::vector<std::vector<double>> fallback_values;
+};
+
+ExpressionBatch::ExpressionBatch(const std::vector<Expression>& expressions) : impl_(std::make_unique<Impl>()) {
+  using namespace GiNaC;
+  symbol x("x"), y("y"), z("z");
+  symtab table;
+  table["x"] = x;
+  table["y"] = y;
+  table["z"] = z;
+  table["pi"] = Pi;
+  table["Pi"] = Pi;
+  table["e"] = exp(ex(1));
+  BatchCompiler compiler(impl_->program, x, y, z);
+  for (const Expression& e : expressions) {
+    int r = -1;
+    try {
+      parser reader(table);
+      reader.strict = true;
+      r = compiler.compile(reader(e.text()));
+    } catch (std::exception&) {
+      r = -1;
+    }
+    impl_->output.push_back(r);
+  }
+  // The same meaning as muParser's at a few points, or muParser it is.
+  const double px[3] = {0.3, -0.4, 0.61}, py[3] = {0.7, 0.25, -0.83}, pz[3] = {0.2, -0.6, 0.45};
+  impl_->registers.resize(impl_->program.size());
+  run_program(impl_->program, impl_->registers, px, py, pz, 3);
+  for (size_t i = 0; i < expressions.size(); ++i) {
+    int& r = impl_->output[i];
+    ExpressionEvaluator reference(expressions[i]);
+    for (int k = 0; k < 3 && r >= 0; ++k) {
+      const double mine = impl_->registers[r][k], theirs = reference(px[k], py[k], pz[k]);
+      if (std::isfinite(mine) != std::isfinite(theirs) ||
+          (std::isfinite(mine) && std::abs(mine - theirs) > 1e-12 * (1 + std::abs(theirs))))
+        r = -1;
+    }
+    impl_->fallback.emplace_back();
+    if (r < 0) impl_->fallback.back().emplace(expressions[i]);
+  }
+  impl_->expressions = expressions;
+  impl_->fallback_values.resize(expressions.size());
+}
+
+ExpressionBatch::ExpressionBatch(const ExpressionBatch& other) : impl_(std::make_unique<Impl>()) {
+  const Impl& o = *other.impl_;
+  impl_->expressions = o.expressions;
+  impl_->program = o.program;
+  impl_->output = o.output;
+  impl_->registers.resize(o.program.size());
+  impl_->fallback_values.resize(o.output.size());
+  for (size_t e = 0; e < o.output.size(); ++e) {
+    impl_->fallback.emplace_back();
+    if (o.output[e] < 0) impl_->fallback.back().emplace(o.expressions[e]);
+  }
+}
+
+ExpressionBatch::~ExpressionBatch() = default;
+ExpressionBatch::ExpressionBatch(ExpressionBatch&&) noexcept = default;
+
+void ExpressionBatch::evaluate(const double* x, const double* y, const double* z, long n) {
+  Impl& m = *impl_;
+  run_program(m.program, m.registers, x, y, z, n);
   for (size_t e = 0; e < m.output.size(); ++e) {
     if (m.output[e] >= 0) continue;
     std::vector<double>& v = m.fallback_values[e];

@@ -81,7 +81,6 @@ const NurbsGeometryMap::RuleTables& NurbsGeometryMap::tables(bool along_u, int n
   // The serial, not the address, names the map: a new map may reuse a freed one's address.
   struct Last {
     unsigned long serial = 0;
-    bool along_u = false;
     int n = -1;
     const RuleTables* tables = nullptr;
   };
@@ -100,7 +99,7 @@ const NurbsGeometryMap::RuleTables& NurbsGeometryMap::tables(bool along_u, int n
                   slot->derivative.back());
     }
   }
-  mine = {serial_, along_u, n, slot.get()};
+  mine = {serial_, n, slot.get()};
   return *slot;
 }
 
