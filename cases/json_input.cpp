@@ -122,7 +122,7 @@ class Builder final : public nlohmann::json_sax<json> {
     }
     Open& top = stack_.back();
     if (top.value.kind == JsonValue::Kind::kArray) top.value.items.push_back(std::move(v));
-    else top.value.members.emplace_back(std::move(top.pending_key), std::move(v));
+    else top.value.members.push_back({std::move(top.pending_key), std::move(v)});
     return true;
   }
   bool refuse(const std::string& why) {

@@ -5,6 +5,8 @@
 
 namespace knotwork {
 
+struct JsonMember;
+
 // A parsed JSON document (RFC 8259). Numbers keep their source text, so that integers stay
 // integers and callers can read them exactly.
 struct JsonValue {
@@ -15,7 +17,13 @@ struct JsonValue {
   bool integral = false;  // a number written without fraction or exponent
   std::string text;       // a string's value, or a number's source text
   std::vector<JsonValue> items;                           // kArray
-  std::vector<std::pair<std::string, JsonValue>> members;  // kObject, in file order
+  std::vector<JsonMember> members;  // kObject, in file order (a struct, not a std::pair: a pair
+                                   // of an incomplete type is refused by clang's libstdc++ checks)
+};
+
+struct JsonMember {
+  std::string key;
+  JsonValue value;
 };
 
 // Parses `text`; throws InputError "<path>:<line>:<column>: JSON syntax error: ..." on bad

@@ -263,10 +263,10 @@ TEST_CASE("basis --g1: the basis in JSON, --export per-face coefficients, --vtk 
       if (key != "faces") continue;
       for (const auto& face : value.items) {
         REQUIRE(face.members.size() == 2);
-        const int index = static_cast<int>(face.members[0].second.number) - 1;
+        const int index = static_cast<int>(face.members[0].value.number) - 1;
         REQUIRE(index >= 0);
         REQUIRE(index < 3);
-        const auto& c = face.members[1].second.items;
+        const auto& c = face.members[1].value.items;
         REQUIRE(c.size() == 64);
         for (int i = 0; i < 64; ++i) {
           x[index * 64L + i] = c[i].number;

@@ -157,8 +157,11 @@ std::vector<std::pair<int, mpq_class>> refine_bspline(const std::vector<mpq_clas
   std::map<std::vector<mpq_class>, mpq_class> done;
   std::vector<std::pair<std::vector<mpq_class>, mpq_class>> work{{t, mpq_class(1)}};
   while (!work.empty()) {
-    auto [k, c] = std::move(work.back());
+    // Not a structured binding: clang 14 cannot capture one in the lambda below.
+    auto piece = std::move(work.back());
     work.pop_back();
+    const std::vector<mpq_class>& k = piece.first;
+    const mpq_class& c = piece.second;
     const auto lo = std::upper_bound(fine.begin(), fine.end(), k.front());
     const auto hi = std::lower_bound(fine.begin(), fine.end(), k.back());
     const auto missing = std::find_if(lo, hi, [&](const mpq_class& x) { return count(k, x) < count(fine, x); });

@@ -55,7 +55,10 @@ PartitionTopology partition_topology(const RectangularPartition& partition) {
       const auto& v = t.vertices[i];
       lines[vertical ? v.x : v.y].emplace_back(vertical ? v.y : v.x, i);
     }
-    for (auto& [position, on_line] : lines) {
+    for (auto& line : lines) {
+      // Named references, not a structured binding: clang 14 cannot capture bindings in lambdas.
+      const mpq_class& position = line.first;
+      auto& on_line = line.second;
       std::sort(on_line.begin(), on_line.end());
       const bool boundary = vertical ? (position == X0 || position == X1) : (position == Y0 || position == Y1);
       std::vector<int> chain;  // current run of connected interior edges, as vertices
