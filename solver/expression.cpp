@@ -167,7 +167,9 @@ class Differentiator {
 
  private:
   Expression u_;
-  GiNaC::symbol x_, y_, z_;
+  // Real symbols: the coordinates are real, and GiNaC then simplifies conjugate(x) to x (the
+  // derivative of abs(f) is written with conjugates, which the evaluator rightly cannot read).
+  GiNaC::realsymbol x_, y_, z_;
   GiNaC::ex f_;
 };
 

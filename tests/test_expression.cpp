@@ -25,7 +25,8 @@ TEST_CASE("Syntax errors name the place and the position", "[expression]") {
 
 TEST_CASE("Symbolic derivatives agree with finite differences", "[expression]") {
   for (const char* text : {"sin(pi*x)*sin(pi*y)", "exp(x)*sin(y)", "-(x^2+y^2-1)*(x^2+y^2-4)*x*y^2",
-                           "(x^2+y^2)^(1/3)*sin(2/3*(atan2(-y,-x)+pi))", "sqrt(1+x^2)*cosh(y)/(2+sin(x*y))"}) {
+                           "(x^2+y^2)^(1/3)*sin(2/3*(atan2(-y,-x)+pi))", "sqrt(1+x^2)*cosh(y)/(2+sin(x*y))",
+                           "abs(x - 0.1)*exp(y) + abs(y)^3"}) {  // abs: GiNaC writes its derivative with conjugates
     INFO(text);
     const ExactSolution ex = differentiate_exact_solution(Expression::parse(text, "t"));
     ExpressionEvaluator u(ex.u), ux(ex.u_x), uy(ex.u_y), f(ex.minus_laplacian);
