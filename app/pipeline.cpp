@@ -1,5 +1,8 @@
 #include "app/pipeline.hpp"
 
+#include <algorithm>
+#include <utility>
+
 #include "solver/amg_preconditioner.hpp"
 #include "solver/input_error.hpp"
 
@@ -43,11 +46,35 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
   return r;
 }
 
+// Gauss points per direction below degree + 1 leave the stiffness under-integrated: on a cell
+// of degree p, L_n(u) L_n(v) (Legendre, n < p + 1 points) lies in the cell's polynomials and its
+// gradient vanishes at every point of the rule, so the matrix can lose definiteness and the
+// solve would then blame the boundary conditions. Refused before any work, naming the key.
+void check_quadrature_points(const CaseDescription& c, const BezierMesh& mesh) {
+  int pu = 0, pv = 0;
+  for (int e = 0; e < mesh.num_cells(); ++e) {
+    pu = std::max(pu, mesh.cell(e).degree_u);
+    pv = std::max(pv, mesh.cell(e).degree_v);
+  }
+  auto check = [&](const char* key, int nu, int nv, const std::string& integrand) {
+    for (const auto& [n, p] : {std::pair{nu, pu}, std::pair{nv, pv}})
+      if (n > 0 && n < p + 1)
+        throw InputError(c.path + ": [space] " + key + ": " + std::to_string(n) + " Gauss point" + (n == 1 ? "" : "s") +
+                         " per direction, fewer than degree + 1 = " + std::to_string(p + 1) +
+                         ", the fewest that integrate " + integrand + " (omit the key for the default)");
+  };
+  check("quadrature_points", c.quadrature.points_u, c.quadrature.points_v,
+        "the stiffness of a degree-" + std::to_string(std::max(pu, pv)) + " space exactly on straight cells");
+  check("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v,
+        "|grad u_h|^2 of a degree-" + std::to_string(std::max(pu, pv)) + " solution exactly on straight cells");
+}
+
 }  // namespace
 
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
                            const ProgressFunction& progress, SolverReport* report) {
   space.check_solvable();
+  check_quadrature_points(c, space.mesh());
   PoissonSolveOptions so;
   so.quadrature = c.quadrature;
   so.ordering = ordering;

@@ -78,7 +78,8 @@ PartitionDescription load_partition_document(const DocumentNode& root, const std
   if (const DocumentNode* sm = root.get("smoothness")) {
     const auto ab = r.integer_pair(*sm, "smoothness");
     if (ab[0] < -1 || ab[0] > d.m - 1 || ab[1] < -1 || ab[1] > d.n - 1)
-      r.fail("smoothness", "must be in [-1, degree-1] per direction");
+      r.fail("smoothness", "must be in [-1, degree-1] per direction, got [" + std::to_string(ab[0]) + ", " +
+                               std::to_string(ab[1]) + "] for degree [" + std::to_string(d.m) + ", " + std::to_string(d.n) + "]");
     d.alpha = static_cast<int>(ab[0]);
     d.beta = static_cast<int>(ab[1]);
   }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -234,6 +235,19 @@ std::string CaseReader::resolve(const std::string& file) const {
   return (f.is_relative() ? std::filesystem::path(path_).parent_path() / f : f).string();
 }
 
+std::string CaseReader::readable_file(const DocumentNode& n, const std::string& field) const {
+  return readable_file(string(n, field), field);
+}
+
+std::string CaseReader::readable_file(const std::string& name, const std::string& field) const {
+  const std::string file = resolve(name);
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) fail(field, "no such file: " + file + " (relative paths start at the case file's folder)");
+  if (std::filesystem::is_directory(file, ec)) fail(field, file + " is a folder, not a file");
+  if (!std::ifstream(file)) fail(field, file + " cannot be read");
+  return file;
+}
+
 DocumentNode parse_document(const std::string& path) {
   if (is_json_file(path)) {
     const JsonValue doc = read_json_file(path);
@@ -243,9 +257,9 @@ DocumentNode parse_document(const std::string& path) {
   std::ifstream probe(path);
   if (!probe) {
     const std::string why = std::filesystem::exists(path) ? "cannot be read" : "no such file";
-    throw InputError(path + ": cannot open case file (" + why + ")");
+    throw InputError(path + ": cannot open the file (" + why + ")");
   }
-  if (std::filesystem::is_directory(path)) throw InputError(path + ": is a directory, not a case file");
+  if (std::filesystem::is_directory(path)) throw InputError(path + ": is a directory, not a file to read");
   try {
     return from_toml(toml::parse_file(path), path, "");
   } catch (const toml::parse_error& e) {
@@ -269,8 +283,7 @@ NurbsPatch read_nurbs(const CaseReader& r, const DocumentNode& g, const std::str
   DocumentNode from_file = DocumentNode::table();
   std::string field_prefix = "[" + section + "] ";
   if (const DocumentNode* f = g.get("file")) {
-    std::filesystem::path file = r.string(*f, field_prefix + "file");
-    if (file.is_relative()) file = std::filesystem::path(r.path()).parent_path() / file;
+    const std::filesystem::path file = r.readable_file(*f, field_prefix + "file");
     from_file = parse_document(file.string());
     CaseReader(file.string()).check_keys(from_file, "", {"degrees", "knots_u", "knots_v", "control_points", "weights"});
     src = &from_file;
@@ -332,6 +345,17 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c) {
     if (corners.rows() != 2) r.fail("[geometry] corners", "must be [[x0, y0], [x1, y1]]");
     if (!(corners(1, 0) > corners(0, 0) && corners(1, 1) > corners(0, 1)))
       r.fail("[geometry] corners", "need x1 > x0 and y1 > y0");
+    // The Jacobian is the product of the sides and the stiffness their inverse squares: both
+    // stay normal doubles only for sides of moderate size (rescale the problem otherwise).
+    for (int d = 0; d < 2; ++d) {
+      const double side = corners(1, d) - corners(0, d);
+      if (!(side >= 1e-100 && side <= 1e100)) {
+        char msg[160];
+        std::snprintf(msg, sizeof msg, "side length %g is outside [1e-100, 1e100], where the Jacobian and its inverse "
+                                       "are normal doubles; rescale the problem", side);
+        r.fail("[geometry] corners", msg);
+      }
+    }
     c.geometry = rectangle_patch(corners(0, 0), corners(0, 1), corners(1, 0), corners(1, 1));
   } else if (c.geometry_type == "quarter_annulus") {
     r.check_keys(g, "geometry", {"type", "inner_radius", "outer_radius"});

@@ -39,6 +39,11 @@ class CaseReader {
   bool boolean(const DocumentNode& n, const std::string& field) const;
   // A file name relative to the case file's folder.
   std::string resolve(const std::string& file) const;
+  // The file the string names (relative to the case file's folder), refused on `field` when
+  // it is not there or cannot be read: a missing T-mesh, mesh or collection names the case
+  // file and the key that points to it, not the file that is not there.
+  std::string readable_file(const DocumentNode& n, const std::string& field) const;
+  std::string readable_file(const std::string& name, const std::string& field) const;
   const std::string& path() const { return path_; }
   // Keys of [space] that other families take: an unknown [space] key that one of them knows
   // is refused with "only with family = ..." (load_case fills it from the registry).

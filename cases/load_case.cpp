@@ -59,7 +59,13 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
 
 }  // namespace
 
-CaseDescription load_case(const std::string& path) { return read_case(parse_document(path), path); }
+CaseDescription load_case(const std::string& path) {
+  // A quad mesh handed to run/converge would otherwise be blamed for TOML syntax.
+  if (std::filesystem::path(path).extension() == ".obj")
+    throw InputError(path + ": a quad mesh (OBJ), not a case file: name it in a case's [space] mesh (family = \"g1\") "
+                            "or check it with `knotwork basis --g1 " + path + "`");
+  return read_case(parse_document(path), path);
+}
 
 CaseDescription load_case_document(const DocumentNode& root, const std::string& name) { return read_case(root, name); }
 

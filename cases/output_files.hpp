@@ -23,7 +23,10 @@ class OutputStage {
  private:
   std::filesystem::path directory_, staging_;
   std::vector<std::string> names_;
-  bool created_directory_ = false, committed_ = false;
+  std::vector<int> cleanup_slots_;  // what an interrupt removes (remove_partial_output_on_interrupt)
+  std::vector<std::filesystem::path> created_;  // folders made for the output, outermost first
+  bool committed_ = false;
+  void remove_created_folders();
 };
 
 // A single output file (e.g. --export): `write` fills a hidden sibling, which is renamed to
@@ -31,6 +34,13 @@ class OutputStage {
 // the option `what`.
 void write_file_atomically(const std::string& file, const std::string& what,
                            const std::function<void(const std::string& path)>& write);
+
+// For the command line: SIGINT, SIGTERM and SIGHUP remove every file still being written
+// (staged, or a hidden sibling of write_file_atomically) and the folders made for them, print
+// one line ("knotwork: error: interrupted (SIGINT); ...") and exit with 128 + the signal.
+// Files already moved into place stay: they are complete. Not for the Python module, whose
+// interpreter handles Ctrl-C itself.
+void remove_partial_output_on_interrupt();
 
 // Writes `text` to `path` (a staged file); throws std::runtime_error naming it on failure.
 void write_text_file(const std::string& path, const std::string& text);

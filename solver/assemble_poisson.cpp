@@ -248,7 +248,10 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
     std::ostringstream s;
     if (dim == 2)
       s << "geometry has a non-positive Jacobian (det J = " << bad_det << ") at a quadrature point of "
-        << describe_cell(mesh, bad_cell) << ": the map folds over or is oriented clockwise";
+        << describe_cell(mesh, bad_cell)
+        << (bad_det == 0 ? ": the map is degenerate there (a collapsed edge or corner, or a domain too small for "
+                           "double precision)"
+                         : ": the map folds over or is oriented clockwise");
     else
       s << "the surface degenerates (area element " << bad_det << ") at a quadrature point of "
         << describe_cell(mesh, bad_cell);

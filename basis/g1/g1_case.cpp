@@ -1,5 +1,7 @@
 // Reading a case of family "g1": [space] mesh/degree/split_smoothness/gluing/refine/
 // smoothness, [geometry] shape, [problem] operator/exact/source/reaction/dirichlet.
+#include <filesystem>
+
 #include "basis/g1/g1_case.hpp"
 
 #include "basis/g1/gluing_file.hpp"
@@ -22,7 +24,7 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
   r.check_keys(s, "space", g1_space_keys());
   const DocumentNode* m = s.get("mesh");
   if (!m) r.fail("[space] mesh", "missing: the quad mesh (.obj) the G1 space lives on");
-  g.mesh_file = r.resolve(r.string(*m, "[space] mesh"));
+  g.mesh_file = r.readable_file(*m, "[space] mesh");
   QuadMesh mesh;
   try {
     mesh = QuadMesh::read_obj(g.mesh_file);
@@ -39,7 +41,10 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
                                        "refinement to nest the spaces), got " + std::to_string(g.split_smoothness));
   if (const DocumentNode* d = s.get("gluing")) {
     g.gluing = r.string(*d, "[space] gluing");
-    if (!is_named_gluing(g.gluing)) g.gluing = r.resolve(g.gluing);
+    if (!is_named_gluing(g.gluing) && !std::filesystem::exists(r.resolve(g.gluing)))
+      r.fail("[space] gluing", "'" + g.gluing + "' is neither a construction (symmetric, symmetric_c1, geometric, "
+                               "regular_fans) nor a gluing file (relative paths start at the case file's folder)");
+    if (!is_named_gluing(g.gluing)) g.gluing = r.readable_file(g.gluing, "[space] gluing");
   }
   if (const DocumentNode* d = s.get("refine")) g.refine = static_cast<int>(r.integer(*d, "[space] refine"));
   if (const DocumentNode* d = s.get("smoothness")) {

@@ -61,7 +61,7 @@ void read_knot_segments_case(const CaseDocument& doc, CaseDescription& c) {
   if (const DocumentNode* f = s.get("collection")) {
     for (const char* key : {"segments", "elements"})
       if (s.get(key)) r.fail(std::string("[space] ") + key, "not used with an explicit collection (its functions are fixed)");
-    k.collection_file = r.resolve(r.string(*f, "[space] collection"));
+    k.collection_file = r.readable_file(*f, "[space] collection");
     const CollectionDescription cd = load_collection(k.collection_file);
     k.collection = cd.splines;
     if (const DocumentNode* d = s.get("degree")) {

@@ -33,7 +33,7 @@ void read_pt_case(const CaseDocument& doc, CaseDescription& c) {
     }
   }
   if (const DocumentNode* tm = s.get("tmesh")) {
-    pt.tmesh_file = r.resolve(r.string(*tm, "[space] tmesh"));
+    pt.tmesh_file = r.readable_file(*tm, "[space] tmesh");
     pt.cells = load_partition(pt.tmesh_file, false).cells;
   }
   if (const DocumentNode* sg = s.get("segments")) pt.segments = read_axis_segments(r, *sg, "[space] segments");
