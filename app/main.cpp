@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "app/commands.hpp"
+#include "cases/output_files.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
@@ -73,6 +74,7 @@ void prefer_robust_threading(char** argv) {
 
 int main(int argc, char** argv) {
   prefer_robust_threading(argv);
+  knotwork::remove_partial_output_on_interrupt();
   CLI::App app{"knotwork: isogeometric Poisson solver (B-splines/NURBS -> Bezier extraction -> CHOLMOD -> ParaView)"};
   app.set_version_flag("--version", "knotwork 0.1.0");
   app.require_subcommand(1);
