@@ -1,5 +1,6 @@
 #include <chrono>
 #include <cstdio>
+#include <stdexcept>
 
 #include "app/commands.hpp"
 #include "app/studies.hpp"
@@ -8,6 +9,7 @@
 #include "basis/tmesh/spline_dimension.hpp"
 #include "basis/tmesh/tmesh_conformality.hpp"
 #include "cases/case_file.hpp"
+#include "solver/input_error.hpp"
 
 namespace knotwork {
 
@@ -27,10 +29,16 @@ struct DimensionStudy {
   ConformalityCount cofactor;
 };
 
-DimensionStudy dimension_study(const PartitionDescription& p, bool exact) {
+DimensionStudy dimension_study(const PartitionDescription& p, const std::string& name, bool exact) {
   DimensionStudy d(p);
   const auto t0 = std::chrono::steady_clock::now();
-  d.r = spline_space_dimension(d.partition, p.m, p.n, p.alpha, p.beta, exact ? RankMethod::kExact : RankMethod::kModular);
+  const RankMethod method = exact ? RankMethod::kExact : RankMethod::kModular;
+  try {
+    check_brute_force_size(d.partition.num_cells(), p.m, p.n, method);
+  } catch (const std::length_error& e) {
+    throw InputError(name + ": cells: " + e.what());
+  }
+  d.r = spline_space_dimension(d.partition, p.m, p.n, p.alpha, p.beta, method);
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   d.topo = partition_topology(d.partition);
   // Weller's Prop. 4.2 count applies to C^{d-1} splines of equal bi-degree d.
@@ -76,11 +84,11 @@ Json dimension_json(const std::string& file, const DimensionStudy& d) {
 }  // namespace
 
 Json dimension_json(const PartitionDescription& partition, const std::string& name, bool exact) {
-  return dimension_json(name, dimension_study(partition, exact));
+  return dimension_json(name, dimension_study(partition, name, exact));
 }
 
 int dimension_command(const DimensionOptions& o) {
-  const DimensionStudy d = dimension_study(load_partition(o.file), o.exact);
+  const DimensionStudy d = dimension_study(load_partition(o.file), o.file, o.exact);
   if (o.json) {
     std::printf("%s\n", dimension_json(o.file, d).dump().c_str());
     return 0;

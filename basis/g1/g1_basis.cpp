@@ -9,6 +9,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -261,7 +262,8 @@ void complete_globally(const QuadMesh& mesh, const GluingData& gluing, int k, in
 }
 
 template <class Scalar>
-void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
+void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
+           const std::function<void(const std::string&)>& say) {
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
   std::vector<Rows<Scalar>> rows(mesh.num_edges());
   for (int e = 0; e < mesh.num_edges(); ++e)
@@ -271,7 +273,9 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
   FloatTaylorSpan float_span;
 
   std::vector<G1BasisFunction> vertex_functions;
+  const int tenth = std::max(1, mesh.num_vertices() / 10);
   for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (v > 0 && v % tenth == 0) say("vertex functions, " + std::to_string(v) + "/" + std::to_string(mesh.num_vertices()));
     const auto& ring = mesh.ring(v);
     LocalColumns cols;
     for (size_t i = 0; i < ring.faces.size(); ++i) add_corner_block(cols, ring.faces[i], ring.corners[i], k, r);
@@ -300,7 +304,9 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis) {
   }
 
   std::vector<G1BasisFunction> edge_functions;
+  const int edge_tenth = std::max(1, mesh.num_edges() / 10);
   for (int e = 0; e < mesh.num_edges(); ++e) {
+    if (e % edge_tenth == 0) say("edge functions, " + std::to_string(e) + "/" + std::to_string(mesh.num_edges()));
     LocalColumns cols;
     add_edge_strips(cols, mesh, e, k, r);
     const auto A = restrict_rows(rows[e], cols);
@@ -574,16 +580,41 @@ void separate_boundary_traces(const QuadMesh& mesh, G1Basis& basis) {
 
 }  // namespace
 
-G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating) {
+void check_g1_construction_size(long faces, int k, int r, bool exact_data) {
+  const long n = 2L * k - r + 1, unknowns = faces * n * n;
+  const long limit = exact_data ? kMaxG1ExactUnknowns : kMaxG1FloatingUnknowns;
+  if (unknowns <= limit) return;
+  char estimate[200];
+  if (exact_data)
+    std::snprintf(estimate, sizeof estimate, "exact data: about %.0f minutes or more here", 547.0 / 60 * double(unknowns) / 248832);
+  else
+    std::snprintf(estimate, sizeof estimate,
+                  "floating-point data take a dense SVD of the conditions: about %.0f GB and %.0f minutes or more here",
+                  3.0 * 8 * double(unknowns) * double(unknowns) / 1e9, 67.0 / 60 * std::pow(double(unknowns) / 8000, 3));
+  throw std::length_error(std::to_string(faces) + " faces of degree " + std::to_string(k) + " are " +
+                          std::to_string(unknowns) + " unknowns, more than the " + std::to_string(limit) +
+                          " a G1 space is built for here (" + estimate + ")");
+}
+
+G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating,
+                 const std::function<void(const std::string&)>& progress) {
+  auto say = [&](const std::string& s) {
+    if (progress) progress("G1 basis: " + s);
+  };
   G1Basis basis;
   basis.k = k;
   basis.r = r;
-  basis.space = g1_space_dimension(mesh, gluing, k, r, floating);  // also validates k, r, gluing
   basis.exact = gluing.exact() && !floating;
+  say(std::string("dimension (rank of the C1 conditions, ") + (basis.exact ? "exact" : "dense SVD") + ", " +
+      std::to_string(long(mesh.num_faces()) * (2 * k - r + 1) * (2 * k - r + 1)) + " unknowns)");
+  basis.space = g1_space_dimension(mesh, gluing, k, r, floating);  // also validates k, r, gluing
+  say("local functions at " + std::to_string(mesh.num_vertices()) + " vertices and " + std::to_string(mesh.num_edges()) +
+      " edges");
   if (basis.exact)
-    build<mpq_class>(mesh, gluing, basis);
+    build<mpq_class>(mesh, gluing, basis, say);
   else
-    build<double>(mesh, gluing, basis);
+    build<double>(mesh, gluing, basis, say);
+  say("tidying " + std::to_string(basis.functions.size()) + " functions");
   tidy_vertex_functions(mesh, basis);
   tidy_pair_functions(mesh, basis);
   separate_boundary_traces(mesh, basis);

@@ -51,7 +51,20 @@ struct G1Basis {
 // Throws std::invalid_argument for bad k, r or missing gluing data.
 // `floating` forces the floating-point path (SVD, singular values below 1e-10 * largest
 // are zero) also for rational data.
-G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false);
+// `progress` (optional) hears each stage ("G1 basis: vertex functions, 1200 vertices").
+G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false,
+                 const std::function<void(const std::string&)>& progress = {});
+
+// The largest constructions done, in unknowns = faces x (2k - r + 1)^2 (docs/RELIABILITY.md).
+// Exact data (sparse rank over Q and local exact null spaces): 248 832 unknowns took 547 s
+// and 1.2 GB here (k = 4, 6912 faces), growing faster than linearly; floating-point data
+// (irrational gluing) take a dense SVD of all the conditions: 8 000 unknowns took 67 s and
+// 0.7 GB (k = 5), growing with the cube. Beyond these a build would run for hours.
+constexpr long kMaxG1ExactUnknowns = 300000;
+constexpr long kMaxG1FloatingUnknowns = 10000;
+// std::length_error with the size, the limit and the estimate when the construction of a
+// G1 space on `faces` faces would exceed them.
+void check_g1_construction_size(long faces, int k, int r, bool exact_data);
 
 // Largest relative residual of conditions (2)-(3) over the basis functions:
 // max over functions and rows of |C_row x| / (sum_j |C_row,j| * max|x|).

@@ -215,6 +215,11 @@ int g1_basis_command(const BasisOptions& o) {
   if (!gluing.exact() && unknowns > 6000)
     throw InputError(o.g1_mesh + ": --gluing " + o.gluing + ": the data are not rational, and checking the space's dimension by SVD over " +
                      std::to_string(unknowns) + " unknowns (more than 6000) is too slow; use rational data (a JSON file) or a smaller mesh");
+  try {
+    check_g1_construction_size(mesh.num_faces(), o.degree, o.split_smoothness, gluing.exact());
+  } catch (const std::length_error& e) {
+    throw InputError(o.g1_mesh + ": " + e.what());
+  }
   const auto t0 = std::chrono::steady_clock::now();
   const G1Basis basis = g1_basis(mesh, gluing, o.degree, o.split_smoothness);
   const G1SpaceDimension& d = basis.space;

@@ -171,11 +171,17 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
   const std::vector<Eigen::MatrixXd> coarse_cells = g1_cell_bernstein(coarse_mesh, fit);
 
   d.levels = g.refine + extra_levels;
+  if (!g.c0) try {
+      check_g1_construction_size(long(d.coarse.num_faces()) << (2 * d.levels), k, r, d.coarse_gluing.exact());
+    } catch (const std::length_error& e) {
+      throw InputError(c.path + ": [space] refine: " + e.what() +
+                       "; subdivide less, lower the degree" + (d.coarse_gluing.exact() ? "" : ", or use rational gluing data"));
+    }
   say("building the G1 space (" + std::to_string(d.levels) + " subdivisions)");
   d.level = refine_g1(d.coarse, d.coarse_gluing, d.levels);
   try {
     // The geometry is the G1 fit in both cases, so the C0 baseline solves on the same domain.
-    d.basis = g.c0 ? c0_multipatch_basis(d.level.mesh, k, r) : g1_basis(d.level.mesh, d.level.gluing, k, r);
+    d.basis = g.c0 ? c0_multipatch_basis(d.level.mesh, k, r) : g1_basis(d.level.mesh, d.level.gluing, k, r, false, say);
   } catch (const std::runtime_error& e) {
     throw InputError(c.path + ": [space]: " + e.what());
   }

@@ -16,6 +16,7 @@ CollectionChecks check_collection(const SemiRegularCollection& collection, bool 
   if (!simple_knots) return r;
   const RectangularPartition part = collection.partition();
   const int dx = collection.degree_x(), dy = collection.degree_y();
+  check_brute_force_size(part.num_cells(), dx, dy, RankMethod::kModular);
   r.dimension_bruteforce = spline_space_dimension(part, dx, dy, dx - 1, dy - 1).dimension;
   if (dx == dy) r.dimension_formula = weller_dimension_formula(partition_topology(part), dx);
   return r;

@@ -13,6 +13,7 @@ struct CollectionChecks {
   std::vector<std::string> violations;
   long dimension_formula = -1, dimension_bruteforce = -1;
 };
+// Throws std::length_error when the partition is too large for the brute-force count.
 CollectionChecks check_collection(const SemiRegularCollection& collection, bool simple_knots);
 
 // "vertical x = 0.375, y in [0, 0.75]"

@@ -39,7 +39,12 @@ int print_report(const BasisReport& r, const BasisRequest& o) {
   const long rank = bezier_rank(mesh);
   long formula = -1, brute = -1;
   if (r.collection) {
-    const CollectionChecks checks = check_collection(*r.collection, r.simple_knots);
+    CollectionChecks checks;
+    try {
+      checks = check_collection(*r.collection, r.simple_knots);
+    } catch (const std::length_error& e) {
+      throw InputError(r.file + ": " + e.what());
+    }
     formula = checks.dimension_formula;
     brute = checks.dimension_bruteforce;
   }

@@ -137,6 +137,11 @@ int pt_basis_command(const BasisOptions& o) {
   if (!parsed) throw InputError("--extension: '" + o.pt_extension + "' is not one of auto, minimal, horizontal, vertical, diagonalizable");
   const PtExtension extension = *parsed;
   const RectangularPartition mesh(p.cells);  // load_partition validated the cells
+  try {
+    check_brute_force_size(mesh.num_cells(), p.m, p.n, RankMethod::kModular);
+  } catch (const std::length_error& e) {
+    throw InputError(o.file + ": cells: " + e.what());
+  }
   PtSplineBasis B = pt_spline_basis(mesh, p.m, p.n, extension);
   const long local_bsplines = static_cast<long>(B.splines.size());  // before Prop. 1 appends the cross-cut ones
   // Is T^e diagonalizable (the paper's premise for its local B-splines; knotwork's ordering test)?

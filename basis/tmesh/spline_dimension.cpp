@@ -55,14 +55,24 @@ std::vector<Constraint> smoothness_constraints(const RectangularPartition& part,
 
 }  // namespace
 
+void check_brute_force_size(long cells, int m, int n, RankMethod method) {
+  const long unknowns = cells * (m + 1) * (n + 1);
+  const long limit = method == RankMethod::kExact ? kMaxExactBruteForceUnknowns : kMaxBruteForceUnknowns;
+  if (unknowns > limit)
+    throw std::length_error(std::to_string(cells) + " cells of bi-degree (" + std::to_string(m) + ", " + std::to_string(n) +
+                            ") are " + std::to_string(unknowns) + " unknowns, more than the " + std::to_string(limit) +
+                            " the brute-force dimension count" + (method == RankMethod::kExact ? " over Q" : "") +
+                            " takes (about a minute here)");
+}
+
 DimensionResult spline_space_dimension(const RectangularPartition& part, int m, int n, int alpha, int beta,
                                        RankMethod method, const C0Lines& c0) {
   if (m < 0 || n < 0) throw std::invalid_argument("degrees must be >= 0");
   if (alpha < -1 || alpha > m - 1 || beta < -1 || beta > n - 1)
     throw std::invalid_argument("smoothness must be in [-1, degree-1]");
-  const std::vector<Constraint> rows = smoothness_constraints(part, m, n, alpha, beta, c0);
   DimensionResult r;
   r.unknowns = static_cast<long>(part.num_cells()) * (m + 1) * (n + 1);
+  const std::vector<Constraint> rows = smoothness_constraints(part, m, n, alpha, beta, c0);
   r.constraints = static_cast<long>(rows.size());
   if (method == RankMethod::kExact) {
     r.rank = rank_exact(rows, r.unknowns);

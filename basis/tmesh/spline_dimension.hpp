@@ -24,6 +24,17 @@ enum class RankMethod {
   kExact,    // elimination over Q with GMP rationals (exact; for small partitions)
 };
 
+// Largest brute force done: unknowns = cells x (m+1)(n+1). Measured on this project's 2-core
+// machine (docs/RELIABILITY.md): 262 144 unknowns (16 384 bicubic cells) in 39 s and 0.8 GB
+// modulo two primes; 65 536 in 60 s and 0.5 GB over Q. The limits keep a run near a minute,
+// where the cost grows faster than the size.
+constexpr long kMaxBruteForceUnknowns = 400000;
+constexpr long kMaxExactBruteForceUnknowns = 80000;
+
+// The commands that offer the brute force as a check (`dimension`, `basis`) call this first:
+// std::length_error, saying the size and the limit, above the limit of the method.
+void check_brute_force_size(long cells, int m, int n, RankMethod method);
+
 // Throws std::invalid_argument for degrees < 0 or smoothness outside [-1, degree-1].
 // Edges on the lines of `c0` are only C^0.
 DimensionResult spline_space_dimension(const RectangularPartition& partition, int m, int n, int alpha,
