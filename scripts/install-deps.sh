@@ -3,7 +3,9 @@
 # OpenBLAS matters: CHOLMOD supernodal spends its time in BLAS, and Debian's
 # default reference BLAS is several times slower. petsc-dev brings hypre (the BoomerAMG
 # preconditioner) and OpenMPI, which PETSc runs on as a single process.
-# Usage: scripts/install-deps.sh [--paraview]
+# Usage: scripts/install-deps.sh [--paraview] [--sanitize]
+#   --sanitize   also install clang 14 with its sanitizer and libFuzzer runtimes and LLVM's
+#                OpenMP (scripts/sanitize.sh, scripts/fuzz.sh; docs/RELIABILITY.md).
 #   --paraview   also install ParaView + Xvfb (only needed to render docs/ screenshots).
 #                Debian 12's python3-paraview conflicts with python3-vtk9, which libvtk9-dev
 #                needs, so its files are unpacked into .paraview-python/ (used only by
@@ -21,10 +23,13 @@ packages=(
   petsc-dev
 )
 with_paraview=0
-if [[ "${1:-}" == "--paraview" ]]; then
-  with_paraview=1
-  packages+=(paraview xvfb xauth)
-fi
+for arg in "$@"; do
+  case "$arg" in
+    --paraview) with_paraview=1; packages+=(paraview xvfb xauth) ;;
+    --sanitize) packages+=(clang-14 libclang-rt-14-dev libomp-14-dev) ;;
+    *) echo "install-deps: unknown option '$arg' (--paraview, --sanitize)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do
