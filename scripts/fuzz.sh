@@ -10,23 +10,14 @@
 #   KNOTWORK_FUZZ_JOBS=N runs N harnesses at a time (default: the number of cores).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-build="${KNOTWORK_SANITIZE_DIR:-$root/build-sanitize}"
 seconds="${1:-600}"
 shift || true
 all=(fuzz_case_toml fuzz_case_json fuzz_tmesh fuzz_collection fuzz_quad_mesh fuzz_gluing fuzz_expression)
 harnesses=("$@")
 if [[ $# -eq 0 ]]; then harnesses=("${all[@]}"); fi
 
-"$root/scripts/install-deps.sh" --sanitize
-export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$root}"
-if [[ ! -f "$build/build.ninja" ]]; then
-  CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja \
-    -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g1" \
-    -DKNOTWORK_SANITIZE=ON -DKNOTWORK_FUZZ=ON -DKNOTWORK_BUILD_BENCH=OFF
-fi
-# The build runs the tests (Catch2 discovery lists them): the sanitizers' settings apply there too.
-source "$root/scripts/sanitizers/environment.sh"
-cmake --build "$build" --parallel "$(nproc)" --target "${harnesses[@]}"
+sanitize_targets=("${harnesses[@]}")
+source "$root/scripts/sanitizers/build.sh"
 # libFuzzer checks leaks itself (-detect_leaks); CLN's start-up allocation is suppressed as in the tests.
 
 seed() {  # seed HARNESS DIR: the shipped inputs of that format

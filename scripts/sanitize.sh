@@ -11,22 +11,11 @@
 #                 that fits in every CI run (a few minutes, with ccache).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-build="${KNOTWORK_SANITIZE_DIR:-$root/build-sanitize}"
-targets=()
+sanitize_targets=()
 if [[ "${1:-}" == "--ci" ]]; then
   shift
-  targets=(--target test_quadrature test_bspline)
+  sanitize_targets=(test_quadrature test_bspline)
   set -- -R '^test_(quadrature|bspline): ' "$@"
 fi
-"$root/scripts/install-deps.sh" --sanitize
-export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$root}"
-if [[ ! -f "$build/build.ninja" ]]; then
-  CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja \
-    -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g1" \
-    -DKNOTWORK_SANITIZE=ON -DKNOTWORK_FUZZ=ON -DKNOTWORK_BUILD_BENCH=OFF
-fi
-# The build runs the test programs (Catch2 discovery lists their tests): the sanitizers'
-# settings apply there too.
-source "$root/scripts/sanitizers/environment.sh"
-cmake --build "$build" --parallel "$(nproc)" "${targets[@]}"
+source "$root/scripts/sanitizers/build.sh"
 ctest --test-dir "$build" --output-on-failure -j "$(nproc)" "$@"
