@@ -121,9 +121,15 @@ class PtSpace final : public SplineSpace {
  public:
   // PT-splines on the given T-mesh of the case's parameter domain, ready to solve: the
   // geometry's C0 knot lines are C0 lines of the space. Throws InputError naming the case.
-  PtSpace(const CaseDescription& c, const std::vector<RationalBox>& cells, int elements)
+  PtSpace(const CaseDescription& c, const std::vector<RationalBox>& cells, int elements,
+          const ProgressFunction& progress = {})
       : case_(&c), elements_(elements) {
     check_pt_memory(c, cells.size());
+    // Exact arithmetic throughout: minutes on the largest meshes, so each stage says so.
+    auto say = [&](const std::string& s) {
+      if (progress) progress("PT-splines: " + s);
+    };
+    say("extension and local B-splines on " + std::to_string(cells.size()) + " cells (exact)");
     const PtSection& pt = pt_section(c);
     const GeometryLines lines = geometry_lines(c.geometry);
     try {
@@ -133,8 +139,10 @@ class PtSpace final : public SplineSpace {
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
     }
+    say("independence of " + std::to_string(pt_->functions.size()) + " functions (exact rank)");
     make_boundary_traces_independent(*pt_, *tmesh_);
     make_numerically_independent(*pt_, *tmesh_);
+    say("Bezier extraction (exact, rounded once)");
     // Exact Bernstein coefficients, rounded once: assembly sees functions that are C^(m-1) to
     // the last bit, whatever the T-mesh.
     mesh_ = pt_bezier_mesh(*tmesh_, to_double(pt_cell_polynomials_exact(*pt_, *tmesh_)), pt_->m, pt_->n);
@@ -218,8 +226,9 @@ SpaceFamily pt_family() {
   f.read_case = read_pt_case;
   f.space_keys = pt_space_keys();
   f.add_basis_tool = pt_basis_tool;
-  f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
-    return std::make_unique<PtSpace>(c, pt_start_cells(c, level), pt_section(c).space.elements_per_span[0] << level);
+  f.build = [](const CaseDescription& c, int level, const ProgressFunction& progress) -> std::unique_ptr<SplineSpace> {
+    return std::make_unique<PtSpace>(c, pt_start_cells(c, level), pt_section(c).space.elements_per_span[0] << level,
+                                     progress);
   };
   f.local_refinement = true;
   f.override_options = [](CaseDescription& c, int degree, int elements) {
