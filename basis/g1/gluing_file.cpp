@@ -1,5 +1,8 @@
 #include "basis/g1/gluing_file.hpp"
 
+#include <stdexcept>
+#include <string>
+
 #include "basis/tmesh/rectangular_partition.hpp"
 #include "cases/json_input.hpp"
 #include "solver/input_error.hpp"
@@ -69,12 +72,20 @@ GluingData load_gluing_file(const std::string& path, const QuadMesh& mesh) {
     if (!edge || edge->kind != K::kArray || edge->items.size() != 2 || edge->items[0].kind != K::kNumber ||
         edge->items[1].kind != K::kNumber || !edge->items[0].integral || !edge->items[1].integral)
       throw InputError(where + ".edge: must be [i, j], two 1-based vertex numbers");
-    const long i = std::stol(edge->items[0].text), j = std::stol(edge->items[1].text);
+    // Vertex numbers as written; one beyond a long (found by fuzzing: std::stol threw) names no vertex.
+    auto vertex_number = [](const std::string& text) {
+      try {
+        return std::stol(text);
+      } catch (const std::out_of_range&) {
+        return 0L;
+      }
+    };
+    const long i = vertex_number(edge->items[0].text), j = vertex_number(edge->items[1].text);
     const int e = (i >= 1 && j >= 1 && i <= mesh.num_vertices() && j <= mesh.num_vertices())
                       ? mesh.find_edge(static_cast<int>(i - 1), static_cast<int>(j - 1))
                       : -1;
     if (e < 0)
-      throw InputError(where + ".edge: [" + std::to_string(i) + ", " + std::to_string(j) + "] is not an edge of the mesh");
+      throw InputError(where + ".edge: [" + edge->items[0].text + ", " + edge->items[1].text + "] is not an edge of the mesh");
     if (mesh.edge(e).boundary())
       throw InputError(where + ".edge: [" + std::to_string(i) + ", " + std::to_string(j) +
                        "] is a boundary edge; gluing data belong to interior edges");

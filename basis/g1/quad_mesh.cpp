@@ -75,6 +75,9 @@ QuadMesh QuadMesh::read_obj(const std::string& path) {
           size_t used = 0;
           i = std::stol(head, &used);
           if (used != head.size()) throw std::invalid_argument("");
+        } catch (const std::out_of_range&) {
+          fail(where, "face index " + head + " does not name a vertex defined before it (1.." +
+                          std::to_string(vertices.size()) + ")");
         } catch (const std::exception&) {
           fail(where, "face index '" + word + "' is not an integer");
         }

@@ -11,9 +11,14 @@ BINARY = os.environ.get("KNOTWORK_BINARY", str(SOURCE / "build/app/knotwork"))
 CASES = SOURCE / "cases"
 
 
+# The sanitizer build preloads clang's shared ASan runtime into this interpreter for the
+# module (tests/CMakeLists.txt); the binary carries its own, and the two must not meet.
+CLI_ENV = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
+
+
 def cli(args, cwd=None):
     """Runs the knotwork binary; returns (exit code, stdout, stderr)."""
-    p = subprocess.run([BINARY, *args], capture_output=True, text=True, cwd=cwd, timeout=600)
+    p = subprocess.run([BINARY, *args], capture_output=True, text=True, cwd=cwd, timeout=600, env=CLI_ENV)
     return p.returncode, p.stdout, p.stderr
 
 
