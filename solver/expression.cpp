@@ -119,6 +119,17 @@ std::string canonical_text(const GiNaC::ex& e) {
   return s.str();
 }
 
+// A power with a numeric exponent beyond a million (x^2111...1, found by fuzzing): GiNaC's exact
+// evaluation underflows in CLN, which throws through GiNaC::power::subs and leaks what it had
+// built there (LeakSanitizer). Such an expression is not evaluated exactly at all.
+bool has_huge_exponent(const GiNaC::ex& e) {
+  using namespace GiNaC;
+  if (is_a<power>(e) && is_a<numeric>(e.op(1)) && abs(ex_to<numeric>(e.op(1))) > numeric(1000000)) return true;
+  for (size_t i = 0; i < e.nops(); ++i)
+    if (has_huge_exponent(e.op(i))) return true;
+  return false;
+}
+
 // Parses u with GiNaC (symbols x, y, z) and turns derived GiNaC expressions back into
 // Expressions, checking the round trip through text against GiNaC's own evaluation.
 class Differentiator {
@@ -153,6 +164,7 @@ class Differentiator {
     Expression r = Expression::parse(text, u_.where() + " (derived " + what + ")");
     ExpressionEvaluator eval(r);
     const double pts[3][3] = {{0.3, 0.7, 0.2}, {-0.4, 0.25, -0.6}, {0.61, -0.83, 0.45}};
+    if (has_huge_exponent(e)) return r;  // see has_huge_exponent: no exact value to compare with
     for (const auto& pt : pts) {
       ex ge;
       try {
