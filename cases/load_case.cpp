@@ -62,8 +62,8 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
 CaseDescription load_case(const std::string& path) {
   // A quad mesh handed to run/converge would otherwise be blamed for TOML syntax.
   if (std::filesystem::path(path).extension() == ".obj")
-    throw InputError(path + ": a quad mesh (OBJ), not a case file: name it in a case's [space] mesh (family = \"g1\") "
-                            "or check it with `knotwork basis --g1 " + path + "`");
+    throw InputError(path + ": a quad mesh (OBJ), not a case file: a case names it in its [space] mesh "
+                            "(cases/README.md), and `knotwork basis --help` says how to check it");
   return read_case(parse_document(path), path);
 }
 
