@@ -141,6 +141,7 @@ bool has_constant_exponent_beyond(const std::string& t, double limit) {
         }
     } else {
       if (end < t.size() && (t[end] == '-' || t[end] == '+')) ++end;
+      while (end < t.size() && (t[end] == ' ' || t[end] == '\t')) ++end;  // "x^ - 3444...": found by fuzzing
       while (end < t.size() && (std::isalnum(static_cast<unsigned char>(t[end])) || t[end] == '.' || t[end] == '_' ||
                                 ((t[end] == '+' || t[end] == '-') && (t[end - 1] == 'e' || t[end - 1] == 'E'))))
         ++end;

@@ -108,6 +108,8 @@ TEST_CASE("A power of numbers too large for exact arithmetic is refused, not com
                       Catch::StartsWith("c: [problem] exact: ") && Catch::Contains("exponent beyond 10000"));
   REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse("2^(7757*77777) + y", "c: [problem] exact")),
                       Catch::Contains("exponent beyond 10000"));
+  REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse("x*(x^ - 3444444444444444444*y^2)", "c: [problem] exact")),
+                      Catch::Contains("exponent beyond 10000"));
   // Exponents that are not constant, or not large, stay exact.
   REQUIRE_NOTHROW(differentiate_exact_solution(Expression::parse("x^y + 3^40*y + exp(-x^2)", "c: [problem] exact")));
   // The batch evaluator leaves such a text to muParser: the value is the double's.
