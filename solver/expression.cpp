@@ -175,14 +175,7 @@ class Differentiator {
       throw InputError(u.where() + ": cannot differentiate \"" + u.text() + "\" symbolically: a constant exponent beyond " +
                        std::to_string(int(kMaxExactExponent)) + " makes exact arithmetic compute numbers of millions of "
                        "digits; give `source` explicitly");
-    try {
-      f_ = reader(u.text());
-    } catch (std::exception& e) {
-      std::string msg = e.what();
-      msg = msg.substr(0, msg.find('\n'));
-      throw InputError(u.where() + ": cannot differentiate \"" + u.text() + "\" symbolically (" + msg +
-                       "); give `source` explicitly or use the functions listed in the README");
-    }
+    f_ = reader(u.text());  // a parse error becomes the field's InputError in derive_or_refuse
   }
   const GiNaC::ex& f() const { return f_; }
   const GiNaC::symbol& x() const { return x_; }
