@@ -10,6 +10,8 @@
 #include <optional>
 #include <numbers>
 #include <sstream>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "solver/input_error.hpp"
@@ -121,40 +123,159 @@ std::string canonical_text(const GiNaC::ex& e) {
 }
 
 // GiNaC evaluates powers of numbers exactly while it parses: 4777^775777777 (found by fuzzing)
-// is an integer of 2.8 billion digits, and the parser never returns. A text whose powers have a
-// constant exponent beyond this (evaluated in double by muParser; the operand right of '^': a
-// number or a parenthesised group) is not given to GiNaC.
+// is an integer of 2.8 billion digits, and the parser never returns; (7^9999)^9999 has only
+// small exponents but 84 million digits. A text is not given to GiNaC if one of its powers has
+// a constant exponent beyond kMaxExactExponent, nested powers whose constant exponents multiply
+// beyond it, or a constant power whose value lies beyond double precision (the solver could not
+// use it anyway). All are judged in double by muParser, on the text's operands either side of
+// '^': a number, a name, a call or a parenthesised group.
 constexpr double kMaxExactExponent = 10000;
 
-bool has_constant_exponent_beyond(const std::string& t, double limit) {
+bool is_name_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_'; }
+
+// [begin, end) of the operand right of the '^' at i, as far as muParser reads it: a number, a
+// name, a call or a group (spaces after '^' and one sign included).
+std::pair<size_t, size_t> exponent_operand(const std::string& t, size_t i) {
+  size_t j = i + 1;
+  while (j < t.size() && (t[j] == ' ' || t[j] == '\t')) ++j;
+  size_t end = j;
+  if (end < t.size() && t[end] == '(') {
+    for (int depth = 0; end < t.size(); ++end)
+      if (t[end] == '(') ++depth;
+      else if (t[end] == ')' && --depth == 0) {
+        ++end;
+        break;
+      }
+  } else {
+    if (end < t.size() && (t[end] == '-' || t[end] == '+')) ++end;
+    while (end < t.size() && (t[end] == ' ' || t[end] == '\t')) ++end;  // "x^ - 3444...": found by fuzzing
+    while (end < t.size() && (is_name_char(t[end]) ||
+                              ((t[end] == '+' || t[end] == '-') && (t[end - 1] == 'e' || t[end - 1] == 'E'))))
+      ++end;
+  }
+  return {j, end};
+}
+
+// GiNaC reads a sign after '^' as the sign of everything up to the end of the enclosing group:
+// 2^-1*3+1 is 2^(-2). [begin, end) of that exponent, or an empty range without a sign.
+std::pair<size_t, size_t> signed_exponent(const std::string& t, size_t i) {
+  size_t j = i + 1;
+  while (j < t.size() && (t[j] == ' ' || t[j] == '\t')) ++j;
+  if (j == t.size() || (t[j] != '-' && t[j] != '+')) return {j, j};
+  size_t end = j;
+  for (int depth = 0; end < t.size(); ++end) {
+    if (t[end] == '(') ++depth;
+    else if (t[end] == ')' && --depth < 0) break;
+    else if (t[end] == ',' && depth == 0) break;
+  }
+  return {j, end};
+}
+
+std::string number_text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// Whether some '^' in t is followed by a sign (spaces between allowed).
+bool signed_exponent_position(const std::string& t) {
+  for (size_t i = 0; i < t.size(); ++i)
+    if (t[i] == '^') {
+      const auto [g0, g1] = signed_exponent(t, i);
+      if (g1 > g0) return true;
+    }
+  return false;
+}
+
+// [begin, end) of the operand left of the '^' at i: a group with the name of the function
+// called on it, or a name or number (1.5e+3 included).
+std::pair<size_t, size_t> base_operand(const std::string& t, size_t i) {
+  size_t end = i;
+  while (end > 0 && (t[end - 1] == ' ' || t[end - 1] == '\t')) --end;
+  size_t begin = end;
+  if (begin > 0 && t[begin - 1] == ')') {
+    for (int depth = 0; begin > 0; --begin)
+      if (t[begin - 1] == ')') ++depth;
+      else if (t[begin - 1] == '(' && --depth == 0) {
+        --begin;
+        break;
+      }
+  }
+  while (begin > 0 && (is_name_char(t[begin - 1]) ||
+                       ((t[begin - 1] == '+' || t[begin - 1] == '-') && begin >= 2 &&
+                        (t[begin - 2] == 'e' || t[begin - 2] == 'E') && begin >= 3 && std::isdigit(static_cast<unsigned char>(t[begin - 3])))))
+    --begin;
+  return {begin, end};
+}
+
+// The value of text if it is a constant (the same at two points), else nothing.
+std::optional<double> constant_value(const std::string& text) {
+  try {
+    ExpressionEvaluator value(Expression::parse(text, "operand"));
+    const double a = value(0.3, 0.7, 0.2), b = value(-0.4, 0.25, -0.6);
+    if (a == b) return a;
+  } catch (const std::exception&) {  // not an expression by itself: GiNaC will say what it makes of it
+  }
+  return std::nullopt;
+}
+
+// Why t must not be given to GiNaC, or nothing.
+std::optional<std::string> unbounded_constant_power(const std::string& t) {
+  const std::string exponent_beyond = "a constant exponent beyond " + std::to_string(int(kMaxExactExponent));
+  // Nested powers multiply their exponents: ((9999/9998)^9999)^9999 is near 2.7 but has 10^8
+  // digits. Per '^', the product of the constant exponents of it and of the powers in its base.
+  std::map<size_t, double> nested_exponent;
   for (size_t i = 0; i < t.size(); ++i) {
     if (t[i] != '^') continue;
-    size_t j = i + 1;
-    while (j < t.size() && (t[j] == ' ' || t[j] == '\t')) ++j;
-    size_t end = j;
-    if (end < t.size() && t[end] == '(') {
-      for (int depth = 0; end < t.size(); ++end)
-        if (t[end] == '(') ++depth;
-        else if (t[end] == ')' && --depth == 0) {
-          ++end;
-          break;
-        }
+    const auto [e0, e1] = exponent_operand(t, i);
+    const std::optional<double> exponent = e1 > e0 ? constant_value(t.substr(e0, e1 - e0)) : std::nullopt;
+    if (exponent && !(std::abs(*exponent) <= kMaxExactExponent)) return exponent_beyond;  // or not finite
+    // The exponent GiNaC computes with: the signed rest of the group, or the operand.
+    auto [g0, g1] = signed_exponent(t, i);
+    std::optional<double> ginac_exponent = exponent;
+    if (g1 > g0) {
+      ginac_exponent = constant_value(t.substr(g0, g1 - g0));
+      if (ginac_exponent && !(std::abs(*ginac_exponent) <= kMaxExactExponent)) return exponent_beyond;
     } else {
-      if (end < t.size() && (t[end] == '-' || t[end] == '+')) ++end;
-      while (end < t.size() && (t[end] == ' ' || t[end] == '\t')) ++end;  // "x^ - 3444...": found by fuzzing
-      while (end < t.size() && (std::isalnum(static_cast<unsigned char>(t[end])) || t[end] == '.' || t[end] == '_' ||
-                                ((t[end] == '+' || t[end] == '-') && (t[end - 1] == 'e' || t[end - 1] == 'E'))))
-        ++end;
+      std::tie(g0, g1) = std::pair(e0, e1);
     }
-    if (end == j) continue;
-    try {
-      ExpressionEvaluator exponent(Expression::parse(t.substr(j, end - j), "exponent"));
-      const double a = exponent(0.3, 0.7, 0.2), b = exponent(-0.4, 0.25, -0.6);
-      if (a == b && !(std::abs(a) <= limit)) return true;  // constant, and beyond the limit or not finite
-    } catch (const std::exception&) {  // not an expression by itself: GiNaC will say what it makes of it
+    if (!ginac_exponent) continue;
+    const auto [b0, b1] = base_operand(t, i);
+    double inner = 1;
+    for (auto k = nested_exponent.lower_bound(b0); k != nested_exponent.end() && k->first < b1; ++k)
+      inner = std::max(inner, k->second);
+    const double nested = inner * std::abs(*ginac_exponent);
+    if (!(nested <= kMaxExactExponent))
+      return "nested constant exponents with a product beyond " + std::to_string(int(kMaxExactExponent)) + " (" +
+             t.substr(b0, b1 - b0) + "^" + t.substr(g0, g1 - g0) + ")";
+    nested_exponent[i] = nested;
+    if (b1 == b0) continue;
+    const std::string base_text = t.substr(b0, b1 - b0);
+    const std::optional<double> base = constant_value(base_text);
+    if (!base || !std::isfinite(*base) || *base == 0) continue;
+    const double power = std::pow(std::abs(*base), *ginac_exponent);
+    if (!(power <= 1e300 && power >= 1e-300))
+      return "a constant power beyond double precision (" + base_text + "^" + t.substr(g0, g1 - g0) + ")";
+  }
+  return std::nullopt;
+}
+
+// CLN's floats have no exponent limit, and it computes what a double would give up on: at a
+// check point, nested powers of x^(-3 y^2 ...) (found by fuzzing) made a float exponent of
+// 10^(10^13), and exp() of it asked for 4.8 TB. A point where an operand of a power or a
+// function lies beyond double precision is not a check point (the text could not be compared
+// there anyway). Post-order: an operand's own powers are judged before it is evaluated.
+bool operands_within_double_range(const GiNaC::ex& e, const GiNaC::lst& at) {
+  using namespace GiNaC;
+  const numeric limit(1e300);
+  for (auto node = e.postorder_begin(); node != e.postorder_end(); ++node) {
+    if (!is_a<power>(*node) && !is_a<function>(*node)) continue;
+    for (size_t k = 0; k < node->nops(); ++k) {
+      const ex v = evalf(node->op(k).subs(at));
+      if (!is_a<numeric>(v) || !ex_to<numeric>(v).is_real() || abs(ex_to<numeric>(v)) > limit) return false;
     }
   }
-  return false;
+  return true;
 }
 
 // Parses u with GiNaC (symbols x, y, z) and turns derived GiNaC expressions back into
@@ -171,11 +292,11 @@ class Differentiator {
     table["e"] = exp(ex(1));
     parser reader(table);
     reader.strict = true;
-    if (has_constant_exponent_beyond(u.text(), kMaxExactExponent))
-      throw InputError(u.where() + ": cannot differentiate \"" + u.text() + "\" symbolically: a constant exponent beyond " +
-                       std::to_string(int(kMaxExactExponent)) + " makes exact arithmetic compute numbers of millions of "
-                       "digits; give `source` explicitly");
+    if (const auto why = unbounded_constant_power(u.text()))
+      throw InputError(u.where() + ": cannot differentiate \"" + u.text() + "\" symbolically: " + *why +
+                       " makes exact arithmetic compute numbers of millions of digits; give `source` explicitly");
     f_ = reader(u.text());  // a parse error becomes the field's InputError in derive_or_refuse
+    check_same_reading();
   }
   const GiNaC::ex& f() const { return f_; }
   const GiNaC::symbol& x() const { return x_; }
@@ -183,35 +304,68 @@ class Differentiator {
   const GiNaC::symbol& z() const { return z_; }
 
   Expression to_expression(const GiNaC::ex& e, const std::string& what) const {
-    using namespace GiNaC;
     const std::string text = canonical_text(e);
     Expression r = Expression::parse(text, u_.where() + " (derived " + what + ")");
-    ExpressionEvaluator eval(r);
+    // The text in double precision must give GiNaC's value; constants too large for doubles
+    // (sin(1e21 x)) or cancellations it cannot carry make it differ: refused, not solved on.
+    if (const auto d = first_disagreement(e, r))
+      throw InputError(u_.where() + ": \"" + u_.text() + "\": its derived " + what + " cannot be evaluated in double precision " +
+                       d->at() + "; are its constants too large?");
+    return r;
+  }
+
+ private:
+  struct Disagreement {
+    std::string point;      // "(x, y, z)"
+    double text_value = 0;  // muParser's
+    double exact_value = 0;  // GiNaC's
+    std::string at() const {
+      std::ostringstream s;
+      s << "(at " << point << ": " << text_value << " against the exact " << exact_value << ")";
+      return s.str();
+    }
+  };
+
+  // The first check point where muParser's value of text and GiNaC's of e differ, if any.
+  std::optional<Disagreement> first_disagreement(const GiNaC::ex& e, const Expression& text) const {
+    using namespace GiNaC;
+    ExpressionEvaluator eval(text);
     const double pts[3][3] = {{0.3, 0.7, 0.2}, {-0.4, 0.25, -0.6}, {0.61, -0.83, 0.45}};
     for (const auto& pt : pts) {
       ex ge;
       try {
-        ge = evalf(e.subs(lst{x_ == pt[0], y_ == pt[1], z_ == pt[2]}));
+        const lst at{x_ == pt[0], y_ == pt[1], z_ == pt[2]};
+        if (!operands_within_double_range(e, at)) continue;
+        ge = evalf(e.subs(at));
       } catch (const std::exception&) {  // CLN's floating-point underflow or overflow: no exact value here
         continue;
       }
       if (!is_a<numeric>(ge) || !ex_to<numeric>(ge).is_real()) continue;
       const double gv = ex_to<numeric>(ge).to_double(), mv = eval(pt[0], pt[1], pt[2]);
       if (!std::isfinite(gv) || !std::isfinite(mv)) continue;
-      // The text in double precision must give GiNaC's value; constants too large for doubles
-      // (sin(1e21 x)) or cancellations it cannot carry make it differ: refused, not solved on.
       if (std::abs(gv - mv) > 1e-9 * (1.0 + std::abs(gv))) {
         std::ostringstream s;
-        s << u_.where() << ": \"" << u_.text() << "\": its derived " << what
-          << " cannot be evaluated in double precision (at (" << pt[0] << ", " << pt[1] << ", " << pt[2] << "): " << mv
-          << " against the exact " << gv << "); are its constants too large?";
-        throw InputError(s.str());
+        s << "(" << pt[0] << ", " << pt[1] << ", " << pt[2] << ")";
+        return Disagreement{s.str(), mv, gv};
       }
     }
-    return r;
+    return std::nullopt;
   }
 
- private:
+  // The differentiator must read u as the evaluator does. They part on a sign after '^': GiNaC
+  // reads (x+2)^-1*2 as (x+2)^(-2), muParser as 2/(x+2) (u and its derivatives then belonged
+  // to two different functions, and the error did not converge).
+  void check_same_reading() const {
+    const auto d = first_disagreement(f_, u_);
+    if (!d) return;
+    if (signed_exponent_position(u_.text()))
+      throw InputError(u_.where() + ": \"" + u_.text() + "\" has a sign after '^', which the evaluator and the symbolic "
+                       "differentiator read differently (at " + d->point + ": " + number_text(d->text_value) + " and " +
+                       number_text(d->exact_value) + "); put the signed exponent in parentheses, as in x^(-1)");
+    throw InputError(u_.where() + ": \"" + u_.text() + "\" cannot be evaluated in double precision " + d->at() +
+                     "; are its constants too large?");
+  }
+
   Expression u_;
   // Real symbols: the coordinates are real, and GiNaC then simplifies conjugate(x) to x (the
   // derivative of abs(f) is written with conjugates, which the evaluator rightly cannot read).
@@ -406,8 +560,8 @@ ExpressionBatch::ExpressionBatch(const std::vector<Expression>& expressions) : i
     try {
       parser reader(table);
       reader.strict = true;
-      // muParser evaluates it (see has_constant_exponent_beyond).
-      r = has_constant_exponent_beyond(e.text(), kMaxExactExponent) ? -1 : compiler.compile(reader(e.text()));
+      // muParser evaluates it (see unbounded_constant_power).
+      r = unbounded_constant_power(e.text()) ? -1 : compiler.compile(reader(e.text()));
     } catch (std::exception&) {
       r = -1;
     }

@@ -91,6 +91,26 @@ TEST_CASE("A batch of expressions gives muParser's values, sharing what they hav
   REQUIRE(batch.result(static_cast<int>(texts.size()) - 2)[3] == Approx(xyz(x[3], y[3])).epsilon(1e-15));
 }
 
+TEST_CASE("A text GiNaC would read differently from muParser is refused, not differentiated", "[expression]") {
+  // GiNaC reads (x+2)^-1*2 as (x+2)^(-2); muParser, which evaluates u, as 2/(x+2). The
+  // derivatives were those of the first, u the second: the error did not converge.
+  REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse("(x+2)^-1*2", "c: [problem] exact")),
+                      Catch::StartsWith("c: [problem] exact: ") && Catch::Contains("sign after '^'") &&
+                          Catch::Contains("x^(-1)"));
+  // Parenthesised, both read 2/(x+2): u_x = -2/(x+2)^2, -Laplacian = -4/(x+2)^3.
+  const ExactSolution u = differentiate_exact_solution(Expression::parse("(x+2)^(-1)*2", "c: [problem] exact"));
+  ExpressionEvaluator ux(u.u_x), f(u.minus_laplacian);
+  REQUIRE(ux(0.5, 0.3) == Approx(-2.0 / (2.5 * 2.5)).epsilon(1e-14));
+  REQUIRE(f(0.5, 0.3) == Approx(-4.0 / (2.5 * 2.5 * 2.5)).epsilon(1e-14));
+  // A sign both read alike is not refused: y + x^-2 is y + x^(-2) to both (x^-2 + y is not).
+  REQUIRE_NOTHROW(differentiate_exact_solution(Expression::parse("y + x^-2", "c: [problem] exact")));
+  // Found by fuzzing (nested powers whose exact value at a check point asked CLN for 4.8 TB):
+  // now refused for its two readings, in a fraction of a second.
+  REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse(
+                          "x*(x^ - 3*y^2*(3^ 2*(x^ - 3*y^2*(x^ -y*6^ 2))))", "c: [problem] exact")),
+                      Catch::Contains("sign after '^'"));
+}
+
 TEST_CASE("Exact solutions double precision cannot carry are refused with the field, not crashed on", "[expression]") {
   // Found by fuzzing: a constant beyond 2^53 makes the printed derivative differ from GiNaC's
   // exact value (an internal logic_error before); an exponent whose exact power underflows
@@ -109,6 +129,15 @@ TEST_CASE("A power of numbers too large for exact arithmetic is refused, not com
   REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse("2^(7757*77777) + y", "c: [problem] exact")),
                       Catch::Contains("exponent beyond 10000"));
   REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse("x*(x^ - 3444444444444444444*y^2)", "c: [problem] exact")),
+                      Catch::Contains("exponent beyond 10000"));
+  // Small exponents whose nesting or value is beyond what exact arithmetic can afford: (7^9999)^9999
+  // has 84 million digits (it took 5 s and 0.6 GB; one more level exhausted the memory).
+  REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse("(7^9999)^9999*x", "c: [problem] exact")),
+                      Catch::Contains("constant power beyond double precision (7^9999)"));
+  REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse("((9999/9998)^9999)^9999*x", "c: [problem] exact")),
+                      Catch::Contains("nested constant exponents with a product beyond 10000"));
+  // GiNaC's exponent after a sign is the rest of the group: 7^-9999*9999 is 7^(-99980001).
+  REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse("x + 7^-9999*9999", "c: [problem] exact")),
                       Catch::Contains("exponent beyond 10000"));
   // Exponents that are not constant, or not large, stay exact.
   REQUIRE_NOTHROW(differentiate_exact_solution(Expression::parse("x^y + 3^40*y + exp(-x^2)", "c: [problem] exact")));
