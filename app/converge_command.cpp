@@ -13,6 +13,7 @@
 #include "app/report.hpp"
 #include "app/svg_plot.hpp"
 #include "solver/input_error.hpp"
+#include "solver/petsc_module.hpp"
 #include "solver/vtk_output.hpp"
 
 namespace knotwork {
@@ -75,6 +76,9 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
       lv.fields.push_back({.key = "cg_iterations",
                            .value = solver.method == "iterative" ? ReportValue(long(s.iterative.iterations)) : ReportValue{},
                            .label = "CG", .column = true, .width = 13});
+    if (solver.method == "petsc")
+      lv.fields.push_back({.key = "ksp_iterations", .value = ReportValue(long(s.iterative.iterations)), .label = "KSP",
+                           .column = true, .width = 14});
     if (!levels.empty()) {
       const ConvergeLevel& prev = levels.back();
       lv.l2_rate = std::log(prev.l2 / lv.l2) / std::log(prev.h / lv.h);
@@ -135,6 +139,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
   Json& root = out.json;
   Json sj = Json::object();
   sj.set("method", c.solver.method).set("iterative_levels", iterative_levels);
+  if (c.solver.method == "petsc") sj.set("ranks", launched_world().size).set("tolerance", c.solver.petsc_tolerance());
   if (iterative_levels > 0)
     sj.set("preconditioner", iterative_solver.preconditioner).set("tolerance", c.solver.tolerance);
   root.set("case", c.path).set("family", c.family).set("space", description).set("solver", sj).set("levels", jl);
@@ -154,11 +159,14 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
 
 int converge_command(const ConvergeOptions& o) {
   CaseDescription c = load_case(o.case_file);
-  override_case(c, o.degree, o.elements, o.solver, o.tolerance);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr);
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);
-  const ConvergeOutcome r = converge_study(c, o.levels, ordering, &directory, [&](const std::string& w) { progress(w); });
+  // Under mpirun, rank 0 alone writes.
+  const bool writer = launched_world().rank == 0;
+  const ConvergeOutcome r =
+      converge_study(c, o.levels, ordering, writer ? &directory : nullptr, [&](const std::string& w) { progress(w); });
   if (o.json) {
     std::printf("%s\n", r.json.dump().c_str());
     return 0;

@@ -12,6 +12,7 @@
 #include "cases/output_files.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
+#include "solver/petsc_module.hpp"
 
 namespace {
 
@@ -22,8 +23,19 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
   cmd->add_option("--ordering", o.ordering, "Fill-reducing ordering for CHOLMOD: amd (fastest measured), metis, nesdis, or default (CHOLMOD's own choice)")
       ->capture_default_str();
   cmd->add_option("--solver", o.solver,
-                  "Linear solve: direct (CHOLMOD), iterative (preconditioned CG) or auto (overrides [solver] method)");
-  cmd->add_option("--tolerance", o.tolerance, "Iterative solve: backward error to reach (overrides [solver] tolerance; default 1e-15)");
+                  "Linear solve: direct (CHOLMOD), iterative (preconditioned CG), auto, or petsc (PETSc's KSP, "
+                  "distributed over the processes of mpirun -n N; overrides [solver] method)");
+  cmd->add_option("--tolerance", o.tolerance,
+                  "Iterative solve: backward error to reach (default 1e-15), or with --solver petsc the relative "
+                  "residual (default 1e-10) (overrides [solver] tolerance)");
+  cmd->add_option_function<std::string>(
+      "--petsc-options",
+      [&o](const std::string& v) {
+        o.petsc_options = v;
+        o.petsc_options_given = true;
+      },
+      "PETSc options for --solver petsc (default \"-ksp_type cg -pc_type hypre\"; e.g. \"-ksp_type preonly -pc_type "
+      "cholesky -pc_factor_mat_solver_type mumps\") or for preconditioner boomeramg (overrides [solver] petsc_options)");
   cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of the summary");
   cmd->add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
 }
@@ -74,7 +86,7 @@ void prefer_robust_threading(char** argv) {
 
 int main(int argc, char** argv) {
   prefer_robust_threading(argv);
-  knotwork::remove_partial_output_on_interrupt();
+  knotwork::remove_partial_output_on_interrupt(knotwork::launched_world().rank == 0);
   CLI::App app{"knotwork: isogeometric Poisson solver (B-splines/NURBS -> Bezier extraction -> CHOLMOD -> ParaView)"};
   app.set_version_flag("--version", "knotwork 0.1.0");
   app.require_subcommand(1);
@@ -170,6 +182,26 @@ int main(int argc, char** argv) {
     print_error(std::string(e.what()) + " (see knotwork --help)");
     return e.get_exit_code() != 0 ? e.get_exit_code() : 2;
   }
+  // Under mpirun: run and converge share the solve among the processes (--solver petsc); rank
+  // 0 alone prints and writes, the others stay quiet.
+  const knotwork::ParallelWorld launched = knotwork::launched_world();
+  if (launched.size > 1) {
+    if (!*run_cmd && !*conv_cmd) {
+      if (launched.rank == 0)
+        print_error("under mpirun (" + std::to_string(launched.size) +
+                    " processes) only `run` and `converge` work, with --solver petsc; start other commands without mpirun");
+      return 2;
+    }
+    if (launched.rank > 0) {
+      run.quiet = conv.quiet = true;
+      if (!std::freopen("/dev/null", "w", stdout)) return 1;
+    }
+  }
+  // An error every rank met alike (the input, or one rank's failure shared with all) is
+  // printed by rank 0 only.
+  const auto report = [&](const std::string& message) {
+    if (launched.rank == 0 || !knotwork::failure_shared_by_all_ranks()) print_error(message);
+  };
   try {
     if (*run_cmd) return knotwork::run_command(run);
     if (*conv_cmd) return knotwork::converge_command(conv);
@@ -178,13 +210,13 @@ int main(int argc, char** argv) {
     if (*dim_cmd) return knotwork::dimension_command(dim);
     if (*basis_cmd) return knotwork::basis_command(basis, basis_tools);
   } catch (const knotwork::InputError& e) {
-    print_error(e.what());
+    if (launched.rank == 0) print_error(e.what());  // the input's errors are the same on every rank
     return 2;
   } catch (const std::bad_alloc&) {
-    print_error("out of memory (try fewer elements or a lower degree)");
+    report("out of memory (try fewer elements or a lower degree)");
     return 3;
   } catch (const std::exception& e) {
-    print_error(e.what());
+    report(e.what());
     return 1;
   }
   return 0;

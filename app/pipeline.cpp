@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "solver/amg_preconditioner.hpp"
+#include "solver/distributed_poisson.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -25,7 +26,7 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
     r.method = !structured.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
   else
     r.method = c.solver.method;
-  if (r.method == "direct") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
+  if (r.method == "direct" || r.method == "petsc") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
   const std::string& asked = c.solver.preconditioner;
   if (asked == "auto") {
     // Without a structure to use: algebraic multigrid, whose iteration count stays bounded as
@@ -82,6 +83,11 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
   so.cell_errors = true;
   const SolverReport chosen = resolve_solver(c, space);
   if (report) *report = chosen;
+  const ParallelWorld launched = launched_world();
+  if (launched.size > 1 && chosen.method != "petsc")
+    throw InputError(c.path + ": [solver] method: \"" + chosen.method + "\" under mpirun with " +
+                     std::to_string(launched.size) + " processes: each would solve the whole problem alone; use "
+                     "--solver petsc (or method = \"petsc\") to share it");
   if (chosen.method == "iterative") {
     so.iterative = true;
     so.tolerance = c.solver.tolerance;
@@ -108,6 +114,13 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     }
   }
   try {
+    if (chosen.method == "petsc") {
+      DistributedSolveOptions petsc;
+      petsc.petsc_options = c.solver.petsc_options;
+      petsc.tolerance = c.solver.petsc_tolerance();
+      petsc.max_iterations = c.solver.max_iterations;
+      return solve_poisson_distributed(space.mesh(), space.geometry(), c.problem, so, petsc);
+    }
     return solve_poisson(space.mesh(), space.geometry(), c.problem, so);
   } catch (const NotConverged& e) {
     throw InputError(c.path + ": [solver]: " + e.what() + "; raise max_iterations, loosen tolerance or use method = \"direct\"");

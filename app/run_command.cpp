@@ -8,6 +8,7 @@
 #include "app/report.hpp"
 #include "app/studies.hpp"
 #include "solver/input_error.hpp"
+#include "solver/petsc_module.hpp"
 #include "solver/vtk_output.hpp"
 
 namespace knotwork {
@@ -18,9 +19,10 @@ double since(std::chrono::steady_clock::time_point t) {
 }
 }  // namespace
 
-void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance) {
+void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance,
+                   const std::string* petsc_options) {
   space_family(c).override_options(c, degree, elements);
-  override_solver(c, solver, tolerance);
+  override_solver(c, solver, tolerance, petsc_options);
 }
 
 double RunOutcome::total_without_output() const {
@@ -92,6 +94,14 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
     sj.set("preconditioner", r.solver.preconditioner).set("iterations", s.iterative.iterations)
         .set("relative_residual", s.iterative.relative_residual).set("backward_error", s.iterative.backward_error)
         .set("tolerance", c.solver.tolerance);
+  if (r.solver.method == "petsc") {
+    const PoissonSolution::Distributed& d = s.distributed;
+    sj.set("ksp", d.ksp).set("pc", d.pc).set("iterations", s.iterative.iterations)
+        .set("relative_residual", s.iterative.relative_residual).set("tolerance", c.solver.petsc_tolerance())
+        .set("converged_reason", d.reason);
+    if (!d.package.empty()) sj.set("factor_package", d.package);
+    j.set("ranks", d.ranks);
+  }
   j.set("solver", sj);
   add_fields(j, r.fields);
   std::vector<std::string> notes = r.space->notes();
@@ -103,12 +113,15 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
 
 int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
-  override_case(c, o.degree, o.elements, o.solver, o.tolerance);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr);
   c.allow_unverified_space = o.allow_unverified_space;
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string out = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);
-  const RunOutcome r = run_study(c, ordering, o.no_output ? nullptr : &out, [&](const std::string& w) { progress(w); });
+  // Under mpirun, rank 0 alone writes.
+  const bool writer = launched_world().rank == 0;
+  const RunOutcome r =
+      run_study(c, ordering, o.no_output || !writer ? nullptr : &out, [&](const std::string& w) { progress(w); });
   if (o.json) {
     std::printf("%s\n", run_json(c, r).dump().c_str());
     return 0;
@@ -131,9 +144,19 @@ int run_command(const RunOptions& o) {
     std::printf("  solver   CG + %s: %d iterations, backward error %.2e (tolerance %.0e), relative residual %.2e\n",
                 solver.preconditioner.c_str(), s.iterative.iterations, s.iterative.backward_error, c.solver.tolerance,
                 s.iterative.relative_residual);
+  if (solver.method == "petsc")
+    std::printf("  solver   PETSc %s + %s%s%s on %d process%s: %d iteration%s, relative residual %.2e (tolerance %.0e)\n",
+                s.distributed.ksp.c_str(), s.distributed.pc.c_str(), s.distributed.package.empty() ? "" : " ",
+                s.distributed.package.c_str(), s.distributed.ranks, s.distributed.ranks == 1 ? "" : "es",
+                s.iterative.iterations, s.iterative.iterations == 1 ? "" : "s", s.iterative.relative_residual,
+                c.solver.petsc_tolerance());
   if (s.errors)
     std::printf("  errors   L2 %.6e   H1-seminorm %.6e   H1 %.6e\n", s.errors->l2, s.errors->h1_semi, s.errors->h1);
-  if (solver.method == "iterative")
+  if (solver.method == "petsc")
+    std::printf("  time     setup %.3f s, assembly %.3f s, PETSc setup %.3f s, PETSc solve %.3f s, errors %.3f s"
+                " (total %.3f s, slowest rank per phase); output %.3f s\n",
+                tm.setup, tm.assembly, tm.preconditioner, tm.iterations, tm.errors, total, r.seconds_output);
+  else if (solver.method == "iterative")
     std::printf("  time     setup %.3f s, assembly %.3f s, preconditioner %.3f s, iterations %.3f s, errors %.3f s"
                 " (total %.3f s); output %.3f s\n",
                 tm.setup, tm.assembly, tm.preconditioner, tm.iterations, tm.errors, total, r.seconds_output);

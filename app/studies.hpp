@@ -18,7 +18,8 @@ namespace knotwork {
 
 // The overrides every command and the Python module take: degree and elements (0: as the
 // case says, else through the family), solver method and tolerance ("" / 0: as [solver] says).
-void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance);
+void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance,
+                   const std::string* petsc_options = nullptr);
 
 struct RunOutcome {
   std::unique_ptr<SplineSpace> space;

@@ -65,10 +65,18 @@ struct CaseDescription {
   int samples = 4;  // linear sub-cells per cell and direction in the sampled output
   // [solver]: the linear solve (docs/SOLVERS.md; --solver and --tolerance override).
   struct Solver {
-    std::string method = "auto";          // direct (CHOLMOD) | iterative (CG) | auto (docs/SOLVERS.md)
+    // direct (CHOLMOD) | iterative (CG) | auto (docs/SOLVERS.md) | petsc (PETSc's KSP, on every
+    // process mpirun started: docs/SCALING.md)
+    std::string method = "auto";
     std::string preconditioner = "auto";  // auto | jacobi | boomeramg | a family's structured one (SpaceFamily)
-    std::string petsc_options;            // for boomeramg: PETSc options ("-pc_hypre_boomeramg_...")
-    double tolerance = 1e-15;             // CG: backward error of the solution (IterativeStats)
+    // PETSc options: for boomeramg, its own ("-pc_hypre_boomeramg_..."); for petsc, the KSP's
+    // and PC's ("-ksp_type cg -pc_type hypre", "-pc_type cholesky -pc_factor_mat_solver_type mumps")
+    std::string petsc_options;
+    double tolerance = 1e-15;  // CG: backward error of the solution (IterativeStats); petsc: see petsc_tolerance
+    bool tolerance_given = false;  // by the case or --tolerance
+    // PETSc's relative residual: the tolerance given, else 1e-10 (1e-15 is below what a
+    // residual computed in double can reach on large systems).
+    double petsc_tolerance() const { return tolerance_given ? tolerance : 1e-10; }
     int max_iterations = 1000;
   } solver;
   // [adapt]: the estimate-mark-refine loop of `knotwork adapt` (command-line flags override).
@@ -103,7 +111,11 @@ CaseDescription load_case_text(const std::string& toml_text, const std::string& 
 CaseDescription load_case_document(const DocumentNode& root, const std::string& name);
 
 // --solver / --tolerance with the same validation as [solver] (0: not given).
-void override_solver(CaseDescription& c, const std::string& method, double tolerance);
+void override_solver(CaseDescription& c, const std::string& method, double tolerance,
+                     const std::string* petsc_options = nullptr);
+// [solver] petsc_options is for preconditioner = "boomeramg" or method = "petsc": refused
+// otherwise, naming `what` (the key or the flag).
+void check_petsc_options(const CaseDescription& c, const std::string& what);
 // The names [solver] method takes.
 const std::vector<std::string>& solver_methods();
 

@@ -14,6 +14,7 @@
 
 #include "cases/geometries.hpp"
 #include "cases/json_input.hpp"
+#include "solver/amg_preconditioner.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -552,7 +553,7 @@ void read_adapt(const CaseReader& r, const DocumentNode& t, CaseDescription& c) 
 }
 
 const std::vector<std::string>& solver_methods() {
-  static const std::vector<std::string> names{"direct", "iterative", "auto"};
+  static const std::vector<std::string> names{"direct", "iterative", "auto", "petsc"};
   return names;
 }
 
@@ -571,8 +572,8 @@ namespace {
 
 void check_tolerance(double t, const std::string& what, const std::string& file) {
   if (!(t > 0 && t < 1))
-    throw InputError((file.empty() ? "" : file + ": ") + what + ": must be in (0, 1) (the backward error CG stops at), got " +
-                     std::to_string(t));
+    throw InputError((file.empty() ? "" : file + ": ") + what + ": must be in (0, 1) (the backward error CG stops at, "
+                     "or PETSc's relative residual), got " + std::to_string(t));
 }
 
 }  // namespace
@@ -587,6 +588,7 @@ void read_solver(const CaseReader& r, const DocumentNode& t, CaseDescription& c)
   if (const DocumentNode* n = t.get("tolerance")) {
     c.solver.tolerance = r.number(*n, "[solver] tolerance");
     check_tolerance(c.solver.tolerance, "[solver] tolerance", r.path());
+    c.solver.tolerance_given = true;
   }
   if (const DocumentNode* n = t.get("max_iterations")) {
     const long m = r.integer(*n, "[solver] max_iterations");
@@ -595,11 +597,21 @@ void read_solver(const CaseReader& r, const DocumentNode& t, CaseDescription& c)
   }
 }
 
-void override_solver(CaseDescription& c, const std::string& method, double tolerance) {
+void check_petsc_options(const CaseDescription& c, const std::string& what) {
+  if (c.solver.petsc_options.empty() || c.solver.method == "petsc" || c.solver.preconditioner == kBoomerAmgName) return;
+  throw InputError((what[0] == '[' ? c.path + ": " : std::string()) + what +
+                   ": only used with method = \"petsc\" (PETSc's KSP and PC) or preconditioner = \"" + kBoomerAmgName +
+                   "\" (PETSc's hypre BoomerAMG)");
+}
+
+void override_solver(CaseDescription& c, const std::string& method, double tolerance, const std::string* petsc_options) {
   if (!method.empty()) c.solver.method = checked_name(method, solver_methods(), "--solver", "");
+  if (petsc_options) c.solver.petsc_options = *petsc_options;
+  check_petsc_options(c, petsc_options ? "--petsc-options" : "[solver] petsc_options");
   if (tolerance != 0) {
     check_tolerance(tolerance, "--tolerance", "");
     c.solver.tolerance = tolerance;
+    c.solver.tolerance_given = true;
   }
 }
 

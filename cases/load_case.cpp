@@ -45,9 +45,7 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
   for (const SpaceFamily& f : space_families())
     if (!f.structured_preconditioner.empty()) preconditioners.push_back(f.structured_preconditioner);
   checked_name(c.solver.preconditioner, preconditioners, "[solver] preconditioner", path);
-  if (!c.solver.petsc_options.empty() && c.solver.preconditioner != kBoomerAmgName)
-    r.fail("[solver] petsc_options", std::string("only used with preconditioner = \"") + kBoomerAmgName +
-                                         "\" (PETSc's hypre BoomerAMG)");
+  check_petsc_options(c, "[solver] petsc_options");
   if (root.get("adapt")) {
     if (!family->local_refinement)
       r.fail("[adapt]", "not used with family = \"" + c.family + "\" (it does not refine cells locally; `knotwork adapt` "

@@ -50,6 +50,10 @@ void forget_for_cleanup(int slot) {
   if (slot >= 0) cleanup_slots[slot].kind.store(kFree);
 }
 
+namespace {
+volatile sig_atomic_t announce_interrupt = 1;
+}  // namespace
+
 extern "C" void remove_partial_output_and_exit(int signal_number) {
   for (int i = 0; i < kCleanupSlots; ++i)
     if (cleanup_slots[i].kind.load() == kFile) ::unlink(cleanup_slots[i].path);
@@ -59,8 +63,10 @@ extern "C" void remove_partial_output_and_exit(int signal_number) {
   const char* message = signal_number == SIGINT ? "knotwork: error: interrupted (SIGINT); no partial output left behind\n"
                         : signal_number == SIGTERM ? "knotwork: error: terminated (SIGTERM); no partial output left behind\n"
                                                    : "knotwork: error: hung up (SIGHUP); no partial output left behind\n";
-  ssize_t ignored = ::write(STDERR_FILENO, message, std::strlen(message));
-  (void)ignored;
+  if (announce_interrupt) {
+    ssize_t ignored = ::write(STDERR_FILENO, message, std::strlen(message));
+    (void)ignored;
+  }
   ::_exit(128 + signal_number);
 }
 
@@ -82,7 +88,8 @@ class HoldInterrupts {
 
 }  // namespace
 
-void remove_partial_output_on_interrupt() {
+void remove_partial_output_on_interrupt(bool announce) {
+  announce_interrupt = announce ? 1 : 0;
   struct sigaction action {};
   action.sa_handler = remove_partial_output_and_exit;
   sigemptyset(&action.sa_mask);

@@ -39,8 +39,9 @@ void write_file_atomically(const std::string& file, const std::string& what,
 // (staged, or a hidden sibling of write_file_atomically) and the folders made for them, print
 // one line ("knotwork: error: interrupted (SIGINT); ...") and exit with 128 + the signal.
 // Files already moved into place stay: they are complete. Not for the Python module, whose
-// interpreter handles Ctrl-C itself.
-void remove_partial_output_on_interrupt();
+// interpreter handles Ctrl-C itself. announce = false: no line (the ranks of mpirun but the
+// first, which mpirun stops when the first has failed).
+void remove_partial_output_on_interrupt(bool announce = true);
 
 // Writes `text` to `path` (a staged file); throws std::runtime_error naming it on failure.
 void write_text_file(const std::string& path, const std::string& text);

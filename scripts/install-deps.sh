@@ -2,7 +2,8 @@
 # Installs everything knotwork needs to build and test, from Debian 12 packages only.
 # OpenBLAS matters: CHOLMOD supernodal spends its time in BLAS, and Debian's
 # default reference BLAS is several times slower. petsc-dev brings hypre (the BoomerAMG
-# preconditioner) and OpenMPI, which PETSc runs on as a single process.
+# preconditioner), MUMPS and OpenMPI; openmpi-bin's mpirun starts method = "petsc" on several
+# processes (and the tests that check it).
 # Usage: scripts/install-deps.sh [--paraview] [--sanitize]
 #   --sanitize   also install clang 14 with its sanitizer and libFuzzer runtimes and LLVM's
 #                OpenMP (scripts/sanitize.sh, scripts/fuzz.sh; docs/RELIABILITY.md).
@@ -20,7 +21,7 @@ packages=(
   libmuparser-dev libginac-dev libgmp-dev
   libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
-  petsc-dev
+  petsc-dev openmpi-bin
 )
 with_paraview=0
 for arg in "$@"; do

@@ -90,24 +90,22 @@ struct DerivedSurfaceSource {
 
 }  // namespace
 
-void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
-                      const DofLayout& layout, const Eigen::VectorXd& fixed_values,
-                      const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
-                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals) {
+namespace {
+
+// The element loop shared by the serial matrix (CSC, lower triangle) and the distributed one:
+// every cell of `cells`, threaded, integrated once; emit(thread, order, Ke, Fe) receives the
+// cell's free dofs (sorted (dof, local index) pairs), its element matrix (all alive
+// functions) and its load with the Dirichlet lifting applied. integrals_of(thread) gives the
+// thread's vector of function integrals, or null.
+template <class Emit, class Integrals>
+void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
+                    const DofLayout& layout, const Eigen::VectorXd& fixed_values, const QuadratureOptions& quadrature,
+                    CellRange cells, Emit emit, Integrals integrals_of) {
   const int dim = geometry.dimension();
   const bool derived = form.load && !form.source;
   if (derived && (!form.exact || form.exact->hessian[0][0].empty() || dim != 3))
     throw std::invalid_argument("assemble_poisson: no source, and no exact solution on a surface to derive it from");
-  const int nthreads = omp_get_max_threads();
-  const long nnz = matrix.nonZeros();
-  const int* outer = matrix.outerIndexPtr();
-  const int* inner = matrix.innerIndexPtr();
-  double* values = matrix.valuePtr();
-  std::fill(values, values + nnz, 0.0);
-  rhs.setZero(layout.num_free());
-  if (integrals) integrals->setZero(mesh.num_functions());
-  std::vector<std::vector<double>> thread_values(nthreads - 1, std::vector<double>());
-  std::vector<Eigen::VectorXd> thread_rhs(nthreads - 1), thread_integrals(nthreads - 1);
+  const int first = cells.first, last = cells.last < 0 ? mesh.num_cells() : cells.last;
   std::optional<ExpressionBatch> compiled_source;  // once: GiNaC is not thread-safe
   if (form.load && form.source) compiled_source.emplace(std::vector<Expression>{*form.source});
   std::optional<SeparableMesh> separable;
@@ -119,19 +117,7 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
 #pragma omp parallel
   {
     const int tid = omp_get_thread_num();
-    double* my_values = values;
-    Eigen::VectorXd* my_rhs = &rhs;
-    Eigen::VectorXd* my_integrals = integrals;
-    if (tid > 0) {
-      thread_values[tid - 1].assign(nnz, 0.0);
-      thread_rhs[tid - 1].setZero(layout.num_free());
-      my_values = thread_values[tid - 1].data();
-      my_rhs = &thread_rhs[tid - 1];
-      if (integrals) {
-        thread_integrals[tid - 1].setZero(mesh.num_functions());
-        my_integrals = &thread_integrals[tid - 1];
-      }
-    }
+    Eigen::VectorXd* my_integrals = integrals_of(tid);
     std::optional<ExpressionBatch> f;
     if (compiled_source) f.emplace(*compiled_source);
     std::optional<DerivedSurfaceSource> derived_f;
@@ -145,7 +131,7 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
     // A fixed assignment of cells to threads (and the thread sums added in thread order
     // below): the matrix and load are bitwise the same from run to run.
 #pragma omp for schedule(static, 64)
-    for (int c = 0; c < mesh.num_cells(); ++c) {
+    for (int c = first; c < last; ++c) {
       const BezierCell& cell = mesh.cell(c);
       const int nu = rule_points(quadrature.points_u, cell.degree_u, 1);
       const int nv = rule_points(quadrature.points_v, cell.degree_v, 1);
@@ -230,18 +216,8 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
       }
       if (lifted) Fe.noalias() -= Ke * ulift;
       std::sort(order.begin(), order.end());
-      for (const auto& [d, a] : order) (*my_rhs)[d] += Fe[a];
-      scatter(outer, inner, order, Ke, my_values);
+      emit(tid, order, Ke, Fe);
     }
-  }
-  for (int t = 0; t < nthreads - 1; ++t) {
-    if (thread_values[t].empty()) continue;
-    const double* src = thread_values[t].data();
-    double* dst = values;
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < nnz; ++i) dst[i] += src[i];
-    rhs += thread_rhs[t];
-    if (integrals) *integrals += thread_integrals[t];
   }
   if (!failure.empty()) throw std::invalid_argument(failure);
   if (bad_cell != std::numeric_limits<int>::max()) {
@@ -265,6 +241,88 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
     if (dim == 3) s << ", " << bad_z;
     s << ") in " << describe_cell(mesh, bad_source_cell);
     throw InputError(e.where() + ": " + s.str());
+  }
+}
+
+}  // namespace
+
+void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
+                      const DofLayout& layout, const Eigen::VectorXd& fixed_values,
+                      const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
+                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals) {
+  const int nthreads = omp_get_max_threads();
+  const long nnz = matrix.nonZeros();
+  const int* outer = matrix.outerIndexPtr();
+  const int* inner = matrix.innerIndexPtr();
+  double* values = matrix.valuePtr();
+  std::fill(values, values + nnz, 0.0);
+  rhs.setZero(layout.num_free());
+  if (integrals) integrals->setZero(mesh.num_functions());
+  // Thread 0 adds into the results, the others into their own copies (allocated by their
+  // thread, before its first cell), summed in thread order after the loop.
+  std::vector<std::vector<double>> thread_values(nthreads - 1, std::vector<double>());
+  std::vector<Eigen::VectorXd> thread_rhs(nthreads - 1), thread_integrals(nthreads - 1);
+  auto integrals_of = [&](int tid) -> Eigen::VectorXd* {
+    if (tid == 0 || !integrals) return integrals;
+    thread_integrals[tid - 1].setZero(mesh.num_functions());
+    return &thread_integrals[tid - 1];
+  };
+  auto emit = [&](int tid, const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke,
+                  const Eigen::VectorXd& Fe) {
+    double* my_values = values;
+    Eigen::VectorXd* my_rhs = &rhs;
+    if (tid > 0) {
+      if (thread_values[tid - 1].empty()) {
+        thread_values[tid - 1].assign(nnz, 0.0);
+        thread_rhs[tid - 1].setZero(layout.num_free());
+      }
+      my_values = thread_values[tid - 1].data();
+      my_rhs = &thread_rhs[tid - 1];
+    }
+    for (const auto& [d, a] : order) (*my_rhs)[d] += Fe[a];
+    scatter(outer, inner, order, Ke, my_values);
+  };
+  assemble_cells(mesh, geometry, form, layout, fixed_values, quadrature, CellRange{}, emit, integrals_of);
+  for (int t = 0; t < nthreads - 1; ++t) {
+    if (!thread_values[t].empty()) {
+      const double* src = thread_values[t].data();
+      double* dst = values;
+#pragma omp parallel for schedule(static)
+      for (long i = 0; i < nnz; ++i) dst[i] += src[i];
+      rhs += thread_rhs[t];
+    }
+    if (integrals && thread_integrals[t].size() > 0) *integrals += thread_integrals[t];
+  }
+}
+
+void assemble_poisson_elements(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
+                               const DofLayout& layout, const Eigen::VectorXd& fixed_values,
+                               const QuadratureOptions& quadrature, CellRange cells, ElementEntries& out) {
+  const int nthreads = omp_get_max_threads();
+  std::vector<ElementEntries> per_thread(nthreads);
+  auto emit = [&](int tid, const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke,
+                  const Eigen::VectorXd& Fe) {
+    ElementEntries& e = per_thread[tid];
+    for (const auto& [d, a] : order) {
+      e.rhs_rows.push_back(d);
+      e.rhs_values.push_back(Fe[a]);
+      for (const auto& [d2, b] : order) {
+        e.rows.push_back(d);
+        e.cols.push_back(d2);
+        e.values.push_back(Ke(a, b));
+      }
+    }
+  };
+  assemble_cells(mesh, geometry, form, layout, fixed_values, quadrature, cells, emit,
+                 [](int) -> Eigen::VectorXd* { return nullptr; });
+  out = ElementEntries{};
+  for (ElementEntries& e : per_thread) {  // in thread order: the same entries, in the same order, every run
+    out.rows.insert(out.rows.end(), e.rows.begin(), e.rows.end());
+    out.cols.insert(out.cols.end(), e.cols.begin(), e.cols.end());
+    out.values.insert(out.values.end(), e.values.begin(), e.values.end());
+    out.rhs_rows.insert(out.rhs_rows.end(), e.rhs_rows.begin(), e.rhs_rows.end());
+    out.rhs_values.insert(out.rhs_values.end(), e.rhs_values.begin(), e.rhs_values.end());
+    e = ElementEntries{};
   }
 }
 

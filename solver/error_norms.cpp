@@ -8,15 +8,16 @@
 
 namespace knotwork {
 
-ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
-                       const Eigen::VectorXd& coefficients, const ExactSolution& exact,
-                       const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell,
-                       double exact_offset) {
+namespace {
+
+// |u - u_h|^2 in L2 and H1-seminorm of every cell of [first, last) (the others: 0).
+void cell_squared_errors(const BezierMesh& mesh, const GeometryMap& geometry, const Eigen::VectorXd& coefficients,
+                         const ExactSolution& exact, const QuadratureOptions& quadrature, double exact_offset,
+                         int first, int last, Eigen::VectorXd& cell_l2, Eigen::VectorXd& cell_semi_all) {
   if (geometry.dimension() == 3 && !exact.on_surface())
     throw std::invalid_argument("error norms on a surface need the exact solution as a function of (x, y, z)");
-  // Per-cell contributions, summed in cell order afterwards: the norms are bitwise the same
-  // whatever the number of threads and however the cells were shared among them.
-  Eigen::VectorXd cell_l2 = Eigen::VectorXd::Zero(mesh.num_cells()), cell_semi_all = cell_l2;
+  cell_l2 = Eigen::VectorXd::Zero(mesh.num_cells());
+  cell_semi_all = cell_l2;
   const bool surface = geometry.dimension() == 3;
   std::vector<Expression> wanted{exact.u, exact.u_x, exact.u_y};
   if (surface) wanted.push_back(exact.u_z);
@@ -26,7 +27,7 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
     ExpressionBatch ex(compiled);
     CellField field;
 #pragma omp for schedule(dynamic, 64)
-    for (int c = 0; c < mesh.num_cells(); ++c) {
+    for (int c = first; c < last; ++c) {
       const BezierCell& cell = mesh.cell(c);
       evaluate_cell_field(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
                           rule_points(quadrature.error_points_v, cell.degree_v, 2), coefficients, field);
@@ -63,6 +64,19 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
       cell_semi_all[c] = cell_semi;
     }
   }
+}
+
+}  // namespace
+
+ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
+                       const Eigen::VectorXd& coefficients, const ExactSolution& exact,
+                       const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell,
+                       double exact_offset) {
+  // Per-cell contributions, summed in cell order afterwards: the norms are bitwise the same
+  // whatever the number of threads and however the cells were shared among them.
+  Eigen::VectorXd cell_l2, cell_semi_all;
+  cell_squared_errors(mesh, geometry, coefficients, exact, quadrature, exact_offset, 0, mesh.num_cells(), cell_l2,
+                      cell_semi_all);
   double l2 = 0, semi = 0;
   for (int c = 0; c < mesh.num_cells(); ++c) l2 += cell_l2[c], semi += cell_semi_all[c];
   if (h1_semi_squared_per_cell) *h1_semi_squared_per_cell = std::move(cell_semi_all);
@@ -71,6 +85,19 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
   n.h1_semi = std::sqrt(semi);
   n.h1 = std::sqrt(l2 + semi);
   return n;
+}
+
+std::array<double, 2> squared_errors(const BezierMesh& mesh, const GeometryMap& geometry,
+                                    const Eigen::VectorXd& coefficients, const ExactSolution& exact,
+                                    const QuadratureOptions& quadrature, CellRange cells,
+                                    Eigen::VectorXd* h1_semi_squared_per_cell) {
+  Eigen::VectorXd cell_l2, cell_semi;
+  const int last = cells.last < 0 ? mesh.num_cells() : cells.last;
+  cell_squared_errors(mesh, geometry, coefficients, exact, quadrature, 0, cells.first, last, cell_l2, cell_semi);
+  double l2 = 0, semi = 0;
+  for (int c = cells.first; c < last; ++c) l2 += cell_l2[c], semi += cell_semi[c];
+  if (h1_semi_squared_per_cell) *h1_semi_squared_per_cell = std::move(cell_semi);
+  return {l2, semi};
 }
 
 double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const ExactSolution& exact,

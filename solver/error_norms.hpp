@@ -1,5 +1,6 @@
 #pragma once
 #include <Eigen/Core>
+#include <array>
 
 #include "basis/core/bezier_mesh.hpp"
 #include "solver/expression.hpp"
@@ -25,6 +26,14 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coefficients, const ExactSolution& exact,
                        const QuadratureOptions& quadrature, Eigen::VectorXd* h1_semi_squared_per_cell = nullptr,
                        double exact_offset = 0);
+
+// The squares of the L2 and H1-seminorm errors summed over the cells `cells` only: one rank's
+// share, summed over ranks by the caller.
+// `h1_semi_squared_per_cell` (optional) as in error_norms, 0 outside `cells`.
+std::array<double, 2> squared_errors(const BezierMesh& mesh, const GeometryMap& geometry,
+                                    const Eigen::VectorXd& coefficients, const ExactSolution& exact,
+                                    const QuadratureOptions& quadrature, CellRange cells,
+                                    Eigen::VectorXd* h1_semi_squared_per_cell = nullptr);
 
 // Integral of the exact solution over the domain (or surface), by the error rule.
 double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const ExactSolution& exact,

@@ -37,4 +37,10 @@ struct QuadratureOptions {
   bool separable_cells = true;
 };
 
+// The cells [first, last) of a mesh (last < 0: to the end): one rank's share of a distributed
+// assembly (contiguous blocks of the cell order, as PetIGA partitions a tensor mesh).
+struct CellRange {
+  int first = 0, last = -1;
+};
+
 }  // namespace knotwork

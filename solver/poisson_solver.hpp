@@ -56,6 +56,12 @@ struct PoissonSolution {
   std::optional<ErrorNorms> errors;
   Eigen::VectorXd cell_h1_squared;  // with cell_errors: where the error sits (sums to h1_semi^2)
   PoissonTimings timings;
+  // method = "petsc" (solver/distributed_poisson.hpp): the processes, and what PETSc ran
+  // (the KSP, the PC, the factorization package when a direct one) and why it stopped.
+  struct Distributed {
+    int ranks = 0;  // 0: not a PETSc solve
+    std::string ksp, pc, package, reason;
+  } distributed;
   // Closed surfaces with reaction = 0 (zero-mean solution): the surface's area, the mean
   // removed from f, and the exact solution's mean, removed before the errors are measured.
   bool zero_mean = false;

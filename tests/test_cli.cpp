@@ -325,7 +325,7 @@ TEST_CASE("bad input: [solver] and --solver", "[cli][bad-input][solver]") {
   expect_rejected(box, kGood + "[solver]\nmax_iterations = 0\n", {"bad.toml", "[solver] max_iterations", "[1, 1000000]"});
   expect_rejected(box, kGood + "[solver]\nmethd = \"direct\"\n", {"bad.toml", "[solver] methd", "did you mean 'method'"});
   expect_rejected(box, kGood + "[solver]\npetsc_options = \"-pc_hypre_boomeramg_max_levels 3\"\n",
-                  {"bad.toml", "[solver] petsc_options", "only used with preconditioner = \"boomeramg\""});
+                  {"bad.toml", "[solver] petsc_options", "only used with method = \"petsc\" (PETSc's KSP and PC) or preconditioner = \"boomeramg\""});
   expect_rejected(box, iterative + "preconditioner = \"boomeramg\"\npetsc_options = \"-pc_hypre_boomeramg_max_lvls 3\"\n",
                   {"bad.toml", "[solver] petsc_options", "-pc_hypre_boomeramg_max_lvls: not an option"});
   // Not converged: a non-zero exit, the residual reached, and no result files.

@@ -1,0 +1,158 @@
+#include "solver/distributed_poisson.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "solver/assemble_poisson.hpp"
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+enum FailureKind { kNone = 0, kInput = 1, kGeometry = 2, kInvalid = 3, kOther = 4 };
+
+// Runs step; a failure on any rank becomes the same exception on every rank (the lowest
+// failing rank's), so that no rank waits in a collective call the others never reach.
+template <class Step>
+void on_all_ranks(Step step) {
+  int kind = kNone;
+  std::string message;
+  try {
+    step();
+  } catch (const GeometryError& e) {
+    kind = kGeometry, message = e.what();
+  } catch (const InputError& e) {
+    kind = kInput, message = e.what();
+  } catch (const std::invalid_argument& e) {
+    kind = kInvalid, message = e.what();
+  } catch (const std::exception& e) {
+    kind = kOther, message = e.what();
+  }
+  const std::optional<RankFailure> f = agree_on_failure(kind, message);
+  if (!f) return;
+  switch (f->kind) {
+    case kGeometry: throw GeometryError(f->message);
+    case kInput: throw InputError(f->message);
+    case kInvalid: throw std::invalid_argument(f->message);
+    default: throw std::runtime_error(f->rank == 0 ? f->message : "rank " + std::to_string(f->rank) + ": " + f->message);
+  }
+}
+
+bool has_boundary(const BezierMesh& mesh) {
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    for (int b : mesh.cell(c).boundary)
+      if (b >= 0) return true;
+  return false;
+}
+
+}  // namespace
+
+PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const GeometryMap& geometry,
+                                          const PoissonProblem& problem, const PoissonSolveOptions& options,
+                                          const DistributedSolveOptions& petsc) {
+  using clock = std::chrono::steady_clock;
+  auto seconds_since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
+  auto say = [&](const std::string& s) {
+    if (options.progress) options.progress(s);
+  };
+  if (problem.reaction < 0) throw std::invalid_argument("reaction must be >= 0");
+  if (problem.reaction == 0 && !has_boundary(mesh))
+    throw std::invalid_argument("[solver] method = \"petsc\" does not solve closed surfaces yet (their zero-mean "
+                                "solution needs the whole mass matrix); use method = \"direct\" or \"iterative\"");
+  const ParallelWorld world = parallel_world();
+  PoissonSolution sol;
+  sol.num_functions = mesh.num_functions();
+  sol.distributed.ranks = world.size;
+  PoissonForm form;
+  form.reaction = problem.reaction;
+  form.source_reaction = problem.reaction;
+  form.source = problem.source.empty() ? nullptr : &problem.source;
+  form.exact = problem.exact ? &*problem.exact : nullptr;
+
+  say("setup");
+  auto t = clock::now();
+  std::vector<bool> fixed;
+  Eigen::VectorXd fixed_values;
+  on_all_ranks([&] { fixed_values = project_dirichlet_data(mesh, geometry, problem, options.quadrature, fixed); });
+  const DofLayout layout = make_dof_layout(mesh.num_functions(), fixed);
+  sol.num_free = layout.num_free();
+  const long cells = mesh.num_cells();
+  const CellRange mine{static_cast<int>(cells * world.rank / world.size),
+                       static_cast<int>(cells * (world.rank + 1) / world.size)};
+  sol.timings.setup = seconds_since(t);
+
+  say("assembly");
+  t = clock::now();
+  ElementEntries entries;
+  on_all_ranks([&] {
+    assemble_poisson_elements(mesh, geometry, form, layout, fixed_values, options.quadrature, mine, entries);
+    if (world.rank == 0) {  // the boundary's few terms, once
+      Eigen::VectorXd neumann = Eigen::VectorXd::Zero(layout.num_free());
+      add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, neumann);
+      for (int d = 0; d < layout.num_free(); ++d)
+        if (neumann[d] != 0) entries.rhs_rows.push_back(d), entries.rhs_values.push_back(neumann[d]);
+    }
+  });
+  sol.timings.assembly = seconds_since(t);
+
+  sol.coefficients = fixed_values;
+  if (layout.num_free() > 0) {
+    say("PETSc solve");
+    DistributedSolveResult r;
+    on_all_ranks([&] {
+      try {
+        r = solve_distributed(layout.num_free(), entries, petsc);
+      } catch (const std::invalid_argument& e) {  // the user's options
+        throw std::invalid_argument(std::string("[solver] petsc_options: ") + e.what());
+      }
+    });
+    entries = ElementEntries{};
+    sol.matrix_nonzeros = r.global_nonzeros;
+    sol.timings.assembly += r.matrix_seconds;
+    sol.timings.preconditioner = r.setup_seconds;
+    sol.timings.iterations = r.solve_seconds;
+    sol.iterative.iterations = r.iterations;
+    sol.iterative.relative_residual = r.relative_residual;
+    sol.iterative.converged = r.converged;
+    sol.distributed.ksp = r.ksp_type;
+    sol.distributed.pc = r.pc_type;
+    sol.distributed.package = r.factor_package;
+    sol.distributed.reason = r.reason;
+    if (!r.converged) {
+      char b[300];
+      std::snprintf(b, sizeof b, "PETSc's %s + %s stopped after %d iterations (%s) at relative residual %.3e, tolerance %.1e",
+                    r.ksp_type.c_str(), r.pc_type.c_str(), r.iterations, r.reason.c_str(), r.relative_residual,
+                    petsc.tolerance);
+      throw NotConverged(b);
+    }
+    for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = r.solution[d];
+  }
+  if (!sol.coefficients.allFinite()) throw std::runtime_error("the discrete solution has non-finite values");
+
+  if (options.compute_errors && problem.exact) {
+    say("error norms");
+    t = clock::now();
+    std::array<double, 2> squares{0, 0};
+    on_all_ranks([&] {
+      squares = squared_errors(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature, mine,
+                               options.cell_errors ? &sol.cell_h1_squared : nullptr);
+    });
+    sum_over_ranks(squares.data(), 2);
+    if (options.cell_errors) sum_over_ranks(sol.cell_h1_squared.data(), static_cast<int>(sol.cell_h1_squared.size()));
+    ErrorNorms n;
+    n.l2 = std::sqrt(squares[0]);
+    n.h1_semi = std::sqrt(squares[1]);
+    n.h1 = std::sqrt(squares[0] + squares[1]);
+    sol.errors = n;
+    sol.timings.errors = seconds_since(t);
+  }
+  // Each phase as long as its slowest rank.
+  double phases[3] = {sol.timings.setup, sol.timings.assembly, sol.timings.errors};
+  max_over_ranks(phases, 3);
+  sol.timings.setup = phases[0], sol.timings.assembly = phases[1], sol.timings.errors = phases[2];
+  return sol;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,67 @@
+#pragma once
+// The PETSc module (libknotwork_petsc.so, loaded on first use by solver/petsc_loader.cpp):
+// MPI through PETSc, hypre's BoomerAMG as a preconditioner of knotwork's CG
+// (solver/amg_preconditioner.hpp), and the distributed solve of `method = "petsc"`. Nothing
+// here names a PETSc type: only the module links PETSc and MPI, and only runs that ask for
+// them load their ~85 libraries.
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "solver/assemble_poisson.hpp"
+
+namespace knotwork {
+
+// This process among the processes mpirun started (rank 0 of 1 without mpirun). The first
+// call initializes PETSc and MPI.
+struct ParallelWorld {
+  int rank = 0, size = 1;
+};
+ParallelWorld parallel_world();
+
+// The rank and size mpirun gave this process, read from OpenMPI's environment without loading
+// anything (rank 0 of 1 when not started by mpirun).
+ParallelWorld launched_world();
+
+// Sums (or maximum) over all ranks, in place; every rank calls it.
+void sum_over_ranks(double* values, int n);
+void max_over_ranks(double* values, int n);
+
+// Every rank calls it after a step some rank may have failed (kind 0: not failed). Returns the
+// failure of the lowest failing rank, the same on every rank, or nothing: so that all ranks
+// throw the same error instead of some waiting forever in the next collective call.
+struct RankFailure {
+  int rank = 0, kind = 0;
+  std::string message;
+};
+std::optional<RankFailure> agree_on_failure(int kind, const std::string& message);
+// Whether agree_on_failure has returned a failure in this process (every rank then throws it).
+bool failure_shared_by_all_ranks();
+
+struct DistributedSolveOptions {
+  // PETSc options for the KSP and its PC, after the defaults (CG + BoomerAMG); refused when
+  // PETSc does not use one (std::invalid_argument).
+  std::string petsc_options;
+  double tolerance = 1e-10;  // relative, unpreconditioned residual (-ksp_rtol)
+  int max_iterations = 1000;
+};
+
+struct DistributedSolveResult {
+  Eigen::VectorXd solution;  // every free dof, on every rank
+  int iterations = 0;
+  double relative_residual = 0;  // ||b - A x|| / ||b||, computed after the solve
+  bool converged = false;
+  std::string reason;            // PETSc's KSPConvergedReason
+  std::string ksp_type, pc_type, factor_package;  // what ran (after the user's options)
+  long global_nonzeros = 0;                        // of the distributed matrix
+  double matrix_seconds = 0, setup_seconds = 0, solve_seconds = 0;  // max over ranks
+};
+
+// Solves A x = b for the num_free free dofs, A and b given by every rank's share of entries
+// (added up, wherever they are stored): a MATMPIAIJ with PETSc's row distribution, built from
+// the entries (MatSetPreallocationCOO/MatSetValuesCOO), b likewise, then KSPSolve. Collective.
+DistributedSolveResult solve_distributed(int num_free, const ElementEntries& local,
+                                         const DistributedSolveOptions& options);
+
+}  // namespace knotwork

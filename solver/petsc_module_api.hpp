@@ -1,0 +1,19 @@
+#pragma once
+// The table of functions the PETSc module exports (knotwork_petsc_api, found by dlsym) and
+// the loader calls: between solver/petsc_loader.cpp and the module's sources only.
+#include <Eigen/SparseCore>
+
+#include "solver/iterative_solver.hpp"
+#include "solver/petsc_module.hpp"
+
+namespace knotwork {
+
+struct PetscModuleApi {
+  ParallelWorld (*world)();
+  void (*reduce)(double* values, int n, bool maximum);
+  std::optional<RankFailure> (*agree_on_failure)(int kind, const std::string& message);
+  DistributedSolveResult (*solve)(int num_free, const ElementEntries& local, const DistributedSolveOptions& options);
+  Preconditioner* (*boomeramg)(const Eigen::SparseMatrix<double>& lower, const std::string& petsc_options);
+};
+
+}  // namespace knotwork

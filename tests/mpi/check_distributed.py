@@ -1,0 +1,69 @@
+#!/usr/bin/env python3
+"""The same case on 1, 2 and 3 MPI processes (method = "petsc") against the serial direct solve.
+
+For one case file: CHOLMOD's errors (serial, `--solver direct`) are the reference; PETSc's CG +
+BoomerAMG (the default) on 1, 2 and 3 ranks must give the same L2 and H1-seminorm errors to
+1e-6 relative (its tolerance is on the residual), MUMPS's distributed Cholesky on 2 and 3 ranks
+to 1e-10. Partition-dependent bugs (a cell on a rank boundary, a Dirichlet dof owned elsewhere)
+change the errors far beyond that.
+
+Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE
+Everything runs on this machine (OpenMPI's shared-memory transport only) and stops by itself.
+"""
+import json
+import os
+import subprocess
+import sys
+
+MUMPS = "-ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type mumps"
+MPIRUN = os.environ.get("MPIRUN", "mpirun")
+
+
+def mpi_environment():
+    env = dict(os.environ)
+    env.update({
+        "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",  # CI runs as root
+        "OMPI_MCA_btl": "self,vader",  # no network: processes talk through shared memory
+        "OMPI_MCA_btl_vader_single_copy_mechanism": "none",  # no ptrace between processes (sandboxes)
+        "OMPI_MCA_rmaps_base_oversubscribe": "1",  # 3 ranks on 2 cores
+    })
+    return env
+
+
+def run(command, env):
+    done = subprocess.run(command, capture_output=True, text=True, env=env, timeout=300)
+    if done.returncode != 0:
+        raise SystemExit(f"FAIL {' '.join(command)}: exit {done.returncode}\n{done.stderr}")
+    return json.loads(done.stdout)
+
+
+def main():
+    binary, case = sys.argv[1], sys.argv[2]
+    env = mpi_environment()
+    base = [binary, "run", case, "--json", "-q", "--no-output"]
+    reference = run(base + ["--solver", "direct"], env)
+    failures = []
+    runs = [(n, "", 1e-6) for n in (1, 2, 3)] + [(n, MUMPS, 1e-10) for n in (2, 3)]
+    for ranks, options, tolerance in runs:
+        command = [MPIRUN, "-n", str(ranks), "--oversubscribe"] + base + ["--solver", "petsc"]
+        if options:
+            command += ["--petsc-options", options]
+        got = run(command, env)
+        what = f"{ranks} rank(s), {got['solver']['ksp']} + {got['solver']['pc']}"
+        if got["ranks"] != ranks:
+            failures.append(f"{what}: reports {got['ranks']} ranks")
+        if got["free_dofs"] != reference["free_dofs"]:
+            failures.append(f"{what}: {got['free_dofs']} unknowns, serial {reference['free_dofs']}")
+        for key in ("l2_error", "h1_seminorm_error"):
+            relative = abs(got[key] - reference[key]) / reference[key]
+            line = f"{what}: {key} {got[key]:.15e} against {reference[key]:.15e} (relative {relative:.1e}, limit {tolerance:.0e})"
+            print(line)
+            if not relative <= tolerance:
+                failures.append(line)
+    if failures:
+        raise SystemExit("FAIL\n" + "\n".join(failures))
+    print(f"{os.path.basename(case)}: {len(runs)} distributed solves agree with the serial one")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,77 @@
+#!/usr/bin/env python3
+"""knotwork under mpirun: what is written, and what is refused.
+
+- `mpirun -n 2 knotwork run --solver petsc` writes the same files as a serial run (rank 0
+  writes them; no staging folder left), with the same cells, and prints one summary.
+- A PETSc option nobody reads, a serial method under mpirun, and a command that does not run
+  under mpirun each get exit code 2 and exactly one error line (rank 0's), not one per rank.
+
+Usage: check_output_and_refusals.py KNOTWORK_BINARY CASE_FILE
+"""
+import os
+import subprocess
+import sys
+import re
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from check_distributed import MPIRUN, mpi_environment  # noqa: E402
+
+
+def cells_of(vtu):
+    # The XML header only: VTK appends the arrays as raw bytes after it.
+    with open(vtu, "rb") as f:
+        header = f.read().split(b"<AppendedData")[0].decode()
+    return sum(int(n) for n in re.findall(r'NumberOfCells="(\d+)"', header))
+
+
+def main():
+    binary, case = sys.argv[1], sys.argv[2]
+    env = mpi_environment()
+    failures = []
+    with tempfile.TemporaryDirectory() as scratch:
+        serial, parallel = os.path.join(scratch, "serial"), os.path.join(scratch, "parallel")
+        subprocess.run([binary, "run", case, "-q", "--out", serial], check=True, env=env, capture_output=True, timeout=300)
+        done = subprocess.run([MPIRUN, "-n", "2", binary, "run", case, "-q", "--solver", "petsc", "--out", parallel],
+                              env=env, capture_output=True, text=True, timeout=300)
+        if done.returncode != 0:
+            failures.append(f"mpirun -n 2 run: exit {done.returncode}: {done.stderr}")
+        if done.stdout.count("knotwork run ") != 1:
+            failures.append(f"mpirun -n 2 run: {done.stdout.count('knotwork run ')} summaries on stdout, expected 1")
+        written = sorted(os.listdir(parallel)) if os.path.isdir(parallel) else []
+        expected = sorted(os.listdir(serial))
+        if written != expected:
+            failures.append(f"mpirun -n 2 run wrote {written}, a serial run {expected}")
+        for name in expected:
+            if name.endswith(".vtu") and name in written:
+                a, b = cells_of(os.path.join(serial, name)), cells_of(os.path.join(parallel, name))
+                if a != b:
+                    failures.append(f"{name}: {b} cells, serial {a}")
+        leftovers = [n for n in os.listdir(scratch) if n not in ("serial", "parallel")]
+        if leftovers:
+            failures.append(f"left in the output's parent folder: {leftovers}")
+
+        refusals = [
+            (["--solver", "petsc", "--petsc-options", "-ksp_typo cg"], "-ksp_typo: not an option of PETSc"),
+            (["--solver", "direct"], "under mpirun with 2 processes"),
+        ]
+        for extra, expected_text in refusals:
+            done = subprocess.run([MPIRUN, "-n", "2", binary, "run", case, "-q", "--no-output"] + extra, env=env,
+                                  capture_output=True, text=True, timeout=300, cwd=scratch)
+            lines = [l for l in done.stderr.splitlines() if l.startswith("knotwork: error:")]
+            if done.returncode != 2 or len(lines) != 1 or expected_text not in lines[0]:
+                failures.append(f"run {' '.join(extra)}: exit {done.returncode}, error lines {lines}")
+        done = subprocess.run([MPIRUN, "-n", "2", binary, "bench", "--quick"], env=env, capture_output=True, text=True,
+                              timeout=300, cwd=scratch)
+        lines = [l for l in done.stderr.splitlines() if l.startswith("knotwork: error:")]
+        if done.returncode != 2 or len(lines) != 1 or "only `run` and `converge`" not in lines[0]:
+            failures.append(f"bench under mpirun: exit {done.returncode}, error lines {lines}")
+        if os.listdir(scratch) != [] and sorted(os.listdir(scratch)) != ["parallel", "serial"]:
+            failures.append(f"refused runs wrote {sorted(os.listdir(scratch))}")
+    if failures:
+        raise SystemExit("FAIL\n" + "\n".join(failures))
+    print("output under mpirun as a serial run's; refusals: one line each, exit 2")
+
+
+if __name__ == "__main__":
+    main()
