@@ -1,5 +1,6 @@
 // knotwork run: one case, one solve, for every family through the family interface.
 #include <chrono>
+#include <filesystem>
 #include <cstdio>
 #include <optional>
 
@@ -8,6 +9,7 @@
 #include "app/report.hpp"
 #include "app/studies.hpp"
 #include "solver/input_error.hpp"
+#include "solver/distributed_poisson.hpp"
 #include "solver/petsc_module.hpp"
 #include "solver/vtk_output.hpp"
 
@@ -42,11 +44,56 @@ void write_run_output(const CaseDescription& c, const SplineSpace& space, const 
                       c.samples, s.exact_mean);
 }
 
+namespace {
+
+// Under mpirun: every rank writes its cells (cells_of_rank) as a piece, rank 0 the .pvtu
+// summaries, into rank 0's staging folder; rank 0 moves them into place once all are written.
+void write_run_pieces(const CaseDescription& c, const SplineSpace& space, const PoissonSolution& s,
+                      OutputStage* stage, ParallelWorld world) {
+  const ExactSolution* exact = c.problem.exact ? &*c.problem.exact : nullptr;
+  CellFields cell_fields;
+  if (s.cell_h1_squared.size() > 0) cell_fields.emplace_back("h1_error_squared", s.cell_h1_squared);
+  const CellRange mine = cells_of_rank(space.mesh().num_cells(), world);
+  for (const auto& [wanted, base] : {std::pair{c.write_bezier, "solution"}, std::pair{c.write_sampled, "solution_sampled"}}) {
+    if (!wanted) continue;
+    std::vector<std::string> pieces;
+    for (int r = 0; r < world.size; ++r) pieces.push_back(std::string(base) + "_" + std::to_string(r) + ".vtu");
+    // Rank 0 stages every name (so that an interrupt or a failure removes them all) and
+    // tells the others where its staging folder is.
+    std::string folder;
+    PieceSummary summary;
+    if (stage) {
+      for (const std::string& piece : pieces) folder = std::filesystem::path(stage->stage(piece)).parent_path().string();
+      summary = PieceSummary{stage->stage(std::string(base) + ".pvtu"), pieces};
+    }
+    broadcast_from_first(folder);
+    const std::string path = (std::filesystem::path(folder) / pieces[world.rank]).string();
+    on_all_ranks([&] {
+      if (std::string(base) == "solution")
+        write_bezier_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, cell_fields, s.exact_mean, mine,
+                         stage ? &summary : nullptr);
+      else
+        write_sampled_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, c.samples, s.exact_mean, mine,
+                          stage ? &summary : nullptr);
+    });
+  }
+}
+
+}  // namespace
+
 RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
                      const ProgressFunction& progress) {
   using clock = std::chrono::steady_clock;
+  // Under mpirun, rank 0 makes the output folder (and says to all if it cannot).
+  const ParallelWorld world = launched_world();
+  const bool writes = output_directory != nullptr;
   std::optional<OutputStage> stage;
-  if (output_directory) stage.emplace(*output_directory);
+  if (world.size > 1 && writes)
+    on_all_ranks([&] {
+      if (world.rank == 0) stage.emplace(*output_directory);
+    });
+  else if (writes)
+    stage.emplace(*output_directory);
   const auto say = [&](const std::string& what) { if (progress) progress(what); };
   RunOutcome r;
   say("building the space ([space] family = \"" + c.family + "\")");
@@ -61,7 +108,13 @@ RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::str
   const std::vector<ReportField> checks = r.space->check_solution(r.solution.coefficients);
   r.seconds_checks = since(t);
   r.fields.insert(r.fields.end(), checks.begin(), checks.end());
-  if (stage) {
+  if (world.size > 1 && writes) {
+    say("writing ParaView output (a piece per rank)");
+    t = clock::now();
+    write_run_pieces(c, *r.space, r.solution, stage ? &*stage : nullptr, world);
+    if (stage) r.outputs = stage->commit();
+    r.seconds_output = since(t);
+  } else if (stage) {
     say("writing ParaView output");
     t = clock::now();
     write_run_output(c, *r.space, r.solution, *stage);
@@ -118,10 +171,7 @@ int run_command(const RunOptions& o) {
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string out = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);
-  // Under mpirun, rank 0 alone writes.
-  const bool writer = launched_world().rank == 0;
-  const RunOutcome r =
-      run_study(c, ordering, o.no_output || !writer ? nullptr : &out, [&](const std::string& w) { progress(w); });
+  const RunOutcome r = run_study(c, ordering, o.no_output ? nullptr : &out, [&](const std::string& w) { progress(w); });
   if (o.json) {
     std::printf("%s\n", run_json(c, r).dump().c_str());
     return 0;

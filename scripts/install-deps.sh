@@ -16,7 +16,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas-dev
-  libvtk9-dev
+  libvtk9-dev python3-vtk9
   catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libmuparser-dev libginac-dev libgmp-dev
   libbenchmark-dev

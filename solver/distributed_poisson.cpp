@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 
 #include "solver/assemble_poisson.hpp"
 #include "solver/input_error.hpp"
@@ -10,13 +11,10 @@
 namespace knotwork {
 
 namespace {
-
 enum FailureKind { kNone = 0, kInput = 1, kGeometry = 2, kInvalid = 3, kOther = 4 };
+}  // namespace
 
-// Runs step; a failure on any rank becomes the same exception on every rank (the lowest
-// failing rank's), so that no rank waits in a collective call the others never reach.
-template <class Step>
-void on_all_ranks(Step step) {
+void on_all_ranks(const std::function<void()>& step) {
   int kind = kNone;
   std::string message;
   try {
@@ -39,6 +37,13 @@ void on_all_ranks(Step step) {
     default: throw std::runtime_error(f->rank == 0 ? f->message : "rank " + std::to_string(f->rank) + ": " + f->message);
   }
 }
+
+CellRange cells_of_rank(int num_cells, ParallelWorld world) {
+  const long n = num_cells;
+  return CellRange{static_cast<int>(n * world.rank / world.size), static_cast<int>(n * (world.rank + 1) / world.size)};
+}
+
+namespace {
 
 bool has_boundary(const BezierMesh& mesh) {
   for (int c = 0; c < mesh.num_cells(); ++c)
@@ -78,9 +83,7 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
   on_all_ranks([&] { fixed_values = project_dirichlet_data(mesh, geometry, problem, options.quadrature, fixed); });
   const DofLayout layout = make_dof_layout(mesh.num_functions(), fixed);
   sol.num_free = layout.num_free();
-  const long cells = mesh.num_cells();
-  const CellRange mine{static_cast<int>(cells * world.rank / world.size),
-                       static_cast<int>(cells * (world.rank + 1) / world.size)};
+  const CellRange mine = cells_of_rank(mesh.num_cells(), world);
   sol.timings.setup = seconds_since(t);
 
   say("assembly");

@@ -85,6 +85,10 @@ std::optional<RankFailure> agree_on_failure(int kind, const std::string& message
 
 bool failure_shared_by_all_ranks() { return shared_failure; }
 
+void broadcast_from_first(std::string& text) {
+  if (launched_world().size > 1) api().broadcast(text);
+}
+
 DistributedSolveResult solve_distributed(int num_free, const ElementEntries& local,
                                          const DistributedSolveOptions& options) {
   return api().solve(num_free, local, options);

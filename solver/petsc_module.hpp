@@ -36,6 +36,9 @@ struct RankFailure {
   std::string message;
 };
 std::optional<RankFailure> agree_on_failure(int kind, const std::string& message);
+// Rank 0's text on every rank; every rank calls it.
+void broadcast_from_first(std::string& text);
+
 // Whether agree_on_failure has returned a failure in this process (every rank then throws it).
 bool failure_shared_by_all_ranks();
 

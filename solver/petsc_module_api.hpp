@@ -13,6 +13,7 @@ struct PetscModuleApi {
   void (*reduce)(double* values, int n, bool maximum);
   std::optional<RankFailure> (*agree_on_failure)(int kind, const std::string& message);
   DistributedSolveResult (*solve)(int num_free, const ElementEntries& local, const DistributedSolveOptions& options);
+  void (*broadcast)(std::string& text);
   Preconditioner* (*boomeramg)(const Eigen::SparseMatrix<double>& lower, const std::string& petsc_options);
 };
 

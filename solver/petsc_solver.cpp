@@ -48,6 +48,14 @@ std::optional<RankFailure> agree(int kind, const std::string& message) {
   return f;
 }
 
+void broadcast(std::string& text) {
+  initialize_petsc();
+  int length = static_cast<int>(text.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  text.resize(length);
+  MPI_Bcast(text.data(), length, MPI_CHAR, 0, PETSC_COMM_WORLD);
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -174,6 +182,6 @@ Preconditioner* make_boomeramg(const Eigen::SparseMatrix<double>& lower, const s
 // The module's one entry point, found by name (dlsym); C++ exceptions pass through its functions.
 extern "C" __attribute__((visibility("default"))) const knotwork::PetscModuleApi* knotwork_petsc_api() {
   static const knotwork::PetscModuleApi api{knotwork::world, knotwork::reduce, knotwork::agree, knotwork::solve,
-                                            knotwork::make_boomeramg};
+                                            knotwork::broadcast, knotwork::make_boomeramg};
   return &api;
 }

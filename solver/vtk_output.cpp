@@ -43,11 +43,48 @@ void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
   if (writer->Write() != 1) throw std::runtime_error(path + ": VTK could not write the file");
 }
 
-void add_cell_fields(vtkUnstructuredGrid* grid, const CellFields& fields, int nc) {
+// The .pvtu summary of pieces written by several processes. VTK's parallel writer lists only
+// the pieces its own process writes unless it runs under VTK's MPI controller, which knotwork
+// does not build on; the summary is a short XML file with the arrays of the pieces (those of
+// `grid`, this process's piece: every piece has the same arrays) and their file names.
+void write_summary(const std::string& path, vtkUnstructuredGrid* grid, const std::vector<std::string>& pieces) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write the file");
+  auto arrays = [&](vtkDataSetAttributes* data, const char* tag, const std::vector<std::pair<const char*, int>>& roles) {
+    out << "    <" << tag;
+    for (const auto& [role, attribute] : roles)
+      if (vtkDataArray* a = data->GetAttribute(attribute); a && a->GetName()) out << " " << role << "=\"" << a->GetName() << "\"";
+    out << ">\n";
+    for (int i = 0; i < data->GetNumberOfArrays(); ++i) {
+      vtkDataArray* a = data->GetArray(i);
+      if (!a || a->GetDataType() != VTK_DOUBLE) throw std::logic_error("write_summary: arrays are doubles");
+      out << "      <PDataArray type=\"Float64\" Name=\"" << a->GetName() << "\" NumberOfComponents=\""
+          << a->GetNumberOfComponents() << "\"/>\n";
+    }
+    out << "    </" << tag << ">\n";
+  };
+  out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\" "
+         "header_type=\"UInt64\">\n  <PUnstructuredGrid GhostLevel=\"0\">\n";
+  arrays(grid->GetPointData(), "PPointData",
+         {{"Scalars", vtkDataSetAttributes::SCALARS}, {"RationalWeights", vtkDataSetAttributes::RATIONALWEIGHTS}});
+  arrays(grid->GetCellData(), "PCellData", {{"HigherOrderDegrees", vtkDataSetAttributes::HIGHERORDERDEGREES}});
+  out << "    <PPoints>\n      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
+  for (const std::string& piece : pieces) out << "    <Piece Source=\"" << piece << "\"/>\n";
+  out << "  </PUnstructuredGrid>\n</VTKFile>\n";
+  if (!out.flush()) throw std::runtime_error(path + ": cannot write the file");
+}
+
+// This process's piece, and with a summary also the .pvtu.
+void write_piece(const std::string& path, vtkUnstructuredGrid* grid, const PieceSummary* summary) {
+  write_grid(path, grid);
+  if (summary && !summary->path.empty()) write_summary(summary->path, grid, summary->pieces);
+}
+
+void add_cell_fields(vtkUnstructuredGrid* grid, const CellFields& fields, int nc, int first, int last) {
   for (const auto& [name, values] : fields) {
     if (values.size() != nc) throw std::invalid_argument("cell field " + name + ": one value per cell is needed");
-    auto a = scalar_array(name.c_str(), nc);
-    for (int c = 0; c < nc; ++c) a->SetValue(c, values[c]);
+    auto a = scalar_array(name.c_str(), last - first);
+    for (int c = first; c < last; ++c) a->SetValue(c - first, values[c]);
     grid->GetCellData()->AddArray(a);
   }
 }
@@ -95,15 +132,15 @@ NodeValues node_values(const BezierMesh& mesh, const GeometryMap& geometry, cons
 
 void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
                       const Eigen::VectorXd& coeffs, const ExactSolution* exact, const CellFields& cell_fields,
-                      double exact_offset) {
+                      double exact_offset, CellRange range, const PieceSummary* summary) {
   vtkNew<vtkUnstructuredGrid> grid;
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
-  const int nc = mesh.num_cells();
+  const int first = range.first, last = range.last < 0 ? mesh.num_cells() : range.last, nc = last - first;
   std::vector<BezierGeometryCell> cells(nc);
   vtkIdType total = 0;
   for (int c = 0; c < nc; ++c) {
-    cells[c] = geometry.bezier_cell(c);
+    cells[c] = geometry.bezier_cell(first + c);
     total += cells[c].points.rows();
   }
   points->SetNumberOfPoints(total);
@@ -135,8 +172,9 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
     }
     // Field coefficients f with sum w_b B_b f_b / W = value at every node.
     GeometryAtPoints at;
-    geometry.evaluate(c, nu, nv, at);
-    const NodeValues val = node_values(mesh, geometry, coeffs, exact, c, nu, nv, at.x, ex ? &*ex.u : nullptr, exact_offset);
+    geometry.evaluate(first + c, nu, nv, at);
+    const NodeValues val =
+        node_values(mesh, geometry, coeffs, exact, first + c, nu, nv, at.x, ex ? &*ex.u : nullptr, exact_offset);
     const Eigen::VectorXd W = collocation * g.weights;
     auto to_bezier = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
       return (inverse * W.cwiseProduct(v)).cwiseQuotient(g.weights);
@@ -166,8 +204,8 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
   grid->GetCellData()->SetHigherOrderDegrees(degrees);
   grid->GetPointData()->SetScalars(solution);
   ex.add_to(grid);
-  add_cell_fields(grid, cell_fields, nc);
-  write_grid(path, grid);
+  add_cell_fields(grid, cell_fields, mesh.num_cells(), first, last);
+  write_piece(path, grid, summary);
 }
 
 void write_bezier_surface_vtu(const std::string& path, const BezierSurface& s) {
@@ -217,13 +255,15 @@ void write_bezier_surface_vtu(const std::string& path, const BezierSurface& s) {
     else
       grid->GetPointData()->AddArray(fields[f]);
   }
-  add_cell_fields(grid, s.cell_fields, nc);
+  add_cell_fields(grid, s.cell_fields, nc, 0, nc);
   write_grid(path, grid);
 }
 
 void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
-                       const Eigen::VectorXd& coeffs, const ExactSolution* exact, int samples, double exact_offset) {
-  const int s = samples, nc = mesh.num_cells(), per_cell = (s + 1) * (s + 1);
+                       const Eigen::VectorXd& coeffs, const ExactSolution* exact, int samples, double exact_offset,
+                       CellRange range, const PieceSummary* summary) {
+  const int first = range.first, last = range.last < 0 ? mesh.num_cells() : range.last;
+  const int s = samples, nc = last - first, per_cell = (s + 1) * (s + 1);
   const vtkIdType total = static_cast<vtkIdType>(nc) * per_cell;
   vtkNew<vtkUnstructuredGrid> grid;
   vtkNew<vtkPoints> points;
@@ -235,7 +275,7 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   CellSamples cs;
   grid->Allocate(static_cast<vtkIdType>(nc) * s * s);
   for (int c = 0; c < nc; ++c) {
-    sample_cell(mesh, geometry, coeffs, c, s, ex ? &*ex.u : nullptr, exact_offset, cs);
+    sample_cell(mesh, geometry, coeffs, first + c, s, ex ? &*ex.u : nullptr, exact_offset, cs);
     const Eigen::MatrixXd& x = cs.at.x;
     const bool surface = x.cols() == 3;
     const vtkIdType base = static_cast<vtkIdType>(c) * per_cell;
@@ -257,7 +297,7 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   grid->GetPointData()->SetScalars(solution);
   grid->GetPointData()->AddArray(gradient);
   ex.add_to(grid);
-  write_grid(path, grid);
+  write_piece(path, grid, summary);
 }
 
 void write_polylines_vtp(const std::string& path, const std::vector<Eigen::MatrixX2d>& lines,

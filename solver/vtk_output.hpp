@@ -7,6 +7,7 @@
 #include "basis/core/bezier_mesh.hpp"
 #include "solver/expression.hpp"
 #include "solver/geometry_map.hpp"
+#include "solver/poisson_problem.hpp"
 
 namespace knotwork {
 
@@ -22,11 +23,21 @@ namespace knotwork {
 // Per-cell scalar fields (e.g. an error indicator), one value per BezierMesh cell.
 using CellFields = std::vector<std::pair<std::string, Eigen::VectorXd>>;
 
+// Pieces of one output written by several processes (mpirun): each writes the cells of its
+// CellRange to its own .vtu, and one of them also the .pvtu summary at `path` naming all the
+// pieces (`pieces`: file names relative to the summary).
+struct PieceSummary {
+  std::string path;
+  std::vector<std::string> pieces;
+};
+
 // Planar domains and surfaces in R^3 alike; `exact_offset` is subtracted from the exact
-// solution (the mean removed by zero-mean problems).
+// solution (the mean removed by zero-mean problems). `cells`: a piece's cells only (cell
+// fields still hold one value per cell of the mesh), with `summary` for the one that writes it.
 void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
                       const Eigen::VectorXd& coefficients, const ExactSolution* exact,
-                      const CellFields& cell_fields = {}, double exact_offset = 0);
+                      const CellFields& cell_fields = {}, double exact_offset = 0, CellRange cells = {},
+                      const PieceSummary* summary = nullptr);
 
 // Polynomial Bezier quadrilaterals in R^3 given by their Bernstein coefficients (surfaces,
 // or planar domains, with no geometry map behind them): per cell its degree (both
@@ -44,7 +55,7 @@ void write_bezier_surface_vtu(const std::string& path, const BezierSurface& surf
 // values at their corners.
 void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
                        const Eigen::VectorXd& coefficients, const ExactSolution* exact, int samples,
-                       double exact_offset = 0);
+                       double exact_offset = 0, CellRange cells = {}, const PieceSummary* summary = nullptr);
 
 // Polylines in the plane (.vtp), e.g. the knot lines of a mesh, each with integer cell data
 // (one array per name, one value per line).

@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """knotwork under mpirun: what is written, and what is refused.
 
-- `mpirun -n 2 knotwork run --solver petsc` writes the same files as a serial run (rank 0
-  writes them; no staging folder left), with the same cells, and prints one summary.
+- `mpirun -n 2 knotwork run --solver petsc` writes a piece per rank and a .pvtu summary for
+  each output of a serial run (no staging folder left), prints one summary, and VTK's own
+  parallel reader reads every cell of the serial output back from the .pvtu, with the
+  Bezier cells' rational weights and degrees as active attributes.
 - A PETSc option nobody reads, a serial method under mpirun, and a command that does not run
   under mpirun each get exit code 2 and exactly one error line (rank 0's), not one per rank.
 
@@ -16,6 +18,18 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from check_distributed import MPIRUN, mpi_environment  # noqa: E402
+
+
+def read_back(pvtu):
+    """Cells and active attributes of a .pvtu as VTK's XML parallel reader sees them."""
+    from vtkmodules.vtkIOXML import vtkXMLPUnstructuredGridReader
+    reader = vtkXMLPUnstructuredGridReader()
+    reader.SetFileName(pvtu)
+    reader.Update()
+    grid = reader.GetOutput()
+    weights = grid.GetPointData().GetRationalWeights()
+    return {"cells": grid.GetNumberOfCells(), "weights": weights.GetName() if weights else None,
+            "degrees": grid.GetCellData().GetHigherOrderDegrees() is not None}
 
 
 def cells_of(vtu):
@@ -39,14 +53,20 @@ def main():
         if done.stdout.count("knotwork run ") != 1:
             failures.append(f"mpirun -n 2 run: {done.stdout.count('knotwork run ')} summaries on stdout, expected 1")
         written = sorted(os.listdir(parallel)) if os.path.isdir(parallel) else []
-        expected = sorted(os.listdir(serial))
+        expected = sorted(f"{base}{suffix}" for base in (n[:-4] for n in os.listdir(serial) if n.endswith(".vtu"))
+                          for suffix in ("_0.vtu", "_1.vtu", ".pvtu"))
         if written != expected:
-            failures.append(f"mpirun -n 2 run wrote {written}, a serial run {expected}")
-        for name in expected:
-            if name.endswith(".vtu") and name in written:
-                a, b = cells_of(os.path.join(serial, name)), cells_of(os.path.join(parallel, name))
-                if a != b:
-                    failures.append(f"{name}: {b} cells, serial {a}")
+            failures.append(f"mpirun -n 2 run wrote {written}, expected {expected}")
+        for name in os.listdir(serial):
+            if not name.endswith(".vtu") or name[:-4] + ".pvtu" not in written:
+                continue
+            cells = cells_of(os.path.join(serial, name))
+            pieces = sum(cells_of(os.path.join(parallel, f"{name[:-4]}_{r}.vtu")) for r in (0, 1))
+            read = read_back(os.path.join(parallel, name[:-4] + ".pvtu"))
+            if pieces != cells or read["cells"] != cells:
+                failures.append(f"{name}: serial {cells} cells, pieces {pieces}, read from the .pvtu {read['cells']}")
+            if name == "solution.vtu" and (read["weights"] != "RationalWeights" or not read["degrees"]):
+                failures.append(f"solution.pvtu: read without the Bezier attributes: {read}")
         leftovers = [n for n in os.listdir(scratch) if n not in ("serial", "parallel")]
         if leftovers:
             failures.append(f"left in the output's parent folder: {leftovers}")
