@@ -5,6 +5,7 @@
 #include <petscksp.h>
 
 #include <algorithm>
+#include <sstream>
 #include <chrono>
 #include <stdexcept>
 #include <vector>
@@ -77,9 +78,26 @@ struct Objects {
   }
 };
 
-DistributedSolveResult solve(int num_free, const ElementEntries& local, const DistributedSolveOptions& options) {
+// -log_view is PETSc's own (no prefix): taken out of the options, it starts PETSc's event
+// log for this solve and prints the summary on stderr at its end (stdout may carry JSON).
+bool take_log_view(std::string& options) {
+  std::istringstream words(options);
+  std::string rest, w;
+  bool found = false;
+  while (words >> w) {
+    if (w == "-log_view") found = true;
+    else rest += (rest.empty() ? "" : " ") + w;
+  }
+  options = rest;
+  return found;
+}
+
+DistributedSolveResult solve(int num_free, const ElementEntries& local, const DistributedSolveOptions& asked) {
   initialize_petsc();
   using clock = std::chrono::steady_clock;
+  DistributedSolveOptions options = asked;
+  const bool log_view = take_log_view(options.petsc_options);
+  if (log_view) check(PetscLogDefaultBegin(), "-log_view");
   DistributedSolveResult result;
   Objects o;
   auto t = clock::now();
@@ -167,6 +185,7 @@ DistributedSolveResult solve(int num_free, const ElementEntries& local, const Di
   check(VecGetArrayRead(o.all, &values), "gather");
   result.solution = Eigen::Map<const Eigen::VectorXd>(values, num_free);
   check(VecRestoreArrayRead(o.all, &values), "gather");
+  if (log_view) check(PetscLogView(PETSC_VIEWER_STDERR_WORLD), "-log_view");
   double times[3] = {result.matrix_seconds, result.setup_seconds, result.solve_seconds};
   reduce(times, 3, true);
   result.matrix_seconds = times[0], result.setup_seconds = times[1], result.solve_seconds = times[2];
