@@ -17,7 +17,7 @@ inline constexpr const char* kBoomerAmgName = "boomeramg";
 // to PETSc's options database before setup. Throws std::invalid_argument naming an option
 // PETSc did not use or could not read, and std::runtime_error when PETSc fails.
 // PETSc (and MPI, as a single process) is loaded and initialized on first use (the module
-// libknotwork_amg.so, or $KNOTWORK_AMG_MODULE), without its signal handlers, and finalized
+// libknotwork_petsc.so, or $KNOTWORK_PETSC_MODULE), without its signal handlers, and finalized
 // at exit.
 std::unique_ptr<Preconditioner> boomeramg_preconditioner(const Eigen::SparseMatrix<double>& lower,
                                                          const std::string& petsc_options);
