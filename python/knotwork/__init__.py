@@ -180,9 +180,10 @@ def run(case, *, degree=None, elements=None, solver=None, tolerance=None, orderi
 
     case: a case-file path, or a dict in the case-file schema.
     degree, elements: override [space] degree / elements (as --degree, --elements).
-    solver: "direct", "iterative" or "auto" (as --solver); tolerance: the iterative solve's
-    backward error (as --tolerance). ordering: CHOLMOD's fill-reducing ordering.
-    allow_unverified_space: as --allow-unverified-space.
+    solver: "direct", "iterative", "auto" or "petsc" (as --solver; "petsc" is PETSc's KSP in
+    this one process, with [solver] petsc_options); tolerance: the iterative solve's backward
+    error, or PETSc's relative residual (as --tolerance). ordering: CHOLMOD's fill-reducing
+    ordering. allow_unverified_space: as --allow-unverified-space.
     output: a directory for the ParaView files (None: nothing is written).
     progress: a callable taking one string per phase.
     name: what a dict case is called in messages (default "<dict>").

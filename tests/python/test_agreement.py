@@ -33,6 +33,7 @@ RUNS = [
     ("square_sinsin.toml", ["--degree", "3", "--elements", "12"], {"degree": 3, "elements": 12}),
     ("quarter_annulus.toml", [], {}),
     ("quarter_annulus.toml", ["--solver", "iterative", "--degree", "3"], {"solver": "iterative", "degree": 3}),
+    ("quarter_annulus.toml", ["--solver", "petsc"], {"solver": "petsc"}),
     ("lshape.toml", [], {}),
     ("square_knot_segments.toml", [], {}),
     ("lshape_adaptive_pt.toml", [], {}),
