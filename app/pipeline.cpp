@@ -26,7 +26,7 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
     r.method = !structured.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
   else
     r.method = c.solver.method;
-  if (r.method == "direct" || r.method == "petsc") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
+  if (r.method == "direct") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
   const std::string& asked = c.solver.preconditioner;
   if (asked == "auto") {
     // Without a structure to use: algebraic multigrid, whose iteration count stays bounded as
@@ -88,11 +88,12 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     throw InputError(c.path + ": [solver] method: \"" + chosen.method + "\" under mpirun with " +
                      std::to_string(launched.size) + " processes: each would solve the whole problem alone; use "
                      "--solver petsc (or method = \"petsc\") to share it");
-  if (chosen.method == "iterative") {
-    so.iterative = true;
+  if (chosen.method == "iterative" || chosen.method == "petsc") {
+    so.iterative = chosen.method == "iterative";
     so.tolerance = c.solver.tolerance;
     so.max_iterations = c.solver.max_iterations;
-    if (chosen.preconditioner == kBoomerAmgName) {
+    // (Under petsc, BoomerAMG and Jacobi are PETSc's own PCs; a structured one is a PCShell.)
+    if (chosen.preconditioner == kBoomerAmgName && chosen.method == "iterative") {
       const std::string options = c.solver.petsc_options, path = c.path;
       so.preconditioner = [options, path](const DofLayout&, const Eigen::SparseMatrix<double>& lower) {
         try {
@@ -101,7 +102,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
           throw InputError(path + ": [solver] petsc_options: " + e.what());
         }
       };
-    } else if (chosen.preconditioner != "jacobi") {
+    } else if (chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi") {
       const std::string name = chosen.preconditioner, path = c.path;
       so.preconditioner = [&space, name, path](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
         std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(layout, lower);
@@ -117,6 +118,9 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     if (chosen.method == "petsc") {
       DistributedSolveOptions petsc;
       petsc.petsc_options = c.solver.petsc_options;
+      petsc.preconditioner = chosen.preconditioner == kBoomerAmgName || chosen.preconditioner == "jacobi"
+                                 ? chosen.preconditioner
+                                 : "shell";
       petsc.tolerance = c.solver.petsc_tolerance();
       petsc.max_iterations = c.solver.max_iterations;
       return solve_poisson_distributed(space.mesh(), space.geometry(), c.problem, so, petsc);

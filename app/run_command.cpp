@@ -149,7 +149,8 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
         .set("tolerance", c.solver.tolerance);
   if (r.solver.method == "petsc") {
     const PoissonSolution::Distributed& d = s.distributed;
-    sj.set("ksp", d.ksp).set("pc", d.pc).set("iterations", s.iterative.iterations)
+    sj.set("ksp", d.ksp).set("pc", d.pc).set("preconditioner", r.solver.preconditioner)
+        .set("iterations", s.iterative.iterations)
         .set("relative_residual", s.iterative.relative_residual).set("tolerance", c.solver.petsc_tolerance())
         .set("converged_reason", d.reason);
     if (!d.package.empty()) sj.set("factor_package", d.package);
@@ -196,7 +197,8 @@ int run_command(const RunOptions& o) {
                 s.iterative.relative_residual);
   if (solver.method == "petsc")
     std::printf("  solver   PETSc %s + %s%s%s on %d process%s: %d iteration%s, relative residual %.2e (tolerance %.0e)\n",
-                s.distributed.ksp.c_str(), s.distributed.pc.c_str(), s.distributed.package.empty() ? "" : " ",
+                s.distributed.ksp.c_str(),
+                (s.distributed.pc == "shell" ? solver.preconditioner + " (PCShell)" : s.distributed.pc).c_str(), s.distributed.package.empty() ? "" : " ",
                 s.distributed.package.c_str(), s.distributed.ranks, s.distributed.ranks == 1 ? "" : "es",
                 s.iterative.iterations, s.iterative.iterations == 1 ? "" : "s", s.iterative.relative_residual,
                 c.solver.petsc_tolerance());

@@ -5,6 +5,9 @@
 #include <cstdio>
 #include <functional>
 
+#include <Eigen/SparseCore>
+#include <memory>
+
 #include "solver/assemble_poisson.hpp"
 #include "solver/input_error.hpp"
 
@@ -102,11 +105,34 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
 
   sol.coefficients = fixed_values;
   if (layout.num_free() > 0) {
+    // knotwork's own preconditioner as a PCShell: built on every rank from what it needs of
+    // the matrix, the diagonal (summed over the ranks' entries).
+    std::unique_ptr<Preconditioner> shell;
+    DistributedSolveOptions solve_options = petsc;
+    if (petsc.preconditioner == "shell") {
+      say("preconditioner");
+      t = clock::now();
+      Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(layout.num_free());
+      for (size_t k = 0; k < entries.rows.size(); ++k)
+        if (entries.rows[k] == entries.cols[k]) diagonal[entries.rows[k]] += entries.values[k];
+      sum_over_ranks(diagonal.data(), layout.num_free());
+      Eigen::SparseMatrix<double> diagonal_matrix(layout.num_free(), layout.num_free());
+      std::vector<Eigen::Triplet<double>> d;
+      for (int i = 0; i < layout.num_free(); ++i) d.emplace_back(i, i, diagonal[i]);
+      diagonal_matrix.setFromTriplets(d.begin(), d.end());
+      on_all_ranks([&] {
+        if (options.preconditioner) shell = options.preconditioner(layout, diagonal_matrix);
+        if (!shell) throw std::invalid_argument("[solver] preconditioner: the space's own preconditioner does not "
+                                                "apply to this problem's unknowns");
+      });
+      solve_options.shell = shell.get();
+      sol.timings.preconditioner = seconds_since(t);
+    }
     say("PETSc solve");
     DistributedSolveResult r;
     on_all_ranks([&] {
       try {
-        r = solve_distributed(layout.num_free(), entries, petsc);
+        r = solve_distributed(layout.num_free(), entries, solve_options);
       } catch (const std::invalid_argument& e) {  // the user's options
         throw std::invalid_argument(std::string("[solver] petsc_options: ") + e.what());
       }
@@ -114,7 +140,7 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
     entries = ElementEntries{};
     sol.matrix_nonzeros = r.global_nonzeros;
     sol.timings.assembly += r.matrix_seconds;
-    sol.timings.preconditioner = r.setup_seconds;
+    sol.timings.preconditioner += r.setup_seconds;
     sol.timings.iterations = r.solve_seconds;
     sol.iterative.iterations = r.iterations;
     sol.iterative.relative_residual = r.relative_residual;

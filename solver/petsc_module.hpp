@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "solver/assemble_poisson.hpp"
+#include "solver/iterative_solver.hpp"
 
 namespace knotwork {
 
@@ -48,6 +49,11 @@ struct DistributedSolveOptions {
   std::string petsc_options;
   double tolerance = 1e-10;  // relative, unpreconditioned residual (-ksp_rtol)
   int max_iterations = 1000;
+  // The preconditioner: "boomeramg" (hypre), "jacobi" (PETSc's), or "shell": `shell`, one of
+  // knotwork's, over all free dofs, applied on every rank to the gathered residual (each rank
+  // keeps its rows): a PCShell.
+  std::string preconditioner = "boomeramg";
+  const Preconditioner* shell = nullptr;
 };
 
 struct DistributedSolveResult {

@@ -61,6 +61,39 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
+// knotwork's preconditioner as a PCShell: the residual gathered on every rank, the whole
+// preconditioner applied there, each rank's own rows kept.
+struct ShellContext {
+  const Preconditioner* preconditioner = nullptr;
+  VecScatter gather = nullptr;
+  Vec all = nullptr;
+  Eigen::VectorXd r, z;
+  ~ShellContext() {
+    VecScatterDestroy(&gather);
+    VecDestroy(&all);
+  }
+};
+
+PetscErrorCode apply_shell(PC pc, Vec x, Vec y) {
+  ShellContext* context = nullptr;
+  PetscCall(PCShellGetContext(pc, &context));
+  PetscCall(VecScatterBegin(context->gather, x, context->all, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(context->gather, x, context->all, INSERT_VALUES, SCATTER_FORWARD));
+  const PetscScalar* values = nullptr;
+  PetscCall(VecGetArrayRead(context->all, &values));
+  PetscInt n = 0, first = 0, last = 0;
+  PetscCall(VecGetSize(context->all, &n));
+  context->r = Eigen::Map<const Eigen::VectorXd>(values, n);
+  PetscCall(VecRestoreArrayRead(context->all, &values));
+  context->preconditioner->apply(context->r, context->z);
+  PetscCall(VecGetOwnershipRange(y, &first, &last));
+  PetscScalar* out = nullptr;
+  PetscCall(VecGetArray(y, &out));
+  for (PetscInt i = first; i < last; ++i) out[i - first] = context->z[i];
+  PetscCall(VecRestoreArray(y, &out));
+  return 0;
+}
+
 // What one solve creates, destroyed on every path.
 struct Objects {
   Mat A = nullptr;
@@ -128,8 +161,21 @@ DistributedSolveResult solve(int num_free, const ElementEntries& local, const Di
   check(KSPSetType(o.ksp, KSPCG), "KSP type");
   PC pc;
   check(KSPGetPC(o.ksp, &pc), "PC");
-  check(PCSetType(pc, PCHYPRE), "PCHYPRE");
-  check(PCHYPRESetType(pc, "boomeramg"), "BoomerAMG");
+  ShellContext shell;
+  if (options.preconditioner == "shell") {
+    if (!options.shell) throw std::logic_error("solve_distributed: a shell preconditioner without one");
+    shell.preconditioner = options.shell;
+    check(VecScatterCreateToAll(o.b, &shell.gather, &shell.all), "shell gather");
+    check(PCSetType(pc, PCSHELL), "PCSHELL");
+    check(PCShellSetContext(pc, &shell), "PCSHELL");
+    check(PCShellSetApply(pc, apply_shell), "PCSHELL");
+    check(PCShellSetName(pc, "knotwork"), "PCSHELL");
+  } else if (options.preconditioner == "jacobi") {
+    check(PCSetType(pc, PCJACOBI), "PCJACOBI");
+  } else {
+    check(PCSetType(pc, PCHYPRE), "PCHYPRE");
+    check(PCHYPRESetType(pc, "boomeramg"), "BoomerAMG");
+  }
   check(KSPSetTolerances(o.ksp, options.tolerance, PETSC_DEFAULT, PETSC_DEFAULT, options.max_iterations),
         "KSP tolerances");
   check(KSPSetNormType(o.ksp, KSP_NORM_UNPRECONDITIONED), "KSP norm");
