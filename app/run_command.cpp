@@ -68,8 +68,9 @@ void write_run_pieces(const CaseDescription& c, const SplineSpace& space, const 
     }
     broadcast_from_first(folder);
     const std::string path = (std::filesystem::path(folder) / pieces[world.rank]).string();
+    const bool bezier = std::string(base) == "solution";  // (clang 14 captures no structured binding)
     on_all_ranks([&] {
-      if (std::string(base) == "solution")
+      if (bezier)
         write_bezier_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, cell_fields, s.exact_mean, mine,
                          stage ? &summary : nullptr);
       else

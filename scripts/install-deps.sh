@@ -3,7 +3,7 @@
 # OpenBLAS matters: CHOLMOD supernodal spends its time in BLAS, and Debian's
 # default reference BLAS is several times slower. petsc-dev brings hypre (the BoomerAMG
 # preconditioner), MUMPS and OpenMPI; openmpi-bin's mpirun starts method = "petsc" on several
-# processes (and the tests that check it).
+# processes (and the tests that check it); time measures scripts/scaling.sh's memory.
 # Usage: scripts/install-deps.sh [--paraview] [--sanitize]
 #   --sanitize   also install clang 14 with its sanitizer and libFuzzer runtimes and LLVM's
 #                OpenMP (scripts/sanitize.sh, scripts/fuzz.sh; docs/RELIABILITY.md).
@@ -21,7 +21,7 @@ packages=(
   libmuparser-dev libginac-dev libgmp-dev
   libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
-  petsc-dev openmpi-bin
+  petsc-dev openmpi-bin time
 )
 with_paraview=0
 for arg in "$@"; do
