@@ -297,33 +297,13 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
 
 void assemble_poisson_elements(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                                const DofLayout& layout, const Eigen::VectorXd& fixed_values,
-                               const QuadratureOptions& quadrature, CellRange cells, ElementEntries& out) {
-  const int nthreads = omp_get_max_threads();
-  std::vector<ElementEntries> per_thread(nthreads);
-  auto emit = [&](int tid, const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke,
-                  const Eigen::VectorXd& Fe) {
-    ElementEntries& e = per_thread[tid];
-    for (const auto& [d, a] : order) {
-      e.rhs_rows.push_back(d);
-      e.rhs_values.push_back(Fe[a]);
-      for (const auto& [d2, b] : order) {
-        e.rows.push_back(d);
-        e.cols.push_back(d2);
-        e.values.push_back(Ke(a, b));
-      }
-    }
-  };
-  assemble_cells(mesh, geometry, form, layout, fixed_values, quadrature, cells, emit,
-                 [](int) -> Eigen::VectorXd* { return nullptr; });
-  out = ElementEntries{};
-  for (ElementEntries& e : per_thread) {  // in thread order: the same entries, in the same order, every run
-    out.rows.insert(out.rows.end(), e.rows.begin(), e.rows.end());
-    out.cols.insert(out.cols.end(), e.cols.begin(), e.cols.end());
-    out.values.insert(out.values.end(), e.values.begin(), e.values.end());
-    out.rhs_rows.insert(out.rhs_rows.end(), e.rhs_rows.begin(), e.rhs_rows.end());
-    out.rhs_values.insert(out.rhs_values.end(), e.rhs_values.begin(), e.rhs_values.end());
-    e = ElementEntries{};
-  }
+                               const QuadratureOptions& quadrature, CellRange cells, const ElementSink& sink) {
+  assemble_cells(
+      mesh, geometry, form, layout, fixed_values, quadrature, cells,
+      [&](int, const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke, const Eigen::VectorXd& Fe) {
+        sink(order, Ke, Fe);
+      },
+      [](int) -> Eigen::VectorXd* { return nullptr; });
 }
 
 namespace {

@@ -1,6 +1,8 @@
 #pragma once
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <functional>
+#include <utility>
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
@@ -41,21 +43,15 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
                       const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
                       Eigen::VectorXd& rhs, Eigen::VectorXd* integrals = nullptr);
 
-// Element contributions of some cells, in global free-dof numbers: the entries (rows[k],
-// cols[k], values[k]) of the full (both triangles) matrix and (rhs_rows[k], rhs_values[k]) of
-// the load, repeated indices to be added (PETSc's MatSetValuesCOO with ADD_VALUES).
-struct ElementEntries {
-  std::vector<int> rows, cols;
-  std::vector<double> values;
-  std::vector<int> rhs_rows;
-  std::vector<double> rhs_values;
-};
-
-// The same integration as assemble_poisson, restricted to `cells`, as entries to be added:
-// for a matrix no process holds whole. Same errors.
+// The same integration as assemble_poisson, restricted to `cells`, handed cell by cell to
+// `sink`: the cell's free dofs as sorted (dof, local index) pairs, its element matrix (over all
+// its alive functions) and its load with the Dirichlet lifting applied. For a matrix no process
+// holds whole. The sink is called from several threads at once. Same errors.
+using ElementSink = std::function<void(const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke,
+                                       const Eigen::VectorXd& Fe)>;
 void assemble_poisson_elements(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                                const DofLayout& layout, const Eigen::VectorXd& fixed_values,
-                               const QuadratureOptions& quadrature, CellRange cells, ElementEntries& out);
+                               const QuadratureOptions& quadrature, CellRange cells, const ElementSink& sink);
 
 // Adds the Neumann terms (h phi_i over the Neumann sides) to rhs (free dofs).
 void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,

@@ -7,6 +7,7 @@
 
 #include <Eigen/SparseCore>
 #include <memory>
+#include <mutex>
 
 #include "solver/assemble_poisson.hpp"
 #include "solver/input_error.hpp"
@@ -47,6 +48,35 @@ CellRange cells_of_rank(int num_cells, ParallelWorld world) {
 }
 
 namespace {
+
+// PETSc's preallocation of rows [first_row, last_row): per row, the free dofs it couples with
+// (the functions of the cells around it) in columns of those rows and in the others. A stamp
+// per column and row instead of sets: each row costs the size of its cells' function lists.
+void count_row_nonzeros(const BezierMesh& mesh, const DofLayout& layout, int first_row, int last_row,
+                        std::vector<int>& diagonal, std::vector<int>& off_diagonal) {
+  const int rows = last_row - first_row;
+  std::vector<std::vector<int>> cells_of_row(rows);
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    for (int f : mesh.functions(c)) {
+      const int d = layout.dof[f];
+      if (d >= first_row && d < last_row) cells_of_row[d - first_row].push_back(c);
+    }
+  diagonal.assign(rows, 0);
+  off_diagonal.assign(rows, 0);
+#pragma omp parallel
+  {
+    std::vector<int> stamp(layout.num_free(), -1);
+#pragma omp for schedule(dynamic, 256)
+    for (int r = 0; r < rows; ++r)
+      for (int c : cells_of_row[r])
+        for (int f : mesh.functions(c)) {
+          const int d = layout.dof[f];
+          if (d < 0 || stamp[d] == r) continue;
+          stamp[d] = r;
+          ++(d >= first_row && d < last_row ? diagonal[r] : off_diagonal[r]);
+        }
+  }
+}
 
 bool has_boundary(const BezierMesh& mesh) {
   for (int c = 0; c < mesh.num_cells(); ++c)
@@ -89,36 +119,64 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
   const CellRange mine = cells_of_rank(mesh.num_cells(), world);
   sol.timings.setup = seconds_since(t);
 
-  say("assembly");
-  t = clock::now();
-  ElementEntries entries;
-  on_all_ranks([&] {
-    assemble_poisson_elements(mesh, geometry, form, layout, fixed_values, options.quadrature, mine, entries);
-    if (world.rank == 0) {  // the boundary's few terms, once
-      Eigen::VectorXd neumann = Eigen::VectorXd::Zero(layout.num_free());
-      add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, neumann);
-      for (int d = 0; d < layout.num_free(); ++d)
-        if (neumann[d] != 0) entries.rhs_rows.push_back(d), entries.rhs_values.push_back(neumann[d]);
-    }
-  });
-  sol.timings.assembly = seconds_since(t);
-
   sol.coefficients = fixed_values;
   if (layout.num_free() > 0) {
+    say("assembly");
+    t = clock::now();
+    const int n = layout.num_free();
+    const int first_row = static_cast<int>(long(n) * world.rank / world.size);
+    const int last_row = static_cast<int>(long(n) * (world.rank + 1) / world.size);
+    std::vector<int> diagonal_nonzeros, off_diagonal_nonzeros;
+    count_row_nonzeros(mesh, layout, first_row, last_row, diagonal_nonzeros, off_diagonal_nonzeros);
+    std::unique_ptr<DistributedSystem> system;
+    on_all_ranks([&] {
+      system = make_distributed_system(n, first_row, last_row, diagonal_nonzeros, off_diagonal_nonzeros);
+    });
+    diagonal_nonzeros = off_diagonal_nonzeros = {};
+    // The cells' blocks go to PETSc one at a time (MatSetValues is not thread-safe); the
+    // threads integrate the next cells meanwhile.
+    std::mutex into_petsc;
+    on_all_ranks([&] {
+      assemble_poisson_elements(
+          mesh, geometry, form, layout, fixed_values, options.quadrature, mine,
+          [&](const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke, const Eigen::VectorXd& Fe) {
+            const int m = static_cast<int>(order.size());
+            std::vector<int> dofs(m);
+            Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block(m, m);
+            Eigen::VectorXd load(m);
+            for (int a = 0; a < m; ++a) {
+              dofs[a] = order[a].first;
+              load[a] = Fe[order[a].second];
+              for (int b = 0; b < m; ++b) block(a, b) = Ke(order[a].second, order[b].second);
+            }
+            const std::lock_guard<std::mutex> one_at_a_time(into_petsc);
+            system->add(m, dofs.data(), block.data(), load.data());
+          });
+      if (world.rank == 0) {  // the boundary's few terms, once
+        Eigen::VectorXd neumann = Eigen::VectorXd::Zero(n);
+        add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, neumann);
+        std::vector<int> rows;
+        std::vector<double> values;
+        for (int d = 0; d < n; ++d)
+          if (neumann[d] != 0) rows.push_back(d), values.push_back(neumann[d]);
+        system->add_load(static_cast<int>(rows.size()), rows.data(), values.data());
+      }
+    });
+    on_all_ranks([&] { system->finish_assembly(); });
+    sol.timings.assembly = seconds_since(t);
+
     // knotwork's own preconditioner as a PCShell: built on every rank from what it needs of
-    // the matrix, the diagonal (summed over the ranks' entries).
+    // the matrix, the diagonal.
     std::unique_ptr<Preconditioner> shell;
     DistributedSolveOptions solve_options = petsc;
     if (petsc.preconditioner == "shell") {
       say("preconditioner");
       t = clock::now();
-      Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(layout.num_free());
-      for (size_t k = 0; k < entries.rows.size(); ++k)
-        if (entries.rows[k] == entries.cols[k]) diagonal[entries.rows[k]] += entries.values[k];
-      sum_over_ranks(diagonal.data(), layout.num_free());
-      Eigen::SparseMatrix<double> diagonal_matrix(layout.num_free(), layout.num_free());
+      Eigen::VectorXd diagonal;
+      on_all_ranks([&] { diagonal = system->diagonal(); });
+      Eigen::SparseMatrix<double> diagonal_matrix(n, n);
       std::vector<Eigen::Triplet<double>> d;
-      for (int i = 0; i < layout.num_free(); ++i) d.emplace_back(i, i, diagonal[i]);
+      for (int i = 0; i < n; ++i) d.emplace_back(i, i, diagonal[i]);
       diagonal_matrix.setFromTriplets(d.begin(), d.end());
       on_all_ranks([&] {
         if (options.preconditioner) shell = options.preconditioner(layout, diagonal_matrix);
@@ -132,14 +190,13 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
     DistributedSolveResult r;
     on_all_ranks([&] {
       try {
-        r = solve_distributed(layout.num_free(), entries, solve_options);
+        r = system->solve(solve_options);
       } catch (const std::invalid_argument& e) {  // the user's options
         throw std::invalid_argument(std::string("[solver] petsc_options: ") + e.what());
       }
     });
-    entries = ElementEntries{};
+    system.reset();
     sol.matrix_nonzeros = r.global_nonzeros;
-    sol.timings.assembly += r.matrix_seconds;
     sol.timings.preconditioner += r.setup_seconds;
     sol.timings.iterations = r.solve_seconds;
     sol.iterative.iterations = r.iterations;

@@ -89,9 +89,11 @@ void broadcast_from_first(std::string& text) {
   if (launched_world().size > 1) api().broadcast(text);
 }
 
-DistributedSolveResult solve_distributed(int num_free, const ElementEntries& local,
-                                         const DistributedSolveOptions& options) {
-  return api().solve(num_free, local, options);
+std::unique_ptr<DistributedSystem> make_distributed_system(int num_free, int first_row, int last_row,
+                                                           const std::vector<int>& diagonal_nonzeros,
+                                                           const std::vector<int>& off_diagonal_nonzeros) {
+  return std::unique_ptr<DistributedSystem>(
+      api().make_system(num_free, first_row, last_row, diagonal_nonzeros, off_diagonal_nonzeros));
 }
 
 }  // namespace knotwork

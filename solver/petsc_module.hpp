@@ -5,6 +5,7 @@
 // here names a PETSc type: only the module links PETSc and MPI, and only runs that ask for
 // them load their ~85 libraries.
 #include <Eigen/Core>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -67,10 +68,30 @@ struct DistributedSolveResult {
   double matrix_seconds = 0, setup_seconds = 0, solve_seconds = 0;  // max over ranks
 };
 
-// Solves A x = b for the num_free free dofs, A and b given by every rank's share of entries
-// (added up, wherever they are stored): a MATMPIAIJ with PETSc's row distribution, built from
-// the entries (MatSetPreallocationCOO/MatSetValuesCOO), b likewise, then KSPSolve. Collective.
-DistributedSolveResult solve_distributed(int num_free, const ElementEntries& local,
-                                         const DistributedSolveOptions& options);
+// The distributed matrix and load (a preallocated MATMPIAIJ and its vector), owned rows
+// [first_row, last_row) on this rank; diagonal_nonzeros / off_diagonal_nonzeros: per owned row,
+// its entries in columns this rank owns and in the others (PETSc's d_nnz, o_nnz). Entries of
+// rows another rank owns are sent there at finish_assembly (MatSetValues with ADD_VALUES).
+class DistributedSystem {
+ public:
+  virtual ~DistributedSystem() = default;
+  // Adds an element: m free dofs (global numbers), Ke (m x m, row-major), Fe (m). Not
+  // thread-safe: one caller at a time.
+  virtual void add(int m, const int* dofs, const double* Ke, const double* Fe) = 0;
+  virtual void add_load(int n, const int* dofs, const double* values) = 0;
+  // Collective: sends the entries of rows owned elsewhere; afterwards nothing can be added.
+  virtual void finish_assembly() = 0;
+  // Collective: the matrix's diagonal, every free dof, on every rank.
+  virtual Eigen::VectorXd diagonal() = 0;
+  // Collective: solves, with the solution gathered on every rank.
+  virtual DistributedSolveResult solve(const DistributedSolveOptions& options) = 0;
+  // Seconds this rank spent in add, add_load and finish_assembly (PETSc's share of assembly).
+  virtual double assembly_seconds() const = 0;
+};
+
+// Collective. Throws std::runtime_error when PETSc fails (naming what it was doing).
+std::unique_ptr<DistributedSystem> make_distributed_system(int num_free, int first_row, int last_row,
+                                                           const std::vector<int>& diagonal_nonzeros,
+                                                           const std::vector<int>& off_diagonal_nonzeros);
 
 }  // namespace knotwork

@@ -12,7 +12,8 @@ struct PetscModuleApi {
   ParallelWorld (*world)();
   void (*reduce)(double* values, int n, bool maximum);
   std::optional<RankFailure> (*agree_on_failure)(int kind, const std::string& message);
-  DistributedSolveResult (*solve)(int num_free, const ElementEntries& local, const DistributedSolveOptions& options);
+  DistributedSystem* (*make_system)(int num_free, int first_row, int last_row, const std::vector<int>& diagonal_nonzeros,
+                                    const std::vector<int>& off_diagonal_nonzeros);
   void (*broadcast)(std::string& text);
   Preconditioner* (*boomeramg)(const Eigen::SparseMatrix<double>& lower, const std::string& petsc_options);
 };

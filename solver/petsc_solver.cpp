@@ -94,23 +94,6 @@ PetscErrorCode apply_shell(PC pc, Vec x, Vec y) {
   return 0;
 }
 
-// What one solve creates, destroyed on every path.
-struct Objects {
-  Mat A = nullptr;
-  Vec b = nullptr, x = nullptr, r = nullptr, all = nullptr;
-  KSP ksp = nullptr;
-  VecScatter gather = nullptr;
-  ~Objects() {
-    VecScatterDestroy(&gather);
-    VecDestroy(&all);
-    VecDestroy(&r);
-    VecDestroy(&x);
-    VecDestroy(&b);
-    KSPDestroy(&ksp);
-    MatDestroy(&A);
-  }
-};
-
 // -log_view is PETSc's own (no prefix): taken out of the options, it starts PETSc's event
 // log for this solve and prints the summary on stderr at its end (stdout may carry JSON).
 bool take_log_view(std::string& options) {
@@ -125,39 +108,128 @@ bool take_log_view(std::string& options) {
   return found;
 }
 
-DistributedSolveResult solve(int num_free, const ElementEntries& local, const DistributedSolveOptions& asked) {
-  initialize_petsc();
+// Every entry of a distributed vector, on every rank.
+Eigen::VectorXd gather_on_all(Vec v) {
+  VecScatter gather = nullptr;
+  Vec all = nullptr;
+  check(VecScatterCreateToAll(v, &gather, &all), "gather");
+  Eigen::VectorXd result;
+  PetscErrorCode code = VecScatterBegin(gather, v, all, INSERT_VALUES, SCATTER_FORWARD);
+  if (!code) code = VecScatterEnd(gather, v, all, INSERT_VALUES, SCATTER_FORWARD);
+  const PetscScalar* values = nullptr;
+  PetscInt n = 0;
+  if (!code) code = VecGetSize(all, &n);
+  if (!code) code = VecGetArrayRead(all, &values);
+  if (!code) {
+    result = Eigen::Map<const Eigen::VectorXd>(values, n);
+    code = VecRestoreArrayRead(all, &values);
+  }
+  VecScatterDestroy(&gather);
+  VecDestroy(&all);
+  check(code, "gather");
+  return result;
+}
+
+class PetscSystem final : public DistributedSystem {
+ public:
+  PetscSystem(int num_free, int first_row, int last_row, const std::vector<int>& diagonal_nonzeros,
+              const std::vector<int>& off_diagonal_nonzeros) {
+    static_assert(sizeof(PetscInt) == sizeof(int), "PETSc with 32-bit indices (Debian's petsc-dev)");
+    initialize_petsc();
+    try {
+      const PetscInt local = last_row - first_row;
+      check(MatCreate(PETSC_COMM_WORLD, &A_), "matrix");
+      check(MatSetSizes(A_, local, local, num_free, num_free), "matrix sizes");
+      check(MatSetType(A_, MATAIJ), "matrix type");
+      check(MatSeqAIJSetPreallocation(A_, 0, diagonal_nonzeros.data()), "matrix preallocation");
+      check(MatMPIAIJSetPreallocation(A_, 0, diagonal_nonzeros.data(), 0, off_diagonal_nonzeros.data()),
+            "matrix preallocation");
+      // An entry outside the preallocated pattern is knotwork's error, not a slow path.
+      check(MatSetOption(A_, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE), "matrix option");
+      check(VecCreateMPI(PETSC_COMM_WORLD, local, num_free, &b_), "load");
+    } catch (...) {
+      release();
+      throw;
+    }
+  }
+  ~PetscSystem() override { release(); }
+
+  void add(int m, const int* dofs, const double* Ke, const double* Fe) override {
+    const auto t = std::chrono::steady_clock::now();
+    check(MatSetValues(A_, m, dofs, m, dofs, Ke, ADD_VALUES), "matrix values");
+    check(VecSetValues(b_, m, dofs, Fe, ADD_VALUES), "load values");
+    assembly_seconds_ += seconds_since(t);
+  }
+  void add_load(int n, const int* dofs, const double* values) override {
+    check(VecSetValues(b_, n, dofs, values, ADD_VALUES), "load values");
+  }
+  void finish_assembly() override {
+    const auto t = std::chrono::steady_clock::now();
+    check(MatAssemblyBegin(A_, MAT_FINAL_ASSEMBLY), "matrix assembly");
+    check(MatAssemblyEnd(A_, MAT_FINAL_ASSEMBLY), "matrix assembly");
+    check(VecAssemblyBegin(b_), "load assembly");
+    check(VecAssemblyEnd(b_), "load assembly");
+    check(MatSetOption(A_, MAT_SYMMETRIC, PETSC_TRUE), "matrix symmetry");
+    check(MatSetOption(A_, MAT_SPD, PETSC_TRUE), "matrix definiteness");
+    assembly_seconds_ += seconds_since(t);
+  }
+  Eigen::VectorXd diagonal() override {
+    Vec d = nullptr;
+    check(VecDuplicate(b_, &d), "diagonal");
+    PetscErrorCode code = MatGetDiagonal(A_, d);
+    Eigen::VectorXd result;
+    if (!code) {
+      try {
+        result = gather_on_all(d);
+      } catch (...) {
+        VecDestroy(&d);
+        throw;
+      }
+    }
+    VecDestroy(&d);
+    check(code, "diagonal");
+    return result;
+  }
+  double assembly_seconds() const override { return assembly_seconds_; }
+  DistributedSolveResult solve(const DistributedSolveOptions& asked) override;
+
+ private:
+  void release() {
+    VecDestroy(&b_);
+    MatDestroy(&A_);
+  }
+  Mat A_ = nullptr;
+  Vec b_ = nullptr;
+  double assembly_seconds_ = 0;
+};
+
+// What one solve creates, destroyed on every path.
+struct SolveObjects {
+  Vec x = nullptr, r = nullptr;
+  KSP ksp = nullptr;
+  ~SolveObjects() {
+    VecDestroy(&r);
+    VecDestroy(&x);
+    KSPDestroy(&ksp);
+  }
+};
+
+DistributedSolveResult PetscSystem::solve(const DistributedSolveOptions& asked) {
   using clock = std::chrono::steady_clock;
   DistributedSolveOptions options = asked;
   const bool log_view = take_log_view(options.petsc_options);
   if (log_view) check(PetscLogDefaultBegin(), "-log_view");
   DistributedSolveResult result;
-  Objects o;
-  auto t = clock::now();
-  // PETSc may reorder the index arrays it is given: copies.
-  std::vector<PetscInt> rows(local.rows.begin(), local.rows.end()), cols(local.cols.begin(), local.cols.end());
-  check(MatCreate(PETSC_COMM_WORLD, &o.A), "matrix");
-  check(MatSetSizes(o.A, PETSC_DECIDE, PETSC_DECIDE, num_free, num_free), "matrix sizes");
-  check(MatSetType(o.A, MATAIJ), "matrix type");
-  check(MatSetPreallocationCOO(o.A, static_cast<PetscCount>(rows.size()), rows.data(), cols.data()),
-        "matrix preallocation");
-  check(MatSetValuesCOO(o.A, local.values.data(), ADD_VALUES), "matrix values");
-  check(MatSetOption(o.A, MAT_SYMMETRIC, PETSC_TRUE), "matrix symmetry");
-  check(MatSetOption(o.A, MAT_SPD, PETSC_TRUE), "matrix definiteness");
-  check(MatCreateVecs(o.A, &o.x, &o.b), "vectors");
-  std::vector<PetscInt> rhs_rows(local.rhs_rows.begin(), local.rhs_rows.end());
-  check(VecSetValues(o.b, static_cast<PetscInt>(rhs_rows.size()), rhs_rows.data(), local.rhs_values.data(), ADD_VALUES),
-        "load");
-  check(VecAssemblyBegin(o.b), "load");
-  check(VecAssemblyEnd(o.b), "load");
+  SolveObjects o;
   MatInfo info;
-  check(MatGetInfo(o.A, MAT_GLOBAL_SUM, &info), "matrix info");
+  check(MatGetInfo(A_, MAT_GLOBAL_SUM, &info), "matrix info");
   result.global_nonzeros = static_cast<long>(info.nz_used);
-  result.matrix_seconds = seconds_since(t);
+  result.matrix_seconds = assembly_seconds_;
+  check(VecDuplicate(b_, &o.x), "solution");
 
-  t = clock::now();
+  auto t = clock::now();
   check(KSPCreate(PETSC_COMM_WORLD, &o.ksp), "KSP");
-  check(KSPSetOperators(o.ksp, o.A, o.A), "KSP operators");
+  check(KSPSetOperators(o.ksp, A_, A_), "KSP operators");
   check(KSPSetType(o.ksp, KSPCG), "KSP type");
   PC pc;
   check(KSPGetPC(o.ksp, &pc), "PC");
@@ -165,7 +237,7 @@ DistributedSolveResult solve(int num_free, const ElementEntries& local, const Di
   if (options.preconditioner == "shell") {
     if (!options.shell) throw std::logic_error("solve_distributed: a shell preconditioner without one");
     shell.preconditioner = options.shell;
-    check(VecScatterCreateToAll(o.b, &shell.gather, &shell.all), "shell gather");
+    check(VecScatterCreateToAll(b_, &shell.gather, &shell.all), "shell gather");
     check(PCSetType(pc, PCSHELL), "PCSHELL");
     check(PCShellSetContext(pc, &shell), "PCSHELL");
     check(PCShellSetApply(pc, apply_shell), "PCSHELL");
@@ -197,7 +269,7 @@ DistributedSolveResult solve(int num_free, const ElementEntries& local, const Di
   result.setup_seconds = seconds_since(t);
 
   t = clock::now();
-  check(KSPSolve(o.ksp, o.b, o.x), "solve");
+  check(KSPSolve(o.ksp, b_, o.x), "solve");
   result.solve_seconds = seconds_since(t);
   KSPConvergedReason reason;
   check(KSPGetConvergedReason(o.ksp, &reason), "converged reason");
@@ -206,11 +278,11 @@ DistributedSolveResult solve(int num_free, const ElementEntries& local, const Di
   check(KSPGetIterationNumber(o.ksp, &result.iterations), "iterations");
   // The true residual, whatever norm the chosen KSP watched.
   PetscReal norm_b = 0, norm_r = 0;
-  check(VecDuplicate(o.b, &o.r), "residual");
-  check(MatMult(o.A, o.x, o.r), "residual");
-  check(VecAYPX(o.r, -1.0, o.b), "residual");
+  check(VecDuplicate(b_, &o.r), "residual");
+  check(MatMult(A_, o.x, o.r), "residual");
+  check(VecAYPX(o.r, -1.0, b_), "residual");
   check(VecNorm(o.r, NORM_2, &norm_r), "residual");
-  check(VecNorm(o.b, NORM_2, &norm_b), "residual");
+  check(VecNorm(b_, NORM_2, &norm_b), "residual");
   result.relative_residual = norm_b > 0 ? norm_r / norm_b : norm_r;
   KSPType ksp_type;
   PCType pc_type;
@@ -223,19 +295,17 @@ DistributedSolveResult solve(int num_free, const ElementEntries& local, const Di
     check(PCFactorGetMatSolverType(pc, &package), "factor package");
     if (package) result.factor_package = package;
   }
-
-  check(VecScatterCreateToAll(o.x, &o.gather, &o.all), "gather");
-  check(VecScatterBegin(o.gather, o.x, o.all, INSERT_VALUES, SCATTER_FORWARD), "gather");
-  check(VecScatterEnd(o.gather, o.x, o.all, INSERT_VALUES, SCATTER_FORWARD), "gather");
-  const PetscScalar* values = nullptr;
-  check(VecGetArrayRead(o.all, &values), "gather");
-  result.solution = Eigen::Map<const Eigen::VectorXd>(values, num_free);
-  check(VecRestoreArrayRead(o.all, &values), "gather");
+  result.solution = gather_on_all(o.x);
   if (log_view) check(PetscLogView(PETSC_VIEWER_STDERR_WORLD), "-log_view");
   double times[3] = {result.matrix_seconds, result.setup_seconds, result.solve_seconds};
   reduce(times, 3, true);
   result.matrix_seconds = times[0], result.setup_seconds = times[1], result.solve_seconds = times[2];
   return result;
+}
+
+DistributedSystem* make_system(int num_free, int first_row, int last_row, const std::vector<int>& diagonal_nonzeros,
+                               const std::vector<int>& off_diagonal_nonzeros) {
+  return new PetscSystem(num_free, first_row, last_row, diagonal_nonzeros, off_diagonal_nonzeros);
 }
 
 }  // namespace
@@ -246,7 +316,7 @@ Preconditioner* make_boomeramg(const Eigen::SparseMatrix<double>& lower, const s
 
 // The module's one entry point, found by name (dlsym); C++ exceptions pass through its functions.
 extern "C" __attribute__((visibility("default"))) const knotwork::PetscModuleApi* knotwork_petsc_api() {
-  static const knotwork::PetscModuleApi api{knotwork::world, knotwork::reduce, knotwork::agree, knotwork::solve,
-                                            knotwork::broadcast, knotwork::make_boomeramg};
+  static const knotwork::PetscModuleApi api{knotwork::world,      knotwork::reduce,    knotwork::agree,
+                                            knotwork::make_system, knotwork::broadcast, knotwork::make_boomeramg};
   return &api;
 }
