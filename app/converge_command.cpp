@@ -13,6 +13,7 @@
 #include "app/report.hpp"
 #include "app/svg_plot.hpp"
 #include "solver/input_error.hpp"
+#include "solver/distributed_poisson.hpp"
 #include "solver/petsc_module.hpp"
 #include "solver/vtk_output.hpp"
 
@@ -41,8 +42,17 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
   if (num_levels < 1 || num_levels > 12) throw InputError("--levels: must be in [1, 12], got " + std::to_string(num_levels));
   if (family.check_converge) family.check_converge(c, num_levels);
   if (!c.problem.exact) throw InputError(c.path + ": [problem] exact: a convergence study needs the exact solution");
+  // Under mpirun, rank 0 makes the output folder (and says to all if it cannot) and writes
+  // the tables; every rank writes its piece of each level.
+  const ParallelWorld world = launched_world();
+  const bool writes = output_directory != nullptr;
   std::optional<OutputStage> stage;
-  if (output_directory) stage.emplace(*output_directory);
+  if (world.size > 1 && writes)
+    on_all_ranks([&] {
+      if (world.rank == 0) stage.emplace(*output_directory);
+    });
+  else if (writes)
+    stage.emplace(*output_directory);
   ConvergeOutcome out;
   std::vector<ConvergeLevel>& levels = out.levels;
   std::vector<std::pair<double, std::string>> pvd, pvd_sampled;
@@ -85,13 +95,29 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
       lv.h1_rate = std::log(prev.h1_semi / lv.h1_semi) / std::log(prev.h / lv.h);
     }
     const std::string name = "level_" + std::to_string(l);
-    if (stage) say("writing ParaView output");
-    if (stage && c.write_bezier) {
+    if (writes) say("writing ParaView output");
+    if (writes && world.size > 1) {
+      const int cells = space->mesh().num_cells();
+      const CellFields errors{{"h1_error_squared", s.cell_h1_squared}};
+      if (c.write_bezier)
+        pvd.emplace_back(l, write_pieces(stage ? &*stage : nullptr, world, name, cells,
+                                         [&](const std::string& path, CellRange mine, const PieceSummary* sum) {
+                                           write_bezier_vtu(path, space->mesh(), space->geometry(), s.coefficients,
+                                                            exact, errors, s.exact_mean, mine, sum);
+                                         }));
+      if (c.write_sampled)
+        pvd_sampled.emplace_back(l, write_pieces(stage ? &*stage : nullptr, world, name + "_sampled", cells,
+                                                 [&](const std::string& path, CellRange mine, const PieceSummary* sum) {
+                                                   write_sampled_vtu(path, space->mesh(), space->geometry(),
+                                                                     s.coefficients, exact, c.samples, s.exact_mean,
+                                                                     mine, sum);
+                                                 }));
+    } else if (stage && c.write_bezier) {
       write_bezier_vtu(stage->stage(name + ".vtu"), space->mesh(), space->geometry(), s.coefficients, exact,
                        {{"h1_error_squared", s.cell_h1_squared}}, s.exact_mean);
       pvd.emplace_back(l, name + ".vtu");
     }
-    if (stage && c.write_sampled) {
+    if (world.size == 1 && stage && c.write_sampled) {
       write_sampled_vtu(stage->stage(name + "_sampled.vtu"), space->mesh(), space->geometry(), s.coefficients, exact,
                         c.samples, s.exact_mean);
       pvd_sampled.emplace_back(l, name + "_sampled.vtu");
@@ -163,10 +189,7 @@ int converge_command(const ConvergeOptions& o) {
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);
-  // Under mpirun, rank 0 alone writes.
-  const bool writer = launched_world().rank == 0;
-  const ConvergeOutcome r =
-      converge_study(c, o.levels, ordering, writer ? &directory : nullptr, [&](const std::string& w) { progress(w); });
+  const ConvergeOutcome r = converge_study(c, o.levels, ordering, &directory, [&](const std::string& w) { progress(w); });
   if (o.json) {
     std::printf("%s\n", r.json.dump().c_str());
     return 0;

@@ -32,6 +32,25 @@ double RunOutcome::total_without_output() const {
   return tm.setup + tm.assembly + tm.analysis + tm.factorization + tm.solve + tm.preconditioner + tm.iterations + tm.errors;
 }
 
+std::string write_pieces(OutputStage* stage, ParallelWorld world, const std::string& base, int num_cells,
+                         const PieceWriter& write) {
+  std::vector<std::string> pieces;
+  for (int r = 0; r < world.size; ++r) pieces.push_back(base + "_" + std::to_string(r) + ".vtu");
+  // Rank 0 stages every name (so that an interrupt or a failure removes them all) and tells
+  // the others where its staging folder is.
+  std::string folder;
+  PieceSummary summary;
+  if (stage) {
+    for (const std::string& piece : pieces) folder = std::filesystem::path(stage->stage(piece)).parent_path().string();
+    summary = PieceSummary{stage->stage(base + ".pvtu"), pieces};
+  }
+  broadcast_from_first(folder);
+  const std::string path = (std::filesystem::path(folder) / pieces[world.rank]).string();
+  const CellRange mine = cells_of_rank(num_cells, world);
+  on_all_ranks([&] { write(path, mine, stage ? &summary : nullptr); });
+  return base + ".pvtu";
+}
+
 void write_run_output(const CaseDescription& c, const SplineSpace& space, const PoissonSolution& s, OutputStage& stage) {
   const ExactSolution* exact = c.problem.exact ? &*c.problem.exact : nullptr;
   CellFields cell_fields;
@@ -46,38 +65,23 @@ void write_run_output(const CaseDescription& c, const SplineSpace& space, const 
 
 namespace {
 
-// Under mpirun: every rank writes its cells (cells_of_rank) as a piece, rank 0 the .pvtu
-// summaries, into rank 0's staging folder; rank 0 moves them into place once all are written.
+// Under mpirun: write_run_output's files as pieces and .pvtu summaries.
 void write_run_pieces(const CaseDescription& c, const SplineSpace& space, const PoissonSolution& s,
                       OutputStage* stage, ParallelWorld world) {
   const ExactSolution* exact = c.problem.exact ? &*c.problem.exact : nullptr;
   CellFields cell_fields;
   if (s.cell_h1_squared.size() > 0) cell_fields.emplace_back("h1_error_squared", s.cell_h1_squared);
-  const CellRange mine = cells_of_rank(space.mesh().num_cells(), world);
-  for (const auto& [wanted, base] : {std::pair{c.write_bezier, "solution"}, std::pair{c.write_sampled, "solution_sampled"}}) {
-    if (!wanted) continue;
-    std::vector<std::string> pieces;
-    for (int r = 0; r < world.size; ++r) pieces.push_back(std::string(base) + "_" + std::to_string(r) + ".vtu");
-    // Rank 0 stages every name (so that an interrupt or a failure removes them all) and
-    // tells the others where its staging folder is.
-    std::string folder;
-    PieceSummary summary;
-    if (stage) {
-      for (const std::string& piece : pieces) folder = std::filesystem::path(stage->stage(piece)).parent_path().string();
-      summary = PieceSummary{stage->stage(std::string(base) + ".pvtu"), pieces};
-    }
-    broadcast_from_first(folder);
-    const std::string path = (std::filesystem::path(folder) / pieces[world.rank]).string();
-    const bool bezier = std::string(base) == "solution";  // (clang 14 captures no structured binding)
-    on_all_ranks([&] {
-      if (bezier)
-        write_bezier_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, cell_fields, s.exact_mean, mine,
-                         stage ? &summary : nullptr);
-      else
-        write_sampled_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, c.samples, s.exact_mean, mine,
-                          stage ? &summary : nullptr);
+  const int cells = space.mesh().num_cells();
+  if (c.write_bezier)
+    write_pieces(stage, world, "solution", cells, [&](const std::string& path, CellRange mine, const PieceSummary* sum) {
+      write_bezier_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, cell_fields, s.exact_mean, mine, sum);
     });
-  }
+  if (c.write_sampled)
+    write_pieces(stage, world, "solution_sampled", cells,
+                 [&](const std::string& path, CellRange mine, const PieceSummary* sum) {
+                   write_sampled_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, c.samples,
+                                     s.exact_mean, mine, sum);
+                 });
 }
 
 }  // namespace

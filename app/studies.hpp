@@ -5,6 +5,7 @@
 // `output_directory` null: nothing is written (the Python default); otherwise the files go
 // through an OutputStage, so a failed study leaves none behind.
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +14,8 @@
 #include "app/pipeline.hpp"
 #include "cases/json_output.hpp"
 #include "cases/output_files.hpp"
+#include "solver/petsc_module.hpp"
+#include "solver/vtk_output.hpp"
 
 namespace knotwork {
 
@@ -20,6 +23,13 @@ namespace knotwork {
 // case says, else through the family), solver method and tolerance ("" / 0: as [solver] says).
 void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance,
                    const std::string* petsc_options = nullptr);
+
+// Under mpirun: every rank writes its cells of one output (cells_of_rank) as the piece
+// `<base>_<rank>.vtu`, into rank 0's staging folder (`stage`, null on the other ranks), and rank
+// 0 also `<base>.pvtu`, which names them all; returns that name. Collective.
+using PieceWriter = std::function<void(const std::string& path, CellRange cells, const PieceSummary* summary)>;
+std::string write_pieces(OutputStage* stage, ParallelWorld world, const std::string& base, int num_cells,
+                         const PieceWriter& write);
 
 struct RunOutcome {
   std::unique_ptr<SplineSpace> space;

@@ -4,7 +4,8 @@
 - `mpirun -n 2 knotwork run --solver petsc` writes a piece per rank and a .pvtu summary for
   each output of a serial run (no staging folder left), prints one summary, and VTK's own
   parallel reader reads every cell of the serial output back from the .pvtu, with the
-  Bezier cells' rational weights and degrees as active attributes.
+  Bezier cells' rational weights and degrees as active attributes. `converge` on 2 ranks
+  writes a .pvd over the levels' .pvtu files, each with every cell of its level.
 - A PETSc option nobody reads, a serial method under mpirun, and a command that does not run
   under mpirun each get exit code 2 and exactly one error line (rank 0's), not one per rank.
 
@@ -30,6 +31,10 @@ def read_back(pvtu):
     weights = grid.GetPointData().GetRationalWeights()
     return {"cells": grid.GetNumberOfCells(), "weights": weights.GetName() if weights else None,
             "degrees": grid.GetCellData().GetHigherOrderDegrees() is not None}
+
+
+def elements_of(case):
+    return int(re.search(r"^elements\s*=\s*(\d+)", open(case).read(), re.M).group(1))
 
 
 def cells_of(vtu):
@@ -67,7 +72,27 @@ def main():
                 failures.append(f"{name}: serial {cells} cells, pieces {pieces}, read from the .pvtu {read['cells']}")
             if name == "solution.vtu" and (read["weights"] != "RationalWeights" or not read["degrees"]):
                 failures.append(f"solution.pvtu: read without the Bezier attributes: {read}")
-        leftovers = [n for n in os.listdir(scratch) if n not in ("serial", "parallel")]
+        # converge: a .pvd over the levels' .pvtu files, each read back whole.
+        levels = os.path.join(scratch, "levels")
+        done = subprocess.run([MPIRUN, "-n", "2", binary, "converge", case, "--levels", "2", "-q", "--solver", "petsc",
+                               "--out", levels], env=env, capture_output=True, text=True, timeout=300)
+        if done.returncode != 0:
+            failures.append(f"mpirun -n 2 converge: exit {done.returncode}: {done.stderr}")
+        else:
+            with open(os.path.join(levels, "convergence.pvd")) as f:
+                listed = re.findall(r'file="([^"]+)"', f.read())
+            if listed != ["level_0.pvtu", "level_1.pvtu"]:
+                failures.append(f"convergence.pvd lists {listed}")
+            for level, name in enumerate(listed):
+                serial_level = os.path.join(scratch, f"serial_level_{level}")
+                subprocess.run([binary, "run", case, "-q", "--out", serial_level, "--elements",
+                                str(elements_of(case) * 2 ** level)], check=True, env=env, capture_output=True,
+                               timeout=300)
+                cells = cells_of(os.path.join(serial_level, "solution.vtu"))
+                if os.path.exists(os.path.join(levels, name)) and read_back(os.path.join(levels, name))["cells"] != cells:
+                    failures.append(f"{name}: not the {cells} cells of the level")
+        leftovers = [n for n in os.listdir(scratch) if n not in ("serial", "parallel", "levels")
+                     and not n.startswith("serial_level_")]
         if leftovers:
             failures.append(f"left in the output's parent folder: {leftovers}")
 
@@ -86,8 +111,9 @@ def main():
         lines = [l for l in done.stderr.splitlines() if l.startswith("knotwork: error:")]
         if done.returncode != 2 or len(lines) != 1 or "only `run` and `converge`" not in lines[0]:
             failures.append(f"bench under mpirun: exit {done.returncode}, error lines {lines}")
-        if os.listdir(scratch) != [] and sorted(os.listdir(scratch)) != ["parallel", "serial"]:
-            failures.append(f"refused runs wrote {sorted(os.listdir(scratch))}")
+        expected_folders = {"parallel", "serial", "levels", "serial_level_0", "serial_level_1"}
+        if not set(os.listdir(scratch)) <= expected_folders:
+            failures.append(f"refused runs wrote {sorted(set(os.listdir(scratch)) - expected_folders)}")
     if failures:
         raise SystemExit("FAIL\n" + "\n".join(failures))
     print("output under mpirun as a serial run's; refusals: one line each, exit 2")
