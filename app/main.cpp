@@ -34,8 +34,9 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
         o.petsc_options = v;
         o.petsc_options_given = true;
       },
-      "PETSc options for --solver petsc (default \"-ksp_type cg -pc_type hypre\"; e.g. \"-ksp_type preonly -pc_type "
-      "cholesky -pc_factor_mat_solver_type mumps\") or for preconditioner boomeramg (overrides [solver] petsc_options)");
+      "PETSc options for --solver petsc (after its default: CG with [solver] preconditioner, the space's own or "
+      "BoomerAMG; e.g. \"-ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type mumps\", \"-log_view\") or "
+      "for preconditioner boomeramg (overrides [solver] petsc_options)");
   cmd->add_flag("--json", o.json, "Print one JSON object on stdout instead of the summary");
   cmd->add_flag("-q,--quiet", o.quiet, "No progress lines on stderr");
 }
