@@ -30,6 +30,15 @@ def mpi_environment():
     return env
 
 
+def under_mpirun(env, ranks):
+    """The environment for the processes of `mpirun -n ranks`: in the sanitizer build, its
+    options for two or more (scripts/sanitizers/environment.sh says why)."""
+    env = dict(env)
+    if ranks > 1 and "KNOTWORK_MPI_ASAN_OPTIONS" in env:
+        env["ASAN_OPTIONS"] = env["KNOTWORK_MPI_ASAN_OPTIONS"]
+    return env
+
+
 def run(command, env):
     done = subprocess.run(command, capture_output=True, text=True, env=env, timeout=300)
     if done.returncode != 0:
@@ -48,7 +57,7 @@ def main():
         command = [MPIRUN, "-n", str(ranks), "--oversubscribe"] + base + ["--solver", "petsc"]
         if options:
             command += ["--petsc-options", options]
-        got = run(command, env)
+        got = run(command, under_mpirun(env, ranks))
         what = f"{ranks} rank(s), {got['solver']['ksp']} + {got['solver']['pc']}"
         if got["ranks"] != ranks:
             failures.append(f"{what}: reports {got['ranks']} ranks")

@@ -18,7 +18,7 @@ import re
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_distributed import MPIRUN, mpi_environment  # noqa: E402
+from check_distributed import MPIRUN, mpi_environment, under_mpirun  # noqa: E402
 
 
 def read_back(pvtu):
@@ -46,11 +46,13 @@ def cells_of(vtu):
 
 def main():
     binary, case = sys.argv[1], sys.argv[2]
-    env = mpi_environment()
+    serial_env = mpi_environment()
+    env = under_mpirun(serial_env, 2)
     failures = []
     with tempfile.TemporaryDirectory() as scratch:
         serial, parallel = os.path.join(scratch, "serial"), os.path.join(scratch, "parallel")
-        subprocess.run([binary, "run", case, "-q", "--out", serial], check=True, env=env, capture_output=True, timeout=300)
+        subprocess.run([binary, "run", case, "-q", "--out", serial], check=True, env=serial_env, capture_output=True,
+                       timeout=300)
         done = subprocess.run([MPIRUN, "-n", "2", binary, "run", case, "-q", "--solver", "petsc", "--out", parallel],
                               env=env, capture_output=True, text=True, timeout=300)
         if done.returncode != 0:
@@ -86,7 +88,7 @@ def main():
             for level, name in enumerate(listed):
                 serial_level = os.path.join(scratch, f"serial_level_{level}")
                 subprocess.run([binary, "run", case, "-q", "--out", serial_level, "--elements",
-                                str(elements_of(case) * 2 ** level)], check=True, env=env, capture_output=True,
+                                str(elements_of(case) * 2 ** level)], check=True, env=serial_env, capture_output=True,
                                timeout=300)
                 cells = cells_of(os.path.join(serial_level, "solution.vtu"))
                 if os.path.exists(os.path.join(levels, name)) and read_back(os.path.join(levels, name))["cells"] != cells:
