@@ -78,13 +78,6 @@ void count_row_nonzeros(const BezierMesh& mesh, const DofLayout& layout, int fir
   }
 }
 
-bool has_boundary(const BezierMesh& mesh) {
-  for (int c = 0; c < mesh.num_cells(); ++c)
-    for (int b : mesh.cell(c).boundary)
-      if (b >= 0) return true;
-  return false;
-}
-
 }  // namespace
 
 PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const GeometryMap& geometry,
@@ -140,10 +133,14 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
       assemble_poisson_elements(
           mesh, geometry, form, layout, fixed_values, options.quadrature, mine,
           [&](const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke, const Eigen::VectorXd& Fe) {
+            // Per thread, reused from cell to cell (no allocation per cell once sizes settle).
+            thread_local std::vector<int> dofs;
+            thread_local Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block;
+            thread_local Eigen::VectorXd load;
             const int m = static_cast<int>(order.size());
-            std::vector<int> dofs(m);
-            Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block(m, m);
-            Eigen::VectorXd load(m);
+            dofs.resize(m);
+            block.resize(m, m);
+            load.resize(m);
             for (int a = 0; a < m; ++a) {
               dofs[a] = order[a].first;
               load[a] = Fe[order[a].second];

@@ -235,7 +235,7 @@ DistributedSolveResult PetscSystem::solve(const DistributedSolveOptions& asked) 
   check(KSPGetPC(o.ksp, &pc), "PC");
   ShellContext shell;
   if (options.preconditioner == "shell") {
-    if (!options.shell) throw std::logic_error("solve_distributed: a shell preconditioner without one");
+    if (!options.shell) throw std::logic_error("DistributedSystem::solve: a shell preconditioner without one");
     shell.preconditioner = options.shell;
     check(VecScatterCreateToAll(b_, &shell.gather, &shell.all), "shell gather");
     check(PCSetType(pc, PCSHELL), "PCSHELL");

@@ -9,14 +9,14 @@
 
 namespace knotwork {
 
-namespace {
-
 bool has_boundary(const BezierMesh& mesh) {
   for (int c = 0; c < mesh.num_cells(); ++c)
     for (int b : mesh.cell(c).boundary)
       if (b >= 0) return true;
   return false;
 }
+
+namespace {
 
 // Closed surface, reaction 0: the mass matrix gives the constant 1 in the basis (M one = the
 // integrals of the functions), hence the area and the mean of f; the stiffness matrix with

@@ -80,6 +80,9 @@ struct NotConverged : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Whether some cell side lies on the boundary (false: a closed surface).
+bool has_boundary(const BezierMesh& mesh);
+
 PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry,
                               const PoissonProblem& problem, const PoissonSolveOptions& options);
 
