@@ -65,17 +65,17 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     const auto say = [&](const std::string& what) { if (progress) progress(prefix + what); };
     say("building the space");
     const auto t0 = std::chrono::steady_clock::now();
-    const std::unique_ptr<SplineSpace> space = family.build(c, l, say);
+    const std::unique_ptr<SplineSpace> space = build_space(c, l, say);
     if (l == 0) description = space->description();
     SolverReport solver;
     const PoissonSolution s = solve_case(c, *space, ordering, say, &solver);
     if (l == 0) first_solver = solver;
     if (solver.method == "iterative") iterative_solver = solver, ++iterative_levels;
     ConvergeLevel lv;
-    lv.h = space->mesh_size();
+    lv.h = global_mesh_size(*space);
     lv.dofs = s.num_functions;
     lv.free = s.num_free;
-    lv.cells = space->mesh().num_cells();
+    lv.cells = global_num_cells(*space);
     lv.l2 = s.errors->l2;
     lv.h1_semi = s.errors->h1_semi;
     lv.h1 = s.errors->h1;
@@ -97,7 +97,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     const std::string name = "level_" + std::to_string(l);
     if (writes) say("writing ParaView output");
     if (writes && world.size > 1) {
-      const int cells = space->mesh().num_cells();
+      const CellRange cells = cells_to_write(*space, world);
       const CellFields errors{{"h1_error_squared", s.cell_h1_squared}};
       if (c.write_bezier)
         pvd.emplace_back(l, write_pieces(stage ? &*stage : nullptr, world, name, cells,

@@ -10,7 +10,33 @@
 namespace knotwork {
 
 std::unique_ptr<SplineSpace> build_space(const CaseDescription& c, int level, const ProgressFunction& progress) {
-  return space_family(c).build(c, level, progress);
+  const SpaceFamily& family = space_family(c);
+  const ParallelWorld launched = launched_world();
+  if (launched.size > 1 && c.solver.method == "petsc" && family.build_part) {
+    std::unique_ptr<SplineSpace> part;
+    on_all_ranks([&] { part = family.build_part(c, level, launched.rank, launched.size, progress); });
+    return part;
+  }
+  std::unique_ptr<SplineSpace> space = family.build(c, level, progress);
+  if (launched.size > 1 && c.solver.method == "petsc" && space->mesh().num_cells() < launched.size)
+    throw InputError(c.path + ": [space]: the space has " + std::to_string(space->mesh().num_cells()) +
+                     " cells, fewer than the " + std::to_string(launched.size) + " processes that share them: use at most " +
+                     std::to_string(space->mesh().num_cells()) + " processes");
+  return space;
+}
+
+int global_num_cells(const SplineSpace& space) {
+  return space.part() ? space.part()->global_cells : space.mesh().num_cells();
+}
+
+double global_mesh_size(const SplineSpace& space) {
+  double h = space.mesh_size();
+  if (space.part()) max_over_ranks(&h, 1);
+  return h;
+}
+
+CellRange cells_to_write(const SplineSpace& space, ParallelWorld world) {
+  return space.part() ? space.part()->owned : cells_of_rank(space.mesh().num_cells(), world);
 }
 
 namespace {
@@ -123,7 +149,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
                                  : "shell";
       petsc.tolerance = c.solver.petsc_tolerance();
       petsc.max_iterations = c.solver.max_iterations;
-      return solve_poisson_distributed(space.mesh(), space.geometry(), c.problem, so, petsc);
+      return solve_poisson_distributed(space.mesh(), space.geometry(), space.part(), c.problem, so, petsc);
     }
     return solve_poisson(space.mesh(), space.geometry(), c.problem, so);
   } catch (const NotConverged& e) {

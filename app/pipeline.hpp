@@ -11,8 +11,16 @@
 namespace knotwork {
 
 // The case's space refined `level` times uniformly (converge's level; 0: as the case says),
-// through its registered family. Throws InputError naming the case and field.
+// through its registered family; under mpirun with method = "petsc", this rank's part of it
+// where the family builds parts. Throws InputError naming the case and field.
 std::unique_ptr<SplineSpace> build_space(const CaseDescription& c, int level = 0, const ProgressFunction& progress = {});
+
+// What the reports say of the whole space when a rank holds a part: its cells, its largest
+// cell diagonal (collective then); and the cells a rank writes under mpirun.
+int global_num_cells(const SplineSpace& space);
+double global_mesh_size(const SplineSpace& space);
+struct ParallelWorld;
+CellRange cells_to_write(const SplineSpace& space, ParallelWorld world);
 
 // Solves the case's problem on the space: the family's own refusal first (check_solvable),
 // then the one Galerkin pipeline. A GeometryError gets the case file and "[geometry]" in

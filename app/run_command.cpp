@@ -32,7 +32,7 @@ double RunOutcome::total_without_output() const {
   return tm.setup + tm.assembly + tm.analysis + tm.factorization + tm.solve + tm.preconditioner + tm.iterations + tm.errors;
 }
 
-std::string write_pieces(OutputStage* stage, ParallelWorld world, const std::string& base, int num_cells,
+std::string write_pieces(OutputStage* stage, ParallelWorld world, const std::string& base, CellRange mine,
                          const PieceWriter& write) {
   std::vector<std::string> pieces;
   for (int r = 0; r < world.size; ++r) pieces.push_back(base + "_" + std::to_string(r) + ".vtu");
@@ -46,7 +46,6 @@ std::string write_pieces(OutputStage* stage, ParallelWorld world, const std::str
   }
   broadcast_from_first(folder);
   const std::string path = (std::filesystem::path(folder) / pieces[world.rank]).string();
-  const CellRange mine = cells_of_rank(num_cells, world);
   on_all_ranks([&] { write(path, mine, stage ? &summary : nullptr); });
   return base + ".pvtu";
 }
@@ -71,7 +70,7 @@ void write_run_pieces(const CaseDescription& c, const SplineSpace& space, const 
   const ExactSolution* exact = c.problem.exact ? &*c.problem.exact : nullptr;
   CellFields cell_fields;
   if (s.cell_h1_squared.size() > 0) cell_fields.emplace_back("h1_error_squared", s.cell_h1_squared);
-  const int cells = space.mesh().num_cells();
+  const CellRange cells = cells_to_write(space, world);
   if (c.write_bezier)
     write_pieces(stage, world, "solution", cells, [&](const std::string& path, CellRange mine, const PieceSummary* sum) {
       write_bezier_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, cell_fields, s.exact_mean, mine, sum);
@@ -103,7 +102,7 @@ RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::str
   RunOutcome r;
   say("building the space ([space] family = \"" + c.family + "\")");
   auto t = clock::now();
-  r.space = space_family(c).build(c, 0, say);
+  r.space = build_space(c, 0, say);
   const double t_space = since(t);
   r.description = r.space->description();
   r.solution = solve_case(c, *r.space, ordering, say, &r.solver);
@@ -140,7 +139,7 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
   Json j = Json::object();
   j.set("case", c.path).set("family", c.family).set("space", r.description)
       .set("degree", Json::array().push(double(r.space->degree()[0])).push(double(r.space->degree()[1])))
-      .set("cells", r.space->mesh().num_cells()).set("dofs", s.num_functions).set("free_dofs", s.num_free)
+      .set("cells", global_num_cells(*r.space)).set("dofs", s.num_functions).set("free_dofs", s.num_free)
       .set("matrix_nonzeros", s.matrix_nonzeros).set("factor_nonzeros", s.cholesky.factor_nonzeros)
       .set("refinement_correction", s.cholesky.refinement_correction);
   if (s.errors) j.set("l2_error", s.errors->l2).set("h1_seminorm_error", s.errors->h1_semi).set("h1_error", s.errors->h1);
@@ -159,7 +158,7 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
         .set("relative_residual", s.iterative.relative_residual).set("tolerance", c.solver.petsc_tolerance())
         .set("converged_reason", d.reason);
     if (!d.package.empty()) sj.set("factor_package", d.package);
-    j.set("ranks", d.ranks);
+    j.set("ranks", d.ranks).set("space_parts", r.space->part() != nullptr).set("largest_part_cells", d.cells_held).set("peak_memory_mb_per_rank", d.peak_memory_mb);
   }
   j.set("solver", sj);
   add_fields(j, r.fields);
@@ -187,7 +186,7 @@ int run_command(const RunOptions& o) {
   const SolverReport& solver = r.solver;
   const double total = r.total_without_output();
   std::printf("knotwork run %s%s\n", c.path.c_str(), c.title.empty() ? "" : ("  (" + c.title + ")").c_str());
-  std::printf("  space    %s, %d cells\n", r.description.c_str(), r.space->mesh().num_cells());
+  std::printf("  space    %s, %d cells\n", r.description.c_str(), global_num_cells(*r.space));
   for (const auto& n : r.space->notes()) std::printf("  note     %s\n", n.c_str());
   if (!solver.note.empty()) std::printf("  note     %s\n", solver.note.c_str());
   std::printf("  dofs     %d functions, %d unknowns after %s, %ld stored matrix entries\n", s.num_functions, s.num_free,
@@ -207,6 +206,11 @@ int run_command(const RunOptions& o) {
                 s.distributed.package.c_str(), s.distributed.ranks, s.distributed.ranks == 1 ? "" : "es",
                 s.iterative.iterations, s.iterative.iterations == 1 ? "" : "s", s.iterative.relative_residual,
                 c.solver.petsc_tolerance());
+  if (solver.method == "petsc" && s.distributed.ranks > 1)
+    std::printf("  parts    the largest rank held %d of the %d cells%s; peak memory %.0f MB per rank\n",
+                s.distributed.cells_held, global_num_cells(*r.space),
+                r.space->part() ? " (its share and the halo its rows need)" : " (the space is built whole on every rank)",
+                s.distributed.peak_memory_mb);
   if (s.errors)
     std::printf("  errors   L2 %.6e   H1-seminorm %.6e   H1 %.6e\n", s.errors->l2, s.errors->h1_semi, s.errors->h1);
   if (solver.method == "petsc")

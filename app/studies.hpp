@@ -24,11 +24,11 @@ namespace knotwork {
 void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance,
                    const std::string* petsc_options = nullptr);
 
-// Under mpirun: every rank writes its cells of one output (cells_of_rank) as the piece
-// `<base>_<rank>.vtu`, into rank 0's staging folder (`stage`, null on the other ranks), and rank
-// 0 also `<base>.pvtu`, which names them all; returns that name. Collective.
+// Under mpirun: every rank writes its cells of one output (`mine`, from cells_to_write) as the
+// piece `<base>_<rank>.vtu`, into rank 0's staging folder (`stage`, null on the other ranks),
+// and rank 0 also `<base>.pvtu`, which names them all; returns that name. Collective.
 using PieceWriter = std::function<void(const std::string& path, CellRange cells, const PieceSummary* summary)>;
-std::string write_pieces(OutputStage* stage, ParallelWorld world, const std::string& base, int num_cells,
+std::string write_pieces(OutputStage* stage, ParallelWorld world, const std::string& base, CellRange mine,
                          const PieceWriter& write);
 
 struct RunOutcome {

@@ -16,6 +16,7 @@
 #include "cases/case_file.hpp"
 #include "solver/geometry_map.hpp"
 #include "solver/iterative_solver.hpp"
+#include "solver/poisson_problem.hpp"
 #include "solver/sparsity.hpp"
 
 namespace knotwork {
@@ -88,6 +89,10 @@ class SplineSpace {
                                                                          const Eigen::SparseMatrix<double>& /*lower*/) const {
     return nullptr;
   }
+  // A space SpaceFamily::build_part made: which cells and functions of the global space its
+  // mesh holds (its coefficients, check_solution and output are this rank's share). Null: the
+  // whole space.
+  virtual const MeshPart* part() const { return nullptr; }
 };
 
 struct CaseDocument;  // cases/case_reader.hpp
@@ -111,6 +116,12 @@ struct SpaceFamily {
   // The case's space refined `level` times uniformly (converge's level; 0: as written).
   // Throws InputError naming the case file and field when it cannot be built.
   std::function<std::unique_ptr<SplineSpace>(const CaseDescription&, int level, const ProgressFunction&)> build;
+  // Under mpirun with method = "petsc": the part of build's space that rank `rank` of `ranks`
+  // needs (SplineSpace::part), so that no rank holds the whole space. Null: every rank builds
+  // the whole space. Throws InputError when the space cannot be split among that many ranks.
+  std::function<std::unique_ptr<SplineSpace>(const CaseDescription&, int level, int rank, int ranks,
+                                             const ProgressFunction&)>
+      build_part;
   // --degree / --elements on the command line (InputError when they do not apply).
   std::function<void(CaseDescription&, int degree, int elements)> override_options;
   // Whether SplineSpace::refine halves marked cells (what `adapt` needs).

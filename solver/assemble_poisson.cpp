@@ -347,10 +347,11 @@ int side_points(const QuadratureOptions& q, const BezierCell& cell) {
 }
 
 // Calls visit(cell, side basis, boundary data at the side's points) for every cell side
-// that carries a condition of the given kind.
+// of `cells` that carries a condition of the given kind.
 template <class Visit>
 void for_each_boundary_side(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
-                            const QuadratureOptions& quadrature, BoundaryKind kind, Visit visit) {
+                            const QuadratureOptions& quadrature, CellRange cells, BoundaryKind kind, Visit visit) {
+  const int last = cells.last < 0 ? mesh.num_cells() : cells.last;
   CellBasis cb;
   Eigen::VectorXd data;
   for (size_t id = 0; id < problem.boundary.size(); ++id) {
@@ -358,7 +359,7 @@ void for_each_boundary_side(const BezierMesh& mesh, const GeometryMap& geometry,
     if (bc.kind != kind) continue;
     std::optional<ExpressionEvaluator> value, ux, uy;
     make_evaluators(problem, bc, value, ux, uy);
-    for (int c = 0; c < mesh.num_cells(); ++c)
+    for (int c = cells.first; c < last; ++c)
       for (int s = 0; s < 4; ++s) {
         if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
         evaluate_side_basis(mesh, geometry, c, static_cast<CellSide>(s), side_points(quadrature, mesh.cell(c)), cb);
@@ -372,9 +373,9 @@ void for_each_boundary_side(const BezierMesh& mesh, const GeometryMap& geometry,
 
 void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const PoissonProblem& problem, const DofLayout& layout,
-                       const QuadratureOptions& quadrature, Eigen::VectorXd& rhs) {
+                       const QuadratureOptions& quadrature, Eigen::VectorXd& rhs, CellRange cells) {
   Eigen::VectorXd Fe;
-  for_each_boundary_side(mesh, geometry, problem, quadrature, BoundaryKind::kNeumann,
+  for_each_boundary_side(mesh, geometry, problem, quadrature, cells, BoundaryKind::kNeumann,
                          [&](int c, const CellBasis& cb, const Eigen::VectorXd& h) {
                            Fe.noalias() = cb.C * (cb.value.transpose() * cb.measure.cwiseProduct(h));
                            const auto ids = mesh.functions(c);
@@ -383,16 +384,16 @@ void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
                          });
 }
 
-Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap& geometry,
-                                       const PoissonProblem& problem,
-                                       const QuadratureOptions& quadrature, std::vector<bool>& fixed) {
-  const int nf = mesh.num_functions();
-  fixed.assign(nf, false);
+DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
+                                 const QuadratureOptions& quadrature, CellRange cells, int function_offset) {
+  DirichletPieces out;
+  const int last = cells.last < 0 ? mesh.num_cells() : cells.last;
   auto is_dirichlet = [&](int id) {
     return id >= 0 && problem.boundary.at(id).kind == BoundaryKind::kDirichlet;
   };
   // Functions whose trace on a Dirichlet side is not identically zero.
-  for (int c = 0; c < mesh.num_cells(); ++c) {
+  std::vector<int> local(mesh.num_functions(), -1);
+  for (int c = cells.first; c < last; ++c) {
     const BezierCell& cell = mesh.cell(c);
     for (int s = 0; s < 4; ++s) {
       if (!is_dirichlet(cell.boundary[s])) continue;
@@ -401,18 +402,14 @@ Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap
       const double scale = C.cwiseAbs().maxCoeff();
       for (int b : side_bernstein_indices(cell.degree_u, cell.degree_v, static_cast<CellSide>(s)))
         for (Eigen::Index a = 0; a < C.rows(); ++a)
-          if (std::abs(C(a, b)) > 1e-12 * scale) fixed[ids[a]] = true;
+          if (std::abs(C(a, b)) > 1e-12 * scale && local[ids[a]] < 0) {
+            local[ids[a]] = static_cast<int>(out.functions.size());
+            out.functions.push_back(ids[a] + function_offset);
+          }
     }
   }
-  std::vector<int> local(nf, -1);
-  int nd = 0;
-  for (int f = 0; f < nf; ++f)
-    if (fixed[f]) local[f] = nd++;
-  Eigen::VectorXd result = Eigen::VectorXd::Zero(nf);
-  if (nd == 0) return result;
-  std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::VectorXd r = Eigen::VectorXd::Zero(nd);
-  for_each_boundary_side(mesh, geometry, problem, quadrature, BoundaryKind::kDirichlet,
+  out.load.assign(out.functions.size(), 0.0);
+  for_each_boundary_side(mesh, geometry, problem, quadrature, cells, BoundaryKind::kDirichlet,
                          [&](int c, const CellBasis& cb, const Eigen::VectorXd& g) {
                            const Eigen::MatrixXd phi = cb.value * cb.C.transpose();  // points x alive
                            const Eigen::MatrixXd Me = phi.transpose() * cb.measure.asDiagonal() * phi;
@@ -420,11 +417,29 @@ Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap
                            const auto ids = mesh.functions(c);
                            for (size_t a = 0; a < ids.size(); ++a) {
                              if (local[ids[a]] < 0) continue;
-                             r[local[ids[a]]] += re[a];
+                             out.load[local[ids[a]]] += re[a];
                              for (size_t b = 0; b < ids.size(); ++b)
-                               if (local[ids[b]] >= 0) triplets.emplace_back(local[ids[a]], local[ids[b]], Me(a, b));
+                               if (local[ids[b]] >= 0)
+                                 out.mass.emplace_back(ids[a] + function_offset, ids[b] + function_offset, Me(a, b));
                            }
                          });
+  return out;
+}
+
+std::vector<std::pair<int, double>> solve_dirichlet_projection(const DirichletPieces& pieces) {
+  // Sorted ids: the unknowns of the boundary system (a function may come from several pieces).
+  std::vector<int> ids = pieces.functions;
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  const int nd = static_cast<int>(ids.size());
+  std::vector<std::pair<int, double>> result;
+  if (nd == 0) return result;
+  auto index = [&](int f) { return static_cast<int>(std::lower_bound(ids.begin(), ids.end(), f) - ids.begin()); };
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(pieces.mass.size());
+  for (const auto& t : pieces.mass) triplets.emplace_back(index(t.row()), index(t.col()), t.value());
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(nd);
+  for (size_t k = 0; k < pieces.functions.size(); ++k) r[index(pieces.functions[k])] += pieces.load[k];
   Eigen::SparseMatrix<double> M(nd, nd);
   M.setFromTriplets(triplets.begin(), triplets.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(M);
@@ -432,8 +447,22 @@ Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap
         "Dirichlet projection: the traces of the basis functions on the Dirichlet sides are linearly dependent "
         "(singular boundary mass matrix); the space breaks the BezierMesh contract");
   const Eigen::VectorXd x = ldlt.solve(r);
-  for (int f = 0; f < nf; ++f)
-    if (local[f] >= 0) result[f] = x[local[f]];
+  result.reserve(nd);
+  for (int k = 0; k < nd; ++k) result.emplace_back(ids[k], x[k]);
+  return result;
+}
+
+Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap& geometry,
+                                       const PoissonProblem& problem,
+                                       const QuadratureOptions& quadrature, std::vector<bool>& fixed) {
+  const int nf = mesh.num_functions();
+  fixed.assign(nf, false);
+  Eigen::VectorXd result = Eigen::VectorXd::Zero(nf);
+  for (const auto& [f, value] :
+       solve_dirichlet_projection(dirichlet_pieces(mesh, geometry, problem, quadrature, CellRange{}, 0))) {
+    fixed[f] = true;
+    result[f] = value;
+  }
   return result;
 }
 

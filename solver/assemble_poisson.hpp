@@ -53,10 +53,10 @@ void assemble_poisson_elements(const BezierMesh& mesh, const GeometryMap& geomet
                                const DofLayout& layout, const Eigen::VectorXd& fixed_values,
                                const QuadratureOptions& quadrature, CellRange cells, const ElementSink& sink);
 
-// Adds the Neumann terms (h phi_i over the Neumann sides) to rhs (free dofs).
+// Adds the Neumann terms (h phi_i over the Neumann sides of `cells`) to rhs (free dofs).
 void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const PoissonProblem& problem, const DofLayout& layout,
-                       const QuadratureOptions& quadrature, Eigen::VectorXd& rhs);
+                       const QuadratureOptions& quadrature, Eigen::VectorXd& rhs, CellRange cells = {});
 
 // L2 projection of the Dirichlet data onto the traces of the functions that do not
 // vanish on the Dirichlet sides. Returns one value per function (0 for the others) and
@@ -64,6 +64,21 @@ void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
 Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap& geometry,
                                        const PoissonProblem& problem,
                                        const QuadratureOptions& quadrature, std::vector<bool>& fixed);
+
+// The Dirichlet projection in two steps, so that ranks holding parts of a mesh can each bring
+// their cells' share: the functions of `cells` whose trace on a Dirichlet side is not zero
+// (numbered function + function_offset), and their boundary mass matrix and load entries
+// there (function numbers; entries of the same pair add up).
+struct DirichletPieces {
+  std::vector<int> functions;
+  std::vector<double> load;  // per entry of `functions`
+  std::vector<Eigen::Triplet<double>> mass;
+};
+DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
+                                 const QuadratureOptions& quadrature, CellRange cells, int function_offset);
+// The projected value of every function of the pieces (sorted by function number). Throws
+// std::runtime_error when the traces are linearly dependent.
+std::vector<std::pair<int, double>> solve_dirichlet_projection(const DirichletPieces& pieces);
 
 // Number of quadrature points along u and v for a cell (0 in options means degree + extra).
 inline int rule_points(int requested, int degree, int extra) {

@@ -8,14 +8,18 @@
 
 namespace knotwork {
 
-// Every rank holds the whole BezierMesh and geometry (built redundantly: the space is not yet
-// distributed) and the Dirichlet projection (the boundary's small system). The cells are
-// split into contiguous blocks of the cell order, one per rank; each rank integrates only its
-// block into the distributed matrix and load (no rank holds the global matrix), rank 0 adds
-// the Neumann terms, PETSc solves, and the solution is gathered on every rank; the error
-// norms are summed over the ranks' blocks. Collective: every rank calls it, and a failure on
-// one rank (a bad cell, a source not finite) is thrown on all of them. A closed surface
-// (zero-mean solution) is refused (std::invalid_argument).
+// Each rank holds either its part of the space (`part`: the cells it integrates and the halo
+// its matrix rows need, with their own function numbers; the tensor family builds these) or,
+// when `part` is null, the whole BezierMesh and geometry, built redundantly, whose cells are
+// then split into contiguous blocks of the cell order and whose functions into contiguous
+// blocks of rows. The Dirichlet projection is assembled from every rank's boundary cells and
+// solved on every rank (a boundary-sized system). Each rank integrates its cells into the
+// distributed matrix and load, Neumann terms included (no rank holds the global matrix),
+// PETSc solves, and each rank gets back the values of its mesh's functions (with a whole mesh:
+// all of them); the error norms are summed over the ranks' cells. The returned coefficients
+// are per function of `mesh`. Collective: every rank calls it, and a failure on one rank (a bad
+// cell, a source not finite) is thrown on all of them. A closed surface (zero-mean solution) is
+// refused (std::invalid_argument).
 // Runs step on every rank; a failure on any rank is thrown on all of them, the lowest failing
 // rank's (InputError, GeometryError, std::invalid_argument kept as such): no rank is left
 // waiting in a collective call the others never reach. Collective; also a barrier.
@@ -24,7 +28,7 @@ void on_all_ranks(const std::function<void()>& step);
 // The contiguous block of the cell order rank `world.rank` integrates and writes.
 CellRange cells_of_rank(int num_cells, ParallelWorld world);
 
-PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const GeometryMap& geometry,
+PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const GeometryMap& geometry, const MeshPart* part,
                                           const PoissonProblem& problem, const PoissonSolveOptions& options,
                                           const DistributedSolveOptions& petsc);
 

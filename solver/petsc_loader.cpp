@@ -89,6 +89,10 @@ void broadcast_from_first(std::string& text) {
   if (launched_world().size > 1) api().broadcast(text);
 }
 
+std::vector<double> gather_from_all_ranks(const std::vector<double>& mine) {
+  return launched_world().size > 1 ? api().gather_all(mine) : mine;
+}
+
 std::unique_ptr<DistributedSystem> make_distributed_system(int num_free, int first_row, int last_row,
                                                            const std::vector<int>& diagonal_nonzeros,
                                                            const std::vector<int>& off_diagonal_nonzeros) {

@@ -38,6 +38,8 @@ struct RankFailure {
   std::string message;
 };
 std::optional<RankFailure> agree_on_failure(int kind, const std::string& message);
+// Every rank's values one after the other (rank 0's first), on every rank; every rank calls it.
+std::vector<double> gather_from_all_ranks(const std::vector<double>& mine);
 // Rank 0's text on every rank; every rank calls it.
 void broadcast_from_first(std::string& text);
 
@@ -55,10 +57,12 @@ struct DistributedSolveOptions {
   // keeps its rows): a PCShell.
   std::string preconditioner = "boomeramg";
   const Preconditioner* shell = nullptr;
+  // The solution's entries this rank wants back (global rows, any order); null: all of them.
+  const std::vector<int>* wanted_rows = nullptr;
 };
 
 struct DistributedSolveResult {
-  Eigen::VectorXd solution;  // every free dof, on every rank
+  Eigen::VectorXd solution;  // the wanted rows' values (DistributedSolveOptions), or every free dof
   int iterations = 0;
   double relative_residual = 0;  // ||b - A x|| / ||b||, computed after the solve
   bool converged = false;
@@ -83,7 +87,7 @@ class DistributedSystem {
   virtual void finish_assembly() = 0;
   // Collective: the matrix's diagonal, every free dof, on every rank.
   virtual Eigen::VectorXd diagonal() = 0;
-  // Collective: solves, with the solution gathered on every rank.
+  // Collective: solves, and gathers the solution's wanted rows on each rank.
   virtual DistributedSolveResult solve(const DistributedSolveOptions& options) = 0;
   // Seconds this rank spent in add, add_load and finish_assembly (PETSc's share of assembly).
   virtual double assembly_seconds() const = 0;

@@ -16,6 +16,7 @@ struct PetscModuleApi {
                                     const std::vector<int>& off_diagonal_nonzeros);
   void (*broadcast)(std::string& text);
   Preconditioner* (*boomeramg)(const Eigen::SparseMatrix<double>& lower, const std::string& petsc_options);
+  std::vector<double> (*gather_all)(const std::vector<double>& mine);
 };
 
 }  // namespace knotwork

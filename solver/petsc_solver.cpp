@@ -57,6 +57,22 @@ void broadcast(std::string& text) {
   MPI_Bcast(text.data(), length, MPI_CHAR, 0, PETSC_COMM_WORLD);
 }
 
+std::vector<double> gather_all(const std::vector<double>& mine) {
+  const ParallelWorld w = world();
+  const int count = static_cast<int>(mine.size());
+  std::vector<int> counts(w.size), offsets(w.size + 1, 0);
+  check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, PETSC_COMM_WORLD) == MPI_SUCCESS ? 0 : PETSC_ERR_MPI,
+        "MPI_Allgather");
+  for (int r = 0; r < w.size; ++r) offsets[r + 1] = offsets[r] + counts[r];
+  std::vector<double> all(offsets[w.size]);
+  check(MPI_Allgatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE,
+                       PETSC_COMM_WORLD) == MPI_SUCCESS
+            ? 0
+            : PETSC_ERR_MPI,
+        "MPI_Allgatherv");
+  return all;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -127,6 +143,31 @@ Eigen::VectorXd gather_on_all(Vec v) {
   VecScatterDestroy(&gather);
   VecDestroy(&all);
   check(code, "gather");
+  return result;
+}
+
+// The entries `rows` (global) of a distributed vector, on this rank.
+Eigen::VectorXd gather_rows(Vec v, const std::vector<int>& rows) {
+  IS from = nullptr;
+  Vec local = nullptr;
+  VecScatter scatter = nullptr;
+  const PetscInt n = static_cast<PetscInt>(rows.size());
+  Eigen::VectorXd result;
+  PetscErrorCode code = ISCreateGeneral(PETSC_COMM_SELF, n, rows.data(), PETSC_USE_POINTER, &from);
+  if (!code) code = VecCreateSeq(PETSC_COMM_SELF, n, &local);
+  if (!code) code = VecScatterCreate(v, from, local, nullptr, &scatter);
+  if (!code) code = VecScatterBegin(scatter, v, local, INSERT_VALUES, SCATTER_FORWARD);
+  if (!code) code = VecScatterEnd(scatter, v, local, INSERT_VALUES, SCATTER_FORWARD);
+  const PetscScalar* values = nullptr;
+  if (!code) code = VecGetArrayRead(local, &values);
+  if (!code) {
+    result = Eigen::Map<const Eigen::VectorXd>(values, n);
+    code = VecRestoreArrayRead(local, &values);
+  }
+  VecScatterDestroy(&scatter);
+  VecDestroy(&local);
+  ISDestroy(&from);
+  check(code, "gather the solution");
   return result;
 }
 
@@ -295,7 +336,7 @@ DistributedSolveResult PetscSystem::solve(const DistributedSolveOptions& asked) 
     check(PCFactorGetMatSolverType(pc, &package), "factor package");
     if (package) result.factor_package = package;
   }
-  result.solution = gather_on_all(o.x);
+  result.solution = options.wanted_rows ? gather_rows(o.x, *options.wanted_rows) : gather_on_all(o.x);
   if (log_view) check(PetscLogView(PETSC_VIEWER_STDERR_WORLD), "-log_view");
   double times[3] = {result.matrix_seconds, result.setup_seconds, result.solve_seconds};
   reduce(times, 3, true);
@@ -316,7 +357,8 @@ Preconditioner* make_boomeramg(const Eigen::SparseMatrix<double>& lower, const s
 
 // The module's one entry point, found by name (dlsym); C++ exceptions pass through its functions.
 extern "C" __attribute__((visibility("default"))) const knotwork::PetscModuleApi* knotwork_petsc_api() {
-  static const knotwork::PetscModuleApi api{knotwork::world,      knotwork::reduce,    knotwork::agree,
-                                            knotwork::make_system, knotwork::broadcast, knotwork::make_boomeramg};
+  static const knotwork::PetscModuleApi api{knotwork::world,     knotwork::reduce,         knotwork::agree,
+                                            knotwork::make_system, knotwork::broadcast,     knotwork::make_boomeramg,
+                                            knotwork::gather_all};
   return &api;
 }

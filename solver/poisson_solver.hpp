@@ -60,6 +60,8 @@ struct PoissonSolution {
   // (the KSP, the PC, the factorization package when a direct one) and why it stopped.
   struct Distributed {
     int ranks = 0;  // 0: not a PETSc solve
+    int cells_held = 0;  // the most cells one rank held (its part, or the whole mesh)
+    double peak_memory_mb = 0;  // the largest peak resident size of a rank, after the solve
     std::string ksp, pc, package, reason;
   } distributed;
   // Closed surfaces with reaction = 0 (zero-mean solution): the surface's area, the mean

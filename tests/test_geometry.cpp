@@ -187,3 +187,80 @@ TEST_CASE("The tensor map at quadrature points (the patch as given, by direction
       }
     }
 }
+
+// A rank's part (RowShare) against the whole space, by brute force: the owned cells of all
+// ranks tile the mesh, the owned functions tile [0, N), each part's cells are the whole mesh's
+// (same functions after the offset, same extraction, weights and geometry), and every cell on
+// which an owned function lives is in the part.
+TEST_CASE("Row parts of a tensor space tile it and hold every cell their functions need", "[geometry][parts]") {
+  struct Setting {
+    std::array<int, 2> degree, elements, continuity;
+    std::vector<double> knots_v;
+  };
+  const std::vector<Setting> settings{{{2, 2}, {3, 8}, {-1, -1}, {}},
+                                      {{3, 2}, {2, 7}, {2, 0}, {0.3141}},
+                                      {{2, 4}, {3, 5}, {1, 1}, {0.05, 0.71}},
+                                      {{2, 3}, {2, 4}, {-1, -1}, {}}};
+  for (const Setting& s : settings) {
+    TensorSpaceOptions o;
+    o.degree = s.degree;
+    o.elements_per_span = s.elements;
+    o.continuity = s.continuity;
+    o.extra_knots[1] = s.knots_v;
+    const TensorDiscretization whole = build_tensor_discretization(quarter_annulus_patch(1, 2), o);
+    const NurbsGeometryMap whole_map(whole);
+    const int n = whole.mesh.num_functions(), rows = whole.elements_v, eu = whole.elements_u;
+    // Cells of every function in the whole mesh.
+    std::vector<std::vector<int>> cells_of(n);
+    for (int c = 0; c < whole.mesh.num_cells(); ++c)
+      for (int f : whole.mesh.functions(c)) cells_of[f].push_back(c);
+    for (int ranks = 2; ranks <= std::min(rows, 5); ++ranks) {
+      INFO("degree " << s.degree[0] << "x" << s.degree[1] << ", " << rows << " rows, " << ranks << " ranks");
+      std::vector<int> cell_owner(whole.mesh.num_cells(), -1), function_owner(n, -1);
+      for (int r = 0; r < ranks; ++r) {
+        const TensorDiscretization part = build_tensor_discretization(quarter_annulus_patch(1, 2), o, RowShare{r, ranks});
+        REQUIRE(part.part);
+        const MeshPart& mp = *part.part;
+        REQUIRE(mp.global_functions == n);
+        REQUIRE(mp.global_cells == whole.mesh.num_cells());
+        const NurbsGeometryMap map(part);
+        std::vector<int> whole_cell_of(part.mesh.num_cells());
+        for (int c = 0; c < part.mesh.num_cells(); ++c) {
+          const BezierCell& cell = part.mesh.cell(c);
+          const int w = cell.index_u + eu * cell.index_v;
+          whole_cell_of[c] = w;
+          const auto mine = part.mesh.functions(c), theirs = whole.mesh.functions(w);
+          REQUIRE(mine.size() == theirs.size());
+          for (size_t a = 0; a < mine.size(); ++a) REQUIRE(mine[a] + mp.function_offset == theirs[a]);
+          REQUIRE((part.mesh.extraction(c) - whole.mesh.extraction(w)).cwiseAbs().maxCoeff() == 0);
+          REQUIRE(cell.boundary == whole.mesh.cell(w).boundary);
+          for (size_t a = 0; a < mine.size(); ++a)
+            REQUIRE(part.mesh.weights()[mine[a]] == whole.mesh.weights()[theirs[a]]);
+          const BezierGeometryCell g = map.bezier_cell(c), h = whole_map.bezier_cell(w);
+          REQUIRE((g.points - h.points).cwiseAbs().maxCoeff() == 0);
+          GeometryAtPoints at, at_whole;
+          map.evaluate_at_rule(c, 3, 3, at);
+          whole_map.evaluate_at_rule(w, 3, 3, at_whole);
+          REQUIRE((at.x - at_whole.x).cwiseAbs().maxCoeff() == 0);
+          REQUIRE((at.jacobian - at_whole.jacobian).cwiseAbs().maxCoeff() == 0);
+          if (c >= mp.owned.first && c < mp.owned.last) {
+            REQUIRE(cell_owner[w] == -1);
+            cell_owner[w] = r;
+          }
+        }
+        std::sort(whole_cell_of.begin(), whole_cell_of.end());
+        for (int f = mp.first_owned_function; f < mp.last_owned_function; ++f) {
+          REQUIRE(function_owner[f] == -1);
+          function_owner[f] = r;
+          for (int c : cells_of[f]) REQUIRE(std::binary_search(whole_cell_of.begin(), whole_cell_of.end(), c));
+        }
+        // The rows: ceil(rows / ranks) of its own at most, and the q rows of the halo at most.
+        REQUIRE(part.mesh.num_cells() <= ((rows + ranks - 1) / ranks + s.degree[1]) * eu);
+      }
+      REQUIRE(std::count(cell_owner.begin(), cell_owner.end(), -1) == 0);
+      REQUIRE(std::count(function_owner.begin(), function_owner.end(), -1) == 0);
+    }
+    REQUIRE_THROWS_AS(build_tensor_discretization(quarter_annulus_patch(1, 2), o, RowShare{0, rows + 1}),
+                      std::invalid_argument);
+  }
+}

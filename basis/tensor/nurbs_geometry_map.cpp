@@ -13,6 +13,8 @@ NurbsGeometryMap::NurbsGeometryMap(const TensorDiscretization& d)
       pv_(d.geometry_v.degree()),
       nu_(d.geometry_u.num_functions()),
       elements_u_(d.elements_u),
+      first_row_(d.first_row),
+      net_first_row_(d.net_first_row),
       spans_u_(d.geometry_u.element_spans()),
       spans_v_(d.geometry_v.element_spans()),
       cu_(bezier_extraction(d.geometry_u)),
@@ -43,8 +45,8 @@ NurbsGeometryMap::NurbsGeometryMap(const TensorDiscretization& d)
 }
 
 void NurbsGeometryMap::homogeneous_bezier(int cell, Eigen::MatrixX3d& out) const {
-  const int iu = cell % elements_u_, iv = cell / elements_u_;
-  const int su = spans_u_[iu] - pu_, sv = spans_v_[iv] - pv_;
+  const int iu = cell % elements_u_, iv = first_row_ + cell / elements_u_;
+  const int su = spans_u_[iu] - pu_, sv = spans_v_[iv] - pv_ - net_first_row_;
   out.resize((pu_ + 1) * (pv_ + 1), 3);
   thread_local Eigen::MatrixXd local, half, bez;
   local.resize(pu_ + 1, pv_ + 1);
@@ -104,10 +106,13 @@ const NurbsGeometryMap::RuleTables& NurbsGeometryMap::tables(bool along_u, int n
 }
 
 void NurbsGeometryMap::evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const {
+  evaluate_element_at_rule(cell % elements_u_, first_row_ + cell / elements_u_, nu, nv, out);
+}
+
+void NurbsGeometryMap::evaluate_element_at_rule(int eu, int ev, int nu, int nv, GeometryAtPoints& out) const {
   // h(u_i, v_j) = sum_ab Nu_a(u_i) Nv_b(v_j) P_ab over the patch's own (pu+1)(pv+1) control
   // points, summed one direction at a time: the cost follows the geometry's degree, not the
   // space's (a bilinear square costs the same at p = 2 and p = 10).
-  const int eu = cell % elements_u_, ev = cell / elements_u_;
   const int gu = patch_u_.degree(), gv = patch_v_.degree(), n_u = patch_u_.num_functions();
   const int su = intervals_u_[eu].span - gu, sv = intervals_v_[ev].span - gv;
   const RuleTables& table_u = tables(true, nu);

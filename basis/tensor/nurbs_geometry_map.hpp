@@ -25,9 +25,12 @@ class NurbsGeometryMap final : public GeometryMap {
                           Eigen::MatrixXd& out) const override;
   // Homogeneous Bezier control points (w x, w y, w) of a cell, one row per Bernstein.
   void homogeneous_bezier(int cell, Eigen::MatrixX3d& out) const;
+  // evaluate_at_rule on element (eu, ev) of the whole space, whether or not this map's mesh (a
+  // part) holds it: it reads only the patch as given.
+  void evaluate_element_at_rule(int eu, int ev, int nu, int nv, GeometryAtPoints& out) const;
 
  private:
-  int pu_, pv_, nu_, elements_u_;
+  int pu_, pv_, nu_, elements_u_, first_row_, net_first_row_;
   std::vector<int> spans_u_, spans_v_;
   std::vector<Eigen::MatrixXd> cu_, cv_;
   Eigen::MatrixX3d net_;

@@ -14,8 +14,9 @@ namespace knotwork {
 
 namespace {
 
-// Refuses discretizations that cannot fit in memory before allocating anything.
-void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s) {
+// Refuses discretizations that cannot fit in memory before allocating anything (a rank's part:
+// its share of the cells).
+void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, int ranks = 1) {
   double cells = 1, functions = 1;
   for (int d = 0; d < 2; ++d) {
     const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
@@ -23,9 +24,14 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s) 
     cells *= elements;
     functions *= elements + s.degree[d];
   }
-  char what[120];
-  std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d", cells, s.degree[0], s.degree[1]);
-  check_memory(c.path + ": [space] elements", galerkin_bytes(cells, functions, s.degree[0], s.degree[1]), what);
+  char what[160];
+  if (ranks > 1)
+    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d on each of %d processes", cells / ranks, s.degree[0],
+                  s.degree[1], ranks);
+  else
+    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d", cells, s.degree[0], s.degree[1]);
+  check_memory(c.path + ": [space] elements", galerkin_bytes(cells / ranks, functions / ranks, s.degree[0], s.degree[1]),
+               what);
 }
 
 std::string describe(const TensorSpaceOptions& s) {
@@ -41,10 +47,10 @@ constexpr const char* kFastDiagonalization = "fast_diagonalization";
 
 class TensorSpace final : public SplineSpace {
  public:
-  TensorSpace(const CaseDescription& c, const TensorSpaceOptions& options) : options_(options) {
-    check_tensor_memory(c, options);
+  TensorSpace(const CaseDescription& c, const TensorSpaceOptions& options, RowShare share = {}) : options_(options) {
+    check_tensor_memory(c, options, share.ranks);
     try {
-      d_ = build_tensor_discretization(c.geometry, options);
+      d_ = build_tensor_discretization(c.geometry, options, share);
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
     }
@@ -64,36 +70,36 @@ class TensorSpace final : public SplineSpace {
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
   }
+  const MeshPart* part() const override { return d_.part ? &*d_.part : nullptr; }
 
  private:
   // The stiffness coefficients at element midpoints, in parameter derivatives
   // x_u = (dx/du_ref) / h_u: c11 = |x_v|^2 / det, c22 = |x_u|^2 / det; then their fit. Only
   // every row against 32 sampled columns and every column against 32 sampled rows are
-  // evaluated: O(n) cells instead of n^2, and still exact for separable maps.
+  // evaluated: O(n) elements instead of n^2, and still exact for separable maps. From the
+  // patch itself, so that a part of the space (which holds a few rows) gets the whole fit.
   SeparableCoefficients separable_coefficients() const {
     const int nu = d_.space_u.num_elements(), nv = d_.space_v.num_elements();
-    if (d_.mesh.num_cells() != nu * nv) return {};
-    std::vector<int> cell_at(static_cast<size_t>(nu) * nv, -1);
-    for (int c = 0; c < d_.mesh.num_cells(); ++c)
-      cell_at[d_.mesh.cell(c).index_u + static_cast<size_t>(nu) * d_.mesh.cell(c).index_v] = c;
     auto sample = [](int n) {
       std::vector<int> v;
       const int m = std::min(n, 32);
       for (int k = 0; k < m; ++k) v.push_back(m == 1 ? 0 : static_cast<int>((static_cast<long>(k) * (n - 1)) / (m - 1)));
       return v;
     };
+    auto lengths = [](const BSplineBasis1D& b) {
+      std::vector<double> h;
+      for (int s : b.element_spans()) h.push_back(b.knots()[s + 1] - b.knots()[s]);
+      return h;
+    };
+    const std::vector<double> h_u = lengths(d_.space_u), h_v = lengths(d_.space_v);
     const std::vector<int> rows = sample(nu), columns = sample(nv);
-    std::vector<double> c11(cell_at.size(), 1.0), c22(cell_at.size(), 1.0);
-    const Eigen::VectorXd mid = Eigen::VectorXd::Constant(1, 0.5);
+    std::vector<double> c11(static_cast<size_t>(nu) * nv, 1.0), c22(c11.size(), 1.0);
     GeometryAtPoints at;
     bool ok = true;
     auto measure = [&](int i, int j) {
       const size_t k = i + static_cast<size_t>(nu) * j;
-      const int c = cell_at[k];
-      if (c < 0) return void(ok = false);
-      const BezierCell& cell = d_.mesh.cell(c);
-      geometry_->evaluate(c, mid, mid, at);
-      const double hu = cell.u1 - cell.u0, hv = cell.v1 - cell.v0;
+      geometry_->evaluate_element_at_rule(i, j, 1, 1, at);  // the one-point Gauss rule: the midpoint
+      const double hu = h_u[i], hv = h_v[j];
       const double xu = at.jacobian(0, 0) / hu, xv = at.jacobian(0, 1) / hv;
       const double yu = at.jacobian(0, 2) / hu, yv = at.jacobian(0, 3) / hv;
       const double det = xu * yv - xv * yu;
@@ -126,6 +132,12 @@ SpaceFamily tensor_family() {
     TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
     return std::make_unique<TensorSpace>(c, s);
+  };
+  f.build_part = [](const CaseDescription& c, int level, int rank, int ranks,
+                    const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
+    TensorSpaceOptions s = patch_space(c);
+    s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
+    return std::make_unique<TensorSpace>(c, s, RowShare{rank, ranks});
   };
   f.override_options = [](CaseDescription& c, int degree, int elements) {
     override_patch_space(patch_space(c), degree, elements);

@@ -92,8 +92,8 @@ Eigen::MatrixXd kronecker(const Eigen::MatrixXd& cu, const Eigen::MatrixXd& cv) 
 
 }  // namespace
 
-TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
-                                                 const TensorSpaceOptions& o) {
+TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& o,
+                                                 RowShare share) {
   patch.validate();
   TensorDiscretization d;
   const int ru = o.continuity[0] < 0 ? o.degree[0] - 1 : o.continuity[0];
@@ -108,12 +108,55 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
   d.geometry_v = pv.geometry;
   d.patch = patch;
 
-  // Refine the homogeneous control net (w x, w y, w) onto the geometry bases.
+  const int p = o.degree[0], q = o.degree[1];
+  const int su = d.space_u.num_functions(), sv = d.space_v.num_functions();
+  const auto spans_u = d.space_u.element_spans(), spans_v = d.space_v.element_spans();
+  d.elements_u = static_cast<int>(spans_u.size());
+  d.elements_v = static_cast<int>(spans_v.size());
+
+  // The element rows this mesh holds, [row_from, row_to), and its function rows.
+  int row_from = 0, row_to = d.elements_v, function_row_from = 0, function_row_to = sv;
+  if (share.ranks > 1) {
+    const long nv = d.elements_v;
+    if (nv < share.ranks)
+      throw std::invalid_argument("the mesh has " + std::to_string(nv) + " rows of cells along v, fewer than the " +
+                                  std::to_string(share.ranks) + " processes that share them by rows: use at most " +
+                                  std::to_string(nv) + " processes or more elements");
+    const int own_from = static_cast<int>(nv * share.rank / share.ranks);
+    const int own_to = static_cast<int>(nv * (share.rank + 1) / share.ranks);
+    // Function row j lives on the elements whose span s has s - q <= j <= s: a rank owns the
+    // function rows that start on its element rows, and holds the rows below its own where
+    // they also live.
+    const auto first_function_row = [&](int row) { return row == 0 ? 0 : spans_v[row] - q; };
+    const int owned_functions_from = first_function_row(own_from);
+    const int owned_functions_to = own_to == d.elements_v ? sv : first_function_row(own_to);
+    row_from = own_from;
+    while (row_from > 0 && spans_v[row_from - 1] >= owned_functions_from) --row_from;
+    row_to = own_to;
+    function_row_from = spans_v[row_from] - q;
+    function_row_to = spans_v[row_to - 1] + 1;
+    MeshPart part;
+    part.owned = CellRange{(own_from - row_from) * d.elements_u, (own_to - row_from) * d.elements_u};
+    part.function_offset = su * function_row_from;
+    part.first_owned_function = su * owned_functions_from;
+    part.last_owned_function = su * owned_functions_to;
+    part.global_functions = su * sv;
+    part.global_cells = d.elements_u * d.elements_v;
+    d.part = part;
+  }
+  d.first_row = row_from;
+
+  // Refine the homogeneous control net (w x, w y, w) onto the geometry bases; a part keeps
+  // the net rows its element rows use.
   const Eigen::SparseMatrix<double> Tu = refinement_matrix(patch.basis_u, d.geometry_u);
-  const Eigen::SparseMatrix<double> Tv = refinement_matrix(patch.basis_v, d.geometry_v);
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> Tv_all = refinement_matrix(patch.basis_v, d.geometry_v);
   const int nu = patch.basis_u.num_functions(), nv = patch.basis_v.num_functions();
-  const int gu = d.geometry_u.num_functions(), gv = d.geometry_v.num_functions();
-  d.geometry_homogeneous.resize(static_cast<Eigen::Index>(gu) * gv, 3);
+  const int gu = d.geometry_u.num_functions(), pg = d.geometry_v.degree();
+  const auto geometry_spans_v = d.geometry_v.element_spans();
+  d.net_first_row = geometry_spans_v[row_from] - pg;
+  const int net_rows = geometry_spans_v[row_to - 1] + 1 - d.net_first_row;
+  const Eigen::SparseMatrix<double> Tv = Tv_all.middleRows(d.net_first_row, net_rows);
+  d.geometry_homogeneous.resize(static_cast<Eigen::Index>(gu) * net_rows, 3);
   for (int k = 0; k < 3; ++k) {
     Eigen::VectorXd h(static_cast<Eigen::Index>(nu) * nv);
     for (Eigen::Index i = 0; i < h.size(); ++i)
@@ -124,24 +167,22 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
   }
 
   BezierMesh& mesh = d.mesh;
-  const int p = o.degree[0], q = o.degree[1];
-  const int su = d.space_u.num_functions(), sv = d.space_v.num_functions();
-  mesh.set_num_functions(su * sv);
+  const int offset = su * function_row_from;
+  mesh.set_num_functions(su * (function_row_to - function_row_from));
   mesh.set_boundary_names({"bottom", "right", "top", "left"});
-  if (o.rational) mesh.set_weights(d.geometry_homogeneous.col(2));  // geometry and space bases coincide
+  // Geometry and space bases coincide (degree >= the geometry's), so do the net's rows.
+  if (o.rational) mesh.set_weights(d.geometry_homogeneous.col(2));
 
   const auto Cu = bezier_extraction(d.space_u), Cv = bezier_extraction(d.space_v);
   std::vector<int> rep_u, rep_v;
   const auto idu = deduplicate(Cu, rep_u), idv = deduplicate(Cv, rep_v);
   std::map<std::pair<int, int>, int> pool_index;
-  const auto spans_u = d.space_u.element_spans(), spans_v = d.space_v.element_spans();
-  d.elements_u = static_cast<int>(spans_u.size());
-  d.elements_v = static_cast<int>(spans_v.size());
   const auto& U = d.space_u.knots();
   const auto& V = d.space_v.knots();
   std::vector<int> ids((p + 1) * (q + 1));
-  mesh.reserve(d.elements_u * d.elements_v, static_cast<long>(d.elements_u) * d.elements_v * (p + 1) * (q + 1));
-  for (int iv = 0; iv < d.elements_v; ++iv)
+  const long cells = static_cast<long>(d.elements_u) * (row_to - row_from);
+  mesh.reserve(static_cast<int>(cells), cells * (p + 1) * (q + 1));
+  for (int iv = row_from; iv < row_to; ++iv)
     for (int iu = 0; iu < d.elements_u; ++iu) {
       auto key = std::make_pair(idu[iu], idv[iv]);
       auto it = pool_index.find(key);
@@ -162,7 +203,7 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
       if (iu == 0) cell.boundary[kSideLeft] = 3;
       for (int av = 0; av <= q; ++av)
         for (int au = 0; au <= p; ++au)
-          ids[au + (p + 1) * av] = (spans_u[iu] - p + au) + su * (spans_v[iv] - q + av);
+          ids[au + (p + 1) * av] = (spans_u[iu] - p + au) + su * (spans_v[iv] - q + av) - offset;
       mesh.add_cell(cell, ids, it->second);
     }
   return d;

@@ -1,11 +1,13 @@
 #pragma once
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
 #include "basis/core/bspline_basis.hpp"
 #include "basis/core/nurbs_patch.hpp"
+#include "solver/poisson_problem.hpp"
 
 namespace knotwork {
 
@@ -28,7 +30,20 @@ struct TensorDiscretization {
   BSplineBasis1D geometry_u, geometry_v;
   Eigen::MatrixX3d geometry_homogeneous;
   NurbsPatch patch;  // the geometry as given, which the map evaluates at quadrature points
-  int elements_u = 0, elements_v = 0;
+  int elements_u = 0, elements_v = 0;  // of the whole space, also in a part
+  // A rank's part (RowShare with ranks > 1): the mesh holds the element rows from first_row
+  // on (the halo rows, then the rank's own), cell c being element (c % elements_u,
+  // first_row + c / elements_u); its functions are numbered from part->function_offset and
+  // geometry_homogeneous holds the geometry net's rows from net_first_row on.
+  int first_row = 0, net_first_row = 0;
+  std::optional<MeshPart> part;
+};
+
+// Rank `rank` of `ranks`: rank r owns the element rows [n_v r / R, n_v (r + 1) / R) and the
+// functions whose support starts in them (function rows are numbered i + n_u j: a contiguous
+// block); its part also holds the rows below its own where those functions live.
+struct RowShare {
+  int rank = 0, ranks = 1;
 };
 
 // k-refinement of the patch: every original span cut into equal parts, plus any extra
@@ -36,7 +51,10 @@ struct TensorDiscretization {
 // continuity C^r, original knots keep min(their continuity, r); degree raised to p.
 // Throws std::invalid_argument for impossible requests (p below the geometry degree
 // with rational = true, continuity outside [0, p-1]).
-TensorDiscretization build_tensor_discretization(const NurbsPatch& patch,
-                                                 const TensorSpaceOptions& options);
+// With a RowShare of several ranks, only that rank's part (the element rows it owns and its
+// halo): memory per rank ~ 1 / ranks of the whole. Throws std::invalid_argument when there are
+// fewer element rows than ranks.
+TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& options,
+                                                 RowShare share = {});
 
 }  // namespace knotwork

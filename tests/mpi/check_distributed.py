@@ -4,10 +4,16 @@
 For one case file: CHOLMOD's errors (serial, `--solver direct`) are the reference; PETSc's CG +
 BoomerAMG (the default) on 1, 2 and 3 ranks must give the same L2 and H1-seminorm errors to
 1e-6 relative (its tolerance is on the residual), MUMPS's distributed Cholesky on 2 and 3 ranks
-to 1e-10. Partition-dependent bugs (a cell on a rank boundary, a Dirichlet dof owned elsewhere)
+to 1e-10 (and for tensor cases, whose default is their own preconditioner, BoomerAMG by
+options to 1e-6). Partition-dependent bugs (a cell on a rank boundary, a Dirichlet dof owned elsewhere)
 change the errors far beyond that.
 
-Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE
+With --rows N (a tensor case with N rows of cells along v), each process must hold only its
+part of the space on 2 and 3 ranks: at most its ceil(N / ranks) rows and the q rows below them
+(q the degree along v) where the functions of its matrix rows also live, of every row's
+cells/N cells; without it, the whole space (built on every rank).
+
+Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE [--rows N]
 Everything runs on this machine (OpenMPI's shared-memory transport only) and stops by itself.
 """
 import json
@@ -48,11 +54,14 @@ def run(command, env):
 
 def main():
     binary, case = sys.argv[1], sys.argv[2]
+    rows = int(sys.argv[4]) if len(sys.argv) > 4 and sys.argv[3] == "--rows" else None
     env = mpi_environment()
     base = [binary, "run", case, "--json", "-q", "--no-output"]
     reference = run(base + ["--solver", "direct"], env)
     failures = []
     runs = [(n, "", 1e-6) for n in (1, 2, 3)] + [(n, MUMPS, 1e-10) for n in (2, 3)]
+    if rows is not None:  # the default there is the space's PCShell: BoomerAMG on the parts too
+        runs += [(n, "-pc_type hypre", 1e-6) for n in (2, 3)]
     for ranks, options, tolerance in runs:
         command = [MPIRUN, "-n", str(ranks), "--oversubscribe"] + base + ["--solver", "petsc"]
         if options:
@@ -61,6 +70,19 @@ def main():
         what = f"{ranks} rank(s), {got['solver']['ksp']} + {got['solver']['pc']}"
         if got["ranks"] != ranks:
             failures.append(f"{what}: reports {got['ranks']} ranks")
+        if got["cells"] != reference["cells"] or got["dofs"] != reference["dofs"]:
+            failures.append(f"{what}: reports {got['cells']} cells and {got['dofs']} functions, serial "
+                            f"{reference['cells']} and {reference['dofs']}")
+        held = got["largest_part_cells"]
+        if rows is not None and ranks > 1:
+            per_row = reference["cells"] // rows
+            limit = (-(-rows // ranks) + reference["degree"][1]) * per_row
+            if not (got["space_parts"] and held <= limit and held < reference["cells"]):
+                failures.append(f"{what}: a process held {held} of {reference['cells']} cells "
+                                f"(parts: {got['space_parts']}; at most {limit})")
+        elif got["space_parts"] or held != reference["cells"]:
+            failures.append(f"{what}: a process held {held} of {reference['cells']} cells (parts: {got['space_parts']}), "
+                            "not the whole space")
         if got["free_dofs"] != reference["free_dofs"]:
             failures.append(f"{what}: {got['free_dofs']} unknowns, serial {reference['free_dofs']}")
         for key in ("l2_error", "h1_seminorm_error"):
