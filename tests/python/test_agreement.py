@@ -8,8 +8,9 @@ import pytest
 
 from conftest import CASES, cli_json
 
-# Keys that are measurements of time, or name files: not results.
-VOLATILE = {"timings", "seconds", "seconds_space", "seconds_solve", "seconds_estimate", "seconds_refine", "outputs"}
+# Keys that are measurements of time or memory, or name files: not results.
+VOLATILE = {"timings", "seconds", "seconds_space", "seconds_solve", "seconds_estimate", "seconds_refine", "outputs",
+            "peak_memory_mb_per_rank"}
 
 def assert_same(cli_value, py_value, where="result"):
     """Recursively equal, numbers to the last bit; VOLATILE keys skipped."""
