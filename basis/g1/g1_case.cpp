@@ -42,8 +42,8 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
   if (const DocumentNode* d = s.get("gluing")) {
     g.gluing = r.string(*d, "[space] gluing");
     if (!is_named_gluing(g.gluing) && !std::filesystem::exists(r.resolve(g.gluing)))
-      r.fail("[space] gluing", "'" + g.gluing + "' is neither a construction (symmetric, symmetric_c1, geometric, "
-                               "regular_fans) nor a gluing file (relative paths start at the case file's folder)");
+      r.fail("[space] gluing", "'" + g.gluing + "' is neither a construction (analysis_suitable, symmetric, "
+                               "symmetric_c1, geometric, regular_fans) nor a gluing file (relative paths start at the case file's folder)");
     if (!is_named_gluing(g.gluing)) g.gluing = r.readable_file(g.gluing, "[space] gluing");
   }
   if (const DocumentNode* d = s.get("refine")) g.refine = static_cast<int>(r.integer(*d, "[space] refine"));

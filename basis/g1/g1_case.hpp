@@ -16,7 +16,7 @@ struct G1Section : CaseSection {
   std::string mesh_file;  // resolved against the case file's folder
   int faces = 0;          // of the coarse mesh (read and checked with the case)
   int degree = 4, split_smoothness = 1;
-  std::string gluing = "symmetric";  // "symmetric", "geometric" or a JSON file (resolved)
+  std::string gluing = "analysis_suitable";  // a construction (gluing_file.hpp) or a JSON file (resolved)
   int refine = 0;                    // subdivisions before solving (converge adds one per level)
   bool c0 = false;                   // [space] smoothness = "c0": the plain C0 multipatch baseline
   std::string shape = "bilinear";    // "bilinear" | "sphere" | "torus"

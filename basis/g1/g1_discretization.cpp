@@ -160,7 +160,10 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
     throw InputError(c.path + ": [space] degree: k = " + std::to_string(k) + " is below the separability of edge " +
                      std::to_string(E.v[0] + 1) + "-" + std::to_string(E.v[1] + 1) + " of " + g.mesh_file +
                      " for these gluing data (Definition 4.11: the Taylor data at its two ends are coupled, the "
-                     "hypothesis of Theorem 7.1); raise the degree or lower split_smoothness");
+                     "hypothesis of Theorem 7.1); raise the degree or lower split_smoothness" +
+                     (g.gluing == "analysis_suitable" ? std::string(" (analysis_suitable data need k >= 4, and "
+                                                                    "split_smoothness <= 2 at k = 4)")
+                                                      : std::string()));
   }
   say("fitting the G1 geometry");
   const G1Basis coarse_basis = g1_basis(d.coarse, d.coarse_gluing, k, r);

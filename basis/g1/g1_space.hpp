@@ -60,6 +60,18 @@ GluingData symmetric_gluing(const QuadMesh& mesh, bool c1_blend = false);
 // corner of the domain stays a corner and a straight side stays straight).
 GluingData geometric_gluing(const QuadMesh& mesh, bool regular_fans_where_rational = false);
 
+// Analysis-suitable data (Collin-Sangalli-Takacs; docs/G1_POISSON.md) from the bilinear faces
+// of a planar mesh: with G0, G1 the maps of the edge's two faces in their corner frames,
+// c(u) = det J of G0 at (0, u), b(u) = -det J of G1 at (u, 0), a(u) = det(du G0(0, u), dv G1(u, 0)):
+// b and c linear, a quadratic, one polynomial on the whole edge; the bilinear faces satisfy
+// the G1 conditions with them (they are in the space) and Condition 3.1 holds at every vertex.
+// Exact rationals always (a double coordinate is one). On a surface mesh (not planar): the
+// linear symmetric data a(u) = 2cos(2pi/n0)(1 - u) - 2cos(2pi/n1) u, b = -1, c = 1, which are
+// compatible at every vertex unless a valence-4 vertex neighbours an extraordinary one
+// (gluing_violations then names it). Throws std::invalid_argument for a planar face that is
+// not a convex counter-clockwise quad (naming it).
+GluingData analysis_suitable_gluing(const QuadMesh& mesh);
+
 // The data of an edge as seen from its other end: (a, b, c)(u) -> (a, c, b)(1 - u).
 EdgeGluing reversed(const EdgeGluing& g);
 

@@ -107,10 +107,18 @@ GluingData load_gluing_file(const std::string& path, const QuadMesh& mesh) {
 }
 
 bool is_named_gluing(const std::string& name) {
-  return name == "symmetric" || name == "symmetric_c1" || name == "geometric" || name == "regular_fans";
+  return name == "analysis_suitable" || name == "symmetric" || name == "symmetric_c1" || name == "geometric" ||
+         name == "regular_fans";
 }
 
 GluingData make_gluing(const std::string& name_or_file, const QuadMesh& mesh, const std::string& mesh_name) {
+  if (name_or_file == "analysis_suitable") {
+    try {
+      return analysis_suitable_gluing(mesh);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(mesh_name + ": gluing \"analysis_suitable\": " + e.what());
+    }
+  }
   if (name_or_file == "symmetric") return symmetric_gluing(mesh);
   if (name_or_file == "symmetric_c1") return symmetric_gluing(mesh, true);
   if (name_or_file == "geometric" || name_or_file == "regular_fans") {

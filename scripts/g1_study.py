@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""The G1 convergence studies of docs/G1_POISSON.md, regenerated: every shipped G1 case with
+its default (analysis-suitable) gluing data over 4 levels, the earlier data for comparison,
+and on every planar case the C0 multipatch space of the same degree on the same mesh, compared
+with the G1 space at equal dofs (the C0 H1 error interpolated log-log in the dofs). Prints
+Markdown on stdout.
+
+    scripts/g1_study.py [KNOTWORK]        # default build/app/knotwork; about 5 minutes here
+"""
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+KNOTWORK = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "build", "app", "knotwork")
+PLANAR = ["g1_three_quads", "g1_pentagon", "g1_mixed_valences", "g1_valences_6_8", "g1_lshape"]
+SURFACES = ["g1_sphere_xy", "g1_sphere_harmonic", "g1_torus"]
+EARLIER = {"g1_three_quads": 'gluing = "symmetric_c1"', "g1_mixed_valences": 'gluing = "regular_fans"',
+           "g1_sphere_xy": 'gluing = "symmetric"', "g1_sphere_harmonic": 'gluing = "symmetric"'}
+
+
+def variant(case, scratch, space_lines):
+    """The case with its mesh path made absolute and `space_lines` replacing its gluing."""
+    text = open(os.path.join(ROOT, "cases", case + ".toml")).read()
+    text = re.sub(r'mesh = "meshes/', 'mesh = "' + os.path.join(ROOT, "cases", "meshes") + "/", text)
+    text = re.sub(r'^gluing = .*$', "", text, flags=re.M)
+    text = text.replace("[space]\n", "[space]\n" + space_lines + "\n", 1)
+    path = os.path.join(scratch, f"{case}_{abs(hash(space_lines))}.toml")
+    open(path, "w").write(text)
+    return path
+
+
+def converge(path, scratch, levels=4):
+    done = subprocess.run([KNOTWORK, "converge", path, "--levels", str(levels), "--json", "-q", "--out",
+                           os.path.join(scratch, "out")], capture_output=True, text=True, check=True)
+    return json.loads(done.stdout)["levels"]
+
+
+def table(title, rows):
+    print(f"\n**{title}**\n")
+    print("| level | faces | dofs | h | L2 error | rate | H1-seminorm error | rate | C1 jump |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        rate = lambda k: "–" if r[k] is None else f"{r[k]:.2f}"
+        print(f"| {r['level']} | {r['faces']} | {r['dofs']} | {r['h']:.4f} | {r['l2_error']:.3e} | {rate('l2_rate')} | "
+              f"{r['h1_seminorm_error']:.3e} | {rate('h1_rate')} | {r['c1_jump']:.1e} |")
+
+
+def at_dofs(rows, n):
+    """log-log interpolation of the H1-seminorm error in the dofs (extrapolated at the ends)."""
+    pts = [(math.log(r["dofs"]), math.log(r["h1_seminorm_error"])) for r in rows]
+    x = math.log(n)
+    i = max(0, min(len(pts) - 2, sum(1 for p in pts if p[0] <= x) - 1))
+    (x0, y0), (x1, y1) = pts[i], pts[i + 1]
+    return math.exp(y0 + (y1 - y0) * (x - x0) / (x1 - x0)), not (pts[0][0] <= x <= pts[-1][0])
+
+
+def main():
+    largest_jump = 0
+    with tempfile.TemporaryDirectory() as scratch:
+        for case in PLANAR + SURFACES:
+            rows = converge(variant(case, scratch, 'gluing = "analysis_suitable"'), scratch)
+            largest_jump = max([largest_jump] + [r["c1_jump"] for r in rows])
+            table(f"{case}: analysis_suitable (the default)", rows)
+            if case in EARLIER:
+                table(f"{case}: {EARLIER[case]} (earlier)", converge(variant(case, scratch, EARLIER[case]), scratch))
+            if case in PLANAR:
+                c0 = converge(variant(case, scratch, 'smoothness = "c0"'), scratch)
+                print(f"\n{case}, H1-seminorm error at equal dofs (C0: the same degree and mesh, interpolated):\n")
+                print("| dofs (G1) | G1 | C0 at those dofs | C0 / G1 |")
+                print("|---|---|---|---|")
+                for r in rows:
+                    e, outside = at_dofs(c0, r["dofs"])
+                    print(f"| {r['dofs']} | {r['h1_seminorm_error']:.3e} | {e:.3e}{' (extrapolated)' if outside else ''} | "
+                          f"{e / r['h1_seminorm_error']:.2f} |")
+    print(f"\nLargest C1 jump over every level of every case: {largest_jump:.1e}")
+
+
+if __name__ == "__main__":
+    main()
