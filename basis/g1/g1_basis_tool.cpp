@@ -29,7 +29,7 @@ struct BasisOptions : BasisRequest {
   std::string g1_mesh;
   int degree = 4;
   int split_smoothness = 1;
-  std::string gluing = "symmetric";  // symmetric | symmetric_c1 | geometric | regular_fans | FILE.json
+  std::string gluing = "symmetric";  // analysis_suitable | symmetric | symmetric_c1 | geometric | regular_fans | FILE.json
 };
 
 const char* kind_name(G1BasisFunction::Kind k) {
@@ -318,7 +318,9 @@ class G1BasisTool final : public BasisTool {
     options_.push_back(basis.add_option("--split-smoothness", o_.split_smoothness, "--g1: smoothness r at the 4-split, 0 <= r < k")
                            ->capture_default_str());
     options_.push_back(basis.add_option("--gluing", o_.gluing,
-                                        "--g1: symmetric | symmetric_c1 | geometric | regular_fans | FILE.json (per-edge a, b, c)")
+                                        "--g1: symmetric (the paper's data, whose counts docs/G1.md checks) | analysis_suitable (the "
+                                        "default of case files) | symmetric_c1 | geometric | regular_fans | FILE.json "
+                                        "(per-edge a, b, c)")
                            ->capture_default_str());
   }
   bool requested() const override { return options_[0]->count() > 0; }
