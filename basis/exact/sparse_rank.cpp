@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 namespace knotwork {
 
@@ -132,6 +133,33 @@ constexpr uint64_t kPrimes[] = {(1ULL << 61) - 1, 2305843009213693921ULL, 230584
                                 2305843009213693723ULL, 2305843009213693693ULL};
 
 long rank_modular(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent) {
+  // The first two primes at once (they are independent eliminations; usually both apply).
+  {
+    long second = -1;
+    bool second_failed = false;
+    std::thread other([&] {
+      try {
+        second = sparse_rank(rows, columns, ModularField{{kPrimes[1]}}, nullptr);
+      } catch (const DenominatorMultipleOfPrime&) {
+        second_failed = true;
+      }
+    });
+    long first = -1;
+    bool first_failed = false;
+    try {
+      first = sparse_rank(rows, columns, ModularField{{kPrimes[0]}}, independent);
+    } catch (const DenominatorMultipleOfPrime&) {
+      first_failed = true;
+    }
+    other.join();
+    if (!first_failed && !second_failed) {
+      if (first != second)
+        throw std::runtime_error("modular ranks disagree (" + std::to_string(first) + " vs " + std::to_string(second) +
+                                 "): use the exact method");
+      return first;
+    }
+  }
+  // A prime divided a denominator: the primes one after the other, the next ones included.
   long ranks[2];
   int found = 0;
   for (uint64_t p : kPrimes) {

@@ -266,20 +266,29 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
            const std::function<void(const std::string&)>& say) {
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
   std::vector<Rows<Scalar>> rows(mesh.num_edges());
+  // Independent per edge and per vertex: threaded (the exact arithmetic dominates a G1 build).
+#pragma omp parallel for schedule(dynamic, 8)
   for (int e = 0; e < mesh.num_edges(); ++e)
     if (!mesh.edge(e).boundary()) rows[e] = edge_rows<Scalar>(mesh, gluing, k, r, e);
   constexpr bool exact = std::is_same_v<Scalar, mpq_class>;
   ExactTaylorSpan exact_span;
   FloatTaylorSpan float_span;
 
-  std::vector<G1BasisFunction> vertex_functions;
-  const int tenth = std::max(1, mesh.num_vertices() / 10);
-  for (int v = 0; v < mesh.num_vertices(); ++v) {
-    if (v > 0 && v % tenth == 0) say("vertex functions, " + std::to_string(v) + "/" + std::to_string(mesh.num_vertices()));
-    const auto& ring = mesh.ring(v);
+  // Each vertex's local solutions, computed in parallel, then kept in vertex order.
+  struct VertexSolutions {
     LocalColumns cols;
+    int taylor = 0;
+    std::vector<std::vector<mpq_class>> exact;
+    Eigen::MatrixXd floating;
+  };
+  std::vector<VertexSolutions> local(mesh.num_vertices());
+  say("vertex functions, " + std::to_string(mesh.num_vertices()) + " vertices");
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const auto& ring = mesh.ring(v);
+    LocalColumns& cols = local[v].cols;
     for (size_t i = 0; i < ring.faces.size(); ++i) add_corner_block(cols, ring.faces[i], ring.corners[i], k, r);
-    const int taylor = cols.size();
+    const int taylor = local[v].taylor = cols.size();
     std::set<int> edges(ring.edges.begin(), ring.edges.end());
     Rows<Scalar> vertex_rows;
     for (int e : edges) {
@@ -288,13 +297,22 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
       vertex_rows.insert(vertex_rows.end(), rows[e].begin(), rows[e].end());
     }
     const auto A = restrict_rows(vertex_rows, cols);
+    if constexpr (exact)
+      local[v].exact = taylor_independent(null_space_exact(A, cols.size()), taylor);
+    else
+      local[v].floating = taylor_independent(null_space(A, cols.size()), taylor);
+  }
+  std::vector<G1BasisFunction> vertex_functions;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const LocalColumns& cols = local[v].cols;
+    const int taylor = local[v].taylor;
     if constexpr (exact) {
-      for (const auto& x : taylor_independent(null_space_exact(A, cols.size()), taylor)) {
+      for (const auto& x : local[v].exact) {
         vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, x));
         exact_span.add(taylor_part(cols, x, taylor));
       }
     } else {
-      const Eigen::MatrixXd Z = taylor_independent(null_space(A, cols.size()), taylor);
+      const Eigen::MatrixXd& Z = local[v].floating;
       for (Eigen::Index j = 0; j < Z.cols(); ++j)
         vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, Z.col(j)));
       Eigen::HouseholderQR<Eigen::MatrixXd> qr(Z.topRows(taylor));
@@ -302,6 +320,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
           qr.householderQ() * Eigen::MatrixXd::Identity(taylor, std::min<Eigen::Index>(Z.cols(), taylor));
     }
   }
+  local.clear();
 
   std::vector<G1BasisFunction> edge_functions;
   const int edge_tenth = std::max(1, mesh.num_edges() / 10);
