@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <map>
 #include <set>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -283,24 +285,59 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
   };
   std::vector<VertexSolutions> local(mesh.num_vertices());
   say("vertex functions, " + std::to_string(mesh.num_vertices()) + " vertices");
+  // A vertex's local system, with its columns and rows taken in ring order, depends only on
+  // its configuration: the valence, whether it is on the boundary, and per edge around it
+  // whether the edge is a boundary edge, which way it runs and its data. After a subdivision
+  // most vertices share one (the inside of a coarse face has the parametric data on every
+  // edge), so the exact solutions (reduced row echelon form: canonical for the column order)
+  // are computed once per configuration.
+  std::mutex cache_mutex;
+  std::map<std::string, std::shared_ptr<const std::vector<std::vector<mpq_class>>>> cache;
+  auto configuration = [&](int v) {
+    const auto& ring = mesh.ring(v);
+    std::string key = std::to_string(ring.faces.size()) + (ring.boundary ? "b" : "i");
+    for (int e : ring.edges) {
+      const auto& E = mesh.edge(e);
+      key += E.boundary() ? "|B" : (E.v[0] == v ? "|0" : "|1");
+      if (E.boundary()) continue;
+      for (const PiecewisePolynomial* p : {&gluing.edges[e]->a, &gluing.edges[e]->b, &gluing.edges[e]->c})
+        for (int h = 0; h < 2; ++h) {
+          key += h ? ";" : ",";
+          for (const auto& x : (*p->exact)[h]) key += x.get_str() + " ";
+        }
+    }
+    return key;
+  };
 #pragma omp parallel for schedule(dynamic, 4)
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     const auto& ring = mesh.ring(v);
     LocalColumns& cols = local[v].cols;
     for (size_t i = 0; i < ring.faces.size(); ++i) add_corner_block(cols, ring.faces[i], ring.corners[i], k, r);
     const int taylor = local[v].taylor = cols.size();
-    std::set<int> edges(ring.edges.begin(), ring.edges.end());
     Rows<Scalar> vertex_rows;
-    for (int e : edges) {
-      if (mesh.edge(e).boundary()) continue;
+    std::set<int> seen;  // an edge appears once (ring.edges closes the fan on the boundary)
+    for (int e : ring.edges) {
+      if (mesh.edge(e).boundary() || !seen.insert(e).second) continue;
       add_edge_strips(cols, mesh, e, k, r);
       vertex_rows.insert(vertex_rows.end(), rows[e].begin(), rows[e].end());
     }
-    const auto A = restrict_rows(vertex_rows, cols);
-    if constexpr (exact)
-      local[v].exact = taylor_independent(null_space_exact(A, cols.size()), taylor);
-    else
-      local[v].floating = taylor_independent(null_space(A, cols.size()), taylor);
+    if constexpr (exact) {
+      const std::string key = configuration(v);
+      std::shared_ptr<const std::vector<std::vector<mpq_class>>> solutions;
+      {
+        const std::lock_guard<std::mutex> lock(cache_mutex);
+        if (const auto it = cache.find(key); it != cache.end()) solutions = it->second;
+      }
+      if (!solutions) {
+        solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(
+            taylor_independent(null_space_exact(restrict_rows(vertex_rows, cols), cols.size()), taylor));
+        const std::lock_guard<std::mutex> lock(cache_mutex);
+        cache.emplace(key, solutions);
+      }
+      local[v].exact = *solutions;
+    } else {
+      local[v].floating = taylor_independent(null_space(restrict_rows(vertex_rows, cols), cols.size()), taylor);
+    }
   }
   std::vector<G1BasisFunction> vertex_functions;
   for (int v = 0; v < mesh.num_vertices(); ++v) {

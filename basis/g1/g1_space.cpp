@@ -642,10 +642,16 @@ G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& glui
   const long n = 2 * k - r + 1;
   d.unknowns = mesh.num_faces() * n * n;
   if (gluing.exact() && !floating) {
-    const auto rows = g1_conditions<mpq_class>(mesh, gluing, k, r);
-    std::vector<SparseRationalRow> sparse(rows.size());
-    for (size_t i = 0; i < rows.size(); ++i) sparse[i].terms = rows[i];
-    d.constraints = static_cast<long>(rows.size());
+    // Edge by edge on all cores, then in edge order (the rows' order of the whole system).
+    std::vector<std::vector<std::vector<std::pair<long, mpq_class>>>> per_edge(mesh.num_edges());
+#pragma omp parallel for schedule(dynamic, 8)
+    for (int e = 0; e < mesh.num_edges(); ++e)
+      if (!mesh.edge(e).boundary()) per_edge[e] = g1_conditions<mpq_class>(mesh, gluing, k, r, e);
+    std::vector<SparseRationalRow> sparse;
+    for (auto& rows : per_edge)
+      for (auto& row : rows) sparse.push_back(SparseRationalRow{std::move(row)});
+    per_edge.clear();
+    d.constraints = static_cast<long>(sparse.size());
     d.rank = rank_reliable(sparse, d.unknowns);
     d.exact = true;
   } else {
