@@ -265,13 +265,16 @@ void complete_globally(const QuadMesh& mesh, const GluingData& gluing, int k, in
 
 template <class Scalar>
 void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
-           const std::function<void(const std::string&)>& say) {
+           const std::function<void(const std::string&)>& say, std::vector<Rows<Scalar>> rows = {}) {
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
-  std::vector<Rows<Scalar>> rows(mesh.num_edges());
   // Independent per edge and per vertex: threaded (the exact arithmetic dominates a G1 build).
+  // The exact path gets the rows the dimension was computed from.
+  if (rows.empty()) {
+    rows.resize(mesh.num_edges());
 #pragma omp parallel for schedule(dynamic, 8)
-  for (int e = 0; e < mesh.num_edges(); ++e)
-    if (!mesh.edge(e).boundary()) rows[e] = edge_rows<Scalar>(mesh, gluing, k, r, e);
+    for (int e = 0; e < mesh.num_edges(); ++e)
+      if (!mesh.edge(e).boundary()) rows[e] = edge_rows<Scalar>(mesh, gluing, k, r, e);
+  }
   constexpr bool exact = std::is_same_v<Scalar, mpq_class>;
   ExactTaylorSpan exact_span;
   FloatTaylorSpan float_span;
@@ -314,13 +317,15 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
     LocalColumns& cols = local[v].cols;
     for (size_t i = 0; i < ring.faces.size(); ++i) add_corner_block(cols, ring.faces[i], ring.corners[i], k, r);
     const int taylor = local[v].taylor = cols.size();
-    Rows<Scalar> vertex_rows;
-    std::set<int> seen;  // an edge appears once (ring.edges closes the fan on the boundary)
-    for (int e : ring.edges) {
-      if (mesh.edge(e).boundary() || !seen.insert(e).second) continue;
-      add_edge_strips(cols, mesh, e, k, r);
-      vertex_rows.insert(vertex_rows.end(), rows[e].begin(), rows[e].end());
-    }
+    std::vector<int> edges;  // each once (ring.edges closes the fan on the boundary)
+    for (int e : ring.edges)
+      if (!mesh.edge(e).boundary() && std::find(edges.begin(), edges.end(), e) == edges.end()) edges.push_back(e);
+    for (int e : edges) add_edge_strips(cols, mesh, e, k, r);
+    auto vertex_rows = [&] {
+      Rows<Scalar> out;
+      for (int e : edges) out.insert(out.end(), rows[e].begin(), rows[e].end());
+      return out;
+    };
     if constexpr (exact) {
       const std::string key = configuration(v);
       std::shared_ptr<const std::vector<std::vector<mpq_class>>> solutions;
@@ -330,13 +335,13 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
       }
       if (!solutions) {
         solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(
-            taylor_independent(null_space_exact(restrict_rows(vertex_rows, cols), cols.size()), taylor));
+            taylor_independent(null_space_exact(restrict_rows(vertex_rows(), cols), cols.size()), taylor));
         const std::lock_guard<std::mutex> lock(cache_mutex);
         cache.emplace(key, solutions);
       }
       local[v].exact = *solutions;
     } else {
-      local[v].floating = taylor_independent(null_space(restrict_rows(vertex_rows, cols), cols.size()), taylor);
+      local[v].floating = taylor_independent(null_space(restrict_rows(vertex_rows(), cols), cols.size()), taylor);
     }
   }
   std::vector<G1BasisFunction> vertex_functions;
@@ -663,13 +668,19 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
   basis.exact = gluing.exact() && !floating;
   say(std::string("dimension (rank of the C1 conditions, ") + (basis.exact ? "exact" : "dense SVD") + ", " +
       std::to_string(long(mesh.num_faces()) * (2 * k - r + 1) * (2 * k - r + 1)) + " unknowns)");
-  basis.space = g1_space_dimension(mesh, gluing, k, r, floating);  // also validates k, r, gluing
-  say("local functions at " + std::to_string(mesh.num_vertices()) + " vertices and " + std::to_string(mesh.num_edges()) +
-      " edges");
-  if (basis.exact)
-    build<mpq_class>(mesh, gluing, basis, say);
-  else
+  if (basis.exact) {
+    check_g1_arguments(mesh, gluing, k, r);
+    std::vector<G1ExactRows> rows = g1_condition_rows_per_edge(mesh, gluing, k, r);
+    basis.space = g1_space_dimension_exact(mesh, k, r, rows);
+    say("local functions at " + std::to_string(mesh.num_vertices()) + " vertices and " +
+        std::to_string(mesh.num_edges()) + " edges");
+    build<mpq_class>(mesh, gluing, basis, say, std::move(rows));
+  } else {
+    basis.space = g1_space_dimension(mesh, gluing, k, r, floating);  // also validates k, r, gluing
+    say("local functions at " + std::to_string(mesh.num_vertices()) + " vertices and " +
+        std::to_string(mesh.num_edges()) + " edges");
     build<double>(mesh, gluing, basis, say);
+  }
   say("tidying " + std::to_string(basis.functions.size()) + " functions");
   tidy_vertex_functions(mesh, basis);
   tidy_pair_functions(mesh, basis);

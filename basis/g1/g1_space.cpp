@@ -631,29 +631,44 @@ std::vector<std::string> gluing_violations(const QuadMesh& mesh, const GluingDat
   return out;
 }
 
-G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating) {
+void check_g1_arguments(const QuadMesh& mesh, const GluingData& gluing, int k, int r) {
   if (k < 2) throw std::invalid_argument("degree k must be >= 2, got " + std::to_string(k));
   if (r < 0 || r >= k) throw std::invalid_argument("split smoothness r must be in [0, k-1], got " + std::to_string(r));
   for (int e = 0; e < mesh.num_edges(); ++e)
     if (!mesh.edge(e).boundary() && (e >= static_cast<int>(gluing.edges.size()) || !gluing.edges[e]))
       throw std::invalid_argument("interior edge " + std::to_string(mesh.edge(e).v[0] + 1) + "-" +
                                   std::to_string(mesh.edge(e).v[1] + 1) + " has no gluing data");
+}
+
+std::vector<G1ExactRows> g1_condition_rows_per_edge(const QuadMesh& mesh, const GluingData& gluing, int k, int r) {
+  std::vector<G1ExactRows> per_edge(mesh.num_edges());
+#pragma omp parallel for schedule(dynamic, 8)
+  for (int e = 0; e < mesh.num_edges(); ++e)
+    if (!mesh.edge(e).boundary()) per_edge[e] = g1_conditions<mpq_class>(mesh, gluing, k, r, e);
+  return per_edge;
+}
+
+G1SpaceDimension g1_space_dimension_exact(const QuadMesh& mesh, int k, int r, const std::vector<G1ExactRows>& per_edge) {
+  G1SpaceDimension d;
+  const long n = 2 * k - r + 1;
+  d.unknowns = mesh.num_faces() * n * n;
+  std::vector<SparseRationalRow> sparse;  // in edge order: the rows' order of the whole system
+  for (const auto& rows : per_edge)
+    for (const auto& row : rows) sparse.push_back(SparseRationalRow{row});
+  d.constraints = static_cast<long>(sparse.size());
+  d.rank = rank_reliable(sparse, d.unknowns);
+  d.exact = true;
+  d.dimension = d.unknowns - d.rank;
+  return d;
+}
+
+G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating) {
+  check_g1_arguments(mesh, gluing, k, r);
   G1SpaceDimension d;
   const long n = 2 * k - r + 1;
   d.unknowns = mesh.num_faces() * n * n;
   if (gluing.exact() && !floating) {
-    // Edge by edge on all cores, then in edge order (the rows' order of the whole system).
-    std::vector<std::vector<std::vector<std::pair<long, mpq_class>>>> per_edge(mesh.num_edges());
-#pragma omp parallel for schedule(dynamic, 8)
-    for (int e = 0; e < mesh.num_edges(); ++e)
-      if (!mesh.edge(e).boundary()) per_edge[e] = g1_conditions<mpq_class>(mesh, gluing, k, r, e);
-    std::vector<SparseRationalRow> sparse;
-    for (auto& rows : per_edge)
-      for (auto& row : rows) sparse.push_back(SparseRationalRow{std::move(row)});
-    per_edge.clear();
-    d.constraints = static_cast<long>(sparse.size());
-    d.rank = rank_reliable(sparse, d.unknowns);
-    d.exact = true;
+    return g1_space_dimension_exact(mesh, k, r, g1_condition_rows_per_edge(mesh, gluing, k, r));
   } else {
     const auto rows = g1_conditions<double>(mesh, gluing, k, r);
     d.constraints = static_cast<long>(rows.size());

@@ -93,6 +93,14 @@ struct G1SpaceDimension {
 };
 // `floating` forces the floating-point path (an independent cross-check of the exact one).
 G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false);
+// Throws std::invalid_argument for k < 2, r outside [0, k-1], or an interior edge without data.
+void check_g1_arguments(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
+// The exact conditions of every interior edge (empty for boundary edges), built on all cores;
+// the same rows as g1_condition_rows_exact(mesh, gluing, k, r, e). Requires gluing.exact().
+using G1ExactRows = std::vector<std::vector<std::pair<long, mpq_class>>>;
+std::vector<G1ExactRows> g1_condition_rows_per_edge(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
+// The exact dimension from those rows (so that a construction that needs them builds them once).
+G1SpaceDimension g1_space_dimension_exact(const QuadMesh& mesh, int k, int r, const std::vector<G1ExactRows>& per_edge);
 
 // dim Syz_k^{r-1,r,r} of one edge's data (Sec. 4.2): triples (A, B, C), A of degree k-1 and
 // C^{r-1} at 1/2, B and C of degree k and C^r (A the derivative along the edge, B and C the
