@@ -9,7 +9,7 @@
 namespace knotwork {
 
 // Each rank holds either its part of the space (`part`: the cells it integrates and the halo
-// its matrix rows need, with their own function numbers; the tensor family builds these) or,
+// its matrix rows need, with their own function numbers; families that split their spaces build these) or,
 // when `part` is null, the whole BezierMesh and geometry, built redundantly, whose cells are
 // then split into contiguous blocks of the cell order and whose functions into contiguous
 // blocks of rows. The Dirichlet projection is assembled from every rank's boundary cells and

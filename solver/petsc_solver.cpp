@@ -5,6 +5,7 @@
 #include <petscksp.h>
 
 #include <algorithm>
+#include <numeric>
 #include <sstream>
 #include <chrono>
 #include <stdexcept>
@@ -124,28 +125,6 @@ bool take_log_view(std::string& options) {
   return found;
 }
 
-// Every entry of a distributed vector, on every rank.
-Eigen::VectorXd gather_on_all(Vec v) {
-  VecScatter gather = nullptr;
-  Vec all = nullptr;
-  check(VecScatterCreateToAll(v, &gather, &all), "gather");
-  Eigen::VectorXd result;
-  PetscErrorCode code = VecScatterBegin(gather, v, all, INSERT_VALUES, SCATTER_FORWARD);
-  if (!code) code = VecScatterEnd(gather, v, all, INSERT_VALUES, SCATTER_FORWARD);
-  const PetscScalar* values = nullptr;
-  PetscInt n = 0;
-  if (!code) code = VecGetSize(all, &n);
-  if (!code) code = VecGetArrayRead(all, &values);
-  if (!code) {
-    result = Eigen::Map<const Eigen::VectorXd>(values, n);
-    code = VecRestoreArrayRead(all, &values);
-  }
-  VecScatterDestroy(&gather);
-  VecDestroy(&all);
-  check(code, "gather");
-  return result;
-}
-
 // The entries `rows` (global) of a distributed vector, on this rank.
 Eigen::VectorXd gather_rows(Vec v, const std::vector<int>& rows) {
   IS from = nullptr;
@@ -167,8 +146,17 @@ Eigen::VectorXd gather_rows(Vec v, const std::vector<int>& rows) {
   VecScatterDestroy(&scatter);
   VecDestroy(&local);
   ISDestroy(&from);
-  check(code, "gather the solution");
+  check(code, "gather");
   return result;
+}
+
+// Every entry of a distributed vector, on every rank.
+Eigen::VectorXd gather_on_all(Vec v) {
+  PetscInt n = 0;
+  check(VecGetSize(v, &n), "gather");
+  std::vector<int> all(n);
+  std::iota(all.begin(), all.end(), 0);
+  return gather_rows(v, all);
 }
 
 class PetscSystem final : public DistributedSystem {

@@ -240,11 +240,13 @@ std::vector<std::vector<std::pair<long, mpq_class>>> g1_condition_rows_exact(con
   return g1_conditions<mpq_class>(mesh, gluing, k, r, edge);
 }
 
-GluingData symmetric_gluing(const QuadMesh& mesh, bool c1_blend) {
-  // a = A0 d0 - A1 d1, as coefficients of the two pieces, for either blend.
-  auto pieces = [c1_blend](const auto& A0, const auto& A1) {
+GluingData symmetric_gluing(const QuadMesh& mesh, SymmetricBlend blend) {
+  // a = A0 d0 - A1 d1, as coefficients of the two pieces, for each blend.
+  auto pieces = [blend](const auto& A0, const auto& A1) {
     using T = std::decay_t<decltype(A0)>;
-    if (!c1_blend)  // d0 = 1 - 4u^2 | 0, d1 = 0 | -3 + 8u - 4u^2 (C^0 at 1/2, the paper's)
+    if (blend == SymmetricBlend::kLinear)  // d0 = 1 - u, d1 = u on the whole edge
+      return std::array<std::vector<T>, 2>{std::vector<T>{A0, T(-A0 - A1)}, std::vector<T>{A0, T(-A0 - A1)}};
+    if (blend == SymmetricBlend::kC0)  // d0 = 1 - 4u^2 | 0, d1 = 0 | -3 + 8u - 4u^2 (C^0 at 1/2, the paper's)
       return std::array<std::vector<T>, 2>{std::vector<T>{A0, T(0), T(-4 * A0)},
                                            std::vector<T>{T(3 * A1), T(-8 * A1), T(4 * A1)}};
     // d0 = 1 - 2u^2 | 2(1-u)^2, d1 = 2u^2 | 1 - 2(1-u)^2 (C^1 at 1/2)
@@ -439,34 +441,10 @@ std::vector<mpq_class> det(const std::array<std::array<mpq_class, 2>, 2>& p,
 }  // namespace
 
 GluingData analysis_suitable_gluing(const QuadMesh& mesh) {
-  if (!mesh.planar()) {
-    // No plane to take faces from: the symmetric fan's values 2cos(2 pi / n) at the two ends,
-    // linear along the edge, b = -1, c = 1. Analysis-suitable by degree; compatible at a
-    // vertex of valence 4 (a crossing, Condition 3.2) only if a stays 0 next to it, i.e.
-    // when no neighbour is extraordinary: gluing_violations names the vertex otherwise.
-    GluingData g;
-    g.edges.resize(mesh.num_edges());
-    for (int e = 0; e < mesh.num_edges(); ++e) {
-      const auto& E = mesh.edge(e);
-      if (E.boundary()) continue;
-      const auto [p0, q0] = symmetric_angle(mesh, E.v[0]);
-      const auto [p1, q1] = symmetric_angle(mesh, E.v[1]);
-      const auto x0 = two_cos_pi_exact(p0, q0), x1 = two_cos_pi_exact(p1, q1);
-      EdgeGluing eg;
-      if (x0 && x1) {
-        const std::vector<mpq_class> a{*x0, -*x0 - *x1};
-        eg.a = PiecewisePolynomial::from_exact({a, a});
-      } else {
-        const double A0 = 2 * std::cos(M_PI * p0 / q0), A1 = 2 * std::cos(M_PI * p1 / q1);
-        const std::vector<double> a{A0, -A0 - A1};
-        eg.a = PiecewisePolynomial::from_double({a, a});
-      }
-      eg.b = PiecewisePolynomial::constant(-1);
-      eg.c = PiecewisePolynomial::constant(1);
-      g.edges[e] = std::move(eg);
-    }
-    return g;
-  }
+  // No plane to take faces from: the symmetric fan's values 2cos(2 pi / n) at the two ends,
+  // linear along the edge, b = -1, c = 1. Analysis-suitable by degree; at a vertex of valence
+  // 4 (a crossing) gluing_violations checks Condition 3.2 and names the vertex if it fails.
+  if (!mesh.planar()) return symmetric_gluing(mesh, SymmetricBlend::kLinear);
   // Every bilinear face must be regular: its det J is affine in (s, t) (no s t term), so
   // positive at the four corners means positive everywhere, i.e. a convex face, counter-
   // clockwise.

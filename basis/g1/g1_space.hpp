@@ -39,10 +39,13 @@ struct GluingData {
 // The symmetric gluing (Blidia-Mourrain-Villamizar eq. 11) with Hermite functions of degree 2,
 // C^0 at 1/2: a = 2cos(2pi/n0) d0(u) - 2cos(2pi/n1) d1(u), b = -1, c = 1, n the number of
 // edges at each end; at a boundary vertex shared by F faces the angle pi/F replaces 2pi/n.
-// c1_blend: the Hermite functions C^1 at 1/2 instead (d0 = 1 - 2u^2 | 2(1-u)^2): with a
-// C^1 split (r >= 1) the paper's C^0 blend forces every G1 geometry to be singular at the
-// midpoint of an edge whose a has a kink there (docs/G1_POISSON.md); these data do not.
-GluingData symmetric_gluing(const QuadMesh& mesh, bool c1_blend = false);
+// kC1: the Hermite functions C^1 at 1/2 instead (d0 = 1 - 2u^2 | 2(1-u)^2): with a C^1 split
+// (r >= 1) the paper's C^0 blend forces every G1 geometry to be singular at the midpoint of an
+// edge whose a has a kink there (docs/G1_POISSON.md); these data do not. kLinear: d0 = 1 - u,
+// d1 = u, one polynomial on the edge (analysis-suitable by degree: analysis_suitable_gluing
+// on surfaces).
+enum class SymmetricBlend { kC0, kC1, kLinear };
+GluingData symmetric_gluing(const QuadMesh& mesh, SymmetricBlend blend = SymmetricBlend::kC0);
 
 // The general construction (eqs. 8 and 10, c = 1) from a fan of vectors per vertex: the
 // mesh's own edge directions, projected to the tangent plane at the vertex. At each end,

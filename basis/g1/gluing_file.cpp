@@ -120,7 +120,7 @@ GluingData make_gluing(const std::string& name_or_file, const QuadMesh& mesh, co
     }
   }
   if (name_or_file == "symmetric") return symmetric_gluing(mesh);
-  if (name_or_file == "symmetric_c1") return symmetric_gluing(mesh, true);
+  if (name_or_file == "symmetric_c1") return symmetric_gluing(mesh, SymmetricBlend::kC1);
   if (name_or_file == "geometric" || name_or_file == "regular_fans") {
     try {
       return geometric_gluing(mesh, name_or_file == "regular_fans");
