@@ -178,7 +178,7 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
   sol.timings.setup = seconds_since(t);
 
   sol.coefficients = fixed_values;
-  if (layout.num_free() > 0) {
+  if (n > 0) {  // global: every rank takes part in the collective calls, with or without rows of its own
     say("assembly");
     t = clock::now();
     const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
