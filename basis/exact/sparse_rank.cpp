@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <unordered_map>
 
 namespace knotwork {
 
@@ -15,28 +16,54 @@ class DenominatorMultipleOfPrime : public std::runtime_error {
   DenominatorMultipleOfPrime() : std::runtime_error("a denominator is a multiple of the prime") {}
 };
 
-// ---- arithmetic modulo a prime below 2^61 ----
+// ---- arithmetic modulo an odd prime below 2^61, in Montgomery form ----
+// A value x is held as x 2^64 mod p: a product is then reduced with two multiplications
+// instead of a 128-bit division (which was a third of the rank's time). Zero stays zero, so
+// the elimination's zero tests are unchanged.
 struct ModP {
-  uint64_t p;
-  uint64_t mul(uint64_t a, uint64_t b) const { return static_cast<uint64_t>((__uint128_t)a * b % p); }
+  uint64_t p = 0, neg_inverse = 0, one = 0, r_squared = 0;
+  explicit ModP(uint64_t prime) : p(prime) {
+    uint64_t inverse = p;  // Newton's iteration for p^-1 mod 2^64 (p odd): 6 steps give 64 bits
+    for (int i = 0; i < 6; ++i) inverse *= 2 - p * inverse;
+    neg_inverse = 0 - inverse;
+    one = static_cast<uint64_t>((static_cast<__uint128_t>(1) << 64) % p);
+    r_squared = static_cast<uint64_t>(static_cast<__uint128_t>(one) * one % p);
+  }
+  uint64_t reduce(__uint128_t t) const {  // t 2^-64 mod p, for t < p 2^64
+    const uint64_t m = static_cast<uint64_t>(t) * neg_inverse;
+    const uint64_t r = static_cast<uint64_t>((t + static_cast<__uint128_t>(m) * p) >> 64);
+    return r >= p ? r - p : r;
+  }
+  uint64_t mul(uint64_t a, uint64_t b) const { return reduce(static_cast<__uint128_t>(a) * b); }
   uint64_t add(uint64_t a, uint64_t b) const { const uint64_t s = a + b; return s >= p ? s - p : s; }
   uint64_t sub(uint64_t a, uint64_t b) const { return a >= b ? a - b : a + p - b; }
   uint64_t pow(uint64_t a, uint64_t e) const {
-    uint64_t r = 1;
+    uint64_t r = one;
     for (; e; e >>= 1, a = mul(a, a))
       if (e & 1) r = mul(r, a);
     return r;
   }
   uint64_t inv(uint64_t a) const { return pow(a, p - 2); }
-  uint64_t of(const mpz_class& z) const {
+  uint64_t of(const mpz_class& z) const {  // z mod p, in Montgomery form
     mpz_class r;
     mpz_fdiv_r_ui(r.get_mpz_t(), z.get_mpz_t(), p);
-    return r.get_ui();
+    return mul(r.get_ui(), r_squared);
   }
   uint64_t of(const mpq_class& q) const {
     const uint64_t d = of(q.get_den());
     if (d == 0) throw DenominatorMultipleOfPrime();
-    return mul(of(q.get_num()), inv(d));
+    return mul(of(q.get_num()), inverse_of_denominator(d));
+  }
+
+ private:
+  // The rows' denominators are few (the same sample points and data recur): their inverses,
+  // 120 products each, are remembered (they were most of the rank's time).
+  mutable std::unordered_map<uint64_t, uint64_t> inverses_;
+  uint64_t inverse_of_denominator(uint64_t d) const {
+    if (d == one) return one;
+    const auto [it, added] = inverses_.try_emplace(d, 0);
+    if (added) it->second = inv(d);
+    return it->second;
   }
 };
 
@@ -139,7 +166,7 @@ long rank_modular(const std::vector<SparseRationalRow>& rows, long columns, std:
     bool second_failed = false;
     std::thread other([&] {
       try {
-        second = sparse_rank(rows, columns, ModularField{{kPrimes[1]}}, nullptr);
+        second = sparse_rank(rows, columns, ModularField{ModP(kPrimes[1])}, nullptr);
       } catch (const DenominatorMultipleOfPrime&) {
         second_failed = true;
       }
@@ -147,7 +174,7 @@ long rank_modular(const std::vector<SparseRationalRow>& rows, long columns, std:
     long first = -1;
     bool first_failed = false;
     try {
-      first = sparse_rank(rows, columns, ModularField{{kPrimes[0]}}, independent);
+      first = sparse_rank(rows, columns, ModularField{ModP(kPrimes[0])}, independent);
     } catch (const DenominatorMultipleOfPrime&) {
       first_failed = true;
     }
@@ -164,7 +191,7 @@ long rank_modular(const std::vector<SparseRationalRow>& rows, long columns, std:
   int found = 0;
   for (uint64_t p : kPrimes) {
     try {
-      ranks[found] = sparse_rank(rows, columns, ModularField{{p}}, found == 0 ? independent : nullptr);
+      ranks[found] = sparse_rank(rows, columns, ModularField{ModP(p)}, found == 0 ? independent : nullptr);
       if (++found == 2) break;
     } catch (const DenominatorMultipleOfPrime&) {  // try the next prime
     }
@@ -191,21 +218,55 @@ long rank_reliable(const std::vector<SparseRationalRow>& rows, long columns, std
   return rank_exact(rows, columns, independent);
 }
 
-std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq_class>> A, int columns, long* rank) {
+std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq_class>> rows, int columns, long* rank) {
+  // Gauss-Jordan on integer rows (each rational row times its denominators' lcm): a row is
+  // updated in place, p * row - q * pivot row, and divided by the gcd of its entries, so
+  // there is no rational arithmetic (a gcd per product) and no temporary per entry. The
+  // reduced echelon form is unique, so the result is the one rational elimination gives,
+  // 4x faster measured on the G1 vertex systems.
+  std::vector<std::vector<mpz_class>> A(rows.size(), std::vector<mpz_class>(columns));
+  for (size_t i = 0; i < rows.size(); ++i) {
+    mpz_class lcm = 1;
+    for (int j = 0; j < columns; ++j)
+      if (rows[i][j] != 0) mpz_lcm(lcm.get_mpz_t(), lcm.get_mpz_t(), rows[i][j].get_den_mpz_t());
+    for (int j = 0; j < columns; ++j)
+      if (rows[i][j] != 0) {
+        mpz_divexact(A[i][j].get_mpz_t(), lcm.get_mpz_t(), rows[i][j].get_den_mpz_t());
+        A[i][j] *= rows[i][j].get_num();
+      }
+  }
+  rows.clear();
+  mpz_class g, p, q;
+  auto remove_content = [&](std::vector<mpz_class>& row) {
+    g = 0;
+    for (const mpz_class& x : row)
+      if (x != 0) {
+        mpz_gcd(g.get_mpz_t(), g.get_mpz_t(), x.get_mpz_t());
+        if (g == 1) return;
+      }
+    if (g > 1)
+      for (mpz_class& x : row)
+        if (x != 0) mpz_divexact(x.get_mpz_t(), x.get_mpz_t(), g.get_mpz_t());
+  };
   std::vector<int> pivot_col;
   size_t r = 0;
   for (int c = 0; c < columns && r < A.size(); ++c) {
-    size_t p = r;
-    while (p < A.size() && A[p][c] == 0) ++p;
-    if (p == A.size()) continue;
-    std::swap(A[p], A[r]);
-    const mpq_class inv = 1 / A[r][c];
-    for (int j = c; j < columns; ++j) A[r][j] *= inv;
+    size_t best = A.size();  // the smallest pivot in size keeps the numbers small
+    for (size_t i = r; i < A.size(); ++i)
+      if (A[i][c] != 0 && (best == A.size() || mpz_cmpabs(A[i][c].get_mpz_t(), A[best][c].get_mpz_t()) < 0)) best = i;
+    if (best == A.size()) continue;
+    std::swap(A[best], A[r]);
+    p = A[r][c];
     for (size_t i = 0; i < A.size(); ++i) {
       if (i == r || A[i][c] == 0) continue;
-      const mpq_class f = A[i][c];
-      for (int j = c; j < columns; ++j)
-        if (A[r][j] != 0) A[i][j] -= f * A[r][j];
+      q = A[i][c];
+      // Row r is zero left of c (its earlier pivot columns were eliminated, and the other
+      // columns had no pivot in the rows from r on); row i is scaled by p everywhere.
+      for (int j = 0; j < columns; ++j) {
+        if (A[i][j] != 0) A[i][j] *= p;
+        if (j >= c && A[r][j] != 0) mpz_submul(A[i][j].get_mpz_t(), q.get_mpz_t(), A[r][j].get_mpz_t());
+      }
+      remove_content(A[i]);
     }
     pivot_col.push_back(c);
     ++r;
@@ -218,7 +279,11 @@ std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq
     if (is_pivot[f]) continue;
     std::vector<mpq_class> x(columns, mpq_class(0));
     x[f] = 1;
-    for (size_t i = 0; i < pivot_col.size(); ++i) x[pivot_col[i]] = -A[i][f];
+    for (size_t i = 0; i < pivot_col.size(); ++i)
+      if (A[i][f] != 0) {
+        x[pivot_col[i]] = mpq_class(-A[i][f], A[i][pivot_col[i]]);
+        x[pivot_col[i]].canonicalize();
+      }
     basis.push_back(std::move(x));
   }
   return basis;

@@ -133,32 +133,62 @@ FaceFunctional<Scalar> face_functional(int face, int corner, const Scalar& u, co
                                        int k, int r) {
   const Scalar s = Scalar(kOrigin[corner][0]) + u * kDu[corner][0] + v * kDv[corner][0];
   const Scalar t = Scalar(kOrigin[corner][1]) + u * kDu[corner][1] + v * kDv[corner][1];
-  std::vector<Scalar> Ns, dNs, Nt, dNt;
+  std::vector<Scalar> local[4];
+  const std::vector<Scalar>*Ns = &local[0], *dNs = &local[1], *Nt = &local[2], *dNt = &local[3];
   if constexpr (std::is_same_v<Scalar, mpq_class>) {
     // The conditions of every edge sample the same few points: exact B-spline values are
     // remembered per thread (a fifth of a G1 build was recomputing them).
     thread_local std::map<std::tuple<int, int, mpq_class>, std::pair<std::vector<mpq_class>, std::vector<mpq_class>>> seen;
-    auto values = [&](const mpq_class& x, std::vector<mpq_class>& value, std::vector<mpq_class>& derivative) {
+    auto values = [&](const mpq_class& x, const std::vector<mpq_class>*& value, const std::vector<mpq_class>*& derivative) {
       auto [it, added] = seen.try_emplace(std::tuple{k, r, x});
       if (added) univariate(k, r, x, it->second.first, it->second.second);
-      value = it->second.first;
-      derivative = it->second.second;
+      value = &it->second.first;
+      derivative = &it->second.second;
     };
     values(s, Ns, dNs);
     values(t, Nt, dNt);
   } else {
-    univariate(k, r, s, Ns, dNs);
-    univariate(k, r, t, Nt, dNt);
+    univariate(k, r, s, local[0], local[1]);
+    univariate(k, r, t, local[2], local[3]);
   }
+  // Only the few B-splines that do not vanish at the point (k + 1 per direction at most, and
+  // on an edge one or two across it) take part: the products are formed for those alone.
+  auto nonzero = [](const std::vector<Scalar>& x, const std::vector<Scalar>* y) {
+    std::vector<int> out;
+    for (int i = 0; i < static_cast<int>(x.size()); ++i)
+      if (x[i] != 0 || (y && (*y)[i] != 0)) out.push_back(i);
+    return out;
+  };
+  const std::vector<int> is = nonzero(*Ns, direction ? dNs : nullptr), js = nonzero(*Nt, direction ? dNt : nullptr);
   FaceFunctional<Scalar> out;
-  const int n = static_cast<int>(Ns.size());
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      Scalar c = direction ? Scalar(Scalar(direction[0]) * dNs[i] * Nt[j] + Scalar(direction[1]) * Ns[i] * dNt[j])
-                           : Scalar(Ns[i] * Nt[j]);
+  for (int i : is)
+    for (int j : js) {
+      Scalar c = direction ? Scalar(Scalar(direction[0]) * (*dNs)[i] * (*Nt)[j] + Scalar(direction[1]) * (*Ns)[i] * (*dNt)[j])
+                           : Scalar((*Ns)[i] * (*Nt)[j]);
       if (c != 0) out.terms.emplace_back(g1_unknown(face, i, j, k, r), c);
     }
   return out;
+}
+
+// face_functional on face 0, remembered per thread for exact points (every edge samples the
+// same points in one of four frames), shifted to `face`: its unknowns are face 0's plus
+// face * n^2.
+template <class Scalar>
+FaceFunctional<Scalar> shared_face_functional(int face, int corner, const Scalar& u, const Scalar& v,
+                                              const int* direction, int k, int r) {
+  if constexpr (!std::is_same_v<Scalar, mpq_class>) {
+    return face_functional<Scalar>(face, corner, u, v, direction, k, r);
+  } else {
+    using Key = std::tuple<int, int, int, int, int, int, mpq_class, mpq_class>;
+    thread_local std::map<Key, FaceFunctional<mpq_class>> seen;
+    const Key key{k, r, corner, direction != nullptr, direction ? direction[0] : 0, direction ? direction[1] : 0, u, v};
+    auto [it, added] = seen.try_emplace(key);
+    if (added) it->second = face_functional<mpq_class>(0, corner, u, v, direction, k, r);
+    const long offset = g1_unknown(face, 0, 0, k, r);
+    FaceFunctional<mpq_class> out = it->second;
+    for (auto& term : out.terms) term.first += offset;
+    return out;
+  }
 }
 
 template <class Scalar>
@@ -186,17 +216,17 @@ std::vector<std::vector<std::pair<long, Scalar>>> g1_conditions(const QuadMesh& 
         const Scalar u = Scalar(half) / 2 + Scalar(q + 1) / (2 * (points + 1));
         const Scalar zero(0);
         // (2): f1(u, 0) - f0(0, u)
-        const auto v1 = face_functional<Scalar>(f1, c1, u, zero, nullptr, k, r);
-        const auto v0 = face_functional<Scalar>(f0, c0, zero, u, nullptr, k, r);
+        const auto v1 = shared_face_functional<Scalar>(f1, c1, u, zero, nullptr, k, r);
+        const auto v0 = shared_face_functional<Scalar>(f0, c0, zero, u, nullptr, k, r);
         std::vector<std::pair<long, Scalar>> row;
         for (const auto& [col, c] : v1.terms) row.emplace_back(col, c);
         for (const auto& [col, c] : v0.terms) row.emplace_back(col, -c);
         rows.push_back(std::move(row));
         // (3): c dv f1(u, 0) - b du f0(0, u) - a dv f0(0, u)
         const Scalar a = gluing_value(g.a, u), b = gluing_value(g.b, u), c = gluing_value(g.c, u);
-        const auto d1 = face_functional<Scalar>(f1, c1, u, zero, kDv[c1], k, r);
-        const auto du0 = face_functional<Scalar>(f0, c0, zero, u, kDu[c0], k, r);
-        const auto dv0 = face_functional<Scalar>(f0, c0, zero, u, kDv[c0], k, r);
+        const auto d1 = shared_face_functional<Scalar>(f1, c1, u, zero, kDv[c1], k, r);
+        const auto du0 = shared_face_functional<Scalar>(f0, c0, zero, u, kDu[c0], k, r);
+        const auto dv0 = shared_face_functional<Scalar>(f0, c0, zero, u, kDv[c0], k, r);
         row.clear();
         for (const auto& [col, x] : d1.terms) row.emplace_back(col, c * x);
         for (const auto& [col, x] : du0.terms) row.emplace_back(col, -b * x);
