@@ -104,6 +104,7 @@ RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::str
   auto t = clock::now();
   r.space = build_space(c, 0, say);
   const double t_space = since(t);
+  r.seconds_space = t_space;
   r.description = r.space->description();
   r.solution = solve_case(c, *r.space, ordering, say, &r.solver);
   r.solution.timings.setup += t_space;
@@ -132,7 +133,7 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
   const PoissonSolution& s = r.solution;
   const PoissonTimings& tm = s.timings;
   Json timings = Json::object();
-  timings.set("setup", tm.setup).set("assembly", tm.assembly).set("analysis", tm.analysis)
+  timings.set("setup", tm.setup).set("space", r.seconds_space).set("assembly", tm.assembly).set("analysis", tm.analysis)
       .set("factorization", tm.factorization).set("solve", tm.solve).set("preconditioner", tm.preconditioner)
       .set("iterations", tm.iterations).set("errors", tm.errors)
       .set("checks", r.seconds_checks).set("output", r.seconds_output).set("total_without_output", r.total_without_output());

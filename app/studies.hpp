@@ -38,6 +38,7 @@ struct RunOutcome {
   std::string description;
   std::vector<ReportField> fields;  // the family's report and solution checks
   std::vector<std::string> outputs;
+  double seconds_space = 0;  // building the space, part of timings.setup
   double seconds_checks = 0, seconds_output = 0;
   double total_without_output() const;
 };

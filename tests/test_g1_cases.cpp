@@ -250,6 +250,17 @@ TEST_CASE("Analysis-suitable data, L-shape with extraordinary vertices: optimal 
 TEST_CASE("Analysis-suitable data, sphere from a cube (valence 3): optimal rates", "[g1][cases][optimal]") {
   check_optimal("/cases/g1_sphere_xy.toml", false);
 }
+// Valence 5 on a closed surface: the linear symmetric data are irrational there (sums of
+// cosines), the dimension a rank modulo primes with a 10th root of unity, the local functions
+// floating point.
+TEST_CASE("Analysis-suitable data, sphere from a dodecahedron (valences 3, 4, 5): optimal rates", "[g1][cases][optimal]") {
+  const CaseDescription c = load_case(kSource + "/cases/g1_sphere_dodecahedron.toml");
+  const G1Discretization d = discretize_g1(c, 0);
+  REQUIRE(!d.basis.exact);
+  REQUIRE(d.basis.space.cyclotomic == 10);
+  REQUIRE(static_cast<long>(d.basis.functions.size()) == d.basis.space.dimension);
+  check_optimal("/cases/g1_sphere_dodecahedron.toml", false);
+}
 
 // The torus (all valence 4: a = 0, b = -1, c = 1) from the first refinement: 0.3 either way
 // around the optimal 5 and 4 (pre-asymptotic). (Observed 5.07/4.07.)

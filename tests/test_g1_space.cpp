@@ -364,3 +364,62 @@ TEST_CASE("Analysis-suitable gluing refuses faces that are not convex, and on su
   const QuadMesh fine = refine_g1(c, g, 1).mesh;
   REQUIRE(gluing_violations(fine, analysis_suitable_gluing(fine)).empty());
 }
+
+TEST_CASE("Sums of cosines: values, and residues that satisfy the minimal polynomials", "[g1][gluing][exact]") {
+  // 2cos(2 pi / 5) is a root of x^2 + x - 1, 2cos(2 pi / 7) of x^3 + x^2 - 2x - 1,
+  // 2cos(pi / 4) of x^2 - 2, 2cos(19 pi / 5) = 2cos(pi / 5) of x^2 - x - 1 (their minimal
+  // polynomials over Q; 19/5 is reduced modulo 2).
+  struct Case {
+    long p, q;
+    std::vector<long> minimal;  // coefficients, constant first
+  };
+  for (const Case& c : {Case{2, 5, {-1, 1, 1}}, Case{2, 7, {-1, -2, 1, 1}}, Case{1, 4, {-2, 0, 1}}, Case{19, 5, {-1, -1, 1}}}) {
+    CAPTURE(c.p, c.q);
+    const CosineSum x = CosineSum::two_cos_pi(c.p, c.q);
+    REQUIRE(x.value() == Approx(2 * std::cos(M_PI * c.p / c.q)).epsilon(1e-15));
+    const long M = x.denominators_lcm();
+    REQUIRE(M == c.q);
+    for (uint64_t prime : primes_congruent_to_one(2 * M, 2)) {
+      REQUIRE((prime - 1) % (2 * M) == 0);
+      const uint64_t zeta = primitive_root_of_unity(2 * M, prime);
+      REQUIRE(power_modulo(zeta, 2 * M, prime) == 1);
+      REQUIRE(power_modulo(zeta, M, prime) == prime - 1);  // primitive: zeta^M = -1
+      const ResidueMap residue_of(prime);
+      const uint64_t r = x.residue(residue_of, zeta, M);
+      uint64_t value = 0;  // the minimal polynomial at r, by Horner
+      for (size_t i = c.minimal.size(); i-- > 0;)
+        value = (multiply_modulo(value, r, prime) + residue(mpq_class(c.minimal[i]), prime)) % prime;
+      CHECK(value == 0);
+    }
+  }
+  // Linear combinations: 2cos(2pi/5) + 2cos(4pi/5) = -1.
+  const CosineSum s = CosineSum::two_cos_pi(2, 5) + CosineSum::two_cos_pi(4, 5);
+  const uint64_t prime = primes_congruent_to_one(10, 1).front();
+  CHECK(s.residue(ResidueMap(prime), primitive_root_of_unity(10, prime), 5) == prime - 1);
+  CHECK(s.value() == Approx(-1));
+}
+
+TEST_CASE("Irrational symmetric data: the dimension modulo primes with roots of unity equals the SVD's", "[g1][dimension]") {
+  // The two computations share nothing but the mesh and the data's doubles: a sparse rank of
+  // the conditions reduced into Z/p (zeta_N -> a root of unity) against the dense SVD of the
+  // conditions in double precision.
+  std::vector<std::pair<std::string, QuadMesh>> meshes;
+  for (int F : {5, 7, 8}) meshes.emplace_back("fan of " + std::to_string(F), fan(F));
+  meshes.emplace_back("five quads", QuadMesh::read_obj(std::string(KNOTWORK_SOURCE_DIR) + "/cases/meshes/five_quads.obj"));
+  for (const auto& [name, mesh] : meshes)
+    for (const SymmetricBlend blend : {SymmetricBlend::kC0, SymmetricBlend::kC1, SymmetricBlend::kLinear})
+      for (const auto& [k, r] : {std::pair{4, 1}, std::pair{5, 2}}) {
+        CAPTURE(name, static_cast<int>(blend), k, r);
+        const GluingData g = symmetric_gluing(mesh, blend);
+        REQUIRE(!g.exact());
+        REQUIRE(g.algebraic());
+        const G1SpaceDimension modular = g1_space_dimension_cyclotomic(mesh, g, k, r);
+        const G1SpaceDimension svd = g1_space_dimension(mesh, g, k, r, true);
+        CHECK(modular.cyclotomic % 2 == 0);
+        CHECK(modular.dimension == svd.dimension);
+        CHECK(modular.constraints == svd.constraints);
+      }
+  // The Section 8 count for a fan of F = 5 (above, by SVD) holds for the modular rank too.
+  const QuadMesh five = fan(5);
+  CHECK(g1_space_dimension_cyclotomic(five, symmetric_gluing(five), 4, 1).dimension == (3 + 5) + 5 * (4 + 5 + 36));
+}

@@ -67,13 +67,13 @@ struct ModP {
   }
 };
 
-using Constraint = SparseRationalRow;
+const std::vector<std::pair<long, mpq_class>>& terms_of(const SparseRationalRow& row) { return row.terms; }
+const std::vector<std::pair<long, uint64_t>>& terms_of(const std::vector<std::pair<long, uint64_t>>& row) { return row; }
 
 // Incremental sparse row echelon form: each new row is reduced by the pivots whose
 // leading column it meets, until it is zero (dependent) or becomes a new pivot.
-template <class Field>
-long sparse_rank(const std::vector<Constraint>& rows, long columns, const Field& F,
-                 std::vector<bool>* independent = nullptr) {
+template <class Field, class Rows>
+long sparse_rank(const Rows& rows, long columns, const Field& F, std::vector<bool>* independent = nullptr) {
   using Value = typename Field::Value;
   using Row = std::vector<std::pair<long, Value>>;  // sorted by column, leading entry 1
   std::vector<int> pivot_of(columns, -1);
@@ -81,9 +81,8 @@ long sparse_rank(const std::vector<Constraint>& rows, long columns, const Field&
   Row row, merged;
   if (independent) independent->assign(rows.size(), false);
   for (size_t index = 0; index < rows.size(); ++index) {
-    const Constraint& c = rows[index];
     row.clear();
-    for (const auto& [col, q] : c.terms) {
+    for (const auto& [col, q] : terms_of(rows[index])) {
       Value v = F.of(q);
       if (!F.zero(v)) row.emplace_back(col, v);
     }
@@ -133,6 +132,7 @@ struct ModularField {
   using Value = uint64_t;
   ModP m;
   Value of(const mpq_class& q) const { return m.of(q); }
+  Value of(uint64_t residue) const { return m.mul(residue % m.p, m.r_squared); }
   bool zero(Value v) const { return v == 0; }
   Value inv(Value v) const { return m.inv(v); }
   Value mul(Value a, Value b) const { return m.mul(a, b); }
@@ -216,6 +216,99 @@ long rank_reliable(const std::vector<SparseRationalRow>& rows, long columns, std
   }
   if (exact) *exact = true;
   return rank_exact(rows, columns, independent);
+}
+
+uint64_t residue(const mpq_class& q, uint64_t prime) {
+  const ModP m(prime);
+  try {
+    return m.reduce(m.of(q));  // out of Montgomery form
+  } catch (const DenominatorMultipleOfPrime&) {
+    throw std::domain_error("the prime " + std::to_string(prime) + " divides the denominator of " + q.get_str());
+  }
+}
+
+uint64_t ResidueMap::operator()(const mpq_class& q) const {
+  const uint64_t d = mpz_fdiv_ui(q.get_den_mpz_t(), prime_);
+  if (d == 0) throw std::domain_error("the prime " + std::to_string(prime_) + " divides the denominator of " + q.get_str());
+  uint64_t inverse = 1;
+  if (d != 1) {
+    const auto [it, added] = inverses_.try_emplace(d, 0);
+    if (added) it->second = power_modulo(d, prime_ - 2, prime_);
+    inverse = it->second;
+  }
+  return multiply_modulo(mpz_fdiv_ui(q.get_num_mpz_t(), prime_), inverse, prime_);
+}
+
+uint64_t multiply_modulo(uint64_t a, uint64_t b, uint64_t prime) {
+  return static_cast<uint64_t>(static_cast<__uint128_t>(a) * b % prime);
+}
+
+uint64_t power_modulo(uint64_t a, uint64_t e, uint64_t prime) {
+  uint64_t r = 1 % prime;
+  for (a %= prime; e; e >>= 1, a = multiply_modulo(a, a, prime))
+    if (e & 1) r = multiply_modulo(r, a, prime);
+  return r;
+}
+
+namespace {
+
+// Deterministic Miller-Rabin below 3.3e24 (the first 12 primes as bases).
+bool is_prime(uint64_t n) {
+  if (n < 2) return false;
+  for (uint64_t p : {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37})
+    if (n % p == 0) return n == p;
+  uint64_t d = n - 1;
+  int s = 0;
+  for (; d % 2 == 0; d /= 2) ++s;
+  for (uint64_t a : {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37}) {
+    uint64_t x = power_modulo(a, d, n);
+    if (x == 1 || x == n - 1) continue;
+    bool composite = true;
+    for (int i = 1; i < s && composite; ++i) {
+      x = multiply_modulo(x, x, n);
+      composite = x != n - 1;
+    }
+    if (composite) return false;
+  }
+  return true;
+}
+
+std::vector<uint64_t> prime_factors(uint64_t n) {
+  std::vector<uint64_t> out;
+  for (uint64_t p = 2; p * p <= n; ++p)
+    if (n % p == 0) {
+      out.push_back(p);
+      while (n % p == 0) n /= p;
+    }
+  if (n > 1) out.push_back(n);
+  return out;
+}
+
+}  // namespace
+
+std::vector<uint64_t> primes_congruent_to_one(uint64_t n, int count) {
+  if (n == 0 || n > (1ULL << 40)) throw std::invalid_argument("primes_congruent_to_one: modulus out of range");
+  std::vector<uint64_t> out;
+  for (uint64_t m = ((1ULL << 61) - 2) / n; m > 0 && static_cast<int>(out.size()) < count; --m)
+    if (is_prime(m * n + 1)) out.push_back(m * n + 1);
+  return out;
+}
+
+uint64_t primitive_root_of_unity(uint64_t n, uint64_t prime) {
+  if (n == 0 || (prime - 1) % n != 0)
+    throw std::invalid_argument("primitive_root_of_unity: " + std::to_string(n) + " does not divide p - 1");
+  const std::vector<uint64_t> factors = prime_factors(n);
+  for (uint64_t x = 2; x < prime; ++x) {
+    const uint64_t z = power_modulo(x, (prime - 1) / n, prime);
+    bool primitive = true;
+    for (uint64_t q : factors) primitive = primitive && power_modulo(z, n / q, prime) != 1;
+    if (primitive) return z;
+  }
+  throw std::logic_error("primitive_root_of_unity: none found");
+}
+
+long rank_of_residues(const std::vector<std::vector<std::pair<long, uint64_t>>>& rows, long columns, uint64_t prime) {
+  return sparse_rank(rows, columns, ModularField{ModP(prime)});
 }
 
 std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq_class>> rows, int columns, long* rank) {

@@ -1,6 +1,8 @@
 #pragma once
 #include <gmpxx.h>
 
+#include <cstdint>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -27,6 +29,32 @@ long rank_exact(const std::vector<SparseRationalRow>& rows, long columns, std::v
 // multiple of the prime, is special modulo that prime only). `exact` (optional) says which.
 long rank_reliable(const std::vector<SparseRationalRow>& rows, long columns, std::vector<bool>* independent = nullptr,
                    bool* exact = nullptr);
+
+// Arithmetic modulo primes below 2^61 for rows whose entries lie in a number field: the G1
+// conditions with gluing data 2cos(2 pi / n) are reduced modulo a prime p = 1 (mod N), where
+// the field Q(zeta_N) has an image (zeta_N -> a primitive N-th root of unity mod p). As for
+// rational rows, the rank modulo p is at most the rank over the field.
+// q mod prime (std::domain_error when the prime divides q's denominator).
+uint64_t residue(const mpq_class& q, uint64_t prime);
+// The same, remembering the inverses of the denominators met (one object per thread).
+class ResidueMap {
+ public:
+  explicit ResidueMap(uint64_t prime) : prime_(prime) {}
+  uint64_t prime() const { return prime_; }
+  uint64_t operator()(const mpq_class& q) const;
+
+ private:
+  uint64_t prime_;
+  mutable std::unordered_map<uint64_t, uint64_t> inverses_;
+};
+uint64_t multiply_modulo(uint64_t a, uint64_t b, uint64_t prime);
+uint64_t power_modulo(uint64_t a, uint64_t e, uint64_t prime);
+// The `count` largest primes below 2^61 that are 1 modulo n (n <= 2^40), largest first.
+std::vector<uint64_t> primes_congruent_to_one(uint64_t n, int count);
+// A primitive n-th root of unity modulo `prime` (n must divide prime - 1).
+uint64_t primitive_root_of_unity(uint64_t n, uint64_t prime);
+// Rank modulo `prime` of rows given by (column, residue); a column named twice counts once.
+long rank_of_residues(const std::vector<std::vector<std::pair<long, uint64_t>>>& rows, long columns, uint64_t prime);
 
 // Null space over Q of dense rows (reduced row echelon form): one vector per free column,
 // with a 1 there and the pivot columns solved for. `rank` (optional) receives the rank.

@@ -319,6 +319,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
   // are computed once per configuration.
   std::mutex cache_mutex;
   std::map<std::string, std::shared_ptr<const std::vector<std::vector<mpq_class>>>> cache;
+  std::map<std::vector<std::vector<double>>, std::shared_ptr<const Eigen::MatrixXd>> floating_cache;
   auto configuration = [&](int v) {
     const auto& ring = mesh.ring(v);
     std::string key = std::to_string(ring.faces.size()) + (ring.boundary ? "b" : "i");
@@ -364,7 +365,19 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
       }
       local[v].exact = *solutions;
     } else {
-      local[v].floating = taylor_independent(null_space(restrict_rows(vertex_rows(), cols), cols.size()), taylor);
+      // The same sharing, keyed by the local system itself (equal doubles, equal solutions).
+      auto A = restrict_rows(vertex_rows(), cols);
+      std::shared_ptr<const Eigen::MatrixXd> solutions;
+      {
+        const std::lock_guard<std::mutex> lock(cache_mutex);
+        if (const auto it = floating_cache.find(A); it != floating_cache.end()) solutions = it->second;
+      }
+      if (!solutions) {
+        solutions = std::make_shared<const Eigen::MatrixXd>(taylor_independent(null_space(A, cols.size()), taylor));
+        const std::lock_guard<std::mutex> lock(cache_mutex);
+        floating_cache.emplace(std::move(A), solutions);
+      }
+      local[v].floating = *solutions;
     }
   }
   std::vector<G1BasisFunction> vertex_functions;
@@ -713,7 +726,11 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
   basis.k = k;
   basis.r = r;
   basis.exact = gluing.exact() && !floating;
-  say(std::string("dimension (rank of the C1 conditions, ") + (basis.exact ? "exact" : "dense SVD") + ", " +
+  // Sums of cosines (valences 5, 7, 8 with the symmetric data): exact data, floating-point
+  // local functions, the dimension modulo primes with roots of unity (sparse, not an SVD).
+  const bool cyclotomic = !basis.exact && !floating && gluing.algebraic();
+  say(std::string("dimension (rank of the C1 conditions, ") +
+      (basis.exact ? "exact" : cyclotomic ? "modulo primes with roots of unity" : "dense SVD") + ", " +
       std::to_string(long(mesh.num_faces()) * (2 * k - r + 1) * (2 * k - r + 1)) + " unknowns)");
   if (basis.exact) {
     check_g1_arguments(mesh, gluing, k, r);
@@ -723,7 +740,8 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
         std::to_string(mesh.num_edges()) + " edges");
     build<mpq_class>(mesh, gluing, basis, say, std::move(rows));
   } else {
-    basis.space = g1_space_dimension(mesh, gluing, k, r, floating);  // also validates k, r, gluing
+    basis.space = cyclotomic ? g1_space_dimension_cyclotomic(mesh, gluing, k, r)
+                             : g1_space_dimension(mesh, gluing, k, r, floating);  // both validate k, r, gluing
     say("local functions at " + std::to_string(mesh.num_vertices()) + " vertices and " +
         std::to_string(mesh.num_edges()) + " edges");
     build<double>(mesh, gluing, basis, say);

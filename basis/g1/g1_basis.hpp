@@ -58,12 +58,15 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
 // The largest constructions done, in unknowns = faces x (2k - r + 1)^2 (docs/RELIABILITY.md).
 // Exact data (sparse modular rank and local exact null spaces): 1 769 472 unknowns (k = 4,
 // r = 1, 27 648 faces, 992 607 functions) built in 25 s, and the whole run took 6.8 GB here,
-// both about linear in the unknowns; floating-point data (irrational gluing) take a dense SVD
-// of all the conditions: 8 000 unknowns took 67 s and 0.7 GB (k = 5), growing with the cube.
+// both about linear in the unknowns; sums of cosines (modular rank, floating-point local
+// functions) are no slower. Floating-point data (a gluing file's doubles, `geometric` data
+// of coordinates that are not short binary fractions) take a dense SVD of all the conditions:
+// 8 000 unknowns took 67 s and 0.7 GB (k = 5), growing with the cube.
 constexpr long kMaxG1ExactUnknowns = 2000000;
 constexpr long kMaxG1FloatingUnknowns = 10000;
 // std::length_error with the size, the limit and the estimate when the construction of a
-// G1 space on `faces` faces would exceed them.
+// G1 space on `faces` faces would exceed them. `exact_data`: rational or sums of cosines
+// (GluingData::algebraic()), whose dimension is a sparse modular rank.
 void check_g1_construction_size(long faces, int k, int r, bool exact_data);
 
 // Largest relative residual of conditions (2)-(3) over the basis functions:

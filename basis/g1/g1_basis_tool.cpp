@@ -209,14 +209,15 @@ int g1_basis_command(const BasisOptions& o) {
     throw InputError((is_named_gluing(o.gluing) ? o.g1_mesh : o.gluing) + ": " +
                      violations.front() +
                      (violations.size() > 1 ? " (and " + std::to_string(violations.size() - 1) + " more)" : ""));
-  // Irrational data have no exact rank: the dimension is a dense SVD, cubic in the unknowns.
+  // Floating-point data (neither rational nor sums of cosines) have no exact rank: the
+  // dimension is a dense SVD, cubic in the unknowns.
   const long unknowns = static_cast<long>(mesh.num_faces()) * (2 * o.degree - o.split_smoothness + 1) *
                         (2 * o.degree - o.split_smoothness + 1);
-  if (!gluing.exact() && unknowns > 6000)
+  if (!gluing.algebraic() && unknowns > 6000)
     throw InputError(o.g1_mesh + ": --gluing " + o.gluing + ": the data are not rational, and checking the space's dimension by SVD over " +
                      std::to_string(unknowns) + " unknowns (more than 6000) is too slow; use rational data (a JSON file) or a smaller mesh");
   try {
-    check_g1_construction_size(mesh.num_faces(), o.degree, o.split_smoothness, gluing.exact());
+    check_g1_construction_size(mesh.num_faces(), o.degree, o.split_smoothness, gluing.algebraic());
   } catch (const std::length_error& e) {
     throw InputError(o.g1_mesh + ": " + e.what());
   }
@@ -252,14 +253,17 @@ int g1_basis_command(const BasisOptions& o) {
         .set("vertices", mesh.num_vertices()).set("edges", mesh.num_edges()).set("faces", mesh.num_faces())
         .set("boundary_edges", boundary_edges).set("euler_characteristic", mesh.euler_characteristic())
         .set("unknowns", d.unknowns).set("constraints", d.constraints).set("dimension", d.dimension)
-        .set("rank_method", d.exact ? "exact data, rank modulo two primes" : "floating point SVD")
+        .set("rank_method", d.exact        ? "exact data, rank modulo two primes"
+                            : d.cyclotomic ? "sums of cosines, rank modulo two primes with roots of unity"
+                                           : "floating point SVD")
         .set("functions", static_cast<double>(basis.functions.size()))
         .set("counts", Json::object()
                            .set("vertex", basis.counts[0]).set("edge", basis.counts[1]).set("face", basis.counts[2])
                            .set("vertex_pair", basis.counts[3]).set("coupled", basis.counts[4]))
         .set("g1_residual_max", residual).set("rank", rank).set("rank_method_basis", rank_method)
         .set_bool("basis_exact", basis.exact).set("seconds", seconds).set("check_seconds", check_seconds);
-    if (!d.exact) j.set("svd_tolerance", d.tolerance);
+    if (!d.exact && !d.cyclotomic) j.set("svd_tolerance", d.tolerance);
+    if (d.cyclotomic) j.set("root_of_unity_order", d.cyclotomic);
     // Theorem 7.1 on closed meshes (its count of boundary edges and vertices is not stated).
     if (formula)
       j.set("dimension_formula", *formula);
@@ -282,7 +286,10 @@ int g1_basis_command(const BasisOptions& o) {
               (2 * o.degree - o.split_smoothness + 1) * (2 * o.degree - o.split_smoothness + 1));
   std::printf("  dimension  %ld = %ld unknowns - rank %ld (%ld G1 conditions; %s, %.3f s)\n", d.dimension, d.unknowns,
               d.rank, d.constraints,
-              d.exact ? "rational data, rank modulo two primes which agree" : "floating-point data, SVD rank at 1e-10",
+              d.exact        ? "rational data, rank modulo two primes which agree"
+              : d.cyclotomic ? ("sums of cosines, rank modulo two primes with a " + std::to_string(d.cyclotomic) +
+                                "th root of unity, which agree").c_str()
+                             : "floating-point data, SVD rank at 1e-10",
               seconds);
   if (formula)
     std::printf("  Thm 7.1    %ld%s\n", *formula,

@@ -175,10 +175,10 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
 
   d.levels = g.refine + extra_levels;
   if (!g.c0) try {
-      check_g1_construction_size(long(d.coarse.num_faces()) << (2 * d.levels), k, r, d.coarse_gluing.exact());
+      check_g1_construction_size(long(d.coarse.num_faces()) << (2 * d.levels), k, r, d.coarse_gluing.algebraic());
     } catch (const std::length_error& e) {
       throw InputError(c.path + ": [space] refine: " + e.what() +
-                       "; subdivide less, lower the degree" + (d.coarse_gluing.exact() ? "" : ", or use rational gluing data"));
+                       "; subdivide less, lower the degree" + (d.coarse_gluing.algebraic() ? "" : ", or use rational gluing data"));
     }
   say("building the G1 space (" + std::to_string(d.levels) + " subdivisions)");
   d.level = refine_g1(d.coarse, d.coarse_gluing, d.levels);

@@ -7,8 +7,8 @@ namespace knotwork {
 namespace {
 
 // Coefficients of p(u0 + u/2) from those of p (powers of u).
-template <class Scalar>
-std::vector<Scalar> compose_half(const std::vector<Scalar>& p, const Scalar& u0) {
+template <class Scalar, class Shift>
+std::vector<Scalar> compose_half(const std::vector<Scalar>& p, const Shift& u0) {
   std::vector<Scalar> out(p.size(), Scalar(0));
   // Horner in the polynomial ring: q <- q * (u0 + u/2) + p_i (q has degree < deg p when
   // multiplied, so the product fits).
@@ -86,10 +86,14 @@ G1Refinement subdivide(const G1Refinement& coarse) {
 
 PiecewisePolynomial restrict_to_half(const PiecewisePolynomial& p, int half) {
   if (p.exact) {
-    const auto q = compose_half<mpq_class>((*p.exact)[half], half == 0 ? mpq_class(0) : mpq_class(1, 2));
+    const auto q = compose_half((*p.exact)[half], half == 0 ? mpq_class(0) : mpq_class(1, 2));
     return PiecewisePolynomial::from_exact({q, q});
   }
-  const auto q = compose_half<double>(p.pieces[half], 0.5 * half);
+  if (p.algebraic) {
+    const auto q = compose_half((*p.algebraic)[half], half == 0 ? mpq_class(0) : mpq_class(1, 2));
+    return PiecewisePolynomial::from_algebraic({q, q});
+  }
+  const auto q = compose_half(p.pieces[half], 0.5 * half);
   return PiecewisePolynomial::from_double({q, q});
 }
 

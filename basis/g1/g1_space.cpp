@@ -294,8 +294,9 @@ GluingData symmetric_gluing(const QuadMesh& mesh, SymmetricBlend blend) {
     EdgeGluing eg;
     if (x0 && x1)
       eg.a = PiecewisePolynomial::from_exact(pieces(mpq_class(*x0), mpq_class(*x1)));
-    else
-      eg.a = PiecewisePolynomial::from_double(pieces(2 * std::cos(M_PI * p0 / q0), 2 * std::cos(M_PI * p1 / q1)));
+    else  // exact still, as sums of cosines (their rank is taken modulo primes with roots of unity)
+      eg.a = PiecewisePolynomial::from_algebraic(pieces(x0 ? CosineSum(*x0) : CosineSum::two_cos_pi(p0, q0),
+                                                        x1 ? CosineSum(*x1) : CosineSum::two_cos_pi(p1, q1)));
     eg.b = PiecewisePolynomial::constant(-1);
     eg.c = PiecewisePolynomial::constant(1);
     g.edges[e] = std::move(eg);
@@ -310,10 +311,10 @@ template <class Scalar>
 std::vector<Scalar> reflect(const std::vector<Scalar>& p) {
   std::vector<Scalar> out(p.size(), Scalar(0));
   for (size_t i = 0; i < p.size(); ++i) {  // (1 - u)^i = sum_j C(i, j) (-u)^j
-    Scalar binom(1);
+    long binom = 1;
     for (size_t j = 0; j <= i; ++j) {
-      out[j] += (j % 2 ? Scalar(-1) : Scalar(1)) * binom * p[i];
-      binom = binom * Scalar(static_cast<long>(i - j)) / Scalar(static_cast<long>(j + 1));
+      out[j] += (j % 2 ? -binom : binom) * p[i];
+      binom = binom * static_cast<long>(i - j) / static_cast<long>(j + 1);
     }
   }
   return out;
@@ -321,6 +322,7 @@ std::vector<Scalar> reflect(const std::vector<Scalar>& p) {
 
 PiecewisePolynomial reflected(const PiecewisePolynomial& p) {
   if (p.exact) return PiecewisePolynomial::from_exact({reflect((*p.exact)[1]), reflect((*p.exact)[0])});
+  if (p.algebraic) return PiecewisePolynomial::from_algebraic({reflect((*p.algebraic)[1]), reflect((*p.algebraic)[0])});
   return PiecewisePolynomial::from_double({reflect(p.pieces[1]), reflect(p.pieces[0])});
 }
 
@@ -666,6 +668,75 @@ G1SpaceDimension g1_space_dimension_exact(const QuadMesh& mesh, int k, int r, co
   d.constraints = static_cast<long>(sparse.size());
   d.rank = rank_reliable(sparse, d.unknowns);
   d.exact = true;
+  d.dimension = d.unknowns - d.rank;
+  return d;
+}
+
+G1SpaceDimension g1_space_dimension_cyclotomic(const QuadMesh& mesh, const GluingData& gluing, int k, int r) {
+  check_g1_arguments(mesh, gluing, k, r);
+  if (!gluing.algebraic()) throw std::invalid_argument("g1_space_dimension_cyclotomic: floating-point gluing data");
+  G1SpaceDimension d;
+  const long n = 2 * k - r + 1;
+  d.unknowns = mesh.num_faces() * n * n;
+  const long M = gluing.cosine_denominators_lcm();
+  d.cyclotomic = 2 * M;
+  // The rows of conditions (2) and (3) modulo one prime, at the points g1_conditions uses.
+  auto rank_modulo = [&](uint64_t prime, long* constraints) {
+    const uint64_t zeta = primitive_root_of_unity(static_cast<uint64_t>(2 * M), prime);
+    std::vector<std::vector<std::vector<std::pair<long, uint64_t>>>> per_edge(mesh.num_edges());
+#pragma omp parallel
+    {
+    const ResidueMap residue(prime);
+#pragma omp for schedule(dynamic, 8)
+    for (int e = 0; e < mesh.num_edges(); ++e) {
+      const auto& E = mesh.edge(e);
+      if (E.boundary()) continue;
+      const EdgeGluing& g = *gluing.edges[e];
+      const int f1 = E.face[0], c1 = E.corner[0];
+      const int f0 = E.face[1], c0 = (E.corner[1] + 1) % 4;
+      const int points = k + std::max({g.a.degree(), g.b.degree(), g.c.degree(), 0}) + 1;
+      auto add = [&](std::vector<std::pair<long, uint64_t>>& row, const FaceFunctional<mpq_class>& f, uint64_t factor) {
+        for (const auto& [col, x] : f.terms) row.emplace_back(col, multiply_modulo(residue(x), factor, prime));
+      };
+      for (int half = 0; half < 2; ++half)
+        for (int q = 0; q < points; ++q) {
+          const mpq_class u = mpq_class(half, 2) + mpq_class(q + 1, 2 * (points + 1));
+          const mpq_class zero(0);
+          std::vector<std::pair<long, uint64_t>> row;
+          add(row, shared_face_functional<mpq_class>(f1, c1, u, zero, nullptr, k, r), 1);
+          add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, nullptr, k, r), prime - 1);
+          per_edge[e].push_back(std::move(row));
+          const uint64_t a = g.a.residue(u, residue, zeta, M), b = g.b.residue(u, residue, zeta, M),
+                         c = g.c.residue(u, residue, zeta, M);
+          row.clear();
+          add(row, shared_face_functional<mpq_class>(f1, c1, u, zero, kDv[c1], k, r), c);
+          add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, kDu[c0], k, r), (prime - b) % prime);
+          add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, kDv[c0], k, r), (prime - a) % prime);
+          per_edge[e].push_back(std::move(row));
+        }
+    }
+    }
+    std::vector<std::vector<std::pair<long, uint64_t>>> rows;
+    for (auto& edge_rows : per_edge)
+      for (auto& row : edge_rows) rows.push_back(std::move(row));
+    *constraints = static_cast<long>(rows.size());
+    return rank_of_residues(rows, d.unknowns, prime);
+  };
+  // A prime that divides a denominator of the rows cannot take them: the next ones are tried.
+  std::vector<long> ranks;
+  for (uint64_t prime : primes_congruent_to_one(static_cast<uint64_t>(2 * M), 4)) {
+    try {
+      ranks.push_back(rank_modulo(prime, &d.constraints));
+    } catch (const std::domain_error&) {
+      continue;
+    }
+    if (ranks.size() == 2) break;
+  }
+  if (ranks.size() < 2) throw std::runtime_error("G1 dimension: no two primes reduce these gluing data");
+  if (ranks[0] != ranks[1])
+    throw std::runtime_error("G1 dimension: the ranks modulo two primes disagree (" + std::to_string(ranks[0]) + ", " +
+                             std::to_string(ranks[1]) + ")");
+  d.rank = ranks[0];
   d.dimension = d.unknowns - d.rank;
   return d;
 }

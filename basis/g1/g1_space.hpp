@@ -2,25 +2,59 @@
 #include <gmpxx.h>
 
 #include <array>
+#include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "basis/exact/sparse_rank.hpp"
 #include "basis/g1/quad_mesh.hpp"
 
 namespace knotwork {
 
+// An exact number c0 + sum_i c_i 2cos(pi r_i) with rational c and r: the values of the
+// symmetric gluing data at vertices whose 2cos(2 pi / n) is irrational (valence 5, 7, 8, ...).
+// They lie in the cyclotomic field Q(zeta_2M), M the least common denominator of the r_i, so
+// the G1 conditions can be reduced modulo a prime p = 1 (mod 2M) (sparse_rank.hpp).
+struct CosineSum {
+  mpq_class rational;
+  std::map<mpq_class, mpq_class> cosines;  // r in [0, 2) -> the coefficient of 2cos(pi r)
+  CosineSum(long v = 0) : rational(v) {}
+  CosineSum(const mpq_class& v) : rational(v) {}
+  static CosineSum two_cos_pi(long p, long q);  // 2cos(pi p / q)
+  double value() const;
+  // The image in Z/prime with zeta = a primitive 2M-th root of unity there
+  // (2cos(pi a / b) -> zeta^(aM/b) + zeta^(-aM/b)); M must be a multiple of every r's denominator.
+  uint64_t residue(const ResidueMap& residue_of, uint64_t zeta, long M) const;
+  long denominators_lcm() const;  // of the r_i (1 if none)
+  CosineSum operator-() const;
+  CosineSum& operator+=(const CosineSum& o);
+  CosineSum& operator*=(const mpq_class& x);
+  friend CosineSum operator+(CosineSum a, const CosineSum& b) { return a += b; }
+  friend CosineSum operator-(CosineSum a, const CosineSum& b) { return a += -b; }
+  friend CosineSum operator*(const mpq_class& x, CosineSum a) { return a *= x; }
+  friend CosineSum operator*(long x, CosineSum a) { return a *= mpq_class(x); }
+  friend CosineSum operator*(CosineSum a, const mpq_class& x) { return a *= x; }
+  friend CosineSum operator/(CosineSum a, long x) { return a *= mpq_class(1, x); }
+};
+
 // A function on [0, 1] that is a polynomial on [0, 1/2] and on [1/2, 1], each piece given
 // by its coefficients in powers of u (the global parameter, not shifted). Exact rational
-// coefficients when the data are rational (`exact`), doubles always.
+// coefficients when the data are rational (`exact`), exact sums of cosines when they are
+// those (`algebraic`), doubles always.
 struct PiecewisePolynomial {
   std::array<std::vector<double>, 2> pieces;
   std::optional<std::array<std::vector<mpq_class>, 2>> exact;
+  std::optional<std::array<std::vector<CosineSum>, 2>> algebraic;
   static PiecewisePolynomial constant(const mpq_class& v);
   static PiecewisePolynomial from_exact(std::array<std::vector<mpq_class>, 2> pieces);
+  static PiecewisePolynomial from_algebraic(std::array<std::vector<CosineSum>, 2> pieces);
   static PiecewisePolynomial from_double(std::array<std::vector<double>, 2> pieces);
   double operator()(double u) const;
   mpq_class exact_value(const mpq_class& u) const;  // requires exact
+  // The value at a rational u modulo a prime (requires exact or algebraic; see CosineSum).
+  uint64_t residue(const mpq_class& u, const ResidueMap& residue_of, uint64_t zeta, long M) const;
   int degree() const;
 };
 
@@ -34,6 +68,8 @@ struct EdgeGluing {
 struct GluingData {
   std::vector<std::optional<EdgeGluing>> edges;  // per mesh edge; empty on boundary edges
   bool exact() const;                            // every coefficient rational
+  bool algebraic() const;                        // every coefficient rational or a CosineSum
+  long cosine_denominators_lcm() const;          // M for CosineSum::residue over all the data
 };
 
 // The symmetric gluing (Blidia-Mourrain-Villamizar eq. 11) with Hermite functions of degree 2,
@@ -92,6 +128,7 @@ std::vector<std::string> gluing_violations(const QuadMesh& mesh, const GluingDat
 struct G1SpaceDimension {
   long unknowns = 0, constraints = 0, rank = 0, dimension = 0;
   bool exact = false;       // rank of the rational system (modulo two primes that agree)
+  long cyclotomic = 0;      // or data in Q(zeta_N), N = this: rank modulo two primes = 1 (mod N)
   double tolerance = 0;     // otherwise: singular values below tolerance * largest are zero
 };
 // `floating` forces the floating-point path (an independent cross-check of the exact one).
@@ -102,6 +139,12 @@ void check_g1_arguments(const QuadMesh& mesh, const GluingData& gluing, int k, i
 // the same rows as g1_condition_rows_exact(mesh, gluing, k, r, e). Requires gluing.exact().
 using G1ExactRows = std::vector<std::vector<std::pair<long, mpq_class>>>;
 std::vector<G1ExactRows> g1_condition_rows_per_edge(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
+// Data that are sums of cosines (GluingData::algebraic(), not all rational): the rank of the
+// conditions modulo two primes p = 1 (mod N), N = 2 * cosine_denominators_lcm(), with the
+// cyclotomic field Q(zeta_N) mapped to Z/p. Each is at most the rank over the field, so the
+// dimension is an upper bound the construction's count must reach; std::runtime_error if the
+// two primes disagree. Sparse and linear in the mesh, unlike the dense SVD of the floating path.
+G1SpaceDimension g1_space_dimension_cyclotomic(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
 // The exact dimension from those rows (so that a construction that needs them builds them once).
 G1SpaceDimension g1_space_dimension_exact(const QuadMesh& mesh, int k, int r, const std::vector<G1ExactRows>& per_edge);
 
