@@ -61,5 +61,9 @@ long rank_of_residues(const std::vector<std::vector<std::pair<long, uint64_t>>>&
 // For the small local systems of the G1 and PT-spline constructions.
 std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq_class>> rows, int columns,
                                                      long* rank = nullptr);
+// The same for sparse rows of (column, value); a column named twice in a row counts once,
+// with the summed value.
+std::vector<std::vector<mpq_class>> null_space_exact(const std::vector<std::vector<std::pair<int, mpq_class>>>& rows,
+                                                     int columns, long* rank = nullptr);
 
 }  // namespace knotwork

@@ -76,6 +76,19 @@ std::vector<std::vector<Scalar>> restrict_rows(const Rows<Scalar>& rows, const L
   return out;
 }
 
+// The same as sparse rows of (local column, value), for the exact null spaces.
+std::vector<std::vector<std::pair<int, mpq_class>>> restrict_rows_sparse(const Rows<mpq_class>& rows,
+                                                                         const LocalColumns& cols) {
+  std::vector<std::vector<std::pair<int, mpq_class>>> out;
+  for (const auto& row : rows) {
+    std::vector<std::pair<int, mpq_class>> sparse;
+    for (const auto& [c, x] : row)
+      if (const auto it = cols.position.find(c); it != cols.position.end()) sparse.emplace_back(it->second, x);
+    if (!sparse.empty()) out.push_back(std::move(sparse));
+  }
+  return out;
+}
+
 constexpr double kTolerance = 1e-10;
 
 // Null space in floating point: right singular vectors of singular values below
@@ -120,9 +133,11 @@ std::vector<std::vector<mpq_class>> taylor_independent(std::vector<std::vector<m
 // reduced edge by edge and only the few rows left meet the shared corner blocks (eliminated
 // first, the corner columns mixed every edge's rows: 2.5x slower, measured on a mesh with
 // coordinates of 17 digits).
-std::vector<std::vector<mpq_class>> null_space_taylor_last(std::vector<std::vector<mpq_class>> rows, int m, int taylor) {
-  for (auto& row : rows) std::rotate(row.begin(), row.begin() + taylor, row.end());
-  auto Z = null_space_exact(std::move(rows), m);
+std::vector<std::vector<mpq_class>> null_space_taylor_last(std::vector<std::vector<std::pair<int, mpq_class>>> rows, int m,
+                                                           int taylor) {
+  for (auto& row : rows)
+    for (auto& term : row) term.first = (term.first + m - taylor) % m;
+  auto Z = null_space_exact(rows, m);
   for (auto& z : Z) std::rotate(z.begin(), z.begin() + (m - taylor), z.end());
   return Z;
 }
@@ -264,7 +279,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
   struct VertexSolutions {
     LocalColumns cols;
     int taylor = 0;
-    std::vector<std::vector<mpq_class>> exact;
+    std::shared_ptr<const std::vector<std::vector<mpq_class>>> exact;  // shared by equal configurations
     Eigen::MatrixXd floating;
   };
   std::vector<VertexSolutions> local(mesh.num_vertices());
@@ -317,11 +332,11 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
       }
       if (!solutions) {
         solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(
-            taylor_independent(null_space_taylor_last(restrict_rows(vertex_rows(), cols), cols.size(), taylor), taylor));
+            taylor_independent(null_space_taylor_last(restrict_rows_sparse(vertex_rows(), cols), cols.size(), taylor), taylor));
         const std::lock_guard<std::mutex> lock(cache_mutex);
         cache.emplace(key, solutions);
       }
-      local[v].exact = *solutions;
+      local[v].exact = std::move(solutions);
     } else {
       // The same sharing, keyed by the local system itself (equal doubles, equal solutions).
       auto A = restrict_rows(vertex_rows(), cols);
@@ -343,7 +358,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
     const LocalColumns& cols = local[v].cols;
     const int taylor = local[v].taylor;
     if constexpr (exact) {
-      for (const auto& x : local[v].exact) {
+      for (const auto& x : *local[v].exact) {
         vertex_functions.push_back(make_function(G1BasisFunction::Kind::vertex, v, cols, x));
         exact_span.add(taylor_part(cols, x, taylor));
       }
@@ -365,12 +380,13 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
   std::vector<LocalColumns> edge_cols(mesh.num_edges());
   std::vector<std::shared_ptr<const std::vector<std::vector<mpq_class>>>> edge_exact(mesh.num_edges());
   std::vector<Eigen::MatrixXd> edge_floating(exact ? 0 : mesh.num_edges());
-  std::map<std::vector<std::vector<Scalar>>, std::shared_ptr<const std::vector<std::vector<mpq_class>>>> edge_cache;
+  std::map<std::vector<std::vector<std::pair<int, mpq_class>>>, std::shared_ptr<const std::vector<std::vector<mpq_class>>>>
+      edge_cache;
 #pragma omp parallel for schedule(dynamic, 16)
   for (int e = 0; e < mesh.num_edges(); ++e) {
     add_edge_strips(edge_cols[e], mesh, e, k, r);
-    auto A = restrict_rows(rows[e], edge_cols[e]);
     if constexpr (exact) {
+      auto A = restrict_rows_sparse(rows[e], edge_cols[e]);
       {
         const std::lock_guard<std::mutex> lock(cache_mutex);
         if (const auto it = edge_cache.find(A); it != edge_cache.end()) edge_exact[e] = it->second;
@@ -380,7 +396,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
       const std::lock_guard<std::mutex> lock(cache_mutex);
       edge_exact[e] = edge_cache.emplace(std::move(A), std::move(solutions)).first->second;
     } else {
-      edge_floating[e] = null_space(A, edge_cols[e].size());
+      edge_floating[e] = null_space(restrict_rows(rows[e], edge_cols[e]), edge_cols[e].size());
     }
   }
   std::vector<G1BasisFunction> edge_functions;
