@@ -113,6 +113,19 @@ TEST_CASE("Exact null space and ranks agree with a textbook rational elimination
         CHECK(Z[z] == expected);
         ++z;
       }
+      // The sparse entry point, with every nonzero split in two terms of the same column:
+      // the same vectors.
+      std::vector<std::vector<std::pair<int, mpq_class>>> split(A.size());
+      for (size_t i = 0; i < A.size(); ++i)
+        for (int j = 0; j < s.n; ++j)
+          if (A[i][j] != 0) {
+            const mpq_class third = A[i][j] / 3;
+            split[i].emplace_back(j, third);
+            split[i].emplace_back(j, A[i][j] - third);
+          }
+      long sparse_rank = -1;
+      CHECK(null_space_exact(split, s.n, &sparse_rank) == Z);
+      CHECK(sparse_rank == rank);
       // And each is in the null space, exactly.
       for (const auto& x : Z)
         for (const auto& row : A) {
