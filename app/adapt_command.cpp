@@ -32,7 +32,8 @@ std::string rate_text(double r) {
 }  // namespace
 
 AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
-                         const ProgressFunction& progress) {
+                         const ProgressFunction& progress, int output_every) {
+  if (output_every < 1) throw InputError("--output-every: must be at least 1, got " + std::to_string(output_every));
   check_adaptive_family(c);
   if (c.adapt.steps < 1 || c.adapt.steps > 200) throw InputError("--steps: must be in [1, 200], got " + std::to_string(c.adapt.steps));
   if (!(c.adapt.theta > 0 && c.adapt.theta <= 1)) throw InputError("--theta: must be in (0, 1]");
@@ -46,7 +47,7 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
   std::string& description = out.description;
   out.steps = adapt_case(c, ordering, say, [&](const AdaptiveStepView& v) {
     if (v.step == 0) description = v.space.description();
-    if (!stage || !c.write_bezier) return;
+    if (!stage || !c.write_bezier || (!v.last && v.step % output_every != 0)) return;
     say("writing ParaView output");
     Eigen::VectorXd eta = v.indicators.eta_squared.cwiseSqrt();
     Eigen::VectorXd flag = Eigen::VectorXd::Zero(eta.size());
@@ -115,7 +116,8 @@ int adapt_command(const AdaptOptions& o) {
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);
-  const AdaptOutcome r = adapt_study(c, ordering, &directory, [&](const std::string& w) { progress(w); });
+  const AdaptOutcome r = adapt_study(c, ordering, o.no_output ? nullptr : &directory,
+                                     [&](const std::string& w) { progress(w); }, o.output_every);
   if (o.json) {
     std::printf("%s\n", r.json.dump().c_str());
     return 0;

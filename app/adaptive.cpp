@@ -67,7 +67,7 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     std::vector<int> marked;
     if (!last) marked = dorfler_marking(ind.eta_squared, c.adapt.theta);
     st.marked = static_cast<int>(marked.size());
-    if (on_step) on_step({s, *space, sol, ind, marked});
+    if (on_step) on_step({s, *space, sol, ind, marked, last});
     if (!last) {
       say(prefix + "refining " + std::to_string(marked.size()) + " marked cells");
       std::vector<CellSplit> split;

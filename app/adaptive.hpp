@@ -29,6 +29,7 @@ struct AdaptiveStepView {
   const PoissonSolution& solution;
   const ErrorIndicators& indicators;
   const std::vector<int>& marked;
+  bool last;  // no refinement follows
 };
 
 // Solve - estimate - mark - refine, c.adapt.steps times or until c.adapt.max_dofs: the

@@ -36,6 +36,8 @@ struct AdaptOptions : CommonOptions {
   int steps = 0;        // 0: [adapt] steps of the case
   double theta = 0;     // 0: [adapt] theta
   long max_dofs = 0;    // 0: [adapt] max_dofs
+  bool no_output = false;
+  int output_every = 1;  // ParaView files of every K-th step (and the last)
 };
 
 struct BenchOptions {

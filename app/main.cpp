@@ -123,6 +123,9 @@ int main(int argc, char** argv) {
                         "Doerfler fraction: mark the fewest cells holding this share of the estimated error squared "
                         "(overrides [adapt] theta; default 0.5)");
   adapt_cmd->add_option("--max-dofs", adapt.max_dofs, "Stop once a space has this many functions (overrides [adapt] max_dofs)");
+  adapt_cmd->add_flag("--no-output", adapt.no_output, "Write no files (the table and timing only)");
+  adapt_cmd->add_option("--output-every", adapt.output_every,
+                        "ParaView files of every K-th step only, and of the last (default 1: every step; adapt.csv/json/svg always)");
   add_common(adapt_cmd, adapt);
 
   knotwork::BenchOptions bench;

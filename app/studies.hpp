@@ -76,9 +76,11 @@ struct AdaptOutcome {
   Json json = Json::object();  // adapt.json's object
   std::vector<std::string> outputs;
 };
-// The adaptive loop of c.adapt (steps, theta and max_dofs checked here).
+// The adaptive loop of c.adapt (steps, theta and max_dofs checked here). No output directory:
+// no files; otherwise the history (adapt.csv/json/svg) and the ParaView files of every
+// `output_every`-th step and of the last.
 AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
-                         const ProgressFunction& progress);
+                         const ProgressFunction& progress, int output_every = 1);
 
 // `knotwork basis --json`'s object for a case's space: the family's checks, partition of
 // unity and rank.

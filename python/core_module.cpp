@@ -404,7 +404,7 @@ PYBIND11_MODULE(_core, m) {
   });
 
   m.def("adapt", [](py::object case_, const std::string& name, py::dict overrides, int steps, double theta, long max_dofs,
-                    py::object output, py::object progress) {
+                    py::object output, int output_every, py::object progress) {
     Ordering ordering;
     CaseDescription c = prepared_case(case_, name, overrides, &ordering);
     if (steps) c.adapt.steps = steps;
@@ -413,7 +413,7 @@ PYBIND11_MODULE(_core, m) {
     const std::optional<std::string> out = output_of(output);
     PythonHooks hooks(progress);
     const Json j = hooks.call([&](const ProgressFunction& p) {
-      return adapt_study(c, ordering, out ? &*out : nullptr, p).json;
+      return adapt_study(c, ordering, out ? &*out : nullptr, p, output_every).json;
     });
     return json_to_python(j);
   });

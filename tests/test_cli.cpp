@@ -305,12 +305,36 @@ TEST_CASE("adapt writes steps as JSON, CSV, plot and a two-part collection", "[c
   REQUIRE(std::count(csv.begin(), csv.end(), '\n') == 5);
 }
 
+TEST_CASE("adapt --output-every K writes every K-th step and the last; --no-output writes nothing", "[cli][adaptive]") {
+  Sandbox box;
+  const std::string src = std::string(KNOTWORK_SOURCE_DIR) + "/cases/lshape_adaptive.toml";
+  Result r = box.run("adapt " + src + " --steps 6 --output-every 4 --out ad -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (int step = 0; step < 6; ++step) {
+    const bool written = step % 4 == 0 || step == 5;
+    CHECK(fs::exists(box.dir() / "ad" / ("step_" + std::to_string(step) + ".vtu")) == written);
+  }
+  const std::string pvd = slurp(box.dir() / "ad/adapt.pvd");
+  CHECK(pvd.find("step_5.vtu") != std::string::npos);
+  CHECK(pvd.find("step_1.vtu") == std::string::npos);
+  CHECK(std::count(pvd.begin(), pvd.end(), '\n') > 0);
+  const std::string csv = slurp(box.dir() / "ad/adapt.csv");
+  CHECK(std::count(csv.begin(), csv.end(), '\n') == 7);  // the history keeps every step
+  r = box.run("adapt " + src + " --steps 3 --no-output --out quiet -q");
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("step") != std::string::npos);  // the table is printed
+  CHECK(!fs::exists(box.dir() / "quiet"));
+  CHECK(!fs::exists(box.dir() / "results"));
+}
+
 TEST_CASE("bad input: adapt", "[cli][bad-input][adaptive]") {
   Sandbox box;
   expect_rejected(box, kGood, {"bad.toml", "[space] family", "knot_segments"}, "", "adapt");
   const std::string segments = replace(kGood, "degree = 2", "family = \"knot_segments\"\ndegree = 2");
   expect_rejected(box, segments, {"--theta", "(0, 1]"}, "--theta 1.5", "adapt");
   expect_rejected(box, segments, {"--steps"}, "--steps 500", "adapt");
+  expect_rejected(box, segments, {"--output-every", "at least 1"}, "--output-every 0", "adapt");
   expect_rejected(box, segments + "\n[adapt]\ntheta = 0\n", {"bad.toml", "[adapt] theta"}, "", "adapt");
   expect_rejected(box, segments + "\n[adapt]\nstep = 3\n", {"bad.toml", "did you mean 'steps'"}, "", "adapt");
 }

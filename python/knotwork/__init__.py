@@ -212,13 +212,16 @@ def converge(case, levels=4, *, degree=None, elements=None, solver=None, toleran
 
 
 def adapt(case, steps=None, *, theta=None, max_dofs=None, degree=None, elements=None, solver=None,
-          tolerance=None, ordering="amd", output=None, progress=None, name=None):
+          tolerance=None, ordering="amd", output=None, output_every=1, progress=None, name=None):
     """The adaptive loop (estimate, Doerfler marking, local refinement, solve), like ``knotwork adapt``.
 
     steps, theta, max_dofs: override the case's [adapt] (None: as the case says). Returns a
     :class:`Study` of the steps (the ``steps`` of ``adapt --json``). The case's family must
-    refine locally. Other arguments as for :func:`converge`.
+    refine locally. output_every: with ``output``, the ParaView files of every K-th step and
+    of the last (``--output-every``). Other arguments as for :func:`converge`.
     """
+    if isinstance(output_every, bool) or not isinstance(output_every, int) or output_every < 1:
+        raise InputError(f"output_every: must be an integer >= 1, got {output_every!r}")
     if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= 200):
         raise InputError(f"steps: must be an integer in [1, 200], got {steps!r}")
     if theta is not None and not (isinstance(theta, (int, float)) and 0 < theta <= 1):
@@ -226,7 +229,7 @@ def adapt(case, steps=None, *, theta=None, max_dofs=None, degree=None, elements=
     if max_dofs is not None and (isinstance(max_dofs, bool) or not isinstance(max_dofs, int) or max_dofs < 1):
         raise InputError(f"max_dofs: must be a positive integer, got {max_dofs!r}")
     j = _core.adapt(case, _name(case, name), _overrides(degree, elements, solver, tolerance, ordering, False),
-                    steps or 0, float(theta or 0), max_dofs or 0, output, progress)
+                    steps or 0, float(theta or 0), max_dofs or 0, output, output_every, progress)
     return Study(j.pop("steps"), j)
 
 

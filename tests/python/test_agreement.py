@@ -80,6 +80,16 @@ def test_adapt_equals_cli(tmp_path):
     assert math.isnan(rates[0]) and all(r > 0 for r in rates[1:])
 
 
+def test_adapt_output_every_writes_every_kth_step_and_the_last(tmp_path):
+    path = str(CASES / "lshape_adaptive.toml")
+    study = knotwork.adapt(path, steps=5, output=tmp_path / "py", output_every=3)
+    names = {p.split("/")[-1] for p in study.info["outputs"]}
+    assert {"step_0.vtu", "step_3.vtu", "step_4.vtu", "adapt.csv"} <= names
+    assert not {"step_1.vtu", "step_2.vtu"} & names
+    with pytest.raises(knotwork.InputError, match="output_every"):
+        knotwork.adapt(path, steps=2, output_every=0)
+
+
 @pytest.mark.parametrize("case", ["square_knot_segments.toml", "g1_three_quads.toml", "lshape_adaptive_pt.toml"])
 def test_space_report_equals_basis_json(case):
     path = str(CASES / case)
