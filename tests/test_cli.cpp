@@ -305,7 +305,7 @@ TEST_CASE("adapt writes steps as JSON, CSV, plot and a two-part collection", "[c
   REQUIRE(std::count(csv.begin(), csv.end(), '\n') == 5);
 }
 
-TEST_CASE("adapt --output-every K writes every K-th step and the last; --no-output writes nothing", "[cli][adaptive]") {
+TEST_CASE("adapt --output-every K writes every K-th step and the last, --no-output writes nothing", "[cli][adaptive]") {
   Sandbox box;
   const std::string src = std::string(KNOTWORK_SOURCE_DIR) + "/cases/lshape_adaptive.toml";
   Result r = box.run("adapt " + src + " --steps 6 --output-every 4 --out ad -q");
