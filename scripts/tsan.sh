@@ -32,7 +32,8 @@ for args in "run cases/square_sinsin.toml --elements 64 --solver direct" \
             "adapt cases/lshape_adaptive_pt.toml --steps 3" \
             "run cases/g1_three_quads.toml" \
             "run cases/g1_mixed_valences.toml" \
-            "run cases/g1_sphere_xy.toml"; do
+            "run cases/g1_sphere_xy.toml" \
+            "run cases/g1_sphere_dodecahedron.toml"; do
   if (cd "$root" && "$build/app/knotwork" $args --out "$out/$(echo "$args" | tr ' /' '__')" -q > /dev/null); then
     echo "tsan: ok   knotwork $args"
   else
