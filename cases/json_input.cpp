@@ -133,9 +133,16 @@ class Builder final : public nlohmann::json_sax<json> {
   std::string where() const {
     std::string path;
     for (size_t i = 0; i + 1 < stack_.size(); ++i)
-      if (stack_[i].value.kind == JsonValue::Kind::kObject) path += (path.empty() ? "" : ".") + stack_[i].pending_key;
-      else path += "[" + std::to_string(stack_[i].value.items.size()) + "]";
-    return path.empty() ? " in the top-level object" : " in " + path;
+      if (stack_[i].value.kind == JsonValue::Kind::kObject) {
+        if (!path.empty()) path += '.';
+        path += stack_[i].pending_key;
+      } else {
+        path += '[';
+        path += std::to_string(stack_[i].value.items.size());
+        path += ']';
+      }
+    // (appended piece by piece: GCC 12 warns, wrongly, about copies in "a" + b + "c")
+    return path.empty() ? std::string(" in the top-level object") : std::string(" in ").append(path);
   }
 
   const std::string& text_;
