@@ -388,7 +388,7 @@ TEST_CASE("Sums of cosines: values, and residues that satisfy the minimal polyno
       const uint64_t r = x.residue(residue_of, zeta, M);
       uint64_t value = 0;  // the minimal polynomial at r, by Horner
       for (size_t i = c.minimal.size(); i-- > 0;)
-        value = (multiply_modulo(value, r, prime) + residue(mpq_class(c.minimal[i]), prime)) % prime;
+        value = (multiply_modulo(value, r, prime) + (c.minimal[i] >= 0 ? c.minimal[i] : prime + c.minimal[i])) % prime;
       CHECK(value == 0);
     }
   }

@@ -218,15 +218,6 @@ long rank_reliable(const std::vector<SparseRationalRow>& rows, long columns, std
   return rank_exact(rows, columns, independent);
 }
 
-uint64_t residue(const mpq_class& q, uint64_t prime) {
-  const ModP m(prime);
-  try {
-    return m.reduce(m.of(q));  // out of Montgomery form
-  } catch (const DenominatorMultipleOfPrime&) {
-    throw std::domain_error("the prime " + std::to_string(prime) + " divides the denominator of " + q.get_str());
-  }
-}
-
 uint64_t ResidueMap::operator()(const mpq_class& q) const {
   const uint64_t d = mpz_fdiv_ui(q.get_den_mpz_t(), prime_);
   if (d == 0) throw std::domain_error("the prime " + std::to_string(prime_) + " divides the denominator of " + q.get_str());

@@ -34,9 +34,8 @@ long rank_reliable(const std::vector<SparseRationalRow>& rows, long columns, std
 // conditions with gluing data 2cos(2 pi / n) are reduced modulo a prime p = 1 (mod N), where
 // the field Q(zeta_N) has an image (zeta_N -> a primitive N-th root of unity mod p). As for
 // rational rows, the rank modulo p is at most the rank over the field.
-// q mod prime (std::domain_error when the prime divides q's denominator).
-uint64_t residue(const mpq_class& q, uint64_t prime);
-// The same, remembering the inverses of the denominators met (one object per thread).
+// q mod prime (std::domain_error when the prime divides q's denominator), remembering the
+// inverses of the denominators met (one object per thread).
 class ResidueMap {
  public:
   explicit ResidueMap(uint64_t prime) : prime_(prime) {}

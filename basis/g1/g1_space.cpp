@@ -198,6 +198,17 @@ double gluing_value(const PiecewisePolynomial& p, const double& u) { return p(u)
 template <>
 mpq_class gluing_value(const PiecewisePolynomial& p, const mpq_class& u) { return p.exact_value(u); }
 
+// The points where an edge's conditions are sampled: on each half of the edge, as many as make
+// them polynomial identities there (the products c dv f1 etc. have degree k + deg data).
+template <class Scalar>
+std::vector<Scalar> condition_points(const EdgeGluing& g, int k) {
+  const int points = k + std::max({g.a.degree(), g.b.degree(), g.c.degree(), 0}) + 1;
+  std::vector<Scalar> u;
+  for (int half = 0; half < 2; ++half)
+    for (int q = 0; q < points; ++q) u.push_back(Scalar(half) / 2 + Scalar(q + 1) / (2 * (points + 1)));
+  return u;
+}
+
 // The G1 conditions (2) and (3) across every interior edge, at enough points of each half
 // of the edge to make them polynomial identities there.
 template <class Scalar>
@@ -210,29 +221,26 @@ std::vector<std::vector<std::pair<long, Scalar>>> g1_conditions(const QuadMesh& 
     const EdgeGluing& g = *gluing.edges[e];
     const int f1 = E.face[0], c1 = E.corner[0];
     const int f0 = E.face[1], c0 = (E.corner[1] + 1) % 4;  // face[1]'s corner at v[0]
-    const int points = k + std::max({g.a.degree(), g.b.degree(), g.c.degree(), 0}) + 1;
-    for (int half = 0; half < 2; ++half)
-      for (int q = 0; q < points; ++q) {
-        const Scalar u = Scalar(half) / 2 + Scalar(q + 1) / (2 * (points + 1));
-        const Scalar zero(0);
-        // (2): f1(u, 0) - f0(0, u)
-        const auto v1 = shared_face_functional<Scalar>(f1, c1, u, zero, nullptr, k, r);
-        const auto v0 = shared_face_functional<Scalar>(f0, c0, zero, u, nullptr, k, r);
-        std::vector<std::pair<long, Scalar>> row;
-        for (const auto& [col, c] : v1.terms) row.emplace_back(col, c);
-        for (const auto& [col, c] : v0.terms) row.emplace_back(col, -c);
-        rows.push_back(std::move(row));
-        // (3): c dv f1(u, 0) - b du f0(0, u) - a dv f0(0, u)
-        const Scalar a = gluing_value(g.a, u), b = gluing_value(g.b, u), c = gluing_value(g.c, u);
-        const auto d1 = shared_face_functional<Scalar>(f1, c1, u, zero, kDv[c1], k, r);
-        const auto du0 = shared_face_functional<Scalar>(f0, c0, zero, u, kDu[c0], k, r);
-        const auto dv0 = shared_face_functional<Scalar>(f0, c0, zero, u, kDv[c0], k, r);
-        row.clear();
-        for (const auto& [col, x] : d1.terms) row.emplace_back(col, c * x);
-        for (const auto& [col, x] : du0.terms) row.emplace_back(col, -b * x);
-        for (const auto& [col, x] : dv0.terms) row.emplace_back(col, -a * x);
-        rows.push_back(std::move(row));
-      }
+    for (const Scalar& u : condition_points<Scalar>(g, k)) {
+      const Scalar zero(0);
+      // (2): f1(u, 0) - f0(0, u)
+      const auto v1 = shared_face_functional<Scalar>(f1, c1, u, zero, nullptr, k, r);
+      const auto v0 = shared_face_functional<Scalar>(f0, c0, zero, u, nullptr, k, r);
+      std::vector<std::pair<long, Scalar>> row;
+      for (const auto& [col, c] : v1.terms) row.emplace_back(col, c);
+      for (const auto& [col, c] : v0.terms) row.emplace_back(col, -c);
+      rows.push_back(std::move(row));
+      // (3): c dv f1(u, 0) - b du f0(0, u) - a dv f0(0, u)
+      const Scalar a = gluing_value(g.a, u), b = gluing_value(g.b, u), c = gluing_value(g.c, u);
+      const auto d1 = shared_face_functional<Scalar>(f1, c1, u, zero, kDv[c1], k, r);
+      const auto du0 = shared_face_functional<Scalar>(f0, c0, zero, u, kDu[c0], k, r);
+      const auto dv0 = shared_face_functional<Scalar>(f0, c0, zero, u, kDv[c0], k, r);
+      row.clear();
+      for (const auto& [col, x] : d1.terms) row.emplace_back(col, c * x);
+      for (const auto& [col, x] : du0.terms) row.emplace_back(col, -b * x);
+      for (const auto& [col, x] : dv0.terms) row.emplace_back(col, -a * x);
+      rows.push_back(std::move(row));
+    }
   }
   return rows;
 }
@@ -694,26 +702,23 @@ G1SpaceDimension g1_space_dimension_cyclotomic(const QuadMesh& mesh, const Gluin
       const EdgeGluing& g = *gluing.edges[e];
       const int f1 = E.face[0], c1 = E.corner[0];
       const int f0 = E.face[1], c0 = (E.corner[1] + 1) % 4;
-      const int points = k + std::max({g.a.degree(), g.b.degree(), g.c.degree(), 0}) + 1;
       auto add = [&](std::vector<std::pair<long, uint64_t>>& row, const FaceFunctional<mpq_class>& f, uint64_t factor) {
         for (const auto& [col, x] : f.terms) row.emplace_back(col, multiply_modulo(residue(x), factor, prime));
       };
-      for (int half = 0; half < 2; ++half)
-        for (int q = 0; q < points; ++q) {
-          const mpq_class u = mpq_class(half, 2) + mpq_class(q + 1, 2 * (points + 1));
-          const mpq_class zero(0);
-          std::vector<std::pair<long, uint64_t>> row;
-          add(row, shared_face_functional<mpq_class>(f1, c1, u, zero, nullptr, k, r), 1);
-          add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, nullptr, k, r), prime - 1);
-          per_edge[e].push_back(std::move(row));
-          const uint64_t a = g.a.residue(u, residue, zeta, M), b = g.b.residue(u, residue, zeta, M),
-                         c = g.c.residue(u, residue, zeta, M);
-          row.clear();
-          add(row, shared_face_functional<mpq_class>(f1, c1, u, zero, kDv[c1], k, r), c);
-          add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, kDu[c0], k, r), (prime - b) % prime);
-          add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, kDv[c0], k, r), (prime - a) % prime);
-          per_edge[e].push_back(std::move(row));
-        }
+      for (const mpq_class& u : condition_points<mpq_class>(g, k)) {
+        const mpq_class zero(0);
+        std::vector<std::pair<long, uint64_t>> row;
+        add(row, shared_face_functional<mpq_class>(f1, c1, u, zero, nullptr, k, r), 1);
+        add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, nullptr, k, r), prime - 1);
+        per_edge[e].push_back(std::move(row));
+        const uint64_t a = g.a.residue(u, residue, zeta, M), b = g.b.residue(u, residue, zeta, M),
+                       c = g.c.residue(u, residue, zeta, M);
+        row.clear();
+        add(row, shared_face_functional<mpq_class>(f1, c1, u, zero, kDv[c1], k, r), c);
+        add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, kDu[c0], k, r), (prime - b) % prime);
+        add(row, shared_face_functional<mpq_class>(f0, c0, zero, u, kDv[c0], k, r), (prime - a) % prime);
+        per_edge[e].push_back(std::move(row));
+      }
     }
     }
     std::vector<std::vector<std::pair<long, uint64_t>>> rows;
