@@ -1,17 +1,15 @@
-// The registration of the spline families: one line each. A new family is a folder in
-// basis/ plus one line here (docs/ARCHITECTURE.md).
+// The registration of the spline families. A new family is a folder in basis/ plus its name
+// in KNOTWORK_FAMILIES (basis/CMakeLists.txt), from which the build generates the list below
+// (docs/ARCHITECTURE.md).
 #include "cases/spline_space.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
 
-SpaceFamily tensor_family();
-SpaceFamily knot_segments_family();
-SpaceFamily pt_family();
-SpaceFamily g1_family();
+#include "registered_families.inc"
 
 const std::vector<SpaceFamily>& space_families() {
-  static const std::vector<SpaceFamily> families{tensor_family(), knot_segments_family(), pt_family(), g1_family()};
+  static const std::vector<SpaceFamily> families{KNOTWORK_REGISTERED_FAMILIES};
   return families;
 }
 

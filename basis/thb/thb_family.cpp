@@ -1,0 +1,202 @@
+// Family "thb": truncated hierarchical B-splines on one patch's parameter domain, starting
+// from the tensor mesh of [space] degree and elements on the geometry's knot spans (its C0
+// lines kept), refined by halving marked cells in both directions; graded to stay
+// T-admissible of class [space] admissibility (2 by default, 0: no grading).
+#include <cstdio>
+#include <memory>
+
+#include "basis/core/bezier_mesh.hpp"
+#include "basis/tensor/tensor_case.hpp"
+#include "basis/thb/thb_hierarchy.hpp"
+#include "cases/case_reader.hpp"
+#include "cases/resource_limits.hpp"
+#include "cases/spline_space.hpp"
+#include "solver/geometry_map.hpp"
+#include "solver/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+struct ThbSection : PatchSpaceSection {
+  int admissibility = 2;
+  std::unique_ptr<CaseSection> clone() const override { return std::make_unique<ThbSection>(*this); }
+};
+
+const std::vector<std::string>& thb_space_keys() {
+  static const std::vector<std::string> keys{"family", "degree", "elements", "admissibility", "quadrature_points",
+                                             "error_quadrature_points"};
+  return keys;
+}
+
+void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
+  const CaseReader& r = doc.reader;
+  read_patch_geometry(doc, c);
+  const DocumentNode& s = r.table(doc.root, "space", true);
+  std::vector<std::string> valid = thb_space_keys();
+  valid.insert(valid.end(), {"continuity", "insert_knots_u", "insert_knots_v", "rational"});
+  r.check_keys(s, "space", valid);
+  ThbSection& t = c.section.emplace<ThbSection>();
+  t.space.rational = false;
+  for (const char* key : {"continuity", "insert_knots_u", "insert_knots_v"})
+    if (s.get(key))
+      r.fail(std::string("[space] ") + key, "not used with family = \"thb\" (new knots are C^(d-1); the geometry's "
+                                            "knots keep their continuity)");
+  if (const DocumentNode* x = s.get("rational"))
+    if (r.boolean(*x, "[space] rational")) r.fail("[space] rational", "THB spaces are polynomial B-splines");
+  if (const DocumentNode* a = s.get("admissibility")) {
+    const long m = r.integer(*a, "[space] admissibility");
+    if (m != 0 && (m < 2 || m > 8))
+      r.fail("[space] admissibility", "must be 0 (no grading) or a class m in 2..8, not " + std::to_string(m));
+    t.admissibility = static_cast<int>(m);
+  }
+  read_patch_degree_elements(doc, t.space, false);
+  read_quadrature(r, s, c);
+  read_patch_problem(doc, c);
+}
+
+const ThbSection& thb_section(const CaseDescription& c) { return family_section<ThbSection>(c); }
+
+// Level 0: the geometry's knot spans cut into `elements << level` parts; a geometry knot keeps
+// min(its continuity, d-1), new knots are C^(d-1).
+DyadicKnots level_zero_knots(const CaseDescription& c, int direction, int level) {
+  const ThbSection& t = thb_section(c);
+  const BSplineBasis1D& g = direction == 0 ? c.geometry.basis_u : c.geometry.basis_v;
+  const int deg = t.space.degree[direction];
+  const int per_span = t.space.elements_per_span[direction] << level;
+  const auto bp = g.breakpoints();
+  const auto mult = g.multiplicities();
+  std::vector<double> breaks;
+  std::vector<int> interior;
+  for (size_t i = 0; i + 1 < bp.size(); ++i)
+    for (int e = 0; e < per_span; ++e) {
+      breaks.push_back(bp[i] + (bp[i + 1] - bp[i]) * e / per_span);
+      if (breaks.size() == 1) continue;
+      const int continuity = e == 0 ? std::min(g.degree() - mult[i], deg - 1) : deg - 1;
+      interior.push_back(deg - continuity);
+    }
+  breaks.push_back(bp.back());
+  return DyadicKnots(deg, std::move(breaks), std::move(interior));
+}
+
+class ThbSpace final : public SplineSpace {
+ public:
+  ThbSpace(const CaseDescription& c, ThbHierarchy hierarchy) : case_(&c), hierarchy_(std::move(hierarchy)) {
+    ThbHierarchy::Basis b;
+    try {
+      b = hierarchy_.build();
+    } catch (const std::runtime_error& e) {
+      throw InputError(c.path + ": [space]: " + e.what());
+    }
+    mesh_ = std::move(b.mesh);
+    leaves_ = std::move(b.leaves);
+    per_level_ = std::move(b.functions_per_level);
+    mesh_.set_interfaces(interfaces_from_parameter_boxes(mesh_));
+    try {
+      geometry_ = std::make_unique<PatchGeometryMap>(mesh_, c.geometry);
+    } catch (const GeometryError& e) {
+      throw InputError(c.path + ": [geometry]: " + e.what());
+    }
+  }
+
+  const BezierMesh& mesh() const override { return mesh_; }
+  const GeometryMap& geometry() const override { return *geometry_; }
+  std::string description() const override {
+    const auto d = degree();
+    const int m = hierarchy_.admissibility();
+    return "THB-splines, degree " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + ", " +
+           (m == 0 ? std::string("no grading") : "T-admissible of class " + std::to_string(m));
+  }
+  std::array<int, 2> degree() const override { return thb_section(*case_).space.degree; }
+  std::vector<ReportField> report() const override {
+    return {{.key = "levels", .value = long(per_level_.size()), .column = true, .width = 7}};
+  }
+  std::vector<ReportField> basis_report() const override {
+    std::string text;
+    for (size_t l = 0; l < per_level_.size(); ++l) text += (l ? ", " : "") + std::to_string(per_level_[l]);
+    std::vector<std::string> counts;
+    for (int n : per_level_) counts.push_back(std::to_string(n));
+    return {{.key = "functions_per_level", .value = counts, .text = text, .label = "per level"}};
+  }
+  std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
+                                      int* extended) const override {
+    // THB refinement halves a cell in both directions; the split direction does not apply.
+    std::vector<ThbCell> cells;
+    cells.reserve(marked.size());
+    for (int m : marked) cells.push_back(leaves_.at(m));
+    ThbHierarchy next = hierarchy_;
+    int extra = 0;
+    try {
+      extra = next.refine(cells);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(case_->path + ": [space]: " + e.what());
+    }
+    if (extended) *extended = extra;
+    return std::make_unique<ThbSpace>(*case_, std::move(next));
+  }
+  KnotLines knot_lines() const override {
+    // Every leaf's sides through the geometry (shared sides drawn once: bottom and left, plus
+    // top and right on the boundary), sampled along the side.
+    KnotLines k;
+    const int samples = 9;
+    auto side = [&](double ua, double va, double ub, double vb, int cell) {
+      Eigen::VectorXd u(samples), v(samples);
+      for (int s = 0; s < samples; ++s) {
+        const double t = double(s) / (samples - 1);
+        const BezierCell& c = mesh_.cell(cell);
+        u[s] = ((1 - t) * ua + t * ub - c.u0) / (c.u1 - c.u0);
+        v[s] = ((1 - t) * va + t * vb - c.v0) / (c.v1 - c.v0);
+      }
+      GeometryAtPoints g;
+      geometry_->evaluate(cell, u, v, g);
+      k.lines.push_back(g.x);
+      k.kind.push_back(2);
+      k.multiplicity.push_back(1);
+    };
+    for (int c = 0; c < mesh_.num_cells(); ++c) {
+      const BezierCell& b = mesh_.cell(c);
+      side(b.u0, b.v0, b.u1, b.v0, c);
+      side(b.u0, b.v0, b.u0, b.v1, c);
+      if (b.boundary[kSideTop] >= 0) side(b.u0, b.v1, b.u1, b.v1, c);
+      if (b.boundary[kSideRight] >= 0) side(b.u1, b.v0, b.u1, b.v1, c);
+    }
+    return k;
+  }
+
+ private:
+  const CaseDescription* case_;
+  ThbHierarchy hierarchy_;
+  BezierMesh mesh_;
+  std::vector<ThbCell> leaves_;
+  std::vector<int> per_level_;
+  std::unique_ptr<PatchGeometryMap> geometry_;
+};
+
+std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
+  const ThbSection& t = thb_section(c);
+  DyadicKnots u = level_zero_knots(c, 0, level), v = level_zero_knots(c, 1, level);
+  const double cells = double(u.base_elements()) * v.base_elements();
+  const double functions = double(u.num_functions(0)) * double(v.num_functions(0));
+  char what[120];
+  std::snprintf(what, sizeof what, "%.3g THB cells of degree %dx%d", cells, u.degree(), v.degree());
+  check_memory(c.path + ": [space] elements", galerkin_bytes(cells, functions, u.degree(), v.degree()), what);
+  return std::make_unique<ThbSpace>(c, ThbHierarchy(std::move(u), std::move(v), t.admissibility));
+}
+
+}  // namespace
+
+SpaceFamily thb_family() {
+  SpaceFamily f;
+  f.name = "thb";
+  f.read_case = read_thb_case;
+  f.space_keys = thb_space_keys();
+  f.build = [](const CaseDescription& c, int level, const ProgressFunction&) { return build_thb(c, level); };
+  f.local_refinement = true;
+  f.override_options = [](CaseDescription& c, int degree, int elements) {
+    override_patch_space(family_section<ThbSection>(c).space, degree, elements);
+  };
+  f.check_converge = [](const CaseDescription& c, int levels) { check_uniform_levels(thb_section(c).space, levels); };
+  return f;
+}
+
+}  // namespace knotwork
