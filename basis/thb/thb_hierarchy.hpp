@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
-#include "basis/thb/dyadic_knots.hpp"
+#include "basis/core/dyadic_knots.hpp"
 
 namespace knotwork {
 

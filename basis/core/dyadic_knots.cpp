@@ -1,6 +1,7 @@
-// Index arithmetic of dyadic knot vectors. Written here because the hierarchies of G+Smo and
-// GeoPDEs store every level's knot vector in full, which a 40-level corner refinement cannot.
-#include "basis/thb/dyadic_knots.hpp"
+// Index arithmetic of dyadic knot vectors (hierarchical and LR families). Written here: no
+// Debian library has hierarchical or LR B-splines, and storing every level's knot vector in
+// full, as hierarchical codes usually do, cannot reach the 40 levels of a corner refinement.
+#include "basis/core/dyadic_knots.hpp"
 
 #include <Eigen/LU>
 #include <cmath>
