@@ -38,6 +38,7 @@ struct AdaptOptions : CommonOptions {
   long max_dofs = 0;    // 0: [adapt] max_dofs
   bool no_output = false;
   int output_every = 1;  // ParaView files of every K-th step (and the last)
+  bool allow_unverified_space = false;  // --allow-dependent
 };
 
 struct BenchOptions {

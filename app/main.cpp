@@ -99,9 +99,9 @@ int main(int argc, char** argv) {
       ->required();
   add_common(run_cmd, run);
   run_cmd->add_flag("--no-output", run.no_output, "Write no files (timing and errors only)");
-  run_cmd->add_flag("--allow-unverified-space,--allow-non-semi-regular", run.allow_unverified_space,
+  run_cmd->add_flag("--allow-unverified-space,--allow-non-semi-regular,--allow-dependent", run.allow_unverified_space,
                     "Solve on a space that failed its family's own check (a given collection that is not "
-                    "semi-regular: its functions may be dependent and the matrix singular)");
+                    "semi-regular, LR B-splines found linearly dependent: the matrix may be singular)");
 
   knotwork::ConvergeOptions conv;
   CLI::App* conv_cmd = app.add_subcommand("converge", "Uniform h-refinement study: errors and observed rates per level");
@@ -126,6 +126,9 @@ int main(int argc, char** argv) {
   adapt_cmd->add_flag("--no-output", adapt.no_output, "Write no files (the table and timing only)");
   adapt_cmd->add_option("--output-every", adapt.output_every,
                         "ParaView files of every K-th step only, and of the last (default 1: every step; adapt.csv/json/svg always)");
+  adapt_cmd->add_flag("--allow-dependent", adapt.allow_unverified_space,
+                      "Go on when a refined space fails its family's own check (LR B-splines found linearly "
+                      "dependent: the matrix may be singular)");
   add_common(adapt_cmd, adapt);
 
   knotwork::BenchOptions bench;

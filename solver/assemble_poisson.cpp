@@ -443,7 +443,14 @@ std::vector<std::pair<int, double>> solve_dirichlet_projection(const DirichletPi
   Eigen::SparseMatrix<double> M(nd, nd);
   M.setFromTriplets(triplets.begin(), triplets.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(M);
-  if (ldlt.info() != Eigen::Success) throw std::runtime_error(
+  // A pivot tiny against its own diagonal entry is a dependent trace that round-off kept from
+  // being an exact zero (B-spline mass matrices keep these ratios far above 1e-10 at any grading).
+  bool singular = ldlt.info() != Eigen::Success;
+  if (!singular) {
+    const Eigen::VectorXd diagonal = ldlt.permutationP() * Eigen::VectorXd(M.diagonal());
+    for (int k = 0; k < nd && !singular; ++k) singular = !(ldlt.vectorD()[k] > 1e-10 * diagonal[k]);
+  }
+  if (singular) throw std::runtime_error(
         "Dirichlet projection: the traces of the basis functions on the Dirichlet sides are linearly dependent "
         "(singular boundary mass matrix); the space breaks the BezierMesh contract");
   const Eigen::VectorXd x = ldlt.solve(r);

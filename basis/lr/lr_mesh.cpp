@@ -1,0 +1,446 @@
+#include "basis/lr/lr_mesh.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <numeric>
+#include <stdexcept>
+
+#include "basis/core/bspline_basis.hpp"
+
+namespace knotwork {
+
+size_t DyadicLrMesh::FunctionHash::operator()(const Function& f) const {
+  uint64_t h = 1469598103934665603ull;
+  for (const auto& t : f.knots)
+    for (int64_t x : t) h = (h ^ uint64_t(x)) * 1099511628211ull;
+  return h;
+}
+
+DyadicLrMesh::DyadicLrMesh(DyadicKnots u, DyadicKnots v) : knots_{std::move(u), std::move(v)} {
+  for (int d = 0; d < 2; ++d) {
+    p_[d] = knots_[d].degree();
+    if (p_[d] > kMaxDegree) throw std::invalid_argument("LR B-splines: degree above " + std::to_string(kMaxDegree));
+    if (knots_[d].base_elements() >= (1 << 20)) throw std::invalid_argument("LR B-splines: more than 2^20 elements");
+    end_[d] = int64_t(knots_[d].base_elements()) << kGridLevel;
+  }
+  // The tensor B-splines: global knot vectors in grid coordinates, windows of degree+2.
+  std::array<std::vector<int64_t>, 2> global;
+  for (int d = 0; d < 2; ++d) {
+    const int J = knots_[d].base_elements();
+    for (int j = 0; j <= J; ++j) global[d].insert(global[d].end(), knots_[d].multiplicity(0, j), int64_t(j) << kGridLevel);
+  }
+  const int nu = static_cast<int>(global[0].size()) - p_[0] - 1, nv = static_cast<int>(global[1].size()) - p_[1] - 1;
+  for (int a = 0; a < nu; ++a)
+    for (int b = 0; b < nv; ++b) {
+      Function f;
+      for (int k = 0; k <= p_[0] + 1; ++k) f.knots[0][k] = global[0][a + k];
+      for (int k = 0; k <= p_[1] + 1; ++k) f.knots[1][k] = global[1][b + k];
+      functions_.emplace(f, 1.0);
+    }
+  for (int i = 0; i < knots_[0].base_elements(); ++i)
+    for (int j = 0; j < knots_[1].base_elements(); ++j)
+      elements_.push_back({{int64_t(i) << kGridLevel, int64_t(j) << kGridLevel},
+                           {int64_t(i + 1) << kGridLevel, int64_t(j + 1) << kGridLevel}});
+}
+
+void DyadicLrMesh::add_line(const Segment& s) {
+  auto& intervals = lines_[s.direction][s.at];
+  intervals.push_back({s.from, s.to});
+  std::sort(intervals.begin(), intervals.end());
+  std::vector<std::pair<int64_t, int64_t>> merged;
+  for (const auto& iv : intervals)
+    if (!merged.empty() && iv.first <= merged.back().second) merged.back().second = std::max(merged.back().second, iv.second);
+    else merged.push_back(iv);
+  intervals = std::move(merged);
+}
+
+bool DyadicLrMesh::covers(int direction, int64_t at, int64_t from, int64_t to) const {
+  const auto it = lines_[direction].find(at);
+  if (it == lines_[direction].end()) return false;
+  const auto& iv = it->second;
+  auto k = std::upper_bound(iv.begin(), iv.end(), std::pair<int64_t, int64_t>{from, INT64_MAX});
+  if (k == iv.begin()) return false;
+  --k;
+  return k->first <= from && to <= k->second;
+}
+
+// Knot insertion into one B-spline: B[t] = a B[t with x, first p+2] + b B[last p+2].
+void DyadicLrMesh::split_functions() {
+  std::vector<Function> work;
+  work.reserve(functions_.size());
+  for (const auto& [f, w] : functions_) work.push_back(f);
+  while (!work.empty()) {
+    const Function f = work.back();
+    work.pop_back();
+    const auto found = functions_.find(f);
+    if (found == functions_.end()) continue;  // split since it was queued
+    for (int d = 0; d < 2; ++d) {
+      const int p = p_[d], o = 1 - d;
+      const auto& t = f.knots[d];
+      const int64_t lo = t[0], hi = t[p + 1], olo = f.knots[o][0], ohi = f.knots[o][p_[o] + 1];
+      const auto& lines = lines_[d];
+      auto it = lines.upper_bound(lo);
+      for (; it != lines.end() && it->first < hi; ++it)
+        if (std::find(t.begin(), t.begin() + p + 2, it->first) == t.begin() + p + 2 && covers(d, it->first, olo, ohi))
+          break;
+      if (it == lines.end() || it->first >= hi) continue;
+      const int64_t x = it->first;
+      const double X = parameter(d, x), t0 = parameter(d, t[0]), tp = parameter(d, t[p]), t1 = parameter(d, t[1]),
+                   tq = parameter(d, t[p + 1]);
+      const double a = x >= t[p] ? 1.0 : (X - t0) / (tp - t0);
+      const double b = x <= t[1] ? 1.0 : (tq - X) / (tq - t1);
+      std::vector<int64_t> w(t.begin(), t.begin() + p + 2);
+      w.insert(std::upper_bound(w.begin(), w.end(), x), x);
+      Function left = f, right = f;
+      for (int k = 0; k <= p + 1; ++k) {
+        left.knots[d][k] = w[k];
+        right.knots[d][k] = w[k + 1];
+      }
+      const double weight = found->second;
+      functions_.erase(found);
+      functions_[left] += weight * a;
+      functions_[right] += weight * b;
+      work.push_back(left);
+      work.push_back(right);
+      break;
+    }
+  }
+}
+
+void DyadicLrMesh::split_elements() {
+  std::vector<Element> work = std::move(elements_), done;
+  while (!work.empty()) {
+    const Element e = work.back();
+    work.pop_back();
+    bool split = false;
+    for (int d = 0; d < 2 && !split; ++d) {
+      const int o = 1 - d;
+      const auto& lines = lines_[d];
+      for (auto it = lines.upper_bound(e.from[d]); it != lines.end() && it->first < e.to[d]; ++it)
+        if (covers(d, it->first, e.from[o], e.to[o])) {
+          Element a = e, b = e;
+          a.to[d] = b.from[d] = it->first;
+          work.push_back(a);
+          work.push_back(b);
+          split = true;
+          break;
+        }
+    }
+    if (!split) done.push_back(e);
+  }
+  // Row by row, left to right: a stable order whatever the order of splitting.
+  std::sort(done.begin(), done.end(), [](const Element& a, const Element& b) {
+    return std::tie(a.from[1], a.from[0]) < std::tie(b.from[1], b.from[0]);
+  });
+  elements_ = std::move(done);
+}
+
+int DyadicLrMesh::refine(const std::vector<int>& marked, Strategy strategy) {
+  std::vector<Function> sorted;
+  const std::vector<std::vector<int>> on = incidence(sorted);
+  std::vector<Segment> segments;
+  auto midpoint = [&](int d, int64_t a, int64_t b) {
+    if ((a + b) % 2 != 0)
+      throw std::invalid_argument("an element of width " + std::to_string(parameter(d, b) - parameter(d, a)) +
+                                  " cannot be halved on the LR grid (2^-40 of a level-0 element)");
+    return (a + b) / 2;
+  };
+  std::vector<char> refine_function(sorted.size(), 0);
+  for (int m : marked) {
+    const Element& e = elements_.at(m);
+    if (strategy == Strategy::kStructuredMesh) {
+      for (int f : on[m]) refine_function[f] = 1;
+      continue;
+    }
+    for (int d = 0; d < 2; ++d) {
+      const int o = 1 - d;
+      int64_t from = 0, to = 0;
+      bool first = true;
+      for (int f : on[m]) {
+        const int64_t a = sorted[f].knots[o][0], b = sorted[f].knots[o][p_[o] + 1];
+        if (first) from = a, to = b;
+        else if (strategy == Strategy::kFullSpan) from = std::min(from, a), to = std::max(to, b);
+        else if (b - a < to - from) from = a, to = b;
+        first = false;
+      }
+      segments.push_back({d, midpoint(d, e.from[d], e.to[d]), from, to});
+    }
+  }
+  for (size_t f = 0; f < sorted.size(); ++f)
+    if (refine_function[f])
+      for (int d = 0; d < 2; ++d) {
+        const int o = 1 - d;
+        const auto& t = sorted[f].knots[d];
+        for (int k = 0; k <= p_[d]; ++k)
+          if (t[k] < t[k + 1])
+            segments.push_back({d, midpoint(d, t[k], t[k + 1]), sorted[f].knots[o][0], sorted[f].knots[o][p_[o] + 1]});
+      }
+  for (const Segment& s : segments) add_line(s);
+  inserted_.insert(inserted_.end(), segments.begin(), segments.end());
+  split_functions();
+  const int before = extended_;
+  keep_traces_independent();
+  split_elements();
+  return static_cast<int>(segments.size()) + extended_ - before;
+}
+
+void DyadicLrMesh::keep_traces_independent() {
+  // The traces on the boundary must stay linearly independent (Dirichlet data are projected
+  // onto them): a meshline that reaches a side is extended across every B-spline with a
+  // trace there whose support it cuts without being one of its knots. Then every trace is a
+  // B-spline of the side's own knot vector, and distinct ones are independent.
+  for (;;) {
+    std::vector<Segment> extensions = boundary_extensions();
+    if (extensions.empty()) break;
+    for (const Segment& s : extensions) add_line(s);
+    inserted_.insert(inserted_.end(), extensions.begin(), extensions.end());
+    extended_ += static_cast<int>(extensions.size());
+    split_functions();
+  }
+}
+
+int64_t DyadicLrMesh::grid(int d, double value) const {
+  const DyadicKnots& K = knots_[d];
+  const double a = K.breakpoint(0, 0), b = K.breakpoint(0, K.base_elements());
+  if (!(value >= a && value <= b)) throw std::invalid_argument(std::to_string(value) + " is outside the parameter domain");
+  int j = 0;
+  while (j + 1 < K.base_elements() && value >= K.breakpoint(0, j + 1)) ++j;
+  const double lo = K.breakpoint(0, j), hi = K.breakpoint(0, j + 1);
+  const int64_t x = (int64_t(j) << kGridLevel) + std::llround((value - lo) / (hi - lo) * std::ldexp(1.0, kGridLevel));
+  if (std::abs(parameter(d, x) - value) > 1e-12 * std::max(1.0, std::abs(value)))
+    throw std::invalid_argument(std::to_string(value) + " is not on the dyadic grid of the level-0 elements");
+  return x;
+}
+
+void DyadicLrMesh::insert(const std::vector<Segment>& segments, bool keep_traces) {
+  for (const Segment& s : segments) {
+    const int d = s.direction, o = 1 - d;
+    auto describe = [&] {
+      return std::string(d == 0 ? "u = " : "v = ") + std::to_string(parameter(d, s.at)) + " from " +
+             std::to_string(parameter(o, s.from)) + " to " + std::to_string(parameter(o, s.to));
+    };
+    if (!(0 < s.at && s.at < end_[d] && 0 <= s.from && s.from < s.to && s.to <= end_[o]))
+      throw std::invalid_argument("the meshline " + describe() + " is empty or leaves the domain");
+    const auto saved = lines_[d];
+    add_line(s);
+    bool traverses = false;
+    for (const auto& [f, w] : functions_) {
+      const auto& t = f.knots[d];
+      if (t[0] < s.at && s.at < t[p_[d] + 1] && std::find(t.begin(), t.begin() + p_[d] + 2, s.at) == t.begin() + p_[d] + 2 &&
+          covers(d, s.at, f.knots[o][0], f.knots[o][p_[o] + 1])) {
+        traverses = true;
+        break;
+      }
+    }
+    if (!traverses) {
+      lines_[d] = saved;
+      throw std::invalid_argument("the meshline " + describe() +
+                                  " traverses the support of no B-spline (the mesh would not be an LR mesh)");
+    }
+    inserted_.push_back(s);
+    split_functions();
+  }
+  if (keep_traces) keep_traces_independent();
+  split_elements();
+}
+
+std::vector<DyadicLrMesh::Segment> DyadicLrMesh::boundary_extensions() const {
+  std::vector<Segment> out;
+  for (const auto& [f, w] : functions_)
+    for (int d = 0; d < 2; ++d) {  // lines u = x (d = 0) reach the sides v = 0 and v = end
+      const int o = 1 - d, p = p_[d], q = p_[o];
+      const auto& t = f.knots[d];
+      const auto& s = f.knots[o];
+      for (int side = 0; side < 2; ++side) {
+        const bool touches = side == 0 ? s[q] == 0 : s[1] == end_[o];
+        if (!touches) continue;
+        const auto& lines = lines_[d];
+        for (auto it = lines.upper_bound(t[0]); it != lines.end() && it->first < t[p + 1]; ++it) {
+          const int64_t x = it->first;
+          if (std::find(t.begin(), t.begin() + p + 2, x) != t.begin() + p + 2) continue;
+          const bool reaches = side == 0 ? it->second.front().first == 0 : it->second.back().second == end_[o];
+          if (!reaches) continue;
+          out.push_back(side == 0 ? Segment{d, x, 0, s[q + 1]} : Segment{d, x, s[0], end_[o]});
+        }
+      }
+    }
+  return out;
+}
+
+std::vector<std::vector<int>> DyadicLrMesh::incidence(std::vector<Function>& sorted) const {
+  sorted.clear();
+  for (const auto& [f, w] : functions_) sorted.push_back(f);
+  std::sort(sorted.begin(), sorted.end(), [](const Function& a, const Function& b) { return a.knots < b.knots; });
+  // A k-d tree of the elements (by their centres, with each node's bounding box), queried with
+  // every support: the elements inside it.
+  const int n = static_cast<int>(elements_.size());
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  struct Node {
+    int begin, end;
+    std::array<int64_t, 2> lo, hi;
+    int left = -1, right = -1;
+  };
+  std::vector<Node> nodes;
+  auto build = [&](auto&& self, int begin, int end, int axis) -> int {
+    Node node{begin, end, {INT64_MAX, INT64_MAX}, {INT64_MIN, INT64_MIN}};
+    for (int k = begin; k < end; ++k)
+      for (int d = 0; d < 2; ++d) {
+        node.lo[d] = std::min(node.lo[d], elements_[order[k]].from[d]);
+        node.hi[d] = std::max(node.hi[d], elements_[order[k]].to[d]);
+      }
+    const int id = static_cast<int>(nodes.size());
+    nodes.push_back(node);
+    if (end - begin > 8) {
+      const int mid = (begin + end) / 2;
+      std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](int a, int b) {
+        return elements_[a].from[axis] + elements_[a].to[axis] < elements_[b].from[axis] + elements_[b].to[axis];
+      });
+      const int l = self(self, begin, mid, 1 - axis);
+      const int r = self(self, mid, end, 1 - axis);
+      nodes[id].left = l;
+      nodes[id].right = r;
+    }
+    return id;
+  };
+  if (n > 0) build(build, 0, n, 0);
+  std::vector<std::vector<int>> on(n);
+  std::vector<int> stack;
+  for (int f = 0; f < static_cast<int>(sorted.size()); ++f) {
+    const std::array<int64_t, 2> lo{sorted[f].knots[0][0], sorted[f].knots[1][0]};
+    const std::array<int64_t, 2> hi{sorted[f].knots[0][p_[0] + 1], sorted[f].knots[1][p_[1] + 1]};
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const Node& node = nodes[stack.back()];
+      stack.pop_back();
+      if (node.hi[0] <= lo[0] || node.lo[0] >= hi[0] || node.hi[1] <= lo[1] || node.lo[1] >= hi[1]) continue;
+      if (node.left >= 0) {
+        stack.push_back(node.left);
+        stack.push_back(node.right);
+        continue;
+      }
+      for (int k = node.begin; k < node.end; ++k) {
+        const Element& e = elements_[order[k]];
+        if (lo[0] <= e.from[0] && e.to[0] <= hi[0] && lo[1] <= e.from[1] && e.to[1] <= hi[1]) on[order[k]].push_back(f);
+      }
+    }
+  }
+  return on;
+}
+
+BezierMesh DyadicLrMesh::bezier_mesh() const {
+  std::vector<Function> sorted;
+  const std::vector<std::vector<int>> on = incidence(sorted);
+  BezierMesh mesh;
+  mesh.set_num_functions(static_cast<int>(sorted.size()));
+  mesh.set_boundary_names({"bottom", "right", "top", "left"});
+  const int p = p_[0], q = p_[1];
+  auto knots_of = [&](const Function& f, int d) {
+    std::vector<double> t(p_[d] + 2);
+    for (int k = 0; k <= p_[d] + 1; ++k) t[k] = parameter(d, f.knots[d][k]);
+    return t;
+  };
+  for (size_t c = 0; c < elements_.size(); ++c) {
+    const Element& e = elements_[c];
+    BezierCell cell;
+    cell.u0 = parameter(0, e.from[0]);
+    cell.u1 = parameter(0, e.to[0]);
+    cell.v0 = parameter(1, e.from[1]);
+    cell.v1 = parameter(1, e.to[1]);
+    cell.degree_u = p;
+    cell.degree_v = q;
+    if (e.from[1] == 0) cell.boundary[kSideBottom] = 0;
+    if (e.to[0] == end_[0]) cell.boundary[kSideRight] = 1;
+    if (e.to[1] == end_[1]) cell.boundary[kSideTop] = 2;
+    if (e.from[0] == 0) cell.boundary[kSideLeft] = 3;
+    Eigen::MatrixXd C(static_cast<int>(on[c].size()), (p + 1) * (q + 1));
+    for (size_t k = 0; k < on[c].size(); ++k) {
+      const Function& f = sorted[on[c][k]];
+      const double w = functions_.at(f);
+      const Eigen::VectorXd bu = single_bspline_bernstein(knots_of(f, 0), cell.u0, cell.u1);
+      const Eigen::VectorXd bv = single_bspline_bernstein(knots_of(f, 1), cell.v0, cell.v1);
+      for (int b = 0; b <= q; ++b)
+        for (int a = 0; a <= p; ++a) C(static_cast<int>(k), a + (p + 1) * b) = w * bu[a] * bv[b];
+    }
+    mesh.add_cell(cell, on[c], mesh.add_extraction(std::move(C)));
+  }
+  return mesh;
+}
+
+DyadicLrMesh::Dependence DyadicLrMesh::dependence(int max_checked) const {
+  std::vector<Function> sorted;
+  const std::vector<std::vector<int>> on = incidence(sorted);
+  const size_t full = size_t(p_[0] + 1) * (p_[1] + 1);
+  std::vector<char> has_free_element(sorted.size(), 0);
+  for (size_t c = 0; c < on.size(); ++c)
+    if (on[c].size() <= full)
+      for (int f : on[c]) has_free_element[f] = 1;
+  std::vector<int> candidates;
+  for (size_t f = 0; f < sorted.size(); ++f)
+    if (!has_free_element[f]) candidates.push_back(static_cast<int>(f));
+  Dependence out;
+  out.overloaded = static_cast<int>(candidates.size());
+  if (candidates.empty()) {
+    out.dependent = 0;
+    return out;
+  }
+  // Candidates that share no element have disjoint Bézier columns: the rank is the sum of
+  // the ranks of the groups connected through shared elements (small clusters in practice).
+  const BezierMesh mesh = bezier_mesh();
+  std::vector<int> row(sorted.size(), -1);
+  for (size_t k = 0; k < candidates.size(); ++k) row[candidates[k]] = static_cast<int>(k);
+  std::vector<int> parent(candidates.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& fs : on) {
+    int first = -1;
+    for (int f : fs)
+      if (row[f] >= 0) {
+        if (first < 0) first = root(row[f]);
+        else parent[root(row[f])] = first;
+      }
+  }
+  std::map<int, std::vector<int>> groups;  // root -> candidate rows
+  for (size_t k = 0; k < candidates.size(); ++k) groups[root(static_cast<int>(k))].push_back(static_cast<int>(k));
+  out.dependent = 0;
+  for (const auto& [r, members] : groups) {
+    if (static_cast<int>(members.size()) > max_checked) {
+      out.dependent = -1;
+      return out;
+    }
+    std::vector<int> local(candidates.size(), -1);
+    for (size_t k = 0; k < members.size(); ++k) local[members[k]] = static_cast<int>(k);
+    std::vector<int> cells;
+    for (size_t c = 0; c < on.size(); ++c)
+      if (std::any_of(on[c].begin(), on[c].end(), [&](int f) { return row[f] >= 0 && local[row[f]] >= 0; }))
+        cells.push_back(static_cast<int>(c));
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(cells.size() * full),
+                                              static_cast<Eigen::Index>(members.size()));
+    for (size_t k = 0; k < cells.size(); ++k) {
+      const auto ids = mesh.functions(cells[k]);
+      for (size_t i = 0; i < ids.size(); ++i)
+        if (row[ids[i]] >= 0 && local[row[ids[i]]] >= 0)
+          A.block(static_cast<Eigen::Index>(k * full), local[row[ids[i]]], full, 1) =
+              mesh.extraction(cells[k]).row(static_cast<Eigen::Index>(i)).transpose();
+    }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+    qr.setThreshold(1e-10);
+    const int nullity = static_cast<int>(members.size()) - static_cast<int>(qr.rank());
+    if (nullity > 0 && out.element < 0) {
+      // The first column the pivoting left out is a combination of the ones before it: its
+      // function takes part in a relation.
+      const int f = candidates[members[qr.colsPermutation().indices()[qr.rank()]]];
+      for (size_t c = 0; c < on.size() && out.element < 0; ++c)
+        if (std::find(on[c].begin(), on[c].end(), f) != on[c].end()) out.element = static_cast<int>(c);
+    }
+    out.dependent += nullity;
+  }
+  return out;
+}
+
+}  // namespace knotwork

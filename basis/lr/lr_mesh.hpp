@@ -1,0 +1,110 @@
+#pragma once
+// LR B-splines (Dokken, Lyche, Pettersen 2013) on a patch's parameter domain, for adaptive
+// analysis (Johannessen, Kvamsdal, Dokken 2014): meshlines inserted in batches, every B-spline
+// whose support a meshline traverses split by knot insertion until none is, the elements of
+// the LR mesh, their Bézier extraction, and the check for linear dependence (which LR meshes
+// can have). Coordinates are integers on a dyadic grid 2^40 finer than level 0, so knots are
+// exact, hashable and cheap; basis/tmesh/lr_spline is the exact-rational LR mesh of the
+// PT-spline studies, far too slow for 10^5 functions.
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "basis/core/bezier_mesh.hpp"
+#include "basis/core/dyadic_knots.hpp"
+
+namespace knotwork {
+
+class DyadicLrMesh {
+ public:
+  static constexpr int kMaxDegree = 8;
+  static constexpr int kGridLevel = 40;
+  struct Element {
+    std::array<int64_t, 2> from, to;  // grid coordinates along u and v
+  };
+  struct Function {
+    std::array<std::array<int64_t, kMaxDegree + 2>, 2> knots{};  // degree+2 used per direction
+    bool operator==(const Function& o) const { return knots == o.knots; }
+  };
+  struct FunctionHash {
+    size_t operator()(const Function& f) const;
+  };
+  enum class Strategy { kMinimalSpan, kFullSpan, kStructuredMesh };
+  struct Segment {
+    int direction;  // 0: the line u = at (vertical), 1: v = at
+    int64_t at, from, to;
+  };
+
+  // The tensor mesh of level 0 and its B-splines.
+  DyadicLrMesh(DyadicKnots u, DyadicKnots v);
+
+  // Refines the given elements (indices into elements()) by `strategy`: minimal span halves
+  // each element by its two midlines, each as long as the shortest support containing the
+  // element; full span makes them as long as all those supports together; structured mesh
+  // halves every knot interval of every B-spline whose support contains a marked element.
+  // Meshlines that reach a side are extended where needed to keep the B-splines' traces there
+  // linearly independent. Returns the number of meshlines inserted. std::invalid_argument when an element is too
+  // small to be halved on the grid.
+  int refine(const std::vector<int>& elements, Strategy strategy);
+
+  // Inserts meshlines one by one, in the given order (merged with collinear ones they touch),
+  // each splitting the B-splines it traverses; with `keep_traces`, then extends what reaches a
+  // side as refine() does. std::invalid_argument names the first segment that leaves the
+  // domain or (merged) traverses the support of no B-spline: the mesh would not be an LR mesh.
+  void insert(const std::vector<Segment>& segments, bool keep_traces = true);
+  // Grid coordinate of a parameter value; std::invalid_argument when it is not on the grid.
+  int64_t grid(int direction, double parameter) const;
+
+  const std::vector<Element>& elements() const { return elements_; }
+  int num_functions() const { return static_cast<int>(functions_.size()); }
+  int degree(int direction) const { return knots_[direction].degree(); }
+  double parameter(int direction, int64_t x) const { return knots_[direction].breakpoint(kGridLevel, x); }
+
+  // The B-splines as a BezierMesh, cells in the order of elements(), functions numbered in
+  // the order of their knot vectors (which does not depend on the order of insertion).
+  BezierMesh bezier_mesh() const;
+
+  // Linear dependence. An element is overloaded when more than (p+1)(q+1) B-splines live on
+  // it, a B-spline when all its elements are; only overloaded B-splines can take part in a
+  // linear relation (on an element with exactly (p+1)(q+1) of them they are a basis of the
+  // polynomials there). The overloaded ones, if any, are then ranked by their Bézier
+  // coefficients (dense QR, relative threshold 1e-10), group by group of B-splines that share
+  // elements, when no group has more than `max_checked`.
+  struct Dependence {
+    int overloaded = 0;   // overloaded B-splines (0: independent, proven)
+    int dependent = -1;   // their nullity (-1: not ranked, too many)
+    int element = -1;     // an element in the support of a linear relation (when dependent > 0)
+  };
+  Dependence dependence(int max_checked = 2000) const;
+
+  // Meshlines added beyond those of the strategy, to keep the boundary traces independent.
+  int extended() const { return extended_; }
+  // The meshlines inserted so far, in order (grid coordinates).
+  const std::vector<Segment>& inserted() const { return inserted_; }
+  // The B-splines: knots (grid coordinates) and weights.
+  const std::unordered_map<Function, double, FunctionHash>& functions() const { return functions_; }
+
+ private:
+  void add_line(const Segment& s);
+  bool covers(int direction, int64_t at, int64_t from, int64_t to) const;
+  void split_functions();
+  void split_elements();
+  std::vector<Segment> boundary_extensions() const;
+  void keep_traces_independent();
+  // The functions living on each element (their keys' indices in a sorted list).
+  std::vector<std::vector<int>> incidence(std::vector<Function>& sorted) const;
+
+  std::array<DyadicKnots, 2> knots_;
+  std::array<int, 2> p_;
+  std::array<int64_t, 2> end_;
+  std::array<std::map<int64_t, std::vector<std::pair<int64_t, int64_t>>>, 2> lines_;  // merged intervals
+  std::unordered_map<Function, double, FunctionHash> functions_;                   // knots -> weight
+  std::vector<Element> elements_;
+  std::vector<Segment> inserted_;
+  int extended_ = 0;
+};
+
+}  // namespace knotwork
