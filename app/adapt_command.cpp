@@ -92,7 +92,7 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
   std::vector<PlotSeries> plot{se};
   if (!sl2.x.empty()) plot.insert(plot.end(), {sl2, sh1});
   Json& root = out.json;
-  root.set("case", c.path).set("family", c.family).set("space", description).set("theta", c.adapt.theta).set("steps", js);
+  root.set("case", c.path).set("family", c.family).set("space", description).set("theta", c.adapt.theta).set("marking", c.adapt.mark_functions ? "functions" : "cells").set("steps", js);
   if (steps.size() >= 4 && !std::isnan(steps.back().h1_semi))
     root.set("h1_rate_last_half", fitted_h1_rate(steps, steps.size() / 2));
   if (stage) {
@@ -114,6 +114,7 @@ int adapt_command(const AdaptOptions& o) {
   if (o.theta) c.adapt.theta = o.theta;
   if (o.max_dofs) c.adapt.max_dofs = o.max_dofs;
   c.allow_unverified_space = o.allow_unverified_space;
+  if (!o.marking.empty()) c.adapt.mark_functions = o.marking == "functions";
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);
@@ -126,7 +127,8 @@ int adapt_command(const AdaptOptions& o) {
   const std::vector<AdaptiveStep>& steps = r.steps;
   const std::string& description = r.description;
   const std::vector<std::string>& outputs = r.outputs;
-  std::printf("knotwork adapt %s: %s, Doerfler theta = %g\n", c.path.c_str(), description.c_str(), c.adapt.theta);
+  std::printf("knotwork adapt %s: %s, Doerfler theta = %g%s\n", c.path.c_str(), description.c_str(), c.adapt.theta,
+              c.adapt.mark_functions ? " on functions" : "");
   for (size_t s = 0; s < steps.size(); ++s)
     for (const auto& n : steps[s].notes) std::printf("  note     step %zu: %s\n", s, n.c_str());
   std::printf("%4s %8s %8s %7s %13s %13s %13s %7s\n", "step", "dofs", "cells", "marked", "estimator", "L2 error",

@@ -65,7 +65,8 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     }
     const bool last = s + 1 == c.adapt.steps || st.dofs >= c.adapt.max_dofs;
     std::vector<int> marked;
-    if (!last) marked = dorfler_marking(ind.eta_squared, c.adapt.theta);
+    if (!last) marked = c.adapt.mark_functions ? cells_of_marked_functions(space->mesh(), ind.eta_squared, c.adapt.theta)
+                                               : dorfler_marking(ind.eta_squared, c.adapt.theta);
     st.marked = static_cast<int>(marked.size());
     if (on_step) on_step({s, *space, sol, ind, marked, last});
     if (!last) {

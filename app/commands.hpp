@@ -39,6 +39,7 @@ struct AdaptOptions : CommonOptions {
   bool no_output = false;
   int output_every = 1;  // ParaView files of every K-th step (and the last)
   bool allow_unverified_space = false;  // --allow-dependent
+  std::string marking;                  // "": [adapt] marking
 };
 
 struct BenchOptions {

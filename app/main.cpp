@@ -126,6 +126,10 @@ int main(int argc, char** argv) {
   adapt_cmd->add_flag("--no-output", adapt.no_output, "Write no files (the table and timing only)");
   adapt_cmd->add_option("--output-every", adapt.output_every,
                         "ParaView files of every K-th step only, and of the last (default 1: every step; adapt.csv/json/svg always)");
+  adapt_cmd->add_option("--marking", adapt.marking,
+                        "What Doerfler marks: cells (default), or functions (their indicator the sum over the cells they "
+                        "live on; the cells of their supports are refined) (overrides [adapt] marking)")
+      ->check(CLI::IsMember({"cells", "functions"}));
   adapt_cmd->add_flag("--allow-dependent", adapt.allow_unverified_space,
                       "Go on when a refined space fails its family's own check (LR B-splines found linearly "
                       "dependent: the matrix may be singular)");

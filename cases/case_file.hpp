@@ -84,6 +84,10 @@ struct CaseDescription {
     int steps = 10;          // solves, the first on the case's own mesh
     double theta = 0.5;      // Doerfler fraction of the estimated error squared to mark
     long max_dofs = 200000;  // stop refining beyond this many functions
+    // [adapt] marking = "functions": Doerfler marking of functions (indicator: the sum of
+    // eta_K^2 over the cells a function lives on), refining the cells of their supports, as
+    // hierarchical codes do; "cells" (default): Doerfler marking of cells.
+    bool mark_functions = false;
   } adapt;
 };
 

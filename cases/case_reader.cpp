@@ -537,7 +537,12 @@ void read_output(const CaseReader& r, const DocumentNode& t, CaseDescription& c)
 }
 
 void read_adapt(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
-  r.check_keys(t, "adapt", {"steps", "theta", "max_dofs"});
+  r.check_keys(t, "adapt", {"steps", "theta", "max_dofs", "marking"});
+  if (const DocumentNode* n = t.get("marking")) {
+    const std::string m = r.string(*n, "[adapt] marking");
+    if (m != "cells" && m != "functions") r.fail("[adapt] marking", "must be \"cells\" or \"functions\", not \"" + m + "\"");
+    c.adapt.mark_functions = m == "functions";
+  }
   if (const DocumentNode* n = t.get("steps")) {
     c.adapt.steps = static_cast<int>(r.integer(*n, "[adapt] steps"));
     if (c.adapt.steps < 1 || c.adapt.steps > 200) r.fail("[adapt] steps", "must be in [1, 200]");

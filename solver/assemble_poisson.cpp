@@ -451,8 +451,9 @@ std::vector<std::pair<int, double>> solve_dirichlet_projection(const DirichletPi
     for (int k = 0; k < nd && !singular; ++k) singular = !(ldlt.vectorD()[k] > 1e-10 * diagonal[k]);
   }
   if (singular) throw std::runtime_error(
-        "Dirichlet projection: the traces of the basis functions on the Dirichlet sides are linearly dependent "
-        "(singular boundary mass matrix); the space breaks the BezierMesh contract");
+        "Dirichlet projection: the traces of the basis functions on the Dirichlet sides are linearly dependent, or "
+        "nearly so in double precision (a pivot of the boundary mass matrix below 1e-10 of its diagonal); the space "
+        "breaks the BezierMesh contract");
   const Eigen::VectorXd x = ldlt.solve(r);
   result.reserve(nd);
   for (int k = 0; k < nd; ++k) result.emplace_back(ids[k], x[k]);

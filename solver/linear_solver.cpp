@@ -72,7 +72,8 @@ void SparseCholesky::factorize(const Eigen::SparseMatrix<double>& A) {
   if (impl_->llt.info() != Eigen::Success)
     throw std::runtime_error(
         "the stiffness matrix is not positive definite: CHOLMOD could not factor it "
-        "(a problem without Dirichlet conditions has no unique solution)");
+        "(a problem without Dirichlet conditions has no unique solution, nor one on linearly dependent functions: "
+        "--solver iterative solves a consistent singular system)");
   stats_.factor_nonzeros = cm.lnz;
   stats_.flops = cm.fl;
   stats_.peak_bytes = static_cast<double>(cm.memory_usage);

@@ -207,4 +207,20 @@ std::vector<int> dorfler_marking(const Eigen::VectorXd& eta_squared, double thet
   return marked;
 }
 
+std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared, double theta) {
+  Eigen::VectorXd per_function = Eigen::VectorXd::Zero(mesh.num_functions());
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    for (int f : mesh.functions(c)) per_function[f] += eta_squared[c];
+  std::vector<char> marked(mesh.num_functions(), 0);
+  for (int f : dorfler_marking(per_function, theta)) marked[f] = 1;
+  std::vector<int> cells;
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    for (int f : mesh.functions(c))
+      if (marked[f]) {
+        cells.push_back(c);
+        break;
+      }
+  return cells;
+}
+
 }  // namespace knotwork

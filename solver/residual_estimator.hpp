@@ -33,4 +33,9 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
 // at least theta times the total. theta in (0, 1].
 std::vector<int> dorfler_marking(const Eigen::VectorXd& eta_squared, double theta);
 
+// Doerfler marking of functions, as hierarchical codes do: a function's indicator is the sum
+// of eta_K^2 over the cells it lives on; the fewest functions holding theta of their sum are
+// marked, and the cells of their supports returned (sorted).
+std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared, double theta);
+
 }  // namespace knotwork

@@ -181,6 +181,24 @@ TEST_CASE("Doerfler marking takes the fewest largest indicators reaching theta",
   CHECK_THROWS(dorfler_marking(eta2, 1.5));
 }
 
+TEST_CASE("Marking by functions refines the supports of the functions Doerfler picks", "[adaptive]") {
+  // Four cells in a row, linear hats 0..4: hat k lives on cells k-1 and k.
+  BezierMesh mesh;
+  mesh.set_num_functions(5);
+  for (int c = 0; c < 4; ++c) {
+    BezierCell cell;
+    cell.u0 = c, cell.u1 = c + 1;
+    const int ids[2] = {c, c + 1};
+    mesh.add_cell(cell, ids, mesh.add_extraction(Eigen::MatrixXd::Identity(2, 4)));
+  }
+  Eigen::VectorXd eta2(4);
+  eta2 << 9, 1, 0, 4;  // per function: 9, 10, 1, 4, 4 (total 28)
+  // Half of 28: function 1 (10) then 0 (9) = 19 >= 14: cells 0 and 1.
+  CHECK(cells_of_marked_functions(mesh, eta2, 0.5) == std::vector<int>{0, 1});
+  // 0.75 of 28 = 21: functions 1, 0, then 3 (4): cells 0, 1, 2, 3 (function 3 lives on 2 and 3).
+  CHECK(cells_of_marked_functions(mesh, eta2, 0.75) == std::vector<int>{0, 1, 2, 3});
+}
+
 TEST_CASE("Adaptive knot segments on the L-shape: H1 error ~ N^(-p/2), uniform ~ N^(-1/3)", "[adaptive][slow]") {
   for (int p : {2, 3}) {
     CaseDescription c = shipped("lshape_adaptive.toml");

@@ -1,6 +1,6 @@
 // Family "lr": LR B-splines on one patch's parameter domain, starting from the tensor mesh of
 // [space] degree and elements on the geometry's knot spans (its C0 lines kept), refined by
-// meshline insertion ([space] refinement: minimal_span by default, full_span, structured_mesh).
+// meshline insertion ([space] refinement: structured_mesh by default, minimal_span, full_span).
 // Every space is checked for linear dependence; a dependent one is refused unless the
 // command was given --allow-dependent.
 #include <cstdio>
@@ -25,7 +25,7 @@ struct MeshlineInput {
 };
 
 struct LrSection : PatchSpaceSection {
-  DyadicLrMesh::Strategy strategy = DyadicLrMesh::Strategy::kMinimalSpan;
+  DyadicLrMesh::Strategy strategy = DyadicLrMesh::Strategy::kStructuredMesh;
   std::vector<MeshlineInput> meshlines;  // inserted in order into the start mesh
   std::unique_ptr<CaseSection> clone() const override { return std::make_unique<LrSection>(*this); }
 };
@@ -124,7 +124,7 @@ class LrSpace final : public SplineSpace {
   LrSpace(const CaseDescription& c, DyadicLrMesh lr) : case_(&c), lr_(std::move(lr)) {
     mesh_ = lr_.bezier_mesh();
     mesh_.set_interfaces(interfaces_from_parameter_boxes(mesh_));
-    dependence_ = lr_.dependence();
+    dependence_ = DyadicLrMesh::dependence(mesh_);
     try {
       geometry_ = std::make_unique<PatchGeometryMap>(mesh_, c.geometry);
     } catch (const GeometryError& e) {

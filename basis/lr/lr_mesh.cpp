@@ -68,6 +68,7 @@ bool DyadicLrMesh::covers(int direction, int64_t at, int64_t from, int64_t to) c
 
 // Knot insertion into one B-spline: B[t] = a B[t with x, first p+2] + b B[last p+2].
 void DyadicLrMesh::split_functions() {
+  incidence_.reset();
   std::vector<Function> work;
   work.reserve(functions_.size());
   for (const auto& [f, w] : functions_) work.push_back(f);
@@ -135,11 +136,13 @@ void DyadicLrMesh::split_elements() {
     return std::tie(a.from[1], a.from[0]) < std::tie(b.from[1], b.from[0]);
   });
   elements_ = std::move(done);
+  incidence_.reset();
 }
 
 int DyadicLrMesh::refine(const std::vector<int>& marked, Strategy strategy) {
-  std::vector<Function> sorted;
-  const std::vector<std::vector<int>> on = incidence(sorted);
+  const Incidence& inc = incidence();
+  const std::vector<Function>& sorted = inc.sorted;
+  const std::vector<std::vector<int>>& on = inc.on;
   std::vector<Segment> segments;
   auto midpoint = [&](int d, int64_t a, int64_t b) {
     if ((a + b) % 2 != 0)
@@ -269,8 +272,10 @@ std::vector<DyadicLrMesh::Segment> DyadicLrMesh::boundary_extensions() const {
   return out;
 }
 
-std::vector<std::vector<int>> DyadicLrMesh::incidence(std::vector<Function>& sorted) const {
-  sorted.clear();
+const DyadicLrMesh::Incidence& DyadicLrMesh::incidence() const {
+  if (incidence_) return *incidence_;
+  auto result = std::make_shared<Incidence>();
+  std::vector<Function>& sorted = result->sorted;
   for (const auto& [f, w] : functions_) sorted.push_back(f);
   std::sort(sorted.begin(), sorted.end(), [](const Function& a, const Function& b) { return a.knots < b.knots; });
   // A k-d tree of the elements (by their centres, with each node's bounding box), queried with
@@ -306,7 +311,8 @@ std::vector<std::vector<int>> DyadicLrMesh::incidence(std::vector<Function>& sor
     return id;
   };
   if (n > 0) build(build, 0, n, 0);
-  std::vector<std::vector<int>> on(n);
+  std::vector<std::vector<int>>& on = result->on;
+  on.assign(n, {});
   std::vector<int> stack;
   for (int f = 0; f < static_cast<int>(sorted.size()); ++f) {
     const std::array<int64_t, 2> lo{sorted[f].knots[0][0], sorted[f].knots[1][0]};
@@ -327,21 +333,45 @@ std::vector<std::vector<int>> DyadicLrMesh::incidence(std::vector<Function>& sor
       }
     }
   }
-  return on;
+  incidence_ = result;
+  return *incidence_;
 }
 
 BezierMesh DyadicLrMesh::bezier_mesh() const {
-  std::vector<Function> sorted;
-  const std::vector<std::vector<int>> on = incidence(sorted);
-  BezierMesh mesh;
-  mesh.set_num_functions(static_cast<int>(sorted.size()));
-  mesh.set_boundary_names({"bottom", "right", "top", "left"});
+  const Incidence& inc = incidence();
   const int p = p_[0], q = p_[1];
-  auto knots_of = [&](const Function& f, int d) {
-    std::vector<double> t(p_[d] + 2);
-    for (int k = 0; k <= p_[d] + 1; ++k) t[k] = parameter(d, f.knots[d][k]);
-    return t;
+  // A B-spline's Bernstein coefficients on an element depend only on its knots in one
+  // direction and the element's interval there: most pairs repeat, so each is computed once.
+  struct Key {
+    std::array<int64_t, kMaxDegree + 4> k;
+    bool operator==(const Key& o) const { return k == o.k; }
   };
+  struct KeyHash {
+    size_t operator()(const Key& key) const {
+      uint64_t h = 1469598103934665603ull;
+      for (int64_t x : key.k) h = (h ^ uint64_t(x)) * 1099511628211ull;
+      return h;
+    }
+  };
+  std::array<std::unordered_map<Key, Eigen::VectorXd, KeyHash>, 2> seen;
+  auto bernstein = [&](const Function& f, int d, int64_t a, int64_t b) -> const Eigen::VectorXd& {
+    Key key{};
+    for (int i = 0; i <= p_[d] + 1; ++i) key.k[i] = f.knots[d][i];
+    key.k[kMaxDegree + 2] = a;
+    key.k[kMaxDegree + 3] = b;
+    auto [it, fresh] = seen[d].try_emplace(key);
+    if (fresh) {
+      std::vector<double> t(p_[d] + 2);
+      for (int i = 0; i <= p_[d] + 1; ++i) t[i] = parameter(d, f.knots[d][i]);
+      it->second = single_bspline_bernstein(t, parameter(d, a), parameter(d, b));
+    }
+    return it->second;
+  };
+  std::vector<double> weight(inc.sorted.size());
+  for (size_t f = 0; f < inc.sorted.size(); ++f) weight[f] = functions_.at(inc.sorted[f]);
+  BezierMesh mesh;
+  mesh.set_num_functions(static_cast<int>(inc.sorted.size()));
+  mesh.set_boundary_names({"bottom", "right", "top", "left"});
   for (size_t c = 0; c < elements_.size(); ++c) {
     const Element& e = elements_[c];
     BezierCell cell;
@@ -355,31 +385,32 @@ BezierMesh DyadicLrMesh::bezier_mesh() const {
     if (e.to[0] == end_[0]) cell.boundary[kSideRight] = 1;
     if (e.to[1] == end_[1]) cell.boundary[kSideTop] = 2;
     if (e.from[0] == 0) cell.boundary[kSideLeft] = 3;
-    Eigen::MatrixXd C(static_cast<int>(on[c].size()), (p + 1) * (q + 1));
-    for (size_t k = 0; k < on[c].size(); ++k) {
-      const Function& f = sorted[on[c][k]];
-      const double w = functions_.at(f);
-      const Eigen::VectorXd bu = single_bspline_bernstein(knots_of(f, 0), cell.u0, cell.u1);
-      const Eigen::VectorXd bv = single_bspline_bernstein(knots_of(f, 1), cell.v0, cell.v1);
+    const std::vector<int>& ids = inc.on[c];
+    Eigen::MatrixXd C(static_cast<int>(ids.size()), (p + 1) * (q + 1));
+    for (size_t k = 0; k < ids.size(); ++k) {
+      const Function& f = inc.sorted[ids[k]];
+      const Eigen::VectorXd& bu = bernstein(f, 0, e.from[0], e.to[0]);
+      const Eigen::VectorXd& bv = bernstein(f, 1, e.from[1], e.to[1]);
       for (int b = 0; b <= q; ++b)
-        for (int a = 0; a <= p; ++a) C(static_cast<int>(k), a + (p + 1) * b) = w * bu[a] * bv[b];
+        for (int a = 0; a <= p; ++a) C(static_cast<int>(k), a + (p + 1) * b) = weight[ids[k]] * bu[a] * bv[b];
     }
-    mesh.add_cell(cell, on[c], mesh.add_extraction(std::move(C)));
+    mesh.add_cell(cell, ids, mesh.add_extraction(std::move(C)));
   }
   return mesh;
 }
 
-DyadicLrMesh::Dependence DyadicLrMesh::dependence(int max_checked) const {
-  std::vector<Function> sorted;
-  const std::vector<std::vector<int>> on = incidence(sorted);
-  const size_t full = size_t(p_[0] + 1) * (p_[1] + 1);
-  std::vector<char> has_free_element(sorted.size(), 0);
+DyadicLrMesh::Dependence DyadicLrMesh::dependence(const BezierMesh& mesh, int max_checked) {
+  const int nf = mesh.num_functions();
+  std::vector<std::vector<int>> on(mesh.num_cells());
+  for (int c = 0; c < mesh.num_cells(); ++c) on[c].assign(mesh.functions(c).begin(), mesh.functions(c).end());
+  const size_t full = mesh.num_cells() ? size_t(mesh.cell(0).degree_u + 1) * (mesh.cell(0).degree_v + 1) : 1;
+  std::vector<char> has_free_element(nf, 0);
   for (size_t c = 0; c < on.size(); ++c)
     if (on[c].size() <= full)
       for (int f : on[c]) has_free_element[f] = 1;
   std::vector<int> candidates;
-  for (size_t f = 0; f < sorted.size(); ++f)
-    if (!has_free_element[f]) candidates.push_back(static_cast<int>(f));
+  for (int f = 0; f < nf; ++f)
+    if (!has_free_element[f]) candidates.push_back(f);
   Dependence out;
   out.overloaded = static_cast<int>(candidates.size());
   if (candidates.empty()) {
@@ -388,8 +419,7 @@ DyadicLrMesh::Dependence DyadicLrMesh::dependence(int max_checked) const {
   }
   // Candidates that share no element have disjoint Bézier columns: the rank is the sum of
   // the ranks of the groups connected through shared elements (small clusters in practice).
-  const BezierMesh mesh = bezier_mesh();
-  std::vector<int> row(sorted.size(), -1);
+  std::vector<int> row(nf, -1);
   for (size_t k = 0; k < candidates.size(); ++k) row[candidates[k]] = static_cast<int>(k);
   std::vector<int> parent(candidates.size());
   std::iota(parent.begin(), parent.end(), 0);

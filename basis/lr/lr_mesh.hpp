@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -78,7 +79,8 @@ class DyadicLrMesh {
     int dependent = -1;   // their nullity (-1: not ranked, too many)
     int element = -1;     // an element in the support of a linear relation (when dependent > 0)
   };
-  Dependence dependence(int max_checked = 2000) const;
+  // `mesh` is this mesh's bezier_mesh().
+  static Dependence dependence(const BezierMesh& mesh, int max_checked = 2000);
 
   // Meshlines added beyond those of the strategy, to keep the boundary traces independent.
   int extended() const { return extended_; }
@@ -94,8 +96,13 @@ class DyadicLrMesh {
   void split_elements();
   std::vector<Segment> boundary_extensions() const;
   void keep_traces_independent();
-  // The functions living on each element (their keys' indices in a sorted list).
-  std::vector<std::vector<int>> incidence(std::vector<Function>& sorted) const;
+  // The functions in the order of their knots, and the ones living on each element (indices
+  // into that list); computed on first use after a change.
+  struct Incidence {
+    std::vector<Function> sorted;
+    std::vector<std::vector<int>> on;
+  };
+  const Incidence& incidence() const;
 
   std::array<DyadicKnots, 2> knots_;
   std::array<int, 2> p_;
@@ -105,6 +112,7 @@ class DyadicLrMesh {
   std::vector<Element> elements_;
   std::vector<Segment> inserted_;
   int extended_ = 0;
+  mutable std::shared_ptr<const Incidence> incidence_;  // null after a change
 };
 
 }  // namespace knotwork
