@@ -139,6 +139,7 @@ struct Overrides {
   std::string solver, ordering = "amd";
   double tolerance = 0;
   bool allow_unverified_space = false;
+  std::string marking;  // adapt: "" (the case's), "cells" or "functions"
 };
 
 Overrides read_overrides(const py::dict& d) {
@@ -169,6 +170,11 @@ Overrides read_overrides(const py::dict& d) {
       // The range is checked by override_solver, as for --tolerance; 0 means "not given" there.
       if (o.tolerance == 0) throw InputError("tolerance: must be in (0, 1), got 0");
     } else if (key == "allow_unverified_space") o.allow_unverified_space = py::bool_(py::reinterpret_borrow<py::object>(v)).cast<bool>();
+    else if (key == "marking") {
+      text(o.marking);
+      if (o.marking != "cells" && o.marking != "functions")
+        throw InputError("marking: must be \"cells\" or \"functions\", got \"" + o.marking + "\"");
+    }
     else throw std::logic_error("unknown override " + key);  // knotwork/__init__.py passes only these
   }
   return o;
@@ -179,6 +185,7 @@ CaseDescription prepared_case(py::handle case_, const std::string& name, const p
   const Overrides o = read_overrides(overrides);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance);
   c.allow_unverified_space = o.allow_unverified_space;
+  if (!o.marking.empty()) c.adapt.mark_functions = o.marking == "functions";
   if (ordering) *ordering = parse_ordering(o.ordering);
   return c;
 }

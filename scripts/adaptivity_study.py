@@ -133,6 +133,8 @@ halved by the grading; LR: meshlines lengthened at the boundary; PT: none).
 """)
     scratch = tempfile.mkdtemp()
     summary = []
+    findings = []  # (problem, family, dofs against THB, error level)
+    extensions = []  # (problem, family, cells marked, what the family added)
     for title, stem, cases, degree, caps in PROBLEMS:
         results = {}
         for fam in FAMILIES:
@@ -159,6 +161,7 @@ halved by the grading; LR: meshlines lengthened at the boundary; PT: none).
                                         stem.startswith("lshape"))
             marked = sum(s["marked"] for s in steps)
             extended = sum(s["extended_segments"] for s in steps)
+            extensions.append((title, fam, marked, extended))
             print(f"| {LABEL[fam]} | {cmd} | {len(steps)} | {last['dofs']} | {last['h1_seminorm_error']:.3e} | "
                   f"{fitted_rate(steps):.2f} | {marked} / {extended} | {total:.1f} | {last['seconds']:.2f} | "
                   f"{usec:.2f} ({udofs}) | {total / usec:.0f} |")
@@ -184,10 +187,14 @@ halved by the grading; LR: meshlines lengthened at the boundary; PT: none).
                     cells.append(f"{d:.0f}")
                 else:
                     cells.append(f"{d:.0f} ({d / thb:.2f})")
+            for fam in FAMILIES:
+                d = loglog_dofs_at(results[fam].get("steps", []), level)
+                if fam != "thb" and d is not None and thb is not None:
+                    findings.append((title, fam, d / thb, level))
             u = loglog_dofs_at(uniform_steps, level)
             cells.append("–" if u is None else f"{u:.0f}" + ("" if thb is None else f" ({u / thb:.1f})"))
             print(f"| {level:.0e} | " + " | ".join(cells) + " |")
-        print(f"\nUniform: `knotwork converge cases/{cases['thb']}.toml --degree {degree} --levels 5` (tensor-product "
+        print(f"\nUniform: `knotwork converge cases/{cases['thb']}.toml --degree {degree} --levels 7` (tensor-product "
               f"B-splines, elements doubled per level): {', '.join(str(l['dofs']) for l in uniform_steps)} dofs, "
               f"H1 error {uniform_steps[-1]['h1_seminorm_error']:.2e} at the finest.")
         lr = results["lr"].get("steps", [])
@@ -228,6 +235,39 @@ halved by the grading; LR: meshlines lengthened at the boundary; PT: none).
                       f"({s['seconds_solve']:.2f} / {s['seconds_estimate']:.2f} / {s['seconds_refine']:.2f}) |")
             print("\n</details>\n")
 
+    # What the tables say, computed from them.
+    print("## Against THB, error level by error level\n")
+    print("The issue this study answers asks that knot segments and PT-splines need no more dofs than THB "
+          "(the usual choice) at every error level, and that where one does, the reason be given.\n")
+    print("| problem | family | most dofs against THB | at H1 error | levels above THB / compared |")
+    print("|---|---|---|---|---|")
+    for title, _, _, _, _ in PROBLEMS:
+        for fam in ("knot_segments", "pt", "lr"):
+            rows = [f for f in findings if f[0] == title and f[1] == fam]
+            if not rows:
+                continue
+            worst = max(rows, key=lambda f: f[2])
+            above = sum(1 for f in rows if f[2] > 1.0)
+            print(f"| {title.split(',')[0]}{', p = 3' if 'p = 3' in title else ''} | {LABEL[fam]} | {worst[2]:.2f} | "
+                  f"{worst[3]:.0e} | {above} / {len(rows)} |")
+    ext = [(t, f, m, e) for (t, f, m, e) in extensions if f == "knot_segments"]
+    lr_ratios = [f[2] for f in findings if f[1] == "lr"]
+    print("\nWhy. **PT-splines** need fewer dofs than THB at all but the first levels (the table above): a marked "
+          "cell is "
+          "halved in one direction (two children, where THB makes four), so a marking adds about half the "
+          "functions, and the PT space is the whole spline space of its T-mesh (its dimension is the "
+          "brute-force count, docs/PT_SPLINES.md), where THB-splines span a subspace of the splines on theirs. "
+          "**Knot segments** halve cells the same way but need more dofs than THB from the middle levels on: "
+          "to stay semi-regular, Weller's collections lengthen segments beyond the marked cell ("
+          + "; ".join(f"{t.split(',')[0]}{', p = 3' if 'p = 3' in t else ''}: {e} extensions for {m} marked cells"
+                      for (t, f, m, e) in ext)
+          + "), and every lengthened segment adds B-splines along cells the estimator did not mark; "
+          "PT-splines on the same kind of T-mesh add none. **LR B-splines** (structured mesh) need "
+          f"{min(lr_ratios):.1f}-{max(lr_ratios):.1f} times THB's dofs: a marked cell refines every B-spline living "
+          "on it over its whole support, "
+          "(p+1)^2 cells around it. Minimal-span LR refinement adds fewer (see below) but produced linearly "
+          "dependent B-splines at p = 3.\n")
+
     # The defaults, by measurement.
     print("## Choosing the defaults\n")
     print("Same commands on the L-shape with one key changed (a copy of the case file), up to 50 000 dofs. "
@@ -242,9 +282,11 @@ halved by the grading; LR: meshlines lengthened at the boundary; PT: none).
                                  ("thb", "marking", ['"functions"']), ("lr", "marking", ['"functions"'])):
             stem = "lshape_adaptive_" + fam
             for v in values:
-                r = adapt(variant(stem, scratch, {key: v}), degree, 50000)
+                path = variant(stem, scratch, {key: v})
+                r = adapt(path, degree, 50000)
                 if "error" in r:
-                    print(f"| {fam}, {key} = {v} | {degree} | | | | | stopped: {r['error']} |")
+                    why = r["error"].replace("knotwork: error: ", "").replace(path, f"(a copy of {stem}.toml)")
+                    print(f"| {fam}, {key} = {v} | {degree} | | | | | stopped: {why} |")
                     continue
                 s = r["steps"]
                 print(f"| {fam}, {key} = {v} | {degree} | {s[-1]['dofs']} | {s[-1]['h1_seminorm_error']:.3e} | "

@@ -99,25 +99,6 @@ void read_lr_case(const CaseDocument& doc, CaseDescription& c) {
 
 const LrSection& lr_section(const CaseDescription& c) { return family_section<LrSection>(c); }
 
-DyadicKnots level_zero_knots(const CaseDescription& c, int direction, int level) {
-  const LrSection& l = lr_section(c);
-  const BSplineBasis1D& g = direction == 0 ? c.geometry.basis_u : c.geometry.basis_v;
-  const int deg = l.space.degree[direction];
-  const int per_span = l.space.elements_per_span[direction] << level;
-  const auto bp = g.breakpoints();
-  const auto mult = g.multiplicities();
-  std::vector<double> breaks;
-  std::vector<int> interior;
-  for (size_t i = 0; i + 1 < bp.size(); ++i)
-    for (int e = 0; e < per_span; ++e) {
-      breaks.push_back(bp[i] + (bp[i + 1] - bp[i]) * e / per_span);
-      if (breaks.size() == 1) continue;
-      const int continuity = e == 0 ? std::min(g.degree() - mult[i], deg - 1) : deg - 1;
-      interior.push_back(deg - continuity);
-    }
-  breaks.push_back(bp.back());
-  return DyadicKnots(deg, std::move(breaks), std::move(interior));
-}
 
 class LrSpace final : public SplineSpace {
  public:
@@ -202,7 +183,8 @@ class LrSpace final : public SplineSpace {
 };
 
 std::unique_ptr<SplineSpace> build_lr(const CaseDescription& c, int level) {
-  DyadicKnots u = level_zero_knots(c, 0, level), v = level_zero_knots(c, 1, level);
+  DyadicKnots u = patch_dyadic_knots(c.geometry, lr_section(c).space, 0, level),
+              v = patch_dyadic_knots(c.geometry, lr_section(c).space, 1, level);
   const double cells = double(u.base_elements()) * v.base_elements();
   const double functions = double(u.num_functions(0)) * double(v.num_functions(0));
   char what[120];

@@ -93,6 +93,25 @@ void override_patch_space(TensorSpaceOptions& s, int degree, int elements, const
   }
 }
 
+DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level) {
+  const BSplineBasis1D& g = direction == 0 ? geometry.basis_u : geometry.basis_v;
+  const int deg = s.degree[direction];
+  const int per_span = s.elements_per_span[direction] << level;
+  const auto bp = g.breakpoints();
+  const auto mult = g.multiplicities();
+  std::vector<double> breaks;
+  std::vector<int> interior;
+  for (size_t i = 0; i + 1 < bp.size(); ++i)
+    for (int e = 0; e < per_span; ++e) {
+      breaks.push_back(bp[i] + (bp[i + 1] - bp[i]) * e / per_span);
+      if (breaks.size() == 1) continue;
+      const int continuity = e == 0 ? std::min(g.degree() - mult[i], deg - 1) : deg - 1;
+      interior.push_back(deg - continuity);
+    }
+  breaks.push_back(bp.back());
+  return DyadicKnots(deg, std::move(breaks), std::move(interior));
+}
+
 void check_uniform_levels(const TensorSpaceOptions& s, int levels) {
   const long finest = static_cast<long>(s.elements_per_span[0]) << (levels - 1);
   if (finest * (static_cast<long>(s.elements_per_span[1]) << (levels - 1)) > kMaxCaseCells)

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "basis/core/dyadic_knots.hpp"
 #include "basis/tensor/tensor_patch.hpp"
 #include "cases/case_file.hpp"
 
@@ -34,6 +35,11 @@ void read_patch_degree_elements(const CaseDocument& doc, TensorSpaceOptions& s, 
 // --degree / --elements with the same validation as the file; `fixed_by` non-empty: the
 // case's functions are fixed by that file, and both are refused.
 void override_patch_space(TensorSpaceOptions& s, int degree, int elements, const std::string& fixed_by = "");
+
+// The level-0 knots of a one-patch local refinement (THB, LR) along `direction`: the
+// geometry's knot spans cut into `elements << level` parts; a geometry knot keeps
+// min(its continuity, degree - 1), the new knots are C^(degree-1).
+DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level);
 
 // For families refined by doubling [space] elements per level: throws InputError when the
 // finest of `levels` levels would have more than 2^26 cells.

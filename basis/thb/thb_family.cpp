@@ -57,27 +57,6 @@ void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
 
 const ThbSection& thb_section(const CaseDescription& c) { return family_section<ThbSection>(c); }
 
-// Level 0: the geometry's knot spans cut into `elements << level` parts; a geometry knot keeps
-// min(its continuity, d-1), new knots are C^(d-1).
-DyadicKnots level_zero_knots(const CaseDescription& c, int direction, int level) {
-  const ThbSection& t = thb_section(c);
-  const BSplineBasis1D& g = direction == 0 ? c.geometry.basis_u : c.geometry.basis_v;
-  const int deg = t.space.degree[direction];
-  const int per_span = t.space.elements_per_span[direction] << level;
-  const auto bp = g.breakpoints();
-  const auto mult = g.multiplicities();
-  std::vector<double> breaks;
-  std::vector<int> interior;
-  for (size_t i = 0; i + 1 < bp.size(); ++i)
-    for (int e = 0; e < per_span; ++e) {
-      breaks.push_back(bp[i] + (bp[i + 1] - bp[i]) * e / per_span);
-      if (breaks.size() == 1) continue;
-      const int continuity = e == 0 ? std::min(g.degree() - mult[i], deg - 1) : deg - 1;
-      interior.push_back(deg - continuity);
-    }
-  breaks.push_back(bp.back());
-  return DyadicKnots(deg, std::move(breaks), std::move(interior));
-}
 
 class ThbSpace final : public SplineSpace {
  public:
@@ -174,7 +153,8 @@ class ThbSpace final : public SplineSpace {
 
 std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
   const ThbSection& t = thb_section(c);
-  DyadicKnots u = level_zero_knots(c, 0, level), v = level_zero_knots(c, 1, level);
+  DyadicKnots u = patch_dyadic_knots(c.geometry, thb_section(c).space, 0, level),
+              v = patch_dyadic_knots(c.geometry, thb_section(c).space, 1, level);
   const double cells = double(u.base_elements()) * v.base_elements();
   const double functions = double(u.num_functions(0)) * double(v.num_functions(0));
   char what[120];

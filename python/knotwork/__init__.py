@@ -211,11 +211,14 @@ def converge(case, levels=4, *, degree=None, elements=None, solver=None, toleran
     return Study(j.pop("levels"), j)
 
 
-def adapt(case, steps=None, *, theta=None, max_dofs=None, degree=None, elements=None, solver=None,
-          tolerance=None, ordering="amd", output=None, output_every=1, progress=None, name=None):
+def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, degree=None, elements=None, solver=None,
+          tolerance=None, ordering="amd", allow_dependent=False, output=None, output_every=1, progress=None,
+          name=None):
     """The adaptive loop (estimate, Doerfler marking, local refinement, solve), like ``knotwork adapt``.
 
-    steps, theta, max_dofs: override the case's [adapt] (None: as the case says). Returns a
+    steps, theta, max_dofs, marking ("cells" or "functions"): override the case's [adapt]
+    (None: as the case says). allow_dependent: go on when an LR space is found linearly
+    dependent (``--allow-dependent``). Returns a
     :class:`Study` of the steps (the ``steps`` of ``adapt --json``). The case's family must
     refine locally. output_every: with ``output``, the ParaView files of every K-th step and
     of the last (``--output-every``). Other arguments as for :func:`converge`.
@@ -228,8 +231,10 @@ def adapt(case, steps=None, *, theta=None, max_dofs=None, degree=None, elements=
         raise InputError(f"theta: must be in (0, 1], got {theta!r}")
     if max_dofs is not None and (isinstance(max_dofs, bool) or not isinstance(max_dofs, int) or max_dofs < 1):
         raise InputError(f"max_dofs: must be a positive integer, got {max_dofs!r}")
-    j = _core.adapt(case, _name(case, name), _overrides(degree, elements, solver, tolerance, ordering, False),
-                    steps or 0, float(theta or 0), max_dofs or 0, output, output_every, progress)
+    overrides = _overrides(degree, elements, solver, tolerance, ordering, bool(allow_dependent))
+    overrides["marking"] = marking
+    j = _core.adapt(case, _name(case, name), overrides, steps or 0, float(theta or 0), max_dofs or 0, output,
+                    output_every, progress)
     return Study(j.pop("steps"), j)
 
 

@@ -80,6 +80,19 @@ def test_adapt_equals_cli(tmp_path):
     assert math.isnan(rates[0]) and all(r > 0 for r in rates[1:])
 
 
+@pytest.mark.parametrize("case", ["lshape_adaptive_thb.toml", "lshape_adaptive_lr.toml"])
+def test_adapt_marking_functions_equals_cli(tmp_path, case):
+    path = str(CASES / case)
+    expected = cli_json(["adapt", path, "--steps", "5", "--marking", "functions", "--out", str(tmp_path)])
+    assert expected["marking"] == "functions"
+    study = knotwork.adapt(path, steps=5, marking="functions")
+    assert_same(expected["steps"], list(study))
+    cells = knotwork.adapt(path, steps=5)
+    assert [s["dofs"] for s in cells] != [s["dofs"] for s in study]  # a different marking, different meshes
+    with pytest.raises(knotwork.InputError, match="marking"):
+        knotwork.adapt(path, steps=2, marking="elements")
+
+
 def test_adapt_output_every_writes_every_kth_step_and_the_last(tmp_path):
     path = str(CASES / "lshape_adaptive.toml")
     study = knotwork.adapt(path, steps=5, output=tmp_path / "py", output_every=3)
