@@ -30,6 +30,8 @@ for args in "run cases/square_sinsin.toml --elements 64 --solver direct" \
             "run cases/quarter_annulus.toml --elements 32 --solver iterative" \
             "converge cases/lshape_knot_segments.toml --levels 2" \
             "adapt cases/lshape_adaptive_pt.toml --steps 3" \
+            "adapt cases/lshape_adaptive_thb.toml --steps 12" \
+            "adapt cases/lshape_adaptive_lr.toml --steps 8" \
             "run cases/g1_three_quads.toml" \
             "run cases/g1_mixed_valences.toml" \
             "run cases/g1_sphere_xy.toml" \
