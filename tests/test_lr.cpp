@@ -15,16 +15,12 @@
 #include "basis/lr/lr_mesh.hpp"
 #include "basis/tmesh/lr_spline.hpp"
 #include "cases/case_file.hpp"
+#include "dyadic_testing.hpp"
 
 using namespace knotwork;
+using knotwork::testing::uniform_knots;
 
 namespace {
-
-DyadicKnots uniform_knots(int p, int elements) {
-  std::vector<double> breaks;
-  for (int e = 0; e <= elements; ++e) breaks.push_back(double(e) / elements);
-  return DyadicKnots(p, breaks, std::vector<int>(elements - 1, 1));
-}
 
 // Grid coordinate -> exact parameter on [0, 1] with n0 level-0 elements.
 mpq_class exact(int64_t x, int n0) {

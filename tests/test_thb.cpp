@@ -17,16 +17,12 @@
 #include "basis/core/bspline_basis.hpp"
 #include "basis/thb/thb_hierarchy.hpp"
 #include "cases/case_file.hpp"
+#include "dyadic_testing.hpp"
 
 using namespace knotwork;
+using knotwork::testing::uniform_knots;
 
 namespace {
-
-DyadicKnots uniform_knots(int p, int elements) {
-  std::vector<double> breaks;
-  for (int e = 0; e <= elements; ++e) breaks.push_back(double(e) / elements);
-  return DyadicKnots(p, breaks, std::vector<int>(elements - 1, 1));
-}
 
 // The oracle: THB functions as coefficient vectors over the finest level's tensor B-splines.
 struct OracleThb {

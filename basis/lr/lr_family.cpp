@@ -48,19 +48,9 @@ const char* strategy_name(DyadicLrMesh::Strategy s) {
 
 void read_lr_case(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
-  read_patch_geometry(doc, c);
-  const DocumentNode& s = r.table(doc.root, "space", true);
-  std::vector<std::string> valid = lr_space_keys();
-  valid.insert(valid.end(), {"continuity", "insert_knots_u", "insert_knots_v", "rational"});
-  r.check_keys(s, "space", valid);
+  const DocumentNode& s = read_dyadic_patch_start(doc, c, "lr", lr_space_keys(), "inserted meshlines are simple knots");
   LrSection& l = c.section.emplace<LrSection>();
   l.space.rational = false;
-  for (const char* key : {"continuity", "insert_knots_u", "insert_knots_v"})
-    if (s.get(key))
-      r.fail(std::string("[space] ") + key, "not used with family = \"lr\" (inserted meshlines are simple knots; the "
-                                            "geometry's knots keep their continuity)");
-  if (const DocumentNode* x = s.get("rational"))
-    if (r.boolean(*x, "[space] rational")) r.fail("[space] rational", "LR spaces are polynomial B-splines");
   if (const DocumentNode* x = s.get("refinement")) {
     const std::string name = r.string(*x, "[space] refinement");
     bool found = false;
@@ -185,11 +175,7 @@ class LrSpace final : public SplineSpace {
 std::unique_ptr<SplineSpace> build_lr(const CaseDescription& c, int level) {
   DyadicKnots u = patch_dyadic_knots(c.geometry, lr_section(c).space, 0, level),
               v = patch_dyadic_knots(c.geometry, lr_section(c).space, 1, level);
-  const double cells = double(u.base_elements()) * v.base_elements();
-  const double functions = double(u.num_functions(0)) * double(v.num_functions(0));
-  char what[120];
-  std::snprintf(what, sizeof what, "%.3g LR cells of degree %dx%d", cells, u.degree(), v.degree());
-  check_memory(c.path + ": [space] elements", galerkin_bytes(cells, functions, u.degree(), v.degree()), what);
+  check_dyadic_start_memory(c, u, v, "LR");
   DyadicLrMesh lr(std::move(u), std::move(v));
   const LrSection& l = lr_section(c);
   for (size_t i = 0; i < l.meshlines.size(); ++i) {

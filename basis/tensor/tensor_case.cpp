@@ -1,9 +1,11 @@
 // Reading the [space] of one-patch families (see tensor_case.hpp).
 #include "basis/tensor/tensor_case.hpp"
 
+#include <cstdio>
 #include <sstream>
 
 #include "cases/case_reader.hpp"
+#include "cases/resource_limits.hpp"
 #include "solver/input_error.hpp"
 
 namespace knotwork {
@@ -110,6 +112,31 @@ DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOpti
     }
   breaks.push_back(bp.back());
   return DyadicKnots(deg, std::move(breaks), std::move(interior));
+}
+
+const DocumentNode& read_dyadic_patch_start(const CaseDocument& doc, CaseDescription& c, const std::string& family,
+                                            const std::vector<std::string>& keys, const std::string& knots) {
+  const CaseReader& r = doc.reader;
+  read_patch_geometry(doc, c);
+  const DocumentNode& s = r.table(doc.root, "space", true);
+  std::vector<std::string> valid = keys;
+  valid.insert(valid.end(), {"continuity", "insert_knots_u", "insert_knots_v", "rational"});
+  r.check_keys(s, "space", valid);
+  for (const char* key : {"continuity", "insert_knots_u", "insert_knots_v"})
+    if (s.get(key))
+      r.fail(std::string("[space] ") + key, "not used with family = \"" + family + "\" (" + knots +
+                                                "; the geometry's knots keep their continuity)");
+  if (const DocumentNode* x = s.get("rational"))
+    if (r.boolean(*x, "[space] rational")) r.fail("[space] rational", "family \"" + family + "\" builds polynomial B-splines");
+  return s;
+}
+
+void check_dyadic_start_memory(const CaseDescription& c, const DyadicKnots& u, const DyadicKnots& v, const char* what) {
+  const double cells = double(u.base_elements()) * v.base_elements();
+  const double functions = double(u.num_functions(0)) * double(v.num_functions(0));
+  char text[120];
+  std::snprintf(text, sizeof text, "%.3g %s cells of degree %dx%d", cells, what, u.degree(), v.degree());
+  check_memory(c.path + ": [space] elements", galerkin_bytes(cells, functions, u.degree(), v.degree()), text);
 }
 
 void check_uniform_levels(const TensorSpaceOptions& s, int levels) {

@@ -12,6 +12,7 @@
 namespace knotwork {
 
 struct CaseDocument;
+class DocumentNode;
 
 struct PatchSpaceSection : CaseSection {
   TensorSpaceOptions space;
@@ -40,6 +41,16 @@ void override_patch_space(TensorSpaceOptions& s, int degree, int elements, const
 // geometry's knot spans cut into `elements << level` parts; a geometry knot keeps
 // min(its continuity, degree - 1), the new knots are C^(degree-1).
 DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level);
+
+// The start of a dyadic one-patch family's reader (THB, LR): [geometry], then [space] checked
+// against `keys`, the tensor family's continuity, insert_knots_* and rational refused with the
+// reason (`knots`: what the family's knots are). Returns [space].
+const DocumentNode& read_dyadic_patch_start(const CaseDocument& doc, CaseDescription& c, const std::string& family,
+                                            const std::vector<std::string>& keys, const std::string& knots);
+
+// Refuses (InputError) a level-0 mesh of a dyadic one-patch family that would not fit in
+// memory, before it is built; `what` names its cells ("THB", "LR").
+void check_dyadic_start_memory(const CaseDescription& c, const DyadicKnots& u, const DyadicKnots& v, const char* what);
 
 // For families refined by doubling [space] elements per level: throws InputError when the
 // finest of `levels` levels would have more than 2^26 cells.

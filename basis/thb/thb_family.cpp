@@ -31,19 +31,9 @@ const std::vector<std::string>& thb_space_keys() {
 
 void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
-  read_patch_geometry(doc, c);
-  const DocumentNode& s = r.table(doc.root, "space", true);
-  std::vector<std::string> valid = thb_space_keys();
-  valid.insert(valid.end(), {"continuity", "insert_knots_u", "insert_knots_v", "rational"});
-  r.check_keys(s, "space", valid);
+  const DocumentNode& s = read_dyadic_patch_start(doc, c, "thb", thb_space_keys(), "new knots are C^(d-1)");
   ThbSection& t = c.section.emplace<ThbSection>();
   t.space.rational = false;
-  for (const char* key : {"continuity", "insert_knots_u", "insert_knots_v"})
-    if (s.get(key))
-      r.fail(std::string("[space] ") + key, "not used with family = \"thb\" (new knots are C^(d-1); the geometry's "
-                                            "knots keep their continuity)");
-  if (const DocumentNode* x = s.get("rational"))
-    if (r.boolean(*x, "[space] rational")) r.fail("[space] rational", "THB spaces are polynomial B-splines");
   if (const DocumentNode* a = s.get("admissibility")) {
     const long m = r.integer(*a, "[space] admissibility");
     if (m != 0 && (m < 2 || m > 8))
@@ -155,11 +145,7 @@ std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
   const ThbSection& t = thb_section(c);
   DyadicKnots u = patch_dyadic_knots(c.geometry, thb_section(c).space, 0, level),
               v = patch_dyadic_knots(c.geometry, thb_section(c).space, 1, level);
-  const double cells = double(u.base_elements()) * v.base_elements();
-  const double functions = double(u.num_functions(0)) * double(v.num_functions(0));
-  char what[120];
-  std::snprintf(what, sizeof what, "%.3g THB cells of degree %dx%d", cells, u.degree(), v.degree());
-  check_memory(c.path + ": [space] elements", galerkin_bytes(cells, functions, u.degree(), v.degree()), what);
+  check_dyadic_start_memory(c, u, v, "THB");
   return std::make_unique<ThbSpace>(c, ThbHierarchy(std::move(u), std::move(v), t.admissibility));
 }
 
