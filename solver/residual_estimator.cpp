@@ -59,20 +59,28 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
     ExpressionEvaluator f(problem.source);
     GeometryAtPoints g;
     Eigen::MatrixXd second, B, Bu, Bv, Buu, Buv, Bvv;
+    // The rule and the Bernstein tables depend on the degrees only: made again when they change.
+    int rule_p = -1, rule_q = -1, n = 0;
+    Eigen::VectorXd u, v, w;
 #pragma omp for schedule(dynamic, 32)
     for (int c = 0; c < mesh.num_cells(); ++c) {
       const BezierCell& cell = mesh.cell(c);
       const int p = cell.degree_u, q = cell.degree_v;
-      const QuadratureRule1D ru = gauss_legendre(p + 2), rv = gauss_legendre(q + 2);
-      const int n = static_cast<int>(ru.nodes.size() * rv.nodes.size());
-      Eigen::VectorXd u(n), v(n), w(n);
-      for (size_t j = 0; j < rv.nodes.size(); ++j)
-        for (size_t i = 0; i < ru.nodes.size(); ++i) {
-          const size_t k = i + ru.nodes.size() * j;
-          u[k] = ru.nodes[i];
-          v[k] = rv.nodes[j];
-          w[k] = ru.weights[i] * rv.weights[j];
-        }
+      if (p != rule_p || q != rule_q) {
+        const QuadratureRule1D ru = gauss_legendre(p + 2), rv = gauss_legendre(q + 2);
+        n = static_cast<int>(ru.nodes.size() * rv.nodes.size());
+        u.resize(n), v.resize(n), w.resize(n);
+        for (size_t j = 0; j < rv.nodes.size(); ++j)
+          for (size_t i = 0; i < ru.nodes.size(); ++i) {
+            const size_t k = i + ru.nodes.size() * j;
+            u[k] = ru.nodes[i];
+            v[k] = rv.nodes[j];
+            w[k] = ru.weights[i] * rv.weights[j];
+          }
+        tensor_bernstein(p, q, u, v, B, Bu, Bv);
+        tensor_bernstein_second(p, q, u, v, Buu, Buv, Bvv);
+        rule_p = p, rule_q = q;
+      }
       geometry.evaluate(c, u, v, g);
       geometry.second_derivatives(c, u, v, second);
       const auto ids = mesh.functions(c);
@@ -80,8 +88,6 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
       const Eigen::VectorXd beta = mesh.extraction(c).transpose() * local;  // Bernstein coefficients
       // u_h's reference derivatives at the points: u_u, u_v, u_uu, u_uv, u_vv.
-      tensor_bernstein(p, q, u, v, B, Bu, Bv);
-      tensor_bernstein_second(p, q, u, v, Buu, Buv, Bvv);
       const Eigen::VectorXd U_u = Bu * beta, U_v = Bv * beta, U_uu = Buu * beta, U_uv = Buv * beta, U_vv = Bvv * beta;
       double integral = 0;
       for (int k = 0; k < n; ++k) {
