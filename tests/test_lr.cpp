@@ -125,6 +125,9 @@ TEST_CASE("The LR mesh with 89 B-splines in a space of dimension 88 is found dep
   CHECK(dep.dependent == 1);
   CHECK(dep.element >= 0);
   CHECK(bezier_rank(lr.bezier_mesh()) == 88);
+  // A point refinement cannot reach is refused, not moved to the nearest grid point.
+  CHECK_THROWS_AS(lr.grid(0, 1.0 / 3), std::invalid_argument);
+  CHECK(lr.parameter(0, lr.grid(0, 2.75)) == 2.75);
   // A meshline that traverses no support is refused.
   CHECK_THROWS_AS(lr.insert({{0, lr.grid(0, 0.25), lr.grid(1, 0), lr.grid(1, 0.5)}}), std::invalid_argument);
 }

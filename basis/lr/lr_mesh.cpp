@@ -212,8 +212,11 @@ int64_t DyadicLrMesh::grid(int d, double value) const {
   while (j + 1 < K.base_elements() && value >= K.breakpoint(0, j + 1)) ++j;
   const double lo = K.breakpoint(0, j), hi = K.breakpoint(0, j + 1);
   const int64_t x = (int64_t(j) << kGridLevel) + std::llround((value - lo) / (hi - lo) * std::ldexp(1.0, kGridLevel));
-  if (std::abs(parameter(d, x) - value) > 1e-12 * std::max(1.0, std::abs(value)))
-    throw std::invalid_argument(std::to_string(value) + " is not on the dyadic grid of the level-0 elements");
+  // A given meshline must sit at k / 2^m of a level-0 element with m <= 30 (up to the decimal
+  // rounding of its input): refinement can reach it. Anything else would be moved silently.
+  const bool coarse = (x & ((int64_t(1) << (kGridLevel - 30)) - 1)) == 0;
+  if (!coarse || std::abs(parameter(d, x) - value) > 1e-12 * std::max(1.0, std::abs(value)))
+    throw std::invalid_argument(std::to_string(value) + " is not a dyadic point k / 2^m (m <= 30) of a level-0 element");
   return x;
 }
 

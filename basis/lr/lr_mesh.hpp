@@ -56,7 +56,8 @@ class DyadicLrMesh {
   // side as refine() does. std::invalid_argument names the first segment that leaves the
   // domain or (merged) traverses the support of no B-spline: the mesh would not be an LR mesh.
   void insert(const std::vector<Segment>& segments, bool keep_traces = true);
-  // Grid coordinate of a parameter value; std::invalid_argument when it is not on the grid.
+  // Grid coordinate of a parameter value; std::invalid_argument unless it is k / 2^m (m <= 30)
+  // of a level-0 element, up to 1e-12 relative (the rounding of decimal input).
   int64_t grid(int direction, double parameter) const;
 
   const std::vector<Element>& elements() const { return elements_; }
