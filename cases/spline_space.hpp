@@ -147,6 +147,11 @@ const std::vector<SpaceFamily>& space_families();
 // The case's family; throws InputError naming [space] family if it is not registered.
 const SpaceFamily& space_family(const CaseDescription& c);
 
+// The sides of a mesh's cells through its geometry, as KnotLines (each side once: bottom and
+// left sides, and top and right sides on the boundary; `samples` points per side): the knot
+// lines of a family whose cells tile one patch's parameter domain (THB, LR).
+KnotLines knot_lines_of_cells(const BezierMesh& mesh, const GeometryMap& geometry, int samples = 9);
+
 // The largest cell diagonal of a mesh through its geometry (the default mesh_size).
 double largest_cell_diagonal(const BezierMesh& mesh, const GeometryMap& geometry);
 

@@ -13,6 +13,7 @@
 #include <set>
 
 #include "app/adaptive.hpp"
+#include "app/pipeline.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "basis/core/bspline_basis.hpp"
 #include "basis/thb/thb_hierarchy.hpp"
@@ -222,4 +223,16 @@ TEST_CASE("Adaptive THB on the L-shape: H1 error ~ N^(-p/2)", "[thb][adaptive]")
   REQUIRE(steps.back().dofs >= 8000);
   // Theory (Buffa, Giannelli 2016; Gantner et al. 2017): optimal rate p/2 = 1 in dofs.
   CHECK(fitted_h1_rate(steps, steps.size() / 2) >= 1 - 0.15);
+}
+
+TEST_CASE("THB and LR spaces draw their cells' sides as knot lines, each side once", "[thb][lr]") {
+  for (const char* name : {"lshape_adaptive_thb.toml", "lshape_adaptive_lr.toml"}) {
+    const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name);
+    const auto space = build_space(c);
+    // 4 x 2 cells: bottom and left sides of all 8, the top sides of 4 and the right sides of 2.
+    const KnotLines k = space->knot_lines();
+    CHECK(k.lines.size() == 8 * 2 + 4 + 2);
+    // Their ends are cell corners of the physical L-shape: inside [-1, 1]^2.
+    for (const auto& line : k.lines) CHECK(line.cwiseAbs().maxCoeff() <= 1 + 1e-12);
+  }
 }

@@ -150,6 +150,8 @@ class LrSpace final : public SplineSpace {
     return out;
   }
 
+  KnotLines knot_lines() const override { return knot_lines_of_cells(mesh_, *geometry_); }
+
  private:
   std::string dependence_text() const {
     if (dependence_.dependent < 0)

@@ -103,34 +103,7 @@ class ThbSpace final : public SplineSpace {
     if (extended) *extended = extra;
     return std::make_unique<ThbSpace>(*case_, std::move(next));
   }
-  KnotLines knot_lines() const override {
-    // Every leaf's sides through the geometry (shared sides drawn once: bottom and left, plus
-    // top and right on the boundary), sampled along the side.
-    KnotLines k;
-    const int samples = 9;
-    auto side = [&](double ua, double va, double ub, double vb, int cell) {
-      Eigen::VectorXd u(samples), v(samples);
-      for (int s = 0; s < samples; ++s) {
-        const double t = double(s) / (samples - 1);
-        const BezierCell& c = mesh_.cell(cell);
-        u[s] = ((1 - t) * ua + t * ub - c.u0) / (c.u1 - c.u0);
-        v[s] = ((1 - t) * va + t * vb - c.v0) / (c.v1 - c.v0);
-      }
-      GeometryAtPoints g;
-      geometry_->evaluate(cell, u, v, g);
-      k.lines.push_back(g.x);
-      k.kind.push_back(2);
-      k.multiplicity.push_back(1);
-    };
-    for (int c = 0; c < mesh_.num_cells(); ++c) {
-      const BezierCell& b = mesh_.cell(c);
-      side(b.u0, b.v0, b.u1, b.v0, c);
-      side(b.u0, b.v0, b.u0, b.v1, c);
-      if (b.boundary[kSideTop] >= 0) side(b.u0, b.v1, b.u1, b.v1, c);
-      if (b.boundary[kSideRight] >= 0) side(b.u1, b.v0, b.u1, b.v1, c);
-    }
-    return k;
-  }
+  KnotLines knot_lines() const override { return knot_lines_of_cells(mesh_, *geometry_); }
 
  private:
   const CaseDescription* case_;
