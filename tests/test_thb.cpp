@@ -14,6 +14,7 @@
 
 #include "app/adaptive.hpp"
 #include "app/pipeline.hpp"
+#include "basis/tensor/tensor_case.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "basis/core/bspline_basis.hpp"
 #include "basis/thb/thb_hierarchy.hpp"
@@ -235,4 +236,11 @@ TEST_CASE("THB and LR spaces draw their cells' sides as knot lines, each side on
     // Their ends are cell corners of the physical L-shape: inside [-1, 1]^2.
     for (const auto& line : k.lines) CHECK(line.cwiseAbs().maxCoeff() <= 1 + 1e-12);
   }
+}
+
+TEST_CASE("A refined space that would not fit in memory is refused before it is built", "[thb][lr]") {
+  const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/lshape_adaptive_thb.toml");
+  CHECK_NOTHROW(check_refined_memory(c, 1e5, "THB"));
+  CHECK_THROWS_WITH(check_refined_memory(c, 1e10, "THB"),
+                    Catch::Contains("[adapt]") && Catch::Contains("a refined space of 1e+10 THB cells of degree 2x2"));
 }

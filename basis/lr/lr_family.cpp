@@ -145,6 +145,7 @@ class LrSpace final : public SplineSpace {
       throw InputError(case_->path + ": [space]: " + e.what());
     }
     if (extended) *extended = next.extended() - lr_.extended();
+    check_refined_memory(*case_, double(next.elements().size()), "LR");
     auto out = std::make_unique<LrSpace>(*case_, std::move(next));
     out->refined_ = true;
     return out;

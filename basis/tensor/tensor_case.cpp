@@ -139,6 +139,13 @@ void check_dyadic_start_memory(const CaseDescription& c, const DyadicKnots& u, c
   check_memory(c.path + ": [space] elements", galerkin_bytes(cells, functions, u.degree(), v.degree()), text);
 }
 
+void check_refined_memory(const CaseDescription& c, double cells, const char* what) {
+  const auto [p, q] = patch_space(c).degree;
+  char text[120];
+  std::snprintf(text, sizeof text, "a refined space of %.3g %s cells of degree %dx%d", cells, what, p, q);
+  check_memory(c.path + ": [adapt]", galerkin_bytes(cells, cells + (p + 1) * (q + 1), p, q) + 4096 * cells, text);
+}
+
 void check_uniform_levels(const TensorSpaceOptions& s, int levels) {
   const long finest = static_cast<long>(s.elements_per_span[0]) << (levels - 1);
   if (finest * (static_cast<long>(s.elements_per_span[1]) << (levels - 1)) > kMaxCaseCells)

@@ -52,6 +52,11 @@ const DocumentNode& read_dyadic_patch_start(const CaseDocument& doc, CaseDescrip
 // memory, before it is built; `what` names its cells ("THB", "LR").
 void check_dyadic_start_memory(const CaseDescription& c, const DyadicKnots& u, const DyadicKnots& v, const char* what);
 
+// The same for a refined space of `cells` cells (about one function per cell), before it is
+// built: the Galerkin estimate and 4 KB per cell for the family's own tables (measured: 6 KB
+// per cell for a whole THB run at p = 3, Galerkin part included).
+void check_refined_memory(const CaseDescription& c, double cells, const char* what);
+
 // For families refined by doubling [space] elements per level: throws InputError when the
 // finest of `levels` levels would have more than 2^26 cells.
 void check_uniform_levels(const TensorSpaceOptions& s, int levels);

@@ -101,6 +101,7 @@ class ThbSpace final : public SplineSpace {
       throw InputError(case_->path + ": [space]: " + e.what());
     }
     if (extended) *extended = extra;
+    check_refined_memory(*case_, double(next.num_leaves()), "THB");
     return std::make_unique<ThbSpace>(*case_, std::move(next));
   }
   KnotLines knot_lines() const override { return knot_lines_of_cells(mesh_, *geometry_); }

@@ -39,6 +39,12 @@ class ThbHierarchy {
   Basis build() const;
 
   int levels() const { return static_cast<int>(refined_.size()) + 1; }
+  // The number of leaves (cells of the mesh), without building anything.
+  size_t num_leaves() const {
+    size_t refined = 0;
+    for (const CellSet& s : refined_) refined += s.size();
+    return size_t(u_.base_elements()) * size_t(v_.base_elements()) + 3 * refined;
+  }
   int admissibility() const { return admissibility_; }
   const DyadicKnots& knots(int direction) const { return direction == 0 ? u_ : v_; }
   bool exists(int level, int64_t i, int64_t j) const;
