@@ -47,7 +47,6 @@ void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
 
 const ThbSection& thb_section(const CaseDescription& c) { return family_section<ThbSection>(c); }
 
-
 class ThbSpace final : public SplineSpace {
  public:
   ThbSpace(const CaseDescription& c, ThbHierarchy hierarchy) : case_(&c), hierarchy_(std::move(hierarchy)) {
@@ -117,8 +116,7 @@ class ThbSpace final : public SplineSpace {
 
 std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
   const ThbSection& t = thb_section(c);
-  DyadicKnots u = patch_dyadic_knots(c.geometry, thb_section(c).space, 0, level),
-              v = patch_dyadic_knots(c.geometry, thb_section(c).space, 1, level);
+  DyadicKnots u = patch_dyadic_knots(c.geometry, t.space, 0, level), v = patch_dyadic_knots(c.geometry, t.space, 1, level);
   check_dyadic_start_memory(c, u, v, "THB");
   return std::make_unique<ThbSpace>(c, ThbHierarchy(std::move(u), std::move(v), t.admissibility));
 }
