@@ -101,7 +101,7 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--no-output", run.no_output, "Write no files (timing and errors only)");
   run_cmd->add_flag("--allow-unverified-space,--allow-non-semi-regular,--allow-dependent", run.allow_unverified_space,
                     "Solve on a space that failed its family's own check (a given collection that is not "
-                    "semi-regular, LR B-splines found linearly dependent: the matrix may be singular)");
+                    "semi-regular, B-splines found linearly dependent: the matrix may be singular)");
 
   knotwork::ConvergeOptions conv;
   CLI::App* conv_cmd = app.add_subcommand("converge", "Uniform h-refinement study: errors and observed rates per level");
@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
                         "live on; the cells of their supports are refined) (overrides [adapt] marking)")
       ->check(CLI::IsMember({"cells", "functions"}));
   adapt_cmd->add_flag("--allow-dependent", adapt.allow_unverified_space,
-                      "Go on when a refined space fails its family's own check (LR B-splines found linearly "
+                      "Go on when a refined space fails its family's own check (B-splines found linearly "
                       "dependent: the matrix may be singular)");
   add_common(adapt_cmd, adapt);
 

@@ -149,7 +149,7 @@ const SpaceFamily& space_family(const CaseDescription& c);
 
 // The sides of a mesh's cells through its geometry, as KnotLines (each side once: bottom and
 // left sides, and top and right sides on the boundary; `samples` points per side): the knot
-// lines of a family whose cells tile one patch's parameter domain (THB, LR).
+// lines of a family whose cells tile one patch's parameter domain.
 KnotLines knot_lines_of_cells(const BezierMesh& mesh, const GeometryMap& geometry, int samples = 9);
 
 // The largest cell diagonal of a mesh through its geometry (the default mesh_size).

@@ -37,24 +37,24 @@ void read_patch_degree_elements(const CaseDocument& doc, TensorSpaceOptions& s, 
 // case's functions are fixed by that file, and both are refused.
 void override_patch_space(TensorSpaceOptions& s, int degree, int elements, const std::string& fixed_by = "");
 
-// The level-0 knots of a one-patch local refinement (THB, LR) along `direction`: the
+// The level-0 knots of a dyadic one-patch local refinement along `direction`: the
 // geometry's knot spans cut into `elements << level` parts; a geometry knot keeps
 // min(its continuity, degree - 1), the new knots are C^(degree-1).
 DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level);
 
-// The start of a dyadic one-patch family's reader (THB, LR): [geometry], then [space] checked
+// The start of a dyadic one-patch family's reader: [geometry], then [space] checked
 // against `keys`, the tensor family's continuity, insert_knots_* and rational refused with the
 // reason (`knots`: what the family's knots are). Returns [space].
 const DocumentNode& read_dyadic_patch_start(const CaseDocument& doc, CaseDescription& c, const std::string& family,
                                             const std::vector<std::string>& keys, const std::string& knots);
 
 // Refuses (InputError) a level-0 mesh of a dyadic one-patch family that would not fit in
-// memory, before it is built; `what` names its cells ("THB", "LR").
+// memory, before it is built; `what` names its kind of cells.
 void check_dyadic_start_memory(const CaseDescription& c, const DyadicKnots& u, const DyadicKnots& v, const char* what);
 
 // The same for a refined space of `cells` cells (about one function per cell), before it is
 // built: the Galerkin estimate and 4 KB per cell for the family's own tables (measured: 6 KB
-// per cell for a whole THB run at p = 3, Galerkin part included).
+// per cell for a whole hierarchical run at p = 3, Galerkin part included).
 void check_refined_memory(const CaseDescription& c, double cells, const char* what);
 
 // For families refined by doubling [space] elements per level: throws InputError when the
