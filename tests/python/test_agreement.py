@@ -103,7 +103,8 @@ def test_adapt_output_every_writes_every_kth_step_and_the_last(tmp_path):
         knotwork.adapt(path, steps=2, output_every=0)
 
 
-@pytest.mark.parametrize("case", ["square_knot_segments.toml", "g1_three_quads.toml", "lshape_adaptive_pt.toml"])
+@pytest.mark.parametrize("case", ["square_knot_segments.toml", "g1_three_quads.toml", "lshape_adaptive_pt.toml",
+                                  "lshape_adaptive_thb.toml", "lshape_adaptive_lr.toml"])
 def test_space_report_equals_basis_json(case):
     path = str(CASES / case)
     expected = cli_json(["basis", path])
