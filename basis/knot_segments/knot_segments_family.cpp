@@ -180,22 +180,10 @@ class KnotSegmentSpace final : public SplineSpace {
     std::array<std::vector<int>, 2> mults;  // per interior breakpoint
     elements_ = k.space.elements_per_span[0] << level;
     for (int dir = 0; dir < 2; ++dir) {
-      const BSplineBasis1D& g = dir == 0 ? c.geometry.basis_u : c.geometry.basis_v;
-      const int deg = dir == 0 ? dx : dy;
-      const int per_span = k.space.elements_per_span[dir] << level;
-      const auto bp = g.breakpoints();
-      const auto mult = g.multiplicities();
-      for (size_t i = 0; i + 1 < bp.size(); ++i) {
-        for (int e = 0; e < per_span; ++e) {
-          breaks[dir].push_back(bp[i] + (bp[i + 1] - bp[i]) * e / per_span);
-          if (breaks[dir].size() == 1) continue;
-          // A geometry knot keeps min(its continuity, d-1); new knots are C^(d-1).
-          const int continuity = e == 0 ? std::min(g.degree() - mult[i], deg - 1) : deg - 1;
-          mults[dir].push_back(deg - continuity);
-          simple_knots_ = simple_knots_ && deg - continuity == 1;
-        }
-      }
-      breaks[dir].push_back(bp.back());
+      PatchBreaks b = patch_breaks(c.geometry, k.space, dir, level);
+      for (int m : b.interior_multiplicity) simple_knots_ = simple_knots_ && m == 1;
+      breaks[dir] = std::move(b.breaks);
+      mults[dir] = std::move(b.interior_multiplicity);
     }
     check_knot_segments_memory(c, breaks, dx, dy);
     try {

@@ -94,13 +94,8 @@ class LrSpace final : public SplineSpace {
  public:
   LrSpace(const CaseDescription& c, DyadicLrMesh lr) : case_(&c), lr_(std::move(lr)) {
     mesh_ = lr_.bezier_mesh();
-    mesh_.set_interfaces(interfaces_from_parameter_boxes(mesh_));
     dependence_ = DyadicLrMesh::dependence(mesh_);
-    try {
-      geometry_ = std::make_unique<PatchGeometryMap>(mesh_, c.geometry);
-    } catch (const GeometryError& e) {
-      throw InputError(c.path + ": [geometry]: " + e.what());
-    }
+    geometry_ = finish_patch_mesh(c, mesh_);
   }
 
   const BezierMesh& mesh() const override { return mesh_; }

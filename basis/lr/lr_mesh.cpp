@@ -159,13 +159,15 @@ int DyadicLrMesh::refine(const std::vector<int>& marked, Strategy strategy) {
     }
     for (int d = 0; d < 2; ++d) {
       const int o = 1 - d;
+      // Minimal span: the support shortest in parameter length across the line (grid units
+      // are not lengths where level-0 elements differ in width).
       int64_t from = 0, to = 0;
       bool first = true;
       for (int f : on[m]) {
         const int64_t a = sorted[f].knots[o][0], b = sorted[f].knots[o][p_[o] + 1];
         if (first) from = a, to = b;
         else if (strategy == Strategy::kFullSpan) from = std::min(from, a), to = std::max(to, b);
-        else if (b - a < to - from) from = a, to = b;
+        else if (parameter(o, b) - parameter(o, a) < parameter(o, to) - parameter(o, from)) from = a, to = b;
         first = false;
       }
       segments.push_back({d, midpoint(d, e.from[d], e.to[d]), from, to});
@@ -404,61 +406,67 @@ BezierMesh DyadicLrMesh::bezier_mesh() const {
 
 DyadicLrMesh::Dependence DyadicLrMesh::dependence(const BezierMesh& mesh, int max_checked) {
   const int nf = mesh.num_functions();
-  std::vector<std::vector<int>> on(mesh.num_cells());
-  for (int c = 0; c < mesh.num_cells(); ++c) on[c].assign(mesh.functions(c).begin(), mesh.functions(c).end());
   const size_t full = mesh.num_cells() ? size_t(mesh.cell(0).degree_u + 1) * (mesh.cell(0).degree_v + 1) : 1;
   std::vector<char> has_free_element(nf, 0);
-  for (size_t c = 0; c < on.size(); ++c)
-    if (on[c].size() <= full)
-      for (int f : on[c]) has_free_element[f] = 1;
+  for (int c = 0; c < mesh.num_cells(); ++c)
+    if (mesh.functions(c).size() <= full)
+      for (int f : mesh.functions(c)) has_free_element[f] = 1;
+  std::vector<int> row(nf, -1);  // candidate index of an overloaded function
   std::vector<int> candidates;
   for (int f = 0; f < nf; ++f)
-    if (!has_free_element[f]) candidates.push_back(f);
+    if (!has_free_element[f]) {
+      row[f] = static_cast<int>(candidates.size());
+      candidates.push_back(f);
+    }
   Dependence out;
   out.overloaded = static_cast<int>(candidates.size());
-  if (candidates.empty()) {
-    out.dependent = 0;
-    return out;
-  }
+  out.dependent = 0;
+  if (candidates.empty()) return out;
   // Candidates that share no element have disjoint Bézier columns: the rank is the sum of
   // the ranks of the groups connected through shared elements (small clusters in practice).
-  std::vector<int> row(nf, -1);
-  for (size_t k = 0; k < candidates.size(); ++k) row[candidates[k]] = static_cast<int>(k);
   std::vector<int> parent(candidates.size());
   std::iota(parent.begin(), parent.end(), 0);
   auto root = [&](int x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
-  for (const auto& fs : on) {
+  for (int c = 0; c < mesh.num_cells(); ++c) {
     int first = -1;
-    for (int f : fs)
+    for (int f : mesh.functions(c))
       if (row[f] >= 0) {
         if (first < 0) first = root(row[f]);
         else parent[root(row[f])] = first;
       }
   }
-  std::map<int, std::vector<int>> groups;  // root -> candidate rows
-  for (size_t k = 0; k < candidates.size(); ++k) groups[root(static_cast<int>(k))].push_back(static_cast<int>(k));
-  out.dependent = 0;
-  for (const auto& [r, members] : groups) {
+  // Each group's candidates (their position in the group) and cells, in one pass each.
+  std::map<int, std::pair<std::vector<int>, std::vector<int>>> groups;  // root -> (candidates, cells)
+  std::vector<int> column(candidates.size());
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    auto& members = groups[root(static_cast<int>(k))].first;
+    column[k] = static_cast<int>(members.size());
+    members.push_back(static_cast<int>(k));
+  }
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    std::vector<int> roots;
+    for (int f : mesh.functions(c))
+      if (row[f] >= 0) roots.push_back(root(row[f]));
+    std::sort(roots.begin(), roots.end());
+    roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
+    for (int r : roots) groups[r].second.push_back(c);
+  }
+  for (const auto& [r, group] : groups) {
+    const auto& [members, cells] = group;
     if (static_cast<int>(members.size()) > max_checked) {
       out.dependent = -1;
       return out;
     }
-    std::vector<int> local(candidates.size(), -1);
-    for (size_t k = 0; k < members.size(); ++k) local[members[k]] = static_cast<int>(k);
-    std::vector<int> cells;
-    for (size_t c = 0; c < on.size(); ++c)
-      if (std::any_of(on[c].begin(), on[c].end(), [&](int f) { return row[f] >= 0 && local[row[f]] >= 0; }))
-        cells.push_back(static_cast<int>(c));
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(cells.size() * full),
                                               static_cast<Eigen::Index>(members.size()));
     for (size_t k = 0; k < cells.size(); ++k) {
       const auto ids = mesh.functions(cells[k]);
       for (size_t i = 0; i < ids.size(); ++i)
-        if (row[ids[i]] >= 0 && local[row[ids[i]]] >= 0)
-          A.block(static_cast<Eigen::Index>(k * full), local[row[ids[i]]], full, 1) =
+        if (row[ids[i]] >= 0 && root(row[ids[i]]) == r)
+          A.block(static_cast<Eigen::Index>(k * full), column[row[ids[i]]], full, 1) =
               mesh.extraction(cells[k]).row(static_cast<Eigen::Index>(i)).transpose();
     }
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
@@ -466,10 +474,13 @@ DyadicLrMesh::Dependence DyadicLrMesh::dependence(const BezierMesh& mesh, int ma
     const int nullity = static_cast<int>(members.size()) - static_cast<int>(qr.rank());
     if (nullity > 0 && out.element < 0) {
       // The first column the pivoting left out is a combination of the ones before it: its
-      // function takes part in a relation.
+      // function takes part in a relation; report a cell of its support.
       const int f = candidates[members[qr.colsPermutation().indices()[qr.rank()]]];
-      for (size_t c = 0; c < on.size() && out.element < 0; ++c)
-        if (std::find(on[c].begin(), on[c].end(), f) != on[c].end()) out.element = static_cast<int>(c);
+      for (int c : cells)
+        if (const auto ids = mesh.functions(c); std::find(ids.begin(), ids.end(), f) != ids.end()) {
+          out.element = c;
+          break;
+        }
     }
     out.dependent += nullity;
   }

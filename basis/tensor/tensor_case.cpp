@@ -95,23 +95,36 @@ void override_patch_space(TensorSpaceOptions& s, int degree, int elements, const
   }
 }
 
-DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level) {
+PatchBreaks patch_breaks(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level) {
   const BSplineBasis1D& g = direction == 0 ? geometry.basis_u : geometry.basis_v;
   const int deg = s.degree[direction];
   const int per_span = s.elements_per_span[direction] << level;
   const auto bp = g.breakpoints();
   const auto mult = g.multiplicities();
-  std::vector<double> breaks;
-  std::vector<int> interior;
+  PatchBreaks out;
   for (size_t i = 0; i + 1 < bp.size(); ++i)
     for (int e = 0; e < per_span; ++e) {
-      breaks.push_back(bp[i] + (bp[i + 1] - bp[i]) * e / per_span);
-      if (breaks.size() == 1) continue;
+      out.breaks.push_back(bp[i] + (bp[i + 1] - bp[i]) * e / per_span);
+      if (out.breaks.size() == 1) continue;
       const int continuity = e == 0 ? std::min(g.degree() - mult[i], deg - 1) : deg - 1;
-      interior.push_back(deg - continuity);
+      out.interior_multiplicity.push_back(deg - continuity);
     }
-  breaks.push_back(bp.back());
-  return DyadicKnots(deg, std::move(breaks), std::move(interior));
+  out.breaks.push_back(bp.back());
+  return out;
+}
+
+DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level) {
+  PatchBreaks b = patch_breaks(geometry, s, direction, level);
+  return DyadicKnots(s.degree[direction], std::move(b.breaks), std::move(b.interior_multiplicity));
+}
+
+std::unique_ptr<PatchGeometryMap> finish_patch_mesh(const CaseDescription& c, BezierMesh& mesh) {
+  mesh.set_interfaces(interfaces_from_parameter_boxes(mesh));
+  try {
+    return std::make_unique<PatchGeometryMap>(mesh, c.geometry);
+  } catch (const GeometryError& e) {
+    throw InputError(c.path + ": [geometry]: " + e.what());
+  }
 }
 
 const DocumentNode& read_dyadic_patch_start(const CaseDocument& doc, CaseDescription& c, const std::string& family,

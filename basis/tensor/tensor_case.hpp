@@ -2,12 +2,15 @@
 // The [space] of the families that live on one NURBS patch (tensor, and the local
 // refinements of it: knot segments, PT): degree and elements per geometry knot span, and
 // for the tensor family continuity, rational and extra knots.
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "basis/core/bezier_mesh.hpp"
 #include "basis/core/dyadic_knots.hpp"
 #include "basis/tensor/tensor_patch.hpp"
 #include "cases/case_file.hpp"
+#include "solver/geometry_map.hpp"
 
 namespace knotwork {
 
@@ -37,10 +40,20 @@ void read_patch_degree_elements(const CaseDocument& doc, TensorSpaceOptions& s, 
 // case's functions are fixed by that file, and both are refused.
 void override_patch_space(TensorSpaceOptions& s, int degree, int elements, const std::string& fixed_by = "");
 
-// The level-0 knots of a dyadic one-patch local refinement along `direction`: the
-// geometry's knot spans cut into `elements << level` parts; a geometry knot keeps
-// min(its continuity, degree - 1), the new knots are C^(degree-1).
+// The tensor-product start of a one-patch local refinement along `direction`: the geometry's
+// knot spans cut into `elements << level` parts; a geometry knot keeps min(its continuity,
+// degree - 1) (the L-shape's C0 fold), the new knots are C^(degree-1).
+struct PatchBreaks {
+  std::vector<double> breaks;
+  std::vector<int> interior_multiplicity;  // per interior breakpoint
+};
+PatchBreaks patch_breaks(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level);
+// The same as the level-0 knots of a dyadic family.
 DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level);
+
+// A one-patch family's mesh made ready: its interfaces from the cells' parameter boxes, and its
+// geometry (GeometryError becomes InputError naming [geometry]).
+std::unique_ptr<PatchGeometryMap> finish_patch_mesh(const CaseDescription& c, BezierMesh& mesh);
 
 // The start of a dyadic one-patch family's reader: [geometry], then [space] checked
 // against `keys`, the tensor family's continuity, insert_knots_* and rational refused with the

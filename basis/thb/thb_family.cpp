@@ -59,12 +59,7 @@ class ThbSpace final : public SplineSpace {
     mesh_ = std::move(b.mesh);
     leaves_ = std::move(b.leaves);
     per_level_ = std::move(b.functions_per_level);
-    mesh_.set_interfaces(interfaces_from_parameter_boxes(mesh_));
-    try {
-      geometry_ = std::make_unique<PatchGeometryMap>(mesh_, c.geometry);
-    } catch (const GeometryError& e) {
-      throw InputError(c.path + ": [geometry]: " + e.what());
-    }
+    geometry_ = finish_patch_mesh(c, mesh_);
   }
 
   const BezierMesh& mesh() const override { return mesh_; }

@@ -85,17 +85,11 @@ void ThbHierarchy::refine_cell(int level, int64_t i, int64_t j, int* extra) {
     const int64_t fu = u_.first_function(k, iu), fv = v_.first_function(k, jv);
     const int64_t u0 = u_.support(k, fu).first, u1 = u_.support(k, fu + u_.degree()).second;
     const int64_t v0 = v_.support(k, fv).first, v1 = v_.support(k, fv + v_.degree()).second;
-    // Every cell of level k-1 that meets the extension must be a leaf of level >= k-1 ...
+    // The leaves of level k-1 that meet the extension are halved first. In a graded mesh every
+    // cell of level k-1 there exists (Buffa, Giannelli 2016); one that does not is a bug here.
     for (int64_t a = u0 >> 1; a <= (u1 - 1) >> 1; ++a)
       for (int64_t b = v0 >> 1; b <= (v1 - 1) >> 1; ++b) {
-        // ... so coarser leaves there are halved first (none in a mesh graded from the start),
-        while (!exists(k - 1, a, b)) {
-          int l = k - 2;
-          while (!exists(l, a >> (k - 1 - l), b >> (k - 1 - l))) --l;
-          refine_cell(l, a >> (k - 1 - l), b >> (k - 1 - l), extra);
-          ++*extra;
-        }
-        // and leaves of level k-1 are halved.
+        if (!exists(k - 1, a, b)) throw std::logic_error("THB grading: the mesh is not T-admissible");
         if (!is_refined(k - 1, a, b)) {
           refine_cell(k - 1, a, b, extra);
           ++*extra;
@@ -182,19 +176,19 @@ ThbHierarchy::Basis ThbHierarchy::build() const {
         Key cell;
         std::vector<Alive> alive;
       };
-      std::vector<Frame> stack;
-      {
-        Frame f{0, cells[0][r], {}};
-        const int64_t fu = u_.first_function(0, f.cell.first), fv = v_.first_function(0, f.cell.second);
+      // The active B-splines of a frame's level that live on its cell join it.
+      auto join_active = [&](Frame& f) {
+        const int64_t fu = u_.first_function(f.level, f.cell.first), fv = v_.first_function(f.level, f.cell.second);
         for (int a = 0; a <= p; ++a)
           for (int b = 0; b <= q; ++b)
-            if (const FunctionStatus& s = status[0].at({fu + a, fv + b}); s.id >= 0) {
+            if (const FunctionStatus& s = status[f.level].at({fu + a, fv + b}); s.id >= 0) {
               Eigen::MatrixXd X = Eigen::MatrixXd::Zero(p + 1, q + 1);
               X(a, b) = 1;
               f.alive.push_back({s.id, std::move(X)});
             }
-        stack.push_back(std::move(f));
-      }
+      };
+      std::vector<Frame> stack(1, Frame{0, cells[0][r], {}});
+      join_active(stack.back());
       while (!stack.empty()) {
         Frame f = std::move(stack.back());
         stack.pop_back();
@@ -232,14 +226,9 @@ ThbHierarchy::Basis ThbHierarchy::build() const {
           const int64_t fu = u_.first_function(l + 1, ci), fv = v_.first_function(l + 1, cj);
           // Which of the child level's B-splines truncate (support in the refined region).
           Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> truncated(p + 1, q + 1);
-          Frame child{l + 1, {ci, cj}, {}};
-          std::vector<std::pair<int, int>> joining;  // active B-splines of the child level
           for (int a = 0; a <= p; ++a)
-            for (int b = 0; b <= q; ++b) {
-              const FunctionStatus& s = status[l + 1].at({fu + a, fv + b});
-              truncated(a, b) = s.in_level;
-              if (s.id >= 0) joining.push_back({a * (q + 1) + b, s.id});
-            }
+            for (int b = 0; b <= q; ++b) truncated(a, b) = status[l + 1].at({fu + a, fv + b}).in_level;
+          Frame child{l + 1, {ci, cj}, {}};
           for (const Alive& g : f.alive) {
             Eigen::MatrixXd Y = Ru.transpose() * g.coefficients * Rv;
             bool any = false;
@@ -250,11 +239,7 @@ ThbHierarchy::Basis ThbHierarchy::build() const {
               }
             if (any) child.alive.push_back({g.id, std::move(Y)});
           }
-          for (const auto& [ab, id] : joining) {
-            Eigen::MatrixXd X = Eigen::MatrixXd::Zero(p + 1, q + 1);
-            X(ab / (q + 1), ab % (q + 1)) = 1;
-            child.alive.push_back({id, std::move(X)});
-          }
+          join_active(child);
           stack.push_back(std::move(child));
         }
       }
