@@ -46,7 +46,6 @@ class ThbHierarchy {
     return size_t(u_.base_elements()) * size_t(v_.base_elements()) + 3 * refined;
   }
   int admissibility() const { return admissibility_; }
-  const DyadicKnots& knots(int direction) const { return direction == 0 ? u_ : v_; }
   bool exists(int level, int64_t i, int64_t j) const;
   bool is_refined(int level, int64_t i, int64_t j) const;
 
