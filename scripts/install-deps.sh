@@ -4,6 +4,7 @@
 # default reference BLAS is several times slower. petsc-dev brings hypre (the BoomerAMG
 # preconditioner), MUMPS and OpenMPI; openmpi-bin's mpirun starts method = "petsc" on several
 # processes (and the tests that check it); time measures scripts/scaling.sh's memory.
+# libboost-dev: only Boost.Geometry's R-tree (header-only), the knot segments' support index.
 # Usage: scripts/install-deps.sh [--paraview] [--sanitize]
 #   --sanitize   also install clang 14 with its sanitizer and libFuzzer runtimes and LLVM's
 #                OpenMP (scripts/sanitize.sh, scripts/fuzz.sh; docs/RELIABILITY.md).
@@ -18,7 +19,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev libopenblas-dev
   libvtk9-dev python3-vtk9
   catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
-  libmuparser-dev libginac-dev libgmp-dev
+  libmuparser-dev libginac-dev libgmp-dev libboost-dev
   libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
   petsc-dev openmpi-bin time

@@ -83,11 +83,17 @@ TEST_CASE("Tensor-product start: semi-regular, and the count is (n+d)^2", "[semi
 }
 
 TEST_CASE("Random refinement sequences keep a semi-regular basis of the full spline space", "[semi-regular]") {
+  using E = SemiRegularCollection::Extension;
+  // Every extension order: each must end in a checked semi-regular collection.
+  const auto [extension, name] = GENERATE(std::make_pair(E::kGalloping, "galloping"), std::make_pair(E::kDirected, "directed"),
+                                          std::make_pair(E::kMinimal, "minimal"));
+  INFO("extension " << name);
   std::mt19937 rng(2024);
   int sequences = 0, insertions = 0, extended = 0, t_meshes = 0, with_segments = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const int d = 1 + trial % 4;
     auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 2 + rng() % 3), random_breaks(rng, 2 + rng() % 3));
+    c.set_extension(extension);
     const int steps = 1 + static_cast<int>(rng() % 4);
     for (int s = 0; s < steps; ++s) {
       const InsertionReport r = c.insert(random_segment(rng, c));
@@ -107,7 +113,7 @@ TEST_CASE("Random refinement sequences keep a semi-regular basis of the full spl
   // segments that end inside the domain at both ends.
   REQUIRE(t_meshes > insertions / 2);
   REQUIRE(with_segments > 10);
-  WARN("semi-regular property test: " << sequences << " sequences, " << insertions << " insertions (" << extended
+  WARN("semi-regular property test (" << name << " extension): " << sequences << " sequences, " << insertions << " insertions (" << extended
                                       << " extended), " << t_meshes << " T-meshes, " << with_segments
                                       << " with knot segments");
 }
@@ -134,6 +140,27 @@ TEST_CASE("A T-mesh of a refined collection gets a collection back from its cell
   }
   REQUIRE(t_meshes > 100);
   WARN("collection on a given partition: " << reached << " of 200 T-meshes rebuilt (" << t_meshes << " with T-nodes)");
+}
+
+TEST_CASE("A copy refines like the original: the support index is rebuilt, not shared", "[semi-regular]") {
+  // The insertions find B-splines through an R-tree of supports kept up to date by splits and
+  // undone attempts; a copy builds its own. If either went stale, the two would differ.
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int d = 2 + trial % 2;
+    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 4), random_breaks(rng, 4));
+    for (int s = 0; s < 3; ++s) c.insert(random_segment(rng, c));
+    SemiRegularCollection copy = c;
+    const KnotInsertion next = random_segment(rng, c);
+    const InsertionReport a = c.insert(next), b = copy.insert(next);
+    INFO("trial " << trial);
+    REQUIRE(a.inserted.from == b.inserted.from);
+    REQUIRE(a.inserted.to == b.inserted.to);
+    REQUIRE(c.splines() == copy.splines());
+    // And a collection rebuilt from the B-splines alone (no index, no insertion history).
+    const SemiRegularCollection fresh = SemiRegularCollection::from_splines(d, d, c.splines());
+    REQUIRE(fresh.violations().empty());
+  }
 }
 
 TEST_CASE("A short segment is extended until it refines, and the extension is reported", "[semi-regular]") {

@@ -37,7 +37,8 @@ std::vector<KnotInsertion> read_knot_insertions(const CaseReader& r, const Docum
 
 const std::vector<std::string>& knot_segments_space_keys() {
   static const std::vector<std::string> keys{"family",   "degree",     "elements", "rational", "quadrature_points",
-                                             "error_quadrature_points", "segments", "collection"};
+                                             "error_quadrature_points", "segments", "collection",
+                                             "extension"};
   return keys;
 }
 
@@ -57,6 +58,14 @@ void read_knot_segments_case(const CaseDocument& doc, CaseDescription& c) {
                                             "refine with segments, which take a multiplicity)");
   if (const DocumentNode* x = s.get("rational"))
     if (r.boolean(*x, "[space] rational")) r.fail("[space] rational", "knot_segments spaces are polynomial B-splines");
+  if (const DocumentNode* x = s.get("extension")) {
+    const std::string name = r.string(*x, "[space] extension");
+    using E = SemiRegularCollection::Extension;
+    if (name == "galloping") k.extension = E::kGalloping;
+    else if (name == "directed") k.extension = E::kDirected;
+    else if (name == "minimal") k.extension = E::kMinimal;
+    else r.fail("[space] extension", "must be \"galloping\", \"directed\" or \"minimal\", not \"" + name + "\"");
+  }
   if (const DocumentNode* segs = s.get("segments")) k.segments = read_knot_insertions(r, *segs);
   if (const DocumentNode* f = s.get("collection")) {
     for (const char* key : {"segments", "elements"})

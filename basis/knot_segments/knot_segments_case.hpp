@@ -13,6 +13,8 @@ struct KnotSegmentsSection : PatchSpaceSection {
   std::vector<KnotInsertion> segments;  // inserted in order, parameter coordinates
   std::string collection_file;          // a collection given explicitly ([space] collection), resolved
   std::vector<LocalBSpline> collection;  // its functions, not yet checked for semi-regularity
+  // [space] extension: how a segment that does not refine or breaks semi-regularity is extended.
+  SemiRegularCollection::Extension extension = SemiRegularCollection::Extension::kGalloping;
   std::unique_ptr<CaseSection> clone() const override { return std::make_unique<KnotSegmentsSection>(*this); }
 };
 

@@ -46,7 +46,9 @@ class KnotSegmentSpace final : public SplineSpace {
     if (!k.collection_file.empty())
       return "knot segments (Weller), degree " + degree_text(c) + ", collection of " + std::to_string(k.collection.size()) +
              " B-splines from " + k.collection_file;
-    return "knot segments (Weller), degree " + degree_text(c) + ", " + std::to_string(k.segments.size()) + " segments";
+    static const char* const extension_names[] = {"galloping", "directed", "minimal"};
+    return "knot segments (Weller), degree " + degree_text(c) + ", " + std::to_string(k.segments.size()) +
+           " segments, " + extension_names[static_cast<int>(k.extension)] + " extension";
   }
   std::array<int, 2> degree() const override { return patch_space(*case_).degree; }
   std::vector<ReportField> report() const override {
@@ -145,6 +147,7 @@ class KnotSegmentSpace final : public SplineSpace {
     const std::string where = c.path + ": [space] collection: " + k.collection_file;
     try {
       collection_ = SemiRegularCollection::from_splines(k.space.degree[0], k.space.degree[1], k.collection);
+      collection_->set_extension(k.extension);
     } catch (const std::invalid_argument& e) {
       throw InputError(where + ": " + e.what());
     }
@@ -188,6 +191,7 @@ class KnotSegmentSpace final : public SplineSpace {
     check_knot_segments_memory(c, breaks, dx, dy);
     try {
       collection_ = SemiRegularCollection::tensor_product(dx, dy, breaks[0], breaks[1], mults[0], mults[1]);
+      collection_->set_extension(k.extension);
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
     }

@@ -9,6 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <boost/geometry.hpp>  // the R-tree needs the strategies; only this file includes it
+#include <boost/geometry/index/rtree.hpp>
+
 #include "basis/core/bspline_basis.hpp"
 #include "basis/tmesh/partition_topology.hpp"
 
@@ -35,6 +38,8 @@ using SplineRefs = std::vector<const LocalBSpline*>;
 struct InducedCells {
   std::vector<Box> cells;
   std::vector<std::string> problems;  // regions that are not rectangles
+  std::vector<double> xs, ys;         // the fine grid: every knot value inside the region
+  std::vector<int> cell_of;           // per fine cell (i + nx j), its index in cells
 };
 
 InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
@@ -100,15 +105,25 @@ InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
     ++e.count;
   }
   InducedCells out;
+  std::vector<std::pair<Box, int>> boxes;  // with the root, to number the fine cells after sorting
   for (const auto& [root, e] : groups) {
     const Box box{xs[e.i0], ys[e.j0], xs[e.i1 + 1], ys[e.j1 + 1]};
     if (e.count != (e.i1 - e.i0 + 1) * (e.j1 - e.j0 + 1))
       out.problems.push_back("the region around " + describe(box) + " is not a rectangle");
+    boxes.emplace_back(box, root);
+  }
+  std::sort(boxes.begin(), boxes.end(), [](const auto& a, const auto& b) {
+    return a.first.y0 != b.first.y0 ? a.first.y0 < b.first.y0 : a.first.x0 < b.first.x0;
+  });
+  std::map<int, int> index_of_root;
+  for (const auto& [box, root] : boxes) {
+    index_of_root[root] = static_cast<int>(out.cells.size());
     out.cells.push_back(box);
   }
-  std::sort(out.cells.begin(), out.cells.end(), [](const Box& a, const Box& b) {
-    return a.y0 != b.y0 ? a.y0 < b.y0 : a.x0 < b.x0;
-  });
+  out.cell_of.resize(parent.size());
+  for (int k = 0; k < nx * ny; ++k) out.cell_of[k] = index_of_root[find(k)];
+  out.xs = xs;
+  out.ys = ys;
   return out;
 }
 
@@ -123,38 +138,43 @@ bool alive_on(const LocalBSpline& b, const Box& c) {
   return b.x.front() <= c.x0 && c.x1 <= b.x.back() && b.y.front() <= c.y0 && c.y1 <= b.y.back();
 }
 
-// The B-splines alive on each cell, in increasing index. Testing every B-spline on every cell
-// costs cells x functions (a 512^2 grid took 517 s); here the cells are put in the buckets of
-// a grid over the domain that they overlap, and each B-spline tests only the cells in the
-// buckets its support overlaps. Bucket ranges are taken inclusively (a superset): alive_on
-// decides.
-std::vector<std::vector<int>> alive_per_cell(const std::vector<LocalBSpline>& splines, const std::vector<Box>& cells,
-                                             const Box& domain) {
-  const int g = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(cells.size())))));
-  const double wx = (domain.x1 - domain.x0) / g, wy = (domain.y1 - domain.y0) / g;
-  auto bucket = [g](double t, double t0, double w) {
-    const double b = std::floor((t - t0) / w);  // not cast before clamping: NaN or huge values are UB as int
-    return b >= 0 && b < g ? static_cast<int>(b) : (b >= g ? g - 1 : 0);
+Box support(const LocalBSpline& b) { return {b.x.front(), b.y.front(), b.x.back(), b.y.back()}; }
+
+// For each cell of `ic`, the boxes (in increasing index) that contain it. Each box visits the
+// fine-grid cells it covers (the grid holds every knot value, so its ends are grid values or
+// lie outside the region), so the cost is the boxes' areas in fine cells — about (p+1)(q+1)
+// times the fine grid for supports — not cells x boxes (a 512^2 grid took 517 s that way),
+// and graded meshes cost no more than uniform ones.
+std::vector<std::vector<int>> containing_boxes(const std::vector<Box>& boxes, const InducedCells& ic) {
+  const int nx = static_cast<int>(ic.xs.size()) - 1;
+  auto first_at_or_after = [](const std::vector<double>& grid, double t) {
+    return static_cast<int>(std::lower_bound(grid.begin(), grid.end(), t) - grid.begin());
   };
-  auto column = [&](double x) { return wx > 0 ? bucket(x, domain.x0, wx) : 0; };
-  auto row = [&](double y) { return wy > 0 ? bucket(y, domain.y0, wy) : 0; };
-  std::vector<std::vector<int>> buckets(static_cast<size_t>(g) * g);
-  for (size_t c = 0; c < cells.size(); ++c)
-    for (int j = row(cells[c].y0); j <= row(cells[c].y1); ++j)
-      for (int i = column(cells[c].x0); i <= column(cells[c].x1); ++i) buckets[size_t(j) * g + i].push_back(int(c));
-  std::vector<std::vector<int>> alive(cells.size());
-  std::vector<int> seen(cells.size(), -1);
-  for (int k = 0; k < static_cast<int>(splines.size()); ++k) {
-    const LocalBSpline& b = splines[k];
-    for (int j = row(b.y.front()); j <= row(b.y.back()); ++j)
-      for (int i = column(b.x.front()); i <= column(b.x.back()); ++i)
-        for (int c : buckets[size_t(j) * g + i])
-          if (seen[c] != k) {
-            seen[c] = k;
-            if (alive_on(b, cells[c])) alive[c].push_back(k);
-          }
+  std::vector<std::vector<int>> containing(ic.cells.size());
+  std::vector<int> seen(ic.cells.size(), -1);
+  for (int k = 0; k < static_cast<int>(boxes.size()); ++k) {
+    const Box& b = boxes[k];
+    const int i0 = std::max(0, first_at_or_after(ic.xs, b.x0)), i1 = std::min(nx, first_at_or_after(ic.xs, b.x1));
+    const int j0 = std::max(0, first_at_or_after(ic.ys, b.y0));
+    const int j1 = std::min(static_cast<int>(ic.ys.size()) - 1, first_at_or_after(ic.ys, b.y1));
+    for (int j = j0; j < j1; ++j)
+      for (int i = i0; i < i1; ++i) {
+        const int c = ic.cell_of[static_cast<size_t>(j) * nx + i];
+        if (seen[c] == k) continue;
+        seen[c] = k;
+        const Box& cell = ic.cells[c];
+        if (b.x0 <= cell.x0 && cell.x1 <= b.x1 && b.y0 <= cell.y0 && cell.y1 <= b.y1) containing[c].push_back(k);
+      }
   }
-  return alive;
+  return containing;
+}
+
+// The B-splines alive on each cell, in increasing index.
+std::vector<std::vector<int>> alive_per_cell(const std::vector<LocalBSpline>& splines, const InducedCells& ic) {
+  std::vector<Box> supports;
+  supports.reserve(splines.size());
+  for (const auto& b : splines) supports.push_back(support(b));
+  return containing_boxes(supports, ic);
 }
 
 // What Def. 3.3 finds on a cell: the shared vector (X in case a) and, per window i of it,
@@ -237,6 +257,64 @@ bool regular_in(const std::vector<const LocalBSpline*>& alive, int d_first, int 
 }
 
 }  // namespace
+
+namespace {
+namespace bg = boost::geometry;
+namespace bgi = boost::geometry::index;
+using IndexPoint = bg::model::point<double, 2, bg::cs::cartesian>;
+using IndexBox = bg::model::box<IndexPoint>;
+using IndexValue = std::pair<IndexBox, const LocalBSpline*>;
+IndexBox index_box(const LocalBSpline& b) {
+  return {IndexPoint(b.x.front(), b.y.front()), IndexPoint(b.x.back(), b.y.back())};
+}
+}  // namespace
+
+struct SemiRegularCollection::SupportIndex {
+  bgi::rtree<IndexValue, bgi::quadratic<16>> tree;
+};
+SemiRegularCollection::IndexHolder::IndexHolder() = default;
+SemiRegularCollection::IndexHolder::IndexHolder(const IndexHolder&) {}
+SemiRegularCollection::IndexHolder::IndexHolder(IndexHolder&&) noexcept = default;
+SemiRegularCollection::IndexHolder& SemiRegularCollection::IndexHolder::operator=(const IndexHolder&) {
+  index.reset();
+  return *this;
+}
+SemiRegularCollection::IndexHolder& SemiRegularCollection::IndexHolder::operator=(IndexHolder&&) noexcept = default;
+SemiRegularCollection::IndexHolder::~IndexHolder() = default;
+
+SemiRegularCollection::SupportIndex& SemiRegularCollection::index() const {
+  if (!index_.index) {
+    std::vector<IndexValue> values;
+    values.reserve(set_.size());
+    for (const auto& b : set_) values.emplace_back(index_box(b), &b);
+    index_.index = std::make_unique<SupportIndex>(SupportIndex{{values.begin(), values.end()}});  // packed bulk load
+  }
+  return *index_.index;
+}
+
+std::vector<const LocalBSpline*> SemiRegularCollection::meeting(double x0, double y0, double x1, double y1) const {
+  std::vector<IndexValue> hits;
+  index().tree.query(bgi::intersects(IndexBox(IndexPoint(x0, y0), IndexPoint(x1, y1))), std::back_inserter(hits));
+  std::vector<const LocalBSpline*> out;
+  out.reserve(hits.size());
+  for (const auto& h : hits) out.push_back(h.second);
+  // The R-tree's order depends on its history; the set's order keeps the results reproducible.
+  std::sort(out.begin(), out.end(), [](const LocalBSpline* a, const LocalBSpline* b) { return *a < *b; });
+  return out;
+}
+
+void SemiRegularCollection::erase_spline(const LocalBSpline& b) {
+  const auto it = set_.find(b);
+  if (it == set_.end()) return;
+  if (index_.index) index_.index->tree.remove(IndexValue(index_box(*it), &*it));
+  set_.erase(it);
+}
+
+bool SemiRegularCollection::insert_spline(const LocalBSpline& b) {
+  const auto [it, fresh] = set_.insert(b);
+  if (fresh && index_.index) index_.index->tree.insert(IndexValue(index_box(*it), &*it));
+  return fresh;
+}
 
 SemiRegularCollection SemiRegularCollection::tensor_product(int dx, int dy, const std::vector<double>& bx,
                                                             const std::vector<double>& by, const std::vector<int>& mx,
@@ -404,15 +482,11 @@ void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> work, C
     LocalBSpline left = b, right = b;
     (vertical ? left.x : left.y).assign(refined.begin(), refined.end() - 1);
     (vertical ? right.x : right.y).assign(refined.begin() + 1, refined.end());
-    set_.erase(b);
-    auto was_added = std::find(change.added.begin(), change.added.end(), b);
-    if (was_added != change.added.end())
-      change.added.erase(was_added);
-    else
-      change.removed.push_back(b);
+    erase_spline(b);
+    if (change.added.erase(b) == 0) change.removed.push_back(b);
     for (const LocalBSpline& child : {left, right})
-      if (set_.insert(child).second) {
-        change.added.push_back(child);
+      if (insert_spline(child)) {
+        change.added.insert(child);
         work.push_back(child);
       }
   }
@@ -420,41 +494,67 @@ void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> work, C
 
 void SemiRegularCollection::undo(const Change& change) {
   cache_valid_ = false;
-  for (const auto& b : change.added) set_.erase(b);
-  set_.insert(change.removed.begin(), change.removed.end());
+  for (const auto& b : change.added) erase_spline(b);
+  for (const auto& b : change.removed) insert_spline(b);
 }
 
-std::string SemiRegularCollection::local_violation(const Change& change) const {
-  // Cells whose alive B-splines changed lie in the supports of the removed and added ones;
-  // supports are unions of cells, so the partition computed on their bounding box from the
-  // B-splines that meet it is exact on every cell inside a changed support.
-  std::vector<Box> changed;
-  Box region{1e300, 1e300, -1e300, -1e300};
-  for (const auto* list : {&change.removed, &change.added})
-    for (const auto& b : *list) {
-      changed.push_back({b.x.front(), b.y.front(), b.x.back(), b.y.back()});
-      region = {std::min(region.x0, b.x.front()), std::min(region.y0, b.y.front()), std::max(region.x1, b.x.back()),
-                std::max(region.y1, b.y.back())};
-    }
+std::string SemiRegularCollection::local_violation(const Change& change, std::array<double, 4>* where,
+                                                   const KnotInsertion* segment) const {
+  // Cells whose alive B-splines changed lie in the supports of the removed and added ones.
+  std::vector<std::array<double, 4>> changed;
+  auto note = [&](const LocalBSpline& b) { changed.push_back({b.x.front(), b.y.front(), b.x.back(), b.y.back()}); };
+  for (const auto& b : change.removed) note(b);
+  for (const auto& b : change.added) note(b);
   if (changed.empty()) return {};
+  if (segment) {
+    // An extension that fails usually fails at one of its ends: the supports there are checked
+    // first, so a failing attempt on a long line costs the size of its ends, not its length.
+    const double from = segment->from, to = segment->to;
+    std::vector<std::array<double, 4>> ends;
+    for (const auto& b : changed) {
+      const double lo = segment->vertical ? b[1] : b[0], hi = segment->vertical ? b[3] : b[2];
+      if ((lo <= from && from <= hi) || (lo <= to && to <= hi)) ends.push_back(b);
+    }
+    if (!ends.empty() && ends.size() < changed.size())
+      if (std::string why = violation_in(ends, where); !why.empty()) return why;
+  }
+  return violation_in(changed, where);
+}
+
+std::string SemiRegularCollection::violation_in(const std::vector<std::array<double, 4>>& supports,
+                                                std::array<double, 4>* where) const {
+  // Supports are unions of cells, so the partition computed on the bounding box of the changed
+  // supports from the B-splines that meet it is exact on every cell inside one of them.
+  std::vector<Box> changed;
+  for (const auto& b : supports) changed.push_back({b[0], b[1], b[2], b[3]});
+  Box region{1e300, 1e300, -1e300, -1e300};
+  for (const Box& b : changed)
+    region = {std::min(region.x0, b.x0), std::min(region.y0, b.y0), std::max(region.x1, b.x1), std::max(region.y1, b.y1)};
   SplineRefs near;
-  for (const auto& b : set_)
-    if (b.x.front() < region.x1 && b.x.back() > region.x0 && b.y.front() < region.y1 && b.y.back() > region.y0)
-      near.push_back(&b);
+  std::vector<Box> near_supports;
+  for (const LocalBSpline* b : meeting(region.x0, region.y0, region.x1, region.y1))
+    if (b->x.front() < region.x1 && b->x.back() > region.x0 && b->y.front() < region.y1 && b->y.back() > region.y0) {
+      near.push_back(b);
+      near_supports.push_back(support(*b));
+    }
   const InducedCells ic = induced_cells(near, region);
   if (!ic.problems.empty()) return ic.problems.front();
-  for (const Box& c : ic.cells) {
-    bool inside = false;
-    for (const Box& s : changed) inside = inside || (s.x0 <= c.x0 && c.x1 <= s.x1 && s.y0 <= c.y0 && c.y1 <= s.y1);
-    if (!inside) continue;
+  const std::vector<std::vector<int>> in_changed = containing_boxes(changed, ic);
+  const std::vector<std::vector<int>> alive_ids = containing_boxes(near_supports, ic);
+  for (size_t ci = 0; ci < ic.cells.size(); ++ci) {
+    if (in_changed[ci].empty()) continue;
+    const Box& c = ic.cells[ci];
+    if (static_cast<int>(alive_ids[ci].size()) != (dx_ + 1) * (dy_ + 1)) {
+      if (where) *where = {c.x0, c.y0, c.x1, c.y1};
+      return "cell " + describe(c) + ": " + std::to_string(alive_ids[ci].size()) + " B-splines are alive";
+    }
     SplineRefs alive;
-    for (const auto* b : near)
-      if (alive_on(*b, c)) alive.push_back(b);
-    if (static_cast<int>(alive.size()) != (dx_ + 1) * (dy_ + 1))
-      return "cell " + describe(c) + ": " + std::to_string(alive.size()) + " B-splines are alive";
+    for (int k : alive_ids[ci]) alive.push_back(near[k]);
     std::string why_a, why_b;
-    if (!regular_in(alive, dx_, dy_, true, c, why_a) && !regular_in(alive, dy_, dx_, false, c, why_b))
+    if (!regular_in(alive, dx_, dy_, true, c, why_a) && !regular_in(alive, dy_, dx_, false, c, why_b)) {
+      if (where) *where = {c.x0, c.y0, c.x1, c.y1};
       return "cell " + describe(c) + ": neither (a) " + why_a + " nor (b) " + why_b;
+    }
   }
   return {};
 }
@@ -480,11 +580,17 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
   if (covering_multiplicity(s.vertical, s.position, s.from, s.to) >= s.multiplicity) return report;  // already there
   // Knot values along the segment's direction: where an extension may stop.
   std::set<double> stops{lo_along, hi_along};
-  for (const auto& b : set_)
-    for (double v : s.vertical ? b.y : b.x) stops.insert(v);
+  // Only the knots of the B-splines the whole line crosses: an end between two of them splits
+  // the same B-splines as an end at the nearer one.
+  for (const LocalBSpline* b : s.vertical ? meeting(s.position, y0_, s.position, y1_) : meeting(x0_, s.position, x1_, s.position)) {
+    const auto& across = s.vertical ? b->x : b->y;
+    if (!(across.front() < s.position && s.position < across.back())) continue;
+    for (double v : s.vertical ? b->y : b->x) stops.insert(v);
+  }
   const std::vector<Piece> lines_before = lines.count(s.position) ? lines[s.position] : std::vector<Piece>{};
-  // Extensions by i knot steps below and j above, tried by increasing i + j (both splits
-  // of each total): the first that refines and stays semi-regular is the minimal one.
+  // An extension is i knot steps below and j above; extension_ says in which order they are
+  // tried (the header); every candidate is split and checked, and the first that refines
+  // and stays semi-regular is kept.
   const std::vector<double> below(std::make_reverse_iterator(stops.upper_bound(s.from)), stops.rend());
   const std::vector<double> above(stops.lower_bound(s.to), stops.end());
   // below[0] <= s.from is the first stop at or under the start; below[i] i steps further.
@@ -492,8 +598,97 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
   auto end_at = [&](size_t j) { return j == 0 ? s.to : above[above[0] == s.to ? j : j - 1]; };
   const size_t max_i = below.empty() ? 0 : (below[0] == s.from ? below.size() - 1 : below.size());
   const size_t max_j = above.empty() ? 0 : (above[0] == s.to ? above.size() - 1 : above.size());
-  // Per total, the balanced splits and the one-sided ones (trying every split would cost
-  // quadratically many attempts on long extensions).
+  // One attempt: insert [start_at(i), end_at(j)], split, check; undone unless it refines and
+  // stays semi-regular. `where` gets the failing cell (NaN when nothing was split or the
+  // changed region is not a partition into rectangles).
+  Change applied;  // what the last successful attempt changed, until it is kept or reverted
+  auto revert = [&] {
+    undo(applied);
+    applied = Change{};
+    if (lines_before.empty())
+      lines.erase(s.position);
+    else
+      lines[s.position] = lines_before;
+  };
+  auto attempt = [&](size_t i, size_t j, std::array<double, 4>& where) {
+    KnotInsertion seg = s;
+    seg.from = start_at(i);
+    seg.to = end_at(j);
+    add_line(seg);
+    // The B-splines the new line may cross completely (the rest cascades from their halves).
+    std::vector<LocalBSpline> work;
+    for (const LocalBSpline* b : s.vertical ? meeting(s.position, seg.from, s.position, seg.to)
+                                            : meeting(seg.from, s.position, seg.to, s.position)) {
+      const auto& across = s.vertical ? b->x : b->y;
+      const auto& along = s.vertical ? b->y : b->x;
+      if (across.front() < s.position && s.position < across.back() && along.back() > seg.from && along.front() < seg.to)
+        work.push_back(*b);
+    }
+    applied = Change{};
+    split_until_stable(std::move(work), applied);
+    where.fill(std::nan(""));
+    if (!applied.removed.empty() && local_violation(applied, &where, &seg).empty()) {
+      report.inserted = seg;
+      report.splits = static_cast<int>(applied.removed.size());
+      report.extended = seg.from != s.from || seg.to != s.to;
+      return true;
+    }
+    revert();
+    return false;
+  };
+  std::array<double, 4> where{};
+  if (extension_ != Extension::kMinimal) {
+    // Grown towards the trouble: after a failed attempt, the end nearer the failing cell
+    // moves one stop outwards (both ends when nothing was split or no cell is named). Each
+    // attempt moves an end, so at most max_i + max_j + 1 attempts, the last a full line.
+    size_t i = 0, j = 0, prev_i = 0, prev_j = 0, step_i = 1, step_j = 1;
+    const bool gallop = extension_ == Extension::kGalloping;
+    while (true) {
+      if (attempt(i, j, where)) {
+        if (!gallop) return report;
+        // The last move may have jumped several stops at one end: bisect back between the
+        // failed and the successful position (each probe checked; the smallest success kept).
+        const bool low_end = i - prev_i > 1;
+        size_t fail = low_end ? prev_i : prev_j, ok = low_end ? i : j;
+        bool ok_applied = true;
+        while (ok - fail > 1) {
+          const size_t mid = fail + (ok - fail) / 2;
+          if (ok_applied) revert();
+          if (attempt(low_end ? mid : i, low_end ? j : mid, where)) {
+            ok = mid;
+            ok_applied = true;
+          } else {
+            fail = mid;
+            ok_applied = false;
+          }
+        }
+        if (!ok_applied && !attempt(low_end ? ok : i, low_end ? j : ok, where))
+          throw std::logic_error("knot segment insertion: an extension that was semi-regular is not on a second try");
+        return report;
+      }
+      if (i == max_i && j == max_j) break;
+      const double mid = s.vertical ? 0.5 * (where[1] + where[3]) : 0.5 * (where[0] + where[2]);
+      const double from = start_at(i), to = end_at(j);
+      const bool grow_low = std::isnan(mid) || mid - from <= to - mid, grow_high = std::isnan(mid) || mid - from >= to - mid;
+      const bool low = i < max_i && (grow_low || j == max_j), high = j < max_j && (grow_high || i == max_i);
+      prev_i = i;
+      prev_j = j;
+      if (gallop && low != high) {
+        // Galloping: an end that has to move again moves twice as far as last time.
+        size_t& step = low ? step_i : step_j;
+        size_t& other = low ? step_j : step_i;
+        other = 1;
+        (low ? i : j) = std::min(low ? max_i : max_j, (low ? i : j) + step);
+        step *= 2;
+      } else {
+        step_i = step_j = 1;
+        i += low;
+        j += high;
+      }
+    }
+  } else {
+  // By increasing i + j: per total, the balanced splits and the one-sided ones (trying every
+  // split would cost quadratically many attempts on long extensions).
   for (size_t total = 0; total <= max_i + max_j; ++total) {
     std::vector<size_t> lows;
     const size_t lo_i = total > max_j ? total - max_j : 0, hi_i = std::min(total, max_i);
@@ -503,32 +698,9 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
     lows.erase(std::unique(lows.begin(), lows.end()), lows.end());
     for (size_t i : lows) {
       if (i > max_i || total - i > max_j) continue;
-      KnotInsertion seg = s;
-      seg.from = start_at(i);
-      seg.to = end_at(total - i);
-      add_line(seg);
-      // The B-splines the new line may cross completely (the rest cascades from their halves).
-      std::vector<LocalBSpline> work;
-      for (const auto& b : set_) {
-        const auto& across = s.vertical ? b.x : b.y;
-        const auto& along = s.vertical ? b.y : b.x;
-        if (across.front() < s.position && s.position < across.back() && along.back() > seg.from && along.front() < seg.to)
-          work.push_back(b);
-      }
-      Change change;
-      split_until_stable(std::move(work), change);
-      if (!change.removed.empty() && local_violation(change).empty()) {
-        report.inserted = seg;
-        report.splits = static_cast<int>(change.removed.size());
-        report.extended = seg.from != s.from || seg.to != s.to;
-        return report;
-      }
-      undo(change);
-      if (lines_before.empty())
-        lines.erase(s.position);
-      else
-        lines[s.position] = lines_before;
+      if (attempt(i, total - i, where)) return report;
     }
+  }
   }
   throw std::runtime_error("a full knot line does not give a semi-regular collection here");
 }
@@ -566,7 +738,7 @@ std::vector<Violation> SemiRegularCollection::violations() const {
   }
   // Def. 3.3, cell by cell.
   const std::vector<LocalBSpline>& all = splines();
-  const std::vector<std::vector<int>> alive_ids = alive_per_cell(all, ic.cells, {x0_, y0_, x1_, y1_});
+  const std::vector<std::vector<int>> alive_ids = alive_per_cell(all, ic);
   for (size_t ci = 0; ci < ic.cells.size(); ++ci) {
     const Box& c = ic.cells[ci];
     std::vector<const LocalBSpline*> alive;
@@ -726,19 +898,27 @@ BezierMesh SemiRegularCollection::bezier_mesh() const {
   mesh.set_num_functions(size());
   mesh.set_boundary_names({"bottom", "right", "top", "left"});
   const int nb = (dx_ + 1) * (dy_ + 1);
-  const std::vector<std::vector<int>> alive = alive_per_cell(all, ic.cells, {x0_, y0_, x1_, y1_});
+  const std::vector<std::vector<int>> alive = alive_per_cell(all, ic);
+  // Many B-splines share a knot vector in one direction, and many cells an interval: each
+  // univariate piece is computed once (measured: bezier_mesh was a fifth of an adaptive run).
+  std::map<std::pair<std::vector<double>, std::pair<double, double>>, Eigen::VectorXd> pieces;
+  auto piece = [&](const std::vector<double>& knots, double a, double b) -> const Eigen::VectorXd& {
+    auto [it, fresh] = pieces.try_emplace({knots, {a, b}});
+    if (fresh) it->second = single_bspline_bernstein(knots, a, b);
+    return it->second;
+  };
   for (size_t ci = 0; ci < ic.cells.size(); ++ci) {
     const Box& c = ic.cells[ci];
     const std::vector<int>& ids = alive[ci];
-    std::vector<Eigen::VectorXd> bx, by;
+    std::vector<const Eigen::VectorXd*> bx, by;
     for (int k : ids) {
-      bx.push_back(single_bspline_bernstein(all[k].x, c.x0, c.x1));
-      by.push_back(single_bspline_bernstein(all[k].y, c.y0, c.y1));
+      bx.push_back(&piece(all[k].x, c.x0, c.x1));
+      by.push_back(&piece(all[k].y, c.y0, c.y1));
     }
     Eigen::MatrixXd C(ids.size(), nb);
     for (size_t a = 0; a < ids.size(); ++a)
       for (int v = 0; v <= dy_; ++v)
-        for (int u = 0; u <= dx_; ++u) C(a, u + (dx_ + 1) * v) = bx[a][u] * by[a][v];
+        for (int u = 0; u <= dx_; ++u) C(a, u + (dx_ + 1) * v) = (*bx[a])[u] * (*by[a])[v];
     BezierCell cell;
     cell.u0 = c.x0;
     cell.u1 = c.x1;

@@ -78,12 +78,27 @@ class SemiRegularCollection {
   // Bounding box of the supports: x0, y0, x1, y1.
   std::array<double, 4> domain() const { return {x0_, y0_, x1_, y1_}; }
 
+  // How insert() looks for an extension. A knot step is the next knot value, along the line,
+  // of a B-spline the whole line crosses (an end between two such values splits the same
+  // B-splines as an end at the nearer one). Every candidate is split and checked; the
+  // first that refines and stays semi-regular is kept, at worst a full knot line.
+  //  kMinimal: by increasing total number of steps (balanced and one-sided splits of each
+  //    total): the shortest, but long extensions take many attempts.
+  //  kDirected: after a failed attempt, the end nearer the cell that failed moves one step
+  //    (both ends when nothing was split); at most one attempt per step.
+  //  kGalloping: as kDirected, but an end that has to move again moves twice as far as last
+  //    time, and the last jump is bisected back; a logarithmic number of attempts on long
+  //    extensions. The default (measured: docs/ADAPTIVITY.md "Choosing the defaults").
+  enum class Extension { kGalloping, kDirected, kMinimal };
+  void set_extension(Extension e) { extension_ = e; }
+  Extension extension() const { return extension_; }
+
   // Inserts the segment by splitting every B-spline it crosses completely (and repeating
   // until no B-spline is crossed by a knot it does not use). If the result would not be
-  // non-degenerate and semi-regular, the segment is extended one knot step at a time (both
-  // ends) until it is, at worst to a full knot line. A segment the mesh already has is a
-  // no-op (splits = 0). Only the region whose B-splines changed is re-checked, so the cost
-  // grows with the refinement, not with the collection (the collection must be
+  // non-degenerate and semi-regular, the segment is extended (extension()) until it is. A
+  // segment the mesh already has is a no-op (splits = 0). Only the region whose B-splines
+  // changed is re-checked, and an R-tree of the supports finds the B-splines involved, so the
+  // cost grows with the refinement, not with the collection (the collection must be
   // semi-regular before). Throws std::invalid_argument for a
   // segment outside the domain or of zero length, a multiplicity outside [1, degree+1], or
   // one that overlaps an existing knot of another multiplicity.
@@ -130,9 +145,25 @@ class SemiRegularCollection {
   };
   // What one insertion attempt changed, to check it locally and to undo it.
   struct Change {
-    std::vector<LocalBSpline> removed, added;
+    std::vector<LocalBSpline> removed;
+    std::set<LocalBSpline> added;
+  };
+  // The supports of set_'s B-splines in an R-tree, so that an insertion finds the B-splines a
+  // line crosses and those near a changed region without scanning all of them. Built on the
+  // first insertion, kept up to date by the splits and their undoing; a copy starts without
+  // one (it would point into the other collection's set).
+  struct SupportIndex;
+  struct IndexHolder {
+    std::unique_ptr<SupportIndex> index;
+    IndexHolder();
+    IndexHolder(const IndexHolder&);
+    IndexHolder(IndexHolder&&) noexcept;
+    IndexHolder& operator=(const IndexHolder&);
+    IndexHolder& operator=(IndexHolder&&) noexcept;
+    ~IndexHolder();
   };
   int dx_ = 2, dy_ = 2;
+  Extension extension_ = Extension::kGalloping;
   std::set<LocalBSpline> set_;
   // splines() lists set_ lazily; the lock makes concurrent const calls safe (the threaded
   // assembly and estimator may reach it). Copies share the lock, which only serializes.
@@ -142,6 +173,13 @@ class SemiRegularCollection {
   double x0_ = 0, x1_ = 1, y0_ = 0, y1_ = 1;
   // Every knot line/segment of the mesh so far, per orientation and position.
   std::map<double, std::vector<Piece>> vlines_, hlines_;
+  mutable IndexHolder index_;
+  SupportIndex& index() const;
+  // B-splines whose support meets the closed box x0, y0, x1, y1 (a superset of those whose
+  // interior does), in the collection's order.
+  std::vector<const LocalBSpline*> meeting(double x0, double y0, double x1, double y1) const;
+  void erase_spline(const LocalBSpline& b);
+  bool insert_spline(const LocalBSpline& b);
   void add_line(const KnotInsertion& s);
   // Largest multiplicity the lines at `position` give on all of [lo, hi] (min over the
   // interval of the max over the pieces covering each point); 0 if some part is uncovered.
@@ -149,7 +187,12 @@ class SemiRegularCollection {
   // Splits B-splines (starting from `work`) until none is crossed by a line it does not use.
   void split_until_stable(std::vector<LocalBSpline> work, Change& change);
   // Def. 3.3 on the cells inside the supports that changed; empty when they are fine.
-  std::string local_violation(const Change& change) const;
+  // `where` (if given) receives the failing cell x0, y0, x1, y1; with the inserted `segment`,
+  // the supports at its ends are checked first.
+  std::string local_violation(const Change& change, std::array<double, 4>* where = nullptr,
+                              const KnotInsertion* segment = nullptr) const;
+  // Def. 3.3 on the cells inside the given supports (x0, y0, x1, y1).
+  std::string violation_in(const std::vector<std::array<double, 4>>& supports, std::array<double, 4>* where) const;
   void undo(const Change& change);
 };
 
