@@ -195,62 +195,67 @@ bool regular_in(const std::vector<const LocalBSpline*>& alive, int d_first, int 
   auto second = [&](const LocalBSpline* b) -> const std::vector<double>& { return x_first ? b->y : b->x; };
   const double lo = x_first ? c.x0 : c.y0, hi = x_first ? c.x1 : c.y1;
   const double lo2 = x_first ? c.y0 : c.x0, hi2 = x_first ? c.y1 : c.x1;
-  std::map<std::vector<double>, std::vector<const LocalBSpline*>> groups;
-  for (const auto* b : alive) groups[first(b)].push_back(b);
-  if (static_cast<int>(groups.size()) != d_first + 1) {
-    why = std::to_string(groups.size()) + " distinct " + (x_first ? "horizontal" : "vertical") +
-          " knot vectors instead of " + std::to_string(d_first + 1);
+  // Sorted by (first, second) vector, the B-splines sharing a first vector are consecutive
+  // and in window order of their second vectors; no vector is copied (this runs for every
+  // changed cell of every insertion attempt).
+  std::vector<const LocalBSpline*> sorted(alive);
+  std::sort(sorted.begin(), sorted.end(), [&](const LocalBSpline* a, const LocalBSpline* b) {
+    const int order = first(a) < first(b) ? -1 : (first(b) < first(a) ? 1 : 0);
+    return order != 0 ? order < 0 : second(a) < second(b);
+  });
+  std::vector<size_t> starts;  // of the groups sharing a first vector, then the end
+  for (size_t k = 0; k < sorted.size(); ++k)
+    if (k == 0 || first(sorted[k]) != first(sorted[k - 1])) starts.push_back(k);
+  const int groups = static_cast<int>(starts.size());
+  starts.push_back(sorted.size());
+  if (groups != d_first + 1) {
+    why = std::to_string(groups) + " distinct " + (x_first ? "horizontal" : "vertical") + " knot vectors instead of " +
+          std::to_string(d_first + 1);
     return false;
   }
   // Consecutive windows of one vector V of length 2d+2, the cell in its middle span.
-  std::vector<std::vector<double>> windows;
-  for (const auto& [v, members] : groups) windows.push_back(v);  // map order = lexicographic = window order
+  auto window = [&](int i) -> const std::vector<double>& { return first(sorted[starts[i]]); };
   for (int i = 1; i <= d_first; ++i)  // consecutive windows overlap: W_i[t] = W_{i-1}[t+1]
     for (int t = 0; t <= d_first; ++t)
-      if (windows[i][t] != windows[i - 1][t + 1]) {
+      if (window(i)[t] != window(i - 1)[t + 1]) {
         why = std::string(x_first ? "horizontal" : "vertical") + " knot vectors are not windows of one vector";
         return false;
       }
-  if (!(windows[0][d_first] <= lo && hi <= windows[d_first][1])) {
+  if (!(window(0)[d_first] <= lo && hi <= window(d_first)[1])) {
     why = "the cell is not in the middle span of the shared knot vector";
     return false;
   }
   if (structure) {
     structure->x_first = x_first;
-    structure->shared = windows[0];
-    structure->shared.insert(structure->shared.end(), windows[d_first].end() - d_first, windows[d_first].end());
+    structure->shared = window(0);
+    structure->shared.insert(structure->shared.end(), window(d_first).end() - d_first, window(d_first).end());
     structure->other.clear();
     structure->spline.clear();
   }
-  for (const auto& [v, members] : groups) {
-    std::vector<std::vector<double>> ws;
-    for (const auto* b : members) ws.push_back(second(b));
-    std::sort(ws.begin(), ws.end());
-    ws.erase(std::unique(ws.begin(), ws.end()), ws.end());
-    if (static_cast<int>(ws.size()) != d_second + 1) {
-      why = std::to_string(ws.size()) + " B-splines share a " + (x_first ? "horizontal" : "vertical") +
+  for (int g = 0; g < groups; ++g) {
+    // Distinct B-splines with one first vector have distinct second vectors.
+    const size_t begin = starts[g], count = starts[g + 1] - begin;
+    if (static_cast<int>(count) != d_second + 1) {
+      why = std::to_string(count) + " B-splines share a " + (x_first ? "horizontal" : "vertical") +
             " knot vector instead of " + std::to_string(d_second + 1);
       return false;
     }
+    auto ws = [&](int i) -> const std::vector<double>& { return second(sorted[begin + i]); };
     for (int i = 1; i <= d_second; ++i)
       for (int t = 0; t <= d_second; ++t)
-        if (ws[i][t] != ws[i - 1][t + 1]) {
+        if (ws(i)[t] != ws(i - 1)[t + 1]) {
           why = "their other knot vectors are not windows of one vector";
           return false;
         }
-    if (!(ws[0][d_second] <= lo2 && hi2 <= ws[d_second][1])) {
+    if (!(ws(0)[d_second] <= lo2 && hi2 <= ws(d_second)[1])) {
       why = "the cell is not in the middle span of a shared knot vector";
       return false;
     }
     if (structure) {
-      std::vector<double> full = ws[0];
-      full.insert(full.end(), ws[d_second].end() - d_second, ws[d_second].end());
+      std::vector<double> full = ws(0);
+      full.insert(full.end(), ws(d_second).end() - d_second, ws(d_second).end());
       structure->other.push_back(full);
-      std::vector<const LocalBSpline*> ordered;
-      for (const auto& w : ws)
-        for (const auto* b : members)
-          if (second(b) == w) ordered.push_back(b);
-      structure->spline.push_back(ordered);
+      structure->spline.emplace_back(sorted.begin() + begin, sorted.begin() + begin + count);
     }
   }
   return true;
