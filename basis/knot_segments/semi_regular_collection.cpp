@@ -43,41 +43,46 @@ struct InducedCells {
 };
 
 InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
-  std::set<double> sx{region.x0, region.x1}, sy{region.y0, region.y1};
+  // Sorted vectors rather than sets and maps: this runs for every insertion attempt.
+  std::vector<double> xs{region.x0, region.x1}, ys{region.y0, region.y1};
   for (const auto* b : splines) {
     for (double x : b->x)
-      if (x > region.x0 && x < region.x1) sx.insert(x);
+      if (x > region.x0 && x < region.x1) xs.push_back(x);
     for (double y : b->y)
-      if (y > region.y0 && y < region.y1) sy.insert(y);
+      if (y > region.y0 && y < region.y1) ys.push_back(y);
   }
-  const std::vector<double> xs(sx.begin(), sx.end()), ys(sy.begin(), sy.end());
+  for (auto* v : {&xs, &ys}) {
+    std::sort(v->begin(), v->end());
+    v->erase(std::unique(v->begin(), v->end()), v->end());
+  }
   const int nx = static_cast<int>(xs.size()) - 1, ny = static_cast<int>(ys.size()) - 1;
-  // Knot line pieces: per value, the union of the intervals the B-splines draw there.
-  std::map<double, std::vector<std::pair<double, double>>> vlines, hlines;
+  // Knot line pieces (value, from, to): per value, the union of the intervals the B-splines
+  // draw there, sorted by value then start.
+  struct Piece {
+    double at, from, to;
+    bool operator<(const Piece& o) const { return at != o.at ? at < o.at : from < o.from; }
+  };
+  std::vector<Piece> vlines, hlines;
   for (const auto* b : splines) {
-    for (double x : b->x) vlines[x].emplace_back(b->y.front(), b->y.back());
-    for (double y : b->y) hlines[y].emplace_back(b->x.front(), b->x.back());
+    for (double x : b->x) vlines.push_back({x, b->y.front(), b->y.back()});
+    for (double y : b->y) hlines.push_back({y, b->x.front(), b->x.back()});
   }
-  for (auto* lines : {&vlines, &hlines})
-    for (auto& [v, pieces] : *lines) {
-      std::sort(pieces.begin(), pieces.end());
-      std::vector<std::pair<double, double>> merged;
-      for (const auto& p : pieces)
-        if (!merged.empty() && p.first <= merged.back().second)
-          merged.back().second = std::max(merged.back().second, p.second);
-        else
-          merged.push_back(p);
-      pieces.swap(merged);
-    }
-  auto covered = [](const std::map<double, std::vector<std::pair<double, double>>>& lines, double at, double lo,
-                    double hi) {
-    const auto it = lines.find(at);
-    if (it == lines.end()) return false;
-    const auto& pieces = it->second;
-    auto p = std::upper_bound(pieces.begin(), pieces.end(), std::make_pair(lo, 1e300));
-    if (p == pieces.begin()) return false;
+  for (auto* lines : {&vlines, &hlines}) {
+    std::sort(lines->begin(), lines->end());
+    std::vector<Piece> merged;
+    for (const Piece& p : *lines)
+      if (!merged.empty() && merged.back().at == p.at && p.from <= merged.back().to)
+        merged.back().to = std::max(merged.back().to, p.to);
+      else
+        merged.push_back(p);
+    lines->swap(merged);
+  }
+  auto covered = [](const std::vector<Piece>& lines, double at, double lo, double hi) {
+    // The last piece at `at` starting at or before lo.
+    auto p = std::upper_bound(lines.begin(), lines.end(), Piece{at, lo, 0});
+    if (p == lines.begin()) return false;
     --p;
-    return p->first <= lo && hi <= p->second;
+    return p->at == at && p->from <= lo && hi <= p->to;
   };
   std::vector<int> parent(static_cast<size_t>(nx) * ny);
   std::iota(parent.begin(), parent.end(), 0);
@@ -93,11 +98,17 @@ InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
   struct Extent {
     int i0, i1, j0, j1, count;
   };
-  std::map<int, Extent> groups;
+  std::vector<int> group_of_root(parent.size(), -1);
+  std::vector<Extent> extents;
+  std::vector<int> roots;
   for (int k = 0; k < nx * ny; ++k) {
-    const int i = k % nx, j = k / nx;
-    auto [it, fresh] = groups.try_emplace(find(k), Extent{i, i, j, j, 0});
-    Extent& e = it->second;
+    const int i = k % nx, j = k / nx, r = find(k);
+    if (group_of_root[r] < 0) {
+      group_of_root[r] = static_cast<int>(extents.size());
+      extents.push_back({i, i, j, j, 0});
+      roots.push_back(r);
+    }
+    Extent& e = extents[group_of_root[r]];
     e.i0 = std::min(e.i0, i);
     e.i1 = std::max(e.i1, i);
     e.j0 = std::min(e.j0, j);
@@ -105,25 +116,26 @@ InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
     ++e.count;
   }
   InducedCells out;
-  std::vector<std::pair<Box, int>> boxes;  // with the root, to number the fine cells after sorting
-  for (const auto& [root, e] : groups) {
+  std::vector<std::pair<Box, int>> boxes;  // with the group, to number the fine cells after sorting
+  for (size_t g = 0; g < extents.size(); ++g) {
+    const Extent& e = extents[g];
     const Box box{xs[e.i0], ys[e.j0], xs[e.i1 + 1], ys[e.j1 + 1]};
     if (e.count != (e.i1 - e.i0 + 1) * (e.j1 - e.j0 + 1))
       out.problems.push_back("the region around " + describe(box) + " is not a rectangle");
-    boxes.emplace_back(box, root);
+    boxes.emplace_back(box, static_cast<int>(g));
   }
   std::sort(boxes.begin(), boxes.end(), [](const auto& a, const auto& b) {
     return a.first.y0 != b.first.y0 ? a.first.y0 < b.first.y0 : a.first.x0 < b.first.x0;
   });
-  std::map<int, int> index_of_root;
-  for (const auto& [box, root] : boxes) {
-    index_of_root[root] = static_cast<int>(out.cells.size());
+  std::vector<int> index_of_group(extents.size());
+  for (const auto& [box, g] : boxes) {
+    index_of_group[g] = static_cast<int>(out.cells.size());
     out.cells.push_back(box);
   }
   out.cell_of.resize(parent.size());
-  for (int k = 0; k < nx * ny; ++k) out.cell_of[k] = index_of_root[find(k)];
-  out.xs = xs;
-  out.ys = ys;
+  for (int k = 0; k < nx * ny; ++k) out.cell_of[k] = index_of_group[group_of_root[find(k)]];
+  out.xs = std::move(xs);
+  out.ys = std::move(ys);
   return out;
 }
 
@@ -436,6 +448,11 @@ int SemiRegularCollection::covering_multiplicity(bool vertical, double position,
   const auto& lines = vertical ? vlines_ : hlines_;
   const auto it = lines.find(position);
   if (it == lines.end()) return 0;
+  // Most lines a B-spline's range meets do not cover its start (they are knots of refined
+  // regions elsewhere along it): answered without building the breaks.
+  if (lo < hi && std::none_of(it->second.begin(), it->second.end(),
+                              [&](const Piece& p) { return p.from <= lo && lo < p.to; }))
+    return 0;
   std::vector<double> breaks{lo, hi};
   for (const Piece& p : it->second) {
     if (p.from > lo && p.from < hi) breaks.push_back(p.from);
