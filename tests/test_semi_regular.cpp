@@ -92,7 +92,10 @@ TEST_CASE("Random refinement sequences keep a semi-regular basis of the full spl
   int sequences = 0, insertions = 0, extended = 0, t_meshes = 0, with_segments = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const int d = 1 + trial % 4;
-    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 2 + rng() % 3), random_breaks(rng, 2 + rng() % 3));
+    // y before x, in separate declarators: argument order is unspecified, and the sequences
+    // must not depend on the compiler (gcc evaluates right to left, clang left to right).
+    const std::vector<double> ys = random_breaks(rng, 2 + rng() % 3), xs = random_breaks(rng, 2 + rng() % 3);
+    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
     c.set_extension(extension);
     const int steps = 1 + static_cast<int>(rng() % 4);
     for (int s = 0; s < steps; ++s) {
@@ -126,7 +129,8 @@ TEST_CASE("A T-mesh of a refined collection gets a collection back from its cell
   int reached = 0, t_meshes = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const int d = 1 + trial % 4;
-    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 2 + rng() % 3), random_breaks(rng, 2 + rng() % 3));
+    const std::vector<double> ys = random_breaks(rng, 2 + rng() % 3), xs = random_breaks(rng, 2 + rng() % 3);  // y first: see above
+    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
     const int steps = 1 + static_cast<int>(rng() % 4);
     for (int s = 0; s < steps; ++s) c.insert(random_segment(rng, c));
     const RectangularPartition part = c.partition();
@@ -148,7 +152,8 @@ TEST_CASE("A copy refines like the original: the support index is rebuilt, not s
   std::mt19937 rng(5);
   for (int trial = 0; trial < 20; ++trial) {
     const int d = 2 + trial % 2;
-    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 4), random_breaks(rng, 4));
+    const std::vector<double> ys = random_breaks(rng, 4), xs = random_breaks(rng, 4);  // y first: see above
+    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
     for (int s = 0; s < 3; ++s) c.insert(random_segment(rng, c));
     SemiRegularCollection copy = c;
     const KnotInsertion next = random_segment(rng, c);
@@ -209,7 +214,8 @@ TEST_CASE("Refinement keeps the spaces nested: coarse functions are exact on the
   std::mt19937 rng(77);
   for (int trial = 0; trial < 40; ++trial) {
     const int d = 1 + trial % 4;
-    auto coarse = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 3));
+    const std::vector<double> ys = random_breaks(rng, 3), xs = random_breaks(rng, 3);  // y first: see above
+    auto coarse = SemiRegularCollection::tensor_product(d, d, xs, ys);
     coarse.insert(random_segment(rng, coarse));
     auto fine = coarse;
     for (int s = 0; s < 2; ++s) fine.insert(random_segment(rng, fine));
@@ -244,7 +250,8 @@ TEST_CASE("Partitions of semi-regular collections satisfy Lemma 3.4 / Prop. 4.1,
   std::mt19937 rng(31);
   for (int trial = 0; trial < 60; ++trial) {
     const int d = 1 + trial % 4;
-    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 3));
+    const std::vector<double> ys = random_breaks(rng, 3), xs = random_breaks(rng, 3);  // y first: see above
+    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
     for (int s = 0; s < 3; ++s) {
       c.insert(random_segment(rng, c));
       const auto v = weller_hypotheses_violations(partition_topology(c.partition()), d);
@@ -271,7 +278,8 @@ TEST_CASE("Weller's multiple de Boor evaluation agrees with Bezier extraction", 
   int points = 0;
   for (int trial = 0; trial < 60; ++trial) {
     const int d = 1 + trial % 4;
-    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 2 + trial % 2));
+    const std::vector<double> ys = random_breaks(rng, 2 + trial % 2), xs = random_breaks(rng, 3);  // y first: see above
+    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
     for (int s = 0; s < 1 + trial % 3; ++s) c.insert(random_segment(rng, c));
     std::vector<double> coef(c.size());
     for (double& v : coef) v = g(rng);
@@ -306,7 +314,8 @@ TEST_CASE("Conversion to a classical tensor-product B-spline keeps every value",
   std::uniform_real_distribution<double> unit(0, 1);
   for (int trial = 0; trial < 40; ++trial) {
     const int d = 1 + trial % 4;
-    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 3));
+    const std::vector<double> ys = random_breaks(rng, 3), xs = random_breaks(rng, 3);  // y first: see above
+    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
     for (int s = 0; s < 2; ++s) c.insert(random_segment(rng, c));
     std::vector<double> coef(c.size());
     for (double& v : coef) v = g(rng);
@@ -325,7 +334,8 @@ TEST_CASE("Knots of higher multiplicity and marked-cell refinement keep the prop
   std::mt19937 rng(5150);
   for (int trial = 0; trial < 40; ++trial) {
     const int d = 2 + trial % 3;
-    auto c = SemiRegularCollection::tensor_product(d, d, random_breaks(rng, 3), random_breaks(rng, 3));
+    const std::vector<double> ys = random_breaks(rng, 3), xs = random_breaks(rng, 3);  // y first: see above
+    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
     const int before = c.size();
     KnotInsertion s = random_segment(rng, c);
     s.from = s.vertical ? 0 : 0;  // a full line of multiplicity m adds m functions per row

@@ -58,7 +58,9 @@ TEST_CASE("Tensor grids: the dimension is the tensor-product B-spline count", "[
     const int nx = 1 + trial % 4, ny = 1 + (trial / 4) % 3;
     const int m = 1 + trial % 3, n = 1 + (trial / 3) % 3;
     const int alpha = -1 + static_cast<int>(rng() % (m + 1)), beta = -1 + static_cast<int>(rng() % (n + 1));
-    const RectangularPartition g = grid(random_breaks(rng, nx), random_breaks(rng, ny));
+    // y before x, in separate declarators: argument order is unspecified (gcc: right to left).
+    const std::vector<mpq_class> ys = random_breaks(rng, ny), xs = random_breaks(rng, nx);
+    const RectangularPartition g = grid(xs, ys);
     // (m+1) + (nx-1)(m-alpha) univariate functions in x, likewise in y.
     const long expected = (m + 1 + (nx - 1L) * (m - alpha)) * (n + 1 + (ny - 1L) * (n - beta));
     INFO("nx " << nx << " ny " << ny << " m " << m << " n " << n << " alpha " << alpha << " beta " << beta);
@@ -160,7 +162,9 @@ TEST_CASE("Tensor grids: topology counts and Weller's Prop. 4.2 equal the brute 
   std::mt19937 rng(16);
   for (int nx = 1; nx <= 4; ++nx)
     for (int ny = 1; ny <= 3; ++ny) {
-      const RectangularPartition g = grid(random_breaks(rng, nx), random_breaks(rng, ny));
+      // y before x, in separate declarators: argument order is unspecified (gcc: right to left).
+      const std::vector<mpq_class> ys = random_breaks(rng, ny), xs = random_breaks(rng, nx);
+      const RectangularPartition g = grid(xs, ys);
       const PartitionTopology t = partition_topology(g);
       REQUIRE(t.interior_vertices() == (nx - 1) * (ny - 1));
       REQUIRE(t.interior_edges() == (nx - 1) * ny + nx * (ny - 1));
