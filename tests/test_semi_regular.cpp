@@ -53,6 +53,17 @@ std::vector<double> random_breaks(std::mt19937& rng, int pieces) {
   return b;
 }
 
+// A tensor-product collection of bi-degree d on random breakpoints, the y ones drawn first:
+// the order gcc evaluated tensor_product(d, d, random_breaks(...), random_breaks(...)) when
+// these tests were written. Argument order is unspecified (clang goes left to right), so it
+// is spelled out here, and every compiler sees the same sequences. `pieces` 0: 2 to 4, drawn.
+SemiRegularCollection random_tensor(std::mt19937& rng, int d, int x_pieces, int y_pieces) {
+  auto draw = [&](int pieces) { return random_breaks(rng, pieces > 0 ? pieces : 2 + static_cast<int>(rng() % 3)); };
+  const std::vector<double> ys = draw(y_pieces);
+  const std::vector<double> xs = draw(x_pieces);
+  return SemiRegularCollection::tensor_product(d, d, xs, ys);
+}
+
 // A random segment across the current knots: position halfway between two knots, ends on knots.
 KnotInsertion random_segment(std::mt19937& rng, const SemiRegularCollection& c) {
   KnotInsertion s;
@@ -92,10 +103,7 @@ TEST_CASE("Random refinement sequences keep a semi-regular basis of the full spl
   int sequences = 0, insertions = 0, extended = 0, t_meshes = 0, with_segments = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const int d = 1 + trial % 4;
-    // y before x, in separate declarators: argument order is unspecified, and the sequences
-    // must not depend on the compiler (gcc evaluates right to left, clang left to right).
-    const std::vector<double> ys = random_breaks(rng, 2 + rng() % 3), xs = random_breaks(rng, 2 + rng() % 3);
-    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
+    auto c = random_tensor(rng, d, 0, 0);
     c.set_extension(extension);
     const int steps = 1 + static_cast<int>(rng() % 4);
     for (int s = 0; s < steps; ++s) {
@@ -129,8 +137,7 @@ TEST_CASE("A T-mesh of a refined collection gets a collection back from its cell
   int reached = 0, t_meshes = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const int d = 1 + trial % 4;
-    const std::vector<double> ys = random_breaks(rng, 2 + rng() % 3), xs = random_breaks(rng, 2 + rng() % 3);  // y first: see above
-    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
+    auto c = random_tensor(rng, d, 0, 0);
     const int steps = 1 + static_cast<int>(rng() % 4);
     for (int s = 0; s < steps; ++s) c.insert(random_segment(rng, c));
     const RectangularPartition part = c.partition();
@@ -152,8 +159,7 @@ TEST_CASE("A copy refines like the original: the support index is rebuilt, not s
   std::mt19937 rng(5);
   for (int trial = 0; trial < 20; ++trial) {
     const int d = 2 + trial % 2;
-    const std::vector<double> ys = random_breaks(rng, 4), xs = random_breaks(rng, 4);  // y first: see above
-    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
+    auto c = random_tensor(rng, d, 4, 4);
     for (int s = 0; s < 3; ++s) c.insert(random_segment(rng, c));
     SemiRegularCollection copy = c;
     const KnotInsertion next = random_segment(rng, c);
@@ -214,8 +220,7 @@ TEST_CASE("Refinement keeps the spaces nested: coarse functions are exact on the
   std::mt19937 rng(77);
   for (int trial = 0; trial < 40; ++trial) {
     const int d = 1 + trial % 4;
-    const std::vector<double> ys = random_breaks(rng, 3), xs = random_breaks(rng, 3);  // y first: see above
-    auto coarse = SemiRegularCollection::tensor_product(d, d, xs, ys);
+    auto coarse = random_tensor(rng, d, 3, 3);
     coarse.insert(random_segment(rng, coarse));
     auto fine = coarse;
     for (int s = 0; s < 2; ++s) fine.insert(random_segment(rng, fine));
@@ -250,8 +255,7 @@ TEST_CASE("Partitions of semi-regular collections satisfy Lemma 3.4 / Prop. 4.1,
   std::mt19937 rng(31);
   for (int trial = 0; trial < 60; ++trial) {
     const int d = 1 + trial % 4;
-    const std::vector<double> ys = random_breaks(rng, 3), xs = random_breaks(rng, 3);  // y first: see above
-    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
+    auto c = random_tensor(rng, d, 3, 3);
     for (int s = 0; s < 3; ++s) {
       c.insert(random_segment(rng, c));
       const auto v = weller_hypotheses_violations(partition_topology(c.partition()), d);
@@ -278,8 +282,7 @@ TEST_CASE("Weller's multiple de Boor evaluation agrees with Bezier extraction", 
   int points = 0;
   for (int trial = 0; trial < 60; ++trial) {
     const int d = 1 + trial % 4;
-    const std::vector<double> ys = random_breaks(rng, 2 + trial % 2), xs = random_breaks(rng, 3);  // y first: see above
-    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
+    auto c = random_tensor(rng, d, 3, 2 + trial % 2);
     for (int s = 0; s < 1 + trial % 3; ++s) c.insert(random_segment(rng, c));
     std::vector<double> coef(c.size());
     for (double& v : coef) v = g(rng);
@@ -314,8 +317,7 @@ TEST_CASE("Conversion to a classical tensor-product B-spline keeps every value",
   std::uniform_real_distribution<double> unit(0, 1);
   for (int trial = 0; trial < 40; ++trial) {
     const int d = 1 + trial % 4;
-    const std::vector<double> ys = random_breaks(rng, 3), xs = random_breaks(rng, 3);  // y first: see above
-    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
+    auto c = random_tensor(rng, d, 3, 3);
     for (int s = 0; s < 2; ++s) c.insert(random_segment(rng, c));
     std::vector<double> coef(c.size());
     for (double& v : coef) v = g(rng);
@@ -334,8 +336,7 @@ TEST_CASE("Knots of higher multiplicity and marked-cell refinement keep the prop
   std::mt19937 rng(5150);
   for (int trial = 0; trial < 40; ++trial) {
     const int d = 2 + trial % 3;
-    const std::vector<double> ys = random_breaks(rng, 3), xs = random_breaks(rng, 3);  // y first: see above
-    auto c = SemiRegularCollection::tensor_product(d, d, xs, ys);
+    auto c = random_tensor(rng, d, 3, 3);
     const int before = c.size();
     KnotInsertion s = random_segment(rng, c);
     s.from = s.vertical ? 0 : 0;  // a full line of multiplicity m adds m functions per row
