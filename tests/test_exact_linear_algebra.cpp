@@ -46,7 +46,10 @@ Matrix planted(std::mt19937_64& rng, int m, int n, int k, bool long_fractions, i
   std::uniform_int_distribution<int> shift(40, 54);
   auto entry = [&] {
     if (!long_fractions) {
-      mpq_class x(small(rng), 1 + std::abs(small(rng)));
+      // Denominator drawn first, in its own statement (gcc's order of the former argument list;
+      // argument order is unspecified, and every compiler must see the same matrices).
+      const long den = 1 + std::abs(small(rng)), num = small(rng);
+      mpq_class x(num, den);
       x.canonicalize();  // GMP's arithmetic assumes canonical operands
       return x;
     }

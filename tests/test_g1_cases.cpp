@@ -426,7 +426,10 @@ TEST_CASE("Defaults on random meshes of convex quads with valences 3 to 8: no re
         const bool inside = i > 0 && i < n && j > 0 && j < n;
         // Multiples of 1/1024, so that edge midpoints are exact and exactly collinear.
         const auto snap = [](double x) { return std::round(x * 1024) / 1024; };
-        grid.emplace_back(snap(double(i) / n + (inside ? jitter(rng) : 0)), snap(double(j) / n + (inside ? jitter(rng) : 0)), 0);
+        // y's jitter drawn first, in its own statement (gcc's order of the former argument list;
+        // argument order is unspecified, and every compiler must see the same mesh).
+        const double dy = inside ? jitter(rng) : 0, dx = inside ? jitter(rng) : 0;
+        grid.emplace_back(snap(double(i) / n + dx), snap(double(j) / n + dy), 0);
       }
     std::vector<std::array<int, 3>> triangles;
     for (int j = 0; j < n; ++j)

@@ -23,7 +23,10 @@ RectangularPartition grid(const std::vector<mpq_class>& xs, const std::vector<mp
 std::vector<mpq_class> random_breaks(std::mt19937& rng, int pieces) {
   std::vector<mpq_class> b{0};
   std::uniform_int_distribution<int> step(1, 9), den(1, 7);
-  for (int i = 0; i < pieces; ++i) b.push_back(b.back() + q(step(rng), den(rng)));
+  for (int i = 0; i < pieces; ++i) {
+    const int d = den(rng), s = step(rng);  // in gcc's order of the former argument list: see below
+    b.push_back(b.back() + q(s, d));
+  }
   return b;
 }
 
