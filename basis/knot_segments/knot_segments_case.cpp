@@ -1,6 +1,8 @@
 // Reading [space] of family "knot_segments" and collection files.
 #include "basis/knot_segments/knot_segments_case.hpp"
 
+#include <algorithm>
+
 #include "cases/case_reader.hpp"
 #include "solver/input_error.hpp"
 
@@ -60,11 +62,12 @@ void read_knot_segments_case(const CaseDocument& doc, CaseDescription& c) {
     if (r.boolean(*x, "[space] rational")) r.fail("[space] rational", "knot_segments spaces are polynomial B-splines");
   if (const DocumentNode* x = s.get("extension")) {
     const std::string name = r.string(*x, "[space] extension");
-    using E = SemiRegularCollection::Extension;
-    if (name == "galloping") k.extension = E::kGalloping;
-    else if (name == "directed") k.extension = E::kDirected;
-    else if (name == "minimal") k.extension = E::kMinimal;
-    else r.fail("[space] extension", "must be \"galloping\", \"directed\" or \"minimal\", not \"" + name + "\"");
+    const auto& names = KnotSegmentsSection::kExtensionNames;
+    const auto found = std::find(std::begin(names), std::end(names), name);
+    if (found == std::end(names))
+      r.fail("[space] extension", std::string("must be \"") + names[0] + "\", \"" + names[1] + "\" or \"" + names[2] +
+                                      "\", not \"" + name + "\"");
+    k.extension = static_cast<SemiRegularCollection::Extension>(found - std::begin(names));
   }
   if (const DocumentNode* segs = s.get("segments")) k.segments = read_knot_insertions(r, *segs);
   if (const DocumentNode* f = s.get("collection")) {

@@ -15,6 +15,8 @@ struct KnotSegmentsSection : PatchSpaceSection {
   std::vector<LocalBSpline> collection;  // its functions, not yet checked for semi-regularity
   // [space] extension: how a segment that does not refine or breaks semi-regularity is extended.
   SemiRegularCollection::Extension extension = SemiRegularCollection::Extension::kGalloping;
+  // The names [space] extension takes, in the order of SemiRegularCollection::Extension.
+  static constexpr const char* kExtensionNames[] = {"galloping", "directed", "minimal"};
   std::unique_ptr<CaseSection> clone() const override { return std::make_unique<KnotSegmentsSection>(*this); }
 };
 

@@ -46,9 +46,8 @@ class KnotSegmentSpace final : public SplineSpace {
     if (!k.collection_file.empty())
       return "knot segments (Weller), degree " + degree_text(c) + ", collection of " + std::to_string(k.collection.size()) +
              " B-splines from " + k.collection_file;
-    static const char* const extension_names[] = {"galloping", "directed", "minimal"};
     return "knot segments (Weller), degree " + degree_text(c) + ", " + std::to_string(k.segments.size()) +
-           " segments, " + extension_names[static_cast<int>(k.extension)] + " extension";
+           " segments, " + KnotSegmentsSection::kExtensionNames[static_cast<int>(k.extension)] + " extension";
   }
   std::array<int, 2> degree() const override { return patch_space(*case_).degree; }
   std::vector<ReportField> report() const override {

@@ -100,13 +100,11 @@ InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
   };
   std::vector<int> group_of_root(parent.size(), -1);
   std::vector<Extent> extents;
-  std::vector<int> roots;
   for (int k = 0; k < nx * ny; ++k) {
     const int i = k % nx, j = k / nx, r = find(k);
     if (group_of_root[r] < 0) {
       group_of_root[r] = static_cast<int>(extents.size());
       extents.push_back({i, i, j, j, 0});
-      roots.push_back(r);
     }
     Extent& e = extents[group_of_root[r]];
     e.i0 = std::min(e.i0, i);
@@ -315,8 +313,6 @@ std::vector<const LocalBSpline*> SemiRegularCollection::meeting(double x0, doubl
   std::vector<const LocalBSpline*> out;
   out.reserve(hits.size());
   for (const auto& h : hits) out.push_back(h.second);
-  // The R-tree's order depends on its history; the set's order keeps the results reproducible.
-  std::sort(out.begin(), out.end(), [](const LocalBSpline* a, const LocalBSpline* b) { return *a < *b; });
   return out;
 }
 
@@ -523,19 +519,18 @@ void SemiRegularCollection::undo(const Change& change) {
 std::string SemiRegularCollection::local_violation(const Change& change, std::array<double, 4>* where,
                                                    const KnotInsertion* segment) const {
   // Cells whose alive B-splines changed lie in the supports of the removed and added ones.
-  std::vector<std::array<double, 4>> changed;
-  auto note = [&](const LocalBSpline& b) { changed.push_back({b.x.front(), b.y.front(), b.x.back(), b.y.back()}); };
-  for (const auto& b : change.removed) note(b);
-  for (const auto& b : change.added) note(b);
+  std::vector<const LocalBSpline*> changed;
+  for (const auto& b : change.removed) changed.push_back(&b);
+  for (const auto& b : change.added) changed.push_back(&b);
   if (changed.empty()) return {};
   if (segment) {
     // An extension that fails usually fails at one of its ends: the supports there are checked
     // first, so a failing attempt on a long line costs the size of its ends, not its length.
-    const double from = segment->from, to = segment->to;
-    std::vector<std::array<double, 4>> ends;
-    for (const auto& b : changed) {
-      const double lo = segment->vertical ? b[1] : b[0], hi = segment->vertical ? b[3] : b[2];
-      if ((lo <= from && from <= hi) || (lo <= to && to <= hi)) ends.push_back(b);
+    auto holds = [](const std::vector<double>& along, double t) { return along.front() <= t && t <= along.back(); };
+    std::vector<const LocalBSpline*> ends;
+    for (const LocalBSpline* b : changed) {
+      const auto& along = segment->vertical ? b->y : b->x;
+      if (holds(along, segment->from) || holds(along, segment->to)) ends.push_back(b);
     }
     if (!ends.empty() && ends.size() < changed.size())
       if (std::string why = violation_in(ends, where); !why.empty()) return why;
@@ -543,12 +538,12 @@ std::string SemiRegularCollection::local_violation(const Change& change, std::ar
   return violation_in(changed, where);
 }
 
-std::string SemiRegularCollection::violation_in(const std::vector<std::array<double, 4>>& supports,
+std::string SemiRegularCollection::violation_in(const std::vector<const LocalBSpline*>& splines,
                                                 std::array<double, 4>* where) const {
   // Supports are unions of cells, so the partition computed on the bounding box of the changed
   // supports from the B-splines that meet it is exact on every cell inside one of them.
   std::vector<Box> changed;
-  for (const auto& b : supports) changed.push_back({b[0], b[1], b[2], b[3]});
+  for (const LocalBSpline* b : splines) changed.push_back(support(*b));
   Box region{1e300, 1e300, -1e300, -1e300};
   for (const Box& b : changed)
     region = {std::min(region.x0, b.x0), std::min(region.y0, b.y0), std::max(region.x1, b.x1), std::max(region.y1, b.y1)};
@@ -659,70 +654,70 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
     return false;
   };
   std::array<double, 4> where{};
-  if (extension_ != Extension::kMinimal) {
-    // Grown towards the trouble: after a failed attempt, the end nearer the failing cell
-    // moves one stop outwards (both ends when nothing was split or no cell is named). Each
-    // attempt moves an end, so at most max_i + max_j + 1 attempts, the last a full line.
-    size_t i = 0, j = 0, prev_i = 0, prev_j = 0, step_i = 1, step_j = 1;
-    const bool gallop = extension_ == Extension::kGalloping;
-    while (true) {
-      if (attempt(i, j, where)) {
-        if (!gallop) return report;
-        // The last move may have jumped several stops at one end: bisect back between the
-        // failed and the successful position (each probe checked; the smallest success kept).
-        const bool low_end = i - prev_i > 1;
-        size_t fail = low_end ? prev_i : prev_j, ok = low_end ? i : j;
-        bool ok_applied = true;
-        while (ok - fail > 1) {
-          const size_t mid = fail + (ok - fail) / 2;
-          if (ok_applied) revert();
-          if (attempt(low_end ? mid : i, low_end ? j : mid, where)) {
-            ok = mid;
-            ok_applied = true;
-          } else {
-            fail = mid;
-            ok_applied = false;
-          }
-        }
-        if (!ok_applied && !attempt(low_end ? ok : i, low_end ? j : ok, where))
-          throw std::logic_error("knot segment insertion: an extension that was semi-regular is not on a second try");
-        return report;
-      }
-      if (i == max_i && j == max_j) break;
-      const double mid = s.vertical ? 0.5 * (where[1] + where[3]) : 0.5 * (where[0] + where[2]);
-      const double from = start_at(i), to = end_at(j);
-      const bool grow_low = std::isnan(mid) || mid - from <= to - mid, grow_high = std::isnan(mid) || mid - from >= to - mid;
-      const bool low = i < max_i && (grow_low || j == max_j), high = j < max_j && (grow_high || i == max_i);
-      prev_i = i;
-      prev_j = j;
-      if (gallop && low != high) {
-        // Galloping: an end that has to move again moves twice as far as last time.
-        size_t& step = low ? step_i : step_j;
-        size_t& other = low ? step_j : step_i;
-        other = 1;
-        (low ? i : j) = std::min(low ? max_i : max_j, (low ? i : j) + step);
-        step *= 2;
-      } else {
-        step_i = step_j = 1;
-        i += low;
-        j += high;
+  if (extension_ == Extension::kMinimal) {
+    // By increasing i + j: per total, the balanced splits and the one-sided ones (trying every
+    // split would cost quadratically many attempts on long extensions).
+    for (size_t total = 0; total <= max_i + max_j; ++total) {
+      std::vector<size_t> lows;
+      const size_t lo_i = total > max_j ? total - max_j : 0, hi_i = std::min(total, max_i);
+      if (lo_i > hi_i) continue;
+      for (size_t a : {total / 2, (total + 1) / 2, size_t{0}, total}) lows.push_back(std::clamp(a, lo_i, hi_i));
+      std::sort(lows.begin(), lows.end());
+      lows.erase(std::unique(lows.begin(), lows.end()), lows.end());
+      for (size_t i : lows) {
+        if (i > max_i || total - i > max_j) continue;
+        if (attempt(i, total - i, where)) return report;
       }
     }
-  } else {
-  // By increasing i + j: per total, the balanced splits and the one-sided ones (trying every
-  // split would cost quadratically many attempts on long extensions).
-  for (size_t total = 0; total <= max_i + max_j; ++total) {
-    std::vector<size_t> lows;
-    const size_t lo_i = total > max_j ? total - max_j : 0, hi_i = std::min(total, max_i);
-    if (lo_i > hi_i) continue;
-    for (size_t a : {total / 2, (total + 1) / 2, size_t{0}, total}) lows.push_back(std::clamp(a, lo_i, hi_i));
-    std::sort(lows.begin(), lows.end());
-    lows.erase(std::unique(lows.begin(), lows.end()), lows.end());
-    for (size_t i : lows) {
-      if (i > max_i || total - i > max_j) continue;
-      if (attempt(i, total - i, where)) return report;
-    }
+    throw std::runtime_error("a full knot line does not give a semi-regular collection here");
   }
+  // Grown towards the trouble: after a failed attempt, the end nearer the failing cell
+  // moves one stop outwards (both ends when nothing was split or no cell is named). Each
+  // attempt moves an end, so at most max_i + max_j + 1 attempts, the last a full line.
+  size_t i = 0, j = 0, prev_i = 0, prev_j = 0, step_i = 1, step_j = 1;
+  const bool gallop = extension_ == Extension::kGalloping;
+  while (true) {
+    if (attempt(i, j, where)) {
+      if (!gallop) return report;
+      // The last move may have jumped several stops at one end: bisect back between the
+      // failed and the successful position (each probe checked; the smallest success kept).
+      const bool low_end = i - prev_i > 1;
+      size_t fail = low_end ? prev_i : prev_j, ok = low_end ? i : j;
+      bool ok_applied = true;
+      while (ok - fail > 1) {
+        const size_t mid = fail + (ok - fail) / 2;
+        if (ok_applied) revert();
+        if (attempt(low_end ? mid : i, low_end ? j : mid, where)) {
+          ok = mid;
+          ok_applied = true;
+        } else {
+          fail = mid;
+          ok_applied = false;
+        }
+      }
+      if (!ok_applied && !attempt(low_end ? ok : i, low_end ? j : ok, where))
+        throw std::logic_error("knot segment insertion: an extension that was semi-regular is not on a second try");
+      return report;
+    }
+    if (i == max_i && j == max_j) break;
+    const double mid = s.vertical ? 0.5 * (where[1] + where[3]) : 0.5 * (where[0] + where[2]);
+    const double from = start_at(i), to = end_at(j);
+    const bool grow_low = std::isnan(mid) || mid - from <= to - mid, grow_high = std::isnan(mid) || mid - from >= to - mid;
+    const bool low = i < max_i && (grow_low || j == max_j), high = j < max_j && (grow_high || i == max_i);
+    prev_i = i;
+    prev_j = j;
+    if (gallop && low != high) {
+      // Galloping: an end that has to move again moves twice as far as last time.
+      size_t& step = low ? step_i : step_j;
+      size_t& other = low ? step_j : step_i;
+      other = 1;
+      (low ? i : j) = std::min(low ? max_i : max_j, (low ? i : j) + step);
+      step *= 2;
+    } else {
+      step_i = step_j = 1;
+      i += low;
+      j += high;
+    }
   }
   throw std::runtime_error("a full knot line does not give a semi-regular collection here");
 }

@@ -176,7 +176,9 @@ class SemiRegularCollection {
   mutable IndexHolder index_;
   SupportIndex& index() const;
   // B-splines whose support meets the closed box x0, y0, x1, y1 (a superset of those whose
-  // interior does), in the collection's order.
+  // interior does), in the R-tree's order: nothing downstream depends on it (the splits reach
+  // the same B-splines in any order, cells are checked in the partition's order, Def. 3.3
+  // sorts), which test_semi_regular's copy test checks against a freshly packed tree.
   std::vector<const LocalBSpline*> meeting(double x0, double y0, double x1, double y1) const;
   void erase_spline(const LocalBSpline& b);
   bool insert_spline(const LocalBSpline& b);
@@ -191,8 +193,8 @@ class SemiRegularCollection {
   // the supports at its ends are checked first.
   std::string local_violation(const Change& change, std::array<double, 4>* where = nullptr,
                               const KnotInsertion* segment = nullptr) const;
-  // Def. 3.3 on the cells inside the given supports (x0, y0, x1, y1).
-  std::string violation_in(const std::vector<std::array<double, 4>>& supports, std::array<double, 4>* where) const;
+  // Def. 3.3 on the cells inside the supports of `splines`.
+  std::string violation_in(const std::vector<const LocalBSpline*>& splines, std::array<double, 4>* where) const;
   void undo(const Change& change);
 };
 
