@@ -199,3 +199,52 @@ TEST_CASE("Invalid knot vectors are rejected with a reason", "[bspline]") {
   REQUIRE_THROWS_WITH(BSplineBasis1D(1, {0, 0, NAN, 1, 1}), Catch::Contains("not a finite"));
   REQUIRE_THROWS(BSplineBasis1D(1, {1, 1, 1, 1}));
 }
+
+TEST_CASE("One B-spline's Bernstein piece on a sub-interval matches the recursive definition", "[bspline]") {
+  // single_bspline_bernstein evaluates blossoms; the oracle is the definition on the local
+  // knot vector, sampled inside [a, b] (Bernstein polynomials of degree d at d + 3 points).
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int pieces = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int d = trial % 7;
+    std::uniform_int_distribution<int> mult(1, d + 1);
+    std::vector<double> knots;
+    double x = std::round(unit(rng) * 8) / 8 - 0.5;
+    while (static_cast<int>(knots.size()) < d + 2) {
+      const int m = std::min(mult(rng), d + 2 - static_cast<int>(knots.size()));
+      knots.insert(knots.end(), m, x);
+      x += 0.125 + std::round(unit(rng) * 8) / 16;
+    }
+    for (int m = 0; m <= d; ++m) {
+      if (!(knots[m] < knots[m + 1])) continue;
+      // The whole span, and a random sub-interval of it.
+      for (int sub = 0; sub < 2; ++sub) {
+        double a = knots[m], b = knots[m + 1];
+        if (sub == 1) {
+          const double s = unit(rng), t = unit(rng);
+          a = knots[m] + std::min(s, t) * (knots[m + 1] - knots[m]);
+          b = knots[m] + std::max(s, t) * (knots[m + 1] - knots[m]);
+          if (!(a < b)) continue;
+        }
+        const Eigen::VectorXd c = single_bspline_bernstein(knots, a, b);
+        REQUIRE(c.size() == d + 1);
+        for (int k = 0; k <= d + 2; ++k) {
+          const double s = double(k) / (d + 3);
+          std::vector<double> bern(d + 1), dummy(d + 1);
+          bernstein_values_and_derivatives(d, s, bern.data(), dummy.data());
+          const double value = Eigen::Map<Eigen::VectorXd>(bern.data(), d + 1).dot(c);
+          REQUIRE(std::abs(value - cox_de_boor(knots, 0, d, a + s * (b - a), knots.back())) < 1e-13);
+        }
+        ++pieces;
+      }
+    }
+    // Outside the support: the zero polynomial; across a knot: refused.
+    REQUIRE(single_bspline_bernstein(knots, knots.back(), knots.back() + 1).isZero());
+    REQUIRE(single_bspline_bernstein(knots, knots.front() - 1, knots.front()).isZero());
+    if (d >= 1 && knots.front() < knots[d] && knots[d] < knots.back())
+      REQUIRE_THROWS_WITH(single_bspline_bernstein(knots, knots.front(), knots.back()),
+                          Catch::Contains("not inside one knot span"));
+  }
+  REQUIRE(pieces > 800);
+}

@@ -308,26 +308,41 @@ Eigen::SparseMatrix<double> refinement_matrix(const BSplineBasis1D& coarse,
 }  // namespace knotwork
 
 namespace knotwork {
-Eigen::VectorXd single_bspline_bernstein(const std::vector<double>& knots, double a, double b) {
+Eigen::VectorXd single_bspline_bernstein(std::span<const double> knots, double a, double b) {
   const int d = static_cast<int>(knots.size()) - 2;
   Eigen::VectorXd out = Eigen::VectorXd::Zero(d + 1);
   if (b <= knots.front() || a >= knots.back()) return out;
-  // Pad with d knots on each side: the function becomes number d of a valid basis whose
-  // domain is exactly its support.
-  std::vector<double> U(d, knots.front() - 1.0);
-  U.insert(U.end(), knots.begin(), knots.end());
-  U.insert(U.end(), d, knots.back() + 1.0);
-  const BSplineBasis1D basis(d, U);
-  const auto spans = basis.element_spans();
-  const auto C = bezier_extraction(basis);
-  for (size_t e = 0; e < spans.size(); ++e) {
-    const int s = spans[e];
-    if (!(U[s] <= a && b <= U[s + 1])) continue;
-    const int local = d - (s - d);  // row of function d among the alive s-d..s
-    if (local < 0 || local > d) return out;
-    const double h = U[s + 1] - U[s];
-    return subdivision_matrix(d, (a - U[s]) / h, (b - U[s]) / h) * C[e].row(local).transpose();
+  // The span [knots[m], knots[m+1]] holding [a, b]. Padding with d knots on each side makes
+  // the function number d of a basis whose domain is its support; on span s = m + d the alive
+  // functions are s-d..s with coefficients e_d. The k-th Bernstein coefficient on [a, b] is
+  // the blossom at (a^(d-k), b^k): de Boor's algorithm with argument u_r at level r. O(d^3)
+  // per piece, where extracting the whole padded basis (as before) was the cost of bezier_mesh
+  // in adaptive runs.
+  int m = -1;
+  for (int i = 0; i <= d; ++i)
+    if (knots[i] < knots[i + 1] && knots[i] <= a && b <= knots[i + 1]) {
+      m = i;
+      break;
+    }
+  if (m < 0) throw std::invalid_argument("single_bspline_bernstein: [a, b] is not inside one knot span");
+  auto U = [&](int i) {  // the padded knot vector
+    return i < d ? knots.front() - 1.0 : i < 2 * d + 2 ? knots[i - d] : knots.back() + 1.0;
+  };
+  const int s = m + d;
+  std::vector<double> c(d + 1);  // c[j]: coefficient of function s - d + j
+  for (int k = 0; k <= d; ++k) {
+    std::fill(c.begin(), c.end(), 0.0);
+    c[d - (s - d)] = 1.0;
+    for (int r = 1; r <= d; ++r) {
+      const double u = r <= d - k ? a : b;
+      for (int j = d; j >= r; --j) {
+        const int i = s - d + j;
+        const double alpha = (u - U(i)) / (U(i + d + 1 - r) - U(i));
+        c[j] = (1.0 - alpha) * c[j - 1] + alpha * c[j];
+      }
+    }
+    out[k] = c[d];
   }
-  throw std::invalid_argument("single_bspline_bernstein: [a, b] is not inside one knot span");
+  return out;
 }
 }  // namespace knotwork

@@ -78,6 +78,6 @@ std::vector<Eigen::MatrixXd> bezier_extraction(const BSplineBasis1D& basis);
 namespace knotwork {
 // Bernstein coefficients, on [a, b], of the single B-spline of degree knots.size()-2 with
 // the given knots (zero vector when [a, b] is outside its support). [a, b] must lie inside
-// one knot span. Exact up to roundoff: padded extraction, then Bernstein subdivision.
-Eigen::VectorXd single_bspline_bernstein(const std::vector<double>& knots, double a, double b);
+// one knot span. Exact up to roundoff: blossoms of the piece at a and b (de Boor).
+Eigen::VectorXd single_bspline_bernstein(std::span<const double> knots, double a, double b);
 }  // namespace knotwork
