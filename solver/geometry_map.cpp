@@ -49,18 +49,42 @@ PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch) : m
   }
 }
 
+namespace {
+// B-spline values and derivatives at the distinct parameters of one call: quadrature rules are
+// tensor products, so a cell's points repeat a few u and v values (the estimator evaluates
+// the map at every point of every cell and side; recomputing per point was most of its time).
+class DerivativeCache {
+ public:
+  DerivativeCache(const BSplineBasis1D& basis, int span, int order)
+      : basis_(basis), span_(span), order_(order), size_((order + 1) * (basis.degree() + 1)) {}
+  const double* at(double t) {
+    for (size_t k = 0; k < params_.size(); ++k)
+      if (params_[k] == t) return values_.data() + k * size_;
+    params_.push_back(t);
+    values_.resize(params_.size() * size_);
+    basis_.evaluate_derivatives(span_, t, order_, values_.data() + (params_.size() - 1) * size_);
+    return values_.data() + (params_.size() - 1) * size_;
+  }
+
+ private:
+  const BSplineBasis1D& basis_;
+  int span_, order_;
+  size_t size_;
+  std::vector<double> params_, values_;
+};
+}  // namespace
+
 void PatchGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                                 GeometryAtPoints& out) const {
   const BezierCell& c = mesh_.cell(cell);
   const int p = patch_.basis_u.degree(), q = patch_.basis_v.degree(), nu = patch_.basis_u.num_functions();
-  std::vector<double> du(2 * (p + 1)), dv(2 * (q + 1));
   Eigen::MatrixX3d h(u.size(), 3), hu(u.size(), 3), hv(u.size(), 3);
+  // Span from the cell's middle, so a point on a cell edge uses the cell's own polynomial.
+  const int su = patch_.basis_u.find_span(0.5 * (c.u0 + c.u1)), sv = patch_.basis_v.find_span(0.5 * (c.v0 + c.v1));
+  DerivativeCache cu(patch_.basis_u, su, 1), cv(patch_.basis_v, sv, 1);
   for (Eigen::Index k = 0; k < u.size(); ++k) {
-    const double s = c.u0 + u[k] * (c.u1 - c.u0), t = c.v0 + v[k] * (c.v1 - c.v0);
-    // Span from the cell's middle, so a point on a cell edge uses the cell's own polynomial.
-    const int su = patch_.basis_u.find_span(0.5 * (c.u0 + c.u1)), sv = patch_.basis_v.find_span(0.5 * (c.v0 + c.v1));
-    patch_.basis_u.evaluate_derivatives(su, s, 1, du.data());
-    patch_.basis_v.evaluate_derivatives(sv, t, 1, dv.data());
+    const double* du = cu.at(c.u0 + u[k] * (c.u1 - c.u0));
+    const double* dv = cv.at(c.v0 + v[k] * (c.v1 - c.v0));
     h.row(k).setZero();
     hu.row(k).setZero();
     hv.row(k).setZero();
@@ -83,11 +107,11 @@ bool PatchGeometryMap::second_derivatives(int cell, const Eigen::VectorXd& u, co
   const int p = patch_.basis_u.degree(), q = patch_.basis_v.degree(), nu = patch_.basis_u.num_functions();
   const double su_len = c.u1 - c.u0, sv_len = c.v1 - c.v0;
   const int su = patch_.basis_u.find_span(0.5 * (c.u0 + c.u1)), sv = patch_.basis_v.find_span(0.5 * (c.v0 + c.v1));
-  std::vector<double> du(3 * (p + 1)), dv(3 * (q + 1));
+  DerivativeCache cu(patch_.basis_u, su, 2), cv(patch_.basis_v, sv, 2);
   out.resize(u.size(), 6);
   for (Eigen::Index k = 0; k < u.size(); ++k) {
-    patch_.basis_u.evaluate_derivatives(su, c.u0 + u[k] * su_len, 2, du.data());
-    patch_.basis_v.evaluate_derivatives(sv, c.v0 + v[k] * sv_len, 2, dv.data());
+    const double* du = cu.at(c.u0 + u[k] * su_len);
+    const double* dv = cv.at(c.v0 + v[k] * sv_len);
     // Homogeneous map H = (w x, w y, w) and its derivatives in the cell's reference coordinates.
     Eigen::RowVector3d H = Eigen::RowVector3d::Zero(), Hu = H, Hv = H, Huu = H, Huv = H, Hvv = H;
     for (int b = 0; b <= q; ++b)
