@@ -121,7 +121,8 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
 #pragma omp parallel
   {
     // Per thread: the rule (per number of points) and the fields of the two cells; the map's
-    // tangent is read from the first cell's field (a third map evaluation was 15% of this loop).
+    // tangent is read from the first cell's field. (A rule and a third map evaluation per side
+    // made the estimator of an adaptive run to 50 000 dofs 20% slower.)
     int rule_n = -1;
     QuadratureRule1D rule;
     Eigen::VectorXd ua, va, ub, vb;
