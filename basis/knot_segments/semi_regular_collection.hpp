@@ -186,8 +186,10 @@ class SemiRegularCollection {
   // Largest multiplicity the lines at `position` give on all of [lo, hi] (min over the
   // interval of the max over the pieces covering each point); 0 if some part is uncovered.
   int covering_multiplicity(bool vertical, double position, double lo, double hi) const;
-  // Splits B-splines (starting from `work`) until none is crossed by a line it does not use.
-  void split_until_stable(std::vector<LocalBSpline> work, Change& change);
+  static int covering_multiplicity(const std::vector<Piece>& pieces, double lo, double hi);
+  // Splits B-splines (starting from `start`, those `inserted` crosses) until none is crossed by
+  // a line it does not use; the collection must have been stable before `inserted` was added.
+  void split_until_stable(std::vector<LocalBSpline> start, const KnotInsertion& inserted, Change& change);
   // Def. 3.3 on the cells inside the supports that changed; empty when they are fine.
   // `where` (if given) receives the failing cell x0, y0, x1, y1; with the inserted `segment`,
   // the supports at its ends are checked first.
