@@ -66,18 +66,29 @@ InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
   };
   // vertical_cut[i + (nx + 1) j]: the edge x = xs[i], ys[j] < y < ys[j+1] is on a knot line.
   std::vector<char> vertical_cut(static_cast<size_t>(nx + 1) * ny, 0), horizontal_cut(static_cast<size_t>(nx) * (ny + 1), 0);
-  for (const auto* b : splines) {
-    const int j0 = at_or_after(ys, b->y.front()), j1 = at_or_after(ys, b->y.back());
-    const int i0 = at_or_after(xs, b->x.front()), i1 = at_or_after(xs, b->x.back());
-    for (double x : b->x) {
-      if (!(x > region.x0 && x < region.x1)) continue;
-      const int i = at_or_after(xs, x);
-      for (int j = j0; j < std::min(j1, ny); ++j) vertical_cut[i + static_cast<size_t>(nx + 1) * j] = 1;
+  // Grid indices of a sorted knot vector's values: one search, then a walk (the knots are few
+  // and the grid near them is short; a search per knot was most of this loop).
+  std::vector<int> at_x, at_y;
+  auto indices = [&](const std::vector<double>& grid, const std::vector<double>& knots, std::vector<int>& out) {
+    out.resize(knots.size());
+    int g = at_or_after(grid, knots.front());
+    const int n = static_cast<int>(grid.size());
+    for (size_t k = 0; k < knots.size(); ++k) {
+      while (g < n && grid[g] < knots[k]) ++g;
+      out[k] = g;
     }
-    for (double y : b->y) {
-      if (!(y > region.y0 && y < region.y1)) continue;
-      const int j = at_or_after(ys, y);
-      for (int i = i0; i < std::min(i1, nx); ++i) horizontal_cut[i + static_cast<size_t>(nx) * j] = 1;
+  };
+  for (const auto* b : splines) {
+    indices(xs, b->x, at_x);
+    indices(ys, b->y, at_y);
+    const int i0 = at_x.front(), i1 = std::min(at_x.back(), nx), j0 = at_y.front(), j1 = std::min(at_y.back(), ny);
+    for (size_t k = 0; k < b->x.size(); ++k) {
+      if (!(b->x[k] > region.x0 && b->x[k] < region.x1)) continue;
+      for (int j = j0; j < j1; ++j) vertical_cut[at_x[k] + static_cast<size_t>(nx + 1) * j] = 1;
+    }
+    for (size_t k = 0; k < b->y.size(); ++k) {
+      if (!(b->y[k] > region.y0 && b->y[k] < region.y1)) continue;
+      for (int i = i0; i < i1; ++i) horizontal_cut[i + static_cast<size_t>(nx) * at_y[k]] = 1;
     }
   }
   std::vector<int> parent(static_cast<size_t>(nx) * ny);
@@ -158,7 +169,8 @@ struct CellLists {
   std::span<const int> operator[](size_t c) const { return {items.data() + start[c], items.data() + start[c + 1]}; }
 };
 
-CellLists containing_boxes(const std::vector<Box>& boxes, const InducedCells& ic) {
+// `wanted` (if given): a flag per cell; the lists of the other cells are left empty.
+CellLists containing_boxes(const std::vector<Box>& boxes, const InducedCells& ic, const std::vector<char>* wanted = nullptr) {
   const int nx = static_cast<int>(ic.xs.size()) - 1;
   auto first_at_or_after = [](const std::vector<double>& grid, double t) {
     return static_cast<int>(std::lower_bound(grid.begin(), grid.end(), t) - grid.begin());
@@ -173,7 +185,7 @@ CellLists containing_boxes(const std::vector<Box>& boxes, const InducedCells& ic
     for (int j = j0; j < j1; ++j)
       for (int i = i0; i < i1; ++i) {
         const int c = ic.cell_of[static_cast<size_t>(j) * nx + i];
-        if (seen[c] == k) continue;
+        if (seen[c] == k || (wanted && !(*wanted)[c])) continue;
         seen[c] = k;
         const Box& cell = ic.cells[c];
         if (b.x0 <= cell.x0 && cell.x1 <= b.x1 && b.y0 <= cell.y0 && cell.y1 <= b.y1) found.emplace_back(c, k);
@@ -372,17 +384,16 @@ std::vector<const LocalBSpline*> SemiRegularCollection::meeting(double x0, doubl
   return out;
 }
 
-void SemiRegularCollection::erase_spline(const LocalBSpline& b) {
-  const auto it = set_.find(b);
-  if (it == set_.end()) return;
+void SemiRegularCollection::erase_spline(std::set<LocalBSpline>::const_iterator it) {
   if (index_.index) index_.index->tree.remove(IndexValue(index_box(*it), &*it));
   set_.erase(it);
 }
 
-bool SemiRegularCollection::insert_spline(const LocalBSpline& b) {
+const LocalBSpline* SemiRegularCollection::insert_spline(const LocalBSpline& b) {
   const auto [it, fresh] = set_.insert(b);
-  if (fresh && index_.index) index_.index->tree.insert(IndexValue(index_box(*it), &*it));
-  return fresh;
+  if (!fresh) return nullptr;
+  if (index_.index) index_.index->tree.insert(IndexValue(index_box(*it), &*it));
+  return &*it;
 }
 
 SemiRegularCollection SemiRegularCollection::tensor_product(int dx, int dy, const std::vector<double>& bx,
@@ -587,35 +598,42 @@ void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> start, 
     return false;
   };
   while (!work.empty()) {
-    const Pending p = std::move(work.back());
+    Pending p = std::move(work.back());
     work.pop_back();
-    const LocalBSpline& b = p.spline;
     int dir = 0;
     double at = 0;
-    if (!needed_split(p, dir, at) || !set_.count(b)) continue;
+    if (!needed_split(p, dir, at)) continue;
+    const auto it = set_.find(p.spline);
+    if (it == set_.end()) continue;
     const bool vertical = dir == 0;
-    std::vector<double> refined = vertical ? b.x : b.y;
-    refined.insert(std::upper_bound(refined.begin(), refined.end(), at), at);
-    LocalBSpline left = b, right = b;
-    (vertical ? left.x : left.y).assign(refined.begin(), refined.end() - 1);
-    (vertical ? right.x : right.y).assign(refined.begin() + 1, refined.end());
-    erase_spline(b);
-    if (change.added.erase(b) == 0) change.removed.push_back(b);
-    for (const LocalBSpline* child : {&left, &right})
-      if (insert_spline(*child)) {
-        change.added.insert(*child);
-        Pending half{*child, p.every_line, {p.positions[0], p.positions[1]}};
-        half.every_line[1 - dir] = true;
-        auto& along = half.positions[dir];
-        if (!std::binary_search(along.begin(), along.end(), at)) along.insert(std::upper_bound(along.begin(), along.end(), at), at);
-        work.push_back(std::move(half));
-      }
+    LocalBSpline halves[2] = {p.spline, p.spline};
+    {
+      std::vector<double> refined = vertical ? p.spline.x : p.spline.y;
+      refined.insert(std::upper_bound(refined.begin(), refined.end(), at), at);
+      (vertical ? halves[0].x : halves[0].y).assign(refined.begin(), refined.end() - 1);
+      (vertical ? halves[1].x : halves[1].y).assign(refined.begin() + 1, refined.end());
+    }
+    if (change.added.erase(&*it) == 0) change.removed.push_back(std::move(p.spline));
+    erase_spline(it);
+    for (LocalBSpline& half : halves) {
+      const LocalBSpline* inserted_half = insert_spline(half);
+      if (!inserted_half) continue;  // already in the collection
+      change.added.insert(inserted_half);
+      // Its lines to check: every line across the split, and along it the parent's list
+      // (or all, as the parent) with the split's position.
+      Pending next{std::move(half), p.every_line, {}};
+      next.every_line[1 - dir] = true;
+      auto& along = next.positions[dir];
+      along = p.positions[dir];
+      if (!std::binary_search(along.begin(), along.end(), at)) along.insert(std::upper_bound(along.begin(), along.end(), at), at);
+      work.push_back(std::move(next));
+    }
   }
 }
 
 void SemiRegularCollection::undo(const Change& change) {
   cache_valid_ = false;
-  for (const auto& b : change.added) erase_spline(b);
+  for (const LocalBSpline* b : change.added) erase_spline(set_.find(*b));
   for (const auto& b : change.removed) insert_spline(b);
 }
 
@@ -624,7 +642,7 @@ std::string SemiRegularCollection::local_violation(const Change& change, std::ar
   // Cells whose alive B-splines changed lie in the supports of the removed and added ones.
   std::vector<const LocalBSpline*> changed;
   for (const auto& b : change.removed) changed.push_back(&b);
-  for (const auto& b : change.added) changed.push_back(&b);
+  for (const LocalBSpline* b : change.added) changed.push_back(b);
   if (changed.empty()) return {};
   if (segment) {
     // An extension that fails usually fails at one of its ends: the supports there are checked
@@ -659,11 +677,14 @@ std::string SemiRegularCollection::violation_in(const std::vector<const LocalBSp
     }
   const InducedCells ic = induced_cells(near, region);
   if (!ic.problems.empty()) return ic.problems.front();
+  // Only the cells inside a changed support are checked: their alive B-splines are counted.
   const CellLists in_changed = containing_boxes(changed, ic);
-  const CellLists alive_ids = containing_boxes(near_supports, ic);
+  std::vector<char> checked(ic.cells.size());
+  for (size_t ci = 0; ci < ic.cells.size(); ++ci) checked[ci] = !in_changed[ci].empty();
+  const CellLists alive_ids = containing_boxes(near_supports, ic, &checked);
   SplineRefs alive, place;
   for (size_t ci = 0; ci < ic.cells.size(); ++ci) {
-    if (in_changed[ci].empty()) continue;
+    if (!checked[ci]) continue;
     const Box& c = ic.cells[ci];
     if (static_cast<int>(alive_ids[ci].size()) != (dx_ + 1) * (dy_ + 1)) {
       if (where) *where = {c.x0, c.y0, c.x1, c.y1};
@@ -709,14 +730,17 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
   auto find_stops = [&] {
     // Only the knots of the B-splines the whole line crosses: an end between two of them
     // splits the same B-splines as an end at the nearer one.
-    std::set<double> stops{lo_along, hi_along};
+    std::vector<double> stops{lo_along, hi_along};
     for (const LocalBSpline* b : s.vertical ? meeting(s.position, y0_, s.position, y1_) : meeting(x0_, s.position, x1_, s.position)) {
       const auto& across = s.vertical ? b->x : b->y;
       if (!(across.front() < s.position && s.position < across.back())) continue;
-      for (double v : s.vertical ? b->y : b->x) stops.insert(v);
+      for (double v : s.vertical ? b->y : b->x) stops.push_back(v);
     }
-    below.assign(std::make_reverse_iterator(stops.upper_bound(s.from)), stops.rend());
-    above.assign(stops.lower_bound(s.to), stops.end());
+    std::sort(stops.begin(), stops.end());
+    stops.erase(std::unique(stops.begin(), stops.end()), stops.end());
+    const auto first_above_from = std::upper_bound(stops.begin(), stops.end(), s.from);
+    below.assign(std::make_reverse_iterator(first_above_from), stops.rend());
+    above.assign(std::lower_bound(stops.begin(), stops.end(), s.to), stops.end());
     max_i = below.empty() ? 0 : (below[0] == s.from ? below.size() - 1 : below.size());
     max_j = above.empty() ? 0 : (above[0] == s.to ? above.size() - 1 : above.size());
   };

@@ -146,7 +146,7 @@ class SemiRegularCollection {
   // What one insertion attempt changed, to check it locally and to undo it.
   struct Change {
     std::vector<LocalBSpline> removed;
-    std::set<LocalBSpline> added;
+    std::set<const LocalBSpline*> added;  // elements of set_ (nodes do not move)
   };
   // The supports of set_'s B-splines in an R-tree, so that an insertion finds the B-splines a
   // line crosses and those near a changed region without scanning all of them. Built on the
@@ -180,8 +180,9 @@ class SemiRegularCollection {
   // the same B-splines in any order, cells are checked in the partition's order, Def. 3.3
   // sorts), which test_semi_regular's copy test checks against a freshly packed tree.
   std::vector<const LocalBSpline*> meeting(double x0, double y0, double x1, double y1) const;
-  void erase_spline(const LocalBSpline& b);
-  bool insert_spline(const LocalBSpline& b);
+  void erase_spline(std::set<LocalBSpline>::const_iterator it);
+  // The inserted element, or nullptr when the collection has it already.
+  const LocalBSpline* insert_spline(const LocalBSpline& b);
   void add_line(const KnotInsertion& s);
   // Largest multiplicity the lines at `position` give on all of [lo, hi] (min over the
   // interval of the max over the pieces covering each point); 0 if some part is uncovered.
