@@ -44,17 +44,20 @@ struct InducedCells {
 };
 
 InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
-  // Sorted vectors rather than sets and maps: this runs for every insertion attempt.
+  // Sorted vectors rather than sets and maps: this runs for every insertion attempt. The knot
+  // values are few and repeat many times (neighbouring B-splines share them): each is looked
+  // up in the sorted distinct values so far (sorting them all: 0.25 s more in an adaptive run
+  // to 50 000 dofs).
   std::vector<double> xs{region.x0, region.x1}, ys{region.y0, region.y1};
+  auto add = [](std::vector<double>& grid, double t) {
+    const auto it = std::lower_bound(grid.begin(), grid.end(), t);
+    if (*it != t) grid.insert(it, t);  // t lies strictly inside the region: `it` is not the end
+  };
   for (const auto* b : splines) {
     for (double x : b->x)
-      if (x > region.x0 && x < region.x1) xs.push_back(x);
+      if (x > region.x0 && x < region.x1) add(xs, x);
     for (double y : b->y)
-      if (y > region.y0 && y < region.y1) ys.push_back(y);
-  }
-  for (auto* v : {&xs, &ys}) {
-    std::sort(v->begin(), v->end());
-    v->erase(std::unique(v->begin(), v->end()), v->end());
+      if (y > region.y0 && y < region.y1) add(ys, y);
   }
   const int nx = static_cast<int>(xs.size()) - 1, ny = static_cast<int>(ys.size()) - 1;
   // Which fine edges a knot line separates: each B-spline marks the fine edges its inner
