@@ -6,7 +6,7 @@ the dofs each family needs per error level, time per step against a uniform solv
 size, and for LR whether any step was dependent; then the choice of the THB grading and of the
 LR refinement strategy. Prints Markdown on stdout and writes docs/adaptivity_*.png.
 
-    scripts/adaptivity_study.py [KNOTWORK] > docs/ADAPTIVITY.md   # about 20 minutes here
+    scripts/adaptivity_study.py [KNOTWORK] > docs/ADAPTIVITY.md   # about 10 minutes here
 """
 import json
 import math
