@@ -316,8 +316,8 @@ Eigen::VectorXd single_bspline_bernstein(std::span<const double> knots, double a
   // the function number d of a basis whose domain is its support; on span s = m + d the alive
   // functions are s-d..s with coefficients e_d. The k-th Bernstein coefficient on [a, b] is
   // the blossom at (a^(d-k), b^k): de Boor's algorithm with argument u_r at level r. O(d^3)
-  // per piece, where extracting the whole padded basis (as before) was the cost of bezier_mesh
-  // in adaptive runs.
+  // per piece; extracting the whole padded basis instead was half of a knot-segment Bezier
+  // mesh in adaptive runs.
   int m = -1;
   for (int i = 0; i <= d; ++i)
     if (knots[i] < knots[i + 1] && knots[i] <= a && b <= knots[i + 1]) {
