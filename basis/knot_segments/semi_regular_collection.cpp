@@ -483,6 +483,13 @@ SemiRegularCollection SemiRegularCollection::from_splines(int dx, int dy, std::v
   }
   c.set_.insert(splines.begin(), splines.end());
   if (c.set_.size() != splines.size()) throw std::invalid_argument("the collection lists a B-spline twice");
+  // Insertions check only the new line for the B-splines it crosses, which needs every
+  // B-spline to use every line that crosses it, with its multiplicity (violations() checks
+  // Def. 3.1 for presence only). A start that does not is refined as before, every line.
+  double unused = 0;
+  c.stable_ = std::none_of(c.set_.begin(), c.set_.end(), [&](const LocalBSpline& b) {
+    return c.jumped_line(b, true, unused) || c.jumped_line(b, false, unused);
+  });
   return c;
 }
 
@@ -541,6 +548,24 @@ int SemiRegularCollection::covering_multiplicity(const std::vector<Piece>& piece
   return result;
 }
 
+bool SemiRegularCollection::jumps(const LocalBSpline& b, bool vertical, double position,
+                                  const std::vector<Piece>& pieces) {
+  const auto& across = vertical ? b.x : b.y;
+  const auto& along = vertical ? b.y : b.x;
+  return covering_multiplicity(pieces, along.front(), along.back()) > std::count(across.begin(), across.end(), position);
+}
+
+bool SemiRegularCollection::jumped_line(const LocalBSpline& b, bool vertical, double& position) const {
+  const auto& lines = vertical ? vlines_ : hlines_;
+  const auto& across = vertical ? b.x : b.y;
+  for (auto it = lines.upper_bound(across.front()); it != lines.end() && it->first < across.back(); ++it)
+    if (jumps(b, vertical, it->first, it->second)) {
+      position = it->first;
+      return true;
+    }
+  return false;
+}
+
 void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> start, const KnotInsertion& inserted,
                                                Change& change) {
   // A B-spline whose support a mesh line crosses completely must use that knot with the
@@ -548,7 +573,7 @@ void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> start, 
   // univariate knot insertion into two, and look at the two halves again.
   //
   // Which lines can a B-spline jump over? Before the insertion none (the collection was
-  // stable), so the B-splines the new line crosses need checking at its position only. The
+  // stable, stable_), so the B-splines the new line crosses need checking at its position only. The
   // halves of a B-spline split at x = t keep its y range and get x ranges inside its own, with
   // every knot strictly inside them as often as in the parent: they jump over no vertical line
   // the parent used, but may over a horizontal line too short to cross the parent, and over
@@ -565,34 +590,27 @@ void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> start, 
   std::vector<Pending> work;
   work.reserve(start.size());
   for (LocalBSpline& b : start) {
-    Pending p{std::move(b), {false, false}, {}};
+    Pending p{std::move(b), {!stable_, !stable_}, {}};  // an unstable start: every line, as before
     p.positions[inserted.vertical ? 0 : 1] = {inserted.position};
     work.push_back(std::move(p));
   }
   cache_valid_ = false;
-  auto fails = [&](const LocalBSpline& b, int dir, std::map<double, std::vector<Piece>>::const_iterator it) {
-    const auto& across = dir == 0 ? b.x : b.y;
-    const auto& along = dir == 0 ? b.y : b.x;
-    return covering_multiplicity(it->second, along.front(), along.back()) > std::count(across.begin(), across.end(), it->first);
-  };
   auto needed_split = [&](const Pending& p, int& dir_out, double& at) {
     const LocalBSpline& b = p.spline;
     for (int dir = 0; dir < 2; ++dir) {
       const auto& lines = dir == 0 ? vlines_ : hlines_;
       const auto& across = dir == 0 ? b.x : b.y;
       if (p.every_line[dir]) {
-        for (auto it = lines.upper_bound(across.front()); it != lines.end() && it->first < across.back(); ++it)
-          if (fails(b, dir, it)) {
-            dir_out = dir;
-            at = it->first;
-            return true;
-          }
+        if (jumped_line(b, dir == 0, at)) {
+          dir_out = dir;
+          return true;
+        }
         continue;
       }
       for (double t : p.positions[dir]) {
         if (!(across.front() < t && t < across.back())) continue;
         const auto it = lines.find(t);
-        if (it != lines.end() && fails(b, dir, it)) {
+        if (it != lines.end() && jumps(b, dir == 0, it->first, it->second)) {
           dir_out = dir;
           at = t;
           return true;
@@ -768,7 +786,8 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
     seg.to = end_at(j);
     add_line(seg);
     // The B-splines the new line crosses completely without using it (the rest cascades from
-    // their halves). Most B-splines it meets it does not cross: they are not copied.
+    // their halves). Most B-splines it meets it does not cross: they are not copied. (From an
+    // unstable start, every B-spline it meets, as before.)
     std::vector<LocalBSpline> work;
     const std::vector<Piece>& here = lines.at(s.position);
     for (const LocalBSpline* b : s.vertical ? meeting(s.position, seg.from, s.position, seg.to)
@@ -776,7 +795,7 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
       const auto& across = s.vertical ? b->x : b->y;
       const auto& along = s.vertical ? b->y : b->x;
       if (across.front() < s.position && s.position < across.back() && along.back() > seg.from && along.front() < seg.to &&
-          covering_multiplicity(here, along.front(), along.back()) > std::count(across.begin(), across.end(), s.position))
+          (!stable_ || jumps(*b, s.vertical, s.position, here)))
         work.push_back(*b);
     }
     applied = Change{};

@@ -164,6 +164,9 @@ class SemiRegularCollection {
   };
   int dx_ = 2, dy_ = 2;
   Extension extension_ = Extension::kGalloping;
+  // No B-spline jumps over a line (tensor starts, and what insert() builds); an explicit
+  // collection that does is refined checking every line, as insert() did before.
+  bool stable_ = true;
   std::set<LocalBSpline> set_;
   // splines() lists set_ lazily; the lock makes concurrent const calls safe (the threaded
   // assembly and estimator may reach it). Copies share the lock, which only serializes.
@@ -188,8 +191,12 @@ class SemiRegularCollection {
   // interval of the max over the pieces covering each point); 0 if some part is uncovered.
   int covering_multiplicity(bool vertical, double position, double lo, double hi) const;
   static int covering_multiplicity(const std::vector<Piece>& pieces, double lo, double hi);
+  // Whether `b` crosses the line at `position` (its `pieces`) without using it as often.
+  static bool jumps(const LocalBSpline& b, bool vertical, double position, const std::vector<Piece>& pieces);
+  // The first line of one direction that `b` jumps over (false if none).
+  bool jumped_line(const LocalBSpline& b, bool vertical, double& position) const;
   // Splits B-splines (starting from `start`, those `inserted` crosses) until none is crossed by
-  // a line it does not use; the collection must have been stable before `inserted` was added.
+  // a line it does not use. With stable_, `start` is checked at the inserted line only.
   void split_until_stable(std::vector<LocalBSpline> start, const KnotInsertion& inserted, Change& change);
   // Def. 3.3 on the cells inside the supports that changed; empty when they are fine.
   // `where` (if given) receives the failing cell x0, y0, x1, y1; with the inserted `segment`,
