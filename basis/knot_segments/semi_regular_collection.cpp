@@ -573,15 +573,15 @@ void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> start, 
   // univariate knot insertion into two, and look at the two halves again.
   //
   // Which lines can a B-spline jump over? Before the insertion none (the collection was
-  // stable, stable_), so the B-splines the new line crosses need checking at its position only. The
-  // halves of a B-spline split at x = t keep its y range and get x ranges inside its own, with
-  // every knot strictly inside them as often as in the parent: they jump over no vertical line
-  // the parent used, but may over a horizontal line too short to cross the parent, and over
-  // x = t again if its multiplicity is higher. So a half checks every line across the split
-  // and only the listed positions along it, unless its parent had to check them all. The
-  // same lines are found first as by looking at every line in the support's range (the listed
-  // ones are the only ones that can fail, and are tried in the same order), with half the
-  // lines looked at (81 → 37 million in an adaptive run to 50 000 dofs).
+  // stable: stable_), so the B-splines the new line crosses need checking at its position
+  // only. The halves of a B-spline split at x = t keep its y range and get x ranges inside
+  // its own, with every knot strictly inside them as often as in the parent: they jump over
+  // no vertical line the parent used, but may over a horizontal line too short to cross the
+  // parent, and over x = t again if its multiplicity is higher. So a half checks every line
+  // across the split and only the listed positions along it, unless its parent had to check
+  // them all. The same lines are found first as by looking at every line in the support's
+  // range (the listed ones are the only ones that can fail, and are tried in the same order),
+  // with half the lines looked at (81 → 37 million in an adaptive run to 50 000 dofs).
   struct Pending {
     LocalBSpline spline;
     std::array<bool, 2> every_line{false, false};  // per direction (0: vertical lines)
