@@ -4,10 +4,13 @@
 // typed with 17 digits gives, zero columns, repeated and dependent rows.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <random>
 
 #include "basis/exact/sparse_rank.hpp"
 
+using knotwork::leading_echelon;
+using knotwork::leading_null_space;
 using knotwork::null_space_exact;
 using knotwork::rank_exact;
 using knotwork::rank_modular;
@@ -140,6 +143,52 @@ TEST_CASE("Exact null space and ranks agree with a textbook rational elimination
       CHECK(rank_modular(sparse(A), s.n) == s.k);
       CHECK(rank_exact(sparse(A), s.n) == s.k);
     }
+}
+
+TEST_CASE("Echelon on the leading columns: their null space, and the rows left on the others", "[exact]") {
+  // What the G1 strips need of it (basis/g1/g1_basis.cpp), against the book: the reduced
+  // rows' pivots are the book's pivots of the leading columns alone; the null space of those
+  // columns is the book's; the rows left are zero there, lie in the row space, and have the
+  // rank the combinations vanishing on the leading columns have, rank A - rank A_leading.
+  std::mt19937_64 rng(20261203);
+  auto rank_of = [](Matrix M, int columns) { return static_cast<long>(reference_rref(M, columns).size()); };
+  struct Shape {
+    int m, n, k, zero_columns, leading;
+  };
+  for (const bool long_fractions : {false, true})
+    for (const Shape s : {Shape{24, 32, 14, 0, 16}, Shape{12, 10, 7, 2, 5}, Shape{30, 24, 11, 3, 24},
+                          Shape{8, 12, 8, 1, 0}, Shape{20, 8, 8, 0, 3}, Shape{3, 7, 0, 0, 4}}) {
+      CAPTURE(long_fractions, s.m, s.n, s.k, s.leading);
+      const Matrix A = planted(rng, s.m, s.n, s.k, long_fractions, s.zero_columns);
+      std::vector<std::vector<std::pair<int, mpq_class>>> rows(A.size());
+      for (size_t i = 0; i < A.size(); ++i)
+        for (int j = 0; j < s.n; ++j)
+          if (A[i][j] != 0) rows[i].emplace_back(j, A[i][j]);
+      const auto E = leading_echelon(rows, s.n, s.leading);
+
+      Matrix leading(A.size(), std::vector<mpq_class>(s.leading));
+      for (size_t i = 0; i < A.size(); ++i)
+        for (int j = 0; j < s.leading; ++j) leading[i][j] = A[i][j];
+      Matrix R = leading;
+      const std::vector<int> pivots = reference_rref(R, s.leading);
+      REQUIRE(E.pivot_column == pivots);
+      for (size_t i = 0; i < pivots.size(); ++i)
+        for (size_t l = 0; l < pivots.size(); ++l) CHECK((E.rows[i][pivots[l]] != 0) == (i == l));
+      CHECK(leading_null_space(E) == null_space_exact(leading, s.leading));
+
+      Matrix rest, stacked = A;
+      for (size_t i = pivots.size(); i < E.rows.size(); ++i) {
+        std::vector<mpq_class> row(E.rows[i].begin(), E.rows[i].end());
+        CHECK(std::any_of(row.begin(), row.end(), [](const mpq_class& x) { return x != 0; }));
+        for (int j = 0; j < s.leading; ++j) CHECK(row[j] == 0);
+        rest.push_back(row);
+        stacked.push_back(row);
+      }
+      const long rank = rank_of(A, s.n);
+      CHECK(rank_of(stacked, s.n) == rank);
+      CHECK(rank_of(rest, s.n) == rank - static_cast<long>(pivots.size()));
+    }
+  CHECK_THROWS_AS(leading_echelon({}, 3, 4), std::invalid_argument);
 }
 
 TEST_CASE("Modular rank: a column named twice in a row counts once, with the summed coefficient", "[exact]") {

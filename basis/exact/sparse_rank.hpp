@@ -65,4 +65,23 @@ std::vector<std::vector<mpq_class>> null_space_exact(std::vector<std::vector<mpq
 std::vector<std::vector<mpq_class>> null_space_exact(const std::vector<std::vector<std::pair<int, mpq_class>>>& rows,
                                                      int columns, long* rank = nullptr);
 
+// Integer rows (the rational rows, each times its denominators' lcm) in reduced echelon form
+// on their first `leading` columns only: rows [0, pivot_column.size()) have their pivots at
+// pivot_column (increasing, < leading) and are zero at the other pivot columns; the rows after
+// them (none of them zero) are zero on the leading columns and span every combination of the
+// input rows that is. The later columns are carried along, not eliminated. For systems whose
+// leading columns split into blocks that share the later ones (the G1 edges' strips around a
+// vertex): each block is reduced once and the small shared part is solved afterwards.
+struct LeadingEchelon {
+  int columns = 0, leading = 0;
+  std::vector<int> pivot_column;
+  std::vector<std::vector<mpz_class>> rows;  // dense over `columns`
+};
+LeadingEchelon leading_echelon(const std::vector<std::vector<std::pair<int, mpq_class>>>& rows, int columns,
+                               int leading);
+// The null space of the rows restricted to the leading columns (the later ones set to zero):
+// the reduced-echelon basis over the leading columns, the same vectors null_space_exact gives
+// for those restricted rows.
+std::vector<std::vector<mpq_class>> leading_null_space(const LeadingEchelon& echelon);
+
 }  // namespace knotwork

@@ -14,6 +14,7 @@
 #include <set>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -259,9 +260,141 @@ PairSystem pair_system(const QuadMesh& mesh, int e, int k, int r) {
   return patch_system(mesh, {mesh.edge(e).v[0], mesh.edge(e).v[1]}, k, r);
 }
 
+// One edge's exact conditions in reduced echelon form on its strips, with the corner blocks at
+// both ends carried along (basis/exact: leading_echelon). The space's dimension, the vertex
+// systems at the edge's two ends and its own edge functions are all read off this one
+// elimination; before, the dimension was a rank of the whole system and each of the three
+// local systems eliminated the strips again (most of a G1 build on a mesh with 17-digit
+// coordinates).
+struct EdgeEchelon {
+  LocalColumns cols;  // the strips (add_edge_strips), then every other unknown of the rows
+  std::shared_ptr<const LeadingEchelon> echelon;
+};
+
+// Every edge's echelon (boundary edges: no rows, every strip free), shared between edges whose
+// local systems are equal entry for entry (after a subdivision, most inner edges of a coarse
+// face).
+std::vector<EdgeEchelon> eliminate_strips(const QuadMesh& mesh, const std::vector<Rows<mpq_class>>& rows, int k,
+                                          int r) {
+  std::vector<EdgeEchelon> out(mesh.num_edges());
+  std::mutex mutex;
+  std::map<std::vector<std::vector<std::pair<int, mpq_class>>>, std::shared_ptr<const LeadingEchelon>> cache;
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    EdgeEchelon& E = out[e];
+    add_edge_strips(E.cols, mesh, e, k, r);
+    const int strips = E.cols.size();
+    for (const auto& row : rows[e])
+      for (const auto& term : row) E.cols.add(term.first);
+    auto A = restrict_rows_sparse(rows[e], E.cols);
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      if (const auto it = cache.find(A); it != cache.end()) E.echelon = it->second;
+    }
+    if (E.echelon) continue;
+    auto echelon = std::make_shared<const LeadingEchelon>(leading_echelon(A, E.cols.size(), strips));
+    const std::lock_guard<std::mutex> lock(mutex);
+    E.echelon = cache.emplace(std::move(A), std::move(echelon)).first->second;
+  }
+  return out;
+}
+
+// The dimension from the echelons: a strip belongs to one edge's rows only, so the rank of
+// the whole system is the number of strip pivots (exact) plus the rank of the rows left on
+// the corner blocks, modulo primes (rank_reliable, as for the whole system before; about a
+// third of its rows and none of the strips). nullopt if some strip unknown appears in
+// another edge's rows (not so for the conditions of a quad mesh).
+std::optional<G1SpaceDimension> dimension_from_strips(const QuadMesh& mesh, int k, int r,
+                                                      const std::vector<EdgeEchelon>& echelons, long constraints) {
+  G1SpaceDimension d;
+  const long n = 2 * k - r + 1;
+  d.unknowns = mesh.num_faces() * n * n;
+  d.constraints = constraints;
+  std::vector<int> owner(d.unknowns, -1);
+  for (int e = 0; e < mesh.num_edges(); ++e)
+    for (int j = 0; j < echelons[e].echelon->leading; ++j) {
+      int& o = owner[echelons[e].cols.global[j]];
+      if (o >= 0) return std::nullopt;
+      o = e;
+    }
+  long pivots = 0;
+  std::vector<SparseRationalRow> corner_rows;
+  for (int e = 0; e < mesh.num_edges(); ++e) {
+    const EdgeEchelon& E = echelons[e];
+    const LeadingEchelon& L = *E.echelon;
+    for (int j = L.leading; j < L.columns; ++j)
+      if (owner[E.cols.global[j]] >= 0) return std::nullopt;
+    pivots += static_cast<long>(L.pivot_column.size());
+    for (size_t i = L.pivot_column.size(); i < L.rows.size(); ++i) {
+      SparseRationalRow row;
+      for (int j = L.leading; j < L.columns; ++j)
+        if (L.rows[i][j] != 0) row.terms.emplace_back(E.cols.global[j], mpq_class(L.rows[i][j]));
+      corner_rows.push_back(std::move(row));
+    }
+  }
+  d.rank = pivots + rank_reliable(corner_rows, d.unknowns);
+  d.exact = true;
+  d.dimension = d.unknowns - d.rank;
+  return d;
+}
+
+// The null vectors of a vertex system (corner blocks, the first `taylor` of `cols`, then the
+// strips of `edges`) that have independent Taylor data: one per free corner-block column of
+// the reduced echelon form with the strips eliminated first, the same vectors as that form
+// gives (the others, free strip columns, vanish on the corner blocks: they are edge
+// functions). Each edge's strip rows are already reduced, and its rows without strips
+// constrain the corner blocks alone, so only those are solved together here; the strips
+// then follow row by row. nullopt if an edge's rows meet another edge's strips (not so for
+// the conditions of a quad mesh; the caller then solves the whole system).
+std::optional<std::vector<std::vector<mpq_class>>> vertex_null_space(const LocalColumns& cols, int taylor,
+                                                                     const std::vector<const EdgeEchelon*>& edges) {
+  std::vector<std::vector<int>> at(edges.size());  // per edge column: the vertex's corner column, or -1
+  std::vector<std::vector<mpq_class>> corner_rows;
+  for (size_t b = 0; b < edges.size(); ++b) {
+    const LeadingEchelon& L = *edges[b]->echelon;
+    at[b].assign(L.columns, -1);
+    for (int j = L.leading; j < L.columns; ++j) {
+      const auto it = cols.position.find(edges[b]->cols.global[j]);
+      if (it == cols.position.end()) continue;  // the far end's corner blocks: zero here
+      if (it->second >= taylor) return std::nullopt;
+      at[b][j] = it->second;
+    }
+    for (size_t i = L.pivot_column.size(); i < L.rows.size(); ++i) {
+      std::vector<mpq_class> row(taylor, mpq_class(0));
+      bool any = false;
+      for (int j = L.leading; j < L.columns; ++j)
+        if (at[b][j] >= 0 && L.rows[i][j] != 0) {
+          row[at[b][j]] = L.rows[i][j];
+          any = true;
+        }
+      if (any) corner_rows.push_back(std::move(row));
+    }
+  }
+  std::vector<std::vector<mpq_class>> out;
+  mpq_class sum;
+  for (auto& tau : null_space_exact(std::move(corner_rows), taylor)) {
+    std::vector<mpq_class> x(cols.size(), mpq_class(0));
+    std::move(tau.begin(), tau.end(), x.begin());
+    for (size_t b = 0; b < edges.size(); ++b) {
+      const LeadingEchelon& L = *edges[b]->echelon;
+      for (size_t i = 0; i < L.pivot_column.size(); ++i) {
+        sum = 0;
+        for (int j = L.leading; j < L.columns; ++j)
+          if (at[b][j] >= 0 && L.rows[i][j] != 0 && x[at[b][j]] != 0) sum += L.rows[i][j] * x[at[b][j]];
+        if (sum == 0) continue;
+        const int pivot = L.pivot_column[i];
+        x[cols.position.at(edges[b]->cols.global[pivot])] = -sum / L.rows[i][pivot];
+      }
+    }
+    out.push_back(std::move(x));
+  }
+  return out;
+}
+
 template <class Scalar>
 void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
-           const std::function<void(const std::string&)>& say, std::vector<Rows<Scalar>> rows = {}) {
+           const std::function<void(const std::string&)>& say, std::vector<Rows<Scalar>> rows = {},
+           std::vector<EdgeEchelon> edge_echelon = {}) {
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
   // Independent per edge and per vertex: threaded (the exact arithmetic dominates a G1 build).
   // The exact path gets the rows the dimension was computed from.
@@ -331,8 +464,14 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
         if (const auto it = cache.find(key); it != cache.end()) solutions = it->second;
       }
       if (!solutions) {
-        solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(
-            taylor_independent(null_space_taylor_last(restrict_rows_sparse(vertex_rows(), cols), cols.size(), taylor), taylor));
+        std::optional<std::vector<std::vector<mpq_class>>> Z;
+        if (!edge_echelon.empty()) {
+          std::vector<const EdgeEchelon*> echelons;
+          for (int e : edges) echelons.push_back(&edge_echelon[e]);
+          Z = vertex_null_space(cols, taylor, echelons);
+        }
+        if (!Z) Z = null_space_taylor_last(restrict_rows_sparse(vertex_rows(), cols), cols.size(), taylor);
+        solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(taylor_independent(std::move(*Z), taylor));
         const std::lock_guard<std::mutex> lock(cache_mutex);
         cache.emplace(key, solutions);
       }
@@ -382,10 +521,24 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
   std::vector<Eigen::MatrixXd> edge_floating(exact ? 0 : mesh.num_edges());
   std::map<std::vector<std::vector<std::pair<int, mpq_class>>>, std::shared_ptr<const std::vector<std::vector<mpq_class>>>>
       edge_cache;
+  std::map<const LeadingEchelon*, std::shared_ptr<const std::vector<std::vector<mpq_class>>>> echelon_cache;
 #pragma omp parallel for schedule(dynamic, 16)
   for (int e = 0; e < mesh.num_edges(); ++e) {
     add_edge_strips(edge_cols[e], mesh, e, k, r);
     if constexpr (exact) {
+      if (!edge_echelon.empty()) {
+        // The strips' null space with the corner blocks zero, read off the edge's echelon.
+        const LeadingEchelon* echelon = edge_echelon[e].echelon.get();
+        {
+          const std::lock_guard<std::mutex> lock(cache_mutex);
+          if (const auto it = echelon_cache.find(echelon); it != echelon_cache.end()) edge_exact[e] = it->second;
+        }
+        if (edge_exact[e]) continue;
+        auto solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(leading_null_space(*echelon));
+        const std::lock_guard<std::mutex> lock(cache_mutex);
+        edge_exact[e] = echelon_cache.emplace(echelon, std::move(solutions)).first->second;
+        continue;
+      }
       auto A = restrict_rows_sparse(rows[e], edge_cols[e]);
       {
         const std::lock_guard<std::mutex> lock(cache_mutex);
@@ -412,6 +565,7 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
   }
   edge_cols.clear();
   edge_exact.clear();
+  edge_echelon.clear();
   edge_floating.clear();
   const long face_count = static_cast<long>(mesh.num_faces()) * std::max(n - 4, 0) * std::max(n - 4, 0);
 
@@ -717,10 +871,18 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
   if (basis.exact) {
     check_g1_arguments(mesh, gluing, k, r);
     std::vector<G1ExactRows> rows = g1_condition_rows_per_edge(mesh, gluing, k, r);
-    basis.space = g1_space_dimension_exact(mesh, k, r, rows);
+    long constraints = 0;
+    for (const auto& x : rows) constraints += static_cast<long>(x.size());
+    auto echelons = eliminate_strips(mesh, rows, k, r);
+    if (auto d = dimension_from_strips(mesh, k, r, echelons, constraints)) {
+      basis.space = *d;
+    } else {
+      basis.space = g1_space_dimension_exact(mesh, k, r, rows);
+      echelons.clear();
+    }
     say("local functions at " + std::to_string(mesh.num_vertices()) + " vertices and " +
         std::to_string(mesh.num_edges()) + " edges");
-    build<mpq_class>(mesh, gluing, basis, say, std::move(rows));
+    build<mpq_class>(mesh, gluing, basis, say, std::move(rows), std::move(echelons));
   } else {
     basis.space = cyclotomic ? g1_space_dimension_cyclotomic(mesh, gluing, k, r)
                              : g1_space_dimension(mesh, gluing, k, r, floating);  // both validate k, r, gluing

@@ -215,9 +215,10 @@ template <class Scalar>
 std::vector<std::vector<std::pair<long, Scalar>>> g1_conditions(const QuadMesh& mesh, const GluingData& gluing, int k,
                                                                 int r, int only_edge = -1) {
   std::vector<std::vector<std::pair<long, Scalar>>> rows;
-  for (int e = 0; e < mesh.num_edges(); ++e) {
+  const int first = only_edge >= 0 ? only_edge : 0, last = only_edge >= 0 ? only_edge + 1 : mesh.num_edges();
+  for (int e = first; e < last; ++e) {
     const auto& E = mesh.edge(e);
-    if (E.boundary() || (only_edge >= 0 && e != only_edge)) continue;
+    if (E.boundary()) continue;
     const EdgeGluing& g = *gluing.edges[e];
     const int f1 = E.face[0], c1 = E.corner[0];
     const int f0 = E.face[1], c0 = (E.corner[1] + 1) % 4;  // face[1]'s corner at v[0]
