@@ -90,26 +90,45 @@ class G1Space final : public SplineSpace {
         {.key = "boundary_deviation", .value = d_.boundary_deviation},
         {.key = "shape_distance", .value = d_.shape_distance},
         {.key = "worst_face", .value = long(d_.worst_face + 1)},
+        {.key = "skewed_fans", .value = long(d_.coarse_gluing.skewed_fans.size())},
         {.key = "min_regularity", .value = d_.min_regularity},
         {.key = "min_regularity_cell_nodes", .value = d_.min_regularity_nodes},
     };
     return r;
   }
   std::vector<std::string> notes() const override {
-    if (d_.min_regularity_nodes > 1e-8) return {};
+    std::vector<std::string> out;
+    if (const auto& skewed = d_.coarse_gluing.skewed_fans; !skewed.empty()) {
+      std::string list;
+      for (size_t i = 0; i < skewed.size() && i < 12; ++i) list += (i ? ", " : "") + std::to_string(skewed[i] + 1);
+      if (skewed.size() > 12) list += ", ...";
+      out.push_back(std::to_string(skewed.size()) + " crossing vertices (" + list +
+                    ") have opposite neighbours of different valences: the linear symmetric data fail Condition 3.2 "
+                    "there, so they get a skewed fan (still analysis-suitable; docs/G1_POISSON.md)");
+    }
+    if (d_.min_regularity_nodes > 1e-8) return out;
     char b[400];
     std::snprintf(b, sizeof b,
                   "%s = %.3g (relative) at (%.6g, %.6g, %.6g), a cell corner or side midpoint: the fitted geometry is "
                   "singular there (regular at every quadrature point); expect reduced rates",
                   g1_section(*case_).surface ? "|x_u x x_v|" : "det J", d_.min_regularity_nodes, d_.singular_point.x(),
                   d_.singular_point.y(), d_.singular_point.z());
-    return {b};
+    out.push_back(b);
+    return out;
   }
   std::vector<ReportField> check_solution(const Eigen::VectorXd& coefficients) const override {
     const double jump = g1_gradient_jump(d_, coefficients);
+    // A G1 solution is C1 to rounding (at most ~1e-11 measured on every case); far more means
+    // the floating-point local functions (data that are not exact) have gone wrong, and the
+    // solution is not to be trusted: said on the line itself, not left to be noticed. (Seen
+    // once: symmetric_c1 data on the split pentagonal prism, 3 subdivisions, docs/G1_POISSON.md.)
+    const bool suspect = !g1_section(*case_).c0 && jump > 1e-6;
     return {{.key = "c1_jump",
              .value = jump,
-             .text = "largest gradient jump across interfaces " + format("%.3e", jump) + " (relative)",
+             .text = "largest gradient jump across interfaces " + format("%.3e", jump) + " (relative)" +
+                     (suspect ? ": NOT C1 to rounding; the floating-point local functions are not accurate here and "
+                                "this solution is unreliable (exact data, e.g. gluing = \"analysis_suitable\", avoid it)"
+                              : ""),
              .label = "C1",
              .column = true,
              .width = 10}};

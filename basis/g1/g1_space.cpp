@@ -481,11 +481,123 @@ std::vector<mpq_class> det(const std::array<std::array<mpq_class, 2>, 2>& p,
 
 }  // namespace
 
+namespace {
+
+struct CrossingResiduals {
+  double eq6, eq7;
+  bool fails;
+};
+
+// Condition 3.2 at a crossing vertex (interior, valence 4, a = 0 at the vertex on every
+// edge): eqs. (6) and (7) on the first derivatives, with the data seen from the vertex;
+// nullopt if v is not a crossing.
+std::optional<CrossingResiduals> crossing_residuals(const QuadMesh& mesh, const GluingData& gluing, int v,
+                                                    double tolerance) {
+  const auto& ring = mesh.ring(v);
+  if (ring.boundary || ring.edges.size() != 4) return std::nullopt;
+  std::array<double, 4> a{}, da{}, b{}, db_over_b{};
+  for (int i = 0; i < 4; ++i) {
+    const int e = ring.edges[i];
+    const EdgeGluing g = mesh.edge(e).v[0] == v ? *gluing.edges[e] : reversed(*gluing.edges[e]);
+    auto at0 = [](const PiecewisePolynomial& p, int order) {
+      return order < static_cast<int>(p.pieces[0].size()) ? p.pieces[0][order] : 0.0;
+    };
+    const double a0 = at0(g.a, 0), a1 = at0(g.a, 1), b0 = at0(g.b, 0), b1 = at0(g.b, 1), c0 = at0(g.c, 0),
+                 c1 = at0(g.c, 1);
+    a[i] = a0 / c0;
+    b[i] = b0 / c0;
+    da[i] = (a1 * c0 - a0 * c1) / (c0 * c0);
+    db_over_b[i] = b1 / b0 - c1 / c0;
+    if (std::abs(a[i]) > tolerance) return std::nullopt;
+  }
+  CrossingResiduals r;
+  r.eq6 = da[0] + db_over_b[3] + b[0] * (da[2] + db_over_b[1]);
+  r.eq7 = da[1] + db_over_b[0] + b[1] * (da[3] + db_over_b[2]);
+  r.fails = std::abs(r.eq6) > tolerance * (1 + std::abs(da[0]) + std::abs(da[2])) ||
+            std::abs(r.eq7) > tolerance * (1 + std::abs(da[1]) + std::abs(da[3]));
+  return r;
+}
+
+// Eq. (8) of a planar fan of edge directions at edge `cur` between `prev` and `next` (counter-
+// clockwise): with T = cur, X = next (dv f1), Y = prev (du f0), c X = b Y + a T holds for
+// c = det(Y, T), b = det(X, T), a = det(Y, X) (three vectors of the plane): (a/c, b/c).
+std::pair<mpq_class, mpq_class> fan_values(const std::array<mpq_class, 2>& prev, const std::array<mpq_class, 2>& cur,
+                                           const std::array<mpq_class, 2>& next) {
+  auto det = [](const std::array<mpq_class, 2>& x, const std::array<mpq_class, 2>& y) -> mpq_class {
+    return x[0] * y[1] - x[1] * y[0];
+  };
+  const mpq_class d = det(prev, cur);
+  return {det(prev, next) / d, det(next, cur) / d};
+}
+
+// Surfaces: per vertex the symmetric fan's values seen from it, a = 2cos(2pi/n) (rational or a
+// sum of cosines), b = -1, or a skewed fan's; a and b linear along each edge between the two
+// ends' values, c = 1. Analysis-suitable by degree. A crossing vertex whose opposite
+// neighbours have different valences fails Condition 3.2 with the symmetric values (its
+// Taylor image shrinks: docs/G1.md); it gets a skewed fan, which is no crossing, and the
+// check runs again (its neighbours now see other values), until no crossing fails.
+GluingData surface_gluing(const QuadMesh& mesh) {
+  // Skewed: the square fan with its last two directions turned by atan(1/8) (7 degrees), so
+  // that neither pair of edges is opposite; rational. The turn was chosen by measurement
+  // (docs/G1_POISSON.md, the split pentagonal prism): 1/8 gave the smallest errors of 1/64,
+  // 1/16, 1/8, 1/4, 1/2 and 1 at every level; nearer the square the space approaches the
+  // crossing's, which loses functions, and further away the parametrization is distorted.
+  const mpq_class turn(1, 8);
+  const std::array<std::array<mpq_class, 2>, 4> skew{{{1, 0}, {0, 1}, {-1, -turn}, {turn, -1}}};
+  std::vector<std::map<int, std::pair<mpq_class, mpq_class>>> skewed(mesh.num_vertices());
+  GluingData g;
+  for (;;) {
+    g = GluingData{};
+    g.edges.resize(mesh.num_edges());
+    // The end values seen from v along e; the far end's are converted to the edge's frames
+    // as in geometric_gluing (B' = 1/B, A' = A/B).
+    auto end_values = [&](int v, int e) -> std::pair<CosineSum, mpq_class> {
+      if (const auto it = skewed[v].find(e); it != skewed[v].end()) return {CosineSum(it->second.first), it->second.second};
+      const auto [p, q] = symmetric_angle(mesh, v);
+      if (const auto x = two_cos_pi_exact(p, q)) return {CosineSum(*x), mpq_class(-1)};
+      return {CosineSum::two_cos_pi(p, q), mpq_class(-1)};
+    };
+    for (int e = 0; e < mesh.num_edges(); ++e) {
+      const auto& E = mesh.edge(e);
+      if (E.boundary()) continue;
+      const auto [A0, B0] = end_values(E.v[0], e);
+      const auto [A1p, B1p] = end_values(E.v[1], e);
+      const mpq_class B1 = 1 / B1p;
+      const CosineSum A1 = A1p * B1;
+      const std::vector<CosineSum> a{A0, A1 - A0};
+      const std::vector<mpq_class> b{B0, B1 - B0};
+      EdgeGluing eg;
+      if (a[0].cosines.empty() && a[1].cosines.empty())
+        eg.a = PiecewisePolynomial::from_exact({std::vector<mpq_class>{a[0].rational, a[1].rational},
+                                                std::vector<mpq_class>{a[0].rational, a[1].rational}});
+      else
+        eg.a = PiecewisePolynomial::from_algebraic({a, a});
+      eg.b = b[1] == 0 ? PiecewisePolynomial::constant(b[0]) : PiecewisePolynomial::from_exact({b, b});
+      eg.c = PiecewisePolynomial::constant(1);
+      g.edges[e] = std::move(eg);
+    }
+    std::vector<int> failing;
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (skewed[v].empty())
+        if (const auto r = crossing_residuals(mesh, g, v, 1e-10); r && r->fails) failing.push_back(v);
+    if (failing.empty()) break;
+    for (const int v : failing) {
+      const auto& ring = mesh.ring(v);
+      for (int i = 0; i < 4; ++i) skewed[v][ring.edges[i]] = fan_values(skew[(i + 3) % 4], skew[i], skew[(i + 1) % 4]);
+    }
+  }
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    if (!skewed[v].empty()) g.skewed_fans.push_back(v);
+  return g;
+}
+
+}  // namespace
+
 GluingData analysis_suitable_gluing(const QuadMesh& mesh) {
   // No plane to take faces from: the symmetric fan's values 2cos(2 pi / n) at the two ends,
   // linear along the edge, b = -1, c = 1. Analysis-suitable by degree; at a vertex of valence
   // 4 (a crossing) gluing_violations checks Condition 3.2 and names the vertex if it fails.
-  if (!mesh.planar()) return symmetric_gluing(mesh, SymmetricBlend::kLinear);
+  if (!mesh.planar()) return surface_gluing(mesh);
   // Every bilinear face must be regular: its det J is affine in (s, t) (no s t term), so
   // positive at the four corners means positive everywhere, i.e. a convex face, counter-
   // clockwise.
@@ -608,34 +720,11 @@ std::vector<std::string> gluing_violations(const QuadMesh& mesh, const GluingDat
       P = M * P;
     }
     if ((P - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff() <= tolerance && ring.edges.size() == 4) {
-      // Condition 3.2 at a crossing vertex (valence 4, bold a = 0 at the vertex on every edge):
-      // eqs. (6) and (7) on the first derivatives, with the data seen from the vertex.
-      std::array<double, 4> a{}, da{}, b{}, db_over_b{};
-      bool crossing = true;
-      for (int i = 0; i < 4; ++i) {
-        const int e = ring.edges[i];
-        const EdgeGluing g = mesh.edge(e).v[0] == v ? *gluing.edges[e] : reversed(*gluing.edges[e]);
-        auto at0 = [](const PiecewisePolynomial& p, int order) {
-          return order < static_cast<int>(p.pieces[0].size()) ? p.pieces[0][order] : 0.0;
-        };
-        const double a0 = at0(g.a, 0), a1 = at0(g.a, 1), b0 = at0(g.b, 0), b1 = at0(g.b, 1), c0 = at0(g.c, 0),
-                     c1 = at0(g.c, 1);
-        a[i] = a0 / c0;
-        b[i] = b0 / c0;
-        da[i] = (a1 * c0 - a0 * c1) / (c0 * c0);
-        db_over_b[i] = b1 / b0 - c1 / c0;
-        crossing = crossing && std::abs(a[i]) <= tolerance;
-      }
-      if (crossing) {
-        const double r6 = da[0] + db_over_b[3] + b[0] * (da[2] + db_over_b[1]);
-        const double r7 = da[1] + db_over_b[0] + b[1] * (da[3] + db_over_b[2]);
-        if (std::abs(r6) > tolerance * (1 + std::abs(da[0]) + std::abs(da[2])) ||
-            std::abs(r7) > tolerance * (1 + std::abs(da[1]) + std::abs(da[3]))) {
-          std::ostringstream s;
-          s << "vertex " << v + 1 << " (crossing, valence 4): Condition 3.2 fails, eq. (6) is off by " << r6
-            << " and eq. (7) by " << r7;
-          out.push_back(s.str());
-        }
+      if (const auto r = crossing_residuals(mesh, gluing, v, tolerance); r && r->fails) {
+        std::ostringstream s;
+        s << "vertex " << v + 1 << " (crossing, valence 4): Condition 3.2 fails, eq. (6) is off by " << r->eq6
+          << " and eq. (7) by " << r->eq7;
+        out.push_back(s.str());
       }
       continue;
     }

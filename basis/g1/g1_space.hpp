@@ -70,6 +70,9 @@ struct GluingData {
   bool exact() const;                            // every coefficient rational
   bool algebraic() const;                        // every coefficient rational or a CosineSum
   long cosine_denominators_lcm() const;          // M for CosineSum::residue over all the data
+  // analysis_suitable_gluing on a surface: the crossing vertices (0-based) given a skewed fan
+  // because the linear symmetric data fail Condition 3.2 there.
+  std::vector<int> skewed_fans;
 };
 
 // The symmetric gluing (Blidia-Mourrain-Villamizar eq. 11) with Hermite functions of degree 2,
@@ -106,9 +109,13 @@ GluingData geometric_gluing(const QuadMesh& mesh, bool regular_fans_where_ration
 // the G1 conditions with them (they are in the space) and Condition 3.1 holds at every vertex.
 // Exact rationals always (a double coordinate is one). On a surface mesh (not planar): the
 // linear symmetric data a(u) = 2cos(2pi/n0)(1 - u) - 2cos(2pi/n1) u, b = -1, c = 1, which are
-// compatible at every vertex unless a valence-4 vertex neighbours an extraordinary one
-// (gluing_violations then names it). Throws std::invalid_argument for a planar face that is
-// not a convex counter-clockwise quad (naming it).
+// compatible at every vertex unless a crossing (valence-4) vertex has opposite neighbours of
+// different valences: Condition 3.2 then fails there, and such a vertex gets a skewed fan
+// instead of the square one (edge directions (1, 0), (0, 1), (-1, -1/8), (1/8, -1): no two
+// opposite, so not a crossing), its edges a and b linear between the two ends' values (still
+// analysis-suitable), until no crossing fails (`skewed_fans` lists them). Throws
+// std::invalid_argument for a planar face that is not a convex counter-clockwise quad (naming
+// it).
 GluingData analysis_suitable_gluing(const QuadMesh& mesh);
 
 // The data of an edge as seen from its other end: (a, b, c)(u) -> (a, c, b)(1 - u).

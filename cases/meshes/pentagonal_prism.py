@@ -1,0 +1,58 @@
+#!/usr/bin/env python3
+"""Writes pentagonal_prism.obj: the pentagonal prism with every face split into quads (its
+centre, its corners and its edge midpoints), a closed quad mesh with vertices of valence 3
+(the 10 corners), 4 (the 15 edge midpoints and the 5 rectangle centres) and 5 (the 2
+pentagon centres). At the midpoint of a pentagon's edge the two neighbours across are a
+pentagon centre (valence 5) and a rectangle centre (valence 4): the linear symmetric gluing
+data fail Condition 3.2 there, and the analysis-suitable construction gives those crossings
+a skewed fan (docs/G1_POISSON.md). Projected onto a sphere by the G1 cases ([geometry] shape =
+"sphere").
+
+    python3 cases/meshes/pentagonal_prism.py      # writes pentagonal_prism.obj here
+"""
+import math
+import os
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def main():
+    # Corners on the unit sphere: two pentagons at heights +-h, h chosen so that the side
+    # rectangles are squares on the sphere's scale (side of the pentagon = 2h).
+    side = 2 * math.sin(math.pi / 5)
+    h = side / 2
+    scale = 1 / math.sqrt(1 + h * h)
+    top = [(scale * math.cos(2 * math.pi * i / 5), scale * math.sin(2 * math.pi * i / 5), scale * h) for i in range(5)]
+    bottom = [(x, y, -z) for x, y, z in top]
+    vertices = top + bottom
+    # Faces counter-clockwise seen from outside.
+    faces = [list(range(5)), [5 + i for i in reversed(range(5))]]
+    faces += [[i, 5 + i, 5 + (i + 1) % 5, (i + 1) % 5] for i in range(5)]
+    midpoint_of = {}
+
+    def midpoint(a, b):
+        key = (min(a, b), max(a, b))
+        if key not in midpoint_of:
+            midpoint_of[key] = len(vertices)
+            vertices.append(tuple((x + y) / 2 for x, y in zip(vertices[a], vertices[b])))
+        return midpoint_of[key]
+
+    quads = []
+    for face in faces:
+        centre = len(vertices)
+        vertices.append(tuple(sum(vertices[c][d] for c in face) / len(face) for d in range(3)))
+        n = len(face)
+        for i in range(n):
+            prev, corner, nxt = face[(i - 1) % n], face[i], face[(i + 1) % n]
+            quads.append([corner, midpoint(corner, nxt), centre, midpoint(prev, corner)])
+    with open(os.path.join(HERE, "pentagonal_prism.obj"), "w") as out:
+        out.write("# The pentagonal prism, each face split into quads: %d vertices of valence 3 (10),\n"
+                  "# 4 (20) and 5 (2), %d faces, outward. Written by pentagonal_prism.py.\n" % (len(vertices), len(quads)))
+        for v in vertices:
+            out.write("v %.17g %.17g %.17g\n" % v)
+        for q in quads:
+            out.write("f %d %d %d %d\n" % tuple(i + 1 for i in q))
+
+
+if __name__ == "__main__":
+    main()
