@@ -11,6 +11,8 @@ import itertools
 import math
 import os
 
+from quad_meshes import Midpoints, write_obj
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 PHI = (1 + 5 ** 0.5) / 2
 
@@ -49,14 +51,7 @@ def main():
                     faces.add(tuple(sorted(ring)))
     assert len(faces) == 12
     vertices = list(corners)
-    midpoint_of = {}
-
-    def midpoint(a, b):
-        key = (min(a, b), max(a, b))
-        if key not in midpoint_of:
-            midpoint_of[key] = len(vertices)
-            vertices.append(tuple((x + y) / 2 for x, y in zip(corners[a], corners[b])))
-        return midpoint_of[key]
+    midpoint = Midpoints(vertices)
 
     quads = []
     for face in sorted(faces):
@@ -71,13 +66,9 @@ def main():
         for t in range(5):  # counter-clockwise seen from outside
             previous, here, following = ring[t - 1], ring[t], ring[(t + 1) % 5]
             quads.append((c, midpoint(previous, here), here, midpoint(here, following)))
-    with open(os.path.join(HERE, "dodecahedron.obj"), "w") as out:
-        out.write("# The dodecahedron, each pentagon split into five quads: 62 vertices of valence 3 (20),\n"
-                  "# 4 (30) and 5 (12), 60 faces, outward. Written by dodecahedron.py.\n")
-        for v in vertices:
-            out.write("v %.17g %.17g %.17g\n" % v)
-        for q in quads:
-            out.write("f %d %d %d %d\n" % tuple(i + 1 for i in q))
+    write_obj(os.path.join(HERE, "dodecahedron.obj"),
+              ["The dodecahedron, each pentagon split into five quads: 62 vertices of valence 3 (20),",
+               "4 (30) and 5 (12), 60 faces, outward. Written by dodecahedron.py."], vertices, quads)
 
 
 if __name__ == "__main__":

@@ -13,6 +13,8 @@ a skewed fan (docs/G1_POISSON.md). Projected onto a sphere by the G1 cases ([geo
 import math
 import os
 
+from quad_meshes import Midpoints, write_obj
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -28,14 +30,7 @@ def main():
     # Faces counter-clockwise seen from outside.
     faces = [list(range(5)), [5 + i for i in reversed(range(5))]]
     faces += [[i, 5 + i, 5 + (i + 1) % 5, (i + 1) % 5] for i in range(5)]
-    midpoint_of = {}
-
-    def midpoint(a, b):
-        key = (min(a, b), max(a, b))
-        if key not in midpoint_of:
-            midpoint_of[key] = len(vertices)
-            vertices.append(tuple((x + y) / 2 for x, y in zip(vertices[a], vertices[b])))
-        return midpoint_of[key]
+    midpoint = Midpoints(vertices)
 
     quads = []
     for face in faces:
@@ -45,13 +40,9 @@ def main():
         for i in range(n):
             prev, corner, nxt = face[(i - 1) % n], face[i], face[(i + 1) % n]
             quads.append([corner, midpoint(corner, nxt), centre, midpoint(prev, corner)])
-    with open(os.path.join(HERE, "pentagonal_prism.obj"), "w") as out:
-        out.write("# The pentagonal prism, each face split into quads: %d vertices of valence 3 (10),\n"
-                  "# 4 (20) and 5 (2), %d faces, outward. Written by pentagonal_prism.py.\n" % (len(vertices), len(quads)))
-        for v in vertices:
-            out.write("v %.17g %.17g %.17g\n" % v)
-        for q in quads:
-            out.write("f %d %d %d %d\n" % tuple(i + 1 for i in q))
+    write_obj(os.path.join(HERE, "pentagonal_prism.obj"),
+              ["The pentagonal prism, each face split into quads: %d vertices of valence 3 (10)," % len(vertices),
+               "4 (20) and 5 (2), %d faces, outward. Written by pentagonal_prism.py." % len(quads)], vertices, quads)
 
 
 if __name__ == "__main__":
