@@ -22,6 +22,9 @@ SURFACES = ["g1_sphere_xy", "g1_sphere_harmonic", "g1_sphere_dodecahedron", "g1_
 EARLIER = {"g1_three_quads": 'gluing = "symmetric_c1"', "g1_mixed_valences": 'gluing = "regular_fans"',
            "g1_sphere_xy": 'gluing = "symmetric"', "g1_sphere_harmonic": 'gluing = "symmetric"',
            "g1_sphere_prism": 'gluing = "symmetric_c1"'}
+# Levels of the earlier data where 4 cannot be built: on the prism sphere the floating-point
+# symmetric_c1 basis is numerically dependent at 3 subdivisions, and knotwork refuses it.
+EARLIER_LEVELS = {"g1_sphere_prism": 3}
 
 
 def variant(case, scratch, space_lines):
@@ -68,7 +71,8 @@ def main():
             largest_jump = max([largest_jump] + [r["c1_jump"] for r in rows])
             table(f"{case}: analysis_suitable (the default)", rows)
             if case in EARLIER:
-                table(f"{case}: {EARLIER[case]} (earlier)", converge(variant(case, scratch, EARLIER[case]), scratch))
+                table(f"{case}: {EARLIER[case]} (earlier)",
+                      converge(variant(case, scratch, EARLIER[case]), scratch, EARLIER_LEVELS.get(case, 4)))
             if case in PLANAR:
                 c0 = converge(variant(case, scratch, 'smoothness = "c0"'), scratch)
                 print(f"\n{case}, H1-seminorm error at equal dofs (C0: the same degree and mesh, interpolated):\n")

@@ -119,9 +119,10 @@ class G1Space final : public SplineSpace {
   std::vector<ReportField> check_solution(const Eigen::VectorXd& coefficients) const override {
     const double jump = g1_gradient_jump(d_, coefficients);
     // A G1 solution is C1 to rounding (at most ~1e-11 measured on every case); far more means
-    // the floating-point local functions (data that are not exact) have gone wrong, and the
-    // solution is not to be trusted: said on the line itself, not left to be noticed. (Seen
-    // once: symmetric_c1 data on the split pentagonal prism, 3 subdivisions, docs/G1_POISSON.md.)
+    // the local functions have gone wrong, and the solution is not to be trusted: said on the
+    // line itself, not left to be noticed. The one case seen (floating-point symmetric_c1 data
+    // on the split pentagonal prism, 3 subdivisions) is now refused when the basis is built
+    // (tidy_vertex_functions), so this is a last line of defence with no known trigger.
     const bool suspect = !g1_section(*case_).c0 && jump > 1e-6;
     return {{.key = "c1_jump",
              .value = jump,
