@@ -1,6 +1,9 @@
 #pragma once
-// Quad meshes shared by the G1 tests: the paper's Section 8 mesh, grids, a cube, tori, fans.
+// Quad meshes shared by the G1 tests: the paper's Section 8 mesh, grids, a cube, split prisms, tori,
+// fans.
+#include <algorithm>
 #include <array>
+#include <map>
 #include <cmath>
 #include <vector>
 
@@ -41,6 +44,37 @@ inline QuadMesh cube() {
   // Outward normals, counter-clockwise seen from outside.
   std::vector<std::array<int, 4>> f{{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   return QuadMesh::from_faces(v, f, "cube");
+}
+
+// The n-gonal prism with every face split into quads (its centre, corners and edge
+// midpoints), as cases/meshes/pentagonal_prism.py writes it for n = 5: corners of valence 3,
+// edge midpoints and rectangle centres of valence 4, the two polygon centres of valence n.
+inline QuadMesh split_prism(int n) {
+  std::vector<Eigen::Vector3d> v;
+  for (int z : {1, -1})
+    for (int i = 0; i < n; ++i) v.emplace_back(std::cos(2 * M_PI * i / n), std::sin(2 * M_PI * i / n), z * 0.6);
+  std::vector<std::vector<int>> faces{{}, {}};
+  for (int i = 0; i < n; ++i) faces[0].push_back(i), faces[1].push_back(2 * n - 1 - i);
+  for (int i = 0; i < n; ++i) faces.push_back({i, n + i, n + (i + 1) % n, (i + 1) % n});
+  std::map<std::pair<int, int>, int> midpoints;
+  auto midpoint = [&](int a, int b) {
+    const auto key = std::minmax(a, b);
+    if (const auto it = midpoints.find(key); it != midpoints.end()) return it->second;
+    v.push_back((v[a] + v[b]) / 2);
+    return midpoints[key] = static_cast<int>(v.size()) - 1;
+  };
+  std::vector<std::array<int, 4>> quads;
+  for (const auto& face : faces) {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (int c : face) centre += v[c] / static_cast<double>(face.size());
+    v.push_back(centre);
+    const int middle = static_cast<int>(v.size()) - 1, m = static_cast<int>(face.size());
+    for (int i = 0; i < m; ++i) {
+      const int previous = face[(i + m - 1) % m], corner = face[i], next = face[(i + 1) % m];
+      quads.push_back({corner, midpoint(corner, next), middle, midpoint(previous, corner)});
+    }
+  }
+  return QuadMesh::from_faces(v, quads, "split prism");
 }
 
 // A torus of n x m quads: every vertex of valence 4, closed, Euler characteristic 0.

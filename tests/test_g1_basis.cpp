@@ -261,6 +261,35 @@ TEST_CASE("G1 bases on the test meshes: count = dimension, rank, residual, suppo
   }
 }
 
+// Closed meshes whose crossings have neighbours of different valences across (the polygon-edge
+// midpoints of a split n-gonal prism: the polygon centre, n, across from a rectangle centre, 4):
+// the default data skew exactly those 2n crossings, pass Conditions 3.1 and 3.2 everywhere,
+// and give a verified basis (count = an independent QR dimension, residual, supports,
+// constants). Valence 5 makes the data sums of cosines; 3 and 6 rational.
+TEST_CASE("Split prisms: skewed fans where crossings need them, and a verified basis", "[g1][basis][gluing]") {
+  for (const int n : {3, 5, 6}) {  // 4, 7 and 8 pass too (24 s for 3 to 8, the dense QR of check_basis)
+    const QuadMesh m = split_prism(n);
+    INFO("n = " << n);
+    std::vector<int> expected;
+    for (int v = 0; v < m.num_vertices(); ++v) {
+      const auto& ring = m.ring(v);
+      if (ring.edges.size() != 4) continue;
+      std::array<int, 4> across{};
+      for (int i = 0; i < 4; ++i) {
+        const auto& E = m.edge(ring.edges[i]);
+        across[i] = m.valence(E.v[0] == v ? E.v[1] : E.v[0]);
+      }
+      if (across[0] != across[2] || across[1] != across[3]) expected.push_back(v);
+    }
+    REQUIRE(expected.size() == 2u * n);
+    const GluingData g = analysis_suitable_gluing(m);
+    REQUIRE(g.skewed_fans == expected);
+    REQUIRE(gluing_violations(m, g).empty());
+    REQUIRE(gluing_violations(m, symmetric_gluing(m, SymmetricBlend::kLinear)).size() == expected.size());
+    check_basis(m, g, 4, 1);
+  }
+}
+
 TEST_CASE("G1 basis through BezierMesh: conditions (2)-(3) hold at points of every interior edge", "[g1][basis]") {
   // Evaluated with Bernstein polynomials written in the test, not with the rows the basis
   // was built from; points on both halves of each edge (and just past the split).
