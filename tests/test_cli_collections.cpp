@@ -206,6 +206,15 @@ TEST_CASE("basis --g1: dimensions of the shipped meshes, and bad input", "[cli][
                              "/cases/meshes/three_quads_linear.json");
   INFO(lin.err);
   REQUIRE(has(lin.out, "\"dimension\": 72"));
+  // The split pentagonal prism: the analysis-suitable data skew its 10 failing crossings, and
+  // both outputs say so; the paper's data need none.
+  const std::string prism = kSource + "/cases/meshes/pentagonal_prism.obj";
+  const Result skew = box.run("basis --g1 " + prism + " --gluing analysis_suitable");
+  INFO(skew.err);
+  REQUIRE(skew.code == 0);
+  REQUIRE(has(skew.out, "10 crossings given a skewed fan (12, 13, 14, 15, 16, 18, 19, 20, 21, 22)"));
+  REQUIRE(has(box.run("basis --json --g1 " + prism + " --gluing analysis_suitable").out, "\"skewed_fans\": 10"));
+  REQUIRE(has(box.run("basis --json --g1 " + prism).out, "\"skewed_fans\": 0"));
 
   auto rejected = [&](const std::string& args, const std::vector<std::string>& mentions) {
     INFO("basis " << args);

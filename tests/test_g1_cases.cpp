@@ -371,6 +371,13 @@ TEST_CASE("G1 cases through the binary: run, converge with a .pvd over levels, a
   REQUIRE(run.code == 0);
   REQUIRE(fs::exists(box.dir() / "conv" / "level_1.vtu"));
   REQUIRE(slurp(box.dir() / "conv" / "convergence.pvd").find("level_1.vtu") != std::string::npos);
+  // Which data a surface gets is said: the prism sphere's skewed crossings in the notes and JSON.
+  const Result prism = box.run("run " + kSource + "/cases/g1_sphere_prism.toml --quiet --no-output");
+  INFO(prism.err);
+  REQUIRE(prism.code == 0);
+  REQUIRE(prism.out.find("note     10 crossing vertices (12, 13, 14, 15, 16, 18, 19, 20, 21, 22)") != std::string::npos);
+  REQUIRE(box.run("run " + kSource + "/cases/g1_sphere_prism.toml --quiet --no-output --json").out.find(
+              "\"skewed_fans\": 10") != std::string::npos);
 
   auto rejected = [&](const std::string& name, const std::string& text, const std::vector<std::string>& mentions) {
     box.file(name, text);

@@ -250,6 +250,7 @@ int g1_basis_command(const BasisOptions& o) {
   if (o.json) {
     Json j = Json::object();
     j.set("mesh", o.g1_mesh).set("degree", o.degree).set("split_smoothness", o.split_smoothness).set("gluing", o.gluing)
+        .set("skewed_fans", static_cast<long>(gluing.skewed_fans.size()))
         .set("vertices", mesh.num_vertices()).set("edges", mesh.num_edges()).set("faces", mesh.num_faces())
         .set("boundary_edges", boundary_edges).set("euler_characteristic", mesh.euler_characteristic())
         .set("unknowns", d.unknowns).set("constraints", d.constraints).set("dimension", d.dimension)
@@ -280,7 +281,16 @@ int g1_basis_command(const BasisOptions& o) {
               mesh.planar() ? ", planar" : "");
   std::printf("             interior vertices: %s\n             boundary vertices: %s\n",
               histogram(interior_valences).c_str(), histogram(boundary_valences).c_str());
-  std::printf("  gluing     %s: Condition 3.1 holds at every interior vertex\n", o.gluing.c_str());
+  std::string skewed;
+  for (size_t i = 0; i < gluing.skewed_fans.size() && i < 12; ++i)
+    skewed += (i ? ", " : "") + std::to_string(gluing.skewed_fans[i] + 1);
+  if (gluing.skewed_fans.size() > 12) skewed += ", ...";
+  std::printf("  gluing     %s: Condition 3.1 holds at every interior vertex%s\n", o.gluing.c_str(),
+              gluing.skewed_fans.empty()
+                  ? ""
+                  : ("; " + std::to_string(gluing.skewed_fans.size()) + " crossings given a skewed fan (" + skewed +
+                     "): Condition 3.2 failed there with the symmetric values")
+                        .c_str());
   std::printf("  space      S_%d^{1,%d}: degree %d per face, C^%d at the 4-split, %d coefficients per face\n", o.degree,
               o.split_smoothness, o.degree, o.split_smoothness,
               (2 * o.degree - o.split_smoothness + 1) * (2 * o.degree - o.split_smoothness + 1));
