@@ -18,7 +18,8 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 KNOTWORK = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "build", "app", "knotwork")
 PLANAR = ["g1_three_quads", "g1_pentagon", "g1_mixed_valences", "g1_valences_6_8", "g1_lshape"]
-SURFACES = ["g1_sphere_xy", "g1_sphere_harmonic", "g1_sphere_dodecahedron", "g1_sphere_prism", "g1_torus"]
+SURFACES = ["g1_sphere_xy", "g1_sphere_harmonic", "g1_sphere_dodecahedron", "g1_sphere_prism", "g1_sphere_antiprism",
+            "g1_torus"]
 EARLIER = {"g1_three_quads": 'gluing = "symmetric_c1"', "g1_mixed_valences": 'gluing = "regular_fans"',
            "g1_sphere_xy": 'gluing = "symmetric"', "g1_sphere_harmonic": 'gluing = "symmetric"',
            "g1_sphere_prism": 'gluing = "symmetric_c1"'}

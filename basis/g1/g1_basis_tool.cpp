@@ -289,7 +289,7 @@ int g1_basis_command(const BasisOptions& o) {
               gluing.skewed_fans.empty()
                   ? ""
                   : ("; " + std::to_string(gluing.skewed_fans.size()) + " crossings given a skewed fan (" + skewed +
-                     "): Condition 3.2 failed there with the symmetric values")
+                     "), where Condition 3.2 fails otherwise")
                         .c_str());
   std::printf("  space      S_%d^{1,%d}: degree %d per face, C^%d at the 4-split, %d coefficients per face\n", o.degree,
               o.split_smoothness, o.degree, o.split_smoothness,

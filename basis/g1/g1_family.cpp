@@ -103,8 +103,9 @@ class G1Space final : public SplineSpace {
       for (size_t i = 0; i < skewed.size() && i < 12; ++i) list += (i ? ", " : "") + std::to_string(skewed[i] + 1);
       if (skewed.size() > 12) list += ", ...";
       out.push_back(std::to_string(skewed.size()) + " crossing vertices (" + list +
-                    ") have opposite neighbours of different valences: the linear symmetric data fail Condition 3.2 "
-                    "there, so they get a skewed fan (still analysis-suitable; docs/G1_POISSON.md)");
+                    ") get a skewed fan: Condition 3.2 fails there with the linear symmetric data (opposite "
+                    "neighbours of different valences) or once a neighbour is skewed; the data stay "
+                    "analysis-suitable (docs/G1_POISSON.md)");
     }
     if (d_.min_regularity_nodes > 1e-8) return out;
     char b[400];
