@@ -77,6 +77,24 @@ inline QuadMesh split_prism(int n) {
   return QuadMesh::from_faces(v, quads, "split prism");
 }
 
+// The crossings (interior vertices with 4 edges) whose neighbours across from each other differ
+// in valence, counted from the mesh alone: where the linear symmetric data fail Condition 3.2
+// (with b = -1, c = 1 and a linear, eqs. (6)-(7) ask those neighbours for equal 2cos(2pi/n)).
+inline std::vector<int> crossings_with_unequal_neighbours(const QuadMesh& m) {
+  std::vector<int> out;
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    const auto& ring = m.ring(v);
+    if (ring.boundary || ring.edges.size() != 4) continue;
+    std::array<int, 4> across{};
+    for (int i = 0; i < 4; ++i) {
+      const auto& E = m.edge(ring.edges[i]);
+      across[i] = m.valence(E.v[0] == v ? E.v[1] : E.v[0]);
+    }
+    if (across[0] != across[2] || across[1] != across[3]) out.push_back(v);
+  }
+  return out;
+}
+
 // A torus of n x m quads: every vertex of valence 4, closed, Euler characteristic 0.
 inline QuadMesh torus(int n, int m) {
   std::vector<Eigen::Vector3d> v;

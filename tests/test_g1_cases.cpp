@@ -277,17 +277,7 @@ TEST_CASE("Analysis-suitable data, sphere from a split pentagonal prism (skewed 
   const CaseDescription c = load_case(kSource + "/cases/g1_sphere_prism.toml");
   const G1Discretization d = discretize_g1(c, 0);
   const QuadMesh& mesh = d.coarse;
-  std::vector<int> expected;
-  for (int v = 0; v < mesh.num_vertices(); ++v) {
-    const auto& ring = mesh.ring(v);
-    if (ring.boundary || ring.edges.size() != 4) continue;
-    std::array<int, 4> n{};
-    for (int i = 0; i < 4; ++i) {
-      const auto& E = mesh.edge(ring.edges[i]);
-      n[i] = mesh.valence(E.v[0] == v ? E.v[1] : E.v[0]);
-    }
-    if (n[0] != n[2] || n[1] != n[3]) expected.push_back(v);
-  }
+  const std::vector<int> expected = test::crossings_with_unequal_neighbours(mesh);
   REQUIRE(expected.size() == 10);
   REQUIRE(d.coarse_gluing.skewed_fans == expected);
   const auto refused = gluing_violations(mesh, symmetric_gluing(mesh, SymmetricBlend::kLinear));
@@ -314,17 +304,7 @@ TEST_CASE("Analysis-suitable data, sphere from a split pentagonal antiprism (ske
   const CaseDescription c = load_case(kSource + "/cases/g1_sphere_antiprism.toml");
   const G1Discretization d = discretize_g1(c, 0);
   const QuadMesh& mesh = d.coarse;
-  std::vector<int> first_round;
-  for (int v = 0; v < mesh.num_vertices(); ++v) {
-    const auto& ring = mesh.ring(v);
-    if (ring.boundary || ring.edges.size() != 4) continue;
-    std::array<int, 4> n{};
-    for (int i = 0; i < 4; ++i) {
-      const auto& E = mesh.edge(ring.edges[i]);
-      n[i] = mesh.valence(E.v[0] == v ? E.v[1] : E.v[0]);
-    }
-    if (n[0] != n[2] || n[1] != n[3]) first_round.push_back(v);
-  }
+  const std::vector<int> first_round = test::crossings_with_unequal_neighbours(mesh);
   REQUIRE(first_round.size() == 10);
   const auto& skewed = d.coarse_gluing.skewed_fans;
   REQUIRE(skewed.size() == 20);

@@ -13,7 +13,7 @@ G1 cases ([geometry] shape = "sphere").
 import math
 import os
 
-from quad_meshes import Midpoints, write_obj
+from quad_meshes import split_faces, write_obj
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -36,14 +36,7 @@ def main():
     for i in range(n):
         faces.append(outward([i, n + i, (i + 1) % n]))
         faces.append(outward([n + i, n + (i + 1) % n, (i + 1) % n]))
-    midpoint = Midpoints(vertices)
-    quads = []
-    for face in faces:
-        centre = len(vertices)
-        vertices.append(tuple(sum(vertices[c][d] for c in face) / len(face) for d in range(3)))
-        m = len(face)
-        for i in range(m):
-            quads.append([face[i], midpoint(face[i], face[(i + 1) % m]), centre, midpoint(face[(i - 1) % m], face[i])])
+    quads = split_faces(vertices, faces)
     write_obj(os.path.join(HERE, "pentagonal_antiprism.obj"),
               ["The pentagonal antiprism, each face split into quads: %d vertices of valence 3 (10)," % len(vertices),
                "4 (30) and 5 (2), %d faces, outward. Written by pentagonal_antiprism.py." % len(quads)], vertices, quads)

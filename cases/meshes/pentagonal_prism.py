@@ -13,7 +13,7 @@ a skewed fan (docs/G1_POISSON.md). Projected onto a sphere by the G1 cases ([geo
 import math
 import os
 
-from quad_meshes import Midpoints, write_obj
+from quad_meshes import split_faces, write_obj
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -30,16 +30,7 @@ def main():
     # Faces counter-clockwise seen from outside.
     faces = [list(range(5)), [5 + i for i in reversed(range(5))]]
     faces += [[i, 5 + i, 5 + (i + 1) % 5, (i + 1) % 5] for i in range(5)]
-    midpoint = Midpoints(vertices)
-
-    quads = []
-    for face in faces:
-        centre = len(vertices)
-        vertices.append(tuple(sum(vertices[c][d] for c in face) / len(face) for d in range(3)))
-        n = len(face)
-        for i in range(n):
-            prev, corner, nxt = face[(i - 1) % n], face[i], face[(i + 1) % n]
-            quads.append([corner, midpoint(corner, nxt), centre, midpoint(prev, corner)])
+    quads = split_faces(vertices, faces)
     write_obj(os.path.join(HERE, "pentagonal_prism.obj"),
               ["The pentagonal prism, each face split into quads: %d vertices of valence 3 (10)," % len(vertices),
                "4 (20) and 5 (2), %d faces, outward. Written by pentagonal_prism.py." % len(quads)], vertices, quads)
