@@ -14,7 +14,6 @@
 #include <set>
 #include <memory>
 #include <mutex>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -127,20 +126,6 @@ std::vector<std::vector<mpq_class>> taylor_independent(std::vector<std::vector<m
   std::vector<std::vector<mpq_class>> out;
   for (size_t j : chosen) out.push_back(std::move(Z[j]));
   return out;
-}
-
-// Null space of a vertex system whose first `taylor` columns are the corner blocks, eliminated
-// with those columns last: each strip column belongs to one edge's rows only, so the strips are
-// reduced edge by edge and only the few rows left meet the shared corner blocks (eliminated
-// first, the corner columns mixed every edge's rows: 2.5x slower, measured on a mesh with
-// coordinates of 17 digits).
-std::vector<std::vector<mpq_class>> null_space_taylor_last(std::vector<std::vector<std::pair<int, mpq_class>>> rows, int m,
-                                                           int taylor) {
-  for (auto& row : rows)
-    for (auto& term : row) term.first = (term.first + m - taylor) % m;
-  auto Z = null_space_exact(rows, m);
-  for (auto& z : Z) std::rotate(z.begin(), z.begin() + (m - taylor), z.end());
-  return Z;
 }
 
 // The same in floating point: Z times the right singular vectors of its Taylor rows.
@@ -302,9 +287,8 @@ std::vector<EdgeEchelon> eliminate_strips(const QuadMesh& mesh, const std::vecto
 // The dimension from the echelons: a strip belongs to one edge's rows only, so the rank of
 // the whole system is the number of strip pivots (exact) plus the rank of the rows left on
 // the corner blocks, modulo primes (rank_reliable, as for the whole system before; about a
-// third of its rows and none of the strips). nullopt if some strip unknown appears in
-// another edge's rows (not so for the conditions of a quad mesh).
-std::optional<G1SpaceDimension> dimension_from_strips(const QuadMesh& mesh, int k, int r,
+// third of its rows and none of the strips).
+G1SpaceDimension dimension_from_strips(const QuadMesh& mesh, int k, int r,
                                                       const std::vector<EdgeEchelon>& echelons, long constraints) {
   G1SpaceDimension d;
   const long n = 2 * k - r + 1;
@@ -314,7 +298,7 @@ std::optional<G1SpaceDimension> dimension_from_strips(const QuadMesh& mesh, int 
   for (int e = 0; e < mesh.num_edges(); ++e)
     for (int j = 0; j < echelons[e].echelon->leading; ++j) {
       int& o = owner[echelons[e].cols.global[j]];
-      if (o >= 0) return std::nullopt;
+      if (o >= 0) throw std::logic_error("G1 dimension: a strip unknown belongs to two edges");
       o = e;
     }
   long pivots = 0;
@@ -323,7 +307,7 @@ std::optional<G1SpaceDimension> dimension_from_strips(const QuadMesh& mesh, int 
     const EdgeEchelon& E = echelons[e];
     const LeadingEchelon& L = *E.echelon;
     for (int j = L.leading; j < L.columns; ++j)
-      if (owner[E.cols.global[j]] >= 0) return std::nullopt;
+      if (owner[E.cols.global[j]] >= 0) throw std::logic_error("G1 dimension: an edge's rows meet another edge's strip");
     pivots += static_cast<long>(L.pivot_column.size());
     for (size_t i = L.pivot_column.size(); i < L.rows.size(); ++i) {
       SparseRationalRow row;
@@ -344,9 +328,9 @@ std::optional<G1SpaceDimension> dimension_from_strips(const QuadMesh& mesh, int 
 // gives (the others, free strip columns, vanish on the corner blocks: they are edge
 // functions). Each edge's strip rows are already reduced, and its rows without strips
 // constrain the corner blocks alone, so only those are solved together here; the strips
-// then follow row by row. nullopt if an edge's rows meet another edge's strips (not so for
-// the conditions of a quad mesh; the caller then solves the whole system).
-std::optional<std::vector<std::vector<mpq_class>>> vertex_null_space(const LocalColumns& cols, int taylor,
+// then follow row by row. (That no edge's rows meet another edge's strips, the premise, is
+// checked once for the whole mesh by dimension_from_strips.)
+std::vector<std::vector<mpq_class>> vertex_null_space(const LocalColumns& cols, int taylor,
                                                                      const std::vector<const EdgeEchelon*>& edges) {
   std::vector<std::vector<int>> at(edges.size());  // per edge column: the vertex's corner column, or -1
   std::vector<std::vector<mpq_class>> corner_rows;
@@ -356,7 +340,6 @@ std::optional<std::vector<std::vector<mpq_class>>> vertex_null_space(const Local
     for (int j = L.leading; j < L.columns; ++j) {
       const auto it = cols.position.find(edges[b]->cols.global[j]);
       if (it == cols.position.end()) continue;  // the far end's corner blocks: zero here
-      if (it->second >= taylor) return std::nullopt;
       at[b][j] = it->second;
     }
     for (size_t i = L.pivot_column.size(); i < L.rows.size(); ++i) {
@@ -394,7 +377,7 @@ std::optional<std::vector<std::vector<mpq_class>>> vertex_null_space(const Local
 template <class Scalar>
 void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
            const std::function<void(const std::string&)>& say, std::vector<Rows<Scalar>> rows = {},
-           std::vector<EdgeEchelon> edge_echelon = {}) {
+           std::vector<EdgeEchelon> edge_echelon = {}) {  // exact: both given, from g1_basis
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
   // Independent per edge and per vertex: threaded (the exact arithmetic dominates a G1 build).
   // The exact path gets the rows the dimension was computed from.
@@ -451,11 +434,6 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
     for (int e : ring.edges)
       if (!mesh.edge(e).boundary() && std::find(edges.begin(), edges.end(), e) == edges.end()) edges.push_back(e);
     for (int e : edges) add_edge_strips(cols, mesh, e, k, r);
-    auto vertex_rows = [&] {
-      Rows<Scalar> out;
-      for (int e : edges) out.insert(out.end(), rows[e].begin(), rows[e].end());
-      return out;
-    };
     if constexpr (exact) {
       const std::string key = configuration(v);
       std::shared_ptr<const std::vector<std::vector<mpq_class>>> solutions;
@@ -464,21 +442,19 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
         if (const auto it = cache.find(key); it != cache.end()) solutions = it->second;
       }
       if (!solutions) {
-        std::optional<std::vector<std::vector<mpq_class>>> Z;
-        if (!edge_echelon.empty()) {
-          std::vector<const EdgeEchelon*> echelons;
-          for (int e : edges) echelons.push_back(&edge_echelon[e]);
-          Z = vertex_null_space(cols, taylor, echelons);
-        }
-        if (!Z) Z = null_space_taylor_last(restrict_rows_sparse(vertex_rows(), cols), cols.size(), taylor);
-        solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(taylor_independent(std::move(*Z), taylor));
+        std::vector<const EdgeEchelon*> echelons;
+        for (int e : edges) echelons.push_back(&edge_echelon[e]);
+        solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(
+            taylor_independent(vertex_null_space(cols, taylor, echelons), taylor));
         const std::lock_guard<std::mutex> lock(cache_mutex);
         cache.emplace(key, solutions);
       }
       local[v].exact = std::move(solutions);
     } else {
       // The same sharing, keyed by the local system itself (equal doubles, equal solutions).
-      auto A = restrict_rows(vertex_rows(), cols);
+      Rows<Scalar> vertex_rows;
+      for (int e : edges) vertex_rows.insert(vertex_rows.end(), rows[e].begin(), rows[e].end());
+      auto A = restrict_rows(vertex_rows, cols);
       std::shared_ptr<const Eigen::MatrixXd> solutions;
       {
         const std::lock_guard<std::mutex> lock(cache_mutex);
@@ -512,42 +488,27 @@ void build(const QuadMesh& mesh, const GluingData& gluing, G1Basis& basis,
   }
   local.clear();
 
-  // Edge functions: each edge's null space on its strips, in parallel. Edges whose local
-  // systems are equal entry for entry (after a subdivision, most inner edges of a coarse
-  // face) share one exact null space.
+  // Edge functions: each edge's null space on its strips, in parallel. Exact: read off the
+  // edge's echelon, once per distinct echelon (edges with equal systems share one).
   say("edge functions, " + std::to_string(mesh.num_edges()) + " edges");
   std::vector<LocalColumns> edge_cols(mesh.num_edges());
   std::vector<std::shared_ptr<const std::vector<std::vector<mpq_class>>>> edge_exact(mesh.num_edges());
   std::vector<Eigen::MatrixXd> edge_floating(exact ? 0 : mesh.num_edges());
-  std::map<std::vector<std::vector<std::pair<int, mpq_class>>>, std::shared_ptr<const std::vector<std::vector<mpq_class>>>>
-      edge_cache;
   std::map<const LeadingEchelon*, std::shared_ptr<const std::vector<std::vector<mpq_class>>>> echelon_cache;
 #pragma omp parallel for schedule(dynamic, 16)
   for (int e = 0; e < mesh.num_edges(); ++e) {
     add_edge_strips(edge_cols[e], mesh, e, k, r);
     if constexpr (exact) {
-      if (!edge_echelon.empty()) {
-        // The strips' null space with the corner blocks zero, read off the edge's echelon.
-        const LeadingEchelon* echelon = edge_echelon[e].echelon.get();
-        {
-          const std::lock_guard<std::mutex> lock(cache_mutex);
-          if (const auto it = echelon_cache.find(echelon); it != echelon_cache.end()) edge_exact[e] = it->second;
-        }
-        if (edge_exact[e]) continue;
-        auto solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(leading_null_space(*echelon));
-        const std::lock_guard<std::mutex> lock(cache_mutex);
-        edge_exact[e] = echelon_cache.emplace(echelon, std::move(solutions)).first->second;
-        continue;
-      }
-      auto A = restrict_rows_sparse(rows[e], edge_cols[e]);
+      // The strips' null space with the corner blocks zero.
+      const LeadingEchelon* echelon = edge_echelon[e].echelon.get();
       {
         const std::lock_guard<std::mutex> lock(cache_mutex);
-        if (const auto it = edge_cache.find(A); it != edge_cache.end()) edge_exact[e] = it->second;
+        if (const auto it = echelon_cache.find(echelon); it != echelon_cache.end()) edge_exact[e] = it->second;
       }
       if (edge_exact[e]) continue;
-      auto solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(null_space_exact(A, edge_cols[e].size()));
+      auto solutions = std::make_shared<const std::vector<std::vector<mpq_class>>>(leading_null_space(*echelon));
       const std::lock_guard<std::mutex> lock(cache_mutex);
-      edge_exact[e] = edge_cache.emplace(std::move(A), std::move(solutions)).first->second;
+      edge_exact[e] = echelon_cache.emplace(echelon, std::move(solutions)).first->second;
     } else {
       edge_floating[e] = null_space(restrict_rows(rows[e], edge_cols[e]), edge_cols[e].size());
     }
@@ -889,12 +850,7 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
     long constraints = 0;
     for (const auto& x : rows) constraints += static_cast<long>(x.size());
     auto echelons = eliminate_strips(mesh, rows, k, r);
-    if (auto d = dimension_from_strips(mesh, k, r, echelons, constraints)) {
-      basis.space = *d;
-    } else {
-      basis.space = g1_space_dimension_exact(mesh, k, r, rows);
-      echelons.clear();
-    }
+    basis.space = dimension_from_strips(mesh, k, r, echelons, constraints);
     say("local functions at " + std::to_string(mesh.num_vertices()) + " vertices and " +
         std::to_string(mesh.num_edges()) + " edges");
     build<mpq_class>(mesh, gluing, basis, say, std::move(rows), std::move(echelons));

@@ -281,14 +281,11 @@ int g1_basis_command(const BasisOptions& o) {
               mesh.planar() ? ", planar" : "");
   std::printf("             interior vertices: %s\n             boundary vertices: %s\n",
               histogram(interior_valences).c_str(), histogram(boundary_valences).c_str());
-  std::string skewed;
-  for (size_t i = 0; i < gluing.skewed_fans.size() && i < 12; ++i)
-    skewed += (i ? ", " : "") + std::to_string(gluing.skewed_fans[i] + 1);
-  if (gluing.skewed_fans.size() > 12) skewed += ", ...";
   std::printf("  gluing     %s: Condition 3.1 holds at every interior vertex%s\n", o.gluing.c_str(),
               gluing.skewed_fans.empty()
                   ? ""
-                  : ("; " + std::to_string(gluing.skewed_fans.size()) + " crossings given a skewed fan (" + skewed +
+                  : ("; " + std::to_string(gluing.skewed_fans.size()) + " crossings given a skewed fan (" +
+                     gluing.skewed_fans_list() +
                      "), where Condition 3.2 fails otherwise")
                         .c_str());
   std::printf("  space      S_%d^{1,%d}: degree %d per face, C^%d at the 4-split, %d coefficients per face\n", o.degree,

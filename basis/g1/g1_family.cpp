@@ -98,11 +98,8 @@ class G1Space final : public SplineSpace {
   }
   std::vector<std::string> notes() const override {
     std::vector<std::string> out;
-    if (const auto& skewed = d_.coarse_gluing.skewed_fans; !skewed.empty()) {
-      std::string list;
-      for (size_t i = 0; i < skewed.size() && i < 12; ++i) list += (i ? ", " : "") + std::to_string(skewed[i] + 1);
-      if (skewed.size() > 12) list += ", ...";
-      out.push_back(std::to_string(skewed.size()) + " crossing vertices (" + list +
+    if (const GluingData& g = d_.coarse_gluing; !g.skewed_fans.empty()) {
+      out.push_back(std::to_string(g.skewed_fans.size()) + " crossing vertices (" + g.skewed_fans_list() +
                     ") get a skewed fan: Condition 3.2 fails there with the linear symmetric data (opposite "
                     "neighbours of different valences) or once a neighbour is skewed; the data stay "
                     "analysis-suitable (docs/G1_POISSON.md)");
@@ -119,18 +116,9 @@ class G1Space final : public SplineSpace {
   }
   std::vector<ReportField> check_solution(const Eigen::VectorXd& coefficients) const override {
     const double jump = g1_gradient_jump(d_, coefficients);
-    // A G1 solution is C1 to rounding (at most ~1e-11 measured on every case); far more means
-    // the local functions have gone wrong, and the solution is not to be trusted: said on the
-    // line itself, not left to be noticed. The one case seen (floating-point symmetric_c1 data
-    // on the split pentagonal prism, 3 subdivisions) is now refused when the basis is built
-    // (tidy_vertex_functions), so this is a last line of defence with no known trigger.
-    const bool suspect = !g1_section(*case_).c0 && jump > 1e-6;
     return {{.key = "c1_jump",
              .value = jump,
-             .text = "largest gradient jump across interfaces " + format("%.3e", jump) + " (relative)" +
-                     (suspect ? ": NOT C1 to rounding; the floating-point local functions are not accurate here and "
-                                "this solution is unreliable (exact data, e.g. gluing = \"analysis_suitable\", avoid it)"
-                              : ""),
+             .text = "largest gradient jump across interfaces " + format("%.3e", jump) + " (relative)",
              .label = "C1",
              .column = true,
              .width = 10}};

@@ -57,6 +57,13 @@ int PiecewisePolynomial::degree() const {
   return static_cast<int>(std::max(pieces[0].size(), pieces[1].size())) - 1;
 }
 
+std::string GluingData::skewed_fans_list() const {
+  std::string list;
+  for (size_t i = 0; i < skewed_fans.size() && i < 12; ++i) list += (i ? ", " : "") + std::to_string(skewed_fans[i] + 1);
+  if (skewed_fans.size() > 12) list += ", ...";
+  return list;
+}
+
 bool GluingData::exact() const {
   for (const auto& e : edges)
     if (e && (!e->a.exact || !e->b.exact || !e->c.exact)) return false;
@@ -337,6 +344,22 @@ PiecewisePolynomial reflected(const PiecewisePolynomial& p) {
 
 }  // namespace
 
+namespace {
+
+// Eq. (8) of a planar fan of edge directions at edge `cur` between `prev` and `next` (counter-
+// clockwise): with T = cur, X = next (dv f1), Y = prev (du f0), c X = b Y + a T holds for
+// c = det(Y, T), b = det(X, T), a = det(Y, X) (three vectors of the plane): (a/c, b/c).
+std::pair<mpq_class, mpq_class> fan_values(const std::array<mpq_class, 2>& prev, const std::array<mpq_class, 2>& cur,
+                                           const std::array<mpq_class, 2>& next) {
+  auto det = [](const std::array<mpq_class, 2>& x, const std::array<mpq_class, 2>& y) -> mpq_class {
+    return x[0] * y[1] - x[1] * y[0];
+  };
+  const mpq_class d = det(prev, cur);
+  return {det(prev, next) / d, det(next, cur) / d};
+}
+
+}  // namespace
+
 EdgeGluing reversed(const EdgeGluing& g) { return {reflected(g.a), reflected(g.c), reflected(g.b)}; }
 
 GluingData geometric_gluing(const QuadMesh& mesh, bool regular_fans_where_rational) {
@@ -394,24 +417,18 @@ GluingData geometric_gluing(const QuadMesh& mesh, bool regular_fans_where_ration
       u.push_back({mpq_class(t.dot(e1)), mpq_class(t.dot(e2))});
       length.push_back(t.norm());
     }
-    auto det = [](const std::array<mpq_class, 2>& x, const std::array<mpq_class, 2>& y) -> mpq_class {
-      return x[0] * y[1] - x[1] * y[0];
-    };
     const int n = static_cast<int>(u.size());
     for (int i = 0; i < n; ++i) {
       if (mesh.edge(ring.edges[i]).boundary()) continue;
       // The ring runs counter-clockwise: edge i is shared by faces[i] (f1, on its left: its
       // other edge at v is edge i + 1) and faces[i - 1] (f0: its other edge is edge i - 1).
-      // For the tangents T = u[i], X = u[next] (dv f1) and Y = u[prev] (du f0) of a map with
-      // these edge directions, c X = b Y + a T holds with c = det(Y, T), b = det(X, T),
-      // a = det(Y, X) (three vectors of the plane); divided by c.
       const int prev = ring.boundary ? i - 1 : (i + n - 1) % n, next = ring.boundary ? i + 1 : (i + 1) % n;
-      const mpq_class d = det(u[prev], u[i]);
+      const mpq_class d = u[prev][0] * u[i][1] - u[prev][1] * u[i][0];
       if (std::abs(d.get_d()) < 1e-12 * length[prev] * length[i])
         throw std::invalid_argument("vertex " + std::to_string(v + 1) +
                                     ": two consecutive edges are parallel in the tangent plane; the geometric gluing "
                                     "is undefined there (use symmetric)");
-      at[v][ring.edges[i]] = {det(u[prev], u[next]) / d, det(u[next], u[i]) / d};
+      at[v][ring.edges[i]] = fan_values(u[prev], u[i], u[next]);
     }
   }
   GluingData g;
@@ -518,18 +535,6 @@ std::optional<CrossingResiduals> crossing_residuals(const QuadMesh& mesh, const 
   return r;
 }
 
-// Eq. (8) of a planar fan of edge directions at edge `cur` between `prev` and `next` (counter-
-// clockwise): with T = cur, X = next (dv f1), Y = prev (du f0), c X = b Y + a T holds for
-// c = det(Y, T), b = det(X, T), a = det(Y, X) (three vectors of the plane): (a/c, b/c).
-std::pair<mpq_class, mpq_class> fan_values(const std::array<mpq_class, 2>& prev, const std::array<mpq_class, 2>& cur,
-                                           const std::array<mpq_class, 2>& next) {
-  auto det = [](const std::array<mpq_class, 2>& x, const std::array<mpq_class, 2>& y) -> mpq_class {
-    return x[0] * y[1] - x[1] * y[0];
-  };
-  const mpq_class d = det(prev, cur);
-  return {det(prev, next) / d, det(next, cur) / d};
-}
-
 // Surfaces: per vertex the symmetric fan's values seen from it, a = 2cos(2pi/n) (rational or a
 // sum of cosines), b = -1, or a skewed fan's; a and b linear along each edge between the two
 // ends' values, c = 1. Analysis-suitable by degree. A crossing vertex whose opposite
@@ -594,9 +599,7 @@ GluingData surface_gluing(const QuadMesh& mesh) {
 }  // namespace
 
 GluingData analysis_suitable_gluing(const QuadMesh& mesh) {
-  // No plane to take faces from: the symmetric fan's values 2cos(2 pi / n) at the two ends,
-  // linear along the edge, b = -1, c = 1. Analysis-suitable by degree; at a vertex of valence
-  // 4 (a crossing) gluing_violations checks Condition 3.2 and names the vertex if it fails.
+  // No plane to take faces from: the symmetric fan's values, skewed where a crossing needs it.
   if (!mesh.planar()) return surface_gluing(mesh);
   // Every bilinear face must be regular: its det J is affine in (s, t) (no s t term), so
   // positive at the four corners means positive everywhere, i.e. a convex face, counter-

@@ -73,6 +73,7 @@ struct GluingData {
   // analysis_suitable_gluing on a surface: the crossing vertices (0-based) given a skewed fan
   // because the linear symmetric data fail Condition 3.2 there.
   std::vector<int> skewed_fans;
+  std::string skewed_fans_list() const;  // "12, 13, ..." (1-based, the first 12) for messages
 };
 
 // The symmetric gluing (Blidia-Mourrain-Villamizar eq. 11) with Hermite functions of degree 2,
