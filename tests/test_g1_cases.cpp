@@ -268,8 +268,8 @@ TEST_CASE("Analysis-suitable data, sphere from a dodecahedron (valences 3, 4, 5)
 
 // A closed mesh where the linear symmetric data fail Condition 3.2: the split pentagonal
 // prism, whose pentagon-edge midpoints (valence 4) have a pentagon centre (5) across from a
-// rectangle centre (4). Which crossings fail is counted here from the valences alone (with
-// b = -1, c = 1 and linear a, eqs. (6)-(7) ask opposite neighbours for equal 2cos(2pi/n));
+// rectangle centre (4). Which crossings fail is counted from the valences alone
+// (test::crossings_with_unequal_neighbours);
 // the symmetric data are refused at exactly those, the default skews exactly those, and the
 // rates are optimal.
 TEST_CASE("Analysis-suitable data, sphere from a split pentagonal prism (skewed crossings): optimal rates",
