@@ -1,6 +1,8 @@
 #include "basis/tmesh/rectangular_partition.hpp"
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <cmath>
 #include <stdexcept>
 
@@ -63,30 +65,75 @@ RectangularPartition::RectangularPartition(std::vector<RationalBox> cells) : cel
     X1 = std::max(X1, c.x1); Y1 = std::max(Y1, c.y1);
     area += (c.x1 - c.x0) * (c.y1 - c.y0);
   }
-  for (size_t i = 0; i < cells_.size(); ++i)
-    for (size_t j = i + 1; j < cells_.size(); ++j) {
-      const RationalBox &a = cells_[i], &b = cells_[j];
-      if (std::min(a.x1, b.x1) > std::max(a.x0, b.x0) && std::min(a.y1, b.y1) > std::max(a.y0, b.y0))
-        throw std::invalid_argument("cells " + std::to_string(i) + " " + box(a) + " and " + std::to_string(j) + " " +
-                                    box(b) + " overlap");
-    }
-  // No overlaps, so the union is the bounding rectangle exactly when the areas add up.
-  if (area != (X1 - X0) * (Y1 - Y0))
+  // Sides on each line x = const (vertical) or y = const: (from, to, cell), left or lower
+  // sides of cells in [0], right or upper ones in [1]. Sorting them makes the checks and the
+  // shared edges O(N log N); comparing every pair of cells took seconds at 10^4 cells.
+  struct Side {
+    mpq_class from, to;
+    int cell;
+  };
+  std::map<mpq_class, std::array<std::vector<Side>, 2>> lines[2];
+  for (int i = 0; i < num_cells(); ++i) {
+    const RationalBox& c = cells_[i];
+    lines[0][c.x0][0].push_back({c.y0, c.y1, i});
+    lines[0][c.x1][1].push_back({c.y0, c.y1, i});
+    lines[1][c.y0][0].push_back({c.x0, c.x1, i});
+    lines[1][c.y1][1].push_back({c.x0, c.x1, i});
+  }
+  for (auto& by_position : lines)
+    for (auto& [position, sides] : by_position)
+      for (auto& list : sides)
+        std::sort(list.begin(), list.end(), [](const Side& a, const Side& b) { return a.from < b.from; });
+  // The number of cells covering a point changes across a line by (cells starting there) -
+  // (cells ending there). If that is zero along every interior line, the count is the same
+  // everywhere inside the bounding rectangle, and the areas adding up make it 1: a tiling.
+  auto balanced = [&]() {
+    for (int d = 0; d < 2; ++d)
+      for (const auto& [position, sides] : lines[d]) {
+        if (position == (d == 0 ? X0 : Y0) || position == (d == 0 ? X1 : Y1)) continue;
+        std::vector<std::pair<mpq_class, int>> events;
+        for (const Side& s : sides[0]) events.emplace_back(s.from, 1), events.emplace_back(s.to, -1);
+        for (const Side& s : sides[1]) events.emplace_back(s.from, -1), events.emplace_back(s.to, 1);
+        std::sort(events.begin(), events.end());
+        int sum = 0;
+        for (size_t e = 0; e < events.size(); ++e) {
+          sum += events[e].second;
+          if (sum != 0 && (e + 1 == events.size() || events[e + 1].first != events[e].first)) return false;
+        }
+      }
+    return true;
+  };
+  if (area != (X1 - X0) * (Y1 - Y0) || !balanced()) {
+    // Not a tiling: name two overlapping cells if there are (the slow scan, only here).
+    for (size_t i = 0; i < cells_.size(); ++i)
+      for (size_t j = i + 1; j < cells_.size(); ++j) {
+        const RationalBox &a = cells_[i], &b = cells_[j];
+        if (std::min(a.x1, b.x1) > std::max(a.x0, b.x0) && std::min(a.y1, b.y1) > std::max(a.y0, b.y0))
+          throw std::invalid_argument("cells " + std::to_string(i) + " " + box(a) + " and " + std::to_string(j) + " " +
+                                      box(b) + " overlap");
+      }
+    // No overlaps, so the union is the bounding rectangle exactly when the areas add up.
     throw std::invalid_argument("the cells do not tile the rectangle [" + num(X0) + ", " + num(X1) + "] x [" +
                                 num(Y0) + ", " + num(Y1) + "]: they leave a gap of area " +
                                 num(mpq_class((X1 - X0) * (Y1 - Y0) - area)));
-  for (int i = 0; i < num_cells(); ++i)
-    for (int j = 0; j < num_cells(); ++j) {
-      const RationalBox &a = cells_[i], &b = cells_[j];
-      if (a.x1 == b.x0) {
-        const mpq_class lo = std::max(a.y0, b.y0), hi = std::min(a.y1, b.y1);
-        if (hi > lo) edges_.push_back({i, j, true, a.x1, lo, hi});
-      }
-      if (a.y1 == b.y0) {
-        const mpq_class lo = std::max(a.x0, b.x0), hi = std::min(a.x1, b.x1);
-        if (hi > lo) edges_.push_back({i, j, false, a.y1, lo, hi});
+  }
+  // Shared edges: on each line, the right (upper) sides of some cells against the left (lower)
+  // sides of others, both sorted along the line: a merge.
+  for (int d = 0; d < 2; ++d)
+    for (const auto& [position, sides] : lines[d]) {
+      const auto &ending = sides[1], &starting = sides[0];
+      size_t a = 0, b = 0;
+      while (a < ending.size() && b < starting.size()) {
+        const mpq_class lo = std::max(ending[a].from, starting[b].from), hi = std::min(ending[a].to, starting[b].to);
+        if (hi > lo) edges_.push_back({ending[a].cell, starting[b].cell, d == 0, position, lo, hi});
+        if (ending[a].to < starting[b].to) ++a;
+        else ++b;
       }
     }
+  // The order of the pairwise scan this replaced: by first cell, then second.
+  std::sort(edges_.begin(), edges_.end(), [](const SharedEdge& a, const SharedEdge& b) {
+    return a.first != b.first ? a.first < b.first : a.second < b.second;
+  });
 }
 
 }  // namespace knotwork
