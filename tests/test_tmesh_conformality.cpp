@@ -134,3 +134,40 @@ TEST_CASE("On a tensor grid the formula is the tensor-product B-spline count", "
       REQUIRE(brute_force(grid, m, n) == (m + 1 + 3) * (n + 1 + 1));
     }
 }
+
+TEST_CASE("Across C0 lines too: the cofactor count modulo primes = the brute-force dimension", "[tmesh]") {
+  // The PT-splines of a one-patch L-shape are only C0 across the fold u = 1/2, a cross-cut;
+  // their certificate uses this count. Random halvings of a 2 x 2 grid (or of a 3 x 2 grid
+  // with both interior x lines C0) keep the grid's lines as cross-cuts; a vertex where two C0
+  // lines cross carries m n cofactor coefficients.
+  std::mt19937 rng(17);
+  int with_t_edges = 0;
+  for (int t = 0; t < 16; ++t) {
+    const bool wide = t % 2 == 1;
+    const std::vector<mpq_class> xs = wide ? std::vector<mpq_class>{0, q(1, 3), q(1, 2), 1} : std::vector<mpq_class>{0, q(1, 2), 1};
+    C0Lines c0;
+    c0.x = {q(1, 2)};
+    if (wide) c0.x.push_back(q(1, 3));
+    if (t % 4 == 3) c0.y = {q(1, 2)};
+    const RectangularPartition mesh(random_halvings(rng, 8 + 2 * t, grid_cells(xs, {0, q(1, 2), 1})));
+    const PartitionTopology topo = partition_topology(mesh);
+    with_t_edges += topo.count(PartitionTopology::KnotKind::kSegment) > 0;
+    for (int m = 1; m <= 3; ++m)
+      for (int n = 1; n <= 3; ++n) {
+        INFO("mesh " << t << ", degree " << m << "x" << n);
+        const long dim = spline_space_dimension(mesh, m, n, m - 1, n - 1, RankMethod::kExact, c0).dimension;
+        REQUIRE(conformality_count(topo, m, n, c0, RankMethod::kModular).dimension == dim);
+        REQUIRE(conformality_count(topo, m, n, c0, RankMethod::kExact).dimension == dim);
+      }
+  }
+  REQUIRE(with_t_edges >= 8);  // the rows of T l-edges were exercised, not only cross-cuts
+  // A tensor grid: a C0 line is a knot of multiplicity m (x) or n (y).
+  const RectangularPartition grid(grid_cells({0, q(1, 3), 1, q(7, 4), 3}, {0, q(2, 5), 1}));
+  C0Lines fold;
+  fold.x = {1};
+  fold.y = {q(2, 5)};
+  for (int m = 1; m <= 3; ++m)
+    for (int n = 1; n <= 3; ++n)
+      REQUIRE(conformality_count(partition_topology(grid), m, n, fold, RankMethod::kModular).dimension ==
+              (m + 1 + 3 + (m - 1)) * (n + 1 + 1 + (n - 1)));
+}

@@ -44,32 +44,63 @@ bool diagonalizable_by_ordering(const PartitionTopology& t, int m, int n) {
   return left == 0;
 }
 
-ConformalityCount conformality_count(const PartitionTopology& t, int m, int n) {
+ConformalityCount conformality_count(const PartitionTopology& t, int m, int n, const C0Lines& c0, RankMethod method) {
   using Kind = PartitionTopology::KnotKind;
   ConformalityCount c;
   c.tensor_part = static_cast<long>(m + 1) * (n + 1);
-  c.interior_vertices = t.interior_vertices();
-  auto degree = [&](const PartitionTopology::Knot& k) { return k.vertical ? n : m; };
+  auto on = [](const std::vector<mpq_class>& lines, const mpq_class& at) {
+    return std::find(lines.begin(), lines.end(), at) != lines.end();
+  };
+  // Smoothness across the vertical line x (rho) and the horizontal line y (sigma).
+  auto rho = [&](const mpq_class& x) { return on(c0.x, x) ? 0 : m - 1; };
+  auto sigma = [&](const mpq_class& y) { return on(c0.y, y) ? 0 : n - 1; };
+  // The cofactor of vertex v has bi-degree (m - rho - 1, n - sigma - 1): its coefficients are
+  // columns first[v] .. first[v] + (m - rho)(n - sigma) - 1, index a + (m - rho) b.
+  std::vector<long> first(t.vertices.size() + 1, 0);
+  for (size_t v = 0; v < t.vertices.size(); ++v) {
+    const auto& p = t.vertices[v];
+    first[v + 1] = first[v] + (p.boundary ? 0 : static_cast<long>(m - rho(p.x)) * (n - sigma(p.y)));
+  }
+  c.interior_vertices = first.back();
   std::vector<SparseRationalRow> rows;
   for (const auto& k : t.knots) {
-    if (k.kind == Kind::kLine) c.tensor_part += degree(k) + 1;
+    // Across a vertical l-edge at x0 the jump is (x - x0)^(rho+1) A(x, y), A of bi-degree
+    // (m - rho - 1, n): one spline in y per power of x (horizontal: the roles swapped).
+    const int along = k.vertical ? n : m, copies = k.vertical ? m - rho(k.position) : n - sigma(k.position);
+    if (k.kind == Kind::kLine) c.tensor_part += static_cast<long>(copies) * (along + 1);
     if (k.kind != Kind::kSegment) continue;
-    std::vector<mpq_class> power(k.vertices.size(), mpq_class(1));  // t_v^j, j = 0, 1, ...
-    for (int j = 0; j <= degree(k); ++j) {
-      SparseRationalRow row;
-      for (size_t i = 0; i < k.vertices.size(); ++i) {
-        row.terms.emplace_back(k.vertices[i], power[i]);
-        power[i] *= k.vertical ? t.vertices[k.vertices[i]].y : t.vertices[k.vertices[i]].x;
+    // A T l-edge's cofactor vanishes beyond both ends: for each copy, the sum over its
+    // vertices of (t - t_v)^(s_v + 1 + b) C_v,b (s_v the smoothness across the other line
+    // through v, t the coordinate along the l-edge) is the zero polynomial of degree `along`.
+    for (int copy = 0; copy < copies; ++copy)
+      for (int j = 0; j <= along; ++j) {
+        SparseRationalRow row;
+        for (int v : k.vertices) {
+          const auto& p = t.vertices[v];
+          const int s = k.vertical ? sigma(p.y) : rho(p.x);
+          const int width = m - rho(p.x);  // a runs along x
+          const mpq_class& tv = k.vertical ? p.y : p.x;
+          for (int b = 0; b < along - s; ++b) {
+            const int e = s + 1 + b;  // coefficient of t^j in (t - t_v)^e
+            if (j > e) continue;
+            mpz_class binomial;
+            mpz_bin_uiui(binomial.get_mpz_t(), e, j);
+            mpq_class power = 1;
+            for (int i = 0; i < e - j; ++i) power *= -tv;
+            const long column = first[v] + (k.vertical ? copy + static_cast<long>(width) * b : b + static_cast<long>(width) * copy);
+            row.terms.emplace_back(column, binomial * power);
+          }
+        }
+        rows.push_back(std::move(row));
       }
-      rows.push_back(std::move(row));
-    }
   }
   c.conformality_rows = static_cast<long>(rows.size());
-  c.conformality_rank = rank_exact(rows, static_cast<long>(t.vertices.size()));
+  c.conformality_rank = method == RankMethod::kExact ? rank_exact(rows, c.interior_vertices)
+                                                     : rank_reliable(rows, c.interior_vertices);
   c.dimension = c.tensor_part + c.interior_vertices - c.conformality_rank;
 
   c.diagonalizable = diagonalizable_by_ordering(t, m, n);
-  if (c.diagonalizable) c.formula = c.tensor_part + c.interior_vertices - c.conformality_rows;
+  if (c.diagonalizable && c0.empty()) c.formula = c.tensor_part + c.interior_vertices - c.conformality_rows;
   return c;
 }
 
