@@ -221,6 +221,48 @@ TEST_CASE("PT-splines: the minimal extension is certified and smaller than the f
   check_premise(folded, 3, C0Lines{{h}, {}});
 }
 
+TEST_CASE("PT-splines: independence proved by peeling is true, and never claimed for dependent LR B-splines", "[pt]") {
+  // The certificate skips the cell polynomials when peeling proves the LR B-splines of T^e
+  // independent. The claim is checked here by the exact rank of the B-splines' own cell
+  // polynomials on the cells of T^e (on a cell of T a B-spline can be piecewise), which the
+  // peeling does not compute.
+  auto splines_rank = [](const PtSplineBasis& B, const RectangularPartition&) {
+    const RectangularPartition extension(B.extension_cells);
+    PtSplineBasis each = B;
+    each.functions.clear();
+    for (int s = 0; s < static_cast<int>(B.splines.size()); ++s) each.functions.push_back({{s, mpq_class(1)}});
+    return exact_rank(pt_cell_polynomials_exact(each, extension), extension, (B.m + 1) * (B.n + 1));
+  };
+  for (const auto& [file, degree] : {std::pair{"lr_dependent.toml", 3}, {"lr_dependent_dlp.toml", 2}}) {
+    INFO(file);
+    const RectangularPartition dependent(load_partition(std::string(KNOTWORK_SOURCE_DIR "/cases/tmeshes/") + file).cells);
+    const PtSplineBasis B = pt_spline_basis(dependent, degree, degree, PtExtension::kMinimal);
+    REQUIRE_FALSE(B.splines_independent);
+    REQUIRE_FALSE(B.certified_by_peeling);
+    REQUIRE(splines_rank(B, dependent) < static_cast<long>(B.splines.size()));
+  }
+  std::mt19937 rng(31);
+  const mpq_class h(1, 2);
+  int peeled = 0, not_peeled = 0;
+  for (int t = 0; t < 12; ++t) {
+    const RectangularPartition mesh(random_halvings(rng, 10 + 3 * t, {{0, 0, h, 1}, {h, 0, 1, 1}}));
+    for (int p : {2, 3}) {
+      INFO("mesh " << t << ", degree " << p);
+      const PtSplineBasis B = pt_spline_basis(mesh, p, p, PtExtension::kAuto, C0Lines{{h}, {}});
+      if (B.extension != PtExtension::kMinimal) continue;
+      if (B.splines_independent) {
+        ++peeled;
+        REQUIRE(splines_rank(B, mesh) == static_cast<long>(B.splines.size()));
+        REQUIRE(B.certified_by_peeling);
+      } else {
+        ++not_peeled;
+      }
+    }
+  }
+  REQUIRE(peeled >= 12);  // measured: most of the 24; the claim was exercised
+  INFO(not_peeled << " not proved by peeling");
+}
+
 TEST_CASE("PT-splines: a B-spline of the extended mesh that meets an extended edge is not in S(T)", "[pt]") {
   // The oracle of the previous test can fail: a function that skips the elimination is caught.
   const RectangularPartition mesh(pinwheel());

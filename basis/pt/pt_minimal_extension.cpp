@@ -4,8 +4,8 @@
 // possible", Sec. 3.1, and turns T l-edges into longer ones or rays rather than cross-cuts).
 // The LR B-splines of that mesh T^e are the local tensor-product B-splines; a combination is
 // in S(T) when it is a single polynomial on every cell of T (the EEE condition, here across
-// extended edges of both directions). pt_spline_basis certifies the result (count = brute-
-// force dimension, exact independence) and falls back to the full extension otherwise.
+// extended edges of both directions). pt_spline_basis certifies the result (count = the
+// dimension of S(T), exact independence) and falls back to the full extension otherwise.
 #include <algorithm>
 #include <set>
 
@@ -127,6 +127,63 @@ bool build_lr_mesh(const Grid& g, LrMesh& lr, std::vector<GridSegment> pending, 
   return true;
 }
 
+// Whether the B-splines are linearly independent, proved by peeling (Dokken-Lyche-Pettersen's
+// overloading argument), or not known. The LR B-splines span every polynomial of bi-degree
+// (m, n) (they refine the tensor B-splines of the cross-cuts), so on any piece of the mesh at
+// least (m+1)(n+1) of them are nonzero; where exactly that many are, their restrictions are a
+// basis of the polynomials, so none of them can carry a coefficient of a vanishing
+// combination. Nor can a B-spline that is the only one left on some piece once those are
+// excluded. When that excludes every B-spline there is no vanishing combination: they are
+// independent. (The pieces: each cell of T cut by the knot lines of the B-splines meeting it.)
+bool independent_by_peeling(const std::vector<PtLocalBSpline>& splines, const std::vector<std::vector<int>>& meeting,
+                            const RectangularPartition& mesh, int m, int n) {
+  const size_t full = static_cast<size_t>(m + 1) * (n + 1);
+  std::vector<std::vector<int>> pieces;  // the B-splines nonzero on each piece
+  for (int k = 0; k < mesh.num_cells(); ++k) {
+    const auto& c = mesh.cells()[k];
+    std::vector<mpq_class> cut[2] = {{c.x0, c.x1}, {c.y0, c.y1}};
+    for (int s : meeting[k])
+      for (int d = 0; d < 2; ++d)
+        for (const mpq_class& v : d == 0 ? splines[s].x : splines[s].y)
+          if ((d == 0 ? c.x0 : c.y0) < v && v < (d == 0 ? c.x1 : c.y1)) cut[d].push_back(v);
+    for (auto& list : cut) {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+    }
+    const int nx = static_cast<int>(cut[0].size()) - 1, ny = static_cast<int>(cut[1].size()) - 1;
+    auto index = [](const std::vector<mpq_class>& list, const mpq_class& v) {
+      return static_cast<int>(std::lower_bound(list.begin(), list.end(), v) - list.begin());
+    };
+    const size_t first = pieces.size();
+    pieces.resize(first + static_cast<size_t>(nx) * ny);
+    for (int s : meeting[k]) {
+      const auto& sp = splines[s];
+      const int x0 = sp.x.front() <= c.x0 ? 0 : index(cut[0], sp.x.front());
+      const int x1 = sp.x.back() >= c.x1 ? nx : index(cut[0], sp.x.back());
+      const int y0 = sp.y.front() <= c.y0 ? 0 : index(cut[1], sp.y.front());
+      const int y1 = sp.y.back() >= c.y1 ? ny : index(cut[1], sp.y.back());
+      for (int j = y0; j < y1; ++j)
+        for (int i = x0; i < x1; ++i) pieces[first + i + static_cast<size_t>(nx) * j].push_back(s);
+    }
+  }
+  std::vector<bool> excluded(splines.size(), false);
+  for (const auto& on : pieces) {
+    if (on.size() < full) return false;  // cannot happen if they span the polynomials: prove nothing
+    if (on.size() == full)
+      for (int s : on) excluded[s] = true;
+  }
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const auto& on : pieces) {
+      int left = -1, count = 0;
+      for (int s : on)
+        if (!excluded[s]) left = s, ++count;
+      if (count == 1) excluded[left] = true, changed = true;
+    }
+  }
+  return std::all_of(excluded.begin(), excluded.end(), [](bool e) { return e; });
+}
+
 }  // namespace
 
 std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0,
@@ -196,6 +253,7 @@ std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int
     }
   }
   eliminate_extended_edges(B, rows, g, mesh);
+  B.splines_independent = independent_by_peeling(B.splines, meeting, mesh, m, n);
   // The untouched B-splines (the first functions) keep their LR weights: where T^e = T they
   // are the weighted LR B-splines, a partition of unity.
   for (int f = 0; f < B.untouched; ++f) B.functions[f].front().second = lr.splines()[B.functions[f].front().first].weight;

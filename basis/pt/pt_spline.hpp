@@ -66,6 +66,10 @@ struct PtSplineBasis {
   int blocks = 0, largest_block = 0;  // EEE blocks; the largest one's number of B-splines
   int untouched = 0;                  // B-splines of T^e kept as they are
   int dropped_dependent = 0;          // minimal extension: functions dropped as dependent on the others
+  // Minimal extension: the LR B-splines proved linearly independent by peeling, so the
+  // functions (independent combinations of them) are independent without cell polynomials.
+  bool splines_independent = false;
+  bool certified_by_peeling = false;  // the certificate used that (else the cell polynomials' rank)
   std::vector<RationalBox> extension_cells;  // the cells of T^e
   // Filled when the exact cell polynomials are first computed on a T-mesh (by the
   // certificate), reused by later calls on the same T-mesh (a different one replaces it);
