@@ -22,8 +22,9 @@ std::unique_ptr<BasisTool> pt_basis_tool(CLI::App& basis);  // pt_basis_tool.cpp
 
 namespace {
 
-// The T-mesh checks compare every pair of cells and the basis is built in exact arithmetic:
-// 4096 cells take 2.3 s, so 20000 would take minutes and more far longer.
+// The basis is built in exact arithmetic and the LR meshline insertion of the minimal
+// extension scans every B-spline per meshline (quadratic): a 14231-cell degree-3 T-mesh took
+// 9-21 s (2026-12-03, docs/PERFORMANCE.md), so 20000 cells keep one build near half a minute.
 constexpr int kMaxPtCells = 20000;
 
 // The geometry's breakpoints, exactly (doubles are dyadic rationals), and which interior
@@ -108,9 +109,10 @@ std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
 
 namespace {
 
-// Exact arithmetic dominates: peaks of 0.99 GB at 15045 and 2.5 GB at 40314 functions (p = 3,
-// adaptive L-shape, about one function per cell; docs/PT_SPLINES.md), i.e. about 65 kB per
-// cell, plus the Galerkin part.
+// Exact arithmetic dominates: a peak of 0.71 GB at 15045 functions (p = 3, adaptive L-shape,
+// 16380 cells, 2026-12-03; 0.99 GB before the certificate stopped computing cell polynomials),
+// about 43 kB per cell with the Galerkin part; 65 kB per cell plus that part stays on the
+// safe side.
 void check_pt_memory(const CaseDescription& c, size_t cells) {
   const auto [m, n] = pt_section(c).space.degree;
   const double bytes = 65e3 * double(cells) + galerkin_bytes(double(cells), double(cells) + (m + 1) * (n + 1), m, n);
