@@ -1,6 +1,7 @@
 #include "basis/tmesh/lr_spline.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace knotwork {
@@ -15,7 +16,43 @@ std::pair<mpq_class, mpq_class> split_weights(const std::vector<mpq_class>& t, c
   return {a, b};
 }
 
+constexpr int kLevels = 41;  // supports below 2^-40 of the rectangle share the last level
+
 }  // namespace
+
+// The node of a support: its level and the indices of its lower-left corner there. Doubles
+// suffice: the index only narrows the search, the exact test follows, and every query
+// widens its range by a node on each side, far beyond the rounding of get_d.
+namespace {
+struct Node {
+  int level;
+  long i, j;
+};
+Node node_of(const std::vector<mpq_class>& x, const std::vector<mpq_class>& y, const std::vector<mpq_class>& xs,
+             const std::vector<mpq_class>& ys) {
+  const double X0 = xs.front().get_d(), Y0 = ys.front().get_d();
+  const double W = xs.back().get_d() - X0, H = ys.back().get_d() - Y0;
+  const double u0 = (x.front().get_d() - X0) / W, v0 = (y.front().get_d() - Y0) / H;
+  const double size = std::max((x.back().get_d() - x.front().get_d()) / W, (y.back().get_d() - y.front().get_d()) / H);
+  int level = 0;
+  while (level + 1 < kLevels && std::ldexp(1.0, -(level + 1)) >= size) ++level;
+  const double s = std::ldexp(1.0, -level);
+  return {level, static_cast<long>(std::floor(u0 / s)), static_cast<long>(std::floor(v0 / s))};
+}
+}  // namespace
+
+void LrMesh::index_add(const Knots& k) {
+  if (levels_.empty()) levels_.resize(kLevels);
+  const Node nd = node_of(k.first, k.second, xs_, ys_);
+  levels_[nd.level].by_column[{nd.i, nd.j}].push_back(k);
+  levels_[nd.level].by_row[{nd.j, nd.i}].push_back(k);
+}
+
+void LrMesh::index_remove(const Knots& k) {
+  const Node nd = node_of(k.first, k.second, xs_, ys_);
+  for (auto* list : {&levels_[nd.level].by_column[{nd.i, nd.j}], &levels_[nd.level].by_row[{nd.j, nd.i}]})
+    list->erase(std::find(list->begin(), list->end(), k));
+}
 
 LrMesh::LrMesh(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& ys, int m, int n, const C0Lines& c0)
     : m_(m), n_(n), xs_(xs), ys_(ys) {
@@ -36,6 +73,7 @@ LrMesh::LrMesh(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& y
   for (size_t j = 0; j + n + 1 < ky.size(); ++j)
     for (size_t i = 0; i + m + 1 < kx.size(); ++i)
       splines_[{{kx.begin() + i, kx.begin() + i + m + 2}, {ky.begin() + j, ky.begin() + j + n + 2}}] = 1;
+  for (const auto& [k, w] : splines_) index_add(k);
 }
 
 const std::vector<LrBSpline>& LrMesh::splines() const {
@@ -96,15 +134,36 @@ bool LrMesh::try_insert(const AxisSegment& segment) {
   auto covers = [&](const mpq_class& from, const mpq_class& to) {
     return std::any_of(merged.begin(), merged.end(), [&](const auto& iv) { return iv.first <= from && to <= iv.second; });
   };
+  // The B-splines the meshline splits: supports that meet it, found through the index (in
+  // the order of splines_, as the scan of every B-spline this replaced found them). A split
+  // support meets the new piece itself: one covered by the line as it was has its knot.
   std::vector<Knots> split;
-  for (const auto& [k, w] : splines_) {
-    const auto& t = s.vertical ? k.first : k.second;
-    const auto& o = s.vertical ? k.second : k.first;
-    if (t.front() < s.position && s.position < t.back() && std::find(t.begin(), t.end(), s.position) == t.end() &&
-        covers(o.front(), o.back()))
-      split.push_back(k);
+  const double X0 = xs_.front().get_d(), Y0 = ys_.front().get_d();
+  const double W = xs_.back().get_d() - X0, H = ys_.back().get_d() - Y0;
+  const double at = ((s.vertical ? s.position : s.from).get_d() - X0) / W;  // u (vertical) or u from
+  const double a0 = s.vertical ? (s.from.get_d() - Y0) / H : (s.position.get_d() - Y0) / H;
+  const double a1 = s.vertical ? (s.to.get_d() - Y0) / H : a0;
+  const double u1 = s.vertical ? at : (s.to.get_d() - X0) / W;
+  for (int level = 0; level < static_cast<int>(levels_.size()); ++level) {
+    const double size = std::ldexp(1.0, -level);
+    const long i0 = static_cast<long>(std::floor(at / size)) - 2, i1 = static_cast<long>(std::floor(u1 / size)) + 1;
+    const long j0 = static_cast<long>(std::floor(a0 / size)) - 2, j1 = static_cast<long>(std::floor(a1 / size)) + 1;
+    // Along the meshline: the columns i0..i1 (a few) of a vertical one, the rows of a horizontal one.
+    const auto& nodes = s.vertical ? levels_[level].by_column : levels_[level].by_row;
+    const long across0 = s.vertical ? i0 : j0, across1 = s.vertical ? i1 : j1;
+    const long along0 = s.vertical ? j0 : i0, along1 = s.vertical ? j1 : i1;
+    for (long c = across0; c <= across1; ++c)
+      for (auto it = nodes.lower_bound({c, along0}); it != nodes.end() && it->first <= std::pair{c, along1}; ++it)
+        for (const Knots& k : it->second) {
+          const auto& t = s.vertical ? k.first : k.second;
+          const auto& o = s.vertical ? k.second : k.first;
+          if (t.front() < s.position && s.position < t.back() && std::find(t.begin(), t.end(), s.position) == t.end() &&
+              covers(o.front(), o.back()))
+            split.push_back(k);
+        }
   }
   if (split.empty()) return false;
+  std::sort(split.begin(), split.end());
   lines_[s.vertical][s.position] = std::move(merged);
   inserted_.push_back(s);
   refine(std::move(split));
@@ -132,11 +191,15 @@ void LrMesh::refine(std::vector<Knots> work) {
       const auto [a, c] = split_weights(t, line->first);
       const std::vector<mpq_class> left(w.begin(), w.end() - 1), right(w.begin() + 1, w.end());
       const mpq_class weight = found->second;
+      index_remove(found->first);
       splines_.erase(found);
       const Knots kl = vertical ? Knots{left, k.second} : Knots{k.first, left};
       const Knots kr = vertical ? Knots{right, k.second} : Knots{k.first, right};
-      splines_[kl] += weight * a;
-      splines_[kr] += weight * c;
+      for (const auto& [piece, share] : {std::pair<const Knots*, mpq_class>{&kl, weight * a}, std::pair<const Knots*, mpq_class>{&kr, weight * c}}) {
+        const auto [at, added] = splines_.try_emplace(*piece, 0);
+        at->second += share;
+        if (added) index_add(*piece);
+      }
       work.push_back(kl);
       work.push_back(kr);
       break;

@@ -52,8 +52,18 @@ class LrMesh {
   // Splits the B-splines of `work` (and their pieces) until no meshline traverses a support.
   void refine(std::vector<Knots> work);
 
+  void index_add(const Knots& k);
+  void index_remove(const Knots& k);
   int m_, n_;
   std::vector<mpq_class> xs_, ys_;
+  // Where the B-splines are, so that a meshline meets only those near it (lr_spline.cpp): a
+  // loose quadtree over the rectangle. Level L holds the supports at most 2^-L of the
+  // rectangle wide and high, under the node of their lower-left corner, which covers twice
+  // that; by column (i, j) and by row (j, i), for vertical and horizontal meshlines.
+  struct Bucket {
+    std::map<std::pair<long, long>, std::vector<Knots>> by_column, by_row;
+  };
+  std::vector<Bucket> levels_;
   std::map<mpq_class, std::vector<std::pair<mpq_class, mpq_class>>> lines_[2];  // [vertical]: position -> intervals
   std::map<Knots, mpq_class> splines_;  // knots -> weight
   // splines() lists splines_ lazily; the lock makes concurrent const calls safe. Copies
