@@ -190,16 +190,10 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
   };
   for (size_t f = 0; f < B.functions.size(); ++f) {
     std::map<int, std::vector<S>> coefficients;
-    std::vector<int> seen;
     for (const auto& [s, coef] : B.functions[f]) {
       const auto& sp = B.splines[s];
       const S cf = to_scalar<S>(coef);
-      seen.clear();
-      for (int iy = g.index_y(sp.y.front()); iy < g.index_y(sp.y.back()); ++iy)
-        for (int ix = g.index_x(sp.x.front()); ix < g.index_x(sp.x.back()); ++ix) {
-          const int k = g.at(ix, iy);
-          if (std::find(seen.begin(), seen.end(), k) != seen.end()) continue;
-          seen.push_back(k);
+      for (int k : g.cells_in(g.index_x(sp.x.front()), g.index_y(sp.y.front()), g.index_x(sp.x.back()), g.index_y(sp.y.back()))) {
           const std::vector<S>&bx = factor(s, 0, k), &by = factor(s, 1, k);
           bool any_x = false, any_y = false;
           for (const S& v : bx) any_x = any_x || v != 0;

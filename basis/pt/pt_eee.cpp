@@ -44,12 +44,31 @@ Grid make_grid(const RectangularPartition& mesh) {
   g.X.assign(xs.begin(), xs.end());
   g.Y.assign(ys.begin(), ys.end());
   g.owner.assign(static_cast<size_t>(g.nx()) * g.ny(), -1);
+  g.cell_box.resize(mesh.num_cells());
   for (int k = 0; k < mesh.num_cells(); ++k) {
     const auto& c = mesh.cells()[k];
-    for (int iy = g.index_y(c.y0); iy < g.index_y(c.y1); ++iy)
-      for (int ix = g.index_x(c.x0); ix < g.index_x(c.x1); ++ix) g.owner[ix + g.nx() * iy] = k;
+    g.cell_box[k] = {g.index_x(c.x0), g.index_y(c.y0), g.index_x(c.x1), g.index_y(c.y1)};
+    for (int iy = g.cell_box[k][1]; iy < g.cell_box[k][3]; ++iy)
+      for (int ix = g.cell_box[k][0]; ix < g.cell_box[k][2]; ++ix) g.owner[ix + g.nx() * iy] = k;
   }
   return g;
+}
+
+std::vector<int> Grid::cells_in(int x0, int y0, int x1, int y1) const {
+  std::vector<int> out;
+  for (int iy = y0; iy < y1;) {
+    int next = y1;
+    for (int ix = x0; ix < x1;) {
+      const int k = at(ix, iy);
+      out.push_back(k);
+      ix = cell_box[k][2];
+      next = std::min(next, cell_box[k][3]);
+    }
+    iy = next;
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
 }
 
 void axpy(SparseVector& y, const mpq_class& a, const SparseVector& x) {
@@ -165,8 +184,8 @@ std::vector<SparseVector> local_null_basis(const std::vector<int>& cols, const s
 
 }  // namespace
 
-void eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows, const Grid& g,
-                              const RectangularPartition& mesh) {
+long eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows, const Grid& g,
+                              const RectangularPartition& mesh, long needed) {
   const int columns = static_cast<int>(B.splines.size());
   B.equations = static_cast<long>(rows.size());
   // Independent blocks: B-splines linked by a common equation.
@@ -186,11 +205,10 @@ void eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows,
       B.functions.push_back({{col, mpq_class(1)}});
       ++B.untouched;
     }
-  std::vector<GridBox> support(columns);
-  for (int col = 0; col < columns; ++col) {
-    const auto& sp = B.splines[col];
-    support[col] = {g.index_x(sp.x.front()), g.index_y(sp.y.front()), g.index_x(sp.x.back()), g.index_y(sp.y.back())};
-  }
+  // The ranks first: they give the number of functions, and when that falls short of
+  // `needed` the null vectors (most of the time of a large block) are not worth computing.
+  std::vector<long> ranks;
+  long count = B.untouched;
   for (const auto& [root, cols] : block_columns) {
     ++B.blocks;
     B.largest_block = std::max(B.largest_block, static_cast<int>(cols.size()));
@@ -198,12 +216,27 @@ void eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows,
     for (int r : block_rows[root]) sparse.push_back({{rows[r].begin(), rows[r].end()}});
     // Modular rank <= rank over Q; were it lower, the boxes could not reach the nullity and
     // local_null_basis would throw rather than return too few functions.
-    const long rank = rank_reliable(sparse, columns);
+    ranks.push_back(rank_reliable(sparse, columns));
+    B.rank += ranks.back();
+    count += static_cast<long>(cols.size()) - ranks.back();
+  }
+  if (needed >= 0 && count < needed) {
+    B.short_of_dimension = needed - count;
+    return count;
+  }
+  std::vector<GridBox> support(columns);
+  for (int col = 0; col < columns; ++col) {
+    const auto& sp = B.splines[col];
+    support[col] = {g.index_x(sp.x.front()), g.index_y(sp.y.front()), g.index_x(sp.x.back()), g.index_y(sp.y.back())};
+  }
+  size_t block = 0;
+  for (const auto& [root, cols] : block_columns) {
+    const long rank = ranks[block++];
     std::vector<SparseVector> null = local_null_basis(cols, block_rows[root], rows, support, g, mesh,
                                                       static_cast<long>(cols.size()) - rank);
     for (const auto& v : null) B.functions.push_back(as_function(v));
-    B.rank += rank;
   }
+  return count;
 }
 
 }  // namespace knotwork::pt_detail

@@ -5,6 +5,7 @@
 #include <gmpxx.h>
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -52,6 +53,11 @@ struct Grid {
   int at(int ix, int iy) const { return owner[ix + nx() * iy]; }
   int index_x(const mpq_class& v) const { return static_cast<int>(std::lower_bound(X.begin(), X.end(), v) - X.begin()); }
   int index_y(const mpq_class& v) const { return static_cast<int>(std::lower_bound(Y.begin(), Y.end(), v) - Y.begin()); }
+  std::vector<std::array<int, 4>> cell_box;  // each cell of T in grid indices: x0, y0, x1, y1
+  // The cells of T meeting the grid box [x0, x1) x [y0, y1), in increasing order: a walk from
+  // cell to cell (a row of the grid at a time only where some cell ends), not a visit of
+  // every grid cell, which costs the square of the number of coordinates on a graded mesh.
+  std::vector<int> cells_in(int x0, int y0, int x1, int y1) const;
 };
 
 Grid make_grid(const RectangularPartition& mesh);
@@ -106,8 +112,10 @@ using EeeRow = std::vector<std::pair<int, mpq_class>>;
 // equation) and fills B.functions: the B-splines no equation touches, untouched, then a local
 // basis of each block's null space (exact). Also sets equations, rank, blocks, largest_block,
 // untouched. Every knot of B.splines must be a coordinate of `mesh` (g = make_grid(mesh)).
-void eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows, const Grid& g,
-                              const RectangularPartition& mesh);
+// Returns the number of functions. With `needed` >= 0 and fewer functions than that, only
+// the untouched B-splines are listed and B.short_of_dimension says how many are missing.
+long eliminate_extended_edges(PtSplineBasis& B, const std::vector<EeeRow>& rows, const Grid& g,
+                              const RectangularPartition& mesh, long needed = -1);
 
 // The construction on an LR-mesh extension of T (pt_minimal_extension.cpp); nullopt when an
 // l-edge cannot be inserted even as a full line. The LR B-splines of the extension need not
@@ -119,7 +127,8 @@ struct MinimalVariant {
   bool shortest_first = false;
   int extra_steps = 0;
 };
+// `needed`: the dimension of S(T), passed on to eliminate_extended_edges.
 std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0,
-                                           const MinimalVariant& variant);
+                                           const MinimalVariant& variant, long needed = -1);
 
 }  // namespace knotwork::pt_detail

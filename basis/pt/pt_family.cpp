@@ -25,7 +25,7 @@ namespace {
 // The basis is built in exact arithmetic and the LR meshline insertion of the minimal
 // extension scans every B-spline per meshline (quadratic): a 14231-cell degree-3 T-mesh took
 // 9-21 s (2026-12-03, docs/PERFORMANCE.md), so 20000 cells keep one build near half a minute.
-constexpr int kMaxPtCells = 20000;
+constexpr int kMaxPtCells = 60000;
 
 // The geometry's breakpoints, exactly (doubles are dyadic rationals), and which interior
 // ones are C0 (multiplicity >= degree): the space must only be C0 there.

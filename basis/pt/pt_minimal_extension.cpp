@@ -187,7 +187,7 @@ bool independent_by_peeling(const std::vector<PtLocalBSpline>& splines, const st
 }  // namespace
 
 std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int m, int n, const C0Lines& c0,
-                                           const MinimalVariant& variant) {
+                                           const MinimalVariant& variant, long needed) {
   const Grid g = make_grid(mesh);
   std::vector<mpq_class> xs, ys;
   std::vector<GridSegment> runs;
@@ -204,11 +204,8 @@ std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int
   std::vector<std::vector<int>> meeting(mesh.num_cells());
   for (int s = 0; s < static_cast<int>(B.splines.size()); ++s) {
     const auto& sp = B.splines[s];
-    for (int iy = g.index_y(sp.y.front()); iy < g.index_y(sp.y.back()); ++iy)
-      for (int ix = g.index_x(sp.x.front()); ix < g.index_x(sp.x.back()); ++ix) {
-        auto& list = meeting[g.at(ix, iy)];
-        if (list.empty() || list.back() != s) list.push_back(s);
-      }
+    for (int k : g.cells_in(g.index_x(sp.x.front()), g.index_y(sp.y.front()), g.index_x(sp.x.back()), g.index_y(sp.y.back())))
+      meeting[k].push_back(s);
   }
   // EEE rows, cell by cell: the knot lines of those B-splines inside the cell cut it into a
   // grid on which every one of them is a polynomial. The sum is a polynomial on the cell iff
@@ -252,7 +249,8 @@ std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int
       }
     }
   }
-  eliminate_extended_edges(B, rows, g, mesh);
+  eliminate_extended_edges(B, rows, g, mesh, needed);
+  if (B.short_of_dimension > 0) return B;  // pt_spline_basis tries another insertion order
   B.splines_independent = independent_by_peeling(B.splines, meeting, mesh, m, n);
   // The untouched B-splines (the first functions) keep their LR weights: where T^e = T they
   // are the weighted LR B-splines, a partition of unity.

@@ -136,6 +136,9 @@ namespace {
 // is never wrong: dim <= unknowns - rank mod p (rank mod p <= rank over Q), and rows
 // independent mod p are independent over Q.
 std::string certify(PtSplineBasis& B, const RectangularPartition& mesh, long dimension) {
+  if (B.short_of_dimension > 0)
+    return std::to_string(dimension - B.short_of_dimension) + " functions for a space of dimension " +
+           std::to_string(dimension);
   const long count = static_cast<long>(B.functions.size());
   if (count < dimension) return std::to_string(count) + " functions for a space of dimension " + std::to_string(dimension);
   // The functions are the untouched B-splines and, per EEE block, null vectors kept only when
@@ -197,7 +200,7 @@ std::optional<PtSplineBasis> attempt_minimal(const RectangularPartition& mesh, i
                                              const MinimalVariant& variant, long dimension, bool diagonalizable,
                                              std::string& why) {
   try {
-    std::optional<PtSplineBasis> B = build_minimal(mesh, m, n, c0, variant);
+    std::optional<PtSplineBasis> B = build_minimal(mesh, m, n, c0, variant, dimension);
     if (!B) {
       why = "an l-edge could not be inserted even as a full line";
       return std::nullopt;

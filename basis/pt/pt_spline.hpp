@@ -66,6 +66,9 @@ struct PtSplineBasis {
   int blocks = 0, largest_block = 0;  // EEE blocks; the largest one's number of B-splines
   int untouched = 0;                  // B-splines of T^e kept as they are
   int dropped_dependent = 0;          // minimal extension: functions dropped as dependent on the others
+  // Minimal extension: how many functions the EEE null spaces fall short of the dimension of
+  // S(T); when > 0 the null vectors were not computed and `functions` is incomplete.
+  long short_of_dimension = 0;
   // Minimal extension: the LR B-splines proved linearly independent by peeling, so the
   // functions (independent combinations of them) are independent without cell polynomials.
   bool splines_independent = false;
