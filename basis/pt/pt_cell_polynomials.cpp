@@ -95,8 +95,11 @@ struct PtBernsteinCache {
 
 namespace {
 
-template <class S>
-std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const PtSplineBasis& B,
+// S: the arithmetic; Out: what is kept (S, or double rounded once from exact S: each
+// function's exact polynomials are then dropped as soon as they are rounded, so a large
+// mesh never holds all of them at once, about 1 GB at 50 000 bicubic cells).
+template <class S, class Out = S>
+std::vector<std::vector<std::pair<int, std::vector<Out>>>> cell_polynomials(const PtSplineBasis& B,
                                                                            const RectangularPartition& mesh) {
   const Grid g = make_grid(mesh);
   const int m = B.m, n = B.n;
@@ -131,7 +134,7 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
     cs.inv_x = inverse_bernstein_collocation<S>(m, sx);
     cs.inv_y = inverse_bernstein_collocation<S>(n, sy);
   }
-  std::vector<std::vector<std::pair<int, std::vector<S>>>> out(B.functions.size());
+  std::vector<std::vector<std::pair<int, std::vector<Out>>>> out(B.functions.size());
   // On a cell, a B-spline is N(x) M(y) with N, M each a polynomial on the sampled grid
   // interval; their Bernstein coefficients over the cell (extrapolated from that interval:
   // the functions, not each B-spline, are polynomials on the whole cell) are computed once
@@ -223,7 +226,14 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
       } else {
         nonzero = scale != 0;
       }
-      if (nonzero) out[f].emplace_back(k, std::move(C));
+      if (!nonzero) continue;
+      if constexpr (std::is_same_v<S, Out>) {
+        out[f].emplace_back(k, std::move(C));
+      } else {
+        std::vector<Out> rounded;
+        for (const S& v : C) rounded.push_back(v.get_d());
+        out[f].emplace_back(k, std::move(rounded));
+      }
     }
   }
   return out;
@@ -233,6 +243,10 @@ std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const 
 
 PtCellPolynomialsExact pt_cell_polynomials_exact(const PtSplineBasis& basis, const RectangularPartition& mesh) {
   return cell_polynomials<mpq_class>(basis, mesh);
+}
+
+PtCellPolynomials pt_cell_polynomials_rounded(const PtSplineBasis& basis, const RectangularPartition& mesh) {
+  return cell_polynomials<mpq_class, double>(basis, mesh);
 }
 
 PtCellPolynomials pt_cell_polynomials(const PtSplineBasis& basis, const RectangularPartition& mesh) {

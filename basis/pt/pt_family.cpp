@@ -22,9 +22,10 @@ std::unique_ptr<BasisTool> pt_basis_tool(CLI::App& basis);  // pt_basis_tool.cpp
 
 namespace {
 
-// The basis is built in exact arithmetic and the LR meshline insertion of the minimal
-// extension scans every B-spline per meshline (quadratic): a 14231-cell degree-3 T-mesh took
-// 9-21 s (2026-12-03, docs/PERFORMANCE.md), so 20000 cells keep one build near half a minute.
+// The basis is built in exact arithmetic: on the adaptive L-shape at degree 3 (2026-12-03,
+// docs/PERFORMANCE.md) a 57557-cell T-mesh took 20-53 s, the larger times when the first
+// insertion orders fall short and a lengthened one is needed; 60000 cells keep a build near
+// a minute.
 constexpr int kMaxPtCells = 60000;
 
 // The geometry's breakpoints, exactly (doubles are dyadic rationals), and which interior
@@ -109,13 +110,12 @@ std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
 
 namespace {
 
-// Exact arithmetic dominates: a peak of 0.71 GB at 15045 functions (p = 3, adaptive L-shape,
-// 16380 cells, 2026-12-03; 0.99 GB before the certificate stopped computing cell polynomials),
-// about 43 kB per cell with the Galerkin part; 65 kB per cell plus that part stays on the
-// safe side.
+// A peak of 1.01 GB for the whole adaptive run to 53732 functions (p = 3, L-shape, 57557
+// cells, 2026-12-03), about 18 kB per cell with the Galerkin part and the previous step's
+// space; 30 kB per cell plus that part stays on the safe side.
 void check_pt_memory(const CaseDescription& c, size_t cells) {
   const auto [m, n] = pt_section(c).space.degree;
-  const double bytes = 65e3 * double(cells) + galerkin_bytes(double(cells), double(cells) + (m + 1) * (n + 1), m, n);
+  const double bytes = 30e3 * double(cells) + galerkin_bytes(double(cells), double(cells) + (m + 1) * (n + 1), m, n);
   check_memory(c.path + ": [space]", bytes, std::to_string(cells) + " T-mesh cells of PT-splines");
 }
 
@@ -147,7 +147,7 @@ class PtSpace final : public SplineSpace {
     say("Bezier extraction (exact, rounded once)");
     // Exact Bernstein coefficients, rounded once: assembly sees functions that are C^(m-1) to
     // the last bit, whatever the T-mesh.
-    mesh_ = pt_bezier_mesh(*tmesh_, to_double(pt_cell_polynomials_exact(*pt_, *tmesh_)), pt_->m, pt_->n);
+    mesh_ = pt_bezier_mesh(*tmesh_, pt_cell_polynomials_rounded(*pt_, *tmesh_), pt_->m, pt_->n);
     pt_->bernstein.reset();  // the exact factors are large on big meshes and not needed again
     mesh_.set_interfaces(interfaces_from_parameter_boxes(mesh_));
     geometry_ = std::make_unique<PatchGeometryMap>(mesh_, c.geometry);
