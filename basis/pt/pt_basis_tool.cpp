@@ -265,7 +265,7 @@ int pt_basis_command(const BasisOptions& o) {
         .set("dropped_dependent", B.dropped_dependent)
         .set("independence_proof", std::string(B.extension == PtExtension::kHorizontal || B.extension == PtExtension::kVertical
                                        ? "full extension (a basis by construction)"
-                                   : B.certified_by_peeling ? "peeling the LR B-splines"
+                                   : B.splines_independent ? "peeling the LR B-splines"
                                                             : "rank of the cell polynomials"))
         .set("cross_cuts", topo.count(PartitionTopology::KnotKind::kLine))
         .set("rays", topo.count(PartitionTopology::KnotKind::kRay))
@@ -301,7 +301,7 @@ int pt_basis_command(const BasisOptions& o) {
                                        : "not shown diagonalizable (no ordering keeps deg+1 vertices on each T l-edge)");
   if (B.extension != PtExtension::kHorizontal && B.extension != PtExtension::kVertical)
     std::printf("  certified  count = smoothing-cofactor dimension; independent by %s\n",
-                B.certified_by_peeling ? "peeling the LR B-splines (no cell polynomials)" : "the rank of the cell polynomials");
+                B.splines_independent ? "peeling the LR B-splines (no cell polynomials)" : "the rank of the cell polynomials");
   if (B.dropped_dependent > 0)
     std::printf("  dependent  %d dropped: the local B-splines of the extension span, but are dependent\n",
                 B.dropped_dependent);

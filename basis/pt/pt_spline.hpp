@@ -44,7 +44,8 @@ enum class PtExtension { kAuto, kMinimal, kHorizontal, kVertical, kDiagonalizabl
 std::optional<PtExtension> parse_pt_extension(const std::string& name);
 const char* pt_extension_name(PtExtension extension);
 
-// Each B-spline's exact Bernstein factors on each cell of one T-mesh (pt_spline.cpp).
+// The B-splines' exact Bernstein factors on the cells of one T-mesh, shared per (knots, cell
+// interval) in each direction (pt_cell_polynomials.cpp).
 struct PtBernsteinCache;
 
 struct PtLocalBSpline {
@@ -70,12 +71,12 @@ struct PtSplineBasis {
   // S(T); when > 0 the null vectors were not computed and `functions` is incomplete.
   long short_of_dimension = 0;
   // Minimal extension: the LR B-splines proved linearly independent by peeling, so the
-  // functions (independent combinations of them) are independent without cell polynomials.
+  // functions (independent combinations of them) are independent without cell polynomials:
+  // the certificate then used that, else the rank of the cell polynomials.
   bool splines_independent = false;
-  bool certified_by_peeling = false;  // the certificate used that (else the cell polynomials' rank)
   std::vector<RationalBox> extension_cells;  // the cells of T^e
-  // Filled when the exact cell polynomials are first computed on a T-mesh (by the
-  // certificate), reused by later calls on the same T-mesh (a different one replaces it);
+  // Filled when the exact cell polynomials are first computed on a T-mesh, reused by later
+  // calls on the same T-mesh (a different one replaces it);
   // copies share it. Valid as long as B-splines are only appended, never changed. Calls that
   // use it hold bernstein_lock for their whole computation: safe, and serialized, across threads.
   mutable std::shared_ptr<PtBernsteinCache> bernstein;

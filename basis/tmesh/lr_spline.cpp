@@ -18,27 +18,29 @@ std::pair<mpq_class, mpq_class> split_weights(const std::vector<mpq_class>& t, c
 
 constexpr int kLevels = 41;  // supports below 2^-40 of the rectangle share the last level
 
-}  // namespace
+// v as a fraction of the rectangle's side spanned by `lines` (its first and last coordinate).
+// Doubles suffice for the index: it only narrows the search, the exact test follows, and every
+// query widens its range by a node on each side, far beyond the rounding of get_d.
+double unit(const mpq_class& v, const std::vector<mpq_class>& lines) {
+  const double a = lines.front().get_d();
+  return (v.get_d() - a) / (lines.back().get_d() - a);
+}
 
-// The node of a support: its level and the indices of its lower-left corner there. Doubles
-// suffice: the index only narrows the search, the exact test follows, and every query
-// widens its range by a node on each side, far beyond the rounding of get_d.
-namespace {
+// The node of a support: its level and the indices of its lower-left corner there.
 struct Node {
   int level;
   long i, j;
 };
 Node node_of(const std::vector<mpq_class>& x, const std::vector<mpq_class>& y, const std::vector<mpq_class>& xs,
              const std::vector<mpq_class>& ys) {
-  const double X0 = xs.front().get_d(), Y0 = ys.front().get_d();
-  const double W = xs.back().get_d() - X0, H = ys.back().get_d() - Y0;
-  const double u0 = (x.front().get_d() - X0) / W, v0 = (y.front().get_d() - Y0) / H;
-  const double size = std::max((x.back().get_d() - x.front().get_d()) / W, (y.back().get_d() - y.front().get_d()) / H);
+  const double u0 = unit(x.front(), xs), v0 = unit(y.front(), ys);
+  const double size = std::max(unit(x.back(), xs) - u0, unit(y.back(), ys) - v0);
   int level = 0;
   while (level + 1 < kLevels && std::ldexp(1.0, -(level + 1)) >= size) ++level;
   const double s = std::ldexp(1.0, -level);
   return {level, static_cast<long>(std::floor(u0 / s)), static_cast<long>(std::floor(v0 / s))};
 }
+
 }  // namespace
 
 void LrMesh::index_add(const Knots& k) {
@@ -138,16 +140,13 @@ bool LrMesh::try_insert(const AxisSegment& segment) {
   // the order of splines_, as the scan of every B-spline this replaced found them). A split
   // support meets the new piece itself: one covered by the line as it was has its knot.
   std::vector<Knots> split;
-  const double X0 = xs_.front().get_d(), Y0 = ys_.front().get_d();
-  const double W = xs_.back().get_d() - X0, H = ys_.back().get_d() - Y0;
-  const double at = ((s.vertical ? s.position : s.from).get_d() - X0) / W;  // u (vertical) or u from
-  const double a0 = s.vertical ? (s.from.get_d() - Y0) / H : (s.position.get_d() - Y0) / H;
-  const double a1 = s.vertical ? (s.to.get_d() - Y0) / H : a0;
-  const double u1 = s.vertical ? at : (s.to.get_d() - X0) / W;
+  // The meshline as a (degenerate) box in the rectangle's unit coordinates.
+  const double u0 = unit(s.vertical ? s.position : s.from, xs_), u1 = unit(s.vertical ? s.position : s.to, xs_);
+  const double v0 = unit(s.vertical ? s.from : s.position, ys_), v1 = unit(s.vertical ? s.to : s.position, ys_);
   for (int level = 0; level < static_cast<int>(levels_.size()); ++level) {
     const double size = std::ldexp(1.0, -level);
-    const long i0 = static_cast<long>(std::floor(at / size)) - 2, i1 = static_cast<long>(std::floor(u1 / size)) + 1;
-    const long j0 = static_cast<long>(std::floor(a0 / size)) - 2, j1 = static_cast<long>(std::floor(a1 / size)) + 1;
+    const long i0 = static_cast<long>(std::floor(u0 / size)) - 2, i1 = static_cast<long>(std::floor(u1 / size)) + 1;
+    const long j0 = static_cast<long>(std::floor(v0 / size)) - 2, j1 = static_cast<long>(std::floor(v1 / size)) + 1;
     // Along the meshline: the columns i0..i1 (a few) of a vertical one, the rows of a horizontal one.
     const auto& nodes = s.vertical ? levels_[level].by_column : levels_[level].by_row;
     const long across0 = s.vertical ? i0 : j0, across1 = s.vertical ? i1 : j1;
