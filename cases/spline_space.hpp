@@ -75,9 +75,11 @@ class SplineSpace {
   virtual double mesh_size() const;
   // Adaptive refinement: the space with the marked cells halved as told, or null when the
   // family cannot refine locally. `extended` (optional) counts what the family had to add
-  // beyond the marked cells (knot segments lengthened to stay semi-regular).
+  // beyond the marked cells (knot segments lengthened to stay semi-regular). It consumes the
+  // space (call it on std::move(*space) and drop the space after): a family may free this
+  // space's mesh before it builds the next one, so that the two never need memory at once.
   virtual std::unique_ptr<SplineSpace> refine(const std::vector<int>& /*marked*/, const std::vector<CellSplit>& /*split*/,
-                                              int* /*extended*/ = nullptr) const {
+                                              int* /*extended*/ = nullptr) && {
     return nullptr;
   }
   virtual KnotLines knot_lines() const { return {}; }

@@ -14,6 +14,7 @@
 #include "basis/exact/sparse_rank.hpp"
 #include "basis/tmesh/lr_spline.hpp"
 #include "basis/tmesh/partition_topology.hpp"
+#include "basis/pt/pt_bezier_mesh.hpp"
 #include "basis/pt/pt_eee.hpp"
 #include "basis/pt/pt_spline.hpp"
 #include <mutex>
@@ -95,158 +96,219 @@ struct PtBernsteinCache {
 
 namespace {
 
-// S: the arithmetic; Out: what is kept (S, or double rounded once from exact S: each
-// function's exact polynomials are then dropped as soon as they are rounded, so a large
-// mesh never holds all of them at once, about 1 GB at 50 000 bicubic cells).
-template <class S, class Out = S>
-std::vector<std::vector<std::pair<int, std::vector<Out>>>> cell_polynomials(const PtSplineBasis& B,
-                                                                           const RectangularPartition& mesh) {
-  const Grid g = make_grid(mesh);
-  const int m = B.m, n = B.n;
-  // Per cell: the largest grid interval inside it in each direction (every B-spline is a
-  // polynomial on each grid cell), the sample points there and the inverse collocations.
-  struct CellSampling {
-    std::vector<S> px, py;
-    std::vector<std::vector<S>> inv_x, inv_y;
-  };
-  std::vector<CellSampling> sampling(mesh.num_cells());
-  for (int k = 0; k < mesh.num_cells(); ++k) {
-    const auto& c = mesh.cells()[k];
-    auto largest = [](const std::vector<mpq_class>& L, int i0, int i1) {
-      int best = i0;
-      for (int i = i0; i < i1; ++i)
-        if (L[i + 1] - L[i] > L[best + 1] - L[best]) best = i;
-      return best;
-    };
-    const int bx = largest(g.X, g.index_x(c.x0), g.index_x(c.x1)), by = largest(g.Y, g.index_y(c.y0), g.index_y(c.y1));
-    CellSampling& cs = sampling[k];
-    std::vector<S> sx, sy;
-    for (int q = 0; q <= m; ++q) {
-      const mpq_class x = g.X[bx] + (g.X[bx + 1] - g.X[bx]) * (q + 1) / (m + 2);
-      cs.px.push_back(to_scalar<S>(x));
-      sx.push_back(to_scalar<S>(mpq_class((x - c.x0) / (c.x1 - c.x0))));
+// The Bernstein coefficients over cell k of the factor of B-spline s in direction d, in the
+// arithmetic S (exact factors are kept in the basis's cache, under its lock, for as long as
+// this object lives). On a cell a B-spline is N(x) M(y) with N, M each a polynomial on the
+// largest grid interval inside the cell; their coefficients over the cell are extrapolated
+// from that interval: the functions, not each B-spline, are polynomials on the whole cell.
+template <class S>
+class CellFactors {
+ public:
+  CellFactors(const PtSplineBasis& B, const RectangularPartition& mesh) : B_(B), mesh_(mesh), g_(make_grid(mesh)) {
+    factors_ = local_;
+    if constexpr (std::is_same_v<S, mpq_class>) {
+      guard_ = std::unique_lock<std::mutex>(*B.bernstein_lock);
+      auto same = [&](const std::vector<RationalBox>& cells) {
+        return std::equal(cells.begin(), cells.end(), mesh.cells().begin(), mesh.cells().end(),
+                          [](const RationalBox& a, const RationalBox& b) {
+                            return a.x0 == b.x0 && a.y0 == b.y0 && a.x1 == b.x1 && a.y1 == b.y1;
+                          });
+      };
+      if (!B.bernstein || !same(B.bernstein->cells)) {
+        B.bernstein = std::make_shared<PtBernsteinCache>();
+        B.bernstein->cells = mesh.cells();
+      }
+      factors_ = B.bernstein->factors;
     }
-    for (int q = 0; q <= n; ++q) {
-      const mpq_class y = g.Y[by] + (g.Y[by + 1] - g.Y[by]) * (q + 1) / (n + 2);
-      cs.py.push_back(to_scalar<S>(y));
-      sy.push_back(to_scalar<S>(mpq_class((y - c.y0) / (c.y1 - c.y0))));
-    }
-    cs.inv_x = inverse_bernstein_collocation<S>(m, sx);
-    cs.inv_y = inverse_bernstein_collocation<S>(n, sy);
   }
-  std::vector<std::vector<std::pair<int, std::vector<Out>>>> out(B.functions.size());
-  // On a cell, a B-spline is N(x) M(y) with N, M each a polynomial on the sampled grid
-  // interval; their Bernstein coefficients over the cell (extrapolated from that interval:
-  // the functions, not each B-spline, are polynomials on the whole cell) are computed once
-  // per (B-spline, cell), and a function's are the sum of coefficient * outer products.
-  auto univariate = [](const std::vector<std::vector<S>>& inv, const std::vector<S>& values) {
-    std::vector<S> c(values.size(), S(0));
-    for (size_t a = 0; a < values.size(); ++a)
-      for (size_t q = 0; q < values.size(); ++q)
-        if (values[q] != 0) c[a] += inv[a][q] * values[q];
-    return c;
-  };
-  UnivariateFactors<S> local[2];
-  UnivariateFactors<S>* factors = local;
-  std::unique_lock<std::mutex> cache_guard;
-  if constexpr (std::is_same_v<S, mpq_class>) {
-    cache_guard = std::unique_lock<std::mutex>(*B.bernstein_lock);
-    auto same = [&](const std::vector<RationalBox>& cells) {
-      return std::equal(cells.begin(), cells.end(), mesh.cells().begin(), mesh.cells().end(),
-                        [](const RationalBox& a, const RationalBox& b) {
-                          return a.x0 == b.x0 && a.y0 == b.y0 && a.x1 == b.x1 && a.y1 == b.y1;
-                        });
-    };
-    if (!B.bernstein || !same(B.bernstein->cells)) {
-      B.bernstein = std::make_shared<PtBernsteinCache>();
-      B.bernstein->cells = mesh.cells();
+  const Grid& grid() const { return g_; }
+  // The T cells the support of B-spline s meets, in increasing order.
+  std::vector<int> cells_of(int s) const {
+    const auto& sp = B_.splines[s];
+    return g_.cells_in(g_.index_x(sp.x.front()), g_.index_y(sp.y.front()), g_.index_x(sp.x.back()),
+                       g_.index_y(sp.y.back()));
+  }
+  const std::vector<S>& factor(int s, int d, int k) {
+    const auto& box = g_.cell_box[k];
+    const int lo = box[d], hi = box[d + 2];
+    const uint64_t interval = static_cast<uint64_t>(lo) * ((d == 0 ? g_.X.size() : g_.Y.size()) + 1) + hi;
+    const uint64_t key = (static_cast<uint64_t>(knots_id(s, d)) << 32) | interval;
+    auto [it, fresh] = factors_[d].coefficients.try_emplace(key);
+    if (fresh) {
+      const Sampling& sampling = sampling_of(d, lo, hi, interval);
+      const auto& knots = d == 0 ? B_.splines[s].x : B_.splines[s].y;
+      std::vector<S> values;
+      for (const S& t : sampling.points) values.push_back(bspline_value<S>(knots, t));
+      std::vector<S> c(values.size(), S(0));
+      for (size_t a = 0; a < values.size(); ++a)
+        for (size_t q = 0; q < values.size(); ++q)
+          if (values[q] != 0) c[a] += sampling.inverse[a][q] * values[q];
+      it->second = std::move(c);
     }
-    factors = B.bernstein->factors;
+    return it->second;
+  }
+
+ private:
+  // One direction of a cell interval [L[lo], L[hi]]: the sample points in its largest grid
+  // interval and the inverse of the Bernstein collocation there.
+  struct Sampling {
+    std::vector<S> points;
+    std::vector<std::vector<S>> inverse;
+  };
+  const Sampling& sampling_of(int d, int lo, int hi, uint64_t interval) {
+    auto [it, fresh] = sampling_[d].try_emplace(interval);
+    if (!fresh) return it->second;
+    const std::vector<mpq_class>& L = d == 0 ? g_.X : g_.Y;
+    const int p = d == 0 ? B_.m : B_.n;
+    int best = lo;
+    for (int i = lo; i < hi; ++i)
+      if (L[i + 1] - L[i] > L[best + 1] - L[best]) best = i;
+    std::vector<S> s;
+    for (int q = 0; q <= p; ++q) {
+      const mpq_class x = L[best] + (L[best + 1] - L[best]) * (q + 1) / (p + 2);
+      it->second.points.push_back(to_scalar<S>(x));
+      s.push_back(to_scalar<S>(mpq_class((x - L[lo]) / (L[hi] - L[lo]))));
+    }
+    it->second.inverse = inverse_bernstein_collocation<S>(p, s);
+    return it->second;
   }
   // The id of B-spline s's knots in direction d (interned once per B-spline).
-  auto knots_id = [&](int s, int d) {
-    UnivariateFactors<S>& u = factors[d];
+  int knots_id(int s, int d) {
+    UnivariateFactors<S>& u = factors_[d];
     while (u.spline_knots.size() <= static_cast<size_t>(s)) {
-      const auto& knots = d == 0 ? B.splines[u.spline_knots.size()].x : B.splines[u.spline_knots.size()].y;
+      const auto& knots = d == 0 ? B_.splines[u.spline_knots.size()].x : B_.splines[u.spline_knots.size()].y;
       std::vector<int> key;
-      for (const mpq_class& t : knots) key.push_back(d == 0 ? g.index_x(t) : g.index_y(t));
+      for (const mpq_class& t : knots) key.push_back(d == 0 ? g_.index_x(t) : g_.index_y(t));
       u.spline_knots.push_back(u.knot_ids.try_emplace(std::move(key), static_cast<int>(u.knot_ids.size())).first->second);
     }
     return u.spline_knots[s];
-  };
-  // Bernstein coefficients of the factor of B-spline s in direction d over cell k.
-  auto factor = [&](int s, int d, int k) -> const std::vector<S>& {
-    const auto& c = mesh.cells()[k];
-    const uint64_t interval = d == 0 ? static_cast<uint64_t>(g.index_x(c.x0)) * (g.X.size() + 1) + g.index_x(c.x1)
-                                     : static_cast<uint64_t>(g.index_y(c.y0)) * (g.Y.size() + 1) + g.index_y(c.y1);
-    const uint64_t key = (static_cast<uint64_t>(knots_id(s, d)) << 32) | interval;
-    auto [it, fresh] = factors[d].coefficients.try_emplace(key);
-    if (fresh) {
-      const CellSampling& cs = sampling[k];
-      const auto& knots = d == 0 ? B.splines[s].x : B.splines[s].y;
-      const auto& points = d == 0 ? cs.px : cs.py;
-      std::vector<S> values;
-      for (const S& t : points) values.push_back(bspline_value<S>(knots, t));
-      it->second = univariate(d == 0 ? cs.inv_x : cs.inv_y, values);
-    }
-    return it->second;
-  };
+  }
+
+  const PtSplineBasis& B_;
+  const RectangularPartition& mesh_;
+  const Grid g_;
+  UnivariateFactors<S> local_[2];
+  UnivariateFactors<S>* factors_;
+  std::unordered_map<uint64_t, Sampling> sampling_[2];
+  std::unique_lock<std::mutex> guard_;
+};
+
+template <class S>
+bool all_zero(const std::vector<S>& v) {
+  return std::all_of(v.begin(), v.end(), [](const S& x) { return x == 0; });
+}
+
+// C += cf * (by outer bx), C indexed a + (m + 1) b.
+template <class S>
+void add_product(std::vector<S>& C, const S& cf, const std::vector<S>& bx, const std::vector<S>& by) {
+  const size_t m1 = bx.size();
+  for (size_t b = 0; b < by.size(); ++b) {
+    if (by[b] == 0) continue;
+    const S cb = cf * by[b];
+    for (size_t a = 0; a < m1; ++a)
+      if (bx[a] != 0) C[a + m1 * b] += cb * bx[a];
+  }
+}
+
+// Whether the coefficients C of function f on a cell are not zero: exactly, or in floating
+// point above the rounding noise cancellation leaves where the function vanishes.
+template <class S>
+bool nonzero(const std::vector<S>& C, const std::vector<std::pair<int, mpq_class>>& f) {
+  S scale = 0;
+  for (const S& c : C)
+    if (magnitude(c) > scale) scale = magnitude(c);
+  if constexpr (std::is_same_v<S, double>) {
+    double fscale = 0;
+    for (const auto& [s, coef] : f) fscale += magnitude(coef.get_d());
+    return scale > 1e-13 * fscale;
+  } else {
+    return scale != 0;
+  }
+}
+
+template <class S>
+std::vector<std::vector<std::pair<int, std::vector<S>>>> cell_polynomials(const PtSplineBasis& B,
+                                                                         const RectangularPartition& mesh) {
+  CellFactors<S> factors(B, mesh);
+  const int nb = (B.m + 1) * (B.n + 1);
+  std::vector<std::vector<std::pair<int, std::vector<S>>>> out(B.functions.size());
   for (size_t f = 0; f < B.functions.size(); ++f) {
     std::map<int, std::vector<S>> coefficients;
     for (const auto& [s, coef] : B.functions[f]) {
-      const auto& sp = B.splines[s];
       const S cf = to_scalar<S>(coef);
-      for (int k : g.cells_in(g.index_x(sp.x.front()), g.index_y(sp.y.front()), g.index_x(sp.x.back()), g.index_y(sp.y.back()))) {
-          const std::vector<S>&bx = factor(s, 0, k), &by = factor(s, 1, k);
-          bool any_x = false, any_y = false;
-          for (const S& v : bx) any_x = any_x || v != 0;
-          for (const S& v : by) any_y = any_y || v != 0;
-          if (!any_x || !any_y) continue;
-          auto [it, fresh] = coefficients.try_emplace(k);
-          if (fresh) it->second.assign((m + 1) * (n + 1), S(0));
-          std::vector<S>& C = it->second;
-          for (int b = 0; b <= n; ++b) {
-            if (by[b] == 0) continue;
-            const S cb = cf * by[b];
-            for (int a = 0; a <= m; ++a)
-              if (bx[a] != 0) C[a + (m + 1) * b] += cb * bx[a];
-          }
-        }
-    }
-    for (auto& [k, C] : coefficients) {
-      bool nonzero = false;
-      S scale = 0;
-      for (const S& c : C)
-        if (magnitude(c) > scale) scale = magnitude(c);
-      if constexpr (std::is_same_v<S, double>) {
-        // Cancellation leaves rounding noise where the function vanishes on the cell.
-        double fscale = 0;
-        for (const auto& [s, coef] : B.functions[f]) fscale += magnitude(coef.get_d());
-        nonzero = scale > 1e-13 * fscale;
-      } else {
-        nonzero = scale != 0;
-      }
-      if (!nonzero) continue;
-      if constexpr (std::is_same_v<S, Out>) {
-        out[f].emplace_back(k, std::move(C));
-      } else {
-        std::vector<Out> rounded;
-        for (const S& v : C) rounded.push_back(v.get_d());
-        out[f].emplace_back(k, std::move(rounded));
+      for (int k : factors.cells_of(s)) {
+        const std::vector<S>&bx = factors.factor(s, 0, k), &by = factors.factor(s, 1, k);
+        if (all_zero(bx) || all_zero(by)) continue;
+        auto [it, fresh] = coefficients.try_emplace(k);
+        if (fresh) it->second.assign(nb, S(0));
+        add_product(it->second, cf, bx, by);
       }
     }
+    for (auto& [k, C] : coefficients)
+      if (nonzero(C, B.functions[f])) out[f].emplace_back(k, std::move(C));
   }
   return out;
 }
 
 }  // namespace
 
-PtCellPolynomialsExact pt_cell_polynomials_exact(const PtSplineBasis& basis, const RectangularPartition& mesh) {
-  return cell_polynomials<mpq_class>(basis, mesh);
+void pt_detail::for_each_cell_polynomials_rounded(
+    const PtSplineBasis& B, const RectangularPartition& mesh,
+    const std::function<void(int cell, const std::vector<int>& functions, Eigen::MatrixXd& coefficients)>& visit) {
+  CellFactors<mpq_class> factors(B, mesh);
+  const int nb = (B.m + 1) * (B.n + 1);
+  // Which B-splines meet each cell and which functions use each B-spline, both as CSR.
+  auto to_csr = [](std::vector<std::vector<std::pair<int, int>>>&& lists, std::vector<int>& start,
+                   std::vector<std::pair<int, int>>& items) {
+    start.assign(1, 0);
+    for (auto& l : lists) {
+      items.insert(items.end(), l.begin(), l.end());
+      start.push_back(static_cast<int>(items.size()));
+      std::vector<std::pair<int, int>>().swap(l);
+    }
+  };
+  std::vector<int> cell_start, spline_start;
+  std::vector<std::pair<int, int>> cell_splines, spline_uses;  // (B-spline, 0); (function, term)
+  {
+    std::vector<std::vector<std::pair<int, int>>> uses(B.splines.size()), meets(mesh.num_cells());
+    for (size_t f = 0; f < B.functions.size(); ++f)
+      for (size_t t = 0; t < B.functions[f].size(); ++t)
+        uses[B.functions[f][t].first].emplace_back(static_cast<int>(f), static_cast<int>(t));
+    for (size_t s = 0; s < B.splines.size(); ++s)
+      if (!uses[s].empty())
+        for (int k : factors.cells_of(static_cast<int>(s))) meets[k].emplace_back(static_cast<int>(s), 0);
+    to_csr(std::move(uses), spline_start, spline_uses);
+    to_csr(std::move(meets), cell_start, cell_splines);
+  }
+  std::map<int, std::vector<mpq_class>> coefficients;  // function -> exact coefficients on the cell
+  std::vector<int> ids;
+  for (int k = 0; k < mesh.num_cells(); ++k) {
+    coefficients.clear();
+    for (int i = cell_start[k]; i < cell_start[k + 1]; ++i) {
+      const int s = cell_splines[i].first;
+      const std::vector<mpq_class>&bx = factors.factor(s, 0, k), &by = factors.factor(s, 1, k);
+      if (all_zero(bx) || all_zero(by)) continue;
+      for (int u = spline_start[s]; u < spline_start[s + 1]; ++u) {
+        const auto [f, t] = spline_uses[u];
+        auto [it, fresh] = coefficients.try_emplace(f);
+        if (fresh) it->second.assign(nb, mpq_class(0));
+        add_product(it->second, B.functions[f][t].second, bx, by);
+      }
+    }
+    ids.clear();
+    for (const auto& [f, C] : coefficients)
+      if (nonzero(C, B.functions[f])) ids.push_back(f);
+    Eigen::MatrixXd rounded(ids.size(), nb);
+    for (size_t r = 0; r < ids.size(); ++r) {
+      const std::vector<mpq_class>& C = coefficients[ids[r]];
+      for (int i = 0; i < nb; ++i) rounded(r, i) = C[i].get_d();
+    }
+    visit(k, ids, rounded);
+  }
 }
 
-PtCellPolynomials pt_cell_polynomials_rounded(const PtSplineBasis& basis, const RectangularPartition& mesh) {
-  return cell_polynomials<mpq_class, double>(basis, mesh);
+PtCellPolynomialsExact pt_cell_polynomials_exact(const PtSplineBasis& basis, const RectangularPartition& mesh) {
+  return cell_polynomials<mpq_class>(basis, mesh);
 }
 
 PtCellPolynomials pt_cell_polynomials(const PtSplineBasis& basis, const RectangularPartition& mesh) {

@@ -98,9 +98,6 @@ PtCellPolynomialsExact pt_cell_polynomials_exact(const PtSplineBasis& basis, con
 PtCellPolynomials pt_cell_polynomials(const PtSplineBasis& basis, const RectangularPartition& mesh);
 // The exact coefficients rounded once (no rounding error from the sampling).
 PtCellPolynomials to_double(const PtCellPolynomialsExact& exact);
-// pt_cell_polynomials_exact rounded once, function by function (the same numbers as
-// to_double of it, without holding every exact coefficient at once).
-PtCellPolynomials pt_cell_polynomials_rounded(const PtSplineBasis& basis, const RectangularPartition& mesh);
 
 // Value of function f at (x, y), exactly (the combination of its local B-splines).
 mpq_class pt_evaluate(const PtSplineBasis& basis, int f, const mpq_class& x, const mpq_class& y);
