@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -125,8 +126,10 @@ class PtSpace final : public SplineSpace {
  public:
   // PT-splines on the given T-mesh of the case's parameter domain, ready to solve: the
   // geometry's C0 knot lines are C0 lines of the space. Throws InputError naming the case.
-  PtSpace(const CaseDescription& c, const std::vector<RationalBox>& cells, int elements,
-          const ProgressFunction& progress = {})
+  // The exact basis and T-mesh are built, turned into the mesh and dropped: the space keeps
+  // the mesh, the cells and the facts it reports. (Kept, the exact data were about 2.5 kB per
+  // bicubic cell next to the mesh's 2.1 kB on the adaptive L-shape, held through every solve.)
+  PtSpace(const CaseDescription& c, std::vector<RationalBox> cells, int elements, const ProgressFunction& progress = {})
       : case_(&c), elements_(elements) {
     check_pt_memory(c, cells.size());
     // Exact arithmetic throughout: minutes on the largest meshes, so each stage says so.
@@ -136,21 +139,28 @@ class PtSpace final : public SplineSpace {
     say("extension and local B-splines on " + std::to_string(cells.size()) + " cells (exact)");
     const PtSection& pt = pt_section(c);
     const GeometryLines lines = geometry_lines(c.geometry);
+    std::optional<RectangularPartition> tmesh;
+    std::optional<PtSplineBasis> basis;
     try {
-      tmesh_ = std::make_unique<RectangularPartition>(cells);
-      pt_ = std::make_unique<PtSplineBasis>(
-          pt_spline_basis(*tmesh_, pt.space.degree[0], pt.space.degree[1], pt.extension, lines.c0));
+      tmesh.emplace(std::move(cells));
+      basis.emplace(pt_spline_basis(*tmesh, pt.space.degree[0], pt.space.degree[1], pt.extension, lines.c0));
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
     }
-    say("independence of " + std::to_string(pt_->functions.size()) + " functions (exact rank)");
-    make_boundary_traces_independent(*pt_, *tmesh_);
-    make_numerically_independent(*pt_, *tmesh_);
+    say("independence of " + std::to_string(basis->functions.size()) + " functions (exact rank)");
+    make_boundary_traces_independent(*basis, *tmesh);
+    make_numerically_independent(*basis, *tmesh);
     say("Bezier extraction (exact, rounded once)");
     // Exact Bernstein coefficients, rounded once: assembly sees functions that are C^(m-1) to
     // the last bit, whatever the T-mesh.
-    mesh_ = pt_bezier_mesh(*pt_, *tmesh_);
-    pt_->bernstein.reset();  // the exact factors are large on big meshes and not needed again
+    mesh_ = pt_bezier_mesh(*basis, *tmesh);
+    m_ = basis->m, n_ = basis->n;
+    c0_ = basis->c0;
+    extension_ = basis->extension;
+    minimal_refused_ = basis->minimal_refused;
+    basis.reset();
+    cells_ = std::move(*tmesh).take_cells();
+    tmesh.reset();
     mesh_.set_interfaces(interfaces_from_parameter_boxes(mesh_));
     geometry_ = std::make_unique<PatchGeometryMap>(mesh_, c.geometry);
 #ifdef __GLIBC__
@@ -171,21 +181,21 @@ class PtSpace final : public SplineSpace {
     return "PT-splines, degree " + std::to_string(pt.space.degree[0]) + "x" + std::to_string(pt.space.degree[1]) + ", " +
            start + ", extension " + pt_extension_name(pt.extension);
   }
-  std::array<int, 2> degree() const override { return {pt_->m, pt_->n}; }
+  std::array<int, 2> degree() const override { return {m_, n_}; }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(elements_), .column = true, .width = 9},
-            {.key = "extension_used", .value = std::string(pt_extension_name(pt_->extension))}};
+            {.key = "extension_used", .value = std::string(pt_extension_name(extension_))}};
   }
   // The minimal extension was refused and a full one used: never silently.
   std::vector<std::string> notes() const override {
-    if (pt_->minimal_refused.empty()) return {};
-    return {"the minimal PT extension was refused (" + pt_->minimal_refused + "); the " +
-            pt_extension_name(pt_->extension) + " full extension is used instead (less local)"};
+    if (minimal_refused_.empty()) return {};
+    return {"the minimal PT extension was refused (" + minimal_refused_ + "); the " + pt_extension_name(extension_) +
+            " full extension is used instead (less local)"};
   }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& split,
                                       int* extended) && override {
     // The BezierMesh cells are the T-mesh cells, in order: halve the marked ones.
-    std::vector<RationalBox> cells = tmesh_->cells();
+    std::vector<RationalBox> cells = std::move(cells_);
     for (size_t k = 0; k < marked.size(); ++k) {
       RationalBox& a = cells[marked[k]];
       RationalBox b = a;
@@ -194,46 +204,48 @@ class PtSpace final : public SplineSpace {
       cells.push_back(b);
     }
     if (extended) *extended = 0;
-    // This space is consumed: its mesh and basis go before the next ones are built (the
-    // extraction alone is 2.1 kB per bicubic cell, measured on the adaptive L-shape).
+    // This space is consumed: its mesh goes before the next one is built (the extraction
+    // alone is 2.1 kB per bicubic cell, measured on the adaptive L-shape).
     geometry_.reset();
     mesh_ = BezierMesh();
-    pt_.reset();
-    tmesh_.reset();
-    return std::make_unique<PtSpace>(*case_, cells, elements_);
+    return std::make_unique<PtSpace>(*case_, std::move(cells), elements_);
   }
   // PT-spline knots are simple, except along the C0 lines.
   KnotLines knot_lines() const override {
-    KnotPolylines k = knot_polylines(*tmesh_, case_->geometry, [&](bool vertical, double at, double, double) {
-      for (const auto& t : vertical ? pt_->c0.x : pt_->c0.y)
-        if (t.get_d() == at) return vertical ? pt_->m : pt_->n;
+    const RectangularPartition tmesh(cells_);
+    KnotPolylines k = knot_polylines(tmesh, case_->geometry, [&](bool vertical, double at, double, double) {
+      for (const auto& t : vertical ? c0_.x : c0_.y)
+        if (t.get_d() == at) return vertical ? m_ : n_;
       return 1;
     });
     return {std::move(k.lines), std::move(k.kind), std::move(k.multiplicity)};
   }
 
-  const PtSplineBasis& basis() const { return *pt_; }
-  const RectangularPartition& tmesh() const { return *tmesh_; }
+  const C0Lines& c0() const { return c0_; }
+  const std::vector<RationalBox>& cells() const { return cells_; }
 
  private:
   const CaseDescription* case_;
   int elements_;
-  std::unique_ptr<RectangularPartition> tmesh_;
-  std::unique_ptr<PtSplineBasis> pt_;
+  int m_ = 0, n_ = 0;
+  C0Lines c0_;
+  PtExtension extension_ = PtExtension::kHorizontal;
+  std::string minimal_refused_;
+  std::vector<RationalBox> cells_;  // the T-mesh's, in the mesh's cell order
   BezierMesh mesh_;
   std::unique_ptr<PatchGeometryMap> geometry_;
 };
 
 }  // namespace
 
-const PtSplineBasis* pt_basis_of(const SplineSpace& space) {
+const C0Lines* pt_c0_lines_of(const SplineSpace& space) {
   const auto* pt = dynamic_cast<const PtSpace*>(&space);
-  return pt ? &pt->basis() : nullptr;
+  return pt ? &pt->c0() : nullptr;
 }
 
-const RectangularPartition* pt_tmesh_of(const SplineSpace& space) {
+const std::vector<RationalBox>* pt_cells_of(const SplineSpace& space) {
   const auto* pt = dynamic_cast<const PtSpace*>(&space);
-  return pt ? &pt->tmesh() : nullptr;
+  return pt ? &pt->cells() : nullptr;
 }
 
 SpaceFamily pt_family() {

@@ -12,8 +12,10 @@ namespace knotwork {
 // each cut into [space] elements * 2^level parts, then the segments. Throws InputError.
 std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level = 0);
 
-// The PT-spline basis and T-mesh of a family "pt" space; null for any other space.
-const PtSplineBasis* pt_basis_of(const SplineSpace& space);
-const RectangularPartition* pt_tmesh_of(const SplineSpace& space);
+// The C0 lines and the T-mesh cells (in the order of its BezierMesh's cells) of a family "pt"
+// space; null for any other space. The space keeps no exact basis: it is rounded into the
+// mesh and dropped.
+const C0Lines* pt_c0_lines_of(const SplineSpace& space);
+const std::vector<RationalBox>* pt_cells_of(const SplineSpace& space);
 
 }  // namespace knotwork

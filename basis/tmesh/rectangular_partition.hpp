@@ -2,6 +2,7 @@
 #include <gmpxx.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace knotwork {
@@ -32,6 +33,11 @@ class RectangularPartition {
   explicit RectangularPartition(std::vector<RationalBox> cells);
 
   const std::vector<RationalBox>& cells() const { return cells_; }
+  // The cells, in the order given, without a copy; the partition is left empty.
+  std::vector<RationalBox> take_cells() && {
+    edges_.clear();
+    return std::move(cells_);
+  }
   int num_cells() const { return static_cast<int>(cells_.size()); }
 
   // A maximal common segment of two cells' boundaries. Vertical: first is left of
