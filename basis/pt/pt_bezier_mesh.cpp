@@ -1,6 +1,9 @@
 #include "basis/pt/pt_bezier_mesh.hpp"
 
 #include <algorithm>
+#include <numeric>
+#include <string_view>
+#include <unordered_map>
 
 namespace knotwork {
 
@@ -73,9 +76,39 @@ BezierMesh pt_bezier_mesh(const PtSplineBasis& basis, const RectangularPartition
   BezierMesh out = empty_mesh(static_cast<int>(basis.functions.size()));
   out.reserve(mesh.num_cells(), 0);
   const CellMaker make_cell(mesh, basis.m, basis.n);
+  // Where the T-mesh repeats itself the cells' coefficients do too, up to the order of their
+  // functions: with the rows in a canonical order (by their coefficients, the functions
+  // permuted alike) equal matrices are pooled. On the adaptive L-shape at degree 3 (16 380
+  // cells) 9 065 of them are distinct.
+  std::unordered_map<std::string_view, int> pooled;  // a matrix's bytes -> its pool id
+  std::vector<int> order, ids;
   pt_detail::for_each_cell_polynomials_rounded(
-      basis, mesh, [&](int k, const std::vector<int>& ids, Eigen::MatrixXd& C) {
-        out.add_cell(make_cell(k), ids, out.add_extraction(std::move(C)));
+      basis, mesh, [&](int k, const std::vector<int>& functions, Eigen::MatrixXd& C) {
+        const auto rows = static_cast<int>(C.rows()), cols = static_cast<int>(C.cols());
+        order.resize(rows);
+        std::iota(order.begin(), order.end(), 0);
+        std::sort(order.begin(), order.end(), [&](int a, int b) {
+          for (int i = 0; i < cols; ++i)
+            if (C(a, i) != C(b, i)) return C(a, i) < C(b, i);
+          return functions[a] < functions[b];
+        });
+        Eigen::MatrixXd sorted(rows, cols);
+        ids.clear();
+        for (int r = 0; r < rows; ++r) {
+          sorted.row(r) = C.row(order[r]);
+          ids.push_back(functions[order[r]]);
+        }
+        const std::string_view bytes(reinterpret_cast<const char*>(sorted.data()), sizeof(double) * sorted.size());
+        auto found = pooled.find(bytes);
+        int id = 0;
+        if (found != pooled.end() && out.pooled_extraction(found->second).rows() == rows) {
+          id = found->second;
+        } else {
+          id = out.add_extraction(std::move(sorted));
+          const Eigen::MatrixXd& kept = out.pooled_extraction(id);
+          pooled[std::string_view(reinterpret_cast<const char*>(kept.data()), sizeof(double) * kept.size())] = id;
+        }
+        out.add_cell(make_cell(k), ids, id);
       });
   return out;
 }
