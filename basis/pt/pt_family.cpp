@@ -26,9 +26,9 @@ std::unique_ptr<BasisTool> pt_basis_tool(CLI::App& basis);  // pt_basis_tool.cpp
 namespace {
 
 // The basis is built in exact arithmetic: on the adaptive L-shape at degree 3 (2026-12-03,
-// docs/PERFORMANCE.md) a 57557-cell T-mesh took 20-53 s, the larger times when the first
-// insertion orders fall short and a lengthened one is needed; 60000 cells keep a build near
-// a minute.
+// docs/PERFORMANCE.md) T-meshes of 57 557 to 118 210 cells took 22-51 s each, the larger
+// times when the first insertion orders fall short and a lengthened one is needed; 120000
+// cells keep a build near a minute.
 constexpr int kMaxPtCells = 120000;
 
 // The geometry's breakpoints, exactly (doubles are dyadic rationals), and which interior
@@ -113,12 +113,12 @@ std::vector<RationalBox> pt_start_cells(const CaseDescription& c, int level) {
 
 namespace {
 
-// A peak of 1.01 GB for the whole adaptive run to 53732 functions (p = 3, L-shape, 57557
-// cells, 2026-12-03), about 18 kB per cell with the Galerkin part and the previous step's
-// space; 30 kB per cell plus that part stays on the safe side.
+// A peak of 0.92 GB for the whole adaptive run to 111 972 functions (p = 3, L-shape, 118 210
+// cells at the end, 2026-12-03): 7.8 kB per cell, reached inside the last build (the
+// solve after it peaked at 0.69 GB); 12 kB per cell plus the Galerkin part stays on the safe side.
 void check_pt_memory(const CaseDescription& c, size_t cells) {
   const auto [m, n] = pt_section(c).space.degree;
-  const double bytes = 30e3 * double(cells) + galerkin_bytes(double(cells), double(cells) + (m + 1) * (n + 1), m, n);
+  const double bytes = 12e3 * double(cells) + galerkin_bytes(double(cells), double(cells) + (m + 1) * (n + 1), m, n);
   check_memory(c.path + ": [space]", bytes, std::to_string(cells) + " T-mesh cells of PT-splines");
 }
 
