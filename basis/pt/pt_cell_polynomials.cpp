@@ -104,7 +104,7 @@ namespace {
 template <class S>
 class CellFactors {
  public:
-  CellFactors(const PtSplineBasis& B, const RectangularPartition& mesh) : B_(B), mesh_(mesh), g_(make_grid(mesh)) {
+  CellFactors(const PtSplineBasis& B, const RectangularPartition& mesh) : B_(B), g_(make_grid(mesh)) {
     factors_ = local_;
     if constexpr (std::is_same_v<S, mpq_class>) {
       guard_ = std::unique_lock<std::mutex>(*B.bernstein_lock);
@@ -185,7 +185,6 @@ class CellFactors {
   }
 
   const PtSplineBasis& B_;
-  const RectangularPartition& mesh_;
   const Grid g_;
   UnivariateFactors<S> local_[2];
   UnivariateFactors<S>* factors_;
@@ -258,34 +257,35 @@ void pt_detail::for_each_cell_polynomials_rounded(
   CellFactors<mpq_class> factors(B, mesh);
   const int nb = (B.m + 1) * (B.n + 1);
   // Which B-splines meet each cell and which functions use each B-spline, both as CSR.
-  auto to_csr = [](std::vector<std::vector<std::pair<int, int>>>&& lists, std::vector<int>& start,
-                   std::vector<std::pair<int, int>>& items) {
+  auto to_csr = [](auto& lists, std::vector<int>& start, auto& items) {
     start.assign(1, 0);
     for (auto& l : lists) {
       items.insert(items.end(), l.begin(), l.end());
       start.push_back(static_cast<int>(items.size()));
-      std::vector<std::pair<int, int>>().swap(l);
+      l = {};
     }
   };
   std::vector<int> cell_start, spline_start;
-  std::vector<std::pair<int, int>> cell_splines, spline_uses;  // (B-spline, 0); (function, term)
+  std::vector<int> cell_splines;                   // B-splines
+  std::vector<std::pair<int, int>> spline_uses;  // (function, term)
   {
-    std::vector<std::vector<std::pair<int, int>>> uses(B.splines.size()), meets(mesh.num_cells());
+    std::vector<std::vector<std::pair<int, int>>> uses(B.splines.size());
+    std::vector<std::vector<int>> meets(mesh.num_cells());
     for (size_t f = 0; f < B.functions.size(); ++f)
       for (size_t t = 0; t < B.functions[f].size(); ++t)
         uses[B.functions[f][t].first].emplace_back(static_cast<int>(f), static_cast<int>(t));
     for (size_t s = 0; s < B.splines.size(); ++s)
       if (!uses[s].empty())
-        for (int k : factors.cells_of(static_cast<int>(s))) meets[k].emplace_back(static_cast<int>(s), 0);
-    to_csr(std::move(uses), spline_start, spline_uses);
-    to_csr(std::move(meets), cell_start, cell_splines);
+        for (int k : factors.cells_of(static_cast<int>(s))) meets[k].push_back(static_cast<int>(s));
+    to_csr(uses, spline_start, spline_uses);
+    to_csr(meets, cell_start, cell_splines);
   }
   std::map<int, std::vector<mpq_class>> coefficients;  // function -> exact coefficients on the cell
   std::vector<int> ids;
   for (int k = 0; k < mesh.num_cells(); ++k) {
     coefficients.clear();
     for (int i = cell_start[k]; i < cell_start[k + 1]; ++i) {
-      const int s = cell_splines[i].first;
+      const int s = cell_splines[i];
       const std::vector<mpq_class>&bx = factors.factor(s, 0, k), &by = factors.factor(s, 1, k);
       if (all_zero(bx) || all_zero(by)) continue;
       for (int u = spline_start[s]; u < spline_start[s + 1]; ++u) {
