@@ -85,7 +85,8 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
                                             : CellSplit::kAcrossV);
       }
       t1 = clock::now();
-      std::unique_ptr<SplineSpace> next = std::move(*space).refine(marked, split, &st.extended);
+      std::unique_ptr<SplineSpace> next =
+          std::move(*space).refine(marked, split, &st.extended, [&](const std::string& what) { say(prefix + what); });
       if (!next)
         throw InputError(c.path + ": [space] family: \"" + c.family + "\" cannot refine marked cells");
       // The family's refinement builds the next space too: both are this step's refinement time.

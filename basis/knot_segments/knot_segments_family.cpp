@@ -81,7 +81,7 @@ class KnotSegmentSpace final : public SplineSpace {
                  file.c_str(), violations_.front().c_str(), more.c_str());
   }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& split,
-                                      int* extended) && override {
+                                      int* extended, const ProgressFunction& /*progress*/) && override {
     if (!violations_.empty())
       throw InputError(case_->path + ": [space]: adaptive refinement needs a semi-regular start, and the collection is "
                        "not: " + violations_.front());

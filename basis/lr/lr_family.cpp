@@ -132,7 +132,7 @@ class LrSpace final : public SplineSpace {
                  case_->path.c_str(), dependence_text().c_str());
   }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
-                                      int* extended) && override {
+                                      int* extended, const ProgressFunction& /*progress*/) && override {
     DyadicLrMesh next = lr_;
     try {
       next.refine(marked, lr_section(*case_).strategy);

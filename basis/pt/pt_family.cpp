@@ -193,7 +193,7 @@ class PtSpace final : public SplineSpace {
             " full extension is used instead (less local)"};
   }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& split,
-                                      int* extended) && override {
+                                      int* extended, const ProgressFunction& progress) && override {
     // The BezierMesh cells are the T-mesh cells, in order: halve the marked ones.
     std::vector<RationalBox> cells = std::move(cells_);
     for (size_t k = 0; k < marked.size(); ++k) {
@@ -208,7 +208,7 @@ class PtSpace final : public SplineSpace {
     // L-shape the extraction is 2.1 kB per bicubic cell, about 1.2 kB once pooled).
     geometry_.reset();
     mesh_ = BezierMesh();
-    return std::make_unique<PtSpace>(*case_, std::move(cells), elements_);
+    return std::make_unique<PtSpace>(*case_, std::move(cells), elements_, progress);
   }
   // PT-spline knots are simple, except along the C0 lines.
   KnotLines knot_lines() const override {

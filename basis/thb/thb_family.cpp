@@ -82,7 +82,7 @@ class ThbSpace final : public SplineSpace {
     return {{.key = "functions_per_level", .value = counts, .text = text, .label = "per level"}};
   }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
-                                      int* extended) && override {
+                                      int* extended, const ProgressFunction& /*progress*/) && override {
     // THB refinement halves a cell in both directions; the split direction does not apply.
     std::vector<ThbCell> cells;
     cells.reserve(marked.size());
