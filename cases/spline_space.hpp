@@ -78,7 +78,7 @@ class SplineSpace {
   // beyond the marked cells (knot segments lengthened to stay semi-regular). It consumes the
   // space (call it on std::move(*space) and drop the space after): a family may free this
   // space's mesh before it builds the next one, so that the two never need memory at once.
-  // `progress` hears the stages of a long build (PT-splines: up to a minute).
+  // `progress` hears the stages of a build that takes long (up to a minute in exact arithmetic).
   virtual std::unique_ptr<SplineSpace> refine(const std::vector<int>& /*marked*/, const std::vector<CellSplit>& /*split*/,
                                               int* /*extended*/ = nullptr, const ProgressFunction& /*progress*/ = {}) && {
     return nullptr;

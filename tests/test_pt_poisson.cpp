@@ -72,21 +72,19 @@ TEST_CASE("PT BezierMesh: every extraction row reproduces the exact PT function"
   // their B-splines' knots, not from Bernstein coefficients.
   REQUIRE(pt_cells_of(*space));
   const RectangularPartition partition(*pt_cells_of(*space));
-  const RectangularPartition* tmesh = &partition;
   PtSplineBasis basis = pt_spline_basis(partition, 2, 2, pt_section(c).extension);
   make_boundary_traces_independent(basis, partition);
   make_numerically_independent(basis, partition);
-  const PtSplineBasis* pt = &basis;
   const BezierMesh& mesh = space->mesh();
-  REQUIRE(mesh.num_functions() == static_cast<int>(pt->functions.size()));
-  REQUIRE(mesh.num_cells() == tmesh->num_cells());
+  REQUIRE(mesh.num_functions() == static_cast<int>(basis.functions.size()));
+  REQUIRE(mesh.num_cells() == partition.num_cells());
   std::mt19937 rng(5);
   std::uniform_int_distribution<int> pick(1, 15);
   double worst = 0;
   int checked = 0;
   for (int k = 0; k < mesh.num_cells(); ++k) {
     const BezierCell& cell = mesh.cell(k);
-    const RationalBox& box = tmesh->cells()[k];
+    const RationalBox& box = partition.cells()[k];
     for (int trial = 0; trial < 2; ++trial) {
       const mpq_class s(pick(rng), 16), t(pick(rng), 16);
       const mpq_class x = box.x0 + s * (box.x1 - box.x0), y = box.y0 + t * (box.y1 - box.y0);
@@ -99,12 +97,12 @@ TEST_CASE("PT BezierMesh: every extraction row reproduces the exact PT function"
         double v = 0;
         for (int j = 0; j <= cell.degree_v; ++j)
           for (int i = 0; i <= cell.degree_u; ++i) v += mesh.extraction(k)(a, i + (cell.degree_u + 1) * j) * bu[i] * bv[j];
-        worst = std::max(worst, std::abs(v - pt_evaluate(*pt, ids[a], x, y).get_d()));
+        worst = std::max(worst, std::abs(v - pt_evaluate(basis, ids[a], x, y).get_d()));
         alive[ids[a]] = true;
       }
       // The functions not listed on the cell vanish there.
       for (int f = 0; f < mesh.num_functions(); ++f)
-        if (!alive[f]) worst = std::max(worst, std::abs(pt_evaluate(*pt, f, x, y).get_d()));
+        if (!alive[f]) worst = std::max(worst, std::abs(pt_evaluate(basis, f, x, y).get_d()));
       ++checked;
     }
   }

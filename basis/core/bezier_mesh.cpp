@@ -1,4 +1,5 @@
 #include "basis/core/bezier_mesh.hpp"
+#include "basis/core/pooled_extractions.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -10,6 +11,17 @@ namespace knotwork {
 int BezierMesh::add_extraction(Eigen::MatrixXd matrix) {
   pool_.push_back(std::move(matrix));
   return static_cast<int>(pool_.size()) - 1;
+}
+
+int PooledExtractions::add(Eigen::MatrixXd matrix) {
+  auto bytes = [](const Eigen::MatrixXd& m) {
+    return std::string_view(reinterpret_cast<const char*>(m.data()), sizeof(double) * m.size());
+  };
+  const auto found = ids_.find(bytes(matrix));
+  if (found != ids_.end() && mesh_.pooled_extraction(found->second).rows() == matrix.rows()) return found->second;
+  const int id = mesh_.add_extraction(std::move(matrix));
+  ids_.try_emplace(bytes(mesh_.pooled_extraction(id)), id);
+  return id;
 }
 
 void BezierMesh::add_cell(const BezierCell& cell, std::span<const int> functions,

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <numeric>
-#include <string_view>
-#include <unordered_map>
+
+#include "basis/core/pooled_extractions.hpp"
 
 namespace knotwork {
 
@@ -80,7 +80,7 @@ BezierMesh pt_bezier_mesh(const PtSplineBasis& basis, const RectangularPartition
   // functions: with the rows in a canonical order (by their coefficients, the functions
   // permuted alike) equal matrices are pooled. On the adaptive L-shape at degree 3 (16 380
   // cells) 9 065 of them are distinct.
-  std::unordered_map<std::string_view, int> pooled;  // a matrix's bytes -> its pool id
+  PooledExtractions pooled(out);
   std::vector<int> order, ids;
   pt_detail::for_each_cell_polynomials_rounded(
       basis, mesh, [&](int k, const std::vector<int>& functions, Eigen::MatrixXd& C) {
@@ -98,17 +98,7 @@ BezierMesh pt_bezier_mesh(const PtSplineBasis& basis, const RectangularPartition
           sorted.row(r) = C.row(order[r]);
           ids.push_back(functions[order[r]]);
         }
-        const std::string_view bytes(reinterpret_cast<const char*>(sorted.data()), sizeof(double) * sorted.size());
-        auto found = pooled.find(bytes);
-        int id = 0;
-        if (found != pooled.end() && out.pooled_extraction(found->second).rows() == rows) {
-          id = found->second;
-        } else {
-          id = out.add_extraction(std::move(sorted));
-          const Eigen::MatrixXd& kept = out.pooled_extraction(id);
-          pooled[std::string_view(reinterpret_cast<const char*>(kept.data()), sizeof(double) * kept.size())] = id;
-        }
-        out.add_cell(make_cell(k), ids, id);
+        out.add_cell(make_cell(k), ids, pooled.add(std::move(sorted)));
       });
   return out;
 }

@@ -121,13 +121,8 @@ class CellFactors {
       factors_ = B.bernstein->factors;
     }
   }
-  const Grid& grid() const { return g_; }
   // The T cells the support of B-spline s meets, in increasing order.
-  std::vector<int> cells_of(int s) const {
-    const auto& sp = B_.splines[s];
-    return g_.cells_in(g_.index_x(sp.x.front()), g_.index_y(sp.y.front()), g_.index_x(sp.x.back()),
-                       g_.index_y(sp.y.back()));
-  }
+  std::vector<int> cells_of(int s) const { return g_.cells_under(B_.splines[s]); }
   const std::vector<S>& factor(int s, int d, int k) {
     const auto& box = g_.cell_box[k];
     const int lo = box[d], hi = box[d + 2];

@@ -58,6 +58,10 @@ struct Grid {
   // cell to cell (a row of the grid at a time only where some cell ends), not a visit of
   // every grid cell, which costs the square of the number of coordinates on a graded mesh.
   std::vector<int> cells_in(int x0, int y0, int x1, int y1) const;
+  // The cells of T meeting the support of a B-spline whose knots are grid coordinates.
+  std::vector<int> cells_under(const PtLocalBSpline& s) const {
+    return cells_in(index_x(s.x.front()), index_y(s.y.front()), index_x(s.x.back()), index_y(s.y.back()));
+  }
 };
 
 Grid make_grid(const RectangularPartition& mesh);

@@ -1,10 +1,11 @@
 // Family "pt": PT-splines over a T-mesh of the geometry's parameter domain, as a BezierMesh;
 // refined locally by halving marked cells of the T-mesh and building the space anew.
-#include <malloc.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <optional>
 #include <stdexcept>
 #include <string>

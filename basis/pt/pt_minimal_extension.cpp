@@ -202,11 +202,8 @@ std::optional<PtSplineBasis> build_minimal(const RectangularPartition& mesh, int
 
   // The B-splines meeting each cell of T.
   std::vector<std::vector<int>> meeting(mesh.num_cells());
-  for (int s = 0; s < static_cast<int>(B.splines.size()); ++s) {
-    const auto& sp = B.splines[s];
-    for (int k : g.cells_in(g.index_x(sp.x.front()), g.index_y(sp.y.front()), g.index_x(sp.x.back()), g.index_y(sp.y.back())))
-      meeting[k].push_back(s);
-  }
+  for (int s = 0; s < static_cast<int>(B.splines.size()); ++s)
+    for (int k : g.cells_under(B.splines[s])) meeting[k].push_back(s);
   // EEE rows, cell by cell: the knot lines of those B-splines inside the cell cut it into a
   // grid on which every one of them is a polynomial. The sum is a polynomial on the cell iff
   // across each such line the jump of the top derivative (d^n/dy^n across y = Y, d^m/dx^m

@@ -136,10 +136,9 @@ namespace {
 // is never wrong: dim <= unknowns - rank mod p (rank mod p <= rank over Q), and rows
 // independent mod p are independent over Q.
 std::string certify(PtSplineBasis& B, const RectangularPartition& mesh, long dimension) {
-  if (B.short_of_dimension > 0)
-    return std::to_string(dimension - B.short_of_dimension) + " functions for a space of dimension " +
-           std::to_string(dimension);
-  const long count = static_cast<long>(B.functions.size());
+  // An insertion order that fell short stopped before listing its null vectors.
+  const long count =
+      B.short_of_dimension > 0 ? dimension - B.short_of_dimension : static_cast<long>(B.functions.size());
   if (count < dimension) return std::to_string(count) + " functions for a space of dimension " + std::to_string(dimension);
   // The functions are the untouched B-splines and, per EEE block, null vectors kept only when
   // exactly independent of the block's earlier ones: their coefficient matrix has full row

@@ -9,10 +9,11 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <map>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+
+#include "basis/core/pooled_extractions.hpp"
 
 namespace knotwork {
 
@@ -259,14 +260,10 @@ ThbHierarchy::Basis ThbHierarchy::build() const {
   out.mesh.set_boundary_names({"bottom", "right", "top", "left"});
   out.leaves.reserve(cells_total);
   // Identical extraction matrices (most cells away from level changes) are pooled.
-  std::map<std::vector<double>, int> pooled;
+  PooledExtractions pooled(out.mesh);
   for (auto& v : per_root)
     for (CellOut& o : v) {
-      std::vector<double> key(o.extraction.data(), o.extraction.data() + o.extraction.size());
-      key.push_back(double(o.extraction.rows()));
-      auto [it, fresh] = pooled.try_emplace(std::move(key), -1);
-      if (fresh) it->second = out.mesh.add_extraction(std::move(o.extraction));
-      out.mesh.add_cell(o.cell, o.ids, it->second);
+      out.mesh.add_cell(o.cell, o.ids, pooled.add(std::move(o.extraction)));
       out.leaves.push_back(o.leaf);
     }
   return out;
