@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "basis/g1/g1_basis.hpp"
+#include "basis/g1/g1_refine.hpp"
 #include "basis/exact/sparse_rank.hpp"
 #include "tests/g1_test_meshes.hpp"
 
@@ -259,6 +260,23 @@ TEST_CASE("G1 bases on the test meshes: count = dimension, rank, residual, suppo
       REQUIRE(exact.functions == floating.functions);
     }
   }
+}
+
+// The floating-point construction beyond the 10 000 unknowns its dense SVD allowed: rational
+// data forced through it give the exact construction's count (the exact dimension), and the
+// functions satisfy the conditions. Twice subdivided mesh with valences 3 to 6, 27 648 unknowns.
+TEST_CASE("The floating-point construction on a large mesh: the exact count, and the conditions", "[g1][basis][floating]") {
+  const QuadMesh coarse = QuadMesh::read_obj(std::string(KNOTWORK_SOURCE_DIR) + "/cases/meshes/mixed_valences.obj");
+  const G1Refinement fine = refine_g1(coarse, analysis_suitable_gluing(coarse), 2);
+  const G1Basis exact = g1_basis(fine.mesh, fine.gluing, 4, 1);
+  const G1Basis floating = g1_basis(fine.mesh, fine.gluing, 4, 1, true);
+  REQUIRE(exact.space.exact);
+  REQUIRE(floating.space.local);
+  REQUIRE(floating.space.unknowns == 27648);
+  REQUIRE(floating.space.dimension == exact.space.dimension);
+  REQUIRE(floating.functions.size() == exact.functions.size());
+  REQUIRE(floating.counts == exact.counts);
+  CHECK(g1_residual_max(fine.mesh, fine.gluing, floating) < 1e-12);
 }
 
 // Closed meshes whose crossings have neighbours of different valences across (the polygon-edge

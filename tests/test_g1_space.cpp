@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 
 #include "basis/g1/g1_refine.hpp"
 #include "basis/g1/g1_space.hpp"
@@ -422,4 +423,60 @@ TEST_CASE("Irrational symmetric data: the dimension modulo primes with roots of 
   // The Section 8 count for a fan of F = 5 (above, by SVD) holds for the modular rank too.
   const QuadMesh five = fan(5);
   CHECK(g1_space_dimension_cyclotomic(five, symmetric_gluing(five), 4, 1).dimension == (3 + 5) + 5 * (4 + 5 + 36));
+}
+
+// The floating-point dimension of large meshes (g1_space_dimension_local) from local SVDs,
+// against two computations that share nothing with it but the conditions' definition: the
+// exact rank of rational data, and the dense SVD of all the conditions for data that are
+// not rational. Degrees below the separability (k = 3, and r = k - 1) make inseparable
+// edges, whose remainder rows join their two vertices: that branch is required to run.
+TEST_CASE("Local SVDs give the exact dimension of rational data and the dense SVD's of floating-point data", "[g1][dimension]") {
+  const std::string meshes = std::string(KNOTWORK_SOURCE_DIR) + "/cases/meshes/";
+  std::vector<std::pair<std::string, QuadMesh>> planar{{"three quads", three_quads()}, {"grid", grid(3)}};
+  for (const char* name : {"pentagon.obj", "mixed_valences.obj", "valences_6_8.obj", "lshape_split.obj"})
+    planar.emplace_back(name, QuadMesh::read_obj(meshes + name));
+  long coupled = 0, compared = 0;
+  SECTION("rational data: analysis-suitable (planar), symmetric (cube, torus), once subdivided") {
+    std::vector<std::tuple<std::string, QuadMesh, GluingData>> cases;
+    for (const auto& [name, m] : planar) {
+      if (name == "three quads") continue;  // irrational coordinates: below
+      cases.emplace_back(name, m, analysis_suitable_gluing(m));
+    }
+    for (const QuadMesh& m : {cube(), torus(4, 3)}) cases.emplace_back("closed", m, symmetric_gluing(m));
+    const QuadMesh pentagon = QuadMesh::read_obj(meshes + "pentagon.obj");
+    const G1Refinement fine = refine_g1(pentagon, analysis_suitable_gluing(pentagon), 1);
+    cases.emplace_back("pentagon, subdivided", fine.mesh, fine.gluing);
+    for (const auto& [name, m, g] : cases)
+      for (const auto& [k, r] : {std::pair{3, 0}, {3, 1}, {4, 1}, {4, 2}, {4, 3}, {5, 1}, {5, 3}}) {
+        CAPTURE(name, k, r);
+        REQUIRE(g.exact());
+        const G1SpaceDimension exact = g1_space_dimension(m, g, k, r);
+        const G1SpaceDimension local = g1_space_dimension_local(m, g, k, r);
+        REQUIRE(exact.exact);
+        REQUIRE(local.local);
+        CHECK(local.dimension == exact.dimension);
+        CHECK(local.constraints == exact.constraints);
+        coupled += local.coupled_edges;
+        ++compared;
+      }
+    CHECK(compared == 8 * 7);  // eight meshes, seven (k, r)
+    CHECK(coupled > 0);
+  }
+  SECTION("floating-point data: geometric on irrational coordinates, cosine sums, against the dense SVD") {
+    std::vector<std::tuple<std::string, QuadMesh, GluingData>> cases;
+    cases.emplace_back("three quads, geometric", three_quads(), geometric_gluing(three_quads()));
+    cases.emplace_back("uneven fan of 5, geometric", fan(5, 0.1), geometric_gluing(fan(5, 0.1)));
+    cases.emplace_back("fan of 7, symmetric", fan(7), symmetric_gluing(fan(7)));
+    cases.emplace_back("split pentagonal prism, linear symmetric", split_prism(5), analysis_suitable_gluing(split_prism(5)));
+    for (const auto& [name, m, g] : cases)
+      for (const auto& [k, r] : {std::pair{3, 1}, {4, 1}, {4, 3}, {5, 2}}) {
+        CAPTURE(name, k, r);
+        REQUIRE(!g.exact());
+        const G1SpaceDimension dense = g1_space_dimension(m, g, k, r, true);
+        const G1SpaceDimension local = g1_space_dimension_local(m, g, k, r);
+        CHECK(local.dimension == dense.dimension);
+        coupled += local.coupled_edges;
+      }
+    CHECK(coupled > 0);
+  }
 }

@@ -55,19 +55,24 @@ struct G1Basis {
 G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false,
                  const std::function<void(const std::string&)>& progress = {});
 
-// The largest constructions done, in unknowns = faces x (2k - r + 1)^2 (docs/RELIABILITY.md).
-// Exact data (sparse modular rank and local exact null spaces): 1 769 472 unknowns (k = 4,
-// r = 1, 27 648 faces, 992 607 functions) built in 25 s, and the whole run took 6.8 GB here,
-// both about linear in the unknowns; sums of cosines (modular rank, floating-point local
-// functions) are no slower. Floating-point data (a gluing file's doubles, `geometric` data
-// of coordinates that are not short binary fractions) take a dense SVD of all the conditions:
-// 8 000 unknowns took 67 s and 0.7 GB (k = 5), growing with the cube.
-constexpr long kMaxG1ExactUnknowns = 2000000;
-constexpr long kMaxG1FloatingUnknowns = 10000;
+// The largest constructions done, in unknowns = faces x (2k - r + 1)^2 (docs/RELIABILITY.md):
+// 1 769 472 unknowns (k = 4, r = 1, 27 648 faces, 992 607 functions) built in 25 s with exact
+// data, and the whole run took 6.8 GB here, both about linear in the unknowns. Sums of cosines
+// and floating-point data (local SVDs, g1_space_dimension_local) are no slower: 512 000
+// unknowns of floating-point data (k = 5) in 11 s.
+constexpr long kMaxG1Unknowns = 2000000;
 // std::length_error with the size, the limit and the estimate when the construction of a
-// G1 space on `faces` faces would exceed them. `exact_data`: rational or sums of cosines
-// (GluingData::algebraic()), whose dimension is a sparse modular rank.
-void check_g1_construction_size(long faces, int k, int r, bool exact_data);
+// G1 space on `faces` faces would exceed it.
+void check_g1_construction_size(long faces, int k, int r);
+
+// Floating-point data (not rational, not sums of cosines): the dimension from local SVDs
+// (g1_space_dimension_local) is refused as ambiguous when the smallest singular value counted
+// as nonzero is less than this factor above the largest counted as zero. Measured on
+// `geometric` data of a 27-face mesh with 17-digit coordinates (k = 4, r = 1): a margin of
+// 1500, 150, 23 and 1.2 at 0 to 3 subdivisions; at 3 the count of the local basis and the
+// dimension differ by one.
+constexpr double kMinG1RankMargin = 10;
+void check_rank_margin(const G1SpaceDimension& d);  // std::runtime_error naming the margin
 
 // Largest relative residual of conditions (2)-(3) over the basis functions:
 // max over functions and rows of |C_row x| / (sum_j |C_row,j| * max|x|).

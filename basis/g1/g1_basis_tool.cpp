@@ -209,20 +209,18 @@ int g1_basis_command(const BasisOptions& o) {
     throw InputError((is_named_gluing(o.gluing) ? o.g1_mesh : o.gluing) + ": " +
                      violations.front() +
                      (violations.size() > 1 ? " (and " + std::to_string(violations.size() - 1) + " more)" : ""));
-  // Floating-point data (neither rational nor sums of cosines) have no exact rank: the
-  // dimension is a dense SVD, cubic in the unknowns.
-  const long unknowns = static_cast<long>(mesh.num_faces()) * (2 * o.degree - o.split_smoothness + 1) *
-                        (2 * o.degree - o.split_smoothness + 1);
-  if (!gluing.algebraic() && unknowns > 6000)
-    throw InputError(o.g1_mesh + ": --gluing " + o.gluing + ": the data are not rational, and checking the space's dimension by SVD over " +
-                     std::to_string(unknowns) + " unknowns (more than 6000) is too slow; use rational data (a JSON file) or a smaller mesh");
   try {
-    check_g1_construction_size(mesh.num_faces(), o.degree, o.split_smoothness, gluing.algebraic());
+    check_g1_construction_size(mesh.num_faces(), o.degree, o.split_smoothness);
   } catch (const std::length_error& e) {
     throw InputError(o.g1_mesh + ": " + e.what());
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const G1Basis basis = g1_basis(mesh, gluing, o.degree, o.split_smoothness);
+  G1Basis basis;
+  try {
+    basis = g1_basis(mesh, gluing, o.degree, o.split_smoothness);
+  } catch (const std::runtime_error& e) {
+    throw InputError(o.g1_mesh + ": --gluing " + o.gluing + ": " + e.what());
+  }
   const G1SpaceDimension& d = basis.space;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto t1 = std::chrono::steady_clock::now();
@@ -256,7 +254,7 @@ int g1_basis_command(const BasisOptions& o) {
         .set("unknowns", d.unknowns).set("constraints", d.constraints).set("dimension", d.dimension)
         .set("rank_method", d.exact        ? "exact data, rank modulo two primes"
                             : d.cyclotomic ? "sums of cosines, rank modulo two primes with roots of unity"
-                                           : "floating point SVD")
+                                           : "floating point, local SVDs")
         .set("functions", static_cast<double>(basis.functions.size()))
         .set("counts", Json::object()
                            .set("vertex", basis.counts[0]).set("edge", basis.counts[1]).set("face", basis.counts[2])
@@ -296,7 +294,7 @@ int g1_basis_command(const BasisOptions& o) {
               d.exact        ? "rational data, rank modulo two primes which agree"
               : d.cyclotomic ? ("sums of cosines, rank modulo two primes with a " + std::to_string(d.cyclotomic) +
                                 "th root of unity, which agree").c_str()
-                             : "floating-point data, SVD rank at 1e-10",
+                             : "floating-point data, local SVDs at 1e-10",
               seconds);
   if (formula)
     std::printf("  Thm 7.1    %ld%s\n", *formula,

@@ -175,10 +175,9 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
 
   d.levels = g.refine + extra_levels;
   if (!g.c0) try {
-      check_g1_construction_size(long(d.coarse.num_faces()) << (2 * d.levels), k, r, d.coarse_gluing.algebraic());
+      check_g1_construction_size(long(d.coarse.num_faces()) << (2 * d.levels), k, r);
     } catch (const std::length_error& e) {
-      throw InputError(c.path + ": [space] refine: " + e.what() +
-                       "; subdivide less, lower the degree" + (d.coarse_gluing.algebraic() ? "" : ", or use rational gluing data"));
+      throw InputError(c.path + ": [space] refine: " + e.what() + "; subdivide less, or lower the degree");
     }
   say("building the G1 space (" + std::to_string(d.levels) + " subdivisions)");
   d.level = refine_g1(d.coarse, d.coarse_gluing, d.levels);

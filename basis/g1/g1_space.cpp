@@ -204,6 +204,15 @@ template <>
 double gluing_value(const PiecewisePolynomial& p, const double& u) { return p(u); }
 template <>
 mpq_class gluing_value(const PiecewisePolynomial& p, const mpq_class& u) { return p.exact_value(u); }
+// The data's double coefficients, evaluated in long double (the rows of the floating-point
+// local constructions, whose null vectors are refined against them).
+template <>
+long double gluing_value(const PiecewisePolynomial& p, const long double& u) {
+  const auto& c = p.pieces[u < 0.5L ? 0 : 1];
+  long double v = 0;
+  for (size_t i = c.size(); i-- > 0;) v = v * u + c[i];
+  return v;
+}
 
 // The points where an edge's conditions are sampled: on each half of the edge, as many as make
 // them polynomial identities there (the products c dv f1 etc. have degree k + deg data).
@@ -279,6 +288,11 @@ std::vector<double> g1_face_knots(int k, int r) {
 std::vector<std::vector<std::pair<long, double>>> g1_condition_rows(const QuadMesh& mesh, const GluingData& gluing,
                                                                     int k, int r, int edge) {
   return g1_conditions<double>(mesh, gluing, k, r, edge);
+}
+std::vector<std::vector<std::pair<long, long double>>> g1_condition_rows_long(const QuadMesh& mesh,
+                                                                            const GluingData& gluing, int k, int r,
+                                                                            int edge) {
+  return g1_conditions<long double>(mesh, gluing, k, r, edge);
 }
 std::vector<std::vector<std::pair<long, mpq_class>>> g1_condition_rows_exact(const QuadMesh& mesh,
                                                                              const GluingData& gluing, int k, int r,

@@ -138,8 +138,17 @@ struct G1SpaceDimension {
   bool exact = false;       // rank of the rational system (modulo two primes that agree)
   long cyclotomic = 0;      // or data in Q(zeta_N), N = this: rank modulo two primes = 1 (mod N)
   double tolerance = 0;     // otherwise: singular values below tolerance * largest are zero
+  bool local = false;       // floating point from local SVDs (g1_space_dimension_local), not one dense SVD
+  long coupled_edges = 0;   // local: the inseparable edges, whose rows join their two vertices
+  // local: over every local SVD, the smallest singular value counted as nonzero and the largest
+  // counted as zero, relative to the largest of the edge's (the group's) rows: the tolerance's
+  // margin. It narrows as the mesh is subdivided (floating-point data restricted to shorter
+  // edges lose numerical rank), which is when a floating-point count cannot be trusted.
+  double smallest_kept = 0, largest_dropped = 0;
 };
-// `floating` forces the floating-point path (an independent cross-check of the exact one).
+// Exact data: the exact rank. Otherwise, or with `floating` (an independent cross-check of the
+// exact one): one dense SVD of all the conditions, cubic in the unknowns; the oracle the local
+// SVDs of g1_space_dimension_local are tested against.
 G1SpaceDimension g1_space_dimension(const QuadMesh& mesh, const GluingData& gluing, int k, int r, bool floating = false);
 // Throws std::invalid_argument for k < 2, r outside [0, k-1], or an interior edge without data.
 void check_g1_arguments(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
@@ -151,8 +160,19 @@ std::vector<G1ExactRows> g1_condition_rows_per_edge(const QuadMesh& mesh, const 
 // conditions modulo two primes p = 1 (mod N), N = 2 * cosine_denominators_lcm(), with the
 // cyclotomic field Q(zeta_N) mapped to Z/p. Each is at most the rank over the field, so the
 // dimension is an upper bound the construction's count must reach; std::runtime_error if the
-// two primes disagree. Sparse and linear in the mesh, unlike the dense SVD of the floating path.
+// two primes disagree. Sparse and linear in the mesh.
 G1SpaceDimension g1_space_dimension_cyclotomic(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
+// Floating-point data (neither rational nor sums of cosines) on meshes of any size: the rank
+// from local SVDs, linear in the mesh (g1_local_dimension.cpp). Each interior edge's rows,
+// scaled to unit length, are reduced on its strips (which no other edge's rows meet): the SVD
+// of the strip columns gives the strip rank, and its left singular vectors beyond that rank
+// give rows on the corner blocks at the edge's two ends. Those rows are split between the two
+// vertices when their row space allows it (a separable edge) and kept whole otherwise, which
+// joins the two vertices into one group; each group's rank is one more SVD. Singular values
+// below 1e-10 times the largest of the edge's rows (of the group's edges) count as zero.
+// std::length_error when a group exceeds kMaxG1FloatingGroup corner-block unknowns.
+G1SpaceDimension g1_space_dimension_local(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
+constexpr long kMaxG1FloatingGroup = 10000;
 // The exact dimension from those rows (so that a construction that needs them builds them once).
 G1SpaceDimension g1_space_dimension_exact(const QuadMesh& mesh, int k, int r, const std::vector<G1ExactRows>& per_edge);
 
@@ -177,6 +197,10 @@ std::vector<std::vector<std::pair<long, mpq_class>>> g1_condition_rows_exact(con
                                                                              const GluingData& gluing, int k, int r,
                                                                              int edge = -1);
 
+// The same in extended precision (the floating-point local constructions).
+std::vector<std::vector<std::pair<long, long double>>> g1_condition_rows_long(const QuadMesh& mesh,
+                                                                            const GluingData& gluing, int k, int r,
+                                                                            int edge);
 // Sparse rows (column, value) as a dense matrix with `columns` columns.
 Eigen::MatrixXd dense_rows(const std::vector<std::vector<std::pair<long, double>>>& rows, long columns);
 
