@@ -9,6 +9,9 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -45,19 +48,60 @@ long count_above(const Eigen::VectorXd& singular_values, double scale, RankGap& 
   return n;
 }
 
-// One interior edge after its strips are eliminated.
-struct EdgeRemainder {
-  long conditions = 0;              // the edge's rows
+// The numbers of one edge's elimination (shared by edges whose systems are equal entry for
+// entry: after a subdivision, most inner edges of a coarse face).
+struct EdgeReduction {
   long strip_rank = 0;
   double scale = 0;                 // largest singular value of the edge's rows (unit rows)
-  std::vector<long> corner[2];      // corner-block unknowns at v[0] and at v[1]
-  Eigen::MatrixXd rows[2];          // rows on corner[0] alone and on corner[1] alone
-  Eigen::MatrixXd coupled;          // rows on corner[0] then corner[1] (an inseparable edge)
+  Eigen::MatrixXd rows[2];          // rows on the corner blocks at v[0] alone and at v[1] alone
+  Eigen::MatrixXd coupled;          // rows on both, v[0]'s columns first (an inseparable edge)
   RankGap gap;
 };
 
+// S: the rows on the edge's strips, K: on the corner blocks, the n0 at v[0] first.
+EdgeReduction reduce(const Eigen::MatrixXd& S, const Eigen::MatrixXd& K, Eigen::Index n0) {
+  EdgeReduction out;
+  const Eigen::Index m = S.rows(), n1 = K.cols() - n0;
+  Eigen::MatrixXd whole(m, S.cols() + K.cols());
+  whole << S, K;
+  out.scale = Eigen::JacobiSVD<Eigen::MatrixXd>(whole).singularValues()(0);
+  // S = U diag(s) V^T: the rows U^T [S K] beyond the strip rank are zero on the strips.
+  const Eigen::JacobiSVD<Eigen::MatrixXd> strips(S, Eigen::ComputeFullU);
+  out.strip_rank = count_above(strips.singularValues(), out.scale, out.gap);
+  const Eigen::MatrixXd R = strips.matrixU().rightCols(m - out.strip_rank).transpose() * K;
+  if (R.rows() == 0) return out;
+  // A basis of R's row space, scaled by its singular values.
+  const Eigen::JacobiSVD<Eigen::MatrixXd> remainder(R, Eigen::ComputeThinV);
+  const long rank = count_above(remainder.singularValues(), out.scale, out.gap);
+  if (rank == 0) return out;
+  const Eigen::MatrixXd W =
+      remainder.singularValues().head(rank).asDiagonal() * remainder.matrixV().leftCols(rank).transpose();
+  // The row space splits between the two ends when rank = rank(W on v[0]) + rank(W on v[1]);
+  // then the combinations that vanish on one end's columns are rows of the other end alone.
+  const Eigen::MatrixXd W0 = W.leftCols(n0), W1 = W.rightCols(n1);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> s0(W0, Eigen::ComputeFullU), s1(W1, Eigen::ComputeFullU);
+  const long r0 = n0 ? count_above(s0.singularValues(), out.scale, out.gap) : 0;
+  const long r1 = n1 ? count_above(s1.singularValues(), out.scale, out.gap) : 0;
+  if (r0 + r1 == rank) {
+    out.rows[0] = n1 ? Eigen::MatrixXd(s1.matrixU().rightCols(rank - r1).transpose() * W0) : W0;
+    out.rows[1] = n0 ? Eigen::MatrixXd(s0.matrixU().rightCols(rank - r0).transpose() * W1) : W1;
+  } else {
+    out.coupled = W;
+  }
+  return out;
+}
+
+// One interior edge after its strips are eliminated.
+struct EdgeRemainder {
+  long conditions = 0;              // the edge's rows
+  std::vector<long> corner[2];      // corner-block unknowns at v[0] and at v[1]
+  std::shared_ptr<const EdgeReduction> reduction;
+};
+
+using ReductionCache = std::map<std::vector<double>, std::shared_ptr<const EdgeReduction>>;
+
 EdgeRemainder eliminate_edge(const QuadMesh& mesh, const GluingData& gluing, int k, int r, int e,
-                             const std::vector<int>& vertex_of) {
+                             const std::vector<int>& vertex_of, ReductionCache& cache, std::mutex& mutex) {
   const auto& E = mesh.edge(e);
   const auto rows = g1_condition_rows(mesh, gluing, k, r, e);
   EdgeRemainder out;
@@ -100,32 +144,19 @@ EdgeRemainder eliminate_edge(const QuadMesh& mesh, const GluingData& gluing, int
       K.row(i) /= norm;
     }
   }
-  Eigen::MatrixXd whole(m, ns + n0 + n1);
-  whole << S, K;
-  out.scale = Eigen::JacobiSVD<Eigen::MatrixXd>(whole).singularValues()(0);
-  // S = U diag(s) V^T: the rows U^T [S K] beyond the strip rank are zero on the strips.
-  const Eigen::JacobiSVD<Eigen::MatrixXd> strips(S, Eigen::ComputeFullU);
-  out.strip_rank = count_above(strips.singularValues(), out.scale, out.gap);
-  const Eigen::MatrixXd R = strips.matrixU().rightCols(m - out.strip_rank).transpose() * K;
-  if (R.rows() == 0) return out;
-  // A basis of R's row space, scaled by its singular values.
-  const Eigen::JacobiSVD<Eigen::MatrixXd> remainder(R, Eigen::ComputeThinV);
-  const long rank = count_above(remainder.singularValues(), out.scale, out.gap);
-  if (rank == 0) return out;
-  const Eigen::MatrixXd W =
-      remainder.singularValues().head(rank).asDiagonal() * remainder.matrixV().leftCols(rank).transpose();
-  // The row space splits between the two ends when rank = rank(W on v[0]) + rank(W on v[1]);
-  // then the combinations that vanish on one end's columns are rows of the other end alone.
-  const Eigen::MatrixXd W0 = W.leftCols(n0), W1 = W.rightCols(n1);
-  const Eigen::JacobiSVD<Eigen::MatrixXd> s0(W0, Eigen::ComputeFullU), s1(W1, Eigen::ComputeFullU);
-  const long r0 = n0 ? count_above(s0.singularValues(), out.scale, out.gap) : 0;
-  const long r1 = n1 ? count_above(s1.singularValues(), out.scale, out.gap) : 0;
-  if (r0 + r1 == rank) {
-    out.rows[0] = n1 ? Eigen::MatrixXd(s1.matrixU().rightCols(rank - r1).transpose() * W0) : W0;
-    out.rows[1] = n0 ? Eigen::MatrixXd(s0.matrixU().rightCols(rank - r0).transpose() * W1) : W1;
-  } else {
-    out.coupled = W;
+  std::vector<double> key{double(m), double(ns), double(n0), double(n1)};
+  key.insert(key.end(), S.data(), S.data() + S.size());
+  key.insert(key.end(), K.data(), K.data() + K.size());
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = cache.find(key); it != cache.end()) {
+      out.reduction = it->second;
+      return out;
+    }
   }
+  auto reduction = std::make_shared<const EdgeReduction>(reduce(S, K, n0));
+  const std::lock_guard<std::mutex> lock(mutex);
+  out.reduction = cache.emplace(std::move(key), std::move(reduction)).first->second;
   return out;
 }
 
@@ -151,11 +182,13 @@ G1SpaceDimension g1_space_dimension_local(const QuadMesh& mesh, const GluingData
 
   std::vector<EdgeRemainder> edges(mesh.num_edges());
   std::string failure;
+  ReductionCache cache;
+  std::mutex cache_mutex;
 #pragma omp parallel for schedule(dynamic, 8)
   for (int e = 0; e < mesh.num_edges(); ++e) {
     if (mesh.edge(e).boundary()) continue;
     try {
-      edges[e] = eliminate_edge(mesh, gluing, k, r, e, vertex_of);
+      edges[e] = eliminate_edge(mesh, gluing, k, r, e, vertex_of, cache, cache_mutex);
     } catch (const std::exception& x) {
 #pragma omp critical
       failure = x.what();
@@ -168,19 +201,20 @@ G1SpaceDimension g1_space_dimension_local(const QuadMesh& mesh, const GluingData
   std::vector<int> parent(mesh.num_vertices());
   std::iota(parent.begin(), parent.end(), 0);
   for (int e = 0; e < mesh.num_edges(); ++e)
-    if (edges[e].coupled.rows() > 0) d.coupled_edges += 1, parent[find_root(parent, mesh.edge(e).v[0])] = find_root(parent, mesh.edge(e).v[1]);
+    if (edges[e].reduction && edges[e].reduction->coupled.rows() > 0) d.coupled_edges += 1, parent[find_root(parent, mesh.edge(e).v[0])] = find_root(parent, mesh.edge(e).v[1]);
   std::vector<std::vector<int>> group_edges(mesh.num_vertices());
   for (int e = 0; e < mesh.num_edges(); ++e) {
     if (mesh.edge(e).boundary()) continue;
-    d.rank += edges[e].strip_rank;
+    d.rank += edges[e].reduction->strip_rank;
     group_edges[find_root(parent, mesh.edge(e).v[0])].push_back(e);
-    if (edges[e].coupled.rows() == 0 && find_root(parent, mesh.edge(e).v[1]) != find_root(parent, mesh.edge(e).v[0]))
+    if (edges[e].reduction->coupled.rows() == 0 && find_root(parent, mesh.edge(e).v[1]) != find_root(parent, mesh.edge(e).v[0]))
       group_edges[find_root(parent, mesh.edge(e).v[1])].push_back(e);
   }
 
   std::vector<long> group_rank(mesh.num_vertices(), 0);
   RankGap group_gap;
-  for (const EdgeRemainder& x : edges) group_gap.merge(x.gap);
+  for (const EdgeRemainder& x : edges)
+    if (x.reduction) group_gap.merge(x.reduction->gap);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int g = 0; g < mesh.num_vertices(); ++g) {
     if (group_edges[g].empty()) continue;
@@ -188,17 +222,18 @@ G1SpaceDimension g1_space_dimension_local(const QuadMesh& mesh, const GluingData
     std::vector<std::pair<const Eigen::MatrixXd*, std::vector<long>>> blocks;  // rows and their columns
     double scale = 0;
     for (int e : group_edges[g]) {
-      const EdgeRemainder& x = edges[e];
+      const EdgeRemainder& edge = edges[e];
+      const EdgeReduction& x = *edge.reduction;
       const int v0 = mesh.edge(e).v[0], v1 = mesh.edge(e).v[1];
       scale = std::max(scale, x.scale);
       if (x.coupled.rows() > 0) {
-        std::vector<long> both = x.corner[0];
-        both.insert(both.end(), x.corner[1].begin(), x.corner[1].end());
+        std::vector<long> both = edge.corner[0];
+        both.insert(both.end(), edge.corner[1].begin(), edge.corner[1].end());
         blocks.emplace_back(&x.coupled, std::move(both));
         continue;
       }
       for (int end = 0; end < 2; ++end)
-        if (find_root(parent, end == 0 ? v0 : v1) == g && x.rows[end].rows() > 0) blocks.emplace_back(&x.rows[end], x.corner[end]);
+        if (find_root(parent, end == 0 ? v0 : v1) == g && x.rows[end].rows() > 0) blocks.emplace_back(&x.rows[end], edge.corner[end]);
     }
     for (const auto& b : blocks) columns.insert(columns.end(), b.second.begin(), b.second.end());
     std::sort(columns.begin(), columns.end());
