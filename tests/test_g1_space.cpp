@@ -480,3 +480,26 @@ TEST_CASE("Local SVDs give the exact dimension of rational data and the dense SV
     CHECK(coupled > 0);
   }
 }
+
+// Below the separability everywhere (k = 3), every edge joins its two vertices: the groups of
+// the local SVDs grow with the mesh, and past kMaxG1FloatingGroup corner-block unknowns the
+// dimension is refused rather than computed by one cubic SVD.
+TEST_CASE("Local SVDs refuse a group of coupled vertices beyond their limit", "[g1][dimension][bad-input]") {
+  const QuadMesh fan5 = fan(5, 0.1);
+  const GluingData g = geometric_gluing(fan5);
+  REQUIRE(!g.exact());
+  // The five edges at the centre couple (the sub-edges along them after subdivision): at 5
+  // subdivisions their chains hold 2 540 corner-block unknowns.
+  const G1SpaceDimension coarse = g1_space_dimension_local(fan5, g, 3, 1);
+  REQUIRE(coarse.coupled_edges == 5);
+  // Below the limit a large group takes BDCSVD (more than 200 columns): rational data, the
+  // exact dimension against it (the pentagon's spokes, three subdivisions, about 650 columns).
+  const QuadMesh pentagon = QuadMesh::read_obj(std::string(KNOTWORK_SOURCE_DIR) + "/cases/meshes/pentagon.obj");
+  const G1Refinement spokes = refine_g1(pentagon, analysis_suitable_gluing(pentagon), 3);
+  const G1SpaceDimension local = g1_space_dimension_local(spokes.mesh, spokes.gluing, 3, 1);
+  CHECK(local.coupled_edges >= 40);
+  CHECK(local.dimension == g1_space_dimension(spokes.mesh, spokes.gluing, 3, 1).dimension);
+  const G1Refinement fine = refine_g1(fan5, g, 5);
+  REQUIRE_THROWS_WITH(g1_space_dimension_local(fine.mesh, fine.gluing, 3, 1),
+                      Catch::Contains("2540 corner-block unknowns are coupled") && Catch::Contains("2000"));
+}

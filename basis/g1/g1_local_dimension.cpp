@@ -8,6 +8,7 @@
 // at the edge's two ends, and split between the two vertices wherever the edge is separable.
 #include <Eigen/SVD>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <memory>
@@ -35,6 +36,8 @@ struct RankGap {
 };
 
 long count_above(const Eigen::VectorXd& singular_values, double scale, RankGap& gap) {
+  if (!singular_values.allFinite() || !std::isfinite(scale))
+    throw std::runtime_error("a singular value of the G1 conditions is not finite (these gluing data are not finite)");
   long n = 0;
   for (Eigen::Index i = 0; i < singular_values.size(); ++i) {
     const double relative = singular_values(i) / scale;
@@ -194,7 +197,7 @@ G1SpaceDimension g1_space_dimension_local(const QuadMesh& mesh, const GluingData
       failure = x.what();
     }
   }
-  if (!failure.empty()) throw std::logic_error(failure);
+  if (!failure.empty()) throw std::runtime_error(failure);
   for (const EdgeRemainder& x : edges) d.constraints += x.conditions;
 
   // Vertices joined by an inseparable edge form one group; every other group is one vertex.
@@ -258,11 +261,21 @@ G1SpaceDimension g1_space_dimension_local(const QuadMesh& mesh, const GluingData
       top += block->rows();
     }
     RankGap gap;
-    group_rank[g] = count_above(Eigen::BDCSVD<Eigen::MatrixXd>(A).singularValues(), scale, gap);
+    try {
+      // JacobiSVD for a vertex's few columns (Eigen 3.4's BDCSVD returned NaN on some small
+      // systems of the G1 bases; count_above refuses a NaN). Groups joined by inseparable edges
+      // grow with the mesh, and there JacobiSVD is too slow (35 s at 1 300 columns): BDCSVD.
+      const Eigen::VectorXd values = A.cols() <= 200 ? Eigen::VectorXd(Eigen::JacobiSVD<Eigen::MatrixXd>(A).singularValues())
+                                                     : Eigen::VectorXd(Eigen::BDCSVD<Eigen::MatrixXd>(A).singularValues());
+      group_rank[g] = count_above(values, scale, gap);
+    } catch (const std::exception& x) {
+#pragma omp critical
+      failure = x.what();
+    }
 #pragma omp critical
     group_gap.merge(gap);
   }
-  if (!failure.empty()) throw std::length_error(failure);
+  if (!failure.empty()) throw std::runtime_error(failure);
   for (long x : group_rank) d.rank += x;
   d.smallest_kept = group_gap.smallest_kept;
   d.largest_dropped = group_gap.largest_dropped;

@@ -170,9 +170,10 @@ G1SpaceDimension g1_space_dimension_cyclotomic(const QuadMesh& mesh, const Gluin
 // vertices when their row space allows it (a separable edge) and kept whole otherwise, which
 // joins the two vertices into one group; each group's rank is one more SVD. Singular values
 // below 1e-10 times the largest of the edge's rows (of the group's edges) count as zero.
-// std::length_error when a group exceeds kMaxG1FloatingGroup corner-block unknowns.
+// std::runtime_error when a group exceeds kMaxG1FloatingGroup corner-block unknowns (the
+// dense SVD of one group is cubic in them) or when a singular value is not finite.
 G1SpaceDimension g1_space_dimension_local(const QuadMesh& mesh, const GluingData& gluing, int k, int r);
-constexpr long kMaxG1FloatingGroup = 10000;
+constexpr long kMaxG1FloatingGroup = 2000;
 // The exact dimension from those rows (so that a construction that needs them builds them once).
 G1SpaceDimension g1_space_dimension_exact(const QuadMesh& mesh, int k, int r, const std::vector<G1ExactRows>& per_edge);
 
