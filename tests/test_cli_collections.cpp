@@ -215,6 +215,16 @@ TEST_CASE("basis --g1: dimensions of the shipped meshes, and bad input", "[cli][
   REQUIRE(has(skew.out, "10 crossings given a skewed fan (12, 13, 14, 15, 16, 18, 19, 20, 21, 22)"));
   REQUIRE(has(box.run("basis --json --g1 " + prism + " --gluing analysis_suitable").out, "\"skewed_fans\": 10"));
   REQUIRE(has(box.run("basis --json --g1 " + prism).out, "\"skewed_fans\": 0"));
+  // Floating-point data (geometric data of decimal coordinates): local SVDs, and the margin
+  // between the singular values kept and dropped, in both outputs.
+  const std::string decimals = kSource + "/tests/bad_inputs/uses_pentagon_decimals.obj";
+  const Result floating = box.run("basis --json --g1 " + decimals + " --gluing geometric --degree 5");
+  INFO(floating.err);
+  REQUIRE(floating.code == 0);
+  REQUIRE(has(floating.out, "\"rank_method\": \"floating point, local SVDs\""));
+  REQUIRE(json_number_of(floating.out, "svd_smallest_kept") > 10 * json_number_of(floating.out, "svd_largest_dropped"));
+  REQUIRE(json_number_of(floating.out, "functions") == json_number_of(floating.out, "dimension"));
+  REQUIRE(has(box.run("basis --g1 " + decimals + " --gluing geometric --degree 5").out, "singular values kept down to"));
 
   auto rejected = [&](const std::string& args, const std::vector<std::string>& mentions) {
     INFO("basis " << args);

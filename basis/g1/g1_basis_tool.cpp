@@ -262,6 +262,7 @@ int g1_basis_command(const BasisOptions& o) {
         .set("g1_residual_max", residual).set("rank", rank).set("rank_method_basis", rank_method)
         .set_bool("basis_exact", basis.exact).set("seconds", seconds).set("check_seconds", check_seconds);
     if (!d.exact && !d.cyclotomic) j.set("svd_tolerance", d.tolerance);
+    if (d.local) j.set("svd_smallest_kept", d.smallest_kept).set("svd_largest_dropped", d.largest_dropped);
     if (d.cyclotomic) j.set("root_of_unity_order", d.cyclotomic);
     // Theorem 7.1 on closed meshes (its count of boundary edges and vertices is not stated).
     if (formula)
@@ -289,13 +290,16 @@ int g1_basis_command(const BasisOptions& o) {
   std::printf("  space      S_%d^{1,%d}: degree %d per face, C^%d at the 4-split, %d coefficients per face\n", o.degree,
               o.split_smoothness, o.degree, o.split_smoothness,
               (2 * o.degree - o.split_smoothness + 1) * (2 * o.degree - o.split_smoothness + 1));
+  char margin[160];
+  std::snprintf(margin, sizeof margin,
+                "floating-point data, local SVDs at 1e-10: singular values kept down to %.2g, dropped up to %.2g",
+                d.smallest_kept, d.largest_dropped);
+  const std::string method = d.exact ? "rational data, rank modulo two primes which agree"
+                             : d.cyclotomic ? "sums of cosines, rank modulo two primes with a " + std::to_string(d.cyclotomic) +
+                                                  "th root of unity, which agree"
+                                            : std::string(margin);
   std::printf("  dimension  %ld = %ld unknowns - rank %ld (%ld G1 conditions; %s, %.3f s)\n", d.dimension, d.unknowns,
-              d.rank, d.constraints,
-              d.exact        ? "rational data, rank modulo two primes which agree"
-              : d.cyclotomic ? ("sums of cosines, rank modulo two primes with a " + std::to_string(d.cyclotomic) +
-                                "th root of unity, which agree").c_str()
-                             : "floating-point data, local SVDs at 1e-10",
-              seconds);
+              d.rank, d.constraints, method.c_str(), seconds);
   if (formula)
     std::printf("  Thm 7.1    %ld%s\n", *formula,
                 *formula == d.dimension ? " (agrees)"
