@@ -827,8 +827,7 @@ void separate_boundary_traces(const QuadMesh& mesh, G1Basis& basis) {
   }
 }
 
-}  // namespace
-
+// Floating-point data refused when the local SVDs' margin is below kMinG1RankMargin.
 void check_rank_margin(const G1SpaceDimension& d) {
   if (d.smallest_kept >= kMinG1RankMargin * d.largest_dropped) return;
   char line[520];
@@ -841,6 +840,8 @@ void check_rank_margin(const G1SpaceDimension& d) {
                 d.smallest_kept, d.largest_dropped, kMinG1RankMargin);
   throw std::runtime_error(line);
 }
+
+}  // namespace
 
 void check_g1_construction_size(long faces, int k, int r) {
   const long n = 2L * k - r + 1, unknowns = faces * n * n;

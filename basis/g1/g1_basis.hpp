@@ -72,7 +72,6 @@ void check_g1_construction_size(long faces, int k, int r);
 // 1500, 150, 23 and 1.2 at 0 to 3 subdivisions; at 3 the count of the local basis and the
 // dimension differ by one.
 constexpr double kMinG1RankMargin = 10;
-void check_rank_margin(const G1SpaceDimension& d);  // std::runtime_error naming the margin
 
 // Largest relative residual of conditions (2)-(3) over the basis functions:
 // max over functions and rows of |C_row x| / (sum_j |C_row,j| * max|x|).

@@ -204,7 +204,10 @@ G1SpaceDimension g1_space_dimension_local(const QuadMesh& mesh, const GluingData
   std::vector<int> parent(mesh.num_vertices());
   std::iota(parent.begin(), parent.end(), 0);
   for (int e = 0; e < mesh.num_edges(); ++e)
-    if (edges[e].reduction && edges[e].reduction->coupled.rows() > 0) d.coupled_edges += 1, parent[find_root(parent, mesh.edge(e).v[0])] = find_root(parent, mesh.edge(e).v[1]);
+    if (edges[e].reduction && edges[e].reduction->coupled.rows() > 0) {
+      ++d.coupled_edges;
+      parent[find_root(parent, mesh.edge(e).v[0])] = find_root(parent, mesh.edge(e).v[1]);
+    }
   std::vector<std::vector<int>> group_edges(mesh.num_vertices());
   for (int e = 0; e < mesh.num_edges(); ++e) {
     if (mesh.edge(e).boundary()) continue;

@@ -39,12 +39,19 @@ PiecewisePolynomial PiecewisePolynomial::from_double(std::array<std::vector<doub
   return p;
 }
 
-double PiecewisePolynomial::operator()(double u) const {
-  const auto& c = pieces[u < 0.5 ? 0 : 1];
-  double v = 0;
+namespace {
+// The piece at u of the double coefficients, by Horner's rule in Real (double, or long double
+// for the rows the floating-point local constructions refine their null vectors against).
+template <class Real>
+Real evaluate_pieces(const std::array<std::vector<double>, 2>& pieces, Real u) {
+  const auto& c = pieces[u < Real(0.5) ? 0 : 1];
+  Real v = 0;
   for (size_t i = c.size(); i-- > 0;) v = v * u + c[i];
   return v;
 }
+}  // namespace
+
+double PiecewisePolynomial::operator()(double u) const { return evaluate_pieces(pieces, u); }
 
 mpq_class PiecewisePolynomial::exact_value(const mpq_class& u) const {
   const auto& c = (*exact)[u < mpq_class(1, 2) ? 0 : 1];
@@ -204,15 +211,8 @@ template <>
 double gluing_value(const PiecewisePolynomial& p, const double& u) { return p(u); }
 template <>
 mpq_class gluing_value(const PiecewisePolynomial& p, const mpq_class& u) { return p.exact_value(u); }
-// The data's double coefficients, evaluated in long double (the rows of the floating-point
-// local constructions, whose null vectors are refined against them).
 template <>
-long double gluing_value(const PiecewisePolynomial& p, const long double& u) {
-  const auto& c = p.pieces[u < 0.5L ? 0 : 1];
-  long double v = 0;
-  for (size_t i = c.size(); i-- > 0;) v = v * u + c[i];
-  return v;
-}
+long double gluing_value(const PiecewisePolynomial& p, const long double& u) { return evaluate_pieces(p.pieces, u); }
 
 // The points where an edge's conditions are sampled: on each half of the edge, as many as make
 // them polynomial identities there (the products c dv f1 etc. have degree k + deg data).
