@@ -169,7 +169,9 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
   if (c.solver.method == "petsc") sj.set("ranks", launched_world().size).set("tolerance", c.solver.petsc_tolerance());
   if (iterative_levels > 0)
     sj.set("preconditioner", iterative_solver.preconditioner).set("tolerance", c.solver.tolerance);
-  root.set("case", c.path).set("family", c.family).set("space", description).set("solver", sj).set("levels", jl);
+  root.set("case", c.path).set("family", c.family).set("space", description).set("solver", sj);
+  if (const char* m = dirichlet_method_name(c.problem)) root.set("dirichlet_method", m);
+  root.set("levels", jl);
   if (!first_solver.note.empty()) root.set("notes", Json::strings({first_solver.note}));
   if (stage) {
     write_text_file(stage->stage("convergence.csv"), csv);

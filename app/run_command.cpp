@@ -145,6 +145,10 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
       .set("refinement_correction", s.cholesky.refinement_correction);
   if (s.errors) j.set("l2_error", s.errors->l2).set("h1_seminorm_error", s.errors->h1_semi).set("h1_error", s.errors->h1);
   else j.set_null("l2_error").set_null("h1_seminorm_error").set_null("h1_error");
+  if (const char* m = dirichlet_method_name(c.problem)) {
+    j.set("dirichlet_method", m);
+    if (c.problem.dirichlet_method == DirichletMethod::kNitsche) j.set("nitsche_penalty", c.problem.nitsche_penalty);
+  }
   if (s.zero_mean) j.set("area", s.area).set("source_mean", s.source_mean).set("exact_mean", s.exact_mean);
   Json sj = Json::object();
   sj.set("method", r.solver.method);
@@ -190,8 +194,13 @@ int run_command(const RunOptions& o) {
   std::printf("  space    %s, %d cells\n", r.description.c_str(), global_num_cells(*r.space));
   for (const auto& n : r.space->notes()) std::printf("  note     %s\n", n.c_str());
   if (!solver.note.empty()) std::printf("  note     %s\n", solver.note.c_str());
-  std::printf("  dofs     %d functions, %d unknowns after %s, %ld stored matrix entries\n", s.num_functions, s.num_free,
-              s.zero_mean ? "pinning one (zero mean)" : "Dirichlet elimination", s.matrix_nonzeros);
+  const char* dirichlet = dirichlet_method_name(c.problem);
+  const bool nitsche = dirichlet && std::string(dirichlet) == "nitsche";
+  std::printf("  dofs     %d functions, %d unknowns %s, %ld stored matrix entries\n", s.num_functions, s.num_free,
+              s.zero_mean ? "after pinning one (zero mean)"
+              : nitsche   ? "(Dirichlet data by Nitsche's method: none eliminated)"
+                          : "after Dirichlet elimination",
+              s.matrix_nonzeros);
   print_field_lines(r.fields);
   if (s.zero_mean)
     std::printf("  surface  area %.6f; mean %.3e removed from the source and %.3e from the exact solution\n", s.area,

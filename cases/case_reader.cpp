@@ -456,13 +456,33 @@ void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, Ca
     r.fail("[problem] source", "missing: give `source`, or `exact` to derive it from");
 }
 
+void read_dirichlet_method(const CaseReader& r, const DocumentNode& t, PoissonProblem& pb) {
+  if (const DocumentNode* n = t.get("dirichlet_method")) {
+    const std::string m = r.string(*n, "[problem] dirichlet_method");
+    if (m == "projection") pb.dirichlet_method = DirichletMethod::kProjection;
+    else if (m == "nitsche") pb.dirichlet_method = DirichletMethod::kNitsche;
+    else r.fail("[problem] dirichlet_method", "'" + m + "' (" + closest_name(m, {"projection", "nitsche"}) + ")");
+  }
+  if (const DocumentNode* n = t.get("nitsche_penalty")) {
+    if (pb.dirichlet_method != DirichletMethod::kNitsche)
+      r.fail("[problem] nitsche_penalty", "only with dirichlet_method = \"nitsche\"");
+    pb.nitsche_penalty = r.number(*n, "[problem] nitsche_penalty");
+    if (!(pb.nitsche_penalty > 1 && pb.nitsche_penalty <= 1e6)) {
+      char got[32];
+      std::snprintf(got, sizeof got, "%g", pb.nitsche_penalty);
+      r.fail("[problem] nitsche_penalty", std::string("must be above 1 (the coercivity bound) and at most 1e6, got ") + got);
+    }
+  }
+}
+
 void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
   const DocumentNode& t = r.table(doc.root, "problem", true);
-  r.check_keys(t, "problem", {"exact", "source", "dirichlet", "neumann"});
+  r.check_keys(t, "problem", {"exact", "source", "dirichlet", "neumann", "dirichlet_method", "nitsche_penalty"});
   PoissonProblem& pb = c.problem;
   const std::string& f = r.path();
   read_planar_exact_and_source(r, t, c);
+  read_dirichlet_method(r, t, pb);
 
   pb.boundary.assign(4, BoundaryCondition{});
   std::set<int> neumann;

@@ -85,6 +85,8 @@ std::string checked_name(const std::string& value, const std::vector<std::string
 void read_patch_geometry(const CaseDocument& doc, CaseDescription& c);
 // [problem] exact and source of a planar problem (source defaults to -Laplace(exact)).
 void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& problem, CaseDescription& c);
+// [problem] dirichlet_method ("projection", the default, or "nitsche") and nitsche_penalty.
+void read_dirichlet_method(const CaseReader& r, const DocumentNode& problem, PoissonProblem& pb);
 // [problem] exact/source/dirichlet/neumann on the four sides bottom, right, top, left.
 void read_patch_problem(const CaseDocument& doc, CaseDescription& c);
 // [space] quadrature_points / error_quadrature_points (int or pair; `pair` false: one int).

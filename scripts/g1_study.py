@@ -2,7 +2,8 @@
 """The G1 convergence studies of docs/G1_POISSON.md, regenerated: every shipped G1 case with
 its default (analysis-suitable) gluing data over 4 levels, the earlier data for comparison,
 and on every planar case the C0 multipatch space of the same degree on the same mesh, compared
-with the G1 space at equal dofs (the C0 H1 error interpolated log-log in the dofs). Prints
+with the G1 space at equal dofs (the H1 errors interpolated log-log in the dofs), with the
+default Dirichlet method of planar G1 cases (Nitsche's) and with the L2 projection. Prints
 Markdown on stdout.
 
     scripts/g1_study.py [KNOTWORK]        # default build/app/knotwork; about 2 minutes here
@@ -28,13 +29,15 @@ EARLIER = {"g1_three_quads": 'gluing = "symmetric_c1"', "g1_mixed_valences": 'gl
 EARLIER_LEVELS = {}
 
 
-def variant(case, scratch, space_lines):
-    """The case with its mesh path made absolute and `space_lines` replacing its gluing."""
+def variant(case, scratch, space_lines, problem_lines=""):
+    """The case with its mesh path made absolute, `space_lines` replacing its gluing and
+    `problem_lines` added to its [problem]."""
     text = open(os.path.join(ROOT, "cases", case + ".toml")).read()
     text = re.sub(r'mesh = "meshes/', 'mesh = "' + os.path.join(ROOT, "cases", "meshes") + "/", text)
     text = re.sub(r'^gluing = .*$', "", text, flags=re.M)
     text = text.replace("[space]\n", "[space]\n" + space_lines + "\n", 1)
-    path = os.path.join(scratch, f"{case}_{abs(hash(space_lines))}.toml")
+    text = text.replace("[problem]\n", "[problem]\n" + problem_lines + "\n", 1)
+    path = os.path.join(scratch, f"{case}_{abs(hash(space_lines + problem_lines))}.toml")
     open(path, "w").write(text)
     return path
 
@@ -76,13 +79,23 @@ def main():
                       converge(variant(case, scratch, EARLIER[case]), scratch, EARLIER_LEVELS.get(case, 4)))
             if case in PLANAR:
                 c0 = converge(variant(case, scratch, 'smoothness = "c0"'), scratch)
-                print(f"\n{case}, H1-seminorm error at equal dofs (C0: the same degree and mesh, interpolated):\n")
+                print(f"\n{case}, H1-seminorm error at equal dofs (C0: the same degree and mesh; both with "
+                      "Nitsche's method, the default):\n")
                 print("| dofs (G1) | G1 | C0 at those dofs | C0 / G1 |")
                 print("|---|---|---|---|")
                 for r in rows:
                     e, outside = at_dofs(c0, r["dofs"])
                     print(f"| {r['dofs']} | {r['h1_seminorm_error']:.3e} | {e:.3e}{' (extrapolated)' if outside else ''} | "
                           f"{e / r['h1_seminorm_error']:.2f} |")
+                print("\nThe other way round, at the C0 space's dofs (G1 interpolated): C0 / G1 = " + ", ".join(
+                    f"{c['h1_seminorm_error'] / g:.3f}{' (extrapolated)' if outside else ''} at {c['dofs']}"
+                    for c in c0 for g, outside in [at_dofs(rows, c["dofs"])]) + ".")
+                projection = 'dirichlet_method = "projection"'
+                g1p = converge(variant(case, scratch, 'gluing = "analysis_suitable"', projection), scratch)
+                c0p = converge(variant(case, scratch, 'smoothness = "c0"', projection), scratch)
+                print("\nWith the L2-projected Dirichlet data (`dirichlet_method = \"projection\"`, both spaces): "
+                      "G1 H1 error " + ", ".join(f"{r['h1_seminorm_error']:.3e}" for r in g1p) + "; C0 / G1 at G1's dofs " +
+                      ", ".join(f"{at_dofs(c0p, r['dofs'])[0] / r['h1_seminorm_error']:.2f}" for r in g1p) + ".")
     print(f"\nLargest C1 jump over every level of every case: {largest_jump:.1e}")
 
 

@@ -5,10 +5,12 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <limits>
 #include <sstream>
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 #include <array>
 #include <optional>
 
@@ -110,6 +112,15 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   if (form.load && form.source) compiled_source.emplace(std::vector<Expression>{*form.source});
   std::optional<SeparableMesh> separable;
   if (quadrature.separable_cells) separable.emplace(mesh);
+  // Nitsche's boundary terms first, serially (few cells; the data's evaluators are not
+  // shared between threads), then added to their cells' element matrices in the loop.
+  std::vector<NitscheCellTerms> nitsche;
+  std::vector<int> nitsche_of_cell;
+  if (form.nitsche) {
+    nitsche = nitsche_terms(mesh, geometry, *form.nitsche, quadrature, CellRange{first, last});
+    nitsche_of_cell.assign(last - first, -1);
+    for (size_t k = 0; k < nitsche.size(); ++k) nitsche_of_cell[nitsche[k].cell - first] = static_cast<int>(k);
+  }
   int bad_cell = std::numeric_limits<int>::max(), bad_source_cell = bad_cell;
   double bad_det = 0, bad_x = 0, bad_y = 0, bad_z = 0;
   std::string failure;
@@ -199,6 +210,11 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
         FB.noalias() = value.transpose() * fq;
         Ke.noalias() = cb.C * KB * cb.C.transpose();
         Fe.noalias() = cb.C * FB;
+      }
+      if (form.nitsche && nitsche_of_cell[c - first] >= 0) {
+        const NitscheCellTerms& boundary = nitsche[nitsche_of_cell[c - first]];
+        Ke += boundary.matrix;
+        if (form.load) Fe += boundary.load;
       }
       const auto ids = mesh.functions(c);
       if (my_integrals) {
@@ -384,12 +400,73 @@ void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
                          });
 }
 
+std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const GeometryMap& geometry,
+                                            const PoissonProblem& problem, const QuadratureOptions& quadrature,
+                                            CellRange cells) {
+  // Per cell, in its Bernstein basis: A = sum over its Dirichlet sides of (dB/dn, dB/dn), the
+  // symmetric part S = -(dB/dn, B) - (B, dB/dn), P = (B, B), and the loads -(g, dB/dn), (g, B).
+  struct Pieces {
+    Eigen::MatrixXd C, A, S, P;
+    Eigen::VectorXd load_normal, load_value;
+  };
+  std::map<int, Pieces> of_cell;
+  Eigen::MatrixXd dn;
+  for_each_boundary_side(mesh, geometry, problem, quadrature, cells, BoundaryKind::kDirichlet,
+                         [&](int c, const CellBasis& cb, const Eigen::VectorXd& g) {
+                           Pieces& p = of_cell[c];
+                           const Eigen::Index nb = cb.value.cols();
+                           if (p.C.size() == 0) {
+                             p.C = cb.C;
+                             p.A.setZero(nb, nb), p.S.setZero(nb, nb), p.P.setZero(nb, nb);
+                             p.load_normal.setZero(nb), p.load_value.setZero(nb);
+                           }
+                           dn = cb.normal.col(0).asDiagonal() * cb.grad_x + cb.normal.col(1).asDiagonal() * cb.grad_y;
+                           const Eigen::MatrixXd mdn = cb.measure.asDiagonal() * dn;
+                           const Eigen::MatrixXd mixed = cb.value.transpose() * mdn;  // (B_i, dB_j/dn)
+                           p.A.noalias() += dn.transpose() * mdn;
+                           p.S -= mixed + mixed.transpose();
+                           p.P.noalias() += cb.value.transpose() * cb.measure.asDiagonal() * cb.value;
+                           p.load_normal.noalias() -= mdn.transpose() * g;
+                           p.load_value.noalias() += cb.value.transpose() * cb.measure.cwiseProduct(g);
+                         });
+  std::vector<NitscheCellTerms> out;
+  out.reserve(of_cell.size());
+  CellBasis vb;
+  for (auto& [c, p] : of_cell) {
+    // lambda = max over the cell's polynomials v of |dv/dn|^2_D / |grad v|^2_K. Both forms vanish
+    // on the constants (the Bernstein polynomials sum to 1), so the quotient is taken on the span
+    // of all but the last Bernstein polynomial, where the stiffness is definite.
+    const BezierCell& cell = mesh.cell(c);
+    evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.points_u, cell.degree_u, 1),
+                        rule_points(quadrature.points_v, cell.degree_v, 1), vb);
+    // A folded or degenerate cell is left to the element loop, which names it as for any cell.
+    if (!(vb.min_jacobian > 0)) continue;
+    const Eigen::Index m = vb.value.cols() - 1;
+    Eigen::MatrixXd stiffness = Eigen::MatrixXd::Zero(m + 1, m + 1);
+    for (int d = 0; d < geometry.dimension(); ++d)
+      stiffness.noalias() += vb.grad(d).transpose() * vb.measure.asDiagonal() * vb.grad(d);
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(p.A.topLeftCorner(m, m),
+                                                                 stiffness.topLeftCorner(m, m), Eigen::EigenvaluesOnly);
+    if (eig.info() != Eigen::Success || !std::isfinite(eig.eigenvalues().maxCoeff()))
+      throw GeometryError("Nitsche's penalty: no bound on the normal derivative of " + describe_cell(mesh, c) +
+                          " (its stiffness matrix is numerically singular: a nearly degenerate cell)");
+    NitscheCellTerms t;
+    t.cell = c;
+    t.penalty = problem.nitsche_penalty * 2 * eig.eigenvalues().maxCoeff();
+    t.matrix = p.C * (p.S + t.penalty * p.P) * p.C.transpose();
+    t.load = p.C * (p.load_normal + t.penalty * p.load_value);
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
 DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
                                  const QuadratureOptions& quadrature, CellRange cells, int function_offset) {
   DirichletPieces out;
   const int last = cells.last < 0 ? mesh.num_cells() : cells.last;
   auto is_dirichlet = [&](int id) {
-    return id >= 0 && problem.boundary.at(id).kind == BoundaryKind::kDirichlet;
+    return problem.dirichlet_method == DirichletMethod::kProjection && id >= 0 &&
+           problem.boundary.at(id).kind == BoundaryKind::kDirichlet;
   };
   // Functions whose trace on a Dirichlet side is not identically zero.
   std::vector<int> local(mesh.num_functions(), -1);

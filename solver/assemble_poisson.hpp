@@ -29,6 +29,11 @@ struct PoissonForm {
   const ExactSolution* exact = nullptr;
   double source_reaction = 0;  // the problem's reaction in the derived f (the matrix's may differ: a mass pass)
   bool load = true;  // false: the right-hand side gets only the Dirichlet lifting
+  // Non-null: this problem's Dirichlet sides are imposed weakly by Nitsche's method, adding
+  //   - (du/dn, v)_D - (u, dv/dn)_D + gamma (u, v)_D   to a(u, v),
+  //   - (g, dv/dn)_D + gamma (g, v)_D                   to l(v),
+  // with gamma constant on each boundary cell (PoissonProblem::nitsche_penalty).
+  const PoissonProblem* nitsche = nullptr;
 };
 
 // Matrix and load of the form over the free dofs, cell by cell through the BezierMesh,
@@ -58,8 +63,22 @@ void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const PoissonProblem& problem, const DofLayout& layout,
                        const QuadratureOptions& quadrature, Eigen::VectorXd& rhs, CellRange cells = {});
 
+// Nitsche's terms of the cells of `cells` that have a Dirichlet side, over each cell's alive
+// functions (mesh.functions(cell) order): the boundary part of the matrix and of the load.
+// Cells whose map is not regular are skipped (the element loop refuses them); throws
+// GeometryError when a cell's stiffness matrix is numerically singular all the same.
+struct NitscheCellTerms {
+  int cell = -1;
+  double penalty = 0;  // gamma on the cell's Dirichlet sides
+  Eigen::MatrixXd matrix;
+  Eigen::VectorXd load;
+};
+std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const GeometryMap& geometry,
+                                            const PoissonProblem& problem, const QuadratureOptions& quadrature,
+                                            CellRange cells);
+
 // L2 projection of the Dirichlet data onto the traces of the functions that do not
-// vanish on the Dirichlet sides. Returns one value per function (0 for the others) and
+// vanish on the Dirichlet sides (none with DirichletMethod::kNitsche). Returns one value per function (0 for the others) and
 // marks those functions in `fixed`.
 Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap& geometry,
                                        const PoissonProblem& problem,

@@ -147,6 +147,7 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
   form.source_reaction = problem.reaction;
   form.source = problem.source.empty() ? nullptr : &problem.source;
   form.exact = problem.exact ? &*problem.exact : nullptr;
+  if (problem.dirichlet_method == DirichletMethod::kNitsche) form.nitsche = &problem;
 
   say("setup");
   auto t = clock::now();

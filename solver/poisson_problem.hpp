@@ -17,6 +17,14 @@ struct BoundaryCondition {
   Expression value;  // g (Dirichlet) or h = du/dn (Neumann) when not from_exact
 };
 
+// How Dirichlet sides are imposed. kProjection: strongly, the functions whose trace does not
+// vanish there are fixed by the L2 projection of g onto their traces. kNitsche: weakly, by
+// Nitsche's method (every function stays free; a penalty per boundary cell, from a local
+// eigenvalue bound, keeps the form coercive). A C1 space ties the gradient at a boundary vertex
+// to its boundary traces, so the projection's derivative error there enters the solution;
+// Nitsche's method lets the Galerkin solution choose its trace (docs/MATH.md §4).
+enum class DirichletMethod { kProjection, kNitsche };
+
 // -Laplace(u) + reaction u = f in the domain (planar) or on the surface (Laplace-Beltrami),
 // with the boundary conditions above. On a closed surface with reaction = 0 the operator has
 // the constants as kernel: u is sought with zero mean and f is made compatible by removing its
@@ -26,6 +34,11 @@ struct PoissonProblem {
   std::optional<ExactSolution> exact;
   std::vector<BoundaryCondition> boundary;
   double reaction = 0;
+  DirichletMethod dirichlet_method = DirichletMethod::kProjection;
+  // Nitsche's penalty on a boundary cell is nitsche_penalty * 2 lambda, with lambda the largest
+  // ratio of the squared normal derivative on the cell's Dirichlet sides to the squared
+  // gradient over the cell: > 1 makes the form coercive.
+  double nitsche_penalty = 2;
 };
 
 struct QuadratureOptions {
@@ -56,5 +69,13 @@ struct MeshPart {
   int first_owned_function = 0, last_owned_function = 0;
   int global_functions = 0, global_cells = 0;
 };
+
+// "projection" or "nitsche" when the problem has a Dirichlet side, else null (for reports).
+inline const char* dirichlet_method_name(const PoissonProblem& p) {
+  for (const BoundaryCondition& bc : p.boundary)
+    if (bc.kind == BoundaryKind::kDirichlet)
+      return p.dirichlet_method == DirichletMethod::kNitsche ? "nitsche" : "projection";
+  return nullptr;
+}
 
 }  // namespace knotwork

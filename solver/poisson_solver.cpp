@@ -67,6 +67,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   form.source_reaction = problem.reaction;
   form.source = problem.source.empty() ? nullptr : &problem.source;
   form.exact = problem.exact ? &*problem.exact : nullptr;
+  if (problem.dirichlet_method == DirichletMethod::kNitsche) form.nitsche = &problem;
   sol.zero_mean = problem.reaction == 0 && !has_boundary(mesh);
 
   say("setup");

@@ -187,6 +187,44 @@ TEST_CASE("The C0 multipatch baseline on the same mesh is not C1 (the jump check
   REQUIRE(m.l2 < 1e-3);  // and it converges: a fair baseline
 }
 
+// The issue's target: at equal dofs the G1 space is at least as accurate in H1 as the C0
+// multipatch space of the same degree on the same mesh, the errors interpolated log-log in the
+// dofs. Checked on the two meshes where G1 was behind on the coarse levels with the L2-projected
+// Dirichlet data: at each finer G1 level (C0 interpolated) and at the C0 space's coarsest level
+// (G1 interpolated: the G1 level 0 lies below every C0 point). Both use the planar default,
+// Nitsche's method; with the projection G1's coarsest error is larger by a factor the C1 space's
+// boundary vertices explain (docs/G1_POISSON.md), and that is asserted too.
+TEST_CASE("G1 at least as accurate as C0 at equal dofs on the pentagon and the valence-8/6 mesh", "[g1][cases][c0]") {
+  const auto at_dofs = [](const std::vector<Measured>& m, double n) {  // log-log, between two levels
+    size_t i = 0;
+    while (i + 2 < m.size() && m[i + 1].dofs < n) ++i;
+    REQUIRE(m[i].dofs <= n);
+    REQUIRE(n <= m[i + 1].dofs);
+    const double t = std::log(n / m[i].dofs) / std::log(double(m[i + 1].dofs) / m[i].dofs);
+    return std::exp((1 - t) * std::log(m[i].h1) + t * std::log(m[i + 1].h1));
+  };
+  for (const char* name : {"/cases/g1_pentagon.toml", "/cases/g1_valences_6_8.toml"}) {
+    CaseDescription c = load_case(kSource + name);
+    REQUIRE(c.problem.dirichlet_method == DirichletMethod::kNitsche);  // the planar default
+    std::vector<Measured> g1, c0;
+    for (int l = 0; l <= 2; ++l) g1.push_back(solve(c, l));
+    g1_section(c).c0 = true;
+    for (int l = 0; l <= 2; ++l) c0.push_back(solve(c, l));
+    INFO(name);
+    for (int l = 1; l <= 2; ++l) {
+      INFO("G1 level " << l << ": " << g1[l].dofs << " dofs, H1 " << g1[l].h1 << "; C0 there " << at_dofs(c0, g1[l].dofs));
+      REQUIRE(at_dofs(c0, g1[l].dofs) >= g1[l].h1);
+    }
+    INFO("C0 level 0: " << c0[0].dofs << " dofs, H1 " << c0[0].h1 << "; G1 there " << at_dofs(g1, c0[0].dofs));
+    REQUIRE(at_dofs(g1, c0[0].dofs) <= c0[0].h1);
+    g1_section(c).c0 = false;
+    c.problem.dirichlet_method = DirichletMethod::kProjection;
+    const Measured projected = solve(c, 0);
+    INFO("G1 level 0 with the projection: H1 " << projected.h1 << ", with Nitsche's method " << g1[0].h1);
+    REQUIRE(projected.h1 > 1.3 * g1[0].h1);
+  }
+}
+
 TEST_CASE("Laplace-Beltrami on the G1 sphere with the earlier symmetric data: rates with the zero-mean constraint", "[g1][cases][surface]") {
   CaseDescription c = load_case(kSource + "/cases/g1_sphere_xy.toml");
   g1_section(c).gluing = "symmetric";

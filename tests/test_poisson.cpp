@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <omp.h>
+#include <Eigen/Eigenvalues>
 
 #include "basis/tensor/fast_diagonalization.hpp"
 #include "basis/tensor/tensor_case.hpp"
@@ -508,4 +509,84 @@ TEST_CASE("A row of an extraction matrix factors exactly when it is a product", 
       for (int bu = 0; bu < 3; ++bu) REQUIRE(rows.u(a, bu) * rows.v(a, bv) == Approx(C(a, bu + 3 * bv)).margin(1e-15));
   C(4, 0) += 1e-6;  // a sum of two products is not one
   REQUIRE_FALSE(factor_separable(C, 2, 1, rows));
+}
+
+// Nitsche's method is consistent: the exact solution satisfies the discrete equations, so a
+// solution in the space is reproduced to roundoff, whatever the penalty. A wrong sign or a
+// missing boundary term breaks this (the projection is exact here too, so it is no witness).
+TEST_CASE("Nitsche's method: solutions in the space are reproduced to roundoff", "[poisson][nitsche]") {
+  NurbsPatch bent;
+  bent.basis_u = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
+  bent.basis_v = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
+  bent.control_points.resize(9, 2);
+  bent.control_points << 0, 0, 0.5, -0.1, 1, 0, -0.1, 0.5, 0.6, 0.4, 1.1, 0.5, 0, 1, 0.5, 1.2, 1, 1;
+  bent.weights.setOnes(9);
+  for (int p = 2; p <= 4; ++p)
+    for (double penalty : {1.01, 2.0, 50.0}) {
+      INFO("degree " << p << ", penalty factor " << penalty);
+      for (const NurbsPatch& g : {lshape_patch(), bent}) {
+        CaseDescription c = with_exact(g, p, 3, "1 + 2*x - 3*y");
+        c.problem.dirichlet_method = DirichletMethod::kNitsche;
+        c.problem.nitsche_penalty = penalty;
+        const ErrorNorms e = solve(c);
+        REQUIRE(e.l2 < 1e-12);
+        REQUIRE(e.h1_semi < 1e-11);
+      }
+      // A quadratic on the square, Dirichlet by Nitsche on two sides and Neumann on the others.
+      CaseDescription c = with_exact(rectangle_patch(-1, 0, 2, 1), p, 4, "x^2 - x*y + 0.5*y^2 + 3");
+      patch_space(c).rational = false;
+      c.problem.dirichlet_method = DirichletMethod::kNitsche;
+      c.problem.nitsche_penalty = penalty;
+      c.problem.boundary[1].kind = BoundaryKind::kNeumann;
+      c.problem.boundary[2].kind = BoundaryKind::kNeumann;
+      const ErrorNorms e = solve(c);
+      REQUIRE(e.l2 < 1e-12);
+      REQUIRE(e.h1_semi < 1e-11);
+    }
+}
+
+// Theory (Nitsche 1971; for splines Embar, Dolbow, Harari 2010): with a penalty above the
+// inverse-inequality bound the method converges at the optimal rates, h^(p+1) in L2 and h^p in
+// H1, with data that do not vanish on the boundary.
+TEST_CASE("Nitsche's method converges optimally on the quarter annulus, p = 1..4", "[poisson][nitsche][rates]") {
+  for (int p = 1; p <= 4; ++p) {
+    CaseDescription c = shipped("quarter_annulus");
+    patch_space(c).degree = {p, p};
+    patch_space(c).rational = p >= 2;
+    c.problem.dirichlet_method = DirichletMethod::kNitsche;
+    const Rates r = rates(c, 8, 3);
+    INFO("p = " << p << ": L2 rate " << r.l2 << ", H1 rate " << r.h1);
+    REQUIRE(r.l2 >= p + 1 - 0.2);
+    REQUIRE(r.h1 >= p - 0.2);
+  }
+}
+
+// The penalty on each boundary cell is factor * 2 lambda, lambda the largest ratio of the
+// squared normal derivative on the cell's Dirichlet sides to the squared gradient over the
+// cell. Above factor 1 the form is coercive: the matrix is positive definite. The bound must
+// also not be loose by orders of magnitude: far below it the form is indefinite (the symmetric
+// consistency terms win), which is what the eigenvalue estimate is for.
+TEST_CASE("Nitsche's penalty: positive definite above the local bound, indefinite far below it", "[poisson][nitsche]") {
+  for (int p : {2, 4}) {
+    auto smallest_eigenvalue = [&](double factor) {
+      CaseDescription c = with_exact(quarter_annulus_patch(1, 2), p, 3, "x*y");
+      c.problem.dirichlet_method = DirichletMethod::kNitsche;
+      c.problem.nitsche_penalty = factor;
+      const auto d_space = build_space(c);
+      PoissonSolveOptions o = options_of(c);
+      Eigen::MatrixXd K;
+      o.on_system = [&](const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd&) {
+        K = Eigen::MatrixXd(Eigen::SparseMatrix<double>(lower.selfadjointView<Eigen::Lower>()));
+      };
+      try {
+        solve_poisson(d_space->mesh(), d_space->geometry(), c.problem, o);
+      } catch (const std::exception&) {  // an indefinite matrix may stop the Cholesky factorization
+      }
+      REQUIRE(K.rows() == d_space->mesh().num_functions());  // Nitsche: no function is fixed
+      return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(K, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+    };
+    INFO("degree " << p);
+    REQUIRE(smallest_eigenvalue(1.01) > 0);
+    REQUIRE(smallest_eigenvalue(0.05) < 0);
+  }
 }
