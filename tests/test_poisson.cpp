@@ -35,6 +35,17 @@ CaseDescription with_exact(NurbsPatch geometry, int p, int n, const std::string&
   return c;
 }
 
+// A curved polynomial (unit-weight) map: x(s,t) bends through the middle control point.
+NurbsPatch bent_patch() {
+  NurbsPatch bent;
+  bent.basis_u = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
+  bent.basis_v = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
+  bent.control_points.resize(9, 2);
+  bent.control_points << 0, 0, 0.5, -0.1, 1, 0, -0.1, 0.5, 0.6, 0.4, 1.1, 0.5, 0, 1, 0.5, 1.2, 1, 1;
+  bent.weights.setOnes(9);
+  return bent;
+}
+
 PoissonSolveOptions options_of(const CaseDescription& c) {
   PoissonSolveOptions o;
   o.quadrature = c.quadrature;
@@ -70,13 +81,7 @@ Rates rates(CaseDescription c, int n0, int levels) {
 
 TEST_CASE("Patch test: linear solutions are reproduced to roundoff", "[poisson]") {
   const std::string u = "1 + 2*x - 3*y";
-  // A curved polynomial (unit-weight) map: x(s,t) bends through the middle control point.
-  NurbsPatch bent;
-  bent.basis_u = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
-  bent.basis_v = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
-  bent.control_points.resize(9, 2);
-  bent.control_points << 0, 0, 0.5, -0.1, 1, 0, -0.1, 0.5, 0.6, 0.4, 1.1, 0.5, 0, 1, 0.5, 1.2, 1, 1;
-  bent.weights.setOnes(9);
+  const NurbsPatch bent = bent_patch();
   for (int p = 2; p <= 4; ++p) {
     INFO("degree " << p);
     // Polynomial maps: grad u . grad v det J is a polynomial of degree <= 2p-1 per direction,
@@ -515,12 +520,7 @@ TEST_CASE("A row of an extraction matrix factors exactly when it is a product", 
 // solution in the space is reproduced to roundoff, whatever the penalty. A wrong sign or a
 // missing boundary term breaks this (the projection is exact here too, so it is no witness).
 TEST_CASE("Nitsche's method: solutions in the space are reproduced to roundoff", "[poisson][nitsche]") {
-  NurbsPatch bent;
-  bent.basis_u = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
-  bent.basis_v = BSplineBasis1D(2, {0, 0, 0, 1, 1, 1});
-  bent.control_points.resize(9, 2);
-  bent.control_points << 0, 0, 0.5, -0.1, 1, 0, -0.1, 0.5, 0.6, 0.4, 1.1, 0.5, 0, 1, 0.5, 1.2, 1, 1;
-  bent.weights.setOnes(9);
+  const NurbsPatch bent = bent_patch();
   for (int p = 2; p <= 4; ++p)
     for (double penalty : {1.01, 2.0, 50.0}) {
       INFO("degree " << p << ", penalty factor " << penalty);
