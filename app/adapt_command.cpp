@@ -35,9 +35,6 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
                          const ProgressFunction& progress, int output_every) {
   if (output_every < 1) throw InputError("--output-every: must be at least 1, got " + std::to_string(output_every));
   check_adaptive_family(c);
-  if (dirichlet_method_name(c.problem) && c.problem.dirichlet_method == DirichletMethod::kNitsche)
-    throw InputError(c.path + ": [problem] dirichlet_method: \"nitsche\" is not supported by adapt (the residual "
-                     "estimator has no term for weakly imposed Dirichlet data); use \"projection\"");
   if (c.adapt.steps < 1 || c.adapt.steps > 200) throw InputError("--steps: must be in [1, 200], got " + std::to_string(c.adapt.steps));
   if (!(c.adapt.theta > 0 && c.adapt.theta <= 1)) throw InputError("--theta: must be in (0, 1]");
   if (c.adapt.max_dofs < 1) throw InputError("--max-dofs: must be positive");

@@ -163,14 +163,16 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
     ind.jump_part += 2 * side_value[s];
     ind.max_gradient_jump = std::max(ind.max_gradient_jump, side_max[s]);
   }
-  // Neumann sides: h_E ||g - du_h/dn||^2.
+  // Neumann sides: h_E ||g - du_h/dn||^2; Dirichlet sides by Nitsche's method: ||g - u_h||^2 / h_E.
   for (int c = 0; c < mesh.num_cells(); ++c) {
     const BezierCell& cell = mesh.cell(c);
     for (int side = 0; side < 4; ++side) {
       const int id = cell.boundary[side];
       if (id < 0 || id >= static_cast<int>(problem.boundary.size())) continue;
       const BoundaryCondition& bc = problem.boundary[id];
-      if (bc.kind != BoundaryKind::kNeumann) continue;
+      const bool weak_dirichlet =
+          bc.kind == BoundaryKind::kDirichlet && problem.dirichlet_method == DirichletMethod::kNitsche;
+      if (bc.kind != BoundaryKind::kNeumann && !weak_dirichlet) continue;
       const int n = std::max(cell.degree_u, cell.degree_v) + 2;
       const QuadratureRule1D rule = gauss_legendre(n);
       Eigen::VectorXd u(n), v(n);
@@ -182,9 +184,9 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       const Eigen::MatrixX3d sol = evaluate_solution(mesh, geometry, coefficients, c, u, v);
       GeometryAtPoints g;
       geometry.evaluate(c, u, v, g);
-      ExpressionEvaluator data(bc.from_exact ? problem.exact->u_x : bc.value);
+      ExpressionEvaluator data(!bc.from_exact ? bc.value : weak_dirichlet ? problem.exact->u : problem.exact->u_x);
       std::unique_ptr<ExpressionEvaluator> data_y;
-      if (bc.from_exact) data_y = std::make_unique<ExpressionEvaluator>(problem.exact->u_y);
+      if (bc.from_exact && !weak_dirichlet) data_y = std::make_unique<ExpressionEvaluator>(problem.exact->u_y);
       double length = 0, integral = 0;
       for (int k = 0; k < n; ++k) {
         // Counter-clockwise tangent of the side; the outward normal is it turned clockwise
@@ -197,14 +199,24 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
         double nx = ty / len, ny = -tx / len;
         if (det < 0) nx = -nx, ny = -ny;
         const double x = g.x(k, 0), y = g.x(k, 1);
-        const double gn = bc.from_exact ? data(x, y) * nx + (*data_y)(x, y) * ny : data(x, y);
-        const double r = gn - (sol(k, 1) * nx + sol(k, 2) * ny);
+        double r;
+        if (weak_dirichlet) {
+          r = data(x, y) - sol(k, 0);
+        } else {
+          const double gn = bc.from_exact ? data(x, y) * nx + (*data_y)(x, y) * ny : data(x, y);
+          r = gn - (sol(k, 1) * nx + sol(k, 2) * ny);
+        }
         const double ds = len * rule.weights[k];
         length += ds;
         integral += ds * r * r;
       }
-      ind.eta_squared[c] += length * integral;
-      ind.neumann_part += length * integral;
+      if (weak_dirichlet) {
+        ind.eta_squared[c] += integral / length;
+        ind.dirichlet_part += integral / length;
+      } else {
+        ind.eta_squared[c] += length * integral;
+        ind.neumann_part += length * integral;
+      }
     }
   }
   return ind;

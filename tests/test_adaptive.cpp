@@ -125,6 +125,13 @@ TEST_CASE("The estimator vanishes when the discrete solution is exact", "[adapti
   const ErrorIndicators ind = residual_indicators(d.mesh(), d.geometry(), s.coefficients, c.problem);
   CHECK(std::sqrt(ind.total()) < 1e-9);
   CHECK(ind.max_gradient_jump < 1e-9);
+  // With Nitsche's method the trace is the Galerkin solution's, and still u's (consistency): the
+  // Dirichlet term h_E^-1 ||g - u_h||^2 vanishes too.
+  c.problem.dirichlet_method = DirichletMethod::kNitsche;
+  const PoissonSolution weak = solve_case(c, d, Ordering::kAmd, {});
+  REQUIRE(weak.errors->h1_semi < 1e-11);
+  const ErrorIndicators weak_ind = residual_indicators(d.mesh(), d.geometry(), weak.coefficients, c.problem);
+  CHECK(std::sqrt(weak_ind.total()) < 1e-9);
 }
 
 TEST_CASE("The estimator bounds the error on the L-shape, and jumps appear only at the C0 fold", "[adaptive]") {
@@ -221,6 +228,29 @@ TEST_CASE("Adaptive knot segments on the L-shape: H1 error ~ N^(-p/2), uniform ~
     CHECK(ratio(steps.size() - 1) / ratio(steps.size() / 2) < 2.0);
     CHECK(ratio(steps.size() - 1) / ratio(steps.size() / 2) > 0.5);
   }
+}
+
+// Nitsche's method in the adaptive loop: the estimator adds h_E^-1 ||g - u_h||^2 on the Dirichlet
+// sides (Becker, Hansbo, Stenberg 2003), and the loop keeps the optimal rate N^(-p/2) of the
+// projection's loop on the L-shape, with a stable eta / error ratio.
+TEST_CASE("Adaptive knot segments with Nitsche's method on the L-shape: H1 error ~ N^(-p/2)", "[adaptive][slow]") {
+  CaseDescription c = shipped("lshape_adaptive.toml");
+  c.problem.dirichlet_method = DirichletMethod::kNitsche;
+  c.adapt.steps = 60;
+  c.adapt.max_dofs = 3000;
+  const auto steps = adapt_case(c, Ordering::kAmd, {});
+  const double rate = fitted_h1_rate(steps, steps.size() / 2);
+  const auto ratio = [&](size_t k) { return steps[k].estimator / steps[k].h1_semi; };
+  INFO(steps.size() << " steps to " << steps.back().dofs << " dofs, H1 error " << steps.back().h1_semi
+                    << ", rate over the last half " << rate << "; eta / error halfway " << ratio(steps.size() / 2)
+                    << ", last " << ratio(steps.size() - 1));
+  CHECK(std::abs(rate - 1.0) < 0.15);  // p = 2
+  CHECK(ratio(steps.size() - 1) / ratio(steps.size() / 2) < 2.0);
+  CHECK(ratio(steps.size() - 1) / ratio(steps.size() / 2) > 0.5);
+  // The Dirichlet term is there: on a mesh that does not resolve u, u_h misses g.
+  const auto d_space = build_space(c);
+  const PoissonSolution s = solve_case(c, *d_space, Ordering::kAmd, {});
+  CHECK(residual_indicators(d_space->mesh(), d_space->geometry(), s.coefficients, c.problem).dirichlet_part > 0);
 }
 
 TEST_CASE("Adaptive knot segments resolve an interior layer with fewer dofs than uniform refinement", "[adaptive][slow]") {
