@@ -47,13 +47,7 @@ constexpr int kAutoIterativeFunctions = 10000;
 
 SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) {
   SolverReport r;
-  std::string structured = space.structured_preconditioner();
-  // A structured preconditioner factors the operator with the Dirichlet functions eliminated;
-  // with Nitsche's method none is, and its factors would be singular (the constants).
-  std::string without_nitsche;
-  if (!structured.empty() && dirichlet_method_name(c.problem) &&
-      c.problem.dirichlet_method == DirichletMethod::kNitsche)
-    without_nitsche.swap(structured);
+  const std::string structured = space.structured_preconditioner();
   if (c.solver.method == "auto")
     r.method = !structured.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
   else
@@ -64,20 +58,13 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
     // Without a structure to use: algebraic multigrid, whose iteration count stays bounded as
     // h shrinks where Jacobi's grows like 1/h (docs/SOLVERS.md).
     r.preconditioner = structured.empty() ? kBoomerAmgName : structured;
-    if (!without_nitsche.empty())
-      r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc), since " + without_nitsche +
-               " does not apply to Dirichlet data imposed by Nitsche's method";
-    else if (structured.empty())
+    if (structured.empty())
       r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc), since family \"" +
                c.family + "\" has no structured preconditioner";
   } else if (asked == "jacobi" || asked == kBoomerAmgName) {
     r.preconditioner = asked;  // algebraic: they apply to every family
   } else if (asked == structured) {
     r.preconditioner = asked;
-  } else if (asked == without_nitsche) {
-    throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" does not apply with [problem] dirichlet_method "
-                     "= \"nitsche\" (it factors the operator with the Dirichlet functions eliminated); use \"boomeramg\", "
-                     "\"jacobi\", method = \"direct\" or dirichlet_method = \"projection\"");
   } else {
     throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" does not apply to family \"" + c.family +
                      "\" (" + (structured.empty() ? std::string("use \"boomeramg\", \"jacobi\" or method = \"direct\"")
@@ -143,8 +130,9 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
       };
     } else if (chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi") {
       const std::string name = chosen.preconditioner, path = c.path;
-      so.preconditioner = [&space, name, path](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
-        std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(layout, lower);
+      const PoissonProblem* problem = &c.problem;
+      so.preconditioner = [&space, name, path, problem](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
+        std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(layout, lower, *problem);
         if (!p)
           throw InputError(path + ": [solver] preconditioner: \"" + name +
                            "\" does not apply to this problem's unknowns (they are not a tensor product: use \"boomeramg\", \"jacobi\" "

@@ -86,10 +86,11 @@ class SplineSpace {
   virtual KnotLines knot_lines() const { return {}; }
   // A preconditioner that knows the space's structure, for the iterative solve: its name
   // ([solver] preconditioner), "" when the family has none, and the preconditioner for the
-  // free dofs of `layout` (null when it does not apply to them).
+  // free dofs of `layout` of `problem`'s operator (null when it does not apply to them).
   virtual std::string structured_preconditioner() const { return ""; }
   virtual std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& /*layout*/,
-                                                                         const Eigen::SparseMatrix<double>& /*lower*/) const {
+                                                                         const Eigen::SparseMatrix<double>& /*lower*/,
+                                                                         const PoissonProblem& /*problem*/) const {
     return nullptr;
   }
   // A space SpaceFamily::build_part made: which cells and functions of the global space its

@@ -135,6 +135,29 @@ extern "C" void dsygvd_(const int* itype, const char* jobz, const char* uplo, co
                         double* b, const int* ldb, double* w, double* work, const int* lwork, int* iwork,
                         const int* liwork, int* info);
 
+// The 1D Nitsche terms (NitscheEnds) of one direction added to its weighted stiffness K: at the
+// start (left or bottom side) when `start`, at the end when `end`. `weight` is the stiffness
+// weight per element (empty: 1).
+void add_nitsche_ends(const BSplineBasis1D& b, const std::vector<double>& weight, bool start, bool end, double factor,
+                      Eigen::MatrixXd& K) {
+  const int p = b.degree();
+  const std::vector<int> spans = b.element_spans();
+  const auto& t = b.knots();
+  std::vector<double> d(2 * (p + 1));
+  for (int which = 0; which < 2; ++which) {
+    if (!(which == 0 ? start : end)) continue;
+    const size_t e = which == 0 ? 0 : spans.size() - 1;
+    const int s = spans[e];
+    const double h = t[s + 1] - t[s], w = weight.empty() ? 1.0 : weight[e];
+    b.evaluate_derivatives(s, which == 0 ? t[s] : t[s + 1], 1, d.data());
+    // Outward derivative: -d/du at the start, +d/du at the end.
+    const double out = which == 0 ? -1.0 : 1.0, gamma = factor * 2 * w * p * p / h;
+    for (int i = 0; i <= p; ++i)
+      for (int k = 0; k <= p; ++k)
+        K(s - p + i, s - p + k) += -w * out * (d[p + 1 + i] * d[k] + d[i] * d[p + 1 + k]) + gamma * d[i] * d[k];
+  }
+}
+
 // K restricted to the free indices, and its generalized eigenvectors (U^T M U = I).
 void diagonalize(const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const std::vector<int>& keep, Eigen::MatrixXd& U,
                  Eigen::VectorXd& lambda) {
@@ -163,7 +186,7 @@ void diagonalize(const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const std::
 
 std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
                                                      const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
-                                                     const SeparableCoefficients& geometry) {
+                                                     const SeparableCoefficients& geometry, const NitscheEnds& nitsche) {
   const int nu = space_u.num_functions(), nv = space_v.num_functions();
   if (static_cast<long>(layout.dof.size()) != static_cast<long>(nu) * nv) return nullptr;
   // Free lines: i is free when function (i, j) is free for some j; the product test follows.
@@ -180,6 +203,9 @@ std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space
   Eigen::MatrixXd Mu, Ku, Mv, Kv;
   univariate_mass_stiffness(space_u, Mu, Ku, geometry.a2, geometry.a1);
   univariate_mass_stiffness(space_v, Mv, Kv, geometry.b1, geometry.b2);
+  const auto& side = nitsche.sides;  // bottom, right, top, left
+  add_nitsche_ends(space_u, geometry.a1, side[3], side[1], nitsche.factor, Ku);
+  add_nitsche_ends(space_v, geometry.b2, side[0], side[2], nitsche.factor, Kv);
   Eigen::MatrixXd Uu, Uv;
   Eigen::VectorXd lu, lv;
   diagonalize(Mu, Ku, iu, Uu, lu);
@@ -193,7 +219,7 @@ std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space
     return true;
   };
   if (space_u.degree() == space_v.degree() && space_u.knots() == space_v.knots() && iu == iv &&
-      same(geometry.a1, geometry.b2) && same(geometry.a2, geometry.b1)) {
+      same(geometry.a1, geometry.b2) && same(geometry.a2, geometry.b1) && side[3] == side[0] && side[1] == side[2]) {
     Uv = Uu;
     lv = lu;
   } else {

@@ -9,6 +9,7 @@
 // element by element (SeparableCoefficients); exact for maps such as the annulus, whose
 // coefficients separate, where CG then converges in a few iterations.
 #include <Eigen/SparseCore>
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -37,12 +38,25 @@ struct SeparableCoefficients {
                                    std::vector<int> rows = {}, std::vector<int> columns = {});
 };
 
+// The sides (bottom v = 0, right u = 1, top v = 1, left u = 0) whose Dirichlet data are
+// imposed by Nitsche's method, and its penalty factor (PoissonProblem::nitsche_penalty).
+// Each adds to the univariate stiffness of its direction the 1D Nitsche terms at its end,
+// weighted like that direction's stiffness on the end element:
+//   -+ w (N_i' N_k + N_i N_k') + factor 2 w p^2 / h N_i N_k   (- at the start, + at the end),
+// p^2 / h the largest |v'(end)|^2 / int |v'|^2 over the end element's polynomials: the 1D
+// form is coercive for factor > 1 as the 2D one is.
+struct NitscheEnds {
+  std::array<bool, 4> sides{};
+  double factor = 2;
+};
+
 // For the tensor space of space_u x space_v (function i + n_u j) and the free dofs of
 // `layout`: the preconditioner, or null when the free functions are not a tensor product of
 // free univariate ones (then it does not apply). `lower` is the assembled matrix (its
 // diagonal gives the scaling).
 std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
                                                      const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
-                                                     const SeparableCoefficients& geometry = {});
+                                                     const SeparableCoefficients& geometry = {},
+                                                     const NitscheEnds& nitsche = {});
 
 }  // namespace knotwork

@@ -64,8 +64,13 @@ class TensorSpace final : public SplineSpace {
   std::array<int, 2> degree() const override { return options_.degree; }
   std::string structured_preconditioner() const override { return kFastDiagonalization; }
   std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& layout,
-                                                                 const Eigen::SparseMatrix<double>& lower) const override {
-    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower, separable_coefficients());
+                                                                 const Eigen::SparseMatrix<double>& lower,
+                                                                 const PoissonProblem& problem) const override {
+    NitscheEnds ends;
+    ends.factor = problem.nitsche_penalty;
+    if (problem.dirichlet_method == DirichletMethod::kNitsche && problem.boundary.size() == 4)
+      for (int s = 0; s < 4; ++s) ends.sides[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
+    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower, separable_coefficients(), ends);
   }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
