@@ -194,8 +194,7 @@ int run_command(const RunOptions& o) {
   std::printf("  space    %s, %d cells\n", r.description.c_str(), global_num_cells(*r.space));
   for (const auto& n : r.space->notes()) std::printf("  note     %s\n", n.c_str());
   if (!solver.note.empty()) std::printf("  note     %s\n", solver.note.c_str());
-  const char* dirichlet = dirichlet_method_name(c.problem);
-  const bool nitsche = dirichlet && std::string(dirichlet) == "nitsche";
+  const bool nitsche = dirichlet_method_name(c.problem) && c.problem.dirichlet_method == DirichletMethod::kNitsche;
   std::printf("  dofs     %d functions, %d unknowns %s, %ld stored matrix entries\n", s.num_functions, s.num_free,
               s.zero_mean ? "after pinning one (zero mean)"
               : nitsche   ? "(Dirichlet data by Nitsche's method: none eliminated)"

@@ -450,11 +450,11 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
     if (eig.info() != Eigen::Success || !std::isfinite(eig.eigenvalues().maxCoeff()))
       throw GeometryError("Nitsche's penalty: no bound on the normal derivative of " + describe_cell(mesh, c) +
                           " (its stiffness matrix is numerically singular: a nearly degenerate cell)");
+    const double penalty = problem.nitsche_penalty * 2 * eig.eigenvalues().maxCoeff();
     NitscheCellTerms t;
     t.cell = c;
-    t.penalty = problem.nitsche_penalty * 2 * eig.eigenvalues().maxCoeff();
-    t.matrix = p.C * (p.S + t.penalty * p.P) * p.C.transpose();
-    t.load = p.C * (p.load_normal + t.penalty * p.load_value);
+    t.matrix = p.C * (p.S + penalty * p.P) * p.C.transpose();
+    t.load = p.C * (p.load_normal + penalty * p.load_value);
     out.push_back(std::move(t));
   }
   return out;

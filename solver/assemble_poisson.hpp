@@ -69,7 +69,6 @@ void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
 // GeometryError when a cell's stiffness matrix is numerically singular all the same.
 struct NitscheCellTerms {
   int cell = -1;
-  double penalty = 0;  // gamma on the cell's Dirichlet sides
   Eigen::MatrixXd matrix;
   Eigen::VectorXd load;
 };
@@ -77,9 +76,9 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
                                             const PoissonProblem& problem, const QuadratureOptions& quadrature,
                                             CellRange cells);
 
-// L2 projection of the Dirichlet data onto the traces of the functions that do not
-// vanish on the Dirichlet sides (none with DirichletMethod::kNitsche). Returns one value per function (0 for the others) and
-// marks those functions in `fixed`.
+// L2 projection of the Dirichlet data onto the traces of the functions that do not vanish on
+// the Dirichlet sides (none with DirichletMethod::kNitsche). Returns one value per function
+// (0 for the others) and marks those functions in `fixed`.
 Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap& geometry,
                                        const PoissonProblem& problem,
                                        const QuadratureOptions& quadrature, std::vector<bool>& fixed);

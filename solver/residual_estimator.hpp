@@ -14,10 +14,11 @@ namespace knotwork {
 //           + 1/2 sum over interior edges E of K of h_E ||[grad u_h]||^2_E
 //           + sum over Neumann edges E of K of h_E ||g - du_h/dn||^2_E
 //           + sum over Dirichlet edges E of K imposed by Nitsche's method of h_E^-1 ||g - u_h||^2_E
-// with h the physical cell diameter and edge length (the last term: the trace u_h misses by;
-// Becker, Hansbo and Stenberg 2003; zero for a strongly imposed trace up to the projection). u_h is continuous, so the jump of the
-// normal derivative is the jump of the whole gradient; on C^1 edges it vanishes (up to
-// roundoff) and only the C^0 ones (e.g. the L-shape's fold) contribute.
+// with h the physical cell diameter and edge length. The last term is what the weakly imposed
+// trace misses g by (Becker, Hansbo and Stenberg 2003); strongly imposed sides have none. u_h
+// is continuous, so the jump of the normal derivative is the jump of the whole gradient; on
+// C^1 edges it vanishes (up to roundoff) and only the C^0 ones (e.g. the L-shape's fold)
+// contribute.
 struct ErrorIndicators {
   Eigen::VectorXd eta_squared;  // per cell
   double residual_part = 0, jump_part = 0, neumann_part = 0, dirichlet_part = 0;  // sums of the terms
