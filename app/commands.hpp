@@ -18,6 +18,7 @@ struct CommonOptions {
   double tolerance = 0;  // 0: [solver] tolerance of the case
   std::string petsc_options;  // --petsc-options, when given (petsc_options_given)
   bool petsc_options_given = false;
+  bool condition = false;  // --condition (run, converge)
 };
 
 struct RunOptions : CommonOptions {

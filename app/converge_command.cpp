@@ -81,6 +81,8 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     lv.h1 = s.errors->h1;
     lv.fields = space->report();
     for (auto& f : space->check_solution(s.coefficients)) lv.fields.push_back(std::move(f));
+    if (c.solver.estimate_condition)
+      for (auto& f : condition_fields(s)) lv.fields.push_back(std::move(f));
     // The CG count of the level (null where the level was solved directly: `auto` decides by size).
     if (c.solver.method == "iterative" || (c.solver.method == "auto" && !space->structured_preconditioner().empty()))
       lv.fields.push_back({.key = "cg_iterations",
@@ -189,6 +191,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
 int converge_command(const ConvergeOptions& o) {
   CaseDescription c = load_case(o.case_file);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr);
+  c.solver.estimate_condition = o.condition;
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);

@@ -98,6 +98,9 @@ int main(int argc, char** argv) {
                      "Case file (TOML or JSON), e.g. cases/square_sinsin.toml; cases/README.md lists the shipped ones")
       ->required();
   add_common(run_cmd, run);
+  run_cmd->add_flag("--condition", run.condition,
+                  "Also estimate the condition numbers of the Jacobi-scaled stiffness and mass matrices (Lanczos; "
+                  "serial solvers only)");
   run_cmd->add_flag("--no-output", run.no_output, "Write no files (timing and errors only)");
   run_cmd->add_flag("--allow-unverified-space,--allow-non-semi-regular,--allow-dependent", run.allow_unverified_space,
                     "Solve on a space that failed its family's own check (a given collection that is not "
@@ -111,6 +114,9 @@ int main(int argc, char** argv) {
                       "per direction, or the quad mesh subdivided)")
       ->capture_default_str();
   add_common(conv_cmd, conv);
+  conv_cmd->add_flag("--condition", conv.condition,
+                  "Also estimate the condition numbers of the Jacobi-scaled stiffness and mass matrices (Lanczos; "
+                  "serial solvers only)");
 
   knotwork::AdaptOptions adapt;
   CLI::App* adapt_cmd = app.add_subcommand(

@@ -107,6 +107,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
   so.ordering = ordering;
   so.progress = progress;
   so.cell_errors = true;
+  so.estimate_condition = c.solver.estimate_condition;
   const SolverReport chosen = resolve_solver(c, space);
   if (report) *report = chosen;
   const ParallelWorld launched = launched_world();
@@ -114,6 +115,9 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     throw InputError(c.path + ": [solver] method: \"" + chosen.method + "\" under mpirun with " +
                      std::to_string(launched.size) + " processes: each would solve the whole problem alone; use "
                      "--solver petsc (or method = \"petsc\") to share it");
+  if (c.solver.estimate_condition && chosen.method == "petsc")
+    throw InputError(c.path + ": --condition: estimated on the serial paths only (direct or iterative), not with "
+                     "method = \"petsc\"");
   if (chosen.method == "iterative" || chosen.method == "petsc") {
     so.iterative = chosen.method == "iterative";
     so.tolerance = c.solver.tolerance;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <tuple>
 
 namespace knotwork {
 
@@ -18,6 +19,29 @@ void set_value(Json& j, const std::string& key, const ReportValue& v) {
 }
 
 }  // namespace
+
+std::vector<ReportField> condition_fields(const PoissonSolution& s) {
+  std::vector<ReportField> out;
+  std::string text, failure;
+  for (const auto& [name, label, e] : {std::tuple{"stiffness", "kappa(K)", &s.stiffness_spectrum},
+                                       std::tuple{"mass", "kappa(M)", &s.mass_spectrum}}) {
+    char line[160];
+    if (e->computed) {
+      std::snprintf(line, sizeof line, "%s%s %.3e (eigenvalues %.3e to %.3e)", text.empty() ? "" : ", ", name,
+                    e->condition(), e->smallest, e->largest);
+      out.push_back({.key = std::string("condition.") + name, .value = e->condition(), .label = label, .column = true, .width = 20});
+    } else {
+      std::snprintf(line, sizeof line, "%s%s not estimated (%s)", text.empty() ? "" : ", ", name, e->failure.c_str());
+      out.push_back({.key = std::string("condition.") + name, .value = ReportValue{}, .label = label, .column = true, .width = 20});
+      failure += (failure.empty() ? "" : "; ") + std::string(name) + ": " + e->failure;
+    }
+    text += line;
+  }
+  if (!failure.empty()) out.push_back({.key = "condition.failure", .value = failure});
+  out.push_back({.key = "condition.scaling", .value = std::string("jacobi"),
+                 .text = text + " [Jacobi-scaled, free dofs]", .label = "kappa"});
+  return out;
+}
 
 void add_fields(Json& object, const std::vector<ReportField>& fields) {
   // Members of nested objects, in the order their first member appears.

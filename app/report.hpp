@@ -5,9 +5,14 @@
 
 #include "cases/json_output.hpp"
 #include "cases/spline_space.hpp"
+#include "solver/poisson_solver.hpp"
 
 namespace knotwork {
 
+// The condition estimates of a solve made with estimate_condition, as fields: JSON
+// condition.stiffness / condition.mass (null when not estimated: condition.failure says why),
+// a text line, and converge's columns kappa(K), kappa(M).
+std::vector<ReportField> condition_fields(const PoissonSolution& s);
 // Adds the fields to a JSON object ("a.b" keys become member b of object a).
 void add_fields(Json& object, const std::vector<ReportField>& fields);
 // Prints the fields that have a text line, as "  label    text" (label padded to `width`).

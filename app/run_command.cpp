@@ -109,6 +109,10 @@ RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::str
   r.solution = solve_case(c, *r.space, ordering, say, &r.solver);
   r.solution.timings.setup += t_space;
   r.fields = r.space->report();
+  if (c.solver.estimate_condition) {
+    const std::vector<ReportField> kappa = condition_fields(r.solution);
+    r.fields.insert(r.fields.end(), kappa.begin(), kappa.end());
+  }
   t = clock::now();
   const std::vector<ReportField> checks = r.space->check_solution(r.solution.coefficients);
   r.seconds_checks = since(t);
@@ -178,6 +182,7 @@ int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr);
   c.allow_unverified_space = o.allow_unverified_space;
+  c.solver.estimate_condition = o.condition;
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string out = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);

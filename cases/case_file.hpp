@@ -78,6 +78,9 @@ struct CaseDescription {
     // residual computed in double can reach on large systems).
     double petsc_tolerance() const { return tolerance_given ? tolerance : 1e-10; }
     int max_iterations = 1000;
+    // --condition: estimate the Jacobi-scaled condition numbers of the stiffness and mass
+    // matrices (solver/condition_estimate.hpp); a command-line request, not a case key.
+    bool estimate_condition = false;
   } solver;
   // [adapt]: the estimate-mark-refine loop of `knotwork adapt` (command-line flags override).
   struct Adapt {

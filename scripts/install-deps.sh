@@ -5,6 +5,7 @@
 # preconditioner), MUMPS and OpenMPI; openmpi-bin's mpirun starts method = "petsc" on several
 # processes (and the tests that check it); time measures scripts/scaling.sh's memory.
 # libboost-dev: only Boost.Geometry's R-tree (header-only), the knot segments' support index.
+# libspectra-dev: Lanczos (header-only) for the condition estimates of run --condition.
 # Usage: scripts/install-deps.sh [--paraview] [--sanitize]
 #   --sanitize   also install clang 14 with its sanitizer and libFuzzer runtimes and LLVM's
 #                OpenMP (scripts/sanitize.sh, scripts/fuzz.sh; docs/RELIABILITY.md).
@@ -20,7 +21,7 @@ packages=(
   libvtk9-dev python3-vtk9
   catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libmuparser-dev libginac-dev libgmp-dev libboost-dev
-  libbenchmark-dev
+  libbenchmark-dev libspectra-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
   petsc-dev openmpi-bin time
 )

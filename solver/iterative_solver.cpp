@@ -1,6 +1,9 @@
 #include "solver/iterative_solver.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 namespace knotwork {
 
@@ -72,13 +75,25 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
       }
   }
   const double k_norm = row_sums.maxCoeff(), b_inf = b.lpNorm<Eigen::Infinity>();
+  {
+    Eigen::VectorXi row_count = Eigen::VectorXi::Zero(n);
+    const int* outer = lower.outerIndexPtr();
+    const int* inner = lower.innerIndexPtr();
+    for (Eigen::Index j = 0; j < lower.outerSize(); ++j)
+      for (int k = outer[j]; k < outer[j + 1]; ++k) {
+        ++row_count[inner[k]];
+        if (inner[k] != j) ++row_count[j];
+      }
+    const double m_eps = (row_count.maxCoeff() + 1) * std::numeric_limits<double>::epsilon();
+    stats.attainable = m_eps / (1 - std::min(m_eps, 0.5));
+  }
   auto backward_error = [&](const Eigen::VectorXd& residual) {
     return residual.lpNorm<Eigen::Infinity>() / (k_norm * x.lpNorm<Eigen::Infinity>() + b_inf);
   };
   // The recurrence's residual drifts from b - K x in the last digits: when it says converged
   // and the true residual does not, CG restarts from x with the true one.
-  // Stagnation: the backward error has not improved by 10% for 30 iterations (it sits at
-  // rounding level): stop and report instead of running to max_iterations.
+  // Stagnation (kStagnationFactor): no 10% improvement over a window that grows with the
+  // iteration count, and only near the attainable accuracy.
   double best = INFINITY;
   int best_at = 0;
   bool stagnated = false;
@@ -101,8 +116,10 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
       const double omega = backward_error(r);
       if (omega <= tolerance) break;
       if (omega < 0.9 * best) best = omega, best_at = stats.iterations;
-      if (stats.iterations - best_at >= 30) {
+      const int window = std::max(30, stats.iterations / 2);
+      if (stats.iterations - best_at >= window && best <= kStagnationFactor * stats.attainable) {
         stagnated = true;
+        stats.stagnation_window = stats.iterations - best_at;
         break;
       }
       preconditioner.apply(r, z);
@@ -116,9 +133,30 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
     stats.backward_error = backward_error(r);
     stats.converged = stats.backward_error <= tolerance;
     stats.stagnated = stagnated && !stats.converged;
+    stats.stop = stats.converged ? IterativeStats::Stop::kConverged
+                 : breakdown     ? IterativeStats::Stop::kBreakdown
+                 : stagnated     ? IterativeStats::Stop::kStagnated
+                                 : IterativeStats::Stop::kMaxIterations;
     if (stats.converged || breakdown) break;
   }
   return x;
+}
+
+std::string IterativeStats::stop_reason() const {
+  char b[200];
+  switch (stop) {
+    case Stop::kConverged:
+      return "converged";
+    case Stop::kStagnated:
+      std::snprintf(b, sizeof b, "stagnated: no 10%% progress over the last %d iterations within %.0e of the attainable "
+                                 "backward error %.1e", stagnation_window, kStagnationFactor, attainable);
+      return b;
+    case Stop::kMaxIterations:
+      return "reached max_iterations";
+    case Stop::kBreakdown:
+      return "broke down (p^T K p <= 0: the matrix or the preconditioner is not positive definite)";
+  }
+  return "";
 }
 
 }  // namespace knotwork

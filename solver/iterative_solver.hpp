@@ -30,8 +30,24 @@ struct IterativeStats {
   // same, so at a small tolerance the errors are the direct solve's (docs/SOLVERS.md).
   double backward_error = 0;
   bool converged = false;
-  bool stagnated = false;  // stopped early: no progress for 30 iterations (rounding level)
+  // Why the iteration ended: converged, stagnated at the attainable accuracy, the iteration
+  // limit, or a breakdown (p^T K p <= 0: K or the preconditioner is not positive definite).
+  enum class Stop { kConverged, kStagnated, kMaxIterations, kBreakdown } stop = Stop::kConverged;
+  bool stagnated = false;  // stop == kStagnated
+  // The backward error that rounding alone leaves in a computed residual: gamma_m = m eps /
+  // (1 - m eps), m the most nonzeros in a row of K. Stagnation is declared only within
+  // kStagnationFactor of it.
+  double attainable = 0;
+  int stagnation_window = 0;  // the iterations without progress that ended it (kStagnated)
+  std::string stop_reason() const;  // one phrase: "stagnated at ... for the last N iterations", ...
 };
+
+// CG is stopped as stagnated only when its backward error is within this factor of the
+// attainable accuracy (IterativeStats::attainable) and has not improved by 10% over the last
+// max(30, iterations / 2) iterations. Above that level a stalled residual says nothing: CG's
+// residual is not monotone, and the energy error keeps falling through long plateaus on
+// ill-conditioned systems, so the iteration goes on to max_iterations.
+constexpr double kStagnationFactor = 1e3;
 
 // CG on K (symmetric positive definite, lower triangle stored) from x = 0 until the
 // backward error of x is at most `tolerance` (measured with the true residual b - K x) or

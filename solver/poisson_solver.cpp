@@ -103,6 +103,21 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   }
   sol.timings.assembly = seconds_since(t);
   if (options.on_system) options.on_system(K, rhs);
+  if (options.estimate_condition) {
+    say("condition estimates");
+    sol.stiffness_spectrum = jacobi_scaled_spectrum(K);
+    // The mass matrix over the same free dofs (the matrix a reaction term would add).
+    PoissonForm mass = form;
+    mass.stiffness = 0;
+    mass.reaction = 1;
+    mass.load = false;
+    mass.nitsche = nullptr;
+    Eigen::SparseMatrix<double> M = lower_pattern_matrix(mesh, layout);
+    Eigen::VectorXd unused;
+    assemble_poisson(mesh, geometry, mass, layout, Eigen::VectorXd::Zero(mesh.num_functions()), options.quadrature, M,
+                     unused);
+    sol.mass_spectrum = jacobi_scaled_spectrum(M);
+  }
 
   sol.coefficients = fixed_values;
   if (layout.num_free() > 0 && options.iterative) {
@@ -116,9 +131,9 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     const Eigen::VectorXd x = preconditioned_cg(K, rhs, *pc, options.tolerance, options.max_iterations, sol.iterative);
     sol.timings.iterations = seconds_since(t);
     if (!sol.iterative.converged) {
-      char b[200];
-      std::snprintf(b, sizeof b, "CG stopped after %d iterations%s at backward error %.3e (relative residual %.3e), above the tolerance %.1e",
-                    sol.iterative.iterations, sol.iterative.stagnated ? " (no progress in the last 30)" : "",
+      char b[400];
+      std::snprintf(b, sizeof b, "CG stopped after %d iterations (%s) at backward error %.3e (relative residual %.3e), above the tolerance %.1e",
+                    sol.iterative.iterations, sol.iterative.stop_reason().c_str(),
                     sol.iterative.backward_error, sol.iterative.relative_residual, options.tolerance);
       throw NotConverged(b);
     }

@@ -8,6 +8,7 @@
 #include "basis/core/bezier_mesh.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/geometry_map.hpp"
+#include "solver/condition_estimate.hpp"
 #include "solver/iterative_solver.hpp"
 #include "solver/linear_solver.hpp"
 #include "solver/poisson_problem.hpp"
@@ -44,6 +45,10 @@ struct PoissonSolveOptions {
   // Called with the assembled system (lower triangle of K over the free dofs, and F)
   // before it is factored: for inspecting or exporting it, or benchmarking solvers on it.
   std::function<void(const Eigen::SparseMatrix<double>&, const Eigen::VectorXd&)> on_system;
+  // Also estimate the extreme eigenvalues of the Jacobi-scaled stiffness and mass matrices
+  // over the free dofs (PoissonSolution::stiffness_spectrum, mass_spectrum): two Lanczos
+  // runs and a factorization each, so off by default.
+  bool estimate_condition = false;
 };
 
 struct PoissonSolution {
@@ -53,6 +58,7 @@ struct PoissonSolution {
   long matrix_nonzeros = 0;      // stored (lower triangle)
   CholeskyStats cholesky;
   IterativeStats iterative;  // the iterative path's count and final relative residual
+  SpectrumEstimate stiffness_spectrum, mass_spectrum;  // with estimate_condition
   std::optional<ErrorNorms> errors;
   Eigen::VectorXd cell_h1_squared;  // with cell_errors: where the error sits (sums to h1_semi^2)
   PoissonTimings timings;

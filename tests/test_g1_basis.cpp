@@ -5,6 +5,7 @@
 
 #include <Eigen/QR>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -147,6 +148,17 @@ double constant_reproduction_residual(const G1Basis& b) {
   return (M * x - one).cwiseAbs().maxCoeff();
 }
 
+// The residual that rounding leaves in a basis whose functions are exact or backward-stable
+// local null vectors combined by Householder QR within each vertex and edge (g1_basis): the
+// relative residual of conditions (2)-(3) is a backward error of the local computation, at most
+// a small multiple of m eps with m the local system's columns (the most coefficients of one
+// function); 10 m eps is the bound stated here.
+double local_rounding_bound(const G1Basis& b) {
+  size_t m = 0;
+  for (const auto& f : b.functions) m = std::max(m, f.coefficients.size());
+  return 10.0 * static_cast<double>(m) * std::numeric_limits<double>::epsilon();
+}
+
 struct Checked {
   long functions, dimension, rank, pair, coupled;
   double residual;
@@ -167,7 +179,7 @@ Checked check_basis(const QuadMesh& m, const GluingData& g, int k, int r, bool f
   REQUIRE(c.functions == b.unknowns() - qr.rank());
   REQUIRE(c.functions == c.dimension);
   REQUIRE(c.rank == c.functions);
-  REQUIRE(c.residual <= 1e-11);
+  REQUIRE(c.residual <= local_rounding_bound(b));
   check_supports(m, b);
   REQUIRE(constant_reproduction_residual(b) < 1e-10);
   return c;
@@ -198,7 +210,7 @@ TEST_CASE("Section 8: 6 functions at gamma, 4 at each delta_i, 5 per edge tau_i,
   for (const auto& [e, count] : per_edge) REQUIRE(count == 5);
   REQUIRE(others == 3 * 36);
   REQUIRE(b.counts[3] + b.counts[4] == 0);
-  REQUIRE(g1_residual_max(m, g, b) <= 1e-15);  // exact null spaces, rounded once
+  REQUIRE(g1_residual_max(m, g, b) <= local_rounding_bound(b));  // exact null spaces, orthonormalized in double
   REQUIRE(g1_basis_rank(b) == 141);
   check_supports(m, b);
 }
