@@ -136,10 +136,13 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
   // A closed surface has no boundary cell anywhere; a part may simply hold none.
   double boundary_sides = has_boundary(mesh) ? 1 : 0;
   sum_over_ranks(&boundary_sides, 1);
-  if (problem.reaction == 0 && boundary_sides == 0)
-    throw std::invalid_argument("[solver] method = \"petsc\" does not solve closed surfaces yet (their zero-mean "
-                                "solution needs the whole mass matrix); use method = \"direct\" or \"iterative\"");
+  const bool zero_mean = problem.reaction == 0 && boundary_sides == 0;
+  if (zero_mean && given)
+    throw std::invalid_argument("[solver] method = \"petsc\" solves closed surfaces only with the space built whole on "
+                                "every rank (their zero-mean solution needs the whole mass matrix), and this family "
+                                "split it; use method = \"direct\" or \"iterative\"");
   PoissonSolution sol;
+  sol.zero_mean = zero_mean;
   sol.num_functions = part.global_functions;
   sol.distributed.ranks = world.size;
   PoissonForm form;
@@ -153,6 +156,16 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
   auto t = clock::now();
   std::vector<std::pair<int, double>> dirichlet;  // global function, value; sorted
   on_all_ranks([&] { dirichlet = project_dirichlet_over_ranks(mesh, geometry, problem, options.quadrature, part); });
+  // A closed surface: as solve_poisson does, on every rank (each holds the whole mesh): the
+  // constant 1 from the mass matrix, one coefficient pinned to 0, the load with f's mean removed.
+  ZeroMeanData mean;
+  if (zero_mean) {
+    on_all_ranks([&] { mean = zero_mean_data(mesh, geometry, form, options.quadrature, options.ordering); });
+    dirichlet = {{mean.pin, 0.0}};
+    sol.area = mean.area;
+    sol.source_mean = mean.source_mean;
+    form.load = false;
+  }
   std::vector<int> fixed_functions(dirichlet.size());
   for (size_t k = 0; k < dirichlet.size(); ++k) fixed_functions[k] = dirichlet[k].first;
   // Free dofs are numbered globally in function order: a free function's row is its number
@@ -217,6 +230,12 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
       // The Neumann terms of the rank's cells.
       Eigen::VectorXd neumann = Eigen::VectorXd::Zero(layout.num_free());
       add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, neumann, mine);
+      if (zero_mean)  // the compatible load, once: each rank adds its own rows
+        for (int d = 0; d < layout.num_free(); ++d) {
+          const int g = layout.function_of_dof[d];
+          if (g >= part.first_owned_function && g < part.last_owned_function)
+            neumann[d] += mean.load[g] - mean.source_mean * mean.integrals[g];
+        }
       std::vector<int> rows;
       std::vector<double> values;
       for (int d = 0; d < layout.num_free(); ++d)
@@ -281,15 +300,21 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
     }
     for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = r.solution[d];
   }
+  if (zero_mean) sol.coefficients -= (mean.integrals.dot(sol.coefficients) / sol.area) * mean.one;
   if (!sol.coefficients.allFinite()) throw std::runtime_error("the discrete solution has non-finite values");
 
   if (options.compute_errors && problem.exact) {
     say("error norms");
     t = clock::now();
+    if (zero_mean) {
+      double integral = 0;
+      on_all_ranks([&] { integral = exact_integral(mesh, geometry, *problem.exact, options.quadrature); });
+      sol.exact_mean = integral / sol.area;
+    }
     std::array<double, 2> squares{0, 0};
     on_all_ranks([&] {
       squares = squared_errors(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature, mine,
-                               options.cell_errors ? &sol.cell_h1_squared : nullptr);
+                               options.cell_errors ? &sol.cell_h1_squared : nullptr, sol.exact_mean);
     });
     sum_over_ranks(squares.data(), 2);
     // A whole mesh on every rank gets every cell's error (a part has only its own cells').

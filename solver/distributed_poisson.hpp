@@ -18,8 +18,9 @@ namespace knotwork {
 // PETSc solves, and each rank gets back the values of its mesh's functions (with a whole mesh:
 // all of them); the error norms are summed over the ranks' cells. The returned coefficients
 // are per function of `mesh`. Collective: every rank calls it, and a failure on one rank (a bad
-// cell, a source not finite) is thrown on all of them. A closed surface (zero-mean solution) is
-// refused (std::invalid_argument).
+// cell, a source not finite) is thrown on all of them. A closed surface (zero-mean solution)
+// is solved as solve_poisson does (the mass matrix's solve for the constant 1 on every rank, so
+// a whole mesh only: with a part it is refused, std::invalid_argument).
 // Runs step on every rank; a failure on any rank is thrown on all of them, the lowest failing
 // rank's (InputError, GeometryError, std::invalid_argument kept as such): no rank is left
 // waiting in a collective call the others never reach. Collective; also a barrier.

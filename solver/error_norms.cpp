@@ -90,10 +90,10 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
 std::array<double, 2> squared_errors(const BezierMesh& mesh, const GeometryMap& geometry,
                                     const Eigen::VectorXd& coefficients, const ExactSolution& exact,
                                     const QuadratureOptions& quadrature, CellRange cells,
-                                    Eigen::VectorXd* h1_semi_squared_per_cell) {
+                                    Eigen::VectorXd* h1_semi_squared_per_cell, double exact_offset) {
   Eigen::VectorXd cell_l2, cell_semi;
   const int last = cells.last < 0 ? mesh.num_cells() : cells.last;
-  cell_squared_errors(mesh, geometry, coefficients, exact, quadrature, 0, cells.first, last, cell_l2, cell_semi);
+  cell_squared_errors(mesh, geometry, coefficients, exact, quadrature, exact_offset, cells.first, last, cell_l2, cell_semi);
   double l2 = 0, semi = 0;
   for (int c = cells.first; c < last; ++c) l2 += cell_l2[c], semi += cell_semi[c];
   if (h1_semi_squared_per_cell) *h1_semi_squared_per_cell = std::move(cell_semi);

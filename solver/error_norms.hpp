@@ -33,7 +33,7 @@ ErrorNorms error_norms(const BezierMesh& mesh, const GeometryMap& geometry,
 std::array<double, 2> squared_errors(const BezierMesh& mesh, const GeometryMap& geometry,
                                     const Eigen::VectorXd& coefficients, const ExactSolution& exact,
                                     const QuadratureOptions& quadrature, CellRange cells,
-                                    Eigen::VectorXd* h1_semi_squared_per_cell = nullptr);
+                                    Eigen::VectorXd* h1_semi_squared_per_cell = nullptr, double exact_offset = 0);
 
 // Integral of the exact solution over the domain (or surface), by the error rule.
 double exact_integral(const BezierMesh& mesh, const GeometryMap& geometry, const ExactSolution& exact,

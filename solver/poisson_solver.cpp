@@ -16,17 +16,6 @@ bool has_boundary(const BezierMesh& mesh) {
   return false;
 }
 
-namespace {
-
-// Closed surface, reaction 0: the mass matrix gives the constant 1 in the basis (M one = the
-// integrals of the functions), hence the area and the mean of f; the stiffness matrix with
-// one coefficient pinned gives a solution, shifted to zero mean.
-struct ZeroMeanData {
-  Eigen::VectorXd one, integrals, load;
-  double area = 0, source_mean = 0;
-  int pin = 0;
-};
-
 ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& load_form,
                             const QuadratureOptions& quadrature, Ordering ordering) {
   const int n = mesh.num_functions();
@@ -47,8 +36,6 @@ ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry,
   z.pin = static_cast<int>(pin);
   return z;
 }
-
-}  // namespace
 
 PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry,
                               const PoissonProblem& problem, const PoissonSolveOptions& options) {

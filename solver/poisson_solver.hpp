@@ -91,6 +91,19 @@ struct NotConverged : std::runtime_error {
 // Whether some cell side lies on the boundary (false: a closed surface).
 bool has_boundary(const BezierMesh& mesh);
 
+// Closed surface, reaction 0: the mass matrix gives the constant 1 in the basis (M one = the
+// integrals of the functions), hence the area and the mean of f; the stiffness matrix with
+// one coefficient pinned (`pin`, the largest entry of `one`) gives a solution, shifted to zero
+// mean. `load` is the load of `load_form`'s source over every function. The whole mesh.
+struct ZeroMeanData {
+  Eigen::VectorXd one, integrals, load;
+  double area = 0, source_mean = 0;
+  int pin = 0;
+};
+struct PoissonForm;
+ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& load_form,
+                            const QuadratureOptions& quadrature, Ordering ordering);
+
 PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry,
                               const PoissonProblem& problem, const PoissonSolveOptions& options);
 

@@ -11,6 +11,7 @@
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
 #include "solver/error_norms.hpp"
+#include "tests/rounding_bounds.hpp"
 
 using namespace knotwork;
 
@@ -120,18 +121,29 @@ TEST_CASE("The estimator vanishes when the discrete solution is exact", "[adapti
   knot_segments_section(c).segments = {{true, 0.3, 0.0, 0.75, 1}, {false, 0.6, 0.1, 0.9, 1}};
   const auto d_space = build_space(c);
   const SplineSpace& d = *d_space;
-  const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
-  REQUIRE(s.errors->h1_semi < 1e-11);
+  // u_h - u is rounding alone (tests/rounding_bounds.hpp); the estimator applied to it is at most
+  // an inverse-inequality constant times its H1 seminorm over the smallest cell: 1e3 / h_min is
+  // the stated bound (degree 2: the constant is a few tens).
+  double h_min = INFINITY;
+  for (int e = 0; e < d.mesh().num_cells(); ++e)
+    h_min = std::min({h_min, d.mesh().cell(e).u1 - d.mesh().cell(e).u0, d.mesh().cell(e).v1 - d.mesh().cell(e).v0});
+  PoissonSolveOptions so;
+  so.quadrature = c.quadrature;
+  const auto solve = [&] {
+    const rounding_test::Reproduction r = rounding_test::solve_reproducing(d.mesh(), d.geometry(), c.problem, so);
+    REQUIRE_REPRODUCED(r);
+    return std::pair{solve_case(c, d, Ordering::kAmd, {}), 1e3 / h_min * r.h1_bound()};
+  };
+  const auto [s, bound] = solve();
   const ErrorIndicators ind = residual_indicators(d.mesh(), d.geometry(), s.coefficients, c.problem);
-  CHECK(std::sqrt(ind.total()) < 1e-9);
-  CHECK(ind.max_gradient_jump < 1e-9);
+  CHECK(std::sqrt(ind.total()) <= bound);
+  CHECK(ind.max_gradient_jump <= bound);
   // With Nitsche's method the trace is the Galerkin solution's, and still u's (consistency): the
   // Dirichlet term h_E^-1 ||g - u_h||^2 vanishes too.
   c.problem.dirichlet_method = DirichletMethod::kNitsche;
-  const PoissonSolution weak = solve_case(c, d, Ordering::kAmd, {});
-  REQUIRE(weak.errors->h1_semi < 1e-11);
+  const auto [weak, weak_bound] = solve();
   const ErrorIndicators weak_ind = residual_indicators(d.mesh(), d.geometry(), weak.coefficients, c.problem);
-  CHECK(std::sqrt(weak_ind.total()) < 1e-9);
+  CHECK(std::sqrt(weak_ind.total()) <= weak_bound);
 }
 
 TEST_CASE("The estimator bounds the error on the L-shape, and jumps appear only at the C0 fold", "[adaptive]") {
@@ -218,7 +230,7 @@ TEST_CASE("Adaptive knot segments on the L-shape: H1 error ~ N^(-p/2), uniform ~
     WARN("L-shape p = " << p << ": " << steps.size() << " steps to " << steps.back().dofs << " dofs, H1 error "
                         << steps.back().h1_semi << ", rate over the last half " << rate << "; uniform: "
                         << uniform_dofs << " dofs, H1 error " << uniform_error);
-    CHECK(std::abs(rate - p / 2.0) < 0.15);
+    CHECK(rate > p / 2.0 - 0.15);  // one-sided: the optimal rate less 0.15
     CHECK(steps.back().h1_semi < uniform_error / 5);
     // Reliability and efficiency (Verfurth): c |u - u_h|_1 <= eta <= C |u - u_h|_1 with
     // constants independent of the mesh, so the ratio eta / error must not drift as the mesh
@@ -244,7 +256,7 @@ TEST_CASE("Adaptive knot segments with Nitsche's method on the L-shape: H1 error
   INFO(steps.size() << " steps to " << steps.back().dofs << " dofs, H1 error " << steps.back().h1_semi
                     << ", rate over the last half " << rate << "; eta / error halfway " << ratio(steps.size() / 2)
                     << ", last " << ratio(steps.size() - 1));
-  CHECK(std::abs(rate - 1.0) < 0.15);  // p = 2
+  CHECK(rate > 1.0 - 0.15);  // p = 2: the optimal rate less 0.15
   CHECK(ratio(steps.size() - 1) / ratio(steps.size() / 2) < 2.0);
   CHECK(ratio(steps.size() - 1) / ratio(steps.size() / 2) > 0.5);
   // The Dirichlet term is there: on a mesh that does not resolve u, u_h misses g.

@@ -24,6 +24,7 @@
 #include "solver/poisson_solver.hpp"
 #include "tests/cli_sandbox.hpp"
 #include "tests/g1_test_meshes.hpp"
+#include "tests/rounding_bounds.hpp"
 
 using namespace knotwork;
 using namespace cli_test;
@@ -59,8 +60,8 @@ double rate(double e0, double e1, double h0, double h1) { return std::log(e0 / e
 // analysis-suitable (Collin-Sangalli-Takacs 2016); the symmetric data are not at an
 // extraordinary vertex, and their locked strip along the first half of each edge is expected to
 // cost half an order (the two-patch model of issue #22 gives 4.50 and 3.57 with these data):
-// for k = 4 the expected rates are 4.5 (L2) and 3.5 (H1). Windows
-// of 0.2 around them between the last two levels, and at least k, k - 1 over the study.
+// for k = 4 the expected rates are 4.5 (L2) and 3.5 (H1). At least those less 0.2 between the
+// last two levels (one-sided: a better rate is no failure), and at least k, k - 1 over the study.
 // (Observed: 4.53 and 3.57 between levels 2 and 3.)
 TEST_CASE("G1 Poisson, case (a) with the earlier symmetric_c1 data: half an order lost, C1", "[g1][cases]") {
   CaseDescription c = load_case(kSource + "/cases/g1_three_quads.toml");
@@ -73,8 +74,8 @@ TEST_CASE("G1 Poisson, case (a) with the earlier symmetric_c1 data: half an orde
   }
   const double l2_rate = rate(m[2].l2, m[3].l2, m[2].h, m[3].h), h1_rate = rate(m[2].h1, m[3].h1, m[2].h, m[3].h);
   INFO("rates between levels 2 and 3: L2 " << l2_rate << ", H1 " << h1_rate);
-  REQUIRE(std::abs(l2_rate - 4.5) < 0.2);
-  REQUIRE(std::abs(h1_rate - 3.5) < 0.2);
+  REQUIRE(l2_rate > 4.5 - 0.2);  // one-sided: a better rate is no failure
+  REQUIRE(h1_rate > 3.5 - 0.2);
   // Over the whole study: at least h^4 in L2 and h^3 in H1 on average.
   REQUIRE(rate(m[0].l2, m[3].l2, m[0].h, m[3].h) > 4);
   REQUIRE(rate(m[0].h1, m[3].h1, m[0].h, m[3].h) > 3);
@@ -240,9 +241,7 @@ TEST_CASE("Laplace-Beltrami on the G1 sphere with the earlier symmetric data: ra
   const double l2_rate = rate(m[1].l2, m[2].l2, m[1].h, m[2].h), h1_rate = rate(m[1].h1, m[2].h1, m[1].h, m[2].h);
   INFO("rates between levels 1 and 2: L2 " << l2_rate << ", H1 " << h1_rate);
   REQUIRE(l2_rate > 4.5 - 0.2);
-  REQUIRE(l2_rate < 5 + 0.2);
   REQUIRE(h1_rate > 3.5 - 0.2);
-  REQUIRE(h1_rate < 4 + 0.2);
 }
 
 // Theory (Collin-Sangalli-Takacs 2016; Kapl-Sangalli-Takacs 2017, 2019): with analysis-
@@ -403,14 +402,14 @@ TEST_CASE("Floating-point gluing data: local SVDs beyond the dense limit, and co
   REQUIRE(rate(m3.h1, m4.h1, m3.h, m4.h) >= k - 1);
 }
 
-// The torus (all valence 4: a = 0, b = -1, c = 1) from the first refinement: 0.3 either way
-// around the optimal 5 and 4 (pre-asymptotic). (Observed 5.07/4.07.)
+// The torus (all valence 4: a = 0, b = -1, c = 1) from the first refinement: at least the
+// optimal 5 and 4 less 0.3 (pre-asymptotic). (Observed 5.07/4.07.)
 TEST_CASE("Torus: optimal rates from the first refinement", "[g1][cases]") {
   const CaseDescription c = load_case(kSource + "/cases/g1_torus.toml");
   const Measured m0 = solve(c, 0), m1 = solve(c, 1);
   INFO("L2 " << m0.l2 << " -> " << m1.l2 << ", H1 " << m0.h1 << " -> " << m1.h1);
-  REQUIRE(std::abs(rate(m0.l2, m1.l2, m0.h, m1.h) - 5) < 0.3);
-  REQUIRE(std::abs(rate(m0.h1, m1.h1, m0.h, m1.h) - 4) < 0.3);
+  REQUIRE(rate(m0.l2, m1.l2, m0.h, m1.h) > 5 - 0.3);
+  REQUIRE(rate(m0.h1, m1.h1, m0.h, m1.h) > 4 - 0.3);
   REQUIRE(m1.jump < 1e-9);
 }
 
@@ -567,7 +566,10 @@ TEST_CASE("Defaults on random meshes of convex quads with valences 3 to 8: no re
   int highest_valence = 0;
   for (int trial = 0; trial < 4; ++trial) {
     const int n = 3;
-    std::uniform_real_distribution<double> jitter(-0.3 / n, 0.3 / n);
+    // Integer arithmetic on mt19937's output (which the standard fixes bit for bit): every
+    // standard library draws the same meshes (uniform_real_distribution's output is not fixed).
+    const unsigned steps = static_cast<unsigned>(0.3 / n * 1024);  // jitter in [-0.3/n, 0.3/n]
+    const auto jitter = [&](std::mt19937& g) { return (static_cast<double>(g() % (2 * steps + 1)) - steps) / 1024; };
     std::vector<Eigen::Vector3d> grid;
     for (int j = 0; j <= n; ++j)
       for (int i = 0; i <= n; ++i) {
@@ -623,7 +625,8 @@ TEST_CASE("Defaults on random meshes of convex quads with valences 3 to 8: no re
     REQUIRE(d.min_regularity_nodes > 0);
     const Measured m = solve(c, 0);
     REQUIRE(m.jump < 1e-9);
-    REQUIRE(m.l2 < 1e-10);
+    // u is in the space: what is left is rounding, bounded from the solve's condition estimates.
+    REQUIRE_REPRODUCED(rounding_test::solve_reproducing(d.mesh, *d.geometry, c.problem));
   }
   // Written with 6 decimals, the last mesh's edge midpoints leave their lines by rounding:
   // refused, naming a vertex (exactly collinear edges make a crossing vertex; nearly collinear

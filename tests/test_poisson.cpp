@@ -13,6 +13,7 @@
 #include "solver/linear_solver.hpp"
 #include "solver/poisson_solver.hpp"
 #include "solver/separable_cells.hpp"
+#include "tests/rounding_bounds.hpp"
 
 using namespace knotwork;
 
@@ -52,6 +53,14 @@ PoissonSolveOptions options_of(const CaseDescription& c) {
   return o;
 }
 
+// A solve that should reproduce u (a function of the space): its errors with the rounding bound
+// of tests/rounding_bounds.hpp.
+rounding_test::Reproduction reproduce(const CaseDescription& c) {
+  const auto d = build_space(c);
+  return rounding_test::solve_reproducing(d->mesh(), d->geometry(), c.problem, options_of(c));
+}
+
+
 ErrorNorms solve(const CaseDescription& c) {
   const auto d_space = build_space(c);
   const SplineSpace& d = *d_space;
@@ -86,32 +95,24 @@ TEST_CASE("Patch test: linear solutions are reproduced to roundoff", "[poisson]"
     INFO("degree " << p);
     // Polynomial maps: grad u . grad v det J is a polynomial of degree <= 2p-1 per direction,
     // integrated exactly by the default p+1 Gauss points, so u_h = u to roundoff.
-    for (const NurbsPatch& g : {lshape_patch(), bent}) {
-      const ErrorNorms e = solve(with_exact(g, p, 3, u));
-      REQUIRE(e.l2 < 1e-12);
-      REQUIRE(e.h1_semi < 1e-11);
-    }
+    for (const NurbsPatch& g : {lshape_patch(), bent}) REQUIRE_REPRODUCED(reproduce(with_exact(g, p, 3, u)));
     // Rational maps: the isoparametric space still contains u, but det J is rational; the
     // patch test holds up to quadrature error, which more points drive to roundoff.
     CaseDescription c = with_exact(quarter_annulus_patch(1, 2), p, 3, u);
     const ErrorNorms coarse_rule = solve(c);
     c.quadrature.points_u = c.quadrature.points_v = 16;
-    const ErrorNorms fine_rule = solve(c);
-    REQUIRE(fine_rule.l2 < 1e-12);
-    REQUIRE(fine_rule.h1_semi < 1e-11);
-    REQUIRE(fine_rule.l2 < coarse_rule.l2);
+    const rounding_test::Reproduction fine_rule = reproduce(c);
+    REQUIRE_REPRODUCED(fine_rule);
+    REQUIRE(fine_rule.errors.l2 < coarse_rule.l2);
   }
   // B-splines on an affine map, with Neumann data on two sides.
   CaseDescription c = with_exact(rectangle_patch(-1, 0, 2, 1), 1, 5, u);
   patch_space(c).rational = false;
   c.problem.boundary[1].kind = BoundaryKind::kNeumann;
   c.problem.boundary[2].kind = BoundaryKind::kNeumann;
-  const ErrorNorms r = solve(c);
-  REQUIRE(r.l2 < 1e-12);
-  REQUIRE(r.h1_semi < 1e-11);
+  REQUIRE_REPRODUCED(reproduce(c));
   // A quadratic polynomial is in every degree-2 space on the square.
-  const ErrorNorms q = solve(with_exact(rectangle_patch(0, 0, 1, 1), 2, 4, "x^2 - x*y + 0.5*y^2"));
-  REQUIRE(q.l2 < 1e-12);
+  REQUIRE_REPRODUCED(reproduce(with_exact(rectangle_patch(0, 0, 1, 1), 2, 4, "x^2 - x*y + 0.5*y^2")));
 }
 
 TEST_CASE("Optimal convergence on the unit square, p = 1..4", "[poisson][rates]") {
@@ -173,9 +174,7 @@ TEST_CASE("Knot-segment spaces through case files: patch test on the folded L-sh
   CaseDescription c = shipped("lshape_knot_segments");
   c.problem.exact = differentiate_exact_solution(Expression::parse("1 + 2*x - 3*y", "test"));
   c.problem.source = c.problem.exact->minus_laplacian;
-  const ErrorNorms patch = solve(c);
-  REQUIRE(patch.l2 < 1e-12);
-  REQUIRE(patch.h1_semi < 1e-11);
+  REQUIRE_REPRODUCED(reproduce(c));
   // The singular solution: segments toward the corner beat uniform refinement with more dofs.
   const CaseDescription local = shipped("lshape_knot_segments");
   CaseDescription uniform = shipped("lshape");
@@ -556,9 +555,7 @@ TEST_CASE("Nitsche's method: solutions in the space are reproduced to roundoff",
         CaseDescription c = with_exact(g, p, 3, "1 + 2*x - 3*y");
         c.problem.dirichlet_method = DirichletMethod::kNitsche;
         c.problem.nitsche_penalty = penalty;
-        const ErrorNorms e = solve(c);
-        REQUIRE(e.l2 < 1e-12);
-        REQUIRE(e.h1_semi < 1e-11);
+        REQUIRE_REPRODUCED(reproduce(c));
       }
       // A quadratic on the square, Dirichlet by Nitsche on two sides and Neumann on the others.
       CaseDescription c = with_exact(rectangle_patch(-1, 0, 2, 1), p, 4, "x^2 - x*y + 0.5*y^2 + 3");
@@ -567,9 +564,7 @@ TEST_CASE("Nitsche's method: solutions in the space are reproduced to roundoff",
       c.problem.nitsche_penalty = penalty;
       c.problem.boundary[1].kind = BoundaryKind::kNeumann;
       c.problem.boundary[2].kind = BoundaryKind::kNeumann;
-      const ErrorNorms e = solve(c);
-      REQUIRE(e.l2 < 1e-12);
-      REQUIRE(e.h1_semi < 1e-11);
+      REQUIRE_REPRODUCED(reproduce(c));
     }
 }
 

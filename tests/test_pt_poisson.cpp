@@ -17,6 +17,7 @@
 #include "solver/geometry_map.hpp"
 #include "quadrature/bernstein.hpp"
 #include "solver/input_error.hpp"
+#include "tests/rounding_bounds.hpp"
 
 using namespace knotwork;
 
@@ -119,9 +120,9 @@ TEST_CASE("PT Poisson: a solution in the space is reproduced to rounding", "[pt]
     const CaseDescription c = file.load();
     const auto d_space = build_space(c);
     const SplineSpace& d = *d_space;
-    const PoissonSolution s = solve_case(c, d, Ordering::kAmd, {});
-    REQUIRE(s.errors->l2 < 1e-11);
-    REQUIRE(s.errors->h1_semi < 1e-10);
+    PoissonSolveOptions so;
+    so.quadrature = c.quadrature;
+    REQUIRE_REPRODUCED(rounding_test::solve_reproducing(d.mesh(), d.geometry(), c.problem, so));
   }
 }
 
@@ -148,16 +149,16 @@ TEST_CASE("PT Poisson: without the numerical change of basis the solver refuses 
     const PatchGeometryMap geometry(mesh, c.geometry);
     PoissonSolveOptions so;
     so.quadrature = c.quadrature;
-    return solve_poisson(mesh, geometry, c.problem, so);
+    return rounding_test::solve_reproducing(mesh, geometry, c.problem, so);
   };
   const RectangularPartition tmesh(cells);
   for (bool change_of_basis : {false, true}) {
     INFO("make_numerically_independent: " << change_of_basis);
     PtSplineBasis full = pt_spline_basis(tmesh, 2, 2, PtExtension::kVertical);
     if (change_of_basis) {
-      const PoissonSolution s = solve_on(std::move(full), tmesh, true);
-      REQUIRE(s.errors->l2 < 1e-11);
-      REQUIRE(s.cholesky.refinement_correction < 1e-10);
+      const rounding_test::Reproduction s = solve_on(std::move(full), tmesh, true);
+      REQUIRE_REPRODUCED(s);
+      REQUIRE(s.refinement_correction <= s.correction_bound());
     } else {
       // Refused by the Dirichlet projection (its boundary traces are as nearly dependent), or
       // else by the solver's refinement check.
@@ -167,9 +168,9 @@ TEST_CASE("PT Poisson: without the numerical change of basis the solver refuses 
   }
   PtSplineBasis minimal = pt_spline_basis(tmesh, 2, 2);
   REQUIRE(minimal.extension == PtExtension::kMinimal);
-  const PoissonSolution s = solve_on(std::move(minimal), tmesh, false);
-  REQUIRE(s.errors->l2 < 1e-11);
-  REQUIRE(s.cholesky.refinement_correction < 1e-10);
+  const rounding_test::Reproduction s = solve_on(std::move(minimal), tmesh, false);
+  REQUIRE_REPRODUCED(s);
+  REQUIRE(s.refinement_correction <= s.correction_bound());
 }
 
 TEST_CASE("PT Poisson: optimal rates when every cell of a T-mesh is halved", "[pt][poisson]") {
@@ -268,5 +269,5 @@ TEST_CASE("PT Poisson on the L-shape: adaptive H1 rate N^(-p/2) at p = 2", "[pt]
   const double rate = fitted_h1_rate(steps, first);
   INFO("H1 rate over " << steps.size() - first << " steps from " << steps[first].dofs << " to " << steps.back().dofs
                        << " dofs: " << rate);
-  REQUIRE(std::abs(rate - 1.0) <= 0.15);
+  REQUIRE(rate >= 1.0 - 0.15);  // one-sided: the optimal rate less 0.15
 }
