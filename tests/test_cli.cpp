@@ -62,6 +62,30 @@ TEST_CASE("a staging folder left by a killed run is removed by the next run", "[
   REQUIRE(fs::exists(box.dir() / "res/solution.vtu"));
 }
 
+TEST_CASE("run and converge with --condition report the Jacobi-scaled condition numbers, refused with petsc", "[cli][condition]") {
+  Sandbox box;
+  box.file("good.toml", kGood);
+  Result r = box.run("run good.toml --condition --json -q --no-output");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  REQUIRE(r.out.find("\"condition\": {") != std::string::npos);
+  REQUIRE(r.out.find("\"stiffness\": ") != std::string::npos);
+  REQUIRE(r.out.find("\"mass\": ") != std::string::npos);
+  r = box.run("run good.toml --condition -q --no-output");
+  REQUIRE(r.code == 0);
+  REQUIRE(r.out.find("kappa    stiffness ") != std::string::npos);
+  r = box.run("converge good.toml --levels 2 --condition -q --out conv");
+  REQUIRE(r.code == 0);
+  REQUIRE(r.out.find("condition.stiffness") != std::string::npos);
+  // Without it, nothing is estimated (the estimate costs a factorization and two Lanczos runs).
+  r = box.run("run good.toml --json -q --no-output");
+  REQUIRE(r.out.find("\"condition\"") == std::string::npos);
+  r = box.run("run good.toml --condition --solver petsc -q --no-output");
+  REQUIRE(r.code != 0);
+  REQUIRE(r.err.find("--condition") != std::string::npos);
+  REQUIRE(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+}
+
 TEST_CASE("converge writes table, JSON, plot and collection", "[cli]") {
   Sandbox box;
   box.file("good.toml", kGood);
