@@ -31,7 +31,9 @@ numerical='^test_(poisson|g1_basis|g1_space|g1_poisson|g1_refine|pt_poisson|semi
 numerical+='|^test_g1_cases:(Defaults on random|Analysis-suitable data, (pentagon|unit square|L-shape|valences 8))'
 slow='H1 error ~ N|adaptive H1 rate|Random refinement sequences|Adaptive LR on the L-shape'
 
-default="$(corename "")"
+# The kernel the full suite ran under: the machine's own choice, or the one the environment
+# already forces (some machines set OPENBLAS_CORETYPE for CPUs older OpenBLAS builds mishandle).
+default="$(corename "${OPENBLAS_CORETYPE:-}")"
 echo "test_blas_kernels: this machine's OpenBLAS kernel is $default"
 failed=0
 for kernel in "${kernels[@]}"; do
