@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <tuple>
+#include <utility>
 
 namespace knotwork {
 
@@ -23,19 +23,18 @@ void set_value(Json& j, const std::string& key, const ReportValue& v) {
 std::vector<ReportField> condition_fields(const PoissonSolution& s) {
   std::vector<ReportField> out;
   std::string text, failure;
-  for (const auto& [name, label, e] : {std::tuple{"stiffness", "kappa(K)", &s.stiffness_spectrum},
-                                       std::tuple{"mass", "kappa(M)", &s.mass_spectrum}}) {
+  for (const auto& [name, e] : {std::pair{"stiffness", &s.stiffness_spectrum}, std::pair{"mass", &s.mass_spectrum}}) {
     char line[160];
-    if (e->computed) {
+    if (e->computed)
       std::snprintf(line, sizeof line, "%s%s %.3e (eigenvalues %.3e to %.3e)", text.empty() ? "" : ", ", name,
                     e->condition(), e->smallest, e->largest);
-      out.push_back({.key = std::string("condition.") + name, .value = e->condition(), .label = label, .column = true, .width = 20});
-    } else {
+    else {
       std::snprintf(line, sizeof line, "%s%s not estimated (%s)", text.empty() ? "" : ", ", name, e->failure.c_str());
-      out.push_back({.key = std::string("condition.") + name, .value = ReportValue{}, .label = label, .column = true, .width = 20});
       failure += (failure.empty() ? "" : "; ") + std::string(name) + ": " + e->failure;
     }
     text += line;
+    out.push_back({.key = std::string("condition.") + name,
+                   .value = e->computed ? ReportValue(e->condition()) : ReportValue{}, .column = true, .width = 20});
   }
   if (!failure.empty()) out.push_back({.key = "condition.failure", .value = failure});
   out.push_back({.key = "condition.scaling", .value = std::string("jacobi"),

@@ -11,7 +11,7 @@ namespace knotwork {
 
 // The condition estimates of a solve made with estimate_condition, as fields: JSON
 // condition.stiffness / condition.mass (null when not estimated: condition.failure says why),
-// a text line, and converge's columns kappa(K), kappa(M).
+// a text line, and two columns of converge's table.
 std::vector<ReportField> condition_fields(const PoissonSolution& s);
 // Adds the fields to a JSON object ("a.b" keys become member b of object a).
 void add_fields(Json& object, const std::vector<ReportField>& fields);

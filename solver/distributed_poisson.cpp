@@ -234,7 +234,7 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
         for (int d = 0; d < layout.num_free(); ++d) {
           const int g = layout.function_of_dof[d];
           if (g >= part.first_owned_function && g < part.last_owned_function)
-            neumann[d] += mean.load[g] - mean.source_mean * mean.integrals[g];
+            neumann[d] += mean.compatible_load(g);
         }
       std::vector<int> rows;
       std::vector<double> values;
@@ -300,7 +300,7 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
     }
     for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = r.solution[d];
   }
-  if (zero_mean) sol.coefficients -= (mean.integrals.dot(sol.coefficients) / sol.area) * mean.one;
+  if (zero_mean) mean.remove_mean(sol.coefficients);
   if (!sol.coefficients.allFinite()) throw std::runtime_error("the discrete solution has non-finite values");
 
   if (options.compute_errors && problem.exact) {

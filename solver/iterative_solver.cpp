@@ -61,9 +61,10 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
     stats.converged = true;
     return x;
   }
-  // ||K||_inf: the largest absolute row sum (lower triangle stored: each entry counts in its
-  // row and, off the diagonal, in its column's row).
+  // ||K||_inf: the largest absolute row sum, and the most nonzeros in a row (lower triangle
+  // stored: each entry counts in its row and, off the diagonal, in its column's row).
   Eigen::VectorXd row_sums = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXi row_count = Eigen::VectorXi::Zero(n);
   {
     const int* outer = lower.outerIndexPtr();
     const int* inner = lower.innerIndexPtr();
@@ -71,22 +72,13 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
     for (Eigen::Index j = 0; j < lower.outerSize(); ++j)
       for (int k = outer[j]; k < outer[j + 1]; ++k) {
         row_sums[inner[k]] += std::abs(value[k]);
-        if (inner[k] != j) row_sums[j] += std::abs(value[k]);
+        ++row_count[inner[k]];
+        if (inner[k] != j) row_sums[j] += std::abs(value[k]), ++row_count[j];
       }
   }
   const double k_norm = row_sums.maxCoeff(), b_inf = b.lpNorm<Eigen::Infinity>();
-  {
-    Eigen::VectorXi row_count = Eigen::VectorXi::Zero(n);
-    const int* outer = lower.outerIndexPtr();
-    const int* inner = lower.innerIndexPtr();
-    for (Eigen::Index j = 0; j < lower.outerSize(); ++j)
-      for (int k = outer[j]; k < outer[j + 1]; ++k) {
-        ++row_count[inner[k]];
-        if (inner[k] != j) ++row_count[j];
-      }
-    const double m_eps = (row_count.maxCoeff() + 1) * std::numeric_limits<double>::epsilon();
-    stats.attainable = m_eps / (1 - std::min(m_eps, 0.5));
-  }
+  const double m_eps = (row_count.maxCoeff() + 1) * std::numeric_limits<double>::epsilon();
+  stats.attainable = m_eps / (1 - std::min(m_eps, 0.5));
   auto backward_error = [&](const Eigen::VectorXd& residual) {
     return residual.lpNorm<Eigen::Infinity>() / (k_norm * x.lpNorm<Eigen::Infinity>() + b_inf);
   };
@@ -132,7 +124,6 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
     stats.relative_residual = r.norm() / b_norm;
     stats.backward_error = backward_error(r);
     stats.converged = stats.backward_error <= tolerance;
-    stats.stagnated = stagnated && !stats.converged;
     stats.stop = stats.converged ? IterativeStats::Stop::kConverged
                  : breakdown     ? IterativeStats::Stop::kBreakdown
                  : stagnated     ? IterativeStats::Stop::kStagnated

@@ -33,13 +33,12 @@ struct IterativeStats {
   // Why the iteration ended: converged, stagnated at the attainable accuracy, the iteration
   // limit, or a breakdown (p^T K p <= 0: K or the preconditioner is not positive definite).
   enum class Stop { kConverged, kStagnated, kMaxIterations, kBreakdown } stop = Stop::kConverged;
-  bool stagnated = false;  // stop == kStagnated
   // The backward error that rounding alone leaves in a computed residual: gamma_m = m eps /
   // (1 - m eps), m the most nonzeros in a row of K. Stagnation is declared only within
   // kStagnationFactor of it.
   double attainable = 0;
   int stagnation_window = 0;  // the iterations without progress that ended it (kStagnated)
-  std::string stop_reason() const;  // one phrase: "stagnated at ... for the last N iterations", ...
+  std::string stop_reason() const;  // one phrase: "converged", "reached max_iterations", ...
 };
 
 // CG is stopped as stagnated only when its backward error is within this factor of the

@@ -82,8 +82,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     PoissonForm stiffness = form;
     stiffness.load = false;
     assemble_poisson(mesh, geometry, stiffness, layout, fixed_values, options.quadrature, K, rhs);
-    const Eigen::VectorXd compatible = zero_mean.load - zero_mean.source_mean * zero_mean.integrals;
-    for (int d = 0; d < layout.num_free(); ++d) rhs[d] = compatible[layout.function_of_dof[d]];
+    for (int d = 0; d < layout.num_free(); ++d) rhs[d] = zero_mean.compatible_load(layout.function_of_dof[d]);
   } else {
     assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, rhs);
     add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs);
@@ -138,7 +137,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     sol.timings.solve = sol.cholesky.solve_seconds;
     for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = x[d];
   }
-  if (sol.zero_mean) sol.coefficients -= (zero_mean.integrals.dot(sol.coefficients) / sol.area) * zero_mean.one;
+  if (sol.zero_mean) zero_mean.remove_mean(sol.coefficients);
   if (!sol.coefficients.allFinite())
     throw std::runtime_error("the discrete solution has non-finite values");
 

@@ -99,6 +99,10 @@ struct ZeroMeanData {
   Eigen::VectorXd one, integrals, load;
   double area = 0, source_mean = 0;
   int pin = 0;
+  // The load of function f with f's mean removed (compatible with the pinned system).
+  double compatible_load(int f) const { return load[f] - source_mean * integrals[f]; }
+  // The coefficients shifted by a constant to zero mean.
+  void remove_mean(Eigen::VectorXd& coefficients) const { coefficients -= (integrals.dot(coefficients) / area) * one; }
 };
 struct PoissonForm;
 ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& load_form,
