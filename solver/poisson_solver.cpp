@@ -31,8 +31,13 @@ ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry,
   z.one = chol.solve(z.integrals);
   z.area = z.one.dot(z.integrals);
   z.source_mean = z.one.dot(z.load) / z.area;
+  // The pinned coefficient x_p = 0 leaves x = one - one_p e_p nearly in the kernel, with energy
+  // one_p^2 K_pp: pin where one_p^2 times the function's size is largest (M_pp standing in for
+  // K_pp, which is not assembled yet). With argmax |one_p| alone, a basis whose constant has
+  // coefficients 1 on almost every function pinned a small one (G1 prism sphere: condition
+  // 1.5e8 instead of 8e2).
   Eigen::Index pin;
-  z.one.cwiseAbs().maxCoeff(&pin);
+  (z.one.array().square() * M.diagonal().array()).maxCoeff(&pin);
   z.pin = static_cast<int>(pin);
   return z;
 }

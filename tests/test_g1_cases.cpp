@@ -20,6 +20,7 @@
 #include "basis/g1/g1_discretization.hpp"
 #include "app/pipeline.hpp"
 #include "cases/spline_space.hpp"
+#include "solver/amg_preconditioner.hpp"
 #include "solver/residual_estimator.hpp"
 #include "solver/poisson_solver.hpp"
 #include "tests/cli_sandbox.hpp"
@@ -653,4 +654,37 @@ TEST_CASE("Defaults on random meshes of convex quads with valences 3 to 8: no re
   std::filesystem::remove_all(dir);
   INFO("highest interior valence " << highest_valence);
   REQUIRE(highest_valence >= 7);
+}
+
+// BoomerAMG (classical AMG) assumes the all-ones vector is near the matrix's kernel. The G1
+// basis is built so that the constant function's coefficients are 1 on its interior functions
+// (g1_basis.cpp, constant_carrying_functions); with orthonormal edge functions instead, the
+// counts on g1_mixed_valences were 35, 41, 48 and 70 over four levels while the C0 space on the
+// same faces stayed at 47-50 (docs/SOLVERS.md); the growth shows at level 3 only. The issue's
+// requirement: within 2x of the C0 space's count at every level, and bounded in h; checked as
+// at most 2x the C0 count at each level and at most 1.2x the G1 count of the level before
+// (measured now: 33, 38, 41, 41; the former basis fails the second at level 3, 70 after 48).
+TEST_CASE("BoomerAMG-CG on G1 spaces: iterations within 2x of the C0 space's and not growing with h", "[g1][cases][amg]") {
+  CaseDescription c = load_case(kSource + "/cases/g1_mixed_valences.toml");
+  PoissonSolveOptions options;
+  options.iterative = true;
+  options.compute_errors = false;
+  options.preconditioner = [](const DofLayout&, const Eigen::SparseMatrix<double>& lower) {
+    return boomeramg_preconditioner(lower, "");
+  };
+  auto iterations = [&](int level) {
+    const G1Discretization d = discretize_g1(c, level);
+    const PoissonSolution s = solve_poisson(d.mesh, *d.geometry, c.problem, options);
+    REQUIRE(s.iterative.stop == IterativeStats::Stop::kConverged);
+    return s.iterative.iterations;
+  };
+  std::vector<double> g1, c0;
+  for (int l = 0; l <= 3; ++l) g1.push_back(iterations(l));
+  g1_section(c).c0 = true;
+  for (int l = 0; l <= 3; ++l) c0.push_back(iterations(l));
+  for (int l = 0; l <= 3; ++l) {
+    INFO("level " << l << ": G1 " << g1[l] << " iterations, C0 " << c0[l]);
+    CHECK(g1[l] <= 2 * c0[l]);
+    if (l > 0) CHECK(g1[l] <= 1.2 * g1[l - 1]);
+  }
 }

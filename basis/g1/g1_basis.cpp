@@ -5,6 +5,7 @@
 // named in basis/g1/README.md.
 #include "basis/g1/g1_basis.hpp"
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -870,6 +871,79 @@ void separate_boundary_traces(const QuadMesh& mesh, G1Basis& basis) {
   }
 }
 
+// The constant function's coefficients in the basis: the least-squares solution of B c = 1,
+// B the functions' B-spline coefficients (each face's split splines are a partition of unity,
+// so the constant is all ones there); CGLS on B, whose condition is that of the mass matrix's
+// square root (about 60). With rational data the constant is in the span to rounding; with
+// floating-point data only to their SVD tolerance (residual 2.3e-9 measured on geometric data
+// of 17-digit coordinates). Either is enough: c only steers the changes of basis below, which
+// keep every span whatever c is (the tests check the constant's reproduction separately).
+Eigen::VectorXd constant_coefficients(const G1Basis& basis) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (size_t j = 0; j < basis.functions.size(); ++j)
+    for (const auto& [c, x] : basis.functions[j].coefficients)
+      entries.emplace_back(static_cast<int>(c), static_cast<int>(j), x);
+  Eigen::SparseMatrix<double> B(static_cast<Eigen::Index>(basis.unknowns()),
+                                static_cast<Eigen::Index>(basis.functions.size()));
+  B.setFromTriplets(entries.begin(), entries.end());
+  Eigen::LeastSquaresConjugateGradient<Eigen::SparseMatrix<double>> cgls(B);
+  cgls.setTolerance(1e-15);
+  cgls.setMaxIterations(20000);
+  return cgls.solve(Eigen::VectorXd::Ones(B.rows()));
+}
+
+// Changes of basis within the functions of each interior vertex and each interior edge after
+// which the constant function's coefficients are 1 on all of them (they are 1 on the face
+// functions already). Classical AMG takes the all-ones vector as the near-null space of the
+// matrix. In the orthonormalized basis the constant's coefficients were anything from -1.6 to
+// 2.3, and BoomerAMG-CG's iterations grew with h (g1_mixed_valences: 35, 41, 48, 70, 125 over
+// five levels, the C0 space 46-50); with this change 33, 38, 39, 39 (docs/SOLVERS.md).
+// With Q an orthonormal basis of a group's span and g = Q a the constant's part there, the new
+// functions are Q R with R = |a|/sqrt(m) H, H the reflection taking 1/sqrt(m) to a/|a|, so
+// that R 1 = a: orthogonal up to one common factor, so the conditioning is kept. At a vertex
+// this is done to the functions that vanish there, and the value function is scaled by its
+// coefficient, so it stays first, with value 1 at the vertex. Boundary groups are left as
+// separate_boundary_traces made them: Dirichlet data take them, or the boundary breaks the
+// near-null space anyway.
+void constant_carrying_functions(const QuadMesh& mesh, G1Basis& basis) {
+  const Eigen::VectorXd c = constant_coefficients(basis);
+  const FunctionsByOwner by(mesh, basis);
+  auto carry = [&](const std::vector<int>& ids) {
+    const Eigen::Index m = static_cast<Eigen::Index>(ids.size());
+    if (m < 2) return;
+    LocalColumns cols;
+    add_columns(basis, ids, cols);
+    const Eigen::MatrixXd X = dense_columns(basis, ids, cols);
+    Eigen::VectorXd cg(m);
+    for (Eigen::Index i = 0; i < m; ++i) cg(i) = c(ids[static_cast<size_t>(i)]);
+    const Eigen::MatrixXd Q = orthonormal_columns(X);
+    const Eigen::VectorXd a = Q.transpose() * (X * cg);
+    const double size = a.norm();
+    // A group where the constant has (almost) no part is left orthonormal: scaled to carry
+    // it, its functions would be tiny (on the prism sphere's 10 skewed crossings the part is
+    // 0.003 of the functions' size, elsewhere 0.38 or more), and a zero-mean solve that pins
+    // one of them nearly singular (condition 1.5e8 instead of 8e2 at level 0).
+    if (!(size / std::sqrt(double(m)) > 0.1 * X.colwise().norm().maxCoeff())) return;
+    Eigen::VectorXd w = Eigen::VectorXd::Constant(m, 1 / std::sqrt(double(m))) - a / size;
+    Eigen::MatrixXd R = Eigen::MatrixXd::Identity(m, m);
+    if (w.norm() > 1e-14) {
+      w.normalize();
+      R -= 2 * w * w.transpose();
+    }
+    const Eigen::MatrixXd Y = Q * (R * (size / std::sqrt(double(m))));
+    for (Eigen::Index i = 0; i < m; ++i) store_column(basis, ids[static_cast<size_t>(i)], Y.col(i), cols);
+  };
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const std::vector<int>& ids = by.vertex[v];
+    if (ids.empty() || mesh.boundary_vertex(v)) continue;
+    const double c0 = c(ids[0]);  // the value function: 1 / its value at the vertex, nonzero
+    for (auto& [u, x] : basis.functions[ids[0]].coefficients) x *= c0;
+    carry(std::vector<int>(ids.begin() + 1, ids.end()));
+  }
+  for (int e = 0; e < mesh.num_edges(); ++e)
+    if (!mesh.edge(e).boundary()) carry(by.edge[e]);
+}
+
 // Floating-point data refused when the local SVDs' margin is below kMinG1RankMargin.
 void check_rank_margin(const G1SpaceDimension& d) {
   if (d.smallest_kept >= kMinG1RankMargin * d.largest_dropped) return;
@@ -946,6 +1020,8 @@ G1Basis g1_basis(const QuadMesh& mesh, const GluingData& gluing, int k, int r, b
                                " with no nonzero (or a non-finite) coefficient; these gluing data break it");
     for (auto& [c, v] : f.coefficients) v /= largest;
   }
+  say("the constant's coefficients");
+  constant_carrying_functions(mesh, basis);
   for (const auto& f : basis.functions) ++basis.counts[static_cast<int>(f.kind)];
   const long count = static_cast<long>(basis.functions.size());
   if (count != basis.space.dimension)

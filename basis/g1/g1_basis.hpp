@@ -11,7 +11,10 @@
 namespace knotwork {
 
 // One basis function of S_k^{1,r}(M), as its nonzero B-spline coefficients over the faces:
-// (g1_unknown(face, i, j, k, r), value), scaled so that the largest in magnitude is +1.
+// (g1_unknown(face, i, j, k, r), value), scaled so that the largest in magnitude is +1, except
+// where the constant function's coefficient is made 1 instead: on the face functions (both), on
+// each interior vertex's functions and each interior edge's where the constant has a part
+// (g1_basis.cpp, constant_carrying_functions: classical AMG needs the constant to be all ones).
 struct G1BasisFunction {
   enum class Kind { vertex, edge, face, vertex_pair, coupled };
   Kind kind = Kind::face;
