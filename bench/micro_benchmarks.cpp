@@ -57,6 +57,27 @@ void BM_LowerPattern(benchmark::State& state) {
 }
 BENCHMARK(BM_LowerPattern)->Args({2, 128})->Unit(benchmark::kMillisecond);
 
+// CG's product with the stiffness matrix stored as its lower triangle (Eigen's selfadjointView).
+void BM_SymmetricProduct(benchmark::State& state) {
+  const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const std::unique_ptr<SplineSpace> space = build_space(c);
+  const SplineSpace& d = *space;
+  const DofLayout layout = make_dof_layout(d.mesh().num_functions(), std::vector<bool>(d.mesh().num_functions(), false));
+  Eigen::SparseMatrix<double> K = lower_pattern_matrix(d.mesh(), layout);
+  Eigen::VectorXd rhs;
+  PoissonForm form;
+  form.source = &c.problem.source;
+  assemble_poisson(d.mesh(), d.geometry(), form, layout, Eigen::VectorXd::Zero(layout.num_free()), c.quadrature, K, rhs);
+  const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(K.rows(), 0, 1);
+  Eigen::VectorXd y(K.rows());
+  for (auto _ : state) {
+    y.noalias() = K.selfadjointView<Eigen::Lower>() * x;
+    benchmark::DoNotOptimize(y.data());
+  }
+  state.SetItemsProcessed(state.iterations() * K.nonZeros());
+}
+BENCHMARK(BM_SymmetricProduct)->Args({2, 512})->Args({4, 256})->Unit(benchmark::kMillisecond);
+
 }  // namespace
 
 BENCHMARK_MAIN();

@@ -18,13 +18,11 @@ namespace {
 struct ScaledProduct {
   using Scalar = double;
   const Eigen::SparseMatrix<double>* lower;
-  mutable Eigen::VectorXd in, out;
   Eigen::Index rows() const { return lower->rows(); }
   Eigen::Index cols() const { return lower->cols(); }
   void perform_op(const double* x, double* y) const {
-    in = Eigen::Map<const Eigen::VectorXd>(x, rows());
-    symmetric_multiply(*lower, in, out);
-    Eigen::Map<Eigen::VectorXd>(y, rows()) = out;
+    Eigen::Map<Eigen::VectorXd>(y, rows()).noalias() =
+        lower->selfadjointView<Eigen::Lower>() * Eigen::Map<const Eigen::VectorXd>(x, rows());
   }
 };
 
@@ -80,7 +78,7 @@ SpectrumEstimate jacobi_scaled_spectrum(const Eigen::SparseMatrix<double>& lower
     if (!s.computed) s.failure = "the matrix is not positive definite";
     return s;
   }
-  ScaledProduct product{&S, {}, {}};
+  ScaledProduct product{&S};
   if (!largest_eigenpair(product, s.largest, nullptr)) {
     s.failure = "Lanczos did not converge to the largest eigenvalue";
     return s;

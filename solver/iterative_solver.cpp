@@ -26,30 +26,6 @@ std::unique_ptr<Preconditioner> jacobi_preconditioner(const Eigen::SparseMatrix<
   return std::make_unique<JacobiPreconditioner>(std::move(d));
 }
 
-void symmetric_multiply(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
-  // Column j of the lower triangle holds K(i, j) for i >= j: y_i += K_ij x_j (the column) and
-  // y_j += K_ij x_i (the transposed part). Serial, so the sums have one order (bitwise
-  // reproducible results); threading it is listed in docs/SOLVERS.md as future work.
-  y.setZero(x.size());
-  const int* outer = lower.outerIndexPtr();
-  const int* inner = lower.innerIndexPtr();
-  const double* value = lower.valuePtr();
-  for (Eigen::Index j = 0; j < lower.outerSize(); ++j) {
-    const double xj = x[j];
-    double sum = 0;
-    for (int k = outer[j]; k < outer[j + 1]; ++k) {
-      const int i = inner[k];
-      if (i == j) {
-        sum += value[k] * xj;
-        continue;
-      }
-      y[i] += value[k] * xj;
-      sum += value[k] * x[i];
-    }
-    y[j] += sum;
-  }
-}
-
 Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& b,
                                   const Preconditioner& preconditioner, double tolerance, int max_iterations,
                                   IterativeStats& stats) {
@@ -95,7 +71,7 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
     double rz = r.dot(z);
     bool breakdown = false;
     while (stats.iterations < max_iterations) {
-      symmetric_multiply(lower, p, q);
+      q.noalias() = lower.selfadjointView<Eigen::Lower>() * p;
       const double pq = p.dot(q);
       if (!(pq > 0)) {  // not positive definite along p, or a NaN
         breakdown = true;
@@ -119,7 +95,7 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
       p = z + (rz_next / rz) * p;
       rz = rz_next;
     }
-    symmetric_multiply(lower, x, q);
+    q.noalias() = lower.selfadjointView<Eigen::Lower>() * x;
     r = b - q;
     stats.relative_residual = r.norm() / b_norm;
     stats.backward_error = backward_error(r);

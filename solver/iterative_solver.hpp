@@ -55,7 +55,4 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
                                   const Preconditioner& preconditioner, double tolerance, int max_iterations,
                                   IterativeStats& stats);
 
-// y = K x for K stored as its lower triangle (threaded over columns' row blocks).
-void symmetric_multiply(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& x, Eigen::VectorXd& y);
-
 }  // namespace knotwork
