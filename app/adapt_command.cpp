@@ -13,7 +13,7 @@
 #include "cases/output_files.hpp"
 #include "app/progress.hpp"
 #include "app/svg_plot.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "solver/poisson_solver.hpp"
 #include "solver/residual_estimator.hpp"
 #include "solver/vtk_output.hpp"

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <optional>
 
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

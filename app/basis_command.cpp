@@ -8,7 +8,7 @@
 #include "app/studies.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "cases/json_output.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

@@ -11,7 +11,7 @@
 #include "app/pipeline.hpp"
 #include "cases/json_output.hpp"
 #include "cases/geometries.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "solver/linear_solver.hpp"
 #include "solver/poisson_solver.hpp"
 

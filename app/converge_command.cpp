@@ -12,7 +12,7 @@
 #include "app/progress.hpp"
 #include "app/report.hpp"
 #include "app/svg_plot.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "solver/distributed_poisson.hpp"
 #include "solver/petsc_module.hpp"
 #include "solver/vtk_output.hpp"

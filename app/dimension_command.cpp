@@ -9,7 +9,7 @@
 #include "basis/tmesh/spline_dimension.hpp"
 #include "basis/tmesh/tmesh_conformality.hpp"
 #include "cases/case_file.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

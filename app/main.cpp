@@ -11,7 +11,7 @@
 #include "app/commands.hpp"
 #include "cases/output_files.hpp"
 #include "cases/spline_space.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "solver/petsc_module.hpp"
 
 namespace {

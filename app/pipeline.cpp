@@ -5,7 +5,7 @@
 
 #include "solver/amg_preconditioner.hpp"
 #include "solver/distributed_poisson.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

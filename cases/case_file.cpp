@@ -3,7 +3,7 @@
 #include "cases/case_file.hpp"
 
 #include "cases/case_reader.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

@@ -15,7 +15,7 @@
 #include "cases/geometries.hpp"
 #include "cases/json_input.hpp"
 #include "solver/amg_preconditioner.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

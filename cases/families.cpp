@@ -2,7 +2,7 @@
 // in KNOTWORK_FAMILIES (basis/CMakeLists.txt), from which the build generates the list below
 // (docs/ARCHITECTURE.md).
 #include "cases/spline_space.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

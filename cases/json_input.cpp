@@ -11,7 +11,7 @@
 #include <set>
 #include <sstream>
 
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

@@ -5,7 +5,7 @@
 #include "cases/case_reader.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/amg_preconditioner.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

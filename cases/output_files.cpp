@@ -10,7 +10,7 @@
 #include <cstring>
 #include <fstream>
 
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

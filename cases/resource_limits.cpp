@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

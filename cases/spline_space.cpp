@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

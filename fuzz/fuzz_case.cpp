@@ -6,7 +6,7 @@
 #include "cases/case_file.hpp"
 #include "cases/spline_space.hpp"
 #include "fuzz/fuzz_input.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = knotwork_fuzz::scratch_file(data, size, std::string("case.") + KNOTWORK_FUZZ_EXTENSION);

@@ -4,7 +4,7 @@
 // cheap.
 #include "basis/knot_segments/knot_segments_case.hpp"
 #include "fuzz/fuzz_input.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = knotwork_fuzz::scratch_file(data, size, "collection.json");

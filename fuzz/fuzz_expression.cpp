@@ -5,7 +5,7 @@
 
 #include "fuzz/fuzz_input.hpp"
 #include "solver/expression.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

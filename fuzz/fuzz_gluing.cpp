@@ -3,7 +3,7 @@
 // compatibility at the vertices).
 #include "basis/g1/gluing_file.hpp"
 #include "fuzz/fuzz_input.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const knotwork::QuadMesh mesh =

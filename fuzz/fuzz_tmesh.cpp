@@ -7,7 +7,7 @@
 #include "basis/tmesh/rectangular_partition.hpp"
 #include "cases/case_file.hpp"
 #include "fuzz/fuzz_input.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = knotwork_fuzz::scratch_file(data, size, "tmesh.toml");

@@ -20,7 +20,7 @@
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/expression.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace py = pybind11;
 

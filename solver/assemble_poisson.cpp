@@ -16,7 +16,7 @@
 
 #include "quadrature/bernstein.hpp"
 #include "solver/cell_basis.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "solver/separable_cells.hpp"
 
 namespace knotwork {

@@ -12,7 +12,7 @@
 #include <sys/resource.h>
 
 #include "solver/assemble_poisson.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

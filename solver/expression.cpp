@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "basis/core/bezier_ops.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "quadrature/bernstein.hpp"
 
 namespace knotwork {

@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "solver/expression.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 using namespace knotwork;
 

@@ -16,7 +16,7 @@
 #include "basis/pt/pt_spline.hpp"
 #include "solver/geometry_map.hpp"
 #include "quadrature/bernstein.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "tests/rounding_bounds.hpp"
 
 using namespace knotwork;

@@ -17,7 +17,7 @@
 #include "basis/g1/g1_space.hpp"
 #include "basis/g1/quad_mesh.hpp"
 #include "basis/g1/gluing_file.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "solver/vtk_output.hpp"
 
 namespace knotwork {

@@ -9,7 +9,7 @@
 #include "quadrature/bernstein.hpp"
 #include "basis/g1/gluing_file.hpp"
 #include "solver/error_norms.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

@@ -11,7 +11,7 @@
 #include "cases/resource_limits.hpp"
 #include "cases/basis_tool.hpp"
 #include "cases/spline_space.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

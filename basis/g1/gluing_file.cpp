@@ -5,7 +5,7 @@
 
 #include "basis/tmesh/rectangular_partition.hpp"
 #include "cases/json_input.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

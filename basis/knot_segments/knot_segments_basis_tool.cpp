@@ -11,7 +11,7 @@
 #include "basis/tmesh/spline_dimension.hpp"
 #include "cases/basis_tool.hpp"
 #include "cases/json_output.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

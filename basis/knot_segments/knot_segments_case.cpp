@@ -4,7 +4,7 @@
 #include <algorithm>
 
 #include "cases/case_reader.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

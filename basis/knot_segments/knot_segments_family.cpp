@@ -12,7 +12,7 @@
 #include "cases/basis_tool.hpp"
 #include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

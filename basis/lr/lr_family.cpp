@@ -12,7 +12,7 @@
 #include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/geometry_map.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

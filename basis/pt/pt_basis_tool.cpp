@@ -20,7 +20,7 @@
 #include "basis/tmesh/tmesh_conformality.hpp"
 #include "cases/case_file.hpp"
 #include "quadrature/bernstein.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 #include "solver/vtk_output.hpp"
 
 namespace knotwork {

@@ -6,7 +6,7 @@
 
 #include "cases/case_reader.hpp"
 #include "cases/resource_limits.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

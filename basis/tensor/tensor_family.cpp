@@ -8,7 +8,7 @@
 #include "basis/tensor/tensor_case.hpp"
 #include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
-#include "solver/input_error.hpp"
+#include "basis/core/input_error.hpp"
 
 namespace knotwork {
 

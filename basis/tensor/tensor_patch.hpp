@@ -7,7 +7,7 @@
 #include "basis/core/bezier_mesh.hpp"
 #include "basis/core/bspline_basis.hpp"
 #include "basis/core/nurbs_patch.hpp"
-#include "solver/poisson_problem.hpp"
+#include "basis/core/mesh_part.hpp"
 
 namespace knotwork {
 
