@@ -46,7 +46,7 @@ TEST_CASE("Full-extension PT basis on the shipped hierarchical T-mesh: 61 bicubi
   const PartitionDescription p = load_partition(std::string(KNOTWORK_SOURCE_DIR) + "/cases/tmeshes/hierarchical.toml");
   const RectangularPartition mesh(p.cells);
   const TensorCombinationBasis B = pt_full_extension_basis(mesh, 3, 3);
-  REQUIRE(B.functions.size() == 61);  // knotwork dimension's brute force (README)
+  REQUIRE(B.functions.size() == 61);  // knotwork dimension's brute force (docs/GUIDE.md)
   REQUIRE(polynomial_per_cell(mesh, B));
   // A tensor grid needs no elimination: every tensor B-spline is a function.
   const RectangularPartition grid({{0, 0, q(1, 2), 1}, {q(1, 2), 0, 1, 1}});
