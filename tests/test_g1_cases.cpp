@@ -688,3 +688,32 @@ TEST_CASE("BoomerAMG-CG on G1 spaces: iterations within 2x of the C0 space's and
     if (l > 0) CHECK(g1[l] <= 1.2 * g1[l - 1]);
   }
 }
+
+// The defaults of a G1 case (g1_case.hpp, measured in docs/G1_POISSON.md): k = 5 and r = k - 2,
+// which has the same unknowns per face as the paper's k = 4, r = 1. An r the case leaves out
+// follows --degree; one it gives stays.
+TEST_CASE("G1 case defaults: degree 5, split smoothness k - 2, following --degree unless given", "[g1][cases]") {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("knotwork_g1_defaults_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string mesh = kSource + "/cases/meshes/three_quads.obj";
+  auto load = [&](const std::string& space_lines) {
+    const std::string file = (dir / "case.toml").string();
+    std::ofstream(file) << "[space]\nfamily = \"g1\"\nmesh = \"" << mesh << "\"\n" << space_lines << "[problem]\nexact = \"x\"\n";
+    return load_case(file);
+  };
+  CaseDescription c = load("");
+  CHECK(g1_section(c).degree == 5);
+  CHECK(g1_section(c).split_smoothness == 3);
+  space_family(c).override_options(c, 4, 0);
+  CHECK(g1_section(c).degree == 4);
+  CHECK(g1_section(c).split_smoothness == 2);
+  space_family(c).override_options(c, 3, 0);
+  CHECK(g1_section(c).split_smoothness == 1);
+  c = load("degree = 6\n");
+  CHECK(g1_section(c).split_smoothness == 4);
+  c = load("split_smoothness = 1\n");
+  CHECK(g1_section(c).degree == 5);
+  space_family(c).override_options(c, 7, 0);
+  CHECK(g1_section(c).split_smoothness == 1);
+  std::filesystem::remove_all(dir);
+}

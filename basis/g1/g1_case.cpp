@@ -5,6 +5,8 @@
 
 #include "basis/g1/g1_case.hpp"
 
+#include <algorithm>
+
 #include "basis/g1/gluing_file.hpp"
 #include "basis/g1/quad_mesh.hpp"
 #include "cases/case_reader.hpp"
@@ -35,8 +37,11 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
   g.faces = mesh.num_faces();
   if (const DocumentNode* d = s.get("degree")) g.degree = static_cast<int>(r.integer(*d, "[space] degree"));
   if (g.degree < 2 || g.degree > 12) r.fail("[space] degree", "must be in [2, 12] (one integer: the bidegree k of the patches)");
-  if (const DocumentNode* d = s.get("split_smoothness"))
+  if (const DocumentNode* d = s.get("split_smoothness")) {
     g.split_smoothness = static_cast<int>(r.integer(*d, "[space] split_smoothness"));
+    g.split_smoothness_given = true;
+  } else
+    g.split_smoothness = std::max(1, g.degree - 2);
   if (g.split_smoothness < 1 || g.split_smoothness > g.degree - 1)
     r.fail("[space] split_smoothness", "must be in [1, degree-1] (C^r across the 4-split lines; r >= 1 for "
                                        "refinement to nest the spaces), got " + std::to_string(g.split_smoothness));
