@@ -897,7 +897,7 @@ Eigen::VectorXd constant_coefficients(const G1Basis& basis) {
 // functions already). Classical AMG takes the all-ones vector as the near-null space of the
 // matrix. In the orthonormalized basis the constant's coefficients were anything from -1.6 to
 // 2.3, and BoomerAMG-CG's iterations grew with h (g1_mixed_valences: 35, 41, 48, 70, 125 over
-// five levels, the C0 space 46-50); with this change 33, 38, 39, 39 (docs/SOLVERS.md).
+// five levels, the C0 space 46-50); with this change 33, 38, 41, 41, 49 (docs/SOLVERS.md).
 // With Q an orthonormal basis of a group's span and g = Q a the constant's part there, the new
 // functions are Q R with R = |a|/sqrt(m) H, H the reflection taking 1/sqrt(m) to a/|a|, so
 // that R 1 = a: orthogonal up to one common factor, so the conditioning is kept. At a vertex
@@ -936,8 +936,12 @@ void constant_carrying_functions(const QuadMesh& mesh, G1Basis& basis) {
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     const std::vector<int>& ids = by.vertex[v];
     if (ids.empty() || mesh.boundary_vertex(v)) continue;
-    const double c0 = c(ids[0]);  // the value function: 1 / its value at the vertex, nonzero
-    for (auto& [u, x] : basis.functions[ids[0]].coefficients) x *= c0;
+    // The value function (first, value_first_orthogonal): c0 = 1 / its value at the vertex,
+    // at least 1 after the scaling to largest coefficient 1. The same cut as for the groups
+    // keeps a vertex whose value lies with its vertex-pair functions from being scaled to ~0.
+    const double c0 = c(ids[0]);
+    if (std::abs(c0) > 0.1)
+      for (auto& [u, x] : basis.functions[ids[0]].coefficients) x *= c0;
     carry(std::vector<int>(ids.begin() + 1, ids.end()));
   }
   for (int e = 0; e < mesh.num_edges(); ++e)

@@ -5,7 +5,6 @@
 
 #include "basis/g1/g1_case.hpp"
 
-#include <algorithm>
 
 #include "basis/g1/gluing_file.hpp"
 #include "basis/g1/quad_mesh.hpp"
@@ -41,7 +40,7 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
     g.split_smoothness = static_cast<int>(r.integer(*d, "[space] split_smoothness"));
     g.split_smoothness_given = true;
   } else
-    g.split_smoothness = std::max(1, g.degree - 2);
+    g.split_smoothness = default_split_smoothness(g.degree);
   if (g.split_smoothness < 1 || g.split_smoothness > g.degree - 1)
     r.fail("[space] split_smoothness", "must be in [1, degree-1] (C^r across the 4-split lines; r >= 1 for "
                                        "refinement to nest the spaces), got " + std::to_string(g.split_smoothness));

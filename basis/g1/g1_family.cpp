@@ -2,7 +2,6 @@
 // topology, planar or a closed surface; the geometry is the G1 spline fitted once to the
 // coarse mesh and restricted exactly to the subdivided cells. Refinement is uniform
 // subdivision (one more per convergence level).
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -146,7 +145,7 @@ SpaceFamily g1_family() {
       throw InputError("--elements: not used with family = \"g1\" (refine with [space] refine; converge subdivides)");
     if (!degree) return;
     if (degree < 2 || degree > 12) throw InputError("--degree: must be in [2, 12] for G1 spaces");
-    if (!g1_section(c).split_smoothness_given) g1_section(c).split_smoothness = std::max(1, degree - 2);
+    if (!g1_section(c).split_smoothness_given) g1_section(c).split_smoothness = default_split_smoothness(degree);
     if (g1_section(c).split_smoothness > degree - 1)
       throw InputError("--degree: " + std::to_string(degree) + " is too low for the case's split_smoothness " +
                        std::to_string(g1_section(c).split_smoothness) + " (needs degree >= split_smoothness + 1)");
