@@ -3,27 +3,14 @@
 #include <cstdio>
 
 #include "app/commands.hpp"
-#include "app/pipeline.hpp"
-#include "app/report.hpp"
-#include "app/studies.hpp"
+#include "studies/pipeline.hpp"
+#include "studies/report.hpp"
+#include "studies/studies.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "cases/json_output.hpp"
 #include "basis/core/input_error.hpp"
 
 namespace knotwork {
-
-Json basis_json(const CaseDescription& c, const SplineSpace& space) {
-  const BezierMesh& mesh = space.mesh();
-  const long rank = bezier_rank(mesh);
-  Json j = Json::object();
-  j.set("file", c.path).set("family", c.family).set("space", space.description())
-      .set("functions", mesh.num_functions()).set("cells", mesh.num_cells());
-  add_fields(j, space.basis_report());
-  j.set("partition_of_unity_error", partition_of_unity_error(mesh));
-  if (rank >= 0) j.set("rank", rank); else j.set_null("rank");
-  j.set("notes", Json::strings(space.notes()));
-  return j;
-}
 
 namespace {
 

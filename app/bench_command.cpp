@@ -8,7 +8,8 @@
 #include <thread>
 
 #include "app/commands.hpp"
-#include "app/pipeline.hpp"
+#include "studies/bench_study.hpp"
+#include "studies/pipeline.hpp"
 #include "cases/json_output.hpp"
 #include "cases/geometries.hpp"
 #include "basis/core/input_error.hpp"
@@ -18,71 +19,6 @@
 namespace knotwork {
 
 namespace {
-
-struct BenchResult {
-  int degree = 0, elements = 0;
-  long dofs = 0, free_dofs = 0, matrix_nonzeros = 0;
-  double factor_nonzeros = 0, flops = 0;
-  double setup = 0, assembly = 0, analysis = 0, factorization = 0, solve = 0, errors = 0, total = 0;
-  double cholmod_peak_bytes = 0, l2 = 0;
-  double floor_seconds = NAN;  // bare CHOLMOD, default settings: analyze + factorize + solve
-  long peak_rss_kb = 0;
-  // --solver iterative: CG with the space's own ([solver] preconditioner = "auto").
-  int iterations = 0;
-  double preconditioner = 0, cg = 0, relative_residual = 0;
-};
-
-// The benchmark problem: unit square, u = sin(pi x) sin(pi y), homogeneous Dirichlet.
-BenchResult run_one(int p, int n, Ordering ordering, bool with_errors, bool floor, const BenchOptions& o) {
-  CaseDescription c = unit_square_benchmark_case(p, n);
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::unique_ptr<SplineSpace> d = build_space(c);
-  const double t_space = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  double floor_seconds = NAN;
-  PoissonSolution s;
-  if (o.solver == "iterative") {
-    c.solver.method = "iterative";
-    c.solver.tolerance = o.tolerance;
-    if (!with_errors) c.problem.exact.reset();
-    s = solve_case(c, *d, ordering);
-  } else {
-    PoissonSolveOptions so;
-    so.ordering = ordering;
-    so.compute_errors = with_errors;
-    if (floor)
-      so.on_system = [&](const Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& F) {
-        const auto t = std::chrono::steady_clock::now();
-        SparseCholesky bare(Ordering::kCholmodDefault);
-        bare.factorize(K);
-        const Eigen::VectorXd x = bare.solve(F);
-        floor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-      };
-    s = solve_poisson(d->mesh(), d->geometry(), c.problem, so);
-  }
-  BenchResult r;
-  r.floor_seconds = floor_seconds;
-  r.degree = p;
-  r.elements = n;
-  r.dofs = s.num_functions;
-  r.free_dofs = s.num_free;
-  r.matrix_nonzeros = s.matrix_nonzeros;
-  r.factor_nonzeros = s.cholesky.factor_nonzeros;
-  r.flops = s.cholesky.flops;
-  r.setup = s.timings.setup + t_space;
-  r.assembly = s.timings.assembly;
-  r.analysis = s.timings.analysis;
-  r.factorization = s.timings.factorization;
-  r.solve = s.timings.solve;
-  r.preconditioner = s.timings.preconditioner;
-  r.cg = s.timings.iterations;
-  r.iterations = s.iterative.iterations;
-  r.relative_residual = s.iterative.relative_residual;
-  r.errors = s.timings.errors;
-  r.total = r.setup + r.assembly + r.analysis + r.factorization + r.solve + r.preconditioner + r.cg + r.errors;
-  r.cholmod_peak_bytes = s.cholesky.peak_bytes;
-  r.l2 = s.errors ? s.errors->l2 : NAN;
-  return r;
-}
 
 // Each configuration runs in a child process so that its peak memory is its own.
 BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool floor, const BenchOptions& o) {
@@ -95,7 +31,7 @@ BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool
     BenchResult r;
     int code = 0;
     try {
-      r = run_one(p, n, ordering, with_errors, floor, o);
+      r = bench_configuration(p, n, ordering, with_errors, floor, o.solver, o.tolerance);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "knotwork bench: p=%d n=%d failed: %s\n", p, n, e.what());
       code = 1;

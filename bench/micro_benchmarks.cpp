@@ -2,7 +2,7 @@
 //   build/bench/knotwork_micro_bench --benchmark_min_time=0.5
 #include <benchmark/benchmark.h>
 
-#include "app/pipeline.hpp"
+#include "studies/pipeline.hpp"
 #include "cases/geometries.hpp"
 #include "solver/assemble_poisson.hpp"
 #include "solver/error_norms.hpp"

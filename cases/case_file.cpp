@@ -1,5 +1,5 @@
 // Rectangular partition (T-mesh) files, which `dimension`, `basis` and the T-mesh families
-// read, and the sniffing of file kinds. Case files: cases/load_case.cpp.
+// read, and the sniffing of file kinds. Case files: families/load_case.cpp.
 #include "cases/case_file.hpp"
 
 #include "cases/case_reader.hpp"

@@ -1,7 +1,7 @@
 #pragma once
 // A case as read from its file: the sections every family shares ([problem], [output],
 // [adapt], quadrature) and the family's own section, which only the family reads and
-// interprets (basis/<family>/<family>_case.*). load_case dispatches on [space] family.
+// interprets (families/<family>/<family>_case.*). load_case dispatches on [space] family.
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -51,7 +51,7 @@ struct CaseDescription {
   std::string path;  // as given
   std::string name;  // file name without extension
   std::string title;
-  std::string family = "tensor";  // [space] family: a registered family (cases/families.cpp)
+  std::string family = "tensor";  // [space] family: a registered family (families/families.cpp)
   // [geometry] of the families whose domain is one NURBS patch (type rectangle,
   // quarter_annulus, lshape or nurbs); empty geometry_type for the others.
   std::string geometry_type;
@@ -107,7 +107,7 @@ const T& family_section(const CaseDescription& c) {
   throw std::logic_error(c.path + ": the case is of family \"" + c.family + "\", not the one asked for");
 }
 
-// Reads and validates a case file through its family's reader (cases/load_case.cpp).
+// Reads and validates a case file through its family's reader (families/load_case.cpp).
 // Throws InputError with a one-line message naming the file and the field (TOML syntax
 // errors with line and column; unknown keys with the closest valid one).
 CaseDescription load_case(const std::string& path);

@@ -1,6 +1,6 @@
 // The validated reading of case files shared by every family: values with their field
 // names in messages, the JSON route, and the sections of one-patch domains ([geometry],
-// [problem]). The families' own [space] readers are in basis/<family>/<family>_case.cpp.
+// [problem]). The families' own [space] readers are in families/<family>/<family>_case.cpp.
 #include "cases/case_reader.hpp"
 
 #include <algorithm>

@@ -14,7 +14,7 @@
 
 #include "basis/core/bezier_mesh.hpp"
 #include "cases/case_file.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 #include "solver/iterative_solver.hpp"
 #include "solver/poisson_problem.hpp"
 #include "solver/sparsity.hpp"
@@ -146,7 +146,7 @@ struct SpaceFamily {
 // (and its own check_adapt passes); the message lists the families that do.
 void check_adaptive_family(const CaseDescription& c);
 
-// Every registered family (cases/families.cpp: one line per family).
+// Every registered family (families/families.cpp: one line per family).
 const std::vector<SpaceFamily>& space_families();
 // The case's family; throws InputError naming [space] family if it is not registered.
 const SpaceFamily& space_family(const CaseDescription& c);

@@ -2,7 +2,7 @@
 // `knotwork basis` does before its rank and dimension counts — the collection itself, its
 // semi-regularity cell by cell and its Bezier extraction — on collections small enough to be
 // cheap.
-#include "basis/knot_segments/knot_segments_case.hpp"
+#include "families/knot_segments/knot_segments_case.hpp"
 #include "fuzz/fuzz_input.hpp"
 #include "basis/core/input_error.hpp"
 

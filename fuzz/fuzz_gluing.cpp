@@ -1,7 +1,7 @@
 // Gluing-data files (JSON) on the three-quad mesh of the shipped G1 case: load_gluing_file
 // reads the data edge by edge and checks them (every interior edge once, polynomial pieces,
 // compatibility at the vertices).
-#include "basis/g1/gluing_file.hpp"
+#include "families/g1/gluing_file.hpp"
 #include "fuzz/fuzz_input.hpp"
 #include "basis/core/input_error.hpp"
 

@@ -1,4 +1,4 @@
-// knotwork._core: the studies of app/studies.hpp for Python, through pybind11. The public
+// knotwork._core: the studies of studies/studies.hpp for Python, through pybind11. The public
 // API and its documentation are in knotwork/__init__.py; this file converts cases (paths or
 // dicts) in, and the studies' JSON objects, solutions and spaces out.
 // - Results are the CLI's own JSON objects (run_json, ...), so Python and `--json` agree
@@ -16,7 +16,7 @@
 #include <optional>
 #include <string>
 
-#include "app/studies.hpp"
+#include "studies/studies.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/expression.hpp"

@@ -2,7 +2,7 @@
 #include <Eigen/Core>
 
 #include "basis/core/bezier_mesh.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 
 namespace knotwork {
 

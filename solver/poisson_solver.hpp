@@ -7,7 +7,7 @@
 
 #include "basis/core/bezier_mesh.hpp"
 #include "solver/error_norms.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 #include "solver/condition_estimate.hpp"
 #include "solver/iterative_solver.hpp"
 #include "solver/linear_solver.hpp"

@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 #include "solver/poisson_problem.hpp"
 
 namespace knotwork {

@@ -6,7 +6,7 @@
 
 #include "basis/core/bezier_mesh.hpp"
 #include "solver/expression.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 #include "solver/poisson_problem.hpp"
 
 namespace knotwork {

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <map>
 
-#include "basis/knot_segments/knot_segments_case.hpp"
+#include "families/knot_segments/knot_segments_case.hpp"
 #include "basis/tensor/nurbs_geometry_map.hpp"
-#include "basis/tensor/tensor_case.hpp"
-#include "app/adaptive.hpp"
+#include "families/tensor/tensor_case.hpp"
+#include "studies/adaptive.hpp"
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
 #include "solver/error_norms.hpp"

@@ -16,9 +16,9 @@
 #include <regex>
 #include <variant>
 
-#include "basis/g1/g1_case.hpp"
-#include "basis/g1/g1_discretization.hpp"
-#include "app/pipeline.hpp"
+#include "families/g1/g1_case.hpp"
+#include "families/g1/g1_discretization.hpp"
+#include "studies/pipeline.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/amg_preconditioner.hpp"
 #include "solver/residual_estimator.hpp"

@@ -10,7 +10,7 @@
 #include <map>
 #include <random>
 
-#include "app/adaptive.hpp"
+#include "studies/adaptive.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "basis/lr/lr_mesh.hpp"
 #include "basis/tmesh/lr_spline.hpp"

@@ -4,9 +4,9 @@
 #include <omp.h>
 #include <Eigen/Eigenvalues>
 
-#include "basis/tensor/fast_diagonalization.hpp"
-#include "basis/tensor/tensor_case.hpp"
-#include "app/pipeline.hpp"
+#include "solver/fast_diagonalization.hpp"
+#include "families/tensor/tensor_case.hpp"
+#include "studies/pipeline.hpp"
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
 #include "solver/error_norms.hpp"

@@ -8,13 +8,13 @@
 #include <fstream>
 #include <random>
 
-#include "basis/pt/pt_case.hpp"
-#include "app/adaptive.hpp"
-#include "app/pipeline.hpp"
-#include "basis/pt/pt_space.hpp"
+#include "families/pt/pt_case.hpp"
+#include "studies/adaptive.hpp"
+#include "studies/pipeline.hpp"
+#include "families/pt/pt_space.hpp"
 #include "basis/pt/pt_bezier_mesh.hpp"
 #include "basis/pt/pt_spline.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 #include "quadrature/bernstein.hpp"
 #include "basis/core/input_error.hpp"
 #include "tests/rounding_bounds.hpp"

@@ -10,7 +10,7 @@
 #include "basis/knot_segments/collection_on_partition.hpp"
 #include "basis/knot_segments/semi_regular_collection.hpp"
 #include "basis/tmesh/spline_dimension.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 #include "solver/poisson_solver.hpp"
 #include "tests/rounding_bounds.hpp"
 

@@ -12,9 +12,9 @@
 #include <random>
 #include <set>
 
-#include "app/adaptive.hpp"
-#include "app/pipeline.hpp"
-#include "basis/tensor/tensor_case.hpp"
+#include "studies/adaptive.hpp"
+#include "studies/pipeline.hpp"
+#include "families/tensor/tensor_case.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "basis/core/bspline_basis.hpp"
 #include "basis/thb/thb_hierarchy.hpp"

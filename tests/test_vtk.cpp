@@ -13,8 +13,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "basis/tensor/tensor_case.hpp"
-#include "app/pipeline.hpp"
+#include "families/tensor/tensor_case.hpp"
+#include "studies/pipeline.hpp"
 #include "cases/case_file.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/poisson_solver.hpp"

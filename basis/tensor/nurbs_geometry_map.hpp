@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "basis/tensor/tensor_patch.hpp"
-#include "solver/geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 
 namespace knotwork {
 

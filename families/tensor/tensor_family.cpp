@@ -1,0 +1,159 @@
+// Family "tensor": tensor-product B-splines and NURBS on one patch, k-refined from the case's
+// geometry (uniform elements per knot span, optional extra knots), isoparametric when rational.
+#include <algorithm>
+#include <cstdio>
+
+#include "solver/fast_diagonalization.hpp"
+#include "basis/tensor/nurbs_geometry_map.hpp"
+#include "families/tensor/tensor_case.hpp"
+#include "cases/resource_limits.hpp"
+#include "cases/spline_space.hpp"
+#include "basis/core/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// Refuses discretizations that cannot fit in memory before allocating anything (a rank's part:
+// its share of the cells).
+void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, int ranks = 1) {
+  double cells = 1, functions = 1;
+  for (int d = 0; d < 2; ++d) {
+    const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
+    const double elements = double(g.num_elements()) * s.elements_per_span[d] + s.extra_knots[d].size();
+    cells *= elements;
+    functions *= elements + s.degree[d];
+  }
+  char what[160];
+  if (ranks > 1)
+    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d on each of %d processes", cells / ranks, s.degree[0],
+                  s.degree[1], ranks);
+  else
+    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d", cells, s.degree[0], s.degree[1]);
+  check_memory(c.path + ": [space] elements", galerkin_bytes(cells / ranks, functions / ranks, s.degree[0], s.degree[1]),
+               what);
+}
+
+std::string describe(const TensorSpaceOptions& s) {
+  const int ru = s.continuity[0] < 0 ? s.degree[0] - 1 : s.continuity[0];
+  const int rv = s.continuity[1] < 0 ? s.degree[1] - 1 : s.continuity[1];
+  std::string r = std::string(s.rational ? "NURBS" : "B-spline") + ", degree " + std::to_string(s.degree[0]) + "x" +
+                  std::to_string(s.degree[1]) + ", C^" + std::to_string(ru);
+  if (rv != ru) r += "/C^" + std::to_string(rv);
+  return r + " at new knots";
+}
+
+constexpr const char* kFastDiagonalization = "fast_diagonalization";
+
+class TensorSpace final : public SplineSpace {
+ public:
+  TensorSpace(const CaseDescription& c, const TensorSpaceOptions& options, RowShare share = {}) : options_(options) {
+    check_tensor_memory(c, options, share.ranks);
+    try {
+      d_ = build_tensor_discretization(c.geometry, options, share);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(c.path + ": [space]: " + e.what());
+    }
+    // The residual estimator's neighbours, derived only if something asks (most runs never do).
+    d_.mesh.set_interface_rule(&interfaces_from_parameter_boxes);
+    geometry_ = std::make_unique<NurbsGeometryMap>(d_);
+  }
+  const BezierMesh& mesh() const override { return d_.mesh; }
+  const GeometryMap& geometry() const override { return *geometry_; }
+  std::string description() const override { return describe(options_); }
+  std::array<int, 2> degree() const override { return options_.degree; }
+  std::string structured_preconditioner() const override { return kFastDiagonalization; }
+  std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& layout,
+                                                                 const Eigen::SparseMatrix<double>& lower,
+                                                                 const PoissonProblem& problem) const override {
+    NitscheEnds ends;
+    ends.factor = problem.nitsche_penalty;
+    if (problem.dirichlet_method == DirichletMethod::kNitsche && problem.boundary.size() == 4)
+      for (int s = 0; s < 4; ++s) ends.sides[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
+    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower, separable_coefficients(), ends);
+  }
+  std::vector<ReportField> report() const override {
+    return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
+  }
+  const MeshPart* part() const override { return d_.part ? &*d_.part : nullptr; }
+
+ private:
+  // The stiffness coefficients at element midpoints, in parameter derivatives
+  // x_u = (dx/du_ref) / h_u: c11 = |x_v|^2 / det, c22 = |x_u|^2 / det; then their fit. Only
+  // every row against 32 sampled columns and every column against 32 sampled rows are
+  // evaluated: O(n) elements instead of n^2, and still exact for separable maps. From the
+  // patch itself, so that a part of the space (which holds a few rows) gets the whole fit.
+  SeparableCoefficients separable_coefficients() const {
+    const int nu = d_.space_u.num_elements(), nv = d_.space_v.num_elements();
+    auto sample = [](int n) {
+      std::vector<int> v;
+      const int m = std::min(n, 32);
+      for (int k = 0; k < m; ++k) v.push_back(m == 1 ? 0 : static_cast<int>((static_cast<long>(k) * (n - 1)) / (m - 1)));
+      return v;
+    };
+    auto lengths = [](const BSplineBasis1D& b) {
+      std::vector<double> h;
+      for (int s : b.element_spans()) h.push_back(b.knots()[s + 1] - b.knots()[s]);
+      return h;
+    };
+    const std::vector<double> h_u = lengths(d_.space_u), h_v = lengths(d_.space_v);
+    const std::vector<int> rows = sample(nu), columns = sample(nv);
+    std::vector<double> c11(static_cast<size_t>(nu) * nv, 1.0), c22(c11.size(), 1.0);
+    GeometryAtPoints at;
+    bool ok = true;
+    auto measure = [&](int i, int j) {
+      const size_t k = i + static_cast<size_t>(nu) * j;
+      geometry_->evaluate_element_at_rule(i, j, 1, 1, at);  // the one-point Gauss rule: the midpoint
+      const double hu = h_u[i], hv = h_v[j];
+      const double xu = at.jacobian(0, 0) / hu, xv = at.jacobian(0, 1) / hv;
+      const double yu = at.jacobian(0, 2) / hu, yv = at.jacobian(0, 3) / hv;
+      const double det = xu * yv - xv * yu;
+      if (!(det > 0)) return void(ok = false);  // assembly refuses such maps before this is built
+      c11[k] = (xv * xv + yv * yv) / det;
+      c22[k] = (xu * xu + yu * yu) / det;
+    };
+    for (int i = 0; i < nu; ++i)
+      for (int j : columns) measure(i, j);
+    for (int j = 0; j < nv; ++j)
+      for (int i : rows) measure(i, j);
+    if (!ok) return {};
+    return SeparableCoefficients::fit(nu, nv, c11, c22, rows, columns);
+  }
+
+  TensorSpaceOptions options_;
+  TensorDiscretization d_;
+  std::unique_ptr<NurbsGeometryMap> geometry_;
+};
+
+}  // namespace
+
+SpaceFamily tensor_family() {
+  SpaceFamily f;
+  f.name = "tensor";
+  f.read_case = read_tensor_case;
+  f.structured_preconditioner = kFastDiagonalization;
+  f.space_keys = tensor_space_keys();
+  f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
+    TensorSpaceOptions s = patch_space(c);
+    s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
+    return std::make_unique<TensorSpace>(c, s);
+  };
+  f.build_part = [](const CaseDescription& c, int level, int rank, int ranks,
+                    const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
+    TensorSpaceOptions s = patch_space(c);
+    s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
+    return std::make_unique<TensorSpace>(c, s, RowShare{rank, ranks});
+  };
+  f.override_options = [](CaseDescription& c, int degree, int elements) {
+    override_patch_space(patch_space(c), degree, elements);
+  };
+  f.check_converge = [](const CaseDescription& c, int levels) {
+    check_uniform_levels(patch_space(c), levels);
+    TensorSpaceOptions finest = patch_space(c);
+    finest.elements_per_span = {finest.elements_per_span[0] << (levels - 1), finest.elements_per_span[1] << (levels - 1)};
+    check_tensor_memory(c, finest);  // the finest level, before the first is solved
+  };
+  return f;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,135 @@
+// Family "thb": truncated hierarchical B-splines on one patch's parameter domain, starting
+// from the tensor mesh of [space] degree and elements on the geometry's knot spans (its C0
+// lines kept), refined by halving marked cells in both directions; graded to stay
+// T-admissible of class [space] admissibility (2 by default, 0: no grading).
+#include <cstdio>
+#include <memory>
+
+#include "basis/core/bezier_mesh.hpp"
+#include "families/tensor/tensor_case.hpp"
+#include "basis/thb/thb_hierarchy.hpp"
+#include "cases/case_reader.hpp"
+#include "cases/resource_limits.hpp"
+#include "cases/spline_space.hpp"
+#include "basis/core/geometry_map.hpp"
+#include "basis/core/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+struct ThbSection : PatchSpaceSection {
+  int admissibility = 2;
+  std::unique_ptr<CaseSection> clone() const override { return std::make_unique<ThbSection>(*this); }
+};
+
+const std::vector<std::string>& thb_space_keys() {
+  static const std::vector<std::string> keys{"family", "degree", "elements", "admissibility", "quadrature_points",
+                                             "error_quadrature_points"};
+  return keys;
+}
+
+void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
+  const CaseReader& r = doc.reader;
+  const DocumentNode& s = read_dyadic_patch_start(doc, c, "thb", thb_space_keys(), "new knots are C^(d-1)");
+  ThbSection& t = c.section.emplace<ThbSection>();
+  t.space.rational = false;
+  if (const DocumentNode* a = s.get("admissibility")) {
+    const long m = r.integer(*a, "[space] admissibility");
+    if (m != 0 && (m < 2 || m > 8))
+      r.fail("[space] admissibility", "must be 0 (no grading) or a class m in 2..8, not " + std::to_string(m));
+    t.admissibility = static_cast<int>(m);
+  }
+  read_patch_degree_elements(doc, t.space, false);
+  read_quadrature(r, s, c);
+  read_patch_problem(doc, c);
+}
+
+const ThbSection& thb_section(const CaseDescription& c) { return family_section<ThbSection>(c); }
+
+class ThbSpace final : public SplineSpace {
+ public:
+  ThbSpace(const CaseDescription& c, ThbHierarchy hierarchy) : case_(&c), hierarchy_(std::move(hierarchy)) {
+    ThbHierarchy::Basis b;
+    try {
+      b = hierarchy_.build();
+    } catch (const std::runtime_error& e) {
+      throw InputError(c.path + ": [space]: " + e.what());
+    }
+    mesh_ = std::move(b.mesh);
+    leaves_ = std::move(b.leaves);
+    per_level_ = std::move(b.functions_per_level);
+    geometry_ = finish_patch_mesh(c, mesh_);
+  }
+
+  const BezierMesh& mesh() const override { return mesh_; }
+  const GeometryMap& geometry() const override { return *geometry_; }
+  std::string description() const override {
+    const auto d = degree();
+    const int m = hierarchy_.admissibility();
+    return "THB-splines, degree " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + ", " +
+           (m == 0 ? std::string("no grading") : "T-admissible of class " + std::to_string(m));
+  }
+  std::array<int, 2> degree() const override { return thb_section(*case_).space.degree; }
+  std::vector<ReportField> report() const override {
+    return {{.key = "levels", .value = long(per_level_.size()), .column = true, .width = 7}};
+  }
+  std::vector<ReportField> basis_report() const override {
+    std::string text;
+    for (size_t l = 0; l < per_level_.size(); ++l) text += (l ? ", " : "") + std::to_string(per_level_[l]);
+    std::vector<std::string> counts;
+    for (int n : per_level_) counts.push_back(std::to_string(n));
+    return {{.key = "functions_per_level", .value = counts, .text = text, .label = "per level"}};
+  }
+  std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
+                                      int* extended, const ProgressFunction& /*progress*/) && override {
+    // THB refinement halves a cell in both directions; the split direction does not apply.
+    std::vector<ThbCell> cells;
+    cells.reserve(marked.size());
+    for (int m : marked) cells.push_back(leaves_.at(m));
+    ThbHierarchy next = hierarchy_;
+    int extra = 0;
+    try {
+      extra = next.refine(cells);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(case_->path + ": [space]: " + e.what());
+    }
+    if (extended) *extended = extra;
+    check_refined_memory(*case_, double(next.num_leaves()), "THB");
+    return std::make_unique<ThbSpace>(*case_, std::move(next));
+  }
+  KnotLines knot_lines() const override { return knot_lines_of_cells(mesh_, *geometry_); }
+
+ private:
+  const CaseDescription* case_;
+  ThbHierarchy hierarchy_;
+  BezierMesh mesh_;
+  std::vector<ThbCell> leaves_;
+  std::vector<int> per_level_;
+  std::unique_ptr<PatchGeometryMap> geometry_;
+};
+
+std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
+  const ThbSection& t = thb_section(c);
+  DyadicKnots u = patch_dyadic_knots(c.geometry, t.space, 0, level), v = patch_dyadic_knots(c.geometry, t.space, 1, level);
+  check_dyadic_start_memory(c, u, v, "THB");
+  return std::make_unique<ThbSpace>(c, ThbHierarchy(std::move(u), std::move(v), t.admissibility));
+}
+
+}  // namespace
+
+SpaceFamily thb_family() {
+  SpaceFamily f;
+  f.name = "thb";
+  f.read_case = read_thb_case;
+  f.space_keys = thb_space_keys();
+  f.build = [](const CaseDescription& c, int level, const ProgressFunction&) { return build_thb(c, level); };
+  f.local_refinement = true;
+  f.override_options = [](CaseDescription& c, int degree, int elements) {
+    override_patch_space(family_section<ThbSection>(c).space, degree, elements);
+  };
+  f.check_converge = [](const CaseDescription& c, int levels) { check_uniform_levels(thb_section(c).space, levels); };
+  return f;
+}
+
+}  // namespace knotwork

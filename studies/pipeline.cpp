@@ -1,0 +1,178 @@
+#include "studies/pipeline.hpp"
+
+#include <algorithm>
+#include <utility>
+
+#include "solver/amg_preconditioner.hpp"
+#include "solver/distributed_poisson.hpp"
+#include "basis/core/input_error.hpp"
+
+namespace knotwork {
+
+std::unique_ptr<SplineSpace> build_space(const CaseDescription& c, int level, const ProgressFunction& progress) {
+  const SpaceFamily& family = space_family(c);
+  const ParallelWorld launched = launched_world();
+  if (launched.size > 1 && c.solver.method == "petsc" && family.build_part) {
+    std::unique_ptr<SplineSpace> part;
+    on_all_ranks([&] { part = family.build_part(c, level, launched.rank, launched.size, progress); });
+    return part;
+  }
+  std::unique_ptr<SplineSpace> space = family.build(c, level, progress);
+  if (launched.size > 1 && c.solver.method == "petsc" && space->mesh().num_cells() < launched.size)
+    throw InputError(c.path + ": [space]: the space has " + std::to_string(space->mesh().num_cells()) +
+                     " cells, fewer than the " + std::to_string(launched.size) + " processes that share them: use at most " +
+                     std::to_string(space->mesh().num_cells()) + " processes");
+  return space;
+}
+
+int global_num_cells(const SplineSpace& space) {
+  return space.part() ? space.part()->global_cells : space.mesh().num_cells();
+}
+
+double global_mesh_size(const SplineSpace& space) {
+  double h = space.mesh_size();
+  if (space.part()) max_over_ranks(&h, 1);
+  return h;
+}
+
+CellRange cells_to_write(const SplineSpace& space, ParallelWorld world) {
+  return space.part() ? space.part()->owned : cells_of_rank(space.mesh().num_cells(), world);
+}
+
+namespace {
+
+// "auto" picks CG for spaces with a structured preconditioner from this many functions on
+// (docs/SOLVERS.md: where the measured times cross), and CHOLMOD otherwise.
+constexpr int kAutoIterativeFunctions = 10000;
+
+SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) {
+  SolverReport r;
+  const std::string structured = space.structured_preconditioner();
+  if (c.solver.method == "auto")
+    r.method = !structured.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
+  else
+    r.method = c.solver.method;
+  if (r.method == "direct") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
+  const std::string& asked = c.solver.preconditioner;
+  if (asked == "auto") {
+    // Without a structure to use: algebraic multigrid, whose iteration count stays bounded as
+    // h shrinks where Jacobi's grows like 1/h (docs/SOLVERS.md).
+    r.preconditioner = structured.empty() ? kBoomerAmgName : structured;
+    if (structured.empty())
+      r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc), since family \"" +
+               c.family + "\" has no structured preconditioner";
+  } else if (asked == "jacobi" || asked == kBoomerAmgName) {
+    r.preconditioner = asked;  // algebraic: they apply to every family
+  } else if (asked == structured) {
+    r.preconditioner = asked;
+  } else {
+    throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" does not apply to family \"" + c.family +
+                     "\" (" + (structured.empty() ? std::string("use \"boomeramg\", \"jacobi\" or method = \"direct\"")
+                                                   : "it has \"" + structured + "\"; or use \"boomeramg\" or \"jacobi\"") + ")");
+  }
+  return r;
+}
+
+// Gauss points per direction below degree + 1 leave the stiffness under-integrated: on a cell
+// of degree p, L_n(u) L_n(v) (Legendre, n < p + 1 points) lies in the cell's polynomials and its
+// gradient vanishes at every point of the rule, so the matrix can lose definiteness and the
+// solve would then blame the boundary conditions. Refused before any work, naming the key.
+void check_quadrature_points(const CaseDescription& c, const BezierMesh& mesh) {
+  int pu = 0, pv = 0;
+  for (int e = 0; e < mesh.num_cells(); ++e) {
+    pu = std::max(pu, mesh.cell(e).degree_u);
+    pv = std::max(pv, mesh.cell(e).degree_v);
+  }
+  auto check = [&](const char* key, int nu, int nv, const std::string& integrand) {
+    for (const auto& [n, p] : {std::pair{nu, pu}, std::pair{nv, pv}})
+      if (n > 0 && n < p + 1)
+        throw InputError(c.path + ": [space] " + key + ": " + std::to_string(n) + " Gauss point" + (n == 1 ? "" : "s") +
+                         " per direction, fewer than degree + 1 = " + std::to_string(p + 1) +
+                         ", the fewest that integrate " + integrand + " (omit the key for the default)");
+  };
+  check("quadrature_points", c.quadrature.points_u, c.quadrature.points_v,
+        "the stiffness of a degree-" + std::to_string(std::max(pu, pv)) + " space exactly on straight cells");
+  check("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v,
+        "|grad u_h|^2 of a degree-" + std::to_string(std::max(pu, pv)) + " solution exactly on straight cells");
+}
+
+}  // namespace
+
+PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
+                           const ProgressFunction& progress, SolverReport* report) {
+  space.check_solvable();
+  check_quadrature_points(c, space.mesh());
+  PoissonSolveOptions so;
+  so.quadrature = c.quadrature;
+  so.ordering = ordering;
+  so.progress = progress;
+  so.cell_errors = true;
+  so.estimate_condition = c.solver.estimate_condition;
+  const SolverReport chosen = resolve_solver(c, space);
+  if (report) *report = chosen;
+  const ParallelWorld launched = launched_world();
+  if (launched.size > 1 && chosen.method != "petsc")
+    throw InputError(c.path + ": [solver] method: \"" + chosen.method + "\" under mpirun with " +
+                     std::to_string(launched.size) + " processes: each would solve the whole problem alone; use "
+                     "--solver petsc (or method = \"petsc\") to share it");
+  if (c.solver.estimate_condition && chosen.method == "petsc")
+    throw InputError(c.path + ": --condition: estimated on the serial paths only (direct or iterative), not with "
+                     "method = \"petsc\"");
+  if (chosen.method == "iterative" || chosen.method == "petsc") {
+    so.iterative = chosen.method == "iterative";
+    so.tolerance = c.solver.tolerance;
+    so.max_iterations = c.solver.max_iterations;
+    // (Under petsc, BoomerAMG and Jacobi are PETSc's own PCs; a structured one is a PCShell.)
+    if (chosen.preconditioner == kBoomerAmgName && chosen.method == "iterative") {
+      const std::string options = c.solver.petsc_options, path = c.path;
+      so.preconditioner = [options, path](const DofLayout&, const Eigen::SparseMatrix<double>& lower) {
+        try {
+          return boomeramg_preconditioner(lower, options);
+        } catch (const std::invalid_argument& e) {
+          throw InputError(path + ": [solver] petsc_options: " + e.what());
+        }
+      };
+    } else if (chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi") {
+      const std::string name = chosen.preconditioner, path = c.path;
+      const PoissonProblem* problem = &c.problem;
+      so.preconditioner = [&space, name, path, problem](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
+        std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(layout, lower, *problem);
+        if (!p)
+          throw InputError(path + ": [solver] preconditioner: \"" + name +
+                           "\" does not apply to this problem's unknowns (they are not a tensor product: use \"boomeramg\", \"jacobi\" "
+                           "or method = \"direct\")");
+        return p;
+      };
+    }
+  }
+  try {
+    if (chosen.method == "petsc") {
+      DistributedSolveOptions petsc;
+      petsc.petsc_options = c.solver.petsc_options;
+      petsc.preconditioner = chosen.preconditioner == kBoomerAmgName || chosen.preconditioner == "jacobi"
+                                 ? chosen.preconditioner
+                                 : "shell";
+      petsc.tolerance = c.solver.petsc_tolerance();
+      petsc.max_iterations = c.solver.max_iterations;
+      return solve_poisson_distributed(space.mesh(), space.geometry(), space.part(), c.problem, so, petsc);
+    }
+    return solve_poisson(space.mesh(), space.geometry(), c.problem, so);
+  } catch (const NotConverged& e) {
+    throw InputError(c.path + ": [solver]: " + e.what() + "; raise max_iterations, loosen tolerance or use method = \"direct\"");
+  } catch (const GeometryError& e) {
+    throw InputError(c.path + ": [geometry]: " + e.what());
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.path + ": " + e.what());
+  }
+}
+
+// Written as a case file, so that it is read and validated like one.
+CaseDescription unit_square_benchmark_case(int p, int n) {
+  const std::string text = "[geometry]\ntype = \"rectangle\"\n[space]\ndegree = " + std::to_string(p) +
+                           "\nelements = " + std::to_string(n) + "\n[problem]\nexact = \"sin(pi*x)*sin(pi*y)\"\n";
+  return load_case_text(text, "bench");
+}
+
+}  // namespace knotwork
