@@ -443,13 +443,73 @@ std::vector<AxisSegment> read_axis_segments(const CaseReader& r, const DocumentN
   return out;
 }
 
+namespace {
+
+// An expression field that may also be written as a number (a constant coefficient).
+Expression expression_or_number(const CaseReader& r, const DocumentNode& n, const std::string& field) {
+  std::string text;
+  if (n.value_exact<std::string>()) {
+    text = r.string(n, field);
+  } else {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.17g", r.number(n, field));
+    text = b;
+  }
+  return Expression::parse(text, r.path() + ": " + field);
+}
+
+// [problem] coefficient: a scalar a (A = a I) or a symmetric 2x2 matrix [[a11, a12], [a21, a22]]
+// of expressions or numbers; a21 must be a12 (compared at a few points).
+std::vector<Expression> read_diffusion(const CaseReader& r, const DocumentNode& n) {
+  const std::string field = "[problem] coefficient";
+  const DocumentNode* rows = n.as_array();
+  if (!rows) return {expression_or_number(r, n, field)};
+  const char* shape = "must be an expression (A = a I) or a symmetric 2x2 matrix [[a11, a12], [a12, a22]]";
+  if (rows->size() != 2) r.fail(field, shape);
+  Expression a[2][2];
+  for (int i = 0; i < 2; ++i) {
+    const DocumentNode* row = rows->get(i)->as_array();
+    if (!row || row->size() != 2) r.fail(field, shape);
+    for (int j = 0; j < 2; ++j)
+      a[i][j] = expression_or_number(r, *row->get(j), field + "[" + std::to_string(i + 1) + "][" + std::to_string(j + 1) + "]");
+  }
+  ExpressionEvaluator upper(a[0][1]), lower(a[1][0]);
+  const double points[3][2] = {{0.31, 0.72}, {-0.43, 0.27}, {0.64, -0.85}};
+  for (const auto& p : points) {
+    const double u = upper(p[0], p[1]), l = lower(p[0], p[1]);
+    if (std::abs(u - l) > 1e-12 * (1 + std::abs(u)) || std::isnan(u) != std::isnan(l)) {
+      char at[96];
+      std::snprintf(at, sizeof at, " differ at (%g, %g): %g and %g", p[0], p[1], u, l);
+      r.fail(field, "not symmetric: a12 = \"" + a[0][1].text() + "\" and a21 = \"" + a[1][0].text() + "\"" + at);
+    }
+  }
+  return {a[0][0], a[0][1], a[1][1]};
+}
+
+}  // namespace
+
 void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
   PoissonProblem& pb = c.problem;
   const std::string& f = r.path();
   if (const DocumentNode* e = t.get("exact"))
     pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
+  if (const DocumentNode* a = t.get("coefficient")) {
+    pb.coefficients.diffusion = read_diffusion(r, *a);
+    pb.coefficients.diffusion_where = f + ": [problem] coefficient";
+  }
+  if (const DocumentNode* n = t.get("reaction")) {
+    if (n->value_exact<std::string>()) {
+      pb.coefficients.reaction = Expression::parse(r.string(*n, "[problem] reaction"), f + ": [problem] reaction");
+    } else {
+      pb.reaction = r.number(*n, "[problem] reaction");
+      if (!(pb.reaction >= 0) || !std::isfinite(pb.reaction)) r.fail("[problem] reaction", "must be >= 0");
+    }
+  }
+  const bool general = !pb.coefficients.constant() || pb.reaction != 0;
   if (const DocumentNode* s = t.get("source"))
     pb.source = Expression::parse(r.string(*s, "[problem] source"), f + ": [problem] source");
+  else if (pb.exact && general)
+    pb.source = derive_general_source(pb.exact->u, pb.coefficients.diffusion, pb.coefficients.reaction, pb.reaction);
   else if (pb.exact)
     pb.source = pb.exact->minus_laplacian;
   else
@@ -478,7 +538,8 @@ void read_dirichlet_method(const CaseReader& r, const DocumentNode& t, PoissonPr
 void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
   const DocumentNode& t = r.table(doc.root, "problem", true);
-  r.check_keys(t, "problem", {"exact", "source", "dirichlet", "neumann", "dirichlet_method", "nitsche_penalty"});
+  r.check_keys(t, "problem",
+               {"exact", "source", "coefficient", "reaction", "dirichlet", "neumann", "dirichlet_method", "nitsche_penalty"});
   PoissonProblem& pb = c.problem;
   const std::string& f = r.path();
   read_planar_exact_and_source(r, t, c);

@@ -31,6 +31,74 @@ std::string describe_cell(const BezierMesh& mesh, int c) {
   return s.str();
 }
 
+// The first point (lowest cell) where A is not positive definite or c is negative.
+struct CoefficientFailure {
+  int cell = -1;
+  double x = 0, y = 0;
+  std::string field, what;
+};
+
+// Checks A (positive definite) and c (>= 0, finite) at the cell's points; records the first
+// failure (lowest cell) and returns false on one.
+bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch& values, const Eigen::MatrixXd& x,
+                             int cell, CoefficientFailure& failure) {
+  const Eigen::Index nq = x.rows();
+  const int nd = static_cast<int>(k.diffusion.size());
+  for (Eigen::Index q = 0; q < nq; ++q) {
+    std::string what;
+    const Expression* field = nullptr;
+    bool matrix = false;
+    if (nd == 1) {
+      const double a = values.result(0)[q];
+      if (!(a > 0) || !std::isfinite(a)) { what = "the coefficient a = " + std::to_string(a) + " is not positive"; field = &k.diffusion[0]; }
+    } else if (nd == 3) {
+      const double a11 = values.result(0)[q], a12 = values.result(1)[q], a22 = values.result(2)[q];
+      if (!(a11 > 0 && a11 * a22 - a12 * a12 > 0) || !std::isfinite(a11 + a12 + a22)) {
+        std::ostringstream m;
+        m << "the coefficient matrix [[" << a11 << ", " << a12 << "], [" << a12 << ", " << a22
+          << "]] is not positive definite";
+        what = m.str();
+        field = &k.diffusion[0];
+        matrix = true;
+      }
+    }
+    if (!field && !k.reaction.empty()) {
+      const double c = values.result(nd)[q];
+      if (!(c >= 0) || !std::isfinite(c)) { what = "the reaction c = " + std::to_string(c) + " is negative"; field = &k.reaction; }
+    }
+    if (!field) continue;
+#pragma omp critical(knotwork_bad_coefficient)
+    if (failure.cell < 0 || cell < failure.cell) {
+      failure.cell = cell;
+      failure.x = x(q, 0);
+      failure.y = x(q, 1);
+      failure.field = matrix && !k.diffusion_where.empty() ? k.diffusion_where : field->where();
+      failure.what = what;
+    }
+    return false;
+  }
+  return true;
+}
+
+// Rows d * nq + q of G (the scaled gradients, per coordinate d and point q) become L^T g at
+// each point, A = L L^T: a scalar a scales them by sqrt(a); a 2x2 matrix by its Cholesky factor.
+void apply_diffusion_factor(const ExpressionBatch& values, int num_diffusion, int dim, Eigen::Index nq,
+                            Eigen::MatrixXd& G) {
+  if (num_diffusion == 1) {
+    const Eigen::Map<const Eigen::ArrayXd> a(values.result(0), nq);
+    const Eigen::VectorXd root = a.sqrt().matrix();
+    for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.asDiagonal() * G.middleRows(d * nq, nq);
+    return;
+  }
+  for (Eigen::Index q = 0; q < nq; ++q) {
+    const double a11 = values.result(0)[q], a12 = values.result(1)[q], a22 = values.result(2)[q];
+    const double l11 = std::sqrt(a11), l21 = a12 / l11, l22 = std::sqrt(a22 - l21 * l21);
+    // L^T = [[l11, l21], [0, l22]]
+    G.row(q) = l11 * G.row(q) + l21 * G.row(nq + q);
+    G.row(nq + q) *= l22;
+  }
+}
+
 // Adds the element matrix into the lower-triangular CSC values: for each alive free
 // column, walk its sorted rows and the cell's sorted dofs together.
 void scatter(const int* outer, const int* inner, const std::vector<std::pair<int, int>>& order,
@@ -112,6 +180,20 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   if (form.load && form.source) compiled_source.emplace(std::vector<Expression>{*form.source});
   std::optional<SeparableMesh> separable;
   if (quadrature.separable_cells) separable.emplace(mesh);
+  // Variable A and c: compiled once (entries of A first, then c), evaluated per cell.
+  const PoissonCoefficients* variable = form.coefficients && !form.coefficients->constant() ? form.coefficients : nullptr;
+  const int num_diffusion = variable ? static_cast<int>(variable->diffusion.size()) : 0;
+  const bool variable_reaction = variable && !variable->reaction.empty();
+  std::optional<ExpressionBatch> compiled_coefficients;
+  if (variable) {
+    if (dim != 2)
+      throw InputError((variable->diffusion.empty() ? variable->reaction.where() : variable->diffusion.front().where()) +
+                       ": a variable coefficient on a surface is not supported (planar domains only)");
+    std::vector<Expression> all = variable->diffusion;
+    if (variable_reaction) all.push_back(variable->reaction);
+    compiled_coefficients.emplace(all);
+  }
+  CoefficientFailure bad_coefficient;
   // Nitsche's boundary terms first, serially (few cells; the data's evaluators are not
   // shared between threads), then added to their cells' element matrices in the loop.
   std::vector<NitscheCellTerms> nitsche;
@@ -131,6 +213,9 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
     Eigen::VectorXd* my_integrals = integrals_of(tid);
     std::optional<ExpressionBatch> f;
     if (compiled_source) f.emplace(*compiled_source);
+    std::optional<ExpressionBatch> coefficient_values;
+    if (compiled_coefficients) coefficient_values.emplace(*compiled_coefficients);
+    Eigen::ArrayXd reaction_root;
     std::optional<DerivedSurfaceSource> derived_f;
     if (derived) derived_f.emplace(*form.exact);
     CellBasis cb;
@@ -187,20 +272,32 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
       if (!rows || form.reaction != 0) root = measure.array().sqrt();
       const Eigen::MatrixXd& value = rows ? cf.value : cb.value;
       Eigen::MatrixXd& K = rows ? Ke : KB;
+      if (coefficient_values) {
+        coefficient_values->evaluate(at.x.col(0).data(), at.x.col(1).data(), dim == 3 ? at.x.col(2).data() : nullptr, nq);
+        if (!coefficients_admissible(*variable, *coefficient_values, at.x, c, bad_coefficient)) continue;
+        if (variable_reaction)
+          reaction_root = (measure.array() * Eigen::Map<const Eigen::ArrayXd>(coefficient_values->result(num_diffusion), nq)).sqrt();
+      }
       if (form.stiffness != 0) {
         if (!rows) {
           G.resize(dim * nq, value.cols());
           for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.matrix().asDiagonal() * cb.grad(d);
+        } else if (num_diffusion > 0) {
+          G = cf.scaled_gradients;
         }
+        // A = L L^T at each point: the stacked gradients become L^T grad phi, so that the same
+        // product gives sum_q m_q grad phi^T A grad phi.
+        if (num_diffusion > 0) apply_diffusion_factor(*coefficient_values, num_diffusion, dim, nq, G);
         // The lower triangle by a symmetric rank update (half the flops of G^T G), mirrored.
         K.setZero(value.cols(), value.cols());
-        K.selfadjointView<Eigen::Lower>().rankUpdate((rows ? cf.scaled_gradients : G).transpose(), form.stiffness);
+        K.selfadjointView<Eigen::Lower>().rankUpdate((rows && num_diffusion == 0 ? cf.scaled_gradients : G).transpose(),
+                                                     form.stiffness);
         K.triangularView<Eigen::StrictlyUpper>() = K.transpose();
       } else {
         K.setZero(value.cols(), value.cols());
       }
       if (form.reaction != 0) {
-        G.noalias() = root.matrix().asDiagonal() * value;
+        G.noalias() = (variable_reaction ? reaction_root : root).matrix().asDiagonal() * value;
         K.noalias() += form.reaction * (G.transpose() * G);
       }
       fq.array() *= measure.array();  // the load's weights m_q f(x_q), in place
@@ -236,6 +333,12 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
     }
   }
   if (!failure.empty()) throw std::invalid_argument(failure);
+  if (bad_coefficient.cell >= 0 && bad_coefficient.cell < bad_cell) {
+    std::ostringstream m;
+    m << ": " << bad_coefficient.what << " at (" << bad_coefficient.x << ", " << bad_coefficient.y << ") in "
+      << describe_cell(mesh, bad_coefficient.cell);
+    throw InputError(bad_coefficient.field + m.str());
+  }
   if (bad_cell != std::numeric_limits<int>::max()) {
     std::ostringstream s;
     if (dim == 2)
@@ -261,6 +364,22 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
 }
 
 }  // namespace
+
+PoissonForm poisson_form(const PoissonProblem& problem) {
+  PoissonForm form;
+  const bool variable_reaction = !problem.coefficients.reaction.empty();
+  form.reaction = variable_reaction ? 1.0 : problem.reaction;
+  form.source_reaction = problem.reaction;
+  form.coefficients = problem.coefficients.constant() ? nullptr : &problem.coefficients;
+  form.source = problem.source.empty() ? nullptr : &problem.source;
+  form.exact = problem.exact ? &*problem.exact : nullptr;
+  if (problem.dirichlet_method == DirichletMethod::kNitsche) form.nitsche = &problem;
+  return form;
+}
+
+bool without_reaction(const PoissonProblem& problem) {
+  return problem.reaction == 0 && problem.coefficients.reaction.empty();
+}
 
 void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                       const DofLayout& layout, const Eigen::VectorXd& fixed_values,
@@ -325,16 +444,28 @@ void assemble_poisson_elements(const BezierMesh& mesh, const GeometryMap& geomet
 namespace {
 
 // Data g (Dirichlet) or h (Neumann) at the side's points.
+// The Neumann data from the exact solution are the flux (A grad u).n: `diffusion` holds A's
+// evaluators (none: A = I; one: a I; three: a11, a12, a22).
 void boundary_data(const PoissonProblem& problem, const BoundaryCondition& bc, const CellBasis& cb,
                    std::optional<ExpressionEvaluator>& value, std::optional<ExpressionEvaluator>& ux,
-                   std::optional<ExpressionEvaluator>& uy, Eigen::VectorXd& out) {
+                   std::optional<ExpressionEvaluator>& uy, std::vector<ExpressionEvaluator>& diffusion,
+                   Eigen::VectorXd& out) {
   const Eigen::Index n = cb.measure.size();
   out.resize(n);
   for (Eigen::Index k = 0; k < n; ++k) {
     const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
-    if (bc.kind == BoundaryKind::kNeumann && bc.from_exact)
-      out[k] = (*ux)(x, y) * cb.normal(k, 0) + (*uy)(x, y) * cb.normal(k, 1);
-    else
+    if (bc.kind == BoundaryKind::kNeumann && bc.from_exact) {
+      double gx = (*ux)(x, y), gy = (*uy)(x, y);
+      if (diffusion.size() == 1) {
+        const double a = diffusion[0](x, y);
+        gx *= a, gy *= a;
+      } else if (diffusion.size() == 3) {
+        const double a11 = diffusion[0](x, y), a12 = diffusion[1](x, y), a22 = diffusion[2](x, y);
+        const double fx = a11 * gx + a12 * gy, fy = a12 * gx + a22 * gy;
+        gx = fx, gy = fy;
+      }
+      out[k] = gx * cb.normal(k, 0) + gy * cb.normal(k, 1);
+    } else
       out[k] = (*value)(x, y);
     if (!std::isfinite(out[k])) {
       std::ostringstream s;
@@ -375,11 +506,14 @@ void for_each_boundary_side(const BezierMesh& mesh, const GeometryMap& geometry,
     if (bc.kind != kind) continue;
     std::optional<ExpressionEvaluator> value, ux, uy;
     make_evaluators(problem, bc, value, ux, uy);
+    std::vector<ExpressionEvaluator> diffusion;
+    if (bc.kind == BoundaryKind::kNeumann && bc.from_exact)
+      for (const Expression& a : problem.coefficients.diffusion) diffusion.emplace_back(a);
     for (int c = cells.first; c < last; ++c)
       for (int s = 0; s < 4; ++s) {
         if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
         evaluate_side_basis(mesh, geometry, c, static_cast<CellSide>(s), side_points(quadrature, mesh.cell(c)), cb);
-        boundary_data(problem, bc, cb, value, ux, uy, data);
+        boundary_data(problem, bc, cb, value, ux, uy, diffusion, data);
         visit(c, cb, data);
       }
   }
@@ -411,6 +545,25 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
   };
   std::map<int, Pieces> of_cell;
   Eigen::MatrixXd dn;
+  // With a coefficient A, dB/dn is the conormal derivative (A grad B).n and the penalty's bound
+  // is taken against the A-weighted stiffness (the same coercivity argument in A's energy).
+  std::vector<ExpressionEvaluator> diffusion;
+  for (const Expression& a : problem.coefficients.diffusion) diffusion.emplace_back(a);
+  Eigen::VectorXd nx, ny;
+  const auto conormal = [&](const CellBasis& cb) {
+    nx = cb.normal.col(0), ny = cb.normal.col(1);
+    for (Eigen::Index k = 0; k < nx.size() && !diffusion.empty(); ++k) {
+      const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
+      if (diffusion.size() == 1) {
+        const double a = diffusion[0](x, y);
+        nx[k] *= a, ny[k] *= a;
+      } else {
+        const double a11 = diffusion[0](x, y), a12 = diffusion[1](x, y), a22 = diffusion[2](x, y);
+        const double n0 = nx[k], n1 = ny[k];
+        nx[k] = a11 * n0 + a12 * n1, ny[k] = a12 * n0 + a22 * n1;
+      }
+    }
+  };
   for_each_boundary_side(mesh, geometry, problem, quadrature, cells, BoundaryKind::kDirichlet,
                          [&](int c, const CellBasis& cb, const Eigen::VectorXd& g) {
                            Pieces& p = of_cell[c];
@@ -420,7 +573,8 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
                              p.A.setZero(nb, nb), p.S.setZero(nb, nb), p.P.setZero(nb, nb);
                              p.load_normal.setZero(nb), p.load_value.setZero(nb);
                            }
-                           dn = cb.normal.col(0).asDiagonal() * cb.grad_x + cb.normal.col(1).asDiagonal() * cb.grad_y;
+                           conormal(cb);
+                           dn = nx.asDiagonal() * cb.grad_x + ny.asDiagonal() * cb.grad_y;
                            const Eigen::MatrixXd mdn = cb.measure.asDiagonal() * dn;
                            const Eigen::MatrixXd mixed = cb.value.transpose() * mdn;  // (B_i, dB_j/dn)
                            p.A.noalias() += dn.transpose() * mdn;
@@ -443,8 +597,23 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
     if (!(vb.min_jacobian > 0)) continue;
     const Eigen::Index m = vb.value.cols() - 1;
     Eigen::MatrixXd stiffness = Eigen::MatrixXd::Zero(m + 1, m + 1);
-    for (int d = 0; d < geometry.dimension(); ++d)
-      stiffness.noalias() += vb.grad(d).transpose() * vb.measure.asDiagonal() * vb.grad(d);
+    if (diffusion.empty()) {
+      for (int d = 0; d < geometry.dimension(); ++d)
+        stiffness.noalias() += vb.grad(d).transpose() * vb.measure.asDiagonal() * vb.grad(d);
+    } else {
+      const Eigen::Index nq = vb.measure.size();
+      Eigen::VectorXd w11(nq), w12(nq), w22(nq);
+      for (Eigen::Index k = 0; k < nq; ++k) {
+        const double x = vb.geometry.x(k, 0), y = vb.geometry.x(k, 1);
+        const bool scalar = diffusion.size() == 1;
+        w11[k] = vb.measure[k] * diffusion[0](x, y);
+        w12[k] = scalar ? 0.0 : vb.measure[k] * diffusion[1](x, y);
+        w22[k] = scalar ? w11[k] : vb.measure[k] * diffusion[2](x, y);
+      }
+      const Eigen::MatrixXd mixed = vb.grad_x.transpose() * w12.asDiagonal() * vb.grad_y;
+      stiffness.noalias() += vb.grad_x.transpose() * w11.asDiagonal() * vb.grad_x +
+                             vb.grad_y.transpose() * w22.asDiagonal() * vb.grad_y + mixed + mixed.transpose();
+    }
     Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(p.A.topLeftCorner(m, m),
                                                                  stiffness.topLeftCorner(m, m), Eigen::EigenvaluesOnly);
     if (eig.info() != Eigen::Success || !std::isfinite(eig.eigenvalues().maxCoeff()))

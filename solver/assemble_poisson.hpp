@@ -13,12 +13,17 @@
 namespace knotwork {
 
 // What assemble_poisson integrates: the form
-//   a(u, v) = stiffness (grad u, grad v) + reaction (u, v),   l(v) = (f, v),
+//   a(u, v) = stiffness (A grad u, grad v) + reaction (c u, v),   l(v) = (f, v),
+// with A = I and c = 1 unless `coefficients` gives them (planar domains; on a surface a
+// scalar A only),
 // with grad the physical gradient of a planar domain or the surface gradient of a surface
 // (Laplace-Beltrami): one routine for both, through the GeometryMap's dimension.
 struct PoissonForm {
   double stiffness = 1;
   double reaction = 0;
+  // Null or constant(): A = I and c = 1 (times `reaction`). Otherwise A and c are evaluated at
+  // every quadrature point, and `reaction` must be 1 when c is a function.
+  const PoissonCoefficients* coefficients = nullptr;
   // f(x, y[, z]). Null: derived from `exact` on the discrete surface itself,
   // f = -Laplace_Beltrami(u) + source_reaction u, with
   //   Laplace_Beltrami(u) = trace(Hess u) - n.(Hess u) n - kappa (grad u . n),
@@ -35,6 +40,12 @@ struct PoissonForm {
   // with gamma constant on each boundary cell (PoissonProblem::nitsche_penalty).
   const PoissonProblem* nitsche = nullptr;
 };
+
+// The form of a problem: its coefficients, source (or exact solution to derive it from on a
+// surface) and Nitsche data.
+PoissonForm poisson_form(const PoissonProblem& problem);
+// True when the problem has no reaction term (constant or variable).
+bool without_reaction(const PoissonProblem& problem);
 
 // Matrix and load of the form over the free dofs, cell by cell through the BezierMesh,
 // threaded with OpenMP. The Dirichlet lifting -A_{free,fixed} u_fixed goes to the

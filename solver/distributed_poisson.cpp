@@ -136,7 +136,7 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
   // A closed surface has no boundary cell anywhere; a part may simply hold none.
   double boundary_sides = has_boundary(mesh) ? 1 : 0;
   sum_over_ranks(&boundary_sides, 1);
-  const bool zero_mean = problem.reaction == 0 && boundary_sides == 0;
+  const bool zero_mean = without_reaction(problem) && boundary_sides == 0;
   if (zero_mean && given)
     throw std::invalid_argument("[solver] method = \"petsc\" solves closed surfaces only with the space built whole on "
                                 "every rank (their zero-mean solution needs the whole mass matrix), and this family "
@@ -145,12 +145,7 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
   sol.zero_mean = zero_mean;
   sol.num_functions = part.global_functions;
   sol.distributed.ranks = world.size;
-  PoissonForm form;
-  form.reaction = problem.reaction;
-  form.source_reaction = problem.reaction;
-  form.source = problem.source.empty() ? nullptr : &problem.source;
-  form.exact = problem.exact ? &*problem.exact : nullptr;
-  if (problem.dirichlet_method == DirichletMethod::kNitsche) form.nitsche = &problem;
+  PoissonForm form = poisson_form(problem);
 
   say("setup");
   auto t = clock::now();

@@ -283,20 +283,24 @@ bool operands_within_double_range(const GiNaC::ex& e, const GiNaC::lst& at) {
 class Differentiator {
  public:
   explicit Differentiator(const Expression& u) : u_(u), x_("x"), y_("y"), z_("z") {
-    using namespace GiNaC;
-    symtab table;
-    table["x"] = x_;
-    table["y"] = y_;
-    table["z"] = z_;
-    table["pi"] = Pi;
-    table["e"] = exp(ex(1));
-    parser reader(table);
-    reader.strict = true;
-    if (const auto why = unbounded_constant_power(u.text()))
-      throw InputError(u.where() + ": cannot differentiate \"" + u.text() + "\" symbolically: " + *why +
-                       " makes exact arithmetic compute numbers of millions of digits; give `source` explicitly");
-    f_ = reader(u.text());  // a parse error becomes the field's InputError in derive_or_refuse
-    check_same_reading();
+    f_ = read_text(u);  // a parse error becomes the field's InputError in derive_or_refuse
+    check_same_reading(f_, u_);
+  }
+  // Another expression of the same problem (a coefficient), read with the same symbols and
+  // checked the same way.
+  GiNaC::ex read(const Expression& e) const {
+    GiNaC::ex r;
+    try {
+      r = read_text(e);
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& error) {
+      std::string msg = error.what();
+      throw InputError(e.where() + ": cannot differentiate \"" + e.text() + "\" symbolically (" +
+                       msg.substr(0, msg.find('\n')) + ")");
+    }
+    check_same_reading(r, e);
+    return r;
   }
   const GiNaC::ex& f() const { return f_; }
   const GiNaC::symbol& x() const { return x_; }
@@ -355,15 +359,31 @@ class Differentiator {
   // The differentiator must read u as the evaluator does. They part on a sign after '^': GiNaC
   // reads (x+2)^-1*2 as (x+2)^(-2), muParser as 2/(x+2) (u and its derivatives then belonged
   // to two different functions, and the error did not converge).
-  void check_same_reading() const {
-    const auto d = first_disagreement(f_, u_);
+  void check_same_reading(const GiNaC::ex& f, const Expression& u) const {
+    const auto d = first_disagreement(f, u);
     if (!d) return;
-    if (signed_exponent_position(u_.text()))
-      throw InputError(u_.where() + ": \"" + u_.text() + "\" has a sign after '^', which the evaluator and the symbolic "
+    if (signed_exponent_position(u.text()))
+      throw InputError(u.where() + ": \"" + u.text() + "\" has a sign after '^', which the evaluator and the symbolic "
                        "differentiator read differently (at " + d->point + ": " + number_text(d->text_value) + " and " +
                        number_text(d->exact_value) + "); put the signed exponent in parentheses, as in x^(-1)");
-    throw InputError(u_.where() + ": \"" + u_.text() + "\" cannot be evaluated in double precision " + d->at() +
+    throw InputError(u.where() + ": \"" + u.text() + "\" cannot be evaluated in double precision " + d->at() +
                      "; are its constants too large?");
+  }
+
+  GiNaC::ex read_text(const Expression& e) const {
+    using namespace GiNaC;
+    symtab table;
+    table["x"] = x_;
+    table["y"] = y_;
+    table["z"] = z_;
+    table["pi"] = Pi;
+    table["e"] = exp(ex(1));
+    parser reader(table);
+    reader.strict = true;
+    if (const auto why = unbounded_constant_power(e.text()))
+      throw InputError(e.where() + ": cannot differentiate \"" + e.text() + "\" symbolically: " + *why +
+                       " makes exact arithmetic compute numbers of millions of digits; give `source` explicitly");
+    return reader(e.text());
   }
 
   Expression u_;
@@ -650,7 +670,7 @@ ExactSolution differentiate_surface(const Expression& u) {
 // GiNaC and CLN throw their own exceptions (a floating-point underflow in exp(-x^2111...), a
 // power too large): they become InputErrors naming the field, like a syntax error.
 template <class Derive>
-ExactSolution derive_or_refuse(const Expression& u, Derive derive) {
+auto derive_or_refuse(const Expression& u, Derive derive) -> decltype(derive()) {
   try {
     return derive();
   } catch (const InputError&) {
@@ -671,6 +691,20 @@ ExactSolution differentiate_exact_solution(const Expression& u) {
 
 ExactSolution differentiate_surface_solution(const Expression& u) {
   return derive_or_refuse(u, [&] { return differentiate_surface(u); });
+}
+
+Expression derive_general_source(const Expression& u, const std::vector<Expression>& diffusion,
+                                  const Expression& reaction, double constant_reaction) {
+  return derive_or_refuse(u, [&] {
+    const Differentiator d(u);
+    const GiNaC::ex ux = d.f().diff(d.x()), uy = d.f().diff(d.y());
+    GiNaC::ex a11 = 1, a12 = 0, a22 = 1;
+    if (diffusion.size() == 1) a11 = a22 = d.read(diffusion[0]);
+    if (diffusion.size() == 3) a11 = d.read(diffusion[0]), a12 = d.read(diffusion[1]), a22 = d.read(diffusion[2]);
+    const GiNaC::ex c = reaction.empty() ? GiNaC::ex(constant_reaction) : d.read(reaction);
+    const GiNaC::ex f = -((a11 * ux + a12 * uy).diff(d.x()) + (a12 * ux + a22 * uy).diff(d.y())) + c * d.f();
+    return d.to_expression(f, "source -div(A grad u) + c u");
+  });
 }
 
 }  // namespace knotwork

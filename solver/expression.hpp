@@ -74,6 +74,11 @@ struct ExactSolution {
 // Throws InputError if u cannot be differentiated (unknown function, non-smooth parts GiNaC
 // rejects). The derived expressions are checked against GiNaC's own evaluation.
 ExactSolution differentiate_exact_solution(const Expression& u);
+// f = -div(A grad u) + c u in the plane, symbolically: A is the identity (no entries), a I (one)
+// or [[a11, a12], [a12, a22]] (three: a11, a12, a22); c is `reaction` when given, else the
+// constant. Throws InputError naming the field that cannot be read or differentiated.
+Expression derive_general_source(const Expression& u, const std::vector<Expression>& diffusion,
+                                  const Expression& reaction, double constant_reaction);
 // The same for a function of (x, y, z) restricted to a surface (u_z and the Hessian; no
 // minus_laplacian, which depends on the surface).
 ExactSolution differentiate_surface_solution(const Expression& u);

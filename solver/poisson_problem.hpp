@@ -1,5 +1,6 @@
 #pragma once
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "basis/core/mesh_part.hpp"
@@ -26,8 +27,22 @@ struct BoundaryCondition {
 // Nitsche's method lets the Galerkin solution choose its trace (docs/MATH.md §4).
 enum class DirichletMethod { kProjection, kNitsche };
 
-// -Laplace(u) + reaction u = f in the domain (planar) or on the surface (Laplace-Beltrami),
-// with the boundary conditions above. On a closed surface with reaction = 0 the operator has
+// The variable coefficients of -div(A grad u) + c u = f. A is symmetric positive definite at
+// every point: the identity (no entries), a scalar function a times the identity (one entry),
+// or the matrix [[a11, a12], [a12, a22]] (three entries, in that order). c >= 0: the constant
+// PoissonProblem::reaction, or a function (`reaction`, when given). The assembly refuses, naming
+// the field and the point, an A that is not positive definite or a c that is negative at a
+// quadrature point.
+struct PoissonCoefficients {
+  std::vector<Expression> diffusion;
+  std::string diffusion_where;  // "file: [problem] coefficient", for messages about A as a whole
+  Expression reaction;
+  bool constant() const { return diffusion.empty() && reaction.empty(); }
+};
+
+// -div(A grad u) + c u = f in the domain (planar; A and c as PoissonCoefficients say) or
+// -Laplace_Beltrami(u) + c u = f on a surface (constant c), with the boundary conditions above;
+// Neumann data are the flux (A grad u).n. On a closed surface with c = 0 the operator has
 // the constants as kernel: u is sought with zero mean and f is made compatible by removing its
 // mean (solve_poisson reports both).
 struct PoissonProblem {
@@ -35,6 +50,7 @@ struct PoissonProblem {
   std::optional<ExactSolution> exact;
   std::vector<BoundaryCondition> boundary;
   double reaction = 0;
+  PoissonCoefficients coefficients;
   DirichletMethod dirichlet_method = DirichletMethod::kProjection;
   // Nitsche's penalty on a boundary cell is nitsche_penalty * 2 lambda, with lambda the largest
   // ratio of the squared normal derivative on the cell's Dirichlet sides to the squared

@@ -24,6 +24,7 @@ ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry,
   PoissonForm mass = load_form;
   mass.stiffness = 0;
   mass.reaction = 1;
+  mass.coefficients = nullptr;  // the plain mass matrix, whatever A is
   ZeroMeanData z;
   assemble_poisson(mesh, geometry, mass, all, Eigen::VectorXd::Zero(n), quadrature, M, z.load, &z.integrals);
   SparseCholesky chol(ordering);
@@ -54,13 +55,8 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   if (problem.reaction < 0) throw std::invalid_argument("reaction must be >= 0");
   PoissonSolution sol;
   sol.num_functions = mesh.num_functions();
-  PoissonForm form;
-  form.reaction = problem.reaction;
-  form.source_reaction = problem.reaction;
-  form.source = problem.source.empty() ? nullptr : &problem.source;
-  form.exact = problem.exact ? &*problem.exact : nullptr;
-  if (problem.dirichlet_method == DirichletMethod::kNitsche) form.nitsche = &problem;
-  sol.zero_mean = problem.reaction == 0 && !has_boundary(mesh);
+  const PoissonForm form = poisson_form(problem);
+  sol.zero_mean = without_reaction(problem) && !has_boundary(mesh);
 
   say("setup");
   auto t = clock::now();
@@ -103,6 +99,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     mass.reaction = 1;
     mass.load = false;
     mass.nitsche = nullptr;
+    mass.coefficients = nullptr;
     Eigen::SparseMatrix<double> M = lower_pattern_matrix(mesh, layout);
     Eigen::VectorXd unused;
     assemble_poisson(mesh, geometry, mass, layout, Eigen::VectorXd::Zero(mesh.num_functions()), options.quadrature, M,

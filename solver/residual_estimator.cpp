@@ -6,12 +6,14 @@
 #include <cmath>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "quadrature/bernstein.hpp"
 #include "quadrature/gauss_legendre.hpp"
 #include "solver/cell_basis.hpp"
 #include "solver/error_norms.hpp"
+#include "solver/expression.hpp"
 
 namespace knotwork {
 
@@ -22,6 +24,41 @@ void side_point(CellSide side, double t, double& u, double& v) {
   u = side == kSideBottom || side == kSideTop ? t : side == kSideRight ? 1 : 0;
   v = side == kSideLeft || side == kSideRight ? t : side == kSideTop ? 1 : 0;
 }
+
+// A and c of -div(A grad u) + c u at points, for one thread: A's entries (none: the identity;
+// one: a I; three: a11, a12, a22) and their x and y derivatives, for div(A grad u_h).
+class PointCoefficients {
+ public:
+  PointCoefficients(const PoissonProblem& problem, const std::vector<ExactSolution>& derivatives)
+      : constant_reaction_(problem.reaction) {
+    for (const ExactSolution& d : derivatives) {
+      entries_.emplace_back(d.u);
+      dx_.emplace_back(d.u_x);
+      dy_.emplace_back(d.u_y);
+    }
+    if (!problem.coefficients.reaction.empty()) reaction_.emplace(problem.coefficients.reaction);
+  }
+  // A at (x, y).
+  Eigen::Matrix2d A(double x, double y) {
+    if (entries_.empty()) return Eigen::Matrix2d::Identity();
+    Eigen::Matrix2d a;
+    if (entries_.size() == 1) return entries_[0](x, y) * Eigen::Matrix2d::Identity();
+    a << entries_[0](x, y), entries_[1](x, y), entries_[1](x, y), entries_[2](x, y);
+    return a;
+  }
+  // (div A)_j = sum_i d A_ij / d x_i at (x, y).
+  Eigen::Vector2d divergence(double x, double y) {
+    if (entries_.empty()) return Eigen::Vector2d::Zero();
+    if (entries_.size() == 1) return Eigen::Vector2d(dx_[0](x, y), dy_[0](x, y));
+    return Eigen::Vector2d(dx_[0](x, y) + dy_[1](x, y), dx_[1](x, y) + dy_[2](x, y));
+  }
+  double reaction(double x, double y) { return reaction_ ? (*reaction_)(x, y) : constant_reaction_; }
+
+ private:
+  std::vector<ExpressionEvaluator> entries_, dx_, dy_;
+  std::optional<ExpressionEvaluator> reaction_;
+  double constant_reaction_;
+};
 
 }  // namespace
 
@@ -39,6 +76,9 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
   }
   ErrorIndicators ind;
   ind.eta_squared = Eigen::VectorXd::Zero(mesh.num_cells());
+  // The derivatives of A's entries, once (GiNaC is not thread-safe).
+  std::vector<ExactSolution> diffusion;
+  for (const Expression& a : problem.coefficients.diffusion) diffusion.push_back(differentiate_exact_solution(a));
   // Physical extent of each cell across its u and v directions (distance between the midpoints
   // of opposite sides); h_K is the larger.
   Eigen::VectorXd extent_u(mesh.num_cells()), extent_v(mesh.num_cells());
@@ -58,6 +98,7 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
 #pragma omp parallel
   {
     ExpressionEvaluator f(problem.source);
+    PointCoefficients coefficient(problem, diffusion);
     GeometryAtPoints g;
     Eigen::MatrixXd second, B, Bu, Bv, Buu, Buv, Bvv;
     // The rule and the Bernstein tables depend on the degrees only: made again when they change.
@@ -89,7 +130,8 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
       const Eigen::VectorXd beta = mesh.extraction(c).transpose() * local;  // Bernstein coefficients
       // u_h's reference derivatives at the points: u_u, u_v, u_uu, u_uv, u_vv.
-      const Eigen::VectorXd U_u = Bu * beta, U_v = Bv * beta, U_uu = Buu * beta, U_uv = Buv * beta, U_vv = Bvv * beta;
+      const Eigen::VectorXd U = B * beta, U_u = Bu * beta, U_v = Bv * beta, U_uu = Buu * beta, U_uv = Buv * beta,
+                            U_vv = Bvv * beta;
       double integral = 0;
       for (int k = 0; k < n; ++k) {
         // Physical derivatives: grad = J^-T (u_u, u_v); Hess_ref = J^T Hess J + sum_i u_xi Hess(x_i).
@@ -105,8 +147,11 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
           Hx << second(k, 3 * d), second(k, 3 * d + 1), second(k, 3 * d + 1), second(k, 3 * d + 2);
           H -= grad[d] * Hx;
         }
-        const double laplacian = (Jinv.transpose() * H * Jinv).trace();
-        const double r = f(g.x(k, 0), g.x(k, 1)) + laplacian;
+        // div(A grad u_h) = A : Hess u_h + (div A) . grad u_h, and the reaction -c u_h.
+        const double x = g.x(k, 0), y = g.x(k, 1);
+        const Eigen::Matrix2d hessian = Jinv.transpose() * H * Jinv;
+        const double divergence = (coefficient.A(x, y).cwiseProduct(hessian)).sum() + coefficient.divergence(x, y).dot(grad);
+        const double r = f(x, y) + divergence - coefficient.reaction(x, y) * U[k];
         integral += w[k] * std::abs(det) * r * r;
       }
       const double h = std::max(extent_u[c], extent_v[c]);
@@ -127,6 +172,7 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
     QuadratureRule1D rule;
     Eigen::VectorXd ua, va, ub, vb;
     CellField a, b;
+    PointCoefficients coefficient(problem, diffusion);
 #pragma omp for schedule(dynamic, 32)
     for (size_t s = 0; s < sides.size(); ++s) {
       const CellInterface& e = sides[s];
@@ -148,7 +194,11 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       double length = 0, integral = 0, biggest = 0;
       for (int k = 0; k < n; ++k) {
         const double ds = std::hypot(g.jacobian(k, col), g.jacobian(k, 2 + col)) * std::abs(e.a_to - e.a_from) * rule.weights[k];
-        const double jump = std::hypot(a.gradient(k, 0) - b.gradient(k, 0), a.gradient(k, 1) - b.gradient(k, 1));
+        // u_h is continuous: the jump of its gradient is normal, and that of the flux A grad u_h
+        // is A times it.
+        const Eigen::Vector2d step(a.gradient(k, 0) - b.gradient(k, 0), a.gradient(k, 1) - b.gradient(k, 1));
+        const double jump = problem.coefficients.diffusion.empty() ? std::hypot(step[0], step[1])
+                                                                   : (coefficient.A(g.x(k, 0), g.x(k, 1)) * step).norm();
         length += ds;
         integral += ds * jump * jump;
         biggest = std::max(biggest, jump);
@@ -184,6 +234,7 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       const Eigen::MatrixX3d sol = evaluate_solution(mesh, geometry, coefficients, c, u, v);
       GeometryAtPoints g;
       geometry.evaluate(c, u, v, g);
+      PointCoefficients coefficient(problem, diffusion);
       ExpressionEvaluator data(!bc.from_exact ? bc.value : weak_dirichlet ? problem.exact->u : problem.exact->u_x);
       std::unique_ptr<ExpressionEvaluator> data_y;
       if (bc.from_exact && !weak_dirichlet) data_y = std::make_unique<ExpressionEvaluator>(problem.exact->u_y);
@@ -203,8 +254,11 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
         if (weak_dirichlet) {
           r = data(x, y) - sol(k, 0);
         } else {
-          const double gn = bc.from_exact ? data(x, y) * nx + (*data_y)(x, y) * ny : data(x, y);
-          r = gn - (sol(k, 1) * nx + sol(k, 2) * ny);
+          // The flux (A grad u).n: from the exact solution, or the side's data; u_h's the same way.
+          const Eigen::Matrix2d A = coefficient.A(x, y);
+          const Eigen::Vector2d normal(nx, ny);
+          const double gn = bc.from_exact ? (A * Eigen::Vector2d(data(x, y), (*data_y)(x, y))).dot(normal) : data(x, y);
+          r = gn - (A * Eigen::Vector2d(sol(k, 1), sol(k, 2))).dot(normal);
         }
         const double ds = len * rule.weights[k];
         length += ds;

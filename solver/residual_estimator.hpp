@@ -8,11 +8,11 @@
 
 namespace knotwork {
 
-// Residual a posteriori error indicators for -Laplace(u) = f (the standard estimator of
+// Residual a posteriori error indicators for -div(A grad u) + c u = f (the standard estimator of
 // adaptive FEM/IGA), per cell K:
-//   eta_K^2 = h_K^2 ||f + Laplace(u_h)||^2_K
-//           + 1/2 sum over interior edges E of K of h_E ||[grad u_h]||^2_E
-//           + sum over Neumann edges E of K of h_E ||g - du_h/dn||^2_E
+//   eta_K^2 = h_K^2 ||f + div(A grad u_h) - c u_h||^2_K
+//           + 1/2 sum over interior edges E of K of h_E ||[A grad u_h]||^2_E
+//           + sum over Neumann edges E of K of h_E ||g - (A grad u_h).n||^2_E
 //           + sum over Dirichlet edges E of K imposed by Nitsche's method of h_E^-1 ||g - u_h||^2_E
 // with h the physical cell diameter and edge length. The last term is what the weakly imposed
 // trace misses g by (Becker, Hansbo and Stenberg 2003); strongly imposed sides have none. u_h

@@ -86,7 +86,7 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
 
   const DocumentNode& t = r.table(root, "problem", true);
   r.check_keys(t, "problem",
-               {"operator", "exact", "source", "reaction", "dirichlet", "dirichlet_method", "nitsche_penalty"});
+               {"operator", "exact", "source", "coefficient", "reaction", "dirichlet", "dirichlet_method", "nitsche_penalty"});
   std::string op = "laplace";
   if (const DocumentNode* n = t.get("operator")) op = r.string(*n, "[problem] operator");
   if (op != "laplace" && op != "laplace_beltrami")
@@ -104,7 +104,6 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
     }
     if (mesh.closed()) r.fail("[space] mesh", "a planar mesh without boundary");
     if (g.shape != "bilinear") r.fail("[geometry] shape", "planar cases use shape = \"bilinear\"");
-    if (t.get("reaction")) r.fail("[problem] reaction", "only with operator = \"laplace_beltrami\"");
     PoissonProblem& pb = c.problem;
     read_planar_exact_and_source(r, t, c);
     // Nitsche by default: a C1 space fixes the gradient at a boundary vertex from the traces
@@ -135,8 +134,11 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
                                                 : "Dirichlet data on surfaces are not supported (closed surfaces only)");
   if (!mesh.closed())
     r.fail("[space] mesh", g.mesh_file + " has a boundary; Laplace-Beltrami problems are solved on closed surfaces");
+  if (t.get("coefficient"))
+    r.fail("[problem] coefficient", "not supported on surfaces: Laplace-Beltrami problems take A = I (planar meshes take a coefficient)");
   PoissonProblem& pb = c.problem;
   if (const DocumentNode* n = t.get("reaction")) {
+    if (n->value_exact<std::string>()) r.fail("[problem] reaction", "must be a number on a surface (a constant c >= 0)");
     pb.reaction = r.number(*n, "[problem] reaction");
     if (!(pb.reaction >= 0)) r.fail("[problem] reaction", "must be >= 0 (0: zero-mean solution)");
   }

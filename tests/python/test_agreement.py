@@ -40,6 +40,8 @@ RUNS = [
     ("lshape_adaptive_pt.toml", [], {}),
     ("g1_pentagon.toml", [], {}),
     ("g1_sphere_xy.toml", [], {}),
+    ("annulus_anisotropic.toml", [], {}),
+    ("g1_variable_coefficient.toml", [], {}),
 ]
 
 
