@@ -384,7 +384,7 @@ bool without_reaction(const PoissonProblem& problem) {
 void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                       const DofLayout& layout, const Eigen::VectorXd& fixed_values,
                       const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
-                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals) {
+                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals, CellRange cells) {
   const int nthreads = omp_get_max_threads();
   const long nnz = matrix.nonZeros();
   const int* outer = matrix.outerIndexPtr();
@@ -417,7 +417,7 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
     for (const auto& [d, a] : order) (*my_rhs)[d] += Fe[a];
     scatter(outer, inner, order, Ke, my_values);
   };
-  assemble_cells(mesh, geometry, form, layout, fixed_values, quadrature, CellRange{}, emit, integrals_of);
+  assemble_cells(mesh, geometry, form, layout, fixed_values, quadrature, cells, emit, integrals_of);
   for (int t = 0; t < nthreads - 1; ++t) {
     if (!thread_values[t].empty()) {
       const double* src = thread_values[t].data();

@@ -54,10 +54,11 @@ bool without_reaction(const PoissonProblem& problem);
 // `integrals` (optional) receives the integral of every basis function (all functions).
 // Throws GeometryError when det J (planar) or the area element (surfaces) is not positive at
 // a quadrature point (naming the cell), InputError when f is not finite.
+// `cells` restricts the integration to a block of cells (a process's share under mpirun).
 void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                       const DofLayout& layout, const Eigen::VectorXd& fixed_values,
                       const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
-                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals = nullptr);
+                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals = nullptr, CellRange cells = {});
 
 // The same integration as assemble_poisson, restricted to `cells`, handed cell by cell to
 // `sink`: the cell's free dofs as sorted (dof, local index) pairs, its element matrix (over all

@@ -7,7 +7,6 @@
 
 #include <Eigen/SparseCore>
 #include <memory>
-#include <mutex>
 
 #include <sys/resource.h>
 
@@ -50,37 +49,6 @@ CellRange cells_of_rank(int num_cells, ParallelWorld world) {
 }
 
 namespace {
-
-// PETSc's preallocation of the rows of this rank: per owned row (local free dof d with
-// row_of_dof[d] in [first_row, last_row)), the free dofs it couples with (the functions of the
-// cells around it, all in the mesh) in columns of those rows and in the others. A stamp per
-// column and row instead of sets: each row costs the size of its cells' function lists.
-void count_row_nonzeros(const BezierMesh& mesh, const DofLayout& layout, const std::vector<int>& row_of_dof,
-                        int first_row, int last_row, std::vector<int>& diagonal, std::vector<int>& off_diagonal) {
-  const int rows = last_row - first_row;
-  const auto owned = [&](int row) { return row >= first_row && row < last_row; };
-  std::vector<std::vector<int>> cells_of_row(rows);
-  for (int c = 0; c < mesh.num_cells(); ++c)
-    for (int f : mesh.functions(c)) {
-      const int d = layout.dof[f];
-      if (d >= 0 && owned(row_of_dof[d])) cells_of_row[row_of_dof[d] - first_row].push_back(c);
-    }
-  diagonal.assign(rows, 0);
-  off_diagonal.assign(rows, 0);
-#pragma omp parallel
-  {
-    std::vector<int> stamp(layout.num_free(), -1);
-#pragma omp for schedule(dynamic, 256)
-    for (int r = 0; r < rows; ++r)
-      for (int c : cells_of_row[r])
-        for (int f : mesh.functions(c)) {
-          const int d = layout.dof[f];
-          if (d < 0 || stamp[d] == r) continue;
-          stamp[d] = r;
-          ++(owned(row_of_dof[d]) ? diagonal[r] : off_diagonal[r]);
-        }
-  }
-}
 
 // The whole mesh on every rank: its cells and functions in contiguous blocks.
 MeshPart whole_mesh_part(const BezierMesh& mesh, ParallelWorld world) {
@@ -192,50 +160,97 @@ PoissonSolution solve_poisson_distributed(const BezierMesh& mesh, const Geometry
     t = clock::now();
     const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
     const int last_row = part.last_owned_function - fixed_below(part.last_owned_function);
-    std::vector<int> diagonal_nonzeros, off_diagonal_nonzeros;
-    count_row_nonzeros(mesh, layout, row_of_dof, first_row, last_row, diagonal_nonzeros, off_diagonal_nonzeros);
     std::unique_ptr<DistributedSystem> system;
+    on_all_ranks([&] { system = make_distributed_system(n, first_row, last_row); });
+    // The rank's cells through the serial assembly (threaded, no lock), in this rank's dof
+    // numbering, over the pattern of its whole mesh (its cells and the halo its rows need, or
+    // every cell): the owned rows whole, as CSR, then what its cells put in other ranks' rows.
     on_all_ranks([&] {
-      system = make_distributed_system(n, first_row, last_row, diagonal_nonzeros, off_diagonal_nonzeros);
-    });
-    diagonal_nonzeros = off_diagonal_nonzeros = {};
-    // The cells' blocks go to PETSc one at a time (MatSetValues is not thread-safe); the
-    // threads integrate the next cells meanwhile.
-    std::mutex into_petsc;
-    on_all_ranks([&] {
-      assemble_poisson_elements(
-          mesh, geometry, form, layout, fixed_values, options.quadrature, mine,
-          [&](const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke, const Eigen::VectorXd& Fe) {
-            // Per thread, reused from cell to cell (no allocation per cell once sizes settle).
-            thread_local std::vector<int> dofs;
-            thread_local Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block;
-            thread_local Eigen::VectorXd load;
-            const int m = static_cast<int>(order.size());
-            dofs.resize(m);
-            block.resize(m, m);
-            load.resize(m);
-            for (int a = 0; a < m; ++a) {
-              dofs[a] = row_of_dof[order[a].first];
-              load[a] = Fe[order[a].second];
-              for (int b = 0; b < m; ++b) block(a, b) = Ke(order[a].second, order[b].second);
-            }
-            const std::lock_guard<std::mutex> one_at_a_time(into_petsc);
-            system->add(m, dofs.data(), block.data(), load.data());
-          });
-      // The Neumann terms of the rank's cells.
-      Eigen::VectorXd neumann = Eigen::VectorXd::Zero(layout.num_free());
-      add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, neumann, mine);
+      Eigen::SparseMatrix<double> K = lower_pattern_matrix(mesh, layout);
+      Eigen::VectorXd load;
+      assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, load, nullptr, mine);
+      add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, load, mine);
       if (zero_mean)  // the compatible load, once: each rank adds its own rows
         for (int d = 0; d < layout.num_free(); ++d) {
           const int g = layout.function_of_dof[d];
-          if (g >= part.first_owned_function && g < part.last_owned_function)
-            neumann[d] += mean.compatible_load(g);
+          if (g >= part.first_owned_function && g < part.last_owned_function) load[d] += mean.compatible_load(g);
         }
-      std::vector<int> rows;
-      std::vector<double> values;
+      // Both triangles, row by row, straight from the lower CSC: sweeping its columns j in
+      // order, row i >= j gets (j, v) and row j gets (i, v), so every row fills in ascending
+      // column order (row_of_dof is increasing). Owned rows go to PETSc as its two blocks
+      // (columns this rank owns, and the others); the other rows, what this rank's cells put
+      // there, are added to their owners' rows.
+      const int nd = layout.num_free();
+      const auto owned = [&](int d) { return row_of_dof[d] >= first_row && row_of_dof[d] < last_row; };
+      const auto owned_column = [&](int d) { return owned(d); };  // same ranges: square blocks
+      const int* outer = K.outerIndexPtr();
+      const int* inner = K.innerIndexPtr();
+      const double* value = K.valuePtr();
+      // This rank's owned dofs are one contiguous run [first, last) of its local dofs.
+      int first = 0;
+      while (first < nd && !owned(first)) ++first;
+      int last = first;
+      while (last < nd && owned(last)) ++last;
+      if (last - first != last_row - first_row)
+        throw std::logic_error("distributed assembly: this rank's mesh does not hold all of its rows");
+      // Pass 1: the length of every row's part in each block (other rows: one count).
+      std::vector<int> diagonal_count(nd + 1, 0), off_count(nd + 1, 0);
+      const auto count = [&](int row, int col) { ++(owned(row) && owned_column(col) ? diagonal_count : off_count)[row + 1]; };
+      for (int j = 0; j < nd; ++j)
+        for (int p = outer[j]; p < outer[j + 1]; ++p) {
+          count(inner[p], j);
+          if (inner[p] != j) count(j, inner[p]);
+        }
+      OwnedRows rows;
+      rows.diagonal_start.assign(diagonal_count.begin() + first, diagonal_count.begin() + last + 1);
+      rows.off_start.assign(off_count.begin() + first, off_count.begin() + last + 1);
+      rows.diagonal_start[0] = rows.off_start[0] = 0;
+      for (int r = 0; r < last - first; ++r)
+        rows.diagonal_start[r + 1] += rows.diagonal_start[r], rows.off_start[r + 1] += rows.off_start[r];
+      std::vector<int> other_start(nd + 1, 0);  // rows owned elsewhere: all their entries
+      for (int d = 0; d < nd; ++d) other_start[d + 1] = other_start[d] + (d >= first && d < last ? 0 : off_count[d + 1]);
+      diagonal_count = off_count = {};
+      rows.diagonal_cols.resize(rows.diagonal_start.back()), rows.diagonal_values.resize(rows.diagonal_start.back());
+      rows.off_cols.resize(rows.off_start.back()), rows.off_values.resize(rows.off_start.back());
+      std::vector<int> other_cols(other_start[nd]);
+      std::vector<double> other_values(other_start[nd]);
+      // Pass 2: fill.
+      std::vector<int> next_diagonal(rows.diagonal_start.begin(), rows.diagonal_start.end() - 1);
+      std::vector<int> next_off(rows.off_start.begin(), rows.off_start.end() - 1);
+      std::vector<int> next_other(other_start.begin(), other_start.end() - 1);
+      const auto put = [&](int row, int col, double v) {
+        if (row >= first && row < last) {
+          if (owned_column(col))
+            rows.diagonal_cols[next_diagonal[row - first]] = row_of_dof[col] - first_row,
+            rows.diagonal_values[next_diagonal[row - first]++] = v;
+          else
+            rows.off_cols[next_off[row - first]] = row_of_dof[col], rows.off_values[next_off[row - first]++] = v;
+        } else {
+          other_cols[next_other[row]] = row_of_dof[col], other_values[next_other[row]++] = v;
+        }
+      };
+      for (int j = 0; j < nd; ++j)
+        for (int p = outer[j]; p < outer[j + 1]; ++p) {
+          put(inner[p], j, value[p]);
+          if (inner[p] != j) put(j, inner[p], value[p]);
+        }
+      K = Eigen::SparseMatrix<double>();
+      next_diagonal = next_off = next_other = {};
+      system->set_owned_rows(std::move(rows));
+      std::vector<int> row_cols;
+      std::vector<double> row_values;
+      for (int d = 0; d < nd; ++d) {
+        row_cols.clear(), row_values.clear();
+        for (int p = other_start[d]; p < other_start[d + 1]; ++p)
+          if (other_values[p] != 0) row_cols.push_back(other_cols[p]), row_values.push_back(other_values[p]);  // 0: no cell of this rank there
+        if (!row_cols.empty())
+          system->add_to_row(row_of_dof[d], static_cast<int>(row_cols.size()), row_cols.data(), row_values.data());
+      }
+      std::vector<int> load_rows;
+      std::vector<double> load_values;
       for (int d = 0; d < layout.num_free(); ++d)
-        if (neumann[d] != 0) rows.push_back(row_of_dof[d]), values.push_back(neumann[d]);
-      system->add_load(static_cast<int>(rows.size()), rows.data(), values.data());
+        if (load[d] != 0) load_rows.push_back(row_of_dof[d]), load_values.push_back(load[d]);
+      system->add_load(static_cast<int>(load_rows.size()), load_rows.data(), load_values.data());
     });
     on_all_ranks([&] { system->finish_assembly(); });
     sol.timings.assembly = seconds_since(t);

@@ -93,11 +93,8 @@ std::vector<double> gather_from_all_ranks(const std::vector<double>& mine) {
   return launched_world().size > 1 ? api().gather_all(mine) : mine;
 }
 
-std::unique_ptr<DistributedSystem> make_distributed_system(int num_free, int first_row, int last_row,
-                                                           const std::vector<int>& diagonal_nonzeros,
-                                                           const std::vector<int>& off_diagonal_nonzeros) {
-  return std::unique_ptr<DistributedSystem>(
-      api().make_system(num_free, first_row, last_row, diagonal_nonzeros, off_diagonal_nonzeros));
+std::unique_ptr<DistributedSystem> make_distributed_system(int num_free, int first_row, int last_row) {
+  return std::unique_ptr<DistributedSystem>(api().make_system(num_free, first_row, last_row));
 }
 
 }  // namespace knotwork

@@ -72,16 +72,26 @@ struct DistributedSolveResult {
   double matrix_seconds = 0, setup_seconds = 0, solve_seconds = 0;  // max over ranks
 };
 
-// The distributed matrix and load (a preallocated MATMPIAIJ and its vector), owned rows
-// [first_row, last_row) on this rank; diagonal_nonzeros / off_diagonal_nonzeros: per owned row,
-// its entries in columns this rank owns and in the others (PETSc's d_nnz, o_nnz). Entries of
-// rows another rank owns are sent there at finish_assembly (MatSetValues with ADD_VALUES).
+// A rank's owned rows of the matrix as PETSc's MATMPIAIJ keeps them: the "diagonal" block
+// (columns this rank owns, numbered from its first row) and the "off-diagonal" block (the
+// other columns, global numbers), each CSR with ascending columns per row.
+struct OwnedRows {
+  std::vector<int> diagonal_start{0}, diagonal_cols, off_start{0}, off_cols;
+  std::vector<double> diagonal_values, off_values;
+};
+
+// The distributed matrix and load (a MATMPIAIJ and its vector), owned rows
+// [first_row, last_row) on this rank. The rank gives its owned rows whole (their pattern and
+// the values its own cells put there; PETSc keeps the arrays as they are, no copy, no count,
+// no sort), then adds what its cells put in rows other ranks own, which finish_assembly sends
+// there. No lock: every call comes from one thread.
 class DistributedSystem {
  public:
   virtual ~DistributedSystem() = default;
-  // Adds an element: m free dofs (global numbers), Ke (m x m, row-major), Fe (m). Not
-  // thread-safe: one caller at a time.
-  virtual void add(int m, const int* dofs, const double* Ke, const double* Fe) = 0;
+  // Collective, once: the owned rows (the system keeps them for the matrix's lifetime).
+  virtual void set_owned_rows(OwnedRows&& rows) = 0;
+  // After set_owned_rows: adds n entries to a row another rank owns (inside its pattern).
+  virtual void add_to_row(int row, int n, const int* cols, const double* values) = 0;
   virtual void add_load(int n, const int* dofs, const double* values) = 0;
   // Collective: sends the entries of rows owned elsewhere; afterwards nothing can be added.
   virtual void finish_assembly() = 0;
@@ -89,13 +99,11 @@ class DistributedSystem {
   virtual Eigen::VectorXd diagonal() = 0;
   // Collective: solves, and gathers the solution's wanted rows on each rank.
   virtual DistributedSolveResult solve(const DistributedSolveOptions& options) = 0;
-  // Seconds this rank spent in add, add_load and finish_assembly (PETSc's share of assembly).
+  // Seconds this rank spent in set_owned_rows, add_to_row and finish_assembly (PETSc's share of assembly).
   virtual double assembly_seconds() const = 0;
 };
 
 // Collective. Throws std::runtime_error when PETSc fails (naming what it was doing).
-std::unique_ptr<DistributedSystem> make_distributed_system(int num_free, int first_row, int last_row,
-                                                           const std::vector<int>& diagonal_nonzeros,
-                                                           const std::vector<int>& off_diagonal_nonzeros);
+std::unique_ptr<DistributedSystem> make_distributed_system(int num_free, int first_row, int last_row);
 
 }  // namespace knotwork

@@ -12,8 +12,7 @@ struct PetscModuleApi {
   ParallelWorld (*world)();
   void (*reduce)(double* values, int n, bool maximum);
   std::optional<RankFailure> (*agree_on_failure)(int kind, const std::string& message);
-  DistributedSystem* (*make_system)(int num_free, int first_row, int last_row, const std::vector<int>& diagonal_nonzeros,
-                                    const std::vector<int>& off_diagonal_nonzeros);
+  DistributedSystem* (*make_system)(int num_free, int first_row, int last_row);
   void (*broadcast)(std::string& text);
   Preconditioner* (*boomeramg)(const Eigen::SparseMatrix<double>& lower, const std::string& petsc_options);
   std::vector<double> (*gather_all)(const std::vector<double>& mine);

@@ -161,21 +161,11 @@ Eigen::VectorXd gather_on_all(Vec v) {
 
 class PetscSystem final : public DistributedSystem {
  public:
-  PetscSystem(int num_free, int first_row, int last_row, const std::vector<int>& diagonal_nonzeros,
-              const std::vector<int>& off_diagonal_nonzeros) {
+  PetscSystem(int num_free, int first_row, int last_row) : num_free_(num_free), local_(last_row - first_row) {
     static_assert(sizeof(PetscInt) == sizeof(int), "PETSc with 32-bit indices (Debian's petsc-dev)");
     initialize_petsc();
     try {
-      const PetscInt local = last_row - first_row;
-      check(MatCreate(PETSC_COMM_WORLD, &A_), "matrix");
-      check(MatSetSizes(A_, local, local, num_free, num_free), "matrix sizes");
-      check(MatSetType(A_, MATAIJ), "matrix type");
-      check(MatSeqAIJSetPreallocation(A_, 0, diagonal_nonzeros.data()), "matrix preallocation");
-      check(MatMPIAIJSetPreallocation(A_, 0, diagonal_nonzeros.data(), 0, off_diagonal_nonzeros.data()),
-            "matrix preallocation");
-      // An entry outside the preallocated pattern is knotwork's error, not a slow path.
-      check(MatSetOption(A_, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE), "matrix option");
-      check(VecCreateMPI(PETSC_COMM_WORLD, local, num_free, &b_), "load");
+      check(VecCreateMPI(PETSC_COMM_WORLD, local_, num_free, &b_), "load");
     } catch (...) {
       release();
       throw;
@@ -183,10 +173,23 @@ class PetscSystem final : public DistributedSystem {
   }
   ~PetscSystem() override { release(); }
 
-  void add(int m, const int* dofs, const double* Ke, const double* Fe) override {
+  // The owned rows become the matrix's two blocks as they are (PETSc does not copy them: they
+  // live in rows_ until the matrix is destroyed).
+  void set_owned_rows(OwnedRows&& rows) override {
     const auto t = std::chrono::steady_clock::now();
-    check(MatSetValues(A_, m, dofs, m, dofs, Ke, ADD_VALUES), "matrix values");
-    check(VecSetValues(b_, m, dofs, Fe, ADD_VALUES), "load values");
+    rows_ = std::move(rows);
+    check(MatCreateMPIAIJWithSplitArrays(PETSC_COMM_WORLD, local_, local_, num_free_, num_free_,
+                                         rows_.diagonal_start.data(), rows_.diagonal_cols.data(),
+                                         rows_.diagonal_values.data(), rows_.off_start.data(), rows_.off_cols.data(),
+                                         rows_.off_values.data(), &A_),
+          "matrix rows");
+    // An entry outside the pattern is knotwork's error, not a slow path.
+    check(MatSetOption(A_, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE), "matrix option");
+    assembly_seconds_ += seconds_since(t);
+  }
+  void add_to_row(int row, int n, const int* cols, const double* values) override {
+    const auto t = std::chrono::steady_clock::now();
+    check(MatSetValues(A_, 1, &row, n, cols, values, ADD_VALUES), "matrix values");
     assembly_seconds_ += seconds_since(t);
   }
   void add_load(int n, const int* dofs, const double* values) override {
@@ -227,6 +230,8 @@ class PetscSystem final : public DistributedSystem {
     VecDestroy(&b_);
     MatDestroy(&A_);
   }
+  int num_free_ = 0, local_ = 0;
+  OwnedRows rows_;
   Mat A_ = nullptr;
   Vec b_ = nullptr;
   double assembly_seconds_ = 0;
@@ -332,9 +337,8 @@ DistributedSolveResult PetscSystem::solve(const DistributedSolveOptions& asked) 
   return result;
 }
 
-DistributedSystem* make_system(int num_free, int first_row, int last_row, const std::vector<int>& diagonal_nonzeros,
-                               const std::vector<int>& off_diagonal_nonzeros) {
-  return new PetscSystem(num_free, first_row, last_row, diagonal_nonzeros, off_diagonal_nonzeros);
+DistributedSystem* make_system(int num_free, int first_row, int last_row) {
+  return new PetscSystem(num_free, first_row, last_row);
 }
 
 }  // namespace
