@@ -5,9 +5,10 @@
 #include <map>
 
 #include "families/knot_segments/knot_segments_case.hpp"
-#include "basis/tensor/nurbs_geometry_map.hpp"
 #include "families/tensor/tensor_case.hpp"
+#include "quadrature/bernstein.hpp"
 #include "studies/adaptive.hpp"
+#include "studies/pipeline.hpp"
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
 #include "solver/error_norms.hpp"
@@ -63,24 +64,43 @@ TEST_CASE("Second derivatives of a NURBS geometry agree with finite differences"
     }
 }
 
-TEST_CASE("The tensor family's NURBS map gives the same second derivatives as the patch evaluated directly", "[adaptive]") {
-  // Two independent routes: Bezier extraction of the refined geometry (NurbsGeometryMap)
-  // against B-spline derivatives of the original patch (PatchGeometryMap).
+TEST_CASE("The NURBS map's exact Bezier cells agree with the patch evaluated directly", "[adaptive][geometry]") {
+  // Two independent routes: the rational Bezier form of each cell (Bezier extraction of the
+  // patch, subdivision to the cell, degree elevation) evaluated by Bernstein polynomials,
+  // against de Boor's evaluation of the patch at the same points; on a tensor grid and on the
+  // cells of a THB space (intervals that are not the patch's spans).
   TensorSpaceOptions o;
   o.degree = {3, 3};
   o.elements_per_span = {3, 2};
   const NurbsPatch patch = quarter_annulus_patch(1.0, 2.0);
   const TensorDiscretization d = build_tensor_discretization(patch, o);
-  const NurbsGeometryMap tensor(d);
-  const PatchGeometryMap direct(d.mesh, patch);
+  const PatchGeometryMap grid(d.mesh, patch, {d.space_u.breakpoints(), d.space_v.breakpoints(), 0});
+  CaseDescription c = load_case_text("[geometry]\ntype = \"quarter_annulus\"\ninner_radius = 1.0\nouter_radius = 2.0\n"
+                                     "[space]\nfamily = \"thb\"\ndegree = 2\nelements = 2\n[problem]\nexact = \"x*y\"\n",
+                                     "thb.toml");
+  std::unique_ptr<SplineSpace> thb = build_space(c);
+  thb = std::move(*thb).refine({0, 3}, {CellSplit::kAcrossU, CellSplit::kAcrossV});
+  REQUIRE(thb);
+  const PatchGeometryMap cells(thb->mesh(), patch);
   Eigen::VectorXd u(3), v(3);
   u << 0.1, 0.5, 0.93;
   v << 0.77, 0.2, 0.5;
-  for (int cell = 0; cell < d.mesh.num_cells(); ++cell) {
-    Eigen::MatrixXd a, b;
-    REQUIRE(tensor.second_derivatives(cell, u, v, a));
-    REQUIRE(direct.second_derivatives(cell, u, v, b));
-    REQUIRE((a - b).cwiseAbs().maxCoeff() < 1e-11 * (1 + b.cwiseAbs().maxCoeff()));
+  for (const PatchGeometryMap* map : {&grid, &cells}) {
+    const BezierMesh& mesh = map == &grid ? d.mesh : thb->mesh();
+    for (int cell = 0; cell < mesh.num_cells(); ++cell) {
+      const BezierGeometryCell b = map->bezier_cell(cell);
+      REQUIRE(b.degree_u >= 2);
+      Eigen::MatrixXd B, Bu, Bv;
+      tensor_bernstein(b.degree_u, b.degree_v, u, v, B, Bu, Bv);
+      const Eigen::VectorXd w = B * b.weights;
+      const Eigen::MatrixXd x = (B * (b.points.array().colwise() * b.weights.array()).matrix()).array().colwise() / w.array();
+      GeometryAtPoints direct;
+      map->evaluate(cell, u, v, direct);
+      REQUIRE((x - direct.x).cwiseAbs().maxCoeff() < 1e-13);
+      // and the points stay on the annulus' circles: |x| = 1 + (the radial parameter)
+      const BezierCell& bc = mesh.cell(cell);
+      for (int k = 0; k < 3; ++k) REQUIRE(std::abs(x.row(k).norm() - (1.0 + bc.u0 + u[k] * (bc.u1 - bc.u0))) < 1e-13);
+    }
   }
 }
 

@@ -7,11 +7,16 @@
 #include "cases/geometries.hpp"
 #include "quadrature/bernstein.hpp"
 #include "solver/cell_basis.hpp"
-#include "basis/tensor/nurbs_geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 
 using namespace knotwork;
 
 namespace {
+// The tensor family's map: the patch on the grid of the space's elements.
+PatchGeometryMap::ElementGrid grid_of(const TensorDiscretization& d) {
+  return {d.space_u.breakpoints(), d.space_v.breakpoints(), d.first_row};
+}
+
 // 20 Gauss points per direction: det J of a rational map is not a polynomial, so the
 // area is exact only up to a quadrature error that this many points push below roundoff.
 double area(const TensorDiscretization& d, const GeometryMap& g) {
@@ -34,7 +39,7 @@ TEST_CASE("The quarter annulus stays exactly on its circles under k-refinement",
       o.degree = {p, p};
       o.elements_per_span = {n, n};
       const TensorDiscretization disc = build_tensor_discretization(quarter_annulus_patch(1, 2), o);
-      NurbsGeometryMap g(disc);
+      PatchGeometryMap g(disc.mesh, disc.patch, grid_of(disc));
       for (int c = 0; c < disc.mesh.num_cells(); ++c) {
         Eigen::VectorXd u(4), v(4);
         for (int k = 0; k < 4; ++k) { u[k] = d(rng); v[k] = d(rng); }
@@ -60,7 +65,7 @@ TEST_CASE("Geometry Jacobians match finite differences of the map", "[geometry]"
   o.degree = {3, 3};
   o.elements_per_span = {2, 3};
   const TensorDiscretization disc = build_tensor_discretization(quarter_annulus_patch(0.5, 1.5), o);
-  NurbsGeometryMap g(disc);
+  PatchGeometryMap g(disc.mesh, disc.patch, grid_of(disc));
   const double h = 1e-6;
   for (int c = 0; c < disc.mesh.num_cells(); ++c) {
     Eigen::VectorXd u(5), v(5);
@@ -81,7 +86,7 @@ TEST_CASE("Built-in geometries have the right areas and positive Jacobians", "[g
   o.elements_per_span = {4, 4};
   {
     const auto d = build_tensor_discretization(lshape_patch(), o);
-    NurbsGeometryMap g(d);
+    PatchGeometryMap g(d.mesh, d.patch, grid_of(d));
     REQUIRE(std::abs(area(d, g) - 3.0) < 1e-13);
     CellBasis cb;
     for (int c = 0; c < d.mesh.num_cells(); ++c) {
@@ -91,7 +96,7 @@ TEST_CASE("Built-in geometries have the right areas and positive Jacobians", "[g
   }
   {
     const auto d = build_tensor_discretization(rectangle_patch(-1, 2, 3, 2.5), o);
-    NurbsGeometryMap g(d);
+    PatchGeometryMap g(d.mesh, d.patch, grid_of(d));
     REQUIRE(std::abs(area(d, g) - 2.0) < 1e-14);
   }
 }
@@ -102,7 +107,7 @@ TEST_CASE("Isoparametric NURBS basis from the BezierMesh: partition of unity and
     o.degree = {p, p};
     o.elements_per_span = {3, 4};
     const auto d = build_tensor_discretization(quarter_annulus_patch(1, 2), o);
-    NurbsGeometryMap g(d);
+    PatchGeometryMap g(d.mesh, d.patch, grid_of(d));
     REQUIRE(d.mesh.is_rational());
     // Control points of the refined geometry: x_i = (w x)_i / w_i.
     const Eigen::MatrixX2d P = d.geometry_homogeneous.leftCols<2>().array().colwise() / d.geometry_homogeneous.col(2).array();
@@ -147,7 +152,7 @@ TEST_CASE("Extra knots refine the space and leave the geometry unchanged", "[geo
   REQUIRE(d.space_u.num_functions() == (3 + 1) + (3 - 1) * 3);
   // v: 0.5 plus 0.9: 2 knots, p - r = 1.
   REQUIRE(d.space_v.num_functions() == (3 + 1) + (3 - 2) * 2);
-  NurbsGeometryMap g(d);
+  PatchGeometryMap g(d.mesh, d.patch, grid_of(d));
   REQUIRE(std::abs(area(d, g) - 0.75 * std::numbers::pi) < 1e-13);
   o.extra_knots = {std::vector<double>{1.5}, {}};
   REQUIRE_THROWS_WITH(build_tensor_discretization(quarter_annulus_patch(1, 2), o), Catch::Contains("not inside"));
@@ -175,7 +180,7 @@ TEST_CASE("The tensor map at quadrature points (the patch as given, by direction
       o.degree = {p, p};
       o.elements_per_span = {3, 2};
       const TensorDiscretization disc = build_tensor_discretization(patch, o);
-      const NurbsGeometryMap g(disc);
+      const PatchGeometryMap g(disc.mesh, disc.patch, grid_of(disc));
       const BernsteinTable& t = bernstein_table(1, 1, 4, 5);
       for (int c = 0; c < disc.mesh.num_cells(); ++c) {
         GeometryAtPoints fast, bezier;
@@ -208,7 +213,7 @@ TEST_CASE("Row parts of a tensor space tile it and hold every cell their functio
     o.continuity = s.continuity;
     o.extra_knots[1] = s.knots_v;
     const TensorDiscretization whole = build_tensor_discretization(quarter_annulus_patch(1, 2), o);
-    const NurbsGeometryMap whole_map(whole);
+    const PatchGeometryMap whole_map(whole.mesh, whole.patch, grid_of(whole));
     const int n = whole.mesh.num_functions(), rows = whole.elements_v, eu = whole.elements_u;
     // Cells of every function in the whole mesh.
     std::vector<std::vector<int>> cells_of(n);
@@ -223,7 +228,7 @@ TEST_CASE("Row parts of a tensor space tile it and hold every cell their functio
         const MeshPart& mp = *part.part;
         REQUIRE(mp.global_functions == n);
         REQUIRE(mp.global_cells == whole.mesh.num_cells());
-        const NurbsGeometryMap map(part);
+        const PatchGeometryMap map(part.mesh, part.patch, grid_of(part));
         std::vector<int> whole_cell_of(part.mesh.num_cells());
         for (int c = 0; c < part.mesh.num_cells(); ++c) {
           const BezierCell& cell = part.mesh.cell(c);

@@ -1,6 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
@@ -52,23 +53,55 @@ class GeometryMap {
 void dehomogenize_map(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, const Eigen::MatrixX3d& hv,
                       GeometryAtPoints& out);
 
-// A NURBS patch evaluated directly at any parameter point, for cells that do not follow the
-// patch's own knot grid (locally refined spaces in the patch's parameter domain).
-// Bezier output interpolates the map at the cell's equispaced nodes (exact for polynomial
-// patches of at most the cell's degree). Every cell must lie inside one knot span of the
-// patch: the constructor throws GeometryError naming the first cell that straddles a knot.
+// The one NURBS map: a patch as the geometry of a space in its parameter domain (a tensor
+// space's elements, or the cells of a locally refined space). Every cell must lie inside one
+// knot span of the patch: the constructor throws GeometryError naming the first cell (or
+// element) that straddles a knot. At quadrature points the patch is evaluated as given, of its
+// own (low) degree, one direction at a time, from univariate tables made once per distinct
+// cell interval and rule (thread-safe, kept); at other points directly; a cell's Bezier form
+// is exact: the patch restricted to the cell, rational, raised to the cell's degree when that
+// is higher.
 class PatchGeometryMap final : public GeometryMap {
  public:
   PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch);
+  // Cells that are a grid of elements: cell c is element (c % (u.size() - 1), first_row +
+  // c / (u.size() - 1)) of the element boundaries u x v (the whole space's, also when the mesh
+  // holds a part of it: a few rows from first_row on). No per-cell lookup.
+  struct ElementGrid {
+    std::vector<double> u, v;
+    int first_row = 0;
+  };
+  PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch, ElementGrid grid);
+  ~PatchGeometryMap() override;
   void evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const override;
   void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, GeometryAtPoints& out) const override;
   BezierGeometryCell bezier_cell(int cell) const override;
   bool second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                           Eigen::MatrixXd& out) const override;
+  // A grid map only: evaluate_at_rule on element (eu, ev) of the whole grid, whether or not
+  // the mesh (a part) holds it.
+  void evaluate_element_at_rule(int eu, int ev, int nu, int nv, GeometryAtPoints& out) const;
 
  private:
+  struct Interval {
+    int span, element;  // the patch's knot span and its index among the patch's elements
+    double from, length;
+  };
+  struct RuleTables;
+  struct Lookup;
+  void find_intervals();
+  void check_intervals();
+  void interval_at_rule(int iu, int iv, int nu, int nv, GeometryAtPoints& out) const;
+  std::pair<int, int> intervals_of(int cell) const;
+  const RuleTables& tables(bool along_u, int n) const;
+
   const BezierMesh& mesh_;
   NurbsPatch patch_;
+  Eigen::MatrixX3d net_;  // homogeneous control points (w x, w y, w), numbered as the patch's
+  std::vector<Interval> intervals_u_, intervals_v_;
+  int grid_columns_ = 0, first_row_ = 0;      // a grid map: its columns (else 0)
+  std::vector<int> cell_u_, cell_v_;          // otherwise: each cell's intervals
+  std::unique_ptr<Lookup> lookup_;
 };
 
 // A map given by a function of the patch parameters (tests and manufactured maps).

@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "solver/fast_diagonalization.hpp"
-#include "basis/tensor/nurbs_geometry_map.hpp"
+#include "basis/core/geometry_map.hpp"
 #include "families/tensor/tensor_case.hpp"
 #include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
@@ -56,7 +56,8 @@ class TensorSpace final : public SplineSpace {
     }
     // The residual estimator's neighbours, derived only if something asks (most runs never do).
     d_.mesh.set_interface_rule(&interfaces_from_parameter_boxes);
-    geometry_ = std::make_unique<NurbsGeometryMap>(d_);
+    geometry_ = std::make_unique<PatchGeometryMap>(
+        d_.mesh, d_.patch, PatchGeometryMap::ElementGrid{d_.space_u.breakpoints(), d_.space_v.breakpoints(), d_.first_row});
   }
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
@@ -122,7 +123,7 @@ class TensorSpace final : public SplineSpace {
 
   TensorSpaceOptions options_;
   TensorDiscretization d_;
-  std::unique_ptr<NurbsGeometryMap> geometry_;
+  std::unique_ptr<PatchGeometryMap> geometry_;
 };
 
 }  // namespace
