@@ -8,7 +8,7 @@ namespace knotwork {
 // Memory of the Galerkin pipeline for `cells` cells of bi-degree (p, q) and `functions`
 // functions: cell function lists, the matrix (lower triangle, a copy per thread during
 // assembly) and the Cholesky factor, estimated as nnz(A) log2(n) entries (measured with AMD
-// on 2D IGA matrices: 0.73-0.75 log2(n), docs/PERFORMANCE.md; the estimate keeps a margin).
+// on 2D IGA matrices: 0.73-0.75 log2(n), docs/records/performance-2026-11-22-to-12-04.md; the estimate keeps a margin).
 double galerkin_bytes(double cells, double functions, int p, int q);
 
 // Throws InputError "<where>: about X GB needed for <what>, more than this machine's Y GB"

@@ -64,7 +64,7 @@ InducedCells induced_cells(const SplineRefs& splines, const Box& region) {
   // Which fine edges a knot line separates: each B-spline marks the fine edges its knot lines
   // run along over its support (whose ends are grid values or lie outside the region). Marking
   // costs the supports' lengths in fine edges; sorting and merging the line pieces instead was
-  // over a quarter of the checks (docs/PERFORMANCE.md, "Adaptive knot segments within 20×").
+  // over a quarter of the checks (docs/records/performance-2026-11-22-to-12-04.md, "Adaptive knot segments within 20×").
   auto at_or_after = [](const std::vector<double>& grid, double t) {
     return static_cast<int>(std::lower_bound(grid.begin(), grid.end(), t) - grid.begin());
   };

@@ -27,7 +27,7 @@ std::unique_ptr<BasisTool> pt_basis_tool(CLI::App& basis);  // pt_basis_tool.cpp
 namespace {
 
 // The basis is built in exact arithmetic: on the adaptive L-shape at degree 3 (2026-12-03,
-// docs/PERFORMANCE.md) T-meshes of 57 557 to 118 210 cells took 22-51 s each, the larger
+// docs/records/performance-2026-11-22-to-12-04.md) T-meshes of 57 557 to 118 210 cells took 22-51 s each, the larger
 // times when the first insertion orders fall short and a lengthened one is needed; 120000
 // cells keep a build near a minute.
 constexpr int kMaxPtCells = 120000;
