@@ -4,7 +4,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <array>
+
 #include "solver/assemble_poisson.hpp"
+#include "solver/petsc_backend.hpp"
 #include "solver/sparsity.hpp"
 
 namespace knotwork {
@@ -43,8 +49,8 @@ ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry,
   return z;
 }
 
-PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry,
-                              const PoissonProblem& problem, const PoissonSolveOptions& options) {
+PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
+                              const PoissonSolveOptions& options, const Distribution* distribution) {
   using clock = std::chrono::steady_clock;
   auto seconds_since = [](clock::time_point t) {
     return std::chrono::duration<double>(clock::now() - t).count();
@@ -53,44 +59,86 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     if (options.progress) options.progress(s);
   };
   if (problem.reaction < 0) throw std::invalid_argument("reaction must be >= 0");
+  const bool distributed = distribution != nullptr;
+  // Serially a step's exception is the caller's as it is; distributed, every rank agrees on it.
+  const auto step = [&](const std::function<void()>& f) {
+    if (distributed) on_all_ranks(f);
+    else f();
+  };
+  const ParallelWorld world = distributed ? parallel_world() : ParallelWorld{};
+  const MeshPart* given = distributed ? distribution->part : nullptr;
+  const MeshPart part = given ? *given : whole_mesh_part(mesh, world);
+  // A closed surface has no boundary cell anywhere; a part may simply hold none.
+  double boundary_sides = has_boundary(mesh) ? 1 : 0;
+  if (distributed) sum_over_ranks(&boundary_sides, 1);
   PoissonSolution sol;
-  sol.num_functions = mesh.num_functions();
-  const PoissonForm form = poisson_form(problem);
-  sol.zero_mean = without_reaction(problem) && !has_boundary(mesh);
+  sol.zero_mean = without_reaction(problem) && boundary_sides == 0;
+  if (sol.zero_mean && given)
+    throw std::invalid_argument("[solver] method = \"petsc\" solves closed surfaces only with the space built whole on "
+                                "every rank (their zero-mean solution needs the whole mass matrix), and this family "
+                                "split it; use method = \"direct\" or \"iterative\"");
+  sol.num_functions = part.global_functions;
+  if (distributed) sol.distributed.ranks = world.size;
+  PoissonForm form = poisson_form(problem);
 
   say("setup");
   auto t = clock::now();
-  std::vector<bool> fixed;
-  Eigen::VectorXd fixed_values = project_dirichlet_data(mesh, geometry, problem, options.quadrature, fixed);
-  ZeroMeanData zero_mean;
+  std::vector<std::pair<int, double>> dirichlet;  // global function, value; sorted
+  step([&] { dirichlet = project_dirichlet_over_ranks(mesh, geometry, problem, options.quadrature, part); });
+  // A closed surface: the constant 1 from the mass matrix (on every rank: each holds the whole
+  // mesh), one coefficient pinned to 0, the load with f's mean removed (added below).
+  ZeroMeanData mean;
   if (sol.zero_mean) {
-    zero_mean = zero_mean_data(mesh, geometry, form, options.quadrature, options.ordering);
-    fixed[zero_mean.pin] = true;
-    sol.area = zero_mean.area;
-    sol.source_mean = zero_mean.source_mean;
+    step([&] { mean = zero_mean_data(mesh, geometry, form, options.quadrature, options.ordering); });
+    dirichlet = {{mean.pin, 0.0}};
+    sol.area = mean.area;
+    sol.source_mean = mean.source_mean;
+    form.load = false;
+  }
+  std::vector<int> fixed_functions(dirichlet.size());
+  for (size_t k = 0; k < dirichlet.size(); ++k) fixed_functions[k] = dirichlet[k].first;
+  // Free dofs are numbered globally in function order: a free function's row is its number
+  // less the fixed functions before it (serially, its dof number).
+  const auto fixed_below = [&](int g) {
+    return static_cast<int>(std::lower_bound(fixed_functions.begin(), fixed_functions.end(), g) - fixed_functions.begin());
+  };
+  const int n = part.global_functions - static_cast<int>(fixed_functions.size());
+  std::vector<bool> fixed(mesh.num_functions(), false);
+  Eigen::VectorXd fixed_values = Eigen::VectorXd::Zero(mesh.num_functions());
+  for (int f = 0; f < mesh.num_functions(); ++f) {
+    const int g = f + part.function_offset, k = fixed_below(g);
+    if (k < static_cast<int>(fixed_functions.size()) && fixed_functions[k] == g)
+      fixed[f] = true, fixed_values[f] = dirichlet[k].second;
   }
   const DofLayout layout = make_dof_layout(mesh.num_functions(), fixed);
+  std::vector<int> row_of_dof(layout.num_free());
+  for (int d = 0; d < layout.num_free(); ++d) {
+    const int g = layout.function_of_dof[d] + part.function_offset;
+    row_of_dof[d] = g - fixed_below(g);
+  }
   Eigen::SparseMatrix<double> K = lower_pattern_matrix(mesh, layout);
-  sol.num_free = layout.num_free();
+  sol.num_free = n;
   sol.matrix_nonzeros = K.nonZeros();
+  const CellRange mine = part.owned;
   sol.timings.setup = seconds_since(t);
 
+  // This process's cells (serially, all of them), threaded, into the lower triangle over its
+  // free dofs; Neumann terms of the same cells; on a closed surface the compatible load.
   say("assembly");
   t = clock::now();
   Eigen::VectorXd rhs;
-  if (sol.zero_mean) {
-    // The load, with f's mean removed, comes from the mass pass.
-    PoissonForm stiffness = form;
-    stiffness.load = false;
-    assemble_poisson(mesh, geometry, stiffness, layout, fixed_values, options.quadrature, K, rhs);
-    for (int d = 0; d < layout.num_free(); ++d) rhs[d] = zero_mean.compatible_load(layout.function_of_dof[d]);
-  } else {
-    assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, rhs);
-    add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs);
-  }
+  step([&] {
+    assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, rhs, nullptr, mine);
+    add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs, mine);
+    if (sol.zero_mean)  // each rank adds its own rows
+      for (int d = 0; d < layout.num_free(); ++d) {
+        const int g = layout.function_of_dof[d];
+        if (g >= part.first_owned_function && g < part.last_owned_function) rhs[d] += mean.compatible_load(g);
+      }
+  });
   sol.timings.assembly = seconds_since(t);
-  if (options.on_system) options.on_system(K, rhs);
-  if (options.estimate_condition) {
+  if (options.on_system && !distributed) options.on_system(K, rhs);
+  if (options.estimate_condition && !distributed) {
     say("condition estimates");
     sol.stiffness_spectrum = jacobi_scaled_spectrum(K);
     // The mass matrix over the same free dofs (the matrix a reaction term would add).
@@ -107,8 +155,14 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     sol.mass_spectrum = jacobi_scaled_spectrum(M);
   }
 
+  // The backend.
   sol.coefficients = fixed_values;
-  if (layout.num_free() > 0 && options.iterative) {
+  if (n > 0 && distributed) {  // global: every rank takes part, with or without rows of its own
+    const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
+    const int last_row = part.last_owned_function - fixed_below(part.last_owned_function);
+    solve_with_petsc(K, rhs, layout, row_of_dof, first_row, last_row, n, fixed_functions, part, options,
+                     *distribution->petsc, sol);
+  } else if (n > 0 && options.iterative) {
     say("preconditioner");
     t = clock::now();
     std::unique_ptr<Preconditioner> pc = options.preconditioner ? options.preconditioner(layout, K) : nullptr;
@@ -126,7 +180,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       throw NotConverged(b);
     }
     for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = x[d];
-  } else if (layout.num_free() > 0) {
+  } else if (n > 0) {
     say("factorization");
     const std::shared_ptr<SparseCholesky> cholesky =
         options.solver ? options.solver : std::make_shared<SparseCholesky>(options.ordering);
@@ -139,20 +193,46 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     sol.timings.solve = sol.cholesky.solve_seconds;
     for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = x[d];
   }
-  if (sol.zero_mean) zero_mean.remove_mean(sol.coefficients);
-  if (!sol.coefficients.allFinite())
-    throw std::runtime_error("the discrete solution has non-finite values");
+  if (sol.zero_mean) mean.remove_mean(sol.coefficients);
+  if (!sol.coefficients.allFinite()) throw std::runtime_error("the discrete solution has non-finite values");
 
   if (options.compute_errors && problem.exact) {
     say("error norms");
     t = clock::now();
     if (sol.zero_mean) {
       // Over the area the mass matrix measured (as the solution's mean is).
-      sol.exact_mean = exact_integral(mesh, geometry, *problem.exact, options.quadrature) / sol.area;
+      double integral = 0;
+      step([&] { integral = exact_integral(mesh, geometry, *problem.exact, options.quadrature); });
+      sol.exact_mean = integral / sol.area;
     }
-    sol.errors = error_norms(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature,
-                             options.cell_errors ? &sol.cell_h1_squared : nullptr, sol.exact_mean);
+    std::array<double, 2> squares{0, 0};
+    step([&] {
+      squares = squared_errors(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature, mine,
+                               options.cell_errors ? &sol.cell_h1_squared : nullptr, sol.exact_mean);
+    });
+    if (distributed) {
+      sum_over_ranks(squares.data(), 2);
+      // A whole mesh on every rank gets every cell's error (a part has only its own cells').
+      if (options.cell_errors && !given)
+        sum_over_ranks(sol.cell_h1_squared.data(), static_cast<int>(sol.cell_h1_squared.size()));
+    }
+    ErrorNorms e;
+    e.l2 = std::sqrt(squares[0]);
+    e.h1_semi = std::sqrt(squares[1]);
+    e.h1 = std::sqrt(squares[0] + squares[1]);
+    sol.errors = e;
     sol.timings.errors = seconds_since(t);
+  }
+  if (distributed) {
+    // Each phase as long as its slowest rank; the most cells and memory of any rank.
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    double phases[5] = {sol.timings.setup, sol.timings.assembly, sol.timings.errors, double(mesh.num_cells()),
+                        usage.ru_maxrss / 1024.0};
+    max_over_ranks(phases, 5);
+    sol.timings.setup = phases[0], sol.timings.assembly = phases[1], sol.timings.errors = phases[2];
+    sol.distributed.cells_held = static_cast<int>(phases[3]);
+    sol.distributed.peak_memory_mb = phases[4];
   }
   return sol;
 }

@@ -62,7 +62,7 @@ struct PoissonSolution {
   std::optional<ErrorNorms> errors;
   Eigen::VectorXd cell_h1_squared;  // with cell_errors: where the error sits (sums to h1_semi^2)
   PoissonTimings timings;
-  // method = "petsc" (solver/distributed_poisson.hpp): the processes, and what PETSc ran
+  // method = "petsc" (solver/petsc_backend.hpp): the processes, and what PETSc ran
   // (the KSP, the PC, the factorization package when a direct one) and why it stopped.
   struct Distributed {
     int ranks = 0;  // 0: not a PETSc solve
@@ -108,7 +108,25 @@ struct PoissonForm;
 ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& load_form,
                             const QuadratureOptions& quadrature, Ordering ordering);
 
-PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry,
-                              const PoissonProblem& problem, const PoissonSolveOptions& options);
+// Under mpirun with method = "petsc": this rank's part of the space (null: every rank holds the
+// whole mesh, built redundantly, whose cells and functions are then split into contiguous
+// blocks) and PETSc's solver settings (solver/petsc_module.hpp).
+struct DistributedSolveOptions;
+struct Distribution {
+  const MeshPart* part = nullptr;
+  const DistributedSolveOptions* petsc = nullptr;
+};
+
+// The one driver: serial (distribution null: CHOLMOD, or CG with options.preconditioner) or on
+// the processes mpirun started (PETSc), planar or on a surface, closed surfaces included. The
+// same steps either way: the Dirichlet projection (from every rank's boundary cells), the
+// zero-mean pin, the dof numbering, the assembly of this process's cells, the backend's solve,
+// the mean removed, the error norms (summed over the ranks). Distributed, every rank calls it,
+// a failure on one rank is thrown on all, the returned coefficients are per function of `mesh`
+// (a part's own), and each phase's time is its slowest rank's. A closed surface needs the whole
+// mesh on every rank (the constant's representation needs the whole mass matrix): with a part
+// it is refused (std::invalid_argument).
+PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
+                              const PoissonSolveOptions& options, const Distribution* distribution = nullptr);
 
 }  // namespace knotwork

@@ -11,7 +11,7 @@
 #include "studies/report.hpp"
 #include "studies/svg_plot.hpp"
 #include "basis/core/input_error.hpp"
-#include "solver/distributed_poisson.hpp"
+#include "solver/petsc_backend.hpp"
 #include "solver/petsc_module.hpp"
 #include "solver/vtk_output.hpp"
 

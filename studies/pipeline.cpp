@@ -4,7 +4,7 @@
 #include <utility>
 
 #include "solver/amg_preconditioner.hpp"
-#include "solver/distributed_poisson.hpp"
+#include "solver/petsc_backend.hpp"
 #include "basis/core/input_error.hpp"
 
 namespace knotwork {
@@ -154,7 +154,8 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
                                  : "shell";
       petsc.tolerance = c.solver.petsc_tolerance();
       petsc.max_iterations = c.solver.max_iterations;
-      return solve_poisson_distributed(space.mesh(), space.geometry(), space.part(), c.problem, so, petsc);
+      const Distribution distribution{space.part(), &petsc};
+      return solve_poisson(space.mesh(), space.geometry(), c.problem, so, &distribution);
     }
     return solve_poisson(space.mesh(), space.geometry(), c.problem, so);
   } catch (const NotConverged& e) {

@@ -7,7 +7,7 @@
 #include "studies/report.hpp"
 #include "studies/studies.hpp"
 #include "basis/core/input_error.hpp"
-#include "solver/distributed_poisson.hpp"
+#include "solver/petsc_backend.hpp"
 #include "solver/petsc_module.hpp"
 #include "solver/vtk_output.hpp"
 
