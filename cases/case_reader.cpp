@@ -458,9 +458,11 @@ Expression expression_or_number(const CaseReader& r, const DocumentNode& n, cons
   return Expression::parse(text, r.path() + ": " + field);
 }
 
+}  // namespace
+
 // [problem] coefficient: a scalar a (A = a I) or a symmetric 2x2 matrix [[a11, a12], [a21, a22]]
 // of expressions or numbers; a21 must be a12 (compared at a few points).
-std::vector<Expression> read_diffusion(const CaseReader& r, const DocumentNode& n) {
+std::vector<Expression> read_coefficient(const CaseReader& r, const DocumentNode& n) {
   const std::string field = "[problem] coefficient";
   const DocumentNode* rows = n.as_array();
   if (!rows) return {expression_or_number(r, n, field)};
@@ -486,15 +488,13 @@ std::vector<Expression> read_diffusion(const CaseReader& r, const DocumentNode& 
   return {a[0][0], a[0][1], a[1][1]};
 }
 
-}  // namespace
-
 void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
   PoissonProblem& pb = c.problem;
   const std::string& f = r.path();
   if (const DocumentNode* e = t.get("exact"))
     pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
   if (const DocumentNode* a = t.get("coefficient")) {
-    pb.coefficients.diffusion = read_diffusion(r, *a);
+    pb.coefficients.diffusion = read_coefficient(r, *a);
     pb.coefficients.diffusion_where = f + ": [problem] coefficient";
   }
   if (const DocumentNode* n = t.get("reaction")) {

@@ -121,15 +121,20 @@ namespace {
 
 // -Laplace_Beltrami(u) + reaction u at the quadrature points of a surface cell, from the exact
 // solution's ambient derivatives and the discrete surface's curvature there (PoissonForm).
+// With a scalar coefficient a: -div_G(a grad_G u) = -a Laplace_Beltrami(u) - grad(a).P grad(u),
+// P the projection onto the tangent plane (coefficient: a and its ambient derivatives).
 struct DerivedSurfaceSource {
   ExpressionEvaluator value;
   std::array<ExpressionEvaluator, 3> gradient;
   std::vector<ExpressionEvaluator> hessian;  // the upper triangle: xx, xy, xz, yy, yz, zz
-  explicit DerivedSurfaceSource(const ExactSolution& e)
+  std::vector<ExpressionEvaluator> coefficient;  // none, or a, a_x, a_y, a_z
+  DerivedSurfaceSource(const ExactSolution& e, const ExactSolution* a)
       : value(e.u),
         gradient{ExpressionEvaluator(e.u_x), ExpressionEvaluator(e.u_y), ExpressionEvaluator(e.u_z)} {
     for (int i = 0; i < 3; ++i)
       for (int j = i; j < 3; ++j) hessian.emplace_back(e.hessian[i][j]);
+    if (a)
+      for (const Expression* t : {&a->u, &a->u_x, &a->u_y, &a->u_z}) coefficient.emplace_back(*t);
   }
   // x: points x 3, J: points x 6, second: points x 9 (x_uu, x_uv, x_vv per coordinate).
   void operator()(const Eigen::MatrixXd& x, const Eigen::MatrixXd& J, const Eigen::MatrixXd& second, double reaction,
@@ -153,7 +158,12 @@ struct DerivedSurfaceSource {
         for (int j = i; j < 3; ++j, ++h) H(i, j) = H(j, i) = hessian[h](px, py, pz);
       }
       const double laplace_beltrami = H.trace() - n.dot(H * n) - kappa * g.dot(n);
-      out[q] = -laplace_beltrami + (reaction != 0 ? reaction * value(px, py, pz) : 0.0);
+      double diffusion = -laplace_beltrami;
+      if (!coefficient.empty()) {
+        const Eigen::Vector3d grad_a(coefficient[1](px, py, pz), coefficient[2](px, py, pz), coefficient[3](px, py, pz));
+        diffusion = -coefficient[0](px, py, pz) * laplace_beltrami - grad_a.dot(g - g.dot(n) * n);
+      }
+      out[q] = diffusion + (reaction != 0 ? reaction * value(px, py, pz) : 0.0);
     }
   }
 };
@@ -186,14 +196,19 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   const bool variable_reaction = variable && !variable->reaction.empty();
   std::optional<ExpressionBatch> compiled_coefficients;
   if (variable) {
-    if (dim != 2)
+    // On a surface: a scalar a (its derived source below); a matrix or a variable c only in the plane.
+    if (dim != 2 && (num_diffusion > 1 || variable_reaction))
       throw InputError((variable->diffusion.empty() ? variable->reaction.where() : variable->diffusion.front().where()) +
-                       ": a variable coefficient on a surface is not supported (planar domains only)");
+                       ": on a surface the coefficient is a scalar a(x, y, z) and the reaction a number");
     std::vector<Expression> all = variable->diffusion;
     if (variable_reaction) all.push_back(variable->reaction);
     compiled_coefficients.emplace(all);
   }
   CoefficientFailure bad_coefficient;
+  // The derived surface source with a scalar coefficient needs grad(a): differentiated once
+  // here (GiNaC is not thread-safe).
+  std::optional<ExactSolution> surface_coefficient;
+  if (derived && form.source_diffusion) surface_coefficient = differentiate_surface_solution(*form.source_diffusion);
   // Nitsche's boundary terms first, serially (few cells; the data's evaluators are not
   // shared between threads), then added to their cells' element matrices in the loop.
   std::vector<NitscheCellTerms> nitsche;
@@ -217,7 +232,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
     if (compiled_coefficients) coefficient_values.emplace(*compiled_coefficients);
     Eigen::ArrayXd reaction_root;
     std::optional<DerivedSurfaceSource> derived_f;
-    if (derived) derived_f.emplace(*form.exact);
+    if (derived) derived_f.emplace(*form.exact, surface_coefficient ? &*surface_coefficient : nullptr);
     CellBasis cb;
     CellFunctions cf;
     Eigen::MatrixXd G, KB, Ke, second;
@@ -371,6 +386,7 @@ PoissonForm poisson_form(const PoissonProblem& problem) {
   form.reaction = variable_reaction ? 1.0 : problem.reaction;
   form.source_reaction = problem.reaction;
   form.coefficients = problem.coefficients.constant() ? nullptr : &problem.coefficients;
+  if (problem.coefficients.diffusion.size() == 1) form.source_diffusion = &problem.coefficients.diffusion[0];
   form.source = problem.source.empty() ? nullptr : &problem.source;
   form.exact = problem.exact ? &*problem.exact : nullptr;
   if (problem.dirichlet_method == DirichletMethod::kNitsche) form.nitsche = &problem;

@@ -33,6 +33,9 @@ struct PoissonForm {
   const Expression* source = nullptr;
   const ExactSolution* exact = nullptr;
   double source_reaction = 0;  // the problem's reaction in the derived f (the matrix's may differ: a mass pass)
+  // The scalar coefficient a in the derived f on a surface, -div(a grad u) (null: a = 1); kept
+  // when a mass pass drops `coefficients` from the matrix.
+  const Expression* source_diffusion = nullptr;
   bool load = true;  // false: the right-hand side gets only the Dirichlet lifting
   // Non-null: this problem's Dirichlet sides are imposed weakly by Nitsche's method, adding
   //   - (du/dn, v)_D - (u, dv/dn)_D + gamma (u, v)_D   to a(u, v),

@@ -134,9 +134,14 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
                                                 : "Dirichlet data on surfaces are not supported (closed surfaces only)");
   if (!mesh.closed())
     r.fail("[space] mesh", g.mesh_file + " has a boundary; Laplace-Beltrami problems are solved on closed surfaces");
-  if (t.get("coefficient"))
-    r.fail("[problem] coefficient", "not supported on surfaces: Laplace-Beltrami problems take A = I (planar meshes take a coefficient)");
   PoissonProblem& pb = c.problem;
+  // -div_G(a grad_G u) + c u: a scalar a(x, y, z) > 0 (a matrix would have to be tangential).
+  if (const DocumentNode* n = t.get("coefficient")) {
+    pb.coefficients.diffusion = read_coefficient(r, *n);
+    pb.coefficients.diffusion_where = f + ": [problem] coefficient";
+    if (pb.coefficients.diffusion.size() != 1)
+      r.fail("[problem] coefficient", "on a surface it is a scalar a(x, y, z) (a matrix is for planar meshes)");
+  }
   if (const DocumentNode* n = t.get("reaction")) {
     if (n->value_exact<std::string>()) r.fail("[problem] reaction", "must be a number on a surface (a constant c >= 0)");
     pb.reaction = r.number(*n, "[problem] reaction");
