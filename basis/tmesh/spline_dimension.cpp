@@ -23,8 +23,10 @@ bool on_line(const std::vector<mpq_class>& lines, const mpq_class& v) {
   return std::find(lines.begin(), lines.end(), v) != lines.end();
 }
 
-std::vector<Constraint> smoothness_constraints(const RectangularPartition& part, int m, int n, int alpha, int beta,
-                                               const C0Lines& c0) {
+}  // namespace
+
+std::vector<SparseRationalRow> smoothness_constraints(const RectangularPartition& part, int m, int n, int alpha,
+                                                      int beta, const C0Lines& c0) {
   const long per_cell = static_cast<long>(m + 1) * (n + 1);
   auto column = [&](int cell, int i, int j) { return cell * per_cell + i + static_cast<long>(m + 1) * j; };
   std::vector<Constraint> rows;
@@ -52,8 +54,6 @@ std::vector<Constraint> smoothness_constraints(const RectangularPartition& part,
   }
   return rows;
 }
-
-}  // namespace
 
 void check_brute_force_size(long cells, int m, int n, RankMethod method) {
   const long unknowns = cells * (m + 1) * (n + 1);

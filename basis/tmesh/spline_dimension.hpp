@@ -1,6 +1,9 @@
 #pragma once
 #include <cstdint>
 
+#include <vector>
+
+#include "basis/exact/sparse_rank.hpp"
 #include "basis/tmesh/rectangular_partition.hpp"
 
 namespace knotwork {
@@ -29,6 +32,11 @@ enum class RankMethod {
 // modulo two primes; 65 536 in 60 s and 0.5 GB over Q. The limits keep a run near a minute,
 // where the cost grows faster than the size.
 constexpr long kMaxBruteForceUnknowns = 400000;
+// The brute-force system: the piecewise polynomials of bi-degree (m, n) on the cells (unknowns
+// cell * (m+1)(n+1) + i + (m+1) j, coefficients of x^i y^j), and one row per condition of C^alpha
+// across each vertical and C^beta across each horizontal shared edge (C^0 on the lines of c0).
+std::vector<SparseRationalRow> smoothness_constraints(const RectangularPartition& part, int m, int n, int alpha,
+                                                      int beta, const C0Lines& c0 = {});
 constexpr long kMaxExactBruteForceUnknowns = 80000;
 
 // The commands that offer the brute force as a check (`dimension`, `basis`) call this first:
