@@ -19,17 +19,17 @@ int basis_of_case(const BasisRequest& o) {
   const CaseDescription c = load_case(o.file);
   const std::unique_ptr<SplineSpace> space = build_space(c);
   const BezierMesh& mesh = space->mesh();
-  if (!o.export_file.empty()) space->export_functions(o.export_file, c.path);
+  if (!o.export_file.empty()) space->presentation().export_functions(o.export_file, c.path);
   if (o.json) {
     std::printf("%s\n", basis_json(c, *space).dump().c_str());
     return 0;
   }
-  const std::vector<ReportField> fields = space->basis_report();
+  const std::vector<ReportField> fields = space->presentation().basis_report();
   const double pu = partition_of_unity_error(mesh);
   const long rank = bezier_rank(mesh);
   std::printf("knotwork basis %s\n  space      %s\n  functions  %d on %d cells\n", c.path.c_str(),
-              space->description().c_str(), mesh.num_functions(), mesh.num_cells());
-  for (const auto& n : space->notes()) std::printf("  note       %s\n", n.c_str());
+              space->presentation().description().c_str(), mesh.num_functions(), mesh.num_cells());
+  for (const auto& n : space->presentation().notes()) std::printf("  note       %s\n", n.c_str());
   print_field_lines(fields, 10);
   std::printf("  partition of unity  max error %.3e\n", pu);
   if (rank >= 0) std::printf("  rank       %ld (%s)\n", rank, rank == mesh.num_functions() ? "linearly independent" : "DEPENDENT");

@@ -33,7 +33,7 @@ int run_command(const RunOptions& o) {
   const double total = r.total_without_output();
   std::printf("knotwork run %s%s\n", c.path.c_str(), c.title.empty() ? "" : ("  (" + c.title + ")").c_str());
   std::printf("  space    %s, %d cells\n", r.description.c_str(), global_num_cells(*r.space));
-  for (const auto& n : r.space->notes()) std::printf("  note     %s\n", n.c_str());
+  for (const auto& n : r.space->presentation().notes()) std::printf("  note     %s\n", n.c_str());
   if (!solver.note.empty()) std::printf("  note     %s\n", solver.note.c_str());
   const bool nitsche = dirichlet_method_name(c.problem) && c.problem.dirichlet_method == DirichletMethod::kNitsche;
   std::printf("  dofs     %d functions, %d unknowns %s, %ld stored matrix entries\n", s.num_functions, s.num_free,

@@ -8,7 +8,7 @@ namespace knotwork {
 
 double SplineSpace::mesh_size() const { return largest_cell_diagonal(mesh(), geometry()); }
 
-void SplineSpace::export_functions(const std::string&, const std::string&) const {
+void SpaceReport::export_functions(const std::string&, const std::string&) const {
   throw InputError("--export: the space " + description() + " has no function export");
 }
 

@@ -46,23 +46,18 @@ enum class CellSplit { kAcrossU, kAcrossV };
 
 using ProgressFunction = std::function<void(const std::string&)>;
 
-// A spline space of some family, built from a case: what the solver needs and what the
-// family says about it.
-class SplineSpace {
+// What a family says about one of its spaces, for people: the reports, notes, the `basis`
+// checks and export, the knot lines of ParaView output. Nothing the solve needs; the family's
+// plugin implements it (families/<family>/).
+class SpaceReport {
  public:
-  virtual ~SplineSpace() = default;
-  virtual const BezierMesh& mesh() const = 0;
-  virtual const GeometryMap& geometry() const = 0;
+  virtual ~SpaceReport() = default;
   // One line: "NURBS, degree 2x2, C^1 at new knots".
   virtual std::string description() const = 0;
-  // The polynomial degree per parameter direction (the reports' `degree`).
-  virtual std::array<int, 2> degree() const = 0;
   // Facts about the space for the reports (before solving), and notes that must be seen
   // (a segment extended, a construction that fell back to another).
   virtual std::vector<ReportField> report() const { return {}; }
   virtual std::vector<std::string> notes() const { return {}; }
-  // Throws InputError when the space must not be solved on (and the case did not allow it).
-  virtual void check_solvable() const {}
   // Checks of a solution only the family can make (G1: the C1 jump across interfaces).
   virtual std::vector<ReportField> check_solution(const Eigen::VectorXd& /*coefficients*/) const { return {}; }
   // `knotwork basis`: the family's own checks of the space (semi-regularity, dimension
@@ -71,6 +66,24 @@ class SplineSpace {
   // `knotwork basis --export FILE`: writes every function (the format is the family's);
   // throws InputError when the family has no export.
   virtual void export_functions(const std::string& file, const std::string& source) const;
+  // The knot lines of ParaView output (physical polylines; none by default).
+  virtual KnotLines knot_lines() const { return {}; }
+};
+
+// A spline space of some family, built from a case: what the pipeline needs (the mesh, its
+// geometry, degree, refinement, a process's part, a structured preconditioner) and, apart,
+// what the family says about it (presentation()).
+class SplineSpace {
+ public:
+  virtual ~SplineSpace() = default;
+  virtual const BezierMesh& mesh() const = 0;
+  virtual const GeometryMap& geometry() const = 0;
+  // The polynomial degree per parameter direction (the reports' `degree`).
+  virtual std::array<int, 2> degree() const = 0;
+  // The family's words about this space (SpaceReport).
+  virtual const SpaceReport& presentation() const = 0;
+  // Throws InputError when the space must not be solved on (and the case did not allow it).
+  virtual void check_solvable() const {}
   // The h of convergence tables: the largest cell diagonal in physical space.
   virtual double mesh_size() const;
   // Adaptive refinement: the space with the marked cells halved as told, or null when the
@@ -83,7 +96,6 @@ class SplineSpace {
                                               int* /*extended*/ = nullptr, const ProgressFunction& /*progress*/ = {}) && {
     return nullptr;
   }
-  virtual KnotLines knot_lines() const { return {}; }
   // A preconditioner that knows the space's structure, for the iterative solve: its name
   // ([solver] preconditioner), "" when the family has none, and the preconditioner for the
   // free dofs of `layout` of `problem`'s operator (null when it does not apply to them).

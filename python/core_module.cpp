@@ -305,14 +305,14 @@ PYBIND11_MODULE(_core, m) {
   py::class_<Space>(m, "Space")
       .def_property_readonly("num_functions", [](const Space& s) { return s.mesh().num_functions(); })
       .def_property_readonly("num_cells", [](const Space& s) { return s.mesh().num_cells(); })
-      .def_property_readonly("description", [](const Space& s) { return s.space->description(); })
+      .def_property_readonly("description", [](const Space& s) { return s.space->presentation().description(); })
       .def_property_readonly("family", [](const Space& s) { return s.c().family; })
       .def_property_readonly("degree", [](const Space& s) {
         const std::array<int, 2> d = s.space->degree();
         return py::make_tuple(d[0], d[1]);
       })
       .def_property_readonly("is_rational", [](const Space& s) { return s.mesh().is_rational(); })
-      .def_property_readonly("notes", [](const Space& s) { return s.space->notes(); })
+      .def_property_readonly("notes", [](const Space& s) { return s.space->presentation().notes(); })
       .def("functions", [](py::object self, long cell) {
         const Space& s = self.cast<const Space&>();
         const std::span<const int> f = s.mesh().functions(s.checked_cell(cell));

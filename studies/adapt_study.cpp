@@ -34,7 +34,7 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
   std::vector<PvdEntry> pvd;
   std::string& description = out.description;
   out.steps = adapt_case(c, ordering, say, [&](const AdaptiveStepView& v) {
-    if (v.step == 0) description = v.space.description();
+    if (v.step == 0) description = v.space.presentation().description();
     if (!stage || !c.write_bezier || (!v.last && v.step % output_every != 0)) return;
     say("writing ParaView output");
     Eigen::VectorXd eta = v.indicators.eta_squared.cwiseSqrt();
@@ -44,7 +44,7 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
     write_bezier_vtu(stage->stage(name + ".vtu"), v.space.mesh(), v.space.geometry(), v.solution.coefficients, exact,
                      {{"error_indicator", eta}, {"marked", flag}}, v.solution.exact_mean);
     pvd.push_back({double(v.step), 0, name + ".vtu"});
-    const KnotLines knots = v.space.knot_lines();
+    const KnotLines knots = v.space.presentation().knot_lines();
     if (!knots.lines.empty()) {
       write_polylines_vtp(stage->stage(name + "_knots.vtp"), knots.lines,
                           {{"kind", knots.kind}, {"multiplicity", knots.multiplicity}});

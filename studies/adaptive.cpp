@@ -37,7 +37,7 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     const auto t0 = clock::now();
     const std::string prefix = "step " + std::to_string(s + 1) + "/" + std::to_string(c.adapt.steps) + ": ";
     AdaptiveStep st;
-    st.notes = space->notes();
+    st.notes = space->presentation().notes();
     for (const auto& n : st.notes) say(prefix + "note: " + n);
     auto t1 = clock::now();
     const PoissonSolution sol = solve_case(c, *space, ordering, [&](const std::string& what) { say(prefix + what); });

@@ -10,12 +10,12 @@ Json basis_json(const CaseDescription& c, const SplineSpace& space) {
   const BezierMesh& mesh = space.mesh();
   const long rank = bezier_rank(mesh);
   Json j = Json::object();
-  j.set("file", c.path).set("family", c.family).set("space", space.description())
+  j.set("file", c.path).set("family", c.family).set("space", space.presentation().description())
       .set("functions", mesh.num_functions()).set("cells", mesh.num_cells());
-  add_fields(j, space.basis_report());
+  add_fields(j, space.presentation().basis_report());
   j.set("partition_of_unity_error", partition_of_unity_error(mesh));
   if (rank >= 0) j.set("rank", rank); else j.set_null("rank");
-  j.set("notes", Json::strings(space.notes()));
+  j.set("notes", Json::strings(space.presentation().notes()));
   return j;
 }
 

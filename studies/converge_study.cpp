@@ -47,7 +47,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     say("building the space");
     const auto t0 = std::chrono::steady_clock::now();
     const std::unique_ptr<SplineSpace> space = build_space(c, l, say);
-    if (l == 0) description = space->description();
+    if (l == 0) description = space->presentation().description();
     SolverReport solver;
     const PoissonSolution s = solve_case(c, *space, ordering, say, &solver);
     if (l == 0) first_solver = solver;
@@ -60,8 +60,8 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     lv.l2 = s.errors->l2;
     lv.h1_semi = s.errors->h1_semi;
     lv.h1 = s.errors->h1;
-    lv.fields = space->report();
-    for (auto& f : space->check_solution(s.coefficients)) lv.fields.push_back(std::move(f));
+    lv.fields = space->presentation().report();
+    for (auto& f : space->presentation().check_solution(s.coefficients)) lv.fields.push_back(std::move(f));
     if (c.solver.estimate_condition)
       for (auto& f : condition_fields(s)) lv.fields.push_back(std::move(f));
     // The CG count of the level (null where the level was solved directly: `auto` decides by size).

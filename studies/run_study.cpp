@@ -103,16 +103,16 @@ RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::str
   r.space = build_space(c, 0, say);
   const double t_space = since(t);
   r.seconds_space = t_space;
-  r.description = r.space->description();
+  r.description = r.space->presentation().description();
   r.solution = solve_case(c, *r.space, ordering, say, &r.solver);
   r.solution.timings.setup += t_space;
-  r.fields = r.space->report();
+  r.fields = r.space->presentation().report();
   if (c.solver.estimate_condition) {
     const std::vector<ReportField> kappa = condition_fields(r.solution);
     r.fields.insert(r.fields.end(), kappa.begin(), kappa.end());
   }
   t = clock::now();
-  const std::vector<ReportField> checks = r.space->check_solution(r.solution.coefficients);
+  const std::vector<ReportField> checks = r.space->presentation().check_solution(r.solution.coefficients);
   r.seconds_checks = since(t);
   r.fields.insert(r.fields.end(), checks.begin(), checks.end());
   if (world.size > 1 && writes) {
@@ -169,7 +169,7 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
   }
   j.set("solver", sj);
   add_fields(j, r.fields);
-  std::vector<std::string> notes = r.space->notes();
+  std::vector<std::string> notes = r.space->presentation().notes();
   if (!r.solver.note.empty()) notes.push_back(r.solver.note);
   j.set("notes", Json::strings(notes));
   j.set("timings", timings).set("outputs", Json::strings(r.outputs));

@@ -231,7 +231,7 @@ TEST_CASE("THB and LR spaces draw their cells' sides as knot lines, each side on
     const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name);
     const auto space = build_space(c);
     // 4 x 2 cells: bottom and left sides of all 8, the top sides of 4 and the right sides of 2.
-    const KnotLines k = space->knot_lines();
+    const KnotLines k = space->presentation().knot_lines();
     CHECK(k.lines.size() == 8 * 2 + 4 + 2);
     // Their ends are cell corners of the physical L-shape: inside [-1, 1]^2.
     for (const auto& line : k.lines) CHECK(line.cwiseAbs().maxCoeff() <= 1 + 1e-12);

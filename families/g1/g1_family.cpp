@@ -50,10 +50,11 @@ G1Discretization checked_discretization(const CaseDescription& c, int level, con
   return discretize_g1(c, level, progress);
 }
 
-class G1Space final : public SplineSpace {
+class G1Space final : public SplineSpace, public SpaceReport {
  public:
+  const SpaceReport& presentation() const override { return *this; }
   G1Space(const CaseDescription& c, int level, const ProgressFunction& progress)
-      : case_(&c), d_(checked_discretization(c, level, progress)) {}
+      : case_(std::make_shared<const CaseDescription>(c)), d_(checked_discretization(c, level, progress)) {}
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *d_.geometry; }
   std::string description() const override { return describe_g1(*case_); }
@@ -125,7 +126,7 @@ class G1Space final : public SplineSpace {
   }
 
  private:
-  const CaseDescription* case_;
+  std::shared_ptr<const CaseDescription> case_;  // a copy: the space does not need the caller's case to live on
   G1Discretization d_;
 };
 

@@ -25,16 +25,17 @@ std::string degree_text(const CaseDescription& c) {
   return std::to_string(d[0]) + "x" + std::to_string(d[1]);
 }
 
-class KnotSegmentSpace final : public SplineSpace {
+class KnotSegmentSpace final : public SplineSpace, public SpaceReport {
  public:
+  const SpaceReport& presentation() const override { return *this; }
   // The case's own space at uniform level `level` (elements per span doubled `level` times).
-  KnotSegmentSpace(const CaseDescription& c, int level) : case_(&c) {
+  KnotSegmentSpace(const CaseDescription& c, int level) : case_(std::make_shared<const CaseDescription>(c)) {
     if (!knot_segments_section(c).collection_file.empty()) build_explicit(c);
     else build_from_segments(c, level);
   }
   // The case's geometry on a given collection (a step of adaptive refinement).
   KnotSegmentSpace(const CaseDescription& c, SemiRegularCollection collection)
-      : case_(&c), collection_(std::move(collection)) {
+      : case_(std::make_shared<const CaseDescription>(c)), collection_(std::move(collection)) {
     finish();
   }
 
@@ -223,7 +224,7 @@ class KnotSegmentSpace final : public SplineSpace {
     geometry_ = std::make_unique<PatchGeometryMap>(mesh_, case_->geometry);
   }
 
-  const CaseDescription* case_;
+  std::shared_ptr<const CaseDescription> case_;  // a copy: the space does not need the caller's case to live on
   std::optional<SemiRegularCollection> collection_;
   BezierMesh mesh_;
   std::unique_ptr<PatchGeometryMap> geometry_;

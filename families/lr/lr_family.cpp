@@ -90,9 +90,10 @@ void read_lr_case(const CaseDocument& doc, CaseDescription& c) {
 const LrSection& lr_section(const CaseDescription& c) { return family_section<LrSection>(c); }
 
 
-class LrSpace final : public SplineSpace {
+class LrSpace final : public SplineSpace, public SpaceReport {
  public:
-  LrSpace(const CaseDescription& c, DyadicLrMesh lr) : case_(&c), lr_(std::move(lr)) {
+  const SpaceReport& presentation() const override { return *this; }
+  LrSpace(const CaseDescription& c, DyadicLrMesh lr) : case_(std::make_shared<const CaseDescription>(c)), lr_(std::move(lr)) {
     mesh_ = lr_.bezier_mesh();
     dependence_ = DyadicLrMesh::dependence(mesh_);
     geometry_ = finish_patch_mesh(c, mesh_);
@@ -162,7 +163,7 @@ class LrSpace final : public SplineSpace {
     return b;
   }
 
-  const CaseDescription* case_;
+  std::shared_ptr<const CaseDescription> case_;  // a copy: the space does not need the caller's case to live on
   DyadicLrMesh lr_;
   BezierMesh mesh_;
   DyadicLrMesh::Dependence dependence_;

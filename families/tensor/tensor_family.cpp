@@ -45,8 +45,9 @@ std::string describe(const TensorSpaceOptions& s) {
 
 constexpr const char* kFastDiagonalization = "fast_diagonalization";
 
-class TensorSpace final : public SplineSpace {
+class TensorSpace final : public SplineSpace, public SpaceReport {
  public:
+  const SpaceReport& presentation() const override { return *this; }
   TensorSpace(const CaseDescription& c, const TensorSpaceOptions& options, RowShare share = {}) : options_(options) {
     check_tensor_memory(c, options, share.ranks);
     try {

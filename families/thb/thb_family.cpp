@@ -47,9 +47,10 @@ void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
 
 const ThbSection& thb_section(const CaseDescription& c) { return family_section<ThbSection>(c); }
 
-class ThbSpace final : public SplineSpace {
+class ThbSpace final : public SplineSpace, public SpaceReport {
  public:
-  ThbSpace(const CaseDescription& c, ThbHierarchy hierarchy) : case_(&c), hierarchy_(std::move(hierarchy)) {
+  const SpaceReport& presentation() const override { return *this; }
+  ThbSpace(const CaseDescription& c, ThbHierarchy hierarchy) : case_(std::make_shared<const CaseDescription>(c)), hierarchy_(std::move(hierarchy)) {
     ThbHierarchy::Basis b;
     try {
       b = hierarchy_.build();
@@ -101,7 +102,7 @@ class ThbSpace final : public SplineSpace {
   KnotLines knot_lines() const override { return knot_lines_of_cells(mesh_, *geometry_); }
 
  private:
-  const CaseDescription* case_;
+  std::shared_ptr<const CaseDescription> case_;  // a copy: the space does not need the caller's case to live on
   ThbHierarchy hierarchy_;
   BezierMesh mesh_;
   std::vector<ThbCell> leaves_;
