@@ -12,8 +12,6 @@
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <array>
-#include <bit>
-#include <cstdint>
 #include <optional>
 
 #include "quadrature/bernstein.hpp"
@@ -182,8 +180,7 @@ namespace {
 template <class Emit, class Integrals>
 void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                     const DofLayout& layout, const Eigen::VectorXd& fixed_values, const QuadratureOptions& quadrature,
-                    CellRange cells, Emit emit, Integrals integrals_of,
-                    const std::vector<std::vector<int>>* colors = nullptr) {
+                    CellRange cells, Emit emit, Integrals integrals_of) {
   const int dim = geometry.dimension();
   const bool derived = form.load && !form.source;
   if (derived && (!form.exact || form.exact->hessian[0][0].empty() || dim != 3))
@@ -242,7 +239,10 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
     Eigen::VectorXd fq, FB, Fe, ulift;
     Eigen::ArrayXd root;
     std::vector<std::pair<int, int>> order;
-    const auto integrate = [&](int c) {
+    // A fixed assignment of cells to threads (and the thread sums added in thread order
+    // below): the matrix and load are bitwise the same from run to run.
+#pragma omp for schedule(static, 64)
+    for (int c = first; c < last; ++c) {
       const BezierCell& cell = mesh.cell(c);
       const int nu = rule_points(quadrature.points_u, cell.degree_u, 1);
       const int nv = rule_points(quadrature.points_v, cell.degree_v, 1);
@@ -255,7 +255,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
       if (!(min_jacobian > 0)) {
 #pragma omp critical(knotwork_bad_cell)
         if (c < bad_cell) { bad_cell = c; bad_det = min_jacobian; }
-        return;
+        continue;
       }
       const Eigen::Index nq = measure.size();
       fq.resize(nq);
@@ -267,7 +267,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
         if (!geometry.second_derivatives(c, t.point_u, t.point_v, second)) {
 #pragma omp critical(knotwork_bad_cell)
           failure = "the geometry has no second derivatives, needed for the curvature of the derived source";
-          return;
+          continue;
         }
         (*derived_f)(at.x, at.jacobian, second, form.source_reaction, fq);
       } else {
@@ -289,7 +289,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
       Eigen::MatrixXd& K = rows ? Ke : KB;
       if (coefficient_values) {
         coefficient_values->evaluate(at.x.col(0).data(), at.x.col(1).data(), dim == 3 ? at.x.col(2).data() : nullptr, nq);
-        if (!coefficients_admissible(*variable, *coefficient_values, at.x, c, bad_coefficient)) return;
+        if (!coefficients_admissible(*variable, *coefficient_values, at.x, c, bad_coefficient)) continue;
         if (variable_reaction)
           reaction_root = (measure.array() * Eigen::Map<const Eigen::ArrayXd>(coefficient_values->result(num_diffusion), nq)).sqrt();
       }
@@ -345,18 +345,6 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
       if (lifted) Fe.noalias() -= Ke * ulift;
       std::sort(order.begin(), order.end());
       emit(tid, order, Ke, Fe);
-    };
-    // A fixed assignment of cells to threads: the matrix and load are bitwise the same from
-    // run to run. With colors (cells of one color share no function) every thread adds into
-    // the one matrix, color after color; otherwise blocks of cells, each thread into its own.
-    if (colors) {
-      for (const std::vector<int>& group : *colors) {
-#pragma omp for schedule(static, 16)
-        for (size_t k = 0; k < group.size(); ++k) integrate(group[k]);
-      }
-    } else {
-#pragma omp for schedule(static, 64)
-      for (int c = first; c < last; ++c) integrate(c);
     }
   }
   if (!failure.empty()) throw std::invalid_argument(failure);
@@ -409,22 +397,6 @@ bool without_reaction(const PoissonProblem& problem) {
   return problem.reaction == 0 && problem.coefficients.reaction.empty();
 }
 
-std::vector<std::vector<int>> color_cells(const BezierMesh& mesh, CellRange cells) {
-  const int first = cells.first, last = cells.last < 0 ? mesh.num_cells() : cells.last;
-  std::vector<uint64_t> used(mesh.num_functions(), 0);  // per function: the colors of its cells so far
-  std::vector<std::vector<int>> groups;
-  for (int c = first; c < last; ++c) {
-    uint64_t taken = 0;
-    for (int f : mesh.functions(c)) taken |= used[f];
-    if (taken == ~uint64_t(0)) return {};
-    const int color = std::countr_one(taken);
-    for (int f : mesh.functions(c)) used[f] |= uint64_t(1) << color;
-    if (color >= static_cast<int>(groups.size())) groups.resize(color + 1);
-    groups[color].push_back(c);
-  }
-  return groups;
-}
-
 void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                       const DofLayout& layout, const Eigen::VectorXd& fixed_values,
                       const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
@@ -437,19 +409,6 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
   std::fill(values, values + nnz, 0.0);
   rhs.setZero(layout.num_free());
   if (integrals) integrals->setZero(mesh.num_functions());
-  // Several threads: cells colored so that no two of a color share a function, and every
-  // thread adds into the one matrix, load and integrals (no copies to sum).
-  const std::vector<std::vector<int>> colors = nthreads > 1 ? color_cells(mesh, cells) : std::vector<std::vector<int>>{};
-  if (!colors.empty()) {
-    assemble_cells(
-        mesh, geometry, form, layout, fixed_values, quadrature, cells,
-        [&](int, const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke, const Eigen::VectorXd& Fe) {
-          for (const auto& [d, a] : order) rhs[d] += Fe[a];
-          scatter(outer, inner, order, Ke, values);
-        },
-        [&](int) { return integrals; }, &colors);
-    return;
-  }
   // Thread 0 adds into the results, the others into their own copies (allocated by their
   // thread, before its first cell), summed in thread order after the loop.
   std::vector<std::vector<double>> thread_values(nthreads - 1, std::vector<double>());

@@ -44,12 +44,6 @@ struct PoissonForm {
   const PoissonProblem* nitsche = nullptr;
 };
 
-// The cells of `cells` in groups ("colors") of which no two share a function, each group in
-// cell order, by a greedy pass (the lowest color none of a cell's functions has yet); empty
-// when some cell would need more than 64. Threads may then add one group's cells into one
-// matrix at once.
-std::vector<std::vector<int>> color_cells(const BezierMesh& mesh, CellRange cells = {});
-
 // The form of a problem: its coefficients, source (or exact solution to derive it from on a
 // surface) and Nitsche data.
 PoissonForm poisson_form(const PoissonProblem& problem);
