@@ -10,8 +10,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include <boost/geometry.hpp>  // the R-tree needs the strategies; only this file includes it
-#include <boost/geometry/index/rtree.hpp>
+#include "basis/core/box_index.hpp"
 
 #include "basis/core/bspline_basis.hpp"
 #include "basis/tmesh/partition_topology.hpp"
@@ -347,18 +346,12 @@ bool regular_quick(const SplineRefs& alive, int d_first, int d_second, bool x_fi
 }  // namespace
 
 namespace {
-namespace bg = boost::geometry;
-namespace bgi = boost::geometry::index;
-using IndexPoint = bg::model::point<double, 2, bg::cs::cartesian>;
-using IndexBox = bg::model::box<IndexPoint>;
-using IndexValue = std::pair<IndexBox, const LocalBSpline*>;
-IndexBox index_box(const LocalBSpline& b) {
-  return {IndexPoint(b.x.front(), b.y.front()), IndexPoint(b.x.back(), b.y.back())};
-}
+using SupportTree = BoxIndex<double, const LocalBSpline*>;
+SupportTree::Box index_box(const LocalBSpline& b) { return SupportTree::box(b.x.front(), b.y.front(), b.x.back(), b.y.back()); }
 }  // namespace
 
 struct SemiRegularCollection::SupportIndex {
-  bgi::rtree<IndexValue, bgi::linear<16>> tree;
+  SupportTree tree;
 };
 SemiRegularCollection::IndexHolder::IndexHolder() = default;
 SemiRegularCollection::IndexHolder::IndexHolder(const IndexHolder&) {}
@@ -372,32 +365,29 @@ SemiRegularCollection::IndexHolder::~IndexHolder() = default;
 
 SemiRegularCollection::SupportIndex& SemiRegularCollection::index() const {
   if (!index_.index) {
-    std::vector<IndexValue> values;
+    std::vector<SupportTree::Entry> values;
     values.reserve(set_.size());
     for (const auto& b : set_) values.emplace_back(index_box(b), &b);
-    index_.index = std::make_unique<SupportIndex>(SupportIndex{{values.begin(), values.end()}});  // packed bulk load
+    index_.index = std::make_unique<SupportIndex>(SupportIndex{SupportTree(values)});  // packed bulk load
   }
   return *index_.index;
 }
 
 std::vector<const LocalBSpline*> SemiRegularCollection::meeting(double x0, double y0, double x1, double y1) const {
-  std::vector<IndexValue> hits;
-  index().tree.query(bgi::intersects(IndexBox(IndexPoint(x0, y0), IndexPoint(x1, y1))), std::back_inserter(hits));
   std::vector<const LocalBSpline*> out;
-  out.reserve(hits.size());
-  for (const auto& h : hits) out.push_back(h.second);
+  index().tree.intersecting(SupportTree::box(x0, y0, x1, y1), out);
   return out;
 }
 
 void SemiRegularCollection::erase_spline(std::set<LocalBSpline>::const_iterator it) {
-  if (index_.index) index_.index->tree.remove(IndexValue(index_box(*it), &*it));
+  if (index_.index) index_.index->tree.remove(index_box(*it), &*it);
   set_.erase(it);
 }
 
 const LocalBSpline* SemiRegularCollection::insert_spline(const LocalBSpline& b) {
   const auto [it, fresh] = set_.insert(b);
   if (!fresh) return nullptr;
-  if (index_.index) index_.index->tree.insert(IndexValue(index_box(*it), &*it));
+  if (index_.index) index_.index->tree.insert(index_box(*it), &*it);
   return &*it;
 }
 

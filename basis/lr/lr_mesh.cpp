@@ -7,6 +7,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "basis/core/box_index.hpp"
 #include "basis/core/bspline_basis.hpp"
 
 namespace knotwork {
@@ -283,60 +284,24 @@ const DyadicLrMesh::Incidence& DyadicLrMesh::incidence() const {
   std::vector<Function>& sorted = result->sorted;
   for (const auto& [f, w] : functions_) sorted.push_back(f);
   std::sort(sorted.begin(), sorted.end(), [](const Function& a, const Function& b) { return a.knots < b.knots; });
-  // A k-d tree of the elements (by their centres, with each node's bounding box), queried with
-  // every support: the elements inside it.
+  // The elements in the one R-tree (integer boxes), queried with every support: the elements
+  // inside it, each element's list in the functions' sorted order.
   const int n = static_cast<int>(elements_.size());
-  std::vector<int> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  struct Node {
-    int begin, end;
-    std::array<int64_t, 2> lo, hi;
-    int left = -1, right = -1;
-  };
-  std::vector<Node> nodes;
-  auto build = [&](auto&& self, int begin, int end, int axis) -> int {
-    Node node{begin, end, {INT64_MAX, INT64_MAX}, {INT64_MIN, INT64_MIN}};
-    for (int k = begin; k < end; ++k)
-      for (int d = 0; d < 2; ++d) {
-        node.lo[d] = std::min(node.lo[d], elements_[order[k]].from[d]);
-        node.hi[d] = std::max(node.hi[d], elements_[order[k]].to[d]);
-      }
-    const int id = static_cast<int>(nodes.size());
-    nodes.push_back(node);
-    if (end - begin > 8) {
-      const int mid = (begin + end) / 2;
-      std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](int a, int b) {
-        return elements_[a].from[axis] + elements_[a].to[axis] < elements_[b].from[axis] + elements_[b].to[axis];
-      });
-      const int l = self(self, begin, mid, 1 - axis);
-      const int r = self(self, mid, end, 1 - axis);
-      nodes[id].left = l;
-      nodes[id].right = r;
-    }
-    return id;
-  };
-  if (n > 0) build(build, 0, n, 0);
+  using ElementIndex = BoxIndex<int64_t, int>;
+  std::vector<ElementIndex::Entry> entries;
+  entries.reserve(n);
+  for (int e = 0; e < n; ++e)
+    entries.emplace_back(ElementIndex::box(elements_[e].from[0], elements_[e].from[1], elements_[e].to[0], elements_[e].to[1]), e);
+  const ElementIndex index(entries);
+  entries = {};
   std::vector<std::vector<int>>& on = result->on;
   on.assign(n, {});
-  std::vector<int> stack;
+  std::vector<int> inside;
   for (int f = 0; f < static_cast<int>(sorted.size()); ++f) {
-    const std::array<int64_t, 2> lo{sorted[f].knots[0][0], sorted[f].knots[1][0]};
-    const std::array<int64_t, 2> hi{sorted[f].knots[0][p_[0] + 1], sorted[f].knots[1][p_[1] + 1]};
-    stack.assign(1, 0);
-    while (!stack.empty()) {
-      const Node& node = nodes[stack.back()];
-      stack.pop_back();
-      if (node.hi[0] <= lo[0] || node.lo[0] >= hi[0] || node.hi[1] <= lo[1] || node.lo[1] >= hi[1]) continue;
-      if (node.left >= 0) {
-        stack.push_back(node.left);
-        stack.push_back(node.right);
-        continue;
-      }
-      for (int k = node.begin; k < node.end; ++k) {
-        const Element& e = elements_[order[k]];
-        if (lo[0] <= e.from[0] && e.to[0] <= hi[0] && lo[1] <= e.from[1] && e.to[1] <= hi[1]) on[order[k]].push_back(f);
-      }
-    }
+    index.covered_by(ElementIndex::box(sorted[f].knots[0][0], sorted[f].knots[1][0], sorted[f].knots[0][p_[0] + 1],
+                                       sorted[f].knots[1][p_[1] + 1]),
+                     inside);
+    for (int e : inside) on[e].push_back(f);
   }
   incidence_ = result;
   return *incidence_;

@@ -1,5 +1,7 @@
 #include "basis/tmesh/lr_spline.hpp"
 
+#include "basis/core/box_index.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -16,44 +18,55 @@ std::pair<mpq_class, mpq_class> split_weights(const std::vector<mpq_class>& t, c
   return {a, b};
 }
 
-constexpr int kLevels = 41;  // supports below 2^-40 of the rectangle share the last level
 
 // v as a fraction of the rectangle's side spanned by `lines` (its first and last coordinate).
 // Doubles suffice for the index: it only narrows the search, the exact test follows, and every
-// query widens its range by a node on each side, far beyond the rounding of get_d.
+// box is widened far beyond the rounding of get_d.
 double unit(const mpq_class& v, const std::vector<mpq_class>& lines) {
   const double a = lines.front().get_d();
   return (v.get_d() - a) / (lines.back().get_d() - a);
 }
-
-// The node of a support: its level and the indices of its lower-left corner there.
-struct Node {
-  int level;
-  long i, j;
-};
-Node node_of(const std::vector<mpq_class>& x, const std::vector<mpq_class>& y, const std::vector<mpq_class>& xs,
-             const std::vector<mpq_class>& ys) {
-  const double u0 = unit(x.front(), xs), v0 = unit(y.front(), ys);
-  const double size = std::max(unit(x.back(), xs) - u0, unit(y.back(), ys) - v0);
-  int level = 0;
-  while (level + 1 < kLevels && std::ldexp(1.0, -(level + 1)) >= size) ++level;
-  const double s = std::ldexp(1.0, -level);
-  return {level, static_cast<long>(std::floor(u0 / s)), static_cast<long>(std::floor(v0 / s))};
-}
+constexpr double kWiden = 1e-9;
 
 }  // namespace
 
+struct LrMesh::SupportIndex {
+  BoxIndex<double, Knots> tree;
+};
+LrMesh::IndexHolder::IndexHolder() = default;
+LrMesh::IndexHolder::IndexHolder(const IndexHolder&) {}
+LrMesh::IndexHolder::IndexHolder(IndexHolder&&) noexcept = default;
+LrMesh::IndexHolder& LrMesh::IndexHolder::operator=(const IndexHolder&) {
+  index.reset();
+  return *this;
+}
+LrMesh::IndexHolder& LrMesh::IndexHolder::operator=(IndexHolder&&) noexcept = default;
+LrMesh::IndexHolder::~IndexHolder() = default;
+
+namespace {
+BoxIndex<double, LrMesh::Knots>::Box support_box(const LrMesh::Knots& k, const std::vector<mpq_class>& xs,
+                                                 const std::vector<mpq_class>& ys) {
+  return BoxIndex<double, LrMesh::Knots>::box(unit(k.first.front(), xs) - kWiden, unit(k.second.front(), ys) - kWiden,
+                                              unit(k.first.back(), xs) + kWiden, unit(k.second.back(), ys) + kWiden);
+}
+}  // namespace
+
+LrMesh::SupportIndex& LrMesh::index() const {
+  if (!index_.index) {
+    std::vector<BoxIndex<double, Knots>::Entry> entries;
+    entries.reserve(splines_.size());
+    for (const auto& [k, w] : splines_) entries.emplace_back(support_box(k, xs_, ys_), k);
+    index_.index = std::make_unique<SupportIndex>(SupportIndex{BoxIndex<double, Knots>(entries)});
+  }
+  return *index_.index;
+}
+
 void LrMesh::index_add(const Knots& k) {
-  if (levels_.empty()) levels_.resize(kLevels);
-  const Node nd = node_of(k.first, k.second, xs_, ys_);
-  levels_[nd.level].by_column[{nd.i, nd.j}].push_back(k);
-  levels_[nd.level].by_row[{nd.j, nd.i}].push_back(k);
+  if (index_.index) index_.index->tree.insert(support_box(k, xs_, ys_), k);
 }
 
 void LrMesh::index_remove(const Knots& k) {
-  const Node nd = node_of(k.first, k.second, xs_, ys_);
-  for (auto* list : {&levels_[nd.level].by_column[{nd.i, nd.j}], &levels_[nd.level].by_row[{nd.j, nd.i}]})
-    list->erase(std::find(list->begin(), list->end(), k));
+  if (index_.index) index_.index->tree.remove(support_box(k, xs_, ys_), k);
 }
 
 LrMesh::LrMesh(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& ys, int m, int n, const C0Lines& c0)
@@ -75,7 +88,6 @@ LrMesh::LrMesh(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& y
   for (size_t j = 0; j + n + 1 < ky.size(); ++j)
     for (size_t i = 0; i + m + 1 < kx.size(); ++i)
       splines_[{{kx.begin() + i, kx.begin() + i + m + 2}, {ky.begin() + j, ky.begin() + j + n + 2}}] = 1;
-  for (const auto& [k, w] : splines_) index_add(k);
 }
 
 const std::vector<LrBSpline>& LrMesh::splines() const {
@@ -140,26 +152,17 @@ bool LrMesh::try_insert(const AxisSegment& segment) {
   // the order of splines_, as the scan of every B-spline this replaced found them). A split
   // support meets the new piece itself: one covered by the line as it was has its knot.
   std::vector<Knots> split;
-  // The meshline as a (degenerate) box in the rectangle's unit coordinates.
+  // The meshline as a (degenerate, widened) box in the rectangle's unit coordinates.
   const double u0 = unit(s.vertical ? s.position : s.from, xs_), u1 = unit(s.vertical ? s.position : s.to, xs_);
   const double v0 = unit(s.vertical ? s.from : s.position, ys_), v1 = unit(s.vertical ? s.to : s.position, ys_);
-  for (int level = 0; level < static_cast<int>(levels_.size()); ++level) {
-    const double size = std::ldexp(1.0, -level);
-    const long i0 = static_cast<long>(std::floor(u0 / size)) - 2, i1 = static_cast<long>(std::floor(u1 / size)) + 1;
-    const long j0 = static_cast<long>(std::floor(v0 / size)) - 2, j1 = static_cast<long>(std::floor(v1 / size)) + 1;
-    // Along the meshline: the columns i0..i1 (a few) of a vertical one, the rows of a horizontal one.
-    const auto& nodes = s.vertical ? levels_[level].by_column : levels_[level].by_row;
-    const long across0 = s.vertical ? i0 : j0, across1 = s.vertical ? i1 : j1;
-    const long along0 = s.vertical ? j0 : i0, along1 = s.vertical ? j1 : i1;
-    for (long c = across0; c <= across1; ++c)
-      for (auto it = nodes.lower_bound({c, along0}); it != nodes.end() && it->first <= std::pair{c, along1}; ++it)
-        for (const Knots& k : it->second) {
-          const auto& t = s.vertical ? k.first : k.second;
-          const auto& o = s.vertical ? k.second : k.first;
-          if (t.front() < s.position && s.position < t.back() && std::find(t.begin(), t.end(), s.position) == t.end() &&
-              covers(o.front(), o.back()))
-            split.push_back(k);
-        }
+  std::vector<Knots> near;
+  index().tree.intersecting(BoxIndex<double, Knots>::box(u0 - kWiden, v0 - kWiden, u1 + kWiden, v1 + kWiden), near);
+  for (const Knots& k : near) {
+    const auto& t = s.vertical ? k.first : k.second;
+    const auto& o = s.vertical ? k.second : k.first;
+    if (t.front() < s.position && s.position < t.back() && std::find(t.begin(), t.end(), s.position) == t.end() &&
+        covers(o.front(), o.back()))
+      split.push_back(k);
   }
   if (split.empty()) return false;
   std::sort(split.begin(), split.end());

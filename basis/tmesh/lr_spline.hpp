@@ -46,8 +46,10 @@ class LrMesh {
   // The T-mesh: the tensor cells cut by the inserted meshlines.
   std::vector<RationalBox> cells() const;
 
- private:
+  // A B-spline's local knots in x and in y (the index's payload; splines() lists them with weights).
   using Knots = std::pair<std::vector<mpq_class>, std::vector<mpq_class>>;
+
+ private:
   bool traverses(bool vertical, const mpq_class& at, const mpq_class& from, const mpq_class& to) const;
   // Splits the B-splines of `work` (and their pieces) until no meshline traverses a support.
   void refine(std::vector<Knots> work);
@@ -56,14 +58,21 @@ class LrMesh {
   void index_remove(const Knots& k);
   int m_, n_;
   std::vector<mpq_class> xs_, ys_;
-  // Where the B-splines are, so that a meshline meets only those near it (lr_spline.cpp): a
-  // loose quadtree over the rectangle. Level L holds the supports at most 2^-L of the
-  // rectangle wide and high, under the node of their lower-left corner, which covers twice
-  // that; by column (i, j) and by row (j, i), for vertical and horizontal meshlines.
-  struct Bucket {
-    std::map<std::pair<long, long>, std::vector<Knots>> by_column, by_row;
+  // Where the B-splines are, so that a meshline meets only those near it: their supports in
+  // the one R-tree (basis/core/box_index.hpp), built on first use; a copy of the mesh builds its
+  // own.
+  struct SupportIndex;
+  struct IndexHolder {
+    std::unique_ptr<SupportIndex> index;
+    IndexHolder();
+    IndexHolder(const IndexHolder&);
+    IndexHolder(IndexHolder&&) noexcept;
+    IndexHolder& operator=(const IndexHolder&);
+    IndexHolder& operator=(IndexHolder&&) noexcept;
+    ~IndexHolder();
   };
-  std::vector<Bucket> levels_;
+  mutable IndexHolder index_;
+  SupportIndex& index() const;
   std::map<mpq_class, std::vector<std::pair<mpq_class, mpq_class>>> lines_[2];  // [vertical]: position -> intervals
   std::map<Knots, mpq_class> splines_;  // knots -> weight
   // splines() lists splines_ lazily; the lock makes concurrent const calls safe. Copies
