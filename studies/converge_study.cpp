@@ -23,17 +23,11 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
   if (num_levels < 1 || num_levels > 12) throw InputError("--levels: must be in [1, 12], got " + std::to_string(num_levels));
   if (family.check_converge) family.check_converge(c, num_levels);
   if (!c.problem.exact) throw InputError(c.path + ": [problem] exact: a convergence study needs the exact solution");
-  // Under mpirun, rank 0 makes the output folder (and says to all if it cannot) and writes
-  // the tables; every rank writes its piece of each level.
+  // Rank 0 writes the tables; every rank writes its piece of each level.
   const ParallelWorld world = launched_world();
   const bool writes = output_directory != nullptr;
   std::optional<OutputStage> stage;
-  if (world.size > 1 && writes)
-    on_all_ranks([&] {
-      if (world.rank == 0) stage.emplace(*output_directory);
-    });
-  else if (writes)
-    stage.emplace(*output_directory);
+  open_output_stage(output_directory, stage);
   ConvergeOutcome out;
   std::vector<ConvergeLevel>& levels = out.levels;
   std::vector<std::pair<double, std::string>> pvd, pvd_sampled;

@@ -83,19 +83,24 @@ void write_run_pieces(const CaseDescription& c, const SplineSpace& space, const 
 
 }  // namespace
 
-RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
-                     const ProgressFunction& progress) {
-  using clock = std::chrono::steady_clock;
-  // Under mpirun, rank 0 makes the output folder (and says to all if it cannot).
+void open_output_stage(const std::string* output_directory, std::optional<OutputStage>& stage) {
+  if (!output_directory) return;
   const ParallelWorld world = launched_world();
-  const bool writes = output_directory != nullptr;
-  std::optional<OutputStage> stage;
-  if (world.size > 1 && writes)
+  if (world.size > 1)
     on_all_ranks([&] {
       if (world.rank == 0) stage.emplace(*output_directory);
     });
-  else if (writes)
+  else
     stage.emplace(*output_directory);
+}
+
+RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::string* output_directory,
+                     const ProgressFunction& progress) {
+  using clock = std::chrono::steady_clock;
+  const ParallelWorld world = launched_world();
+  const bool writes = output_directory != nullptr;
+  std::optional<OutputStage> stage;
+  open_output_stage(output_directory, stage);
   const auto say = [&](const std::string& what) { if (progress) progress(what); };
   RunOutcome r;
   say("building the space ([space] family = \"" + c.family + "\")");

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,11 @@ void override_case(CaseDescription& c, int degree, int elements, const std::stri
 using PieceWriter = std::function<void(const std::string& path, CellRange cells, const PieceSummary* summary)>;
 std::string write_pieces(OutputStage* stage, ParallelWorld world, const std::string& base, CellRange mine,
                          const PieceWriter& write);
+
+// Opens `stage`, the staging folder of a study's output (null directory: none). Under mpirun
+// rank 0 makes it and says to all ranks if it cannot; the other ranks get none (they write
+// pieces into rank 0's through write_pieces). Collective under mpirun.
+void open_output_stage(const std::string* output_directory, std::optional<OutputStage>& stage);
 
 struct RunOutcome {
   std::unique_ptr<SplineSpace> space;
