@@ -353,24 +353,15 @@ SupportTree::Box index_box(const LocalBSpline& b) { return SupportTree::box(b.x.
 struct SemiRegularCollection::SupportIndex {
   SupportTree tree;
 };
-SemiRegularCollection::IndexHolder::IndexHolder() = default;
-SemiRegularCollection::IndexHolder::IndexHolder(const IndexHolder&) {}
-SemiRegularCollection::IndexHolder::IndexHolder(IndexHolder&&) noexcept = default;
-SemiRegularCollection::IndexHolder& SemiRegularCollection::IndexHolder::operator=(const IndexHolder&) {
-  index.reset();
-  return *this;
-}
-SemiRegularCollection::IndexHolder& SemiRegularCollection::IndexHolder::operator=(IndexHolder&&) noexcept = default;
-SemiRegularCollection::IndexHolder::~IndexHolder() = default;
 
 SemiRegularCollection::SupportIndex& SemiRegularCollection::index() const {
-  if (!index_.index) {
+  if (!index_.value) {
     std::vector<SupportTree::Entry> values;
     values.reserve(set_.size());
     for (const auto& b : set_) values.emplace_back(index_box(b), &b);
-    index_.index = std::make_unique<SupportIndex>(SupportIndex{SupportTree(values)});  // packed bulk load
+    index_.value = std::make_shared<SupportIndex>(SupportIndex{SupportTree(values)});  // packed bulk load
   }
-  return *index_.index;
+  return *index_.value;
 }
 
 std::vector<const LocalBSpline*> SemiRegularCollection::meeting(double x0, double y0, double x1, double y1) const {
@@ -380,14 +371,14 @@ std::vector<const LocalBSpline*> SemiRegularCollection::meeting(double x0, doubl
 }
 
 void SemiRegularCollection::erase_spline(std::set<LocalBSpline>::const_iterator it) {
-  if (index_.index) index_.index->tree.remove(index_box(*it), &*it);
+  if (index_.value) index_.value->tree.remove(index_box(*it), &*it);
   set_.erase(it);
 }
 
 const LocalBSpline* SemiRegularCollection::insert_spline(const LocalBSpline& b) {
   const auto [it, fresh] = set_.insert(b);
   if (!fresh) return nullptr;
-  if (index_.index) index_.index->tree.insert(index_box(*it), &*it);
+  if (index_.value) index_.value->tree.insert(index_box(*it), &*it);
   return &*it;
 }
 

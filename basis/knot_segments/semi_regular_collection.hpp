@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "basis/core/copy_reset_cache.hpp"
 #include "basis/core/bezier_mesh.hpp"
 #include "basis/core/bspline_basis.hpp"
 #include "basis/tmesh/rectangular_partition.hpp"
@@ -153,15 +154,6 @@ class SemiRegularCollection {
   // first insertion, kept up to date by the splits and their undoing; a copy starts without
   // one (it would point into the other collection's set).
   struct SupportIndex;
-  struct IndexHolder {
-    std::unique_ptr<SupportIndex> index;
-    IndexHolder();
-    IndexHolder(const IndexHolder&);
-    IndexHolder(IndexHolder&&) noexcept;
-    IndexHolder& operator=(const IndexHolder&);
-    IndexHolder& operator=(IndexHolder&&) noexcept;
-    ~IndexHolder();
-  };
   int dx_ = 2, dy_ = 2;
   Extension extension_ = Extension::kGalloping;
   // No B-spline jumps over a line (tensor starts, and what insert() builds); an explicit
@@ -176,7 +168,7 @@ class SemiRegularCollection {
   double x0_ = 0, x1_ = 1, y0_ = 0, y1_ = 1;
   // Every knot line/segment of the mesh so far, per orientation and position.
   std::map<double, std::vector<Piece>> vlines_, hlines_;
-  mutable IndexHolder index_;
+  mutable CopyResetCache<SupportIndex> index_;
   SupportIndex& index() const;
   // B-splines whose support meets the closed box x0, y0, x1, y1 (a superset of those whose
   // interior does), in the R-tree's order: nothing downstream depends on it (the splits reach

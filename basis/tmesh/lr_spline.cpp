@@ -33,15 +33,6 @@ constexpr double kWiden = 1e-9;
 struct LrMesh::SupportIndex {
   BoxIndex<double, Knots> tree;
 };
-LrMesh::IndexHolder::IndexHolder() = default;
-LrMesh::IndexHolder::IndexHolder(const IndexHolder&) {}
-LrMesh::IndexHolder::IndexHolder(IndexHolder&&) noexcept = default;
-LrMesh::IndexHolder& LrMesh::IndexHolder::operator=(const IndexHolder&) {
-  index.reset();
-  return *this;
-}
-LrMesh::IndexHolder& LrMesh::IndexHolder::operator=(IndexHolder&&) noexcept = default;
-LrMesh::IndexHolder::~IndexHolder() = default;
 
 namespace {
 BoxIndex<double, LrMesh::Knots>::Box support_box(const LrMesh::Knots& k, const std::vector<mpq_class>& xs,
@@ -52,21 +43,21 @@ BoxIndex<double, LrMesh::Knots>::Box support_box(const LrMesh::Knots& k, const s
 }  // namespace
 
 LrMesh::SupportIndex& LrMesh::index() const {
-  if (!index_.index) {
+  if (!index_.value) {
     std::vector<BoxIndex<double, Knots>::Entry> entries;
     entries.reserve(splines_.size());
     for (const auto& [k, w] : splines_) entries.emplace_back(support_box(k, xs_, ys_), k);
-    index_.index = std::make_unique<SupportIndex>(SupportIndex{BoxIndex<double, Knots>(entries)});
+    index_.value = std::make_shared<SupportIndex>(SupportIndex{BoxIndex<double, Knots>(entries)});
   }
-  return *index_.index;
+  return *index_.value;
 }
 
 void LrMesh::index_add(const Knots& k) {
-  if (index_.index) index_.index->tree.insert(support_box(k, xs_, ys_), k);
+  if (index_.value) index_.value->tree.insert(support_box(k, xs_, ys_), k);
 }
 
 void LrMesh::index_remove(const Knots& k) {
-  if (index_.index) index_.index->tree.remove(support_box(k, xs_, ys_), k);
+  if (index_.value) index_.value->tree.remove(support_box(k, xs_, ys_), k);
 }
 
 LrMesh::LrMesh(const std::vector<mpq_class>& xs, const std::vector<mpq_class>& ys, int m, int n, const C0Lines& c0)

@@ -6,6 +6,7 @@
 #include <mutex>
 #include <vector>
 
+#include "basis/core/copy_reset_cache.hpp"
 #include "basis/tmesh/rectangular_partition.hpp"
 
 namespace knotwork {
@@ -62,16 +63,7 @@ class LrMesh {
   // the one R-tree (basis/core/box_index.hpp), built on first use; a copy of the mesh builds its
   // own.
   struct SupportIndex;
-  struct IndexHolder {
-    std::unique_ptr<SupportIndex> index;
-    IndexHolder();
-    IndexHolder(const IndexHolder&);
-    IndexHolder(IndexHolder&&) noexcept;
-    IndexHolder& operator=(const IndexHolder&);
-    IndexHolder& operator=(IndexHolder&&) noexcept;
-    ~IndexHolder();
-  };
-  mutable IndexHolder index_;
+  mutable CopyResetCache<SupportIndex> index_;
   SupportIndex& index() const;
   std::map<mpq_class, std::vector<std::pair<mpq_class, mpq_class>>> lines_[2];  // [vertical]: position -> intervals
   std::map<Knots, mpq_class> splines_;  // knots -> weight
