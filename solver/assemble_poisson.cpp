@@ -16,6 +16,7 @@
 
 #include "quadrature/bernstein.hpp"
 #include "solver/cell_basis.hpp"
+#include "solver/diffusion_at_points.hpp"
 #include "basis/core/input_error.hpp"
 #include "solver/separable_cells.hpp"
 
@@ -50,7 +51,12 @@ bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch
     bool matrix = false;
     if (nd == 1) {
       const double a = values.result(0)[q];
-      if (!(a > 0) || !std::isfinite(a)) { what = "the coefficient a = " + std::to_string(a) + " is not positive"; field = &k.diffusion[0]; }
+      if (!(a > 0) || !std::isfinite(a)) {
+        std::ostringstream m;
+        m << "the coefficient a = " << a << " is not positive";
+        what = m.str();
+        field = &k.diffusion[0];
+      }
     } else if (nd == 3) {
       const double a11 = values.result(0)[q], a12 = values.result(1)[q], a22 = values.result(2)[q];
       if (!(a11 > 0 && a11 * a22 - a12 * a12 > 0) || !std::isfinite(a11 + a12 + a22)) {
@@ -64,7 +70,12 @@ bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch
     }
     if (!field && !k.reaction.empty()) {
       const double c = values.result(nd)[q];
-      if (!(c >= 0) || !std::isfinite(c)) { what = "the reaction c = " + std::to_string(c) + " is negative"; field = &k.reaction; }
+      if (!(c >= 0) || !std::isfinite(c)) {
+        std::ostringstream m;
+        m << "the reaction c = " << c << " is negative";
+        what = m.str();
+        field = &k.reaction;
+      }
     }
     if (!field) continue;
 #pragma omp critical(knotwork_bad_coefficient)
@@ -446,41 +457,21 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
   }
 }
 
-void assemble_poisson_elements(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
-                               const DofLayout& layout, const Eigen::VectorXd& fixed_values,
-                               const QuadratureOptions& quadrature, CellRange cells, const ElementSink& sink) {
-  assemble_cells(
-      mesh, geometry, form, layout, fixed_values, quadrature, cells,
-      [&](int, const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke, const Eigen::VectorXd& Fe) {
-        sink(order, Ke, Fe);
-      },
-      [](int) -> Eigen::VectorXd* { return nullptr; });
-}
-
 namespace {
 
 // Data g (Dirichlet) or h (Neumann) at the side's points.
-// The Neumann data from the exact solution are the flux (A grad u).n: `diffusion` holds A's
-// evaluators (none: A = I; one: a I; three: a11, a12, a22).
+// The Neumann data from the exact solution are the flux (A grad u).n.
 void boundary_data(const PoissonProblem& problem, const BoundaryCondition& bc, const CellBasis& cb,
                    std::optional<ExpressionEvaluator>& value, std::optional<ExpressionEvaluator>& ux,
-                   std::optional<ExpressionEvaluator>& uy, std::vector<ExpressionEvaluator>& diffusion,
-                   Eigen::VectorXd& out) {
+                   std::optional<ExpressionEvaluator>& uy, DiffusionAtPoints& diffusion, Eigen::VectorXd& out) {
   const Eigen::Index n = cb.measure.size();
   out.resize(n);
   for (Eigen::Index k = 0; k < n; ++k) {
     const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
     if (bc.kind == BoundaryKind::kNeumann && bc.from_exact) {
-      double gx = (*ux)(x, y), gy = (*uy)(x, y);
-      if (diffusion.size() == 1) {
-        const double a = diffusion[0](x, y);
-        gx *= a, gy *= a;
-      } else if (diffusion.size() == 3) {
-        const double a11 = diffusion[0](x, y), a12 = diffusion[1](x, y), a22 = diffusion[2](x, y);
-        const double fx = a11 * gx + a12 * gy, fy = a12 * gx + a22 * gy;
-        gx = fx, gy = fy;
-      }
-      out[k] = gx * cb.normal(k, 0) + gy * cb.normal(k, 1);
+      Eigen::Vector2d flux((*ux)(x, y), (*uy)(x, y));
+      if (!diffusion.identity()) flux = diffusion(x, y) * flux;
+      out[k] = flux[0] * cb.normal(k, 0) + flux[1] * cb.normal(k, 1);
     } else
       out[k] = (*value)(x, y);
     if (!std::isfinite(out[k])) {
@@ -522,9 +513,8 @@ void for_each_boundary_side(const BezierMesh& mesh, const GeometryMap& geometry,
     if (bc.kind != kind) continue;
     std::optional<ExpressionEvaluator> value, ux, uy;
     make_evaluators(problem, bc, value, ux, uy);
-    std::vector<ExpressionEvaluator> diffusion;
-    if (bc.kind == BoundaryKind::kNeumann && bc.from_exact)
-      for (const Expression& a : problem.coefficients.diffusion) diffusion.emplace_back(a);
+    DiffusionAtPoints diffusion(bc.kind == BoundaryKind::kNeumann && bc.from_exact ? problem.coefficients.diffusion
+                                                                                   : std::vector<Expression>{});
     for (int c = cells.first; c < last; ++c)
       for (int s = 0; s < 4; ++s) {
         if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
@@ -563,21 +553,13 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
   Eigen::MatrixXd dn;
   // With a coefficient A, dB/dn is the conormal derivative (A grad B).n and the penalty's bound
   // is taken against the A-weighted stiffness (the same coercivity argument in A's energy).
-  std::vector<ExpressionEvaluator> diffusion;
-  for (const Expression& a : problem.coefficients.diffusion) diffusion.emplace_back(a);
+  DiffusionAtPoints diffusion(problem.coefficients.diffusion);
   Eigen::VectorXd nx, ny;
   const auto conormal = [&](const CellBasis& cb) {
     nx = cb.normal.col(0), ny = cb.normal.col(1);
-    for (Eigen::Index k = 0; k < nx.size() && !diffusion.empty(); ++k) {
-      const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
-      if (diffusion.size() == 1) {
-        const double a = diffusion[0](x, y);
-        nx[k] *= a, ny[k] *= a;
-      } else {
-        const double a11 = diffusion[0](x, y), a12 = diffusion[1](x, y), a22 = diffusion[2](x, y);
-        const double n0 = nx[k], n1 = ny[k];
-        nx[k] = a11 * n0 + a12 * n1, ny[k] = a12 * n0 + a22 * n1;
-      }
+    for (Eigen::Index k = 0; k < nx.size() && !diffusion.identity(); ++k) {
+      const Eigen::Vector2d n = diffusion(cb.geometry.x(k, 0), cb.geometry.x(k, 1)) * Eigen::Vector2d(nx[k], ny[k]);
+      nx[k] = n[0], ny[k] = n[1];
     }
   };
   for_each_boundary_side(mesh, geometry, problem, quadrature, cells, BoundaryKind::kDirichlet,
@@ -613,18 +595,15 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
     if (!(vb.min_jacobian > 0)) continue;
     const Eigen::Index m = vb.value.cols() - 1;
     Eigen::MatrixXd stiffness = Eigen::MatrixXd::Zero(m + 1, m + 1);
-    if (diffusion.empty()) {
+    if (diffusion.identity()) {
       for (int d = 0; d < geometry.dimension(); ++d)
         stiffness.noalias() += vb.grad(d).transpose() * vb.measure.asDiagonal() * vb.grad(d);
     } else {
       const Eigen::Index nq = vb.measure.size();
       Eigen::VectorXd w11(nq), w12(nq), w22(nq);
       for (Eigen::Index k = 0; k < nq; ++k) {
-        const double x = vb.geometry.x(k, 0), y = vb.geometry.x(k, 1);
-        const bool scalar = diffusion.size() == 1;
-        w11[k] = vb.measure[k] * diffusion[0](x, y);
-        w12[k] = scalar ? 0.0 : vb.measure[k] * diffusion[1](x, y);
-        w22[k] = scalar ? w11[k] : vb.measure[k] * diffusion[2](x, y);
+        const Eigen::Matrix2d a = diffusion(vb.geometry.x(k, 0), vb.geometry.x(k, 1));
+        w11[k] = vb.measure[k] * a(0, 0), w12[k] = vb.measure[k] * a(0, 1), w22[k] = vb.measure[k] * a(1, 1);
       }
       const Eigen::MatrixXd mixed = vb.grad_x.transpose() * w12.asDiagonal() * vb.grad_y;
       stiffness.noalias() += vb.grad_x.transpose() * w11.asDiagonal() * vb.grad_x +

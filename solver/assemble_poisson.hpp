@@ -63,16 +63,6 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
                       const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
                       Eigen::VectorXd& rhs, Eigen::VectorXd* integrals = nullptr, CellRange cells = {});
 
-// The same integration as assemble_poisson, restricted to `cells`, handed cell by cell to
-// `sink`: the cell's free dofs as sorted (dof, local index) pairs, its element matrix (over all
-// its alive functions) and its load with the Dirichlet lifting applied. For a matrix no process
-// holds whole. The sink is called from several threads at once. Same errors.
-using ElementSink = std::function<void(const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke,
-                                       const Eigen::VectorXd& Fe)>;
-void assemble_poisson_elements(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
-                               const DofLayout& layout, const Eigen::VectorXd& fixed_values,
-                               const QuadratureOptions& quadrature, CellRange cells, const ElementSink& sink);
-
 // Adds the Neumann terms (h phi_i over the Neumann sides of `cells`) to rhs (free dofs).
 void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,
                        const PoissonProblem& problem, const DofLayout& layout,

@@ -12,6 +12,7 @@
 #include "quadrature/bernstein.hpp"
 #include "quadrature/gauss_legendre.hpp"
 #include "solver/cell_basis.hpp"
+#include "solver/diffusion_at_points.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/expression.hpp"
 
@@ -30,32 +31,26 @@ void side_point(CellSide side, double t, double& u, double& v) {
 class PointCoefficients {
  public:
   PointCoefficients(const PoissonProblem& problem, const std::vector<ExactSolution>& derivatives)
-      : constant_reaction_(problem.reaction) {
+      : a_(problem.coefficients.diffusion), constant_reaction_(problem.reaction) {
     for (const ExactSolution& d : derivatives) {
-      entries_.emplace_back(d.u);
       dx_.emplace_back(d.u_x);
       dy_.emplace_back(d.u_y);
     }
     if (!problem.coefficients.reaction.empty()) reaction_.emplace(problem.coefficients.reaction);
   }
-  // A at (x, y).
-  Eigen::Matrix2d A(double x, double y) {
-    if (entries_.empty()) return Eigen::Matrix2d::Identity();
-    Eigen::Matrix2d a;
-    if (entries_.size() == 1) return entries_[0](x, y) * Eigen::Matrix2d::Identity();
-    a << entries_[0](x, y), entries_[1](x, y), entries_[1](x, y), entries_[2](x, y);
-    return a;
-  }
+  bool identity() const { return a_.identity(); }
+  Eigen::Matrix2d A(double x, double y) { return a_(x, y); }
   // (div A)_j = sum_i d A_ij / d x_i at (x, y).
   Eigen::Vector2d divergence(double x, double y) {
-    if (entries_.empty()) return Eigen::Vector2d::Zero();
-    if (entries_.size() == 1) return Eigen::Vector2d(dx_[0](x, y), dy_[0](x, y));
+    if (dx_.empty()) return Eigen::Vector2d::Zero();
+    if (dx_.size() == 1) return Eigen::Vector2d(dx_[0](x, y), dy_[0](x, y));
     return Eigen::Vector2d(dx_[0](x, y) + dy_[1](x, y), dx_[1](x, y) + dy_[2](x, y));
   }
   double reaction(double x, double y) { return reaction_ ? (*reaction_)(x, y) : constant_reaction_; }
 
  private:
-  std::vector<ExpressionEvaluator> entries_, dx_, dy_;
+  DiffusionAtPoints a_;
+  std::vector<ExpressionEvaluator> dx_, dy_;
   std::optional<ExpressionEvaluator> reaction_;
   double constant_reaction_;
 };
@@ -197,7 +192,7 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
         // u_h is continuous: the jump of its gradient is normal, and that of the flux A grad u_h
         // is A times it.
         const Eigen::Vector2d step(a.gradient(k, 0) - b.gradient(k, 0), a.gradient(k, 1) - b.gradient(k, 1));
-        const double jump = problem.coefficients.diffusion.empty() ? std::hypot(step[0], step[1])
+        const double jump = coefficient.identity() ? std::hypot(step[0], step[1])
                                                                    : (coefficient.A(g.x(k, 0), g.x(k, 1)) * step).norm();
         length += ds;
         integral += ds * jump * jump;
@@ -213,7 +208,8 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
     ind.jump_part += 2 * side_value[s];
     ind.max_gradient_jump = std::max(ind.max_gradient_jump, side_max[s]);
   }
-  // Neumann sides: h_E ||g - du_h/dn||^2; Dirichlet sides by Nitsche's method: ||g - u_h||^2 / h_E.
+  // Neumann sides: h_E ||g - (A grad u_h).n||^2; Dirichlet sides by Nitsche's method: ||g - u_h||^2 / h_E.
+  PointCoefficients coefficient(problem, diffusion);
   for (int c = 0; c < mesh.num_cells(); ++c) {
     const BezierCell& cell = mesh.cell(c);
     for (int side = 0; side < 4; ++side) {
@@ -234,7 +230,6 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       const Eigen::MatrixX3d sol = evaluate_solution(mesh, geometry, coefficients, c, u, v);
       GeometryAtPoints g;
       geometry.evaluate(c, u, v, g);
-      PointCoefficients coefficient(problem, diffusion);
       ExpressionEvaluator data(!bc.from_exact ? bc.value : weak_dirichlet ? problem.exact->u : problem.exact->u_x);
       std::unique_ptr<ExpressionEvaluator> data_y;
       if (bc.from_exact && !weak_dirichlet) data_y = std::make_unique<ExpressionEvaluator>(problem.exact->u_y);

@@ -98,6 +98,9 @@ class PatchGeometryMap final : public GeometryMap {
   const BezierMesh& mesh_;
   NurbsPatch patch_;
   Eigen::MatrixX3d net_;  // homogeneous control points (w x, w y, w), numbered as the patch's
+  // The patch's Bezier extraction per element and its breakpoints, per direction (Bezier cells).
+  std::vector<Eigen::MatrixXd> extraction_u_, extraction_v_;
+  std::vector<double> breaks_u_, breaks_v_;
   std::vector<Interval> intervals_u_, intervals_v_;
   int grid_columns_ = 0, first_row_ = 0;      // a grid map: its columns (else 0)
   std::vector<int> cell_u_, cell_v_;          // otherwise: each cell's intervals

@@ -48,14 +48,28 @@ Eigen::MatrixX3d homogeneous_net(const NurbsPatch& p) {
 }  // namespace
 
 PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch)
-    : mesh_(mesh), patch_(std::move(patch)), net_(homogeneous_net(patch_)), lookup_(std::make_unique<Lookup>()) {
+    : mesh_(mesh),
+      patch_(std::move(patch)),
+      net_(homogeneous_net(patch_)),
+      extraction_u_(bezier_extraction(patch_.basis_u)),
+      extraction_v_(bezier_extraction(patch_.basis_v)),
+      breaks_u_(patch_.basis_u.breakpoints()),
+      breaks_v_(patch_.basis_v.breakpoints()),
+      lookup_(std::make_unique<Lookup>()) {
   lookup_->serial = next_serial();
   find_intervals();
   check_intervals();
 }
 
 PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch, ElementGrid grid)
-    : mesh_(mesh), patch_(std::move(patch)), net_(homogeneous_net(patch_)), lookup_(std::make_unique<Lookup>()) {
+    : mesh_(mesh),
+      patch_(std::move(patch)),
+      net_(homogeneous_net(patch_)),
+      extraction_u_(bezier_extraction(patch_.basis_u)),
+      extraction_v_(bezier_extraction(patch_.basis_v)),
+      breaks_u_(patch_.basis_u.breakpoints()),
+      breaks_v_(patch_.basis_v.breakpoints()),
+      lookup_(std::make_unique<Lookup>()) {
   lookup_->serial = next_serial();
   grid_columns_ = static_cast<int>(grid.u.size()) - 1;
   first_row_ = grid.first_row;
@@ -229,19 +243,18 @@ void PatchGeometryMap::interval_at_rule(int iu, int iv, int nu, int nv, Geometry
 BezierGeometryCell PatchGeometryMap::bezier_cell(int cell) const {
   const auto [iu, iv] = intervals_of(cell);
   const BezierCell& c = mesh_.cell(cell);
-  const auto restricted = [](const BSplineBasis1D& basis, const Interval& e, int degree) {
-    const std::vector<double> b = basis.breakpoints();
+  const auto restricted = [](const std::vector<Eigen::MatrixXd>& extraction, const std::vector<double>& b, int p,
+                             const Interval& e, int degree) {
     const double a = b[e.element], len = b[e.element + 1] - a;
-    const int p = basis.degree();
     // Rows: the span's p+1 B-splines; columns: Bernstein polynomials on the interval.
-    Eigen::MatrixXd m = bezier_extraction(basis)[e.element] *
-                        subdivision_matrix(p, (e.from - a) / len, (e.from + e.length - a) / len).transpose();
+    Eigen::MatrixXd m =
+        extraction[e.element] * subdivision_matrix(p, (e.from - a) / len, (e.from + e.length - a) / len).transpose();
     if (degree > p) m = m * degree_elevation_matrix(p, degree - p).transpose();
     return m;
   };
   const int du = std::max(c.degree_u, patch_.basis_u.degree()), dv = std::max(c.degree_v, patch_.basis_v.degree());
-  const Eigen::MatrixXd Bu = restricted(patch_.basis_u, intervals_u_[iu], du);
-  const Eigen::MatrixXd Bv = restricted(patch_.basis_v, intervals_v_[iv], dv);
+  const Eigen::MatrixXd Bu = restricted(extraction_u_, breaks_u_, patch_.basis_u.degree(), intervals_u_[iu], du);
+  const Eigen::MatrixXd Bv = restricted(extraction_v_, breaks_v_, patch_.basis_v.degree(), intervals_v_[iv], dv);
   const int gu = patch_.basis_u.degree(), gv = patch_.basis_v.degree(), n_u = patch_.basis_u.num_functions();
   const int su = intervals_u_[iu].span - gu, sv = intervals_v_[iv].span - gv;
   BezierGeometryCell g;
