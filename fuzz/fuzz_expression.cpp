@@ -1,4 +1,4 @@
-// User expressions ([problem] exact, source, dirichlet, neumann): parsed by muParser,
+// User expressions ([problem] exact, source, dirichlet, neumann): read by the grammar,
 // evaluated, differentiated symbolically by GiNaC as an exact solution, and the derived
 // expressions compiled into the batch program the solver evaluates at quadrature points.
 #include <string>

@@ -6,13 +6,25 @@
 
 namespace knotwork {
 
-// A scalar function of x, y and z (z = 0 in the plane) written by the user, e.g. "sin(pi*x)*exp(-y^2)".
-// Operators + - * / ^, functions sin cos tan asin acos atan atan2 sinh cosh tanh
-// exp log (natural) sqrt abs pow, constants pi and e.
+namespace expression_detail {
+struct Node;
+struct CompiledExpression;
+}  // namespace expression_detail
+
+// A scalar function of x, y and z (z = 0 in the plane) written by the user, e.g.
+// "sin(pi*x)*exp(-y^2)". The grammar, read once into a tree (solver/expression_tree.hpp):
+//   numbers    2, 0.5, .5, 1e-3, 2.5E+4
+//   variables  x y z;  constants pi e
+//   operators  + - * / ^, with ^ binding tightest and to the right: 2^3^2 = 2^9, -x^2 = -(x^2),
+//              2^-1*3 = (2^-1)*3; no implicit products (2*x, not 2x)
+//   functions  sin cos tan asin acos atan atan2(y, x) sinh cosh tanh exp log (natural) sqrt
+//              abs pow(a, b)
+// The same tree is differentiated (GiNaC) and evaluated (a compiled program), so the source
+// derived from an exact solution and the solution itself are the same function.
 class Expression {
  public:
   Expression() = default;
-  // Checks the syntax; throws InputError("<where>: ... at position N") if it does not parse.
+  // Reads text; throws InputError("<where>: cannot parse \"...\": ... at character N").
   // `where` names the file and field, e.g. "square.toml: [problem] exact".
   static Expression parse(const std::string& text, const std::string& where);
   static Expression constant(double value);
@@ -20,11 +32,19 @@ class Expression {
   const std::string& where() const { return where_; }
   bool empty() const { return text_.empty(); }
 
+  // Internal (solver/expression*.cpp): the tree and its program.
+  const expression_detail::Node& tree() const { return *tree_; }
+  const std::shared_ptr<const expression_detail::CompiledExpression>& compiled() const { return compiled_; }
+  static Expression from_tree(std::string text, std::string where, std::shared_ptr<const expression_detail::Node> tree);
+
  private:
   std::string text_, where_;
+  std::shared_ptr<const expression_detail::Node> tree_;
+  std::shared_ptr<const expression_detail::CompiledExpression> compiled_;
 };
 
-// Evaluates one expression fast (compiled bytecode). Not thread-safe: make one per thread.
+// Evaluates one expression at one point (its compiled program). Not thread-safe: make one per
+// thread; making one is cheap (no parsing, no GiNaC).
 class ExpressionEvaluator {
  public:
   explicit ExpressionEvaluator(const Expression& e);
@@ -39,12 +59,9 @@ class ExpressionEvaluator {
 };
 
 // Several expressions at many points at once (the exact solution and its gradient at a
-// cell's quadrature points): compiled once into one program over arrays of points in which a
+// cell's quadrature points): their programs merged into one over arrays of points in which a
 // subexpression common to several of them (sin(pi*x) in u, u_x and u_y) is computed once,
-// with no interpretation per point. Built from GiNaC's reading of each text, checked against
-// muParser's at a few points; an expression GiNaC does not read (or reads with another
-// meaning) is evaluated by muParser, point by point. Not thread-safe: construct it once
-// (GiNaC is not thread-safe either) and give every thread its own copy.
+// with no interpretation per point. Not thread-safe: give every thread its own copy.
 class ExpressionBatch {
  public:
   explicit ExpressionBatch(const std::vector<Expression>& expressions);
@@ -71,8 +88,9 @@ struct ExactSolution {
   std::array<std::array<Expression, 3>, 3> hessian;  // surfaces only
   bool on_surface() const { return !u_z.empty(); }
 };
-// Throws InputError if u cannot be differentiated (unknown function, non-smooth parts GiNaC
-// rejects). The derived expressions are checked against GiNaC's own evaluation.
+// Throws InputError if u cannot be differentiated (constant powers exact arithmetic cannot
+// afford, functions whose derivatives leave the grammar) or if a derived expression in double
+// precision differs from GiNaC's exact value at a check point (constants beyond 2^53).
 ExactSolution differentiate_exact_solution(const Expression& u);
 // f = -div(A grad u) + c u in the plane, symbolically: A is the identity (no entries), a I (one)
 // or [[a11, a12], [a12, a22]] (three: a11, a12, a22); c is `reaction` when given, else the
