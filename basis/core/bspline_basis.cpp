@@ -1,5 +1,7 @@
 #include "basis/core/bspline_basis.hpp"
 
+#include "basis/core/bspline_kernel.hpp"
+
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <algorithm>
@@ -76,20 +78,7 @@ int BSplineBasis1D::find_span(double t) const {
 }
 
 void BSplineBasis1D::evaluate(int s, double t, double* N) const {
-  // Cox–de Boor in the triangular form (Piegl & Tiller A2.2).
-  std::vector<double> left(p_ + 1), right(p_ + 1);
-  N[0] = 1.0;
-  for (int j = 1; j <= p_; ++j) {
-    left[j] = t - knots_[s + 1 - j];
-    right[j] = knots_[s + j] - t;
-    double saved = 0.0;
-    for (int r = 0; r < j; ++r) {
-      const double temp = N[r] / (right[r + 1] + left[j - r]);
-      N[r] = saved + right[r + 1] * temp;
-      saved = left[j - r] * temp;
-    }
-    N[j] = saved;
-  }
+  bspline_kernel::alive_on_span<double>(knots_.data(), s, p_, t, N);
 }
 
 void BSplineBasis1D::evaluate_derivatives(int s, double t, int order, double* out) const {
@@ -194,7 +183,7 @@ void boehm(std::vector<double>& L, Eigen::MatrixXd& Q, int p, double t) {
   Eigen::MatrixXd R(Q.rows() + 1, Q.cols());
   for (int i = 0; i <= s - p; ++i) R.row(i) = Q.row(i);
   for (int i = std::max(s - p + 1, 0); i <= s - mult; ++i) {
-    const double alpha = (t - L[i]) / (L[i + p] - L[i]);
+    const double alpha = bspline_kernel::split_weights<double>({L.data() + i, std::size_t(p) + 2}, t).first;
     R.row(i) = alpha * Q.row(i) + (1.0 - alpha) * Q.row(i - 1);
   }
   for (int i = s - mult + 1; i < R.rows(); ++i) R.row(i) = Q.row(i - 1);

@@ -13,6 +13,7 @@
 #include "basis/core/box_index.hpp"
 
 #include "basis/core/bspline_basis.hpp"
+#include "basis/core/bspline_kernel.hpp"
 #include "basis/tmesh/partition_topology.hpp"
 
 namespace knotwork {
@@ -968,37 +969,9 @@ std::vector<double> global_knots(const std::vector<LocalBSpline>& splines, bool 
 }
 
 // Coefficients of the single B-spline N(local | t) in the basis of the global knot vector U
-// (which contains local's knots): Boehm insertion of the missing knots, then the resulting
-// windows located in U. Returns (global index, coefficient) pairs.
+// (which contains local's knots): (global index, coefficient) pairs.
 std::vector<std::pair<int, double>> in_global_basis(const std::vector<double>& local, const std::vector<double>& U) {
-  const int d = static_cast<int>(local.size()) - 2;
-  std::vector<double> padded(d, local.front() - 1.0);  // as in single_bspline_bernstein
-  padded.insert(padded.end(), local.begin(), local.end());
-  padded.insert(padded.end(), d, local.back() + 1.0);
-  BSplineBasis1D basis(d, padded);
-  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(2 * d + 1, 1);
-  c(d, 0) = 1.0;
-  for (size_t i = 0; i < U.size();) {
-    size_t j = i;
-    while (j < U.size() && U[j] == U[i]) ++j;
-    if (U[i] > local.front() && U[i] < local.back()) {
-      const long have = std::count(local.begin(), local.end(), U[i]);
-      for (long r = have; r < static_cast<long>(j - i); ++r) basis = insert_knot(basis, c, U[i]);
-    }
-    i = j;
-  }
-  std::vector<std::pair<int, double>> out;
-  const auto& K = basis.knots();
-  for (int f = 0; f < basis.num_functions(); ++f) {
-    if (c(f, 0) == 0.0) continue;
-    const std::vector<double> window(K.begin() + f, K.begin() + f + d + 2);
-    for (size_t g = 0; g + d + 2 <= U.size(); ++g)
-      if (std::equal(window.begin(), window.end(), U.begin() + g)) {
-        out.emplace_back(static_cast<int>(g), c(f, 0));
-        break;
-      }
-  }
-  return out;
+  return bspline_kernel::in_finer_knots(local, U);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "basis/core/box_index.hpp"
+#include "basis/core/bspline_kernel.hpp"
 #include "basis/core/bspline_basis.hpp"
 
 namespace knotwork {
@@ -67,7 +68,7 @@ bool DyadicLrMesh::covers(int direction, int64_t at, int64_t from, int64_t to) c
   return k->first <= from && to <= k->second;
 }
 
-// Knot insertion into one B-spline: B[t] = a B[t with x, first p+2] + b B[last p+2].
+// Knot insertion into one B-spline (bspline_kernel::split_weights), on the dyadic integers.
 void DyadicLrMesh::split_functions() {
   incidence_.reset();
   std::vector<Function> work;
@@ -89,10 +90,9 @@ void DyadicLrMesh::split_functions() {
           break;
       if (it == lines.end() || it->first >= hi) continue;
       const int64_t x = it->first;
-      const double X = parameter(d, x), t0 = parameter(d, t[0]), tp = parameter(d, t[p]), t1 = parameter(d, t[1]),
-                   tq = parameter(d, t[p + 1]);
-      const double a = x >= t[p] ? 1.0 : (X - t0) / (tp - t0);
-      const double b = x <= t[1] ? 1.0 : (tq - X) / (tq - t1);
+      std::vector<double> T(p + 2);
+      for (int k = 0; k <= p + 1; ++k) T[k] = parameter(d, t[k]);
+      const auto [a, b] = bspline_kernel::split_weights<double>(T, parameter(d, x));
       std::vector<int64_t> w(t.begin(), t.begin() + p + 2);
       w.insert(std::upper_bound(w.begin(), w.end(), x), x);
       Function left = f, right = f;

@@ -9,9 +9,11 @@
 #include <map>
 #include <numeric>
 #include <optional>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
+#include "basis/core/bspline_kernel.hpp"
 #include "basis/pt/pt_spline.hpp"
 #include "basis/tmesh/rectangular_partition.hpp"
 
@@ -20,24 +22,13 @@ namespace knotwork::pt_detail {
 // Value of the B-spline with local knots t (degree t.size() - 2) at x, not at a knot.
 template <class S>
 S bspline_value(const std::vector<mpq_class>& knots, const S& x) {
-  const int p = static_cast<int>(knots.size()) - 2;
-  std::vector<S> t(knots.size());
-  for (size_t i = 0; i < knots.size(); ++i) {
-    if constexpr (std::is_same_v<S, double>) t[i] = knots[i].get_d();
-    else t[i] = knots[i];
+  if constexpr (std::is_same_v<S, mpq_class>) {
+    return bspline_kernel::local_value<mpq_class>(knots, x);
+  } else {
+    std::vector<S> t(knots.size());
+    for (size_t i = 0; i < knots.size(); ++i) t[i] = knots[i].get_d();
+    return bspline_kernel::local_value<S>(t, x);
   }
-  if (x < t.front() || x >= t.back()) return S(0);
-  std::vector<S> N(p + 1, S(0));
-  for (int i = 0; i <= p; ++i)
-    if (t[i] <= x && x < t[i + 1]) N[i] = 1;
-  for (int q = 1; q <= p; ++q)
-    for (int i = 0; i + q <= p; ++i) {
-      S v = 0;
-      if (t[i + q] != t[i]) v += (x - t[i]) / (t[i + q] - t[i]) * N[i];
-      if (t[i + q + 1] != t[i + 1]) v += (t[i + q + 1] - x) / (t[i + q + 1] - t[i + 1]) * N[i + 1];
-      N[i] = v;
-    }
-  return N[0];
 }
 
 // The jump of the p-th derivative (p = degree) of the B-spline with local knots t across the

@@ -1,5 +1,6 @@
 #include "basis/pt/pt_reference.hpp"
 
+#include "basis/core/bspline_kernel.hpp"
 #include "basis/exact/sparse_rank.hpp"
 
 #include <algorithm>
@@ -18,18 +19,7 @@ std::vector<mpq_class> open_knots(const std::set<mpq_class>& breaks, int p) {
 
 // Values of all B-splines of degree p at x (x not a knot, or the domain's right end).
 std::vector<mpq_class> values(const std::vector<mpq_class>& t, int p, const mpq_class& x) {
-  std::vector<mpq_class> N(t.size() - 1, mpq_class(0));
-  for (size_t i = 0; i + 1 < t.size(); ++i)
-    if ((t[i] <= x && x < t[i + 1]) || (x == t.back() && t[i] < x && t[i + 1] == x)) N[i] = 1;
-  for (int q = 1; q <= p; ++q)
-    for (size_t i = 0; i + q + 1 < t.size(); ++i) {
-      mpq_class v = 0;
-      if (t[i + q] != t[i]) v += (x - t[i]) / (t[i + q] - t[i]) * N[i];
-      if (t[i + q + 1] != t[i + 1]) v += (t[i + q + 1] - x) / (t[i + q + 1] - t[i + 1]) * N[i + 1];
-      N[i] = v;
-    }
-  N.resize(t.size() - p - 1);
-  return N;
+  return bspline_kernel::all_at<mpq_class>(t, p, x);
 }
 
 // The p-th derivative of B-spline a (degree p) as a combination of the degree-0 B-splines

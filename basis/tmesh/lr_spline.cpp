@@ -1,6 +1,7 @@
 #include "basis/tmesh/lr_spline.hpp"
 
 #include "basis/core/box_index.hpp"
+#include "basis/core/bspline_kernel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,14 +10,6 @@
 namespace knotwork {
 
 namespace {
-
-// B[t] = a B[first p+2 knots of t + c] + b B[last p+2] (knot insertion into one B-spline).
-std::pair<mpq_class, mpq_class> split_weights(const std::vector<mpq_class>& t, const mpq_class& c) {
-  const int p = static_cast<int>(t.size()) - 2;
-  const mpq_class a = c >= t[p] ? mpq_class(1) : mpq_class((c - t[0]) / (t[p] - t[0]));
-  const mpq_class b = c <= t[1] ? mpq_class(1) : mpq_class((t[p + 1] - c) / (t[p + 1] - t[1]));
-  return {a, b};
-}
 
 
 // v as a fraction of the rectangle's side spanned by `lines` (its first and last coordinate).
@@ -181,7 +174,7 @@ void LrMesh::refine(std::vector<Knots> work) {
       if (line == last) continue;
       std::vector<mpq_class> w = t;
       w.insert(std::upper_bound(w.begin(), w.end(), line->first), line->first);
-      const auto [a, c] = split_weights(t, line->first);
+      const auto [a, c] = bspline_kernel::split_weights<mpq_class>(t, line->first);
       const std::vector<mpq_class> left(w.begin(), w.end() - 1), right(w.begin() + 1, w.end());
       const mpq_class weight = found->second;
       index_remove(found->first);
@@ -202,43 +195,7 @@ void LrMesh::refine(std::vector<Knots> work) {
 
 std::vector<std::pair<int, mpq_class>> refine_bspline(const std::vector<mpq_class>& t,
                                                       const std::vector<mpq_class>& fine) {
-  auto count = [](const std::vector<mpq_class>& v, const mpq_class& x) {
-    const auto r = std::equal_range(v.begin(), v.end(), x);
-    return static_cast<long>(r.second - r.first);
-  };
-  for (const mpq_class& x : t)
-    if (count(t, x) > count(fine, x)) throw std::invalid_argument("refine_bspline: the knots are not in the fine vector");
-  // Insert, one at a time, the knots of `fine` strictly inside the support that a piece lacks:
-  // then each piece has every knot of `fine` inside its support, so it is a window of `fine`.
-  std::map<std::vector<mpq_class>, mpq_class> done;
-  std::vector<std::pair<std::vector<mpq_class>, mpq_class>> work{{t, mpq_class(1)}};
-  while (!work.empty()) {
-    // Not a structured binding: clang 14 cannot capture one in the lambda below.
-    auto piece = std::move(work.back());
-    work.pop_back();
-    const std::vector<mpq_class>& k = piece.first;
-    const mpq_class& c = piece.second;
-    const auto lo = std::upper_bound(fine.begin(), fine.end(), k.front());
-    const auto hi = std::lower_bound(fine.begin(), fine.end(), k.back());
-    const auto missing = std::find_if(lo, hi, [&](const mpq_class& x) { return count(k, x) < count(fine, x); });
-    if (missing == hi) {
-      done[k] += c;
-      continue;
-    }
-    std::vector<mpq_class> w = k;
-    w.insert(std::upper_bound(w.begin(), w.end(), *missing), *missing);
-    const auto [a, b] = split_weights(k, *missing);
-    work.push_back({{w.begin(), w.end() - 1}, c * a});
-    work.push_back({{w.begin() + 1, w.end()}, c * b});
-  }
-  std::vector<std::pair<int, mpq_class>> out;
-  for (const auto& [k, c] : done) {
-    if (c == 0) continue;
-    // The window starts at the last copies of k's first knot in `fine`.
-    const auto first = std::lower_bound(fine.begin(), fine.end(), k.front());
-    out.emplace_back(static_cast<int>(first - fine.begin() + count(fine, k.front()) - count(k, k.front())), c);
-  }
-  return out;
+  return bspline_kernel::in_finer_knots(t, fine);
 }
 
 std::vector<RationalBox> LrMesh::cells() const { return insert_segments(grid_cells(xs_, ys_), inserted_); }
