@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""docs/ADAPTIVITY.md, regenerated: the four local refinements (knot segments, PT-splines,
+"""The adaptivity study (a dated record in docs/records/, summarized in docs/ADAPTIVITY.md), regenerated: the four local refinements (knot segments, PT-splines,
 THB-splines, LR B-splines) behind the same residual estimator, Doerfler marking and direct
 solve, on the L-shape (p = 2, 3) and the interior layer (p = 2): DOFs against the H1 error,
 the dofs each family needs per error level, time per step against a uniform solve of the same
 size, and for LR whether any step was dependent; then the choice of the THB grading and of the
 LR refinement strategy. Prints Markdown on stdout and writes docs/adaptivity_*.png.
 
-    scripts/adaptivity_study.py [KNOTWORK] > docs/ADAPTIVITY.md   # about 30 minutes here
+    scripts/adaptivity_study.py [KNOTWORK] > docs/records/adaptivity-$(date +%F).md   # about 30 minutes here
 """
 import json
 import math
@@ -247,7 +247,7 @@ halved by the grading; LR: meshlines lengthened at the boundary; PT: none).
         png = f"adaptivity_{stem}.png"
         plt.savefig(os.path.join(ROOT, "docs", png), dpi=110)
         plt.close()
-        print(f"![{title}]({png})\n")
+        print(f"![{title}](../{png})\n")  # the record lives in docs/records/
         # Per-step tables.
         for fam in FAMILIES:
             if "steps" not in results[fam]:

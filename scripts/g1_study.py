@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The G1 convergence studies of docs/G1_POISSON.md, regenerated: every shipped G1 case with
+"""The G1 convergence studies (a dated record in docs/records/, summarized in docs/G1_POISSON.md, "Results"), regenerated: every shipped G1 case with
 its default (analysis-suitable) gluing data over 4 levels, the earlier data for comparison,
 and on every planar case the C0 multipatch space of the same degree on the same mesh, compared
 with the G1 space at equal dofs (the H1 errors interpolated log-log in the dofs), with the

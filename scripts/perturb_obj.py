@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """A quad mesh (.obj) with every interior vertex moved by a pseudo-random amount, written with
 17 significant digits: planar data whose exact rationals are long (100+ bits), the worst case
-for the exact G1 constructions (docs/G1_POISSON.md, "Performance"). Boundary vertices (on the
+for the exact G1 constructions (docs/records/g1-poisson-results-2026-12-04.md, "Performance"). Boundary vertices (on the
 bounding box) stay, so the domain is unchanged. Deterministic for a given seed.
 
     scripts/perturb_obj.py cases/meshes/mixed_valences.obj 0.003 1 > cases/meshes/mixed_valences_17digit.obj
