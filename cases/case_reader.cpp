@@ -460,32 +460,42 @@ Expression expression_or_number(const CaseReader& r, const DocumentNode& n, cons
 
 }  // namespace
 
-// [problem] coefficient: a scalar a (A = a I) or a symmetric 2x2 matrix [[a11, a12], [a21, a22]]
-// of expressions or numbers; a21 must be a12 (compared at a few points).
-std::vector<Expression> read_coefficient(const CaseReader& r, const DocumentNode& n) {
+// [problem] coefficient: a scalar a (A = a I) or a symmetric size x size matrix of expressions
+// or numbers; a_ji must be a_ij (compared at a few points). Returns the upper triangle by rows.
+std::vector<Expression> read_coefficient(const CaseReader& r, const DocumentNode& n, int size) {
   const std::string field = "[problem] coefficient";
   const DocumentNode* rows = n.as_array();
   if (!rows) return {expression_or_number(r, n, field)};
-  const char* shape = "must be an expression (A = a I) or a symmetric 2x2 matrix [[a11, a12], [a12, a22]]";
-  if (rows->size() != 2) r.fail(field, shape);
-  Expression a[2][2];
-  for (int i = 0; i < 2; ++i) {
+  const std::string shape = size == 2 ? "must be an expression (A = a I) or a symmetric 2x2 matrix [[a11, a12], [a12, a22]]"
+                                      : "must be an expression (A = a I) or a symmetric 3x3 matrix [[a11, a12, a13], "
+                                        "[a12, a22, a23], [a13, a23, a33]] (on a surface: its tangential part acts)";
+  if (int(rows->size()) != size) r.fail(field, shape);
+  std::vector<std::vector<Expression>> a(size, std::vector<Expression>(size));
+  for (int i = 0; i < size; ++i) {
     const DocumentNode* row = rows->get(i)->as_array();
-    if (!row || row->size() != 2) r.fail(field, shape);
-    for (int j = 0; j < 2; ++j)
+    if (!row || int(row->size()) != size) r.fail(field, shape);
+    for (int j = 0; j < size; ++j)
       a[i][j] = expression_or_number(r, *row->get(j), field + "[" + std::to_string(i + 1) + "][" + std::to_string(j + 1) + "]");
   }
-  ExpressionEvaluator upper(a[0][1]), lower(a[1][0]);
-  const double points[3][2] = {{0.31, 0.72}, {-0.43, 0.27}, {0.64, -0.85}};
-  for (const auto& p : points) {
-    const double u = upper(p[0], p[1]), l = lower(p[0], p[1]);
-    if (std::abs(u - l) > 1e-12 * (1 + std::abs(u)) || std::isnan(u) != std::isnan(l)) {
-      char at[96];
-      std::snprintf(at, sizeof at, " differ at (%g, %g): %g and %g", p[0], p[1], u, l);
-      r.fail(field, "not symmetric: a12 = \"" + a[0][1].text() + "\" and a21 = \"" + a[1][0].text() + "\"" + at);
+  const double points[3][3] = {{0.31, 0.72, 0.18}, {-0.43, 0.27, -0.61}, {0.64, -0.85, 0.39}};
+  std::vector<Expression> upper_triangle;
+  for (int i = 0; i < size; ++i)
+    for (int j = i; j < size; ++j) {
+      upper_triangle.push_back(a[i][j]);
+      if (j == i) continue;
+      ExpressionEvaluator upper(a[i][j]), lower(a[j][i]);
+      for (const auto& p : points) {
+        const double u = upper(p[0], p[1], p[2]), l = lower(p[0], p[1], p[2]);
+        if (std::abs(u - l) > 1e-12 * (1 + std::abs(u)) || std::isnan(u) != std::isnan(l)) {
+          char at[128];
+          if (size == 2) std::snprintf(at, sizeof at, " differ at (%g, %g): %g and %g", p[0], p[1], u, l);
+          else std::snprintf(at, sizeof at, " differ at (%g, %g, %g): %g and %g", p[0], p[1], p[2], u, l);
+          const std::string ij = std::to_string(i + 1) + std::to_string(j + 1), ji = std::to_string(j + 1) + std::to_string(i + 1);
+          r.fail(field, "not symmetric: a" + ij + " = \"" + a[i][j].text() + "\" and a" + ji + " = \"" + a[j][i].text() + "\"" + at);
+        }
+      }
     }
-  }
-  return {a[0][0], a[0][1], a[1][1]};
+  return upper_triangle;
 }
 
 void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
@@ -494,7 +504,7 @@ void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, Ca
   if (const DocumentNode* e = t.get("exact"))
     pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
   if (const DocumentNode* a = t.get("coefficient")) {
-    pb.coefficients.diffusion = read_coefficient(r, *a);
+    pb.coefficients.diffusion = read_coefficient(r, *a, 2);
     pb.coefficients.diffusion_where = f + ": [problem] coefficient";
   }
   if (const DocumentNode* n = t.get("reaction")) {

@@ -19,6 +19,7 @@
 #include "solver/diffusion_at_points.hpp"
 #include "basis/core/input_error.hpp"
 #include "solver/separable_cells.hpp"
+#include "solver/surface_source.hpp"
 
 namespace knotwork {
 
@@ -35,14 +36,38 @@ std::string describe_cell(const BezierMesh& mesh, int c) {
 // The first point (lowest cell) where A is not positive definite or c is negative.
 struct CoefficientFailure {
   int cell = -1;
-  double x = 0, y = 0;
+  double x = 0, y = 0, z = 0;
+  bool surface = false;
   std::string field, what;
 };
 
 // Checks A (positive definite) and c (>= 0, finite) at the cell's points; records the first
 // failure (lowest cell) and returns false on one.
-bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch& values, const Eigen::MatrixXd& x,
+// The unit normal at point q of a surface cell (jacobian columns x_u x_v y_u y_v z_u z_v).
+Eigen::Vector3d unit_normal(const Eigen::MatrixXd& J, Eigen::Index q) {
+  const Eigen::Vector3d xu(J(q, 0), J(q, 2), J(q, 4)), xv(J(q, 1), J(q, 3), J(q, 5));
+  return xu.cross(xv).normalized();
+}
+
+// The symmetric matrix of the six entries a11 a12 a13 a22 a23 a33 at point q.
+Eigen::Matrix3d matrix_at(const ExpressionBatch& values, Eigen::Index q) {
+  Eigen::Matrix3d A;
+  A << values.result(0)[q], values.result(1)[q], values.result(2)[q], values.result(1)[q], values.result(3)[q],
+      values.result(4)[q], values.result(2)[q], values.result(4)[q], values.result(5)[q];
+  return A;
+}
+
+// On a surface only the tangential part P A P of a 3x3 A acts. B = P A P + n n^T agrees with
+// it on tangent vectors and is positive definite exactly when P A P is on the tangent plane:
+// its Cholesky factor both checks A and gives the L^T applied to surface gradients.
+Eigen::LLT<Eigen::Matrix3d> tangential_factor(const Eigen::Matrix3d& A, const Eigen::Vector3d& n) {
+  const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - n * n.transpose();
+  return Eigen::LLT<Eigen::Matrix3d>(P * A * P + n * n.transpose());
+}
+
+bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch& values, const GeometryAtPoints& at,
                              int cell, CoefficientFailure& failure) {
+  const Eigen::MatrixXd& x = at.x;
   const Eigen::Index nq = x.rows();
   const int nd = static_cast<int>(k.diffusion.size());
   for (Eigen::Index q = 0; q < nq; ++q) {
@@ -67,6 +92,17 @@ bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch
         field = &k.diffusion[0];
         matrix = true;
       }
+    } else if (nd == 6) {
+      const Eigen::Matrix3d A = matrix_at(values, q);
+      const Eigen::LLT<Eigen::Matrix3d> factor = tangential_factor(A, unit_normal(at.jacobian, q));
+      if (!A.allFinite() || factor.info() != Eigen::Success || !(factor.matrixL().toDenseMatrix().diagonal().minCoeff() > 0)) {
+        const Eigen::IOFormat row(Eigen::StreamPrecision, Eigen::DontAlignCols, ", ", ", ", "[", "]", "[", "]");
+        std::ostringstream m;
+        m << "the coefficient matrix " << A.format(row) << " is not positive definite on the tangent plane";
+        what = m.str();
+        field = &k.diffusion[0];
+        matrix = true;
+      }
     }
     if (!field && !k.reaction.empty()) {
       const double c = values.result(nd)[q];
@@ -83,6 +119,8 @@ bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch
       failure.cell = cell;
       failure.x = x(q, 0);
       failure.y = x(q, 1);
+      failure.surface = x.cols() == 3;
+      if (failure.surface) failure.z = x(q, 2);
       failure.field = matrix && !k.diffusion_where.empty() ? k.diffusion_where : field->where();
       failure.what = what;
     }
@@ -94,11 +132,22 @@ bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch
 // Rows d * nq + q of G (the scaled gradients, per coordinate d and point q) become L^T g at
 // each point, A = L L^T: a scalar a scales them by sqrt(a); a 2x2 matrix by its Cholesky factor.
 void apply_diffusion_factor(const ExpressionBatch& values, int num_diffusion, int dim, Eigen::Index nq,
-                            Eigen::MatrixXd& G) {
+                            const Eigen::MatrixXd& jacobian, Eigen::MatrixXd& G) {
   if (num_diffusion == 1) {
     const Eigen::Map<const Eigen::ArrayXd> a(values.result(0), nq);
     const Eigen::VectorXd root = a.sqrt().matrix();
     for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.asDiagonal() * G.middleRows(d * nq, nq);
+    return;
+  }
+  if (num_diffusion == 6) {  // a surface: the factor of P A P + n n^T (tangential_factor)
+    Eigen::Matrix3Xd rows(3, G.cols());
+    for (Eigen::Index q = 0; q < nq; ++q) {
+      const Eigen::Matrix3d Lt =
+          tangential_factor(matrix_at(values, q), unit_normal(jacobian, q)).matrixL().transpose().toDenseMatrix();
+      for (int d = 0; d < 3; ++d) rows.row(d) = G.row(d * nq + q);
+      rows = Lt * rows;
+      for (int d = 0; d < 3; ++d) G.row(d * nq + q) = rows.row(d);
+    }
     return;
   }
   for (Eigen::Index q = 0; q < nq; ++q) {
@@ -130,59 +179,6 @@ void scatter(const int* outer, const int* inner, const std::vector<std::pair<int
 
 namespace {
 
-// -Laplace_Beltrami(u) + reaction u at the quadrature points of a surface cell, from the exact
-// solution's ambient derivatives and the discrete surface's curvature there (PoissonForm).
-// With a scalar coefficient a: -div_G(a grad_G u) = -a Laplace_Beltrami(u) - grad(a).P grad(u),
-// P the projection onto the tangent plane (coefficient: a and its ambient derivatives).
-struct DerivedSurfaceSource {
-  ExpressionEvaluator value;
-  std::array<ExpressionEvaluator, 3> gradient;
-  std::vector<ExpressionEvaluator> hessian;  // the upper triangle: xx, xy, xz, yy, yz, zz
-  std::vector<ExpressionEvaluator> coefficient;  // none, or a, a_x, a_y, a_z
-  DerivedSurfaceSource(const ExactSolution& e, const ExactSolution* a)
-      : value(e.u),
-        gradient{ExpressionEvaluator(e.u_x), ExpressionEvaluator(e.u_y), ExpressionEvaluator(e.u_z)} {
-    for (int i = 0; i < 3; ++i)
-      for (int j = i; j < 3; ++j) hessian.emplace_back(e.hessian[i][j]);
-    if (a)
-      for (const Expression* t : {&a->u, &a->u_x, &a->u_y, &a->u_z}) coefficient.emplace_back(*t);
-  }
-  // x: points x 3, J: points x 6, second: points x 9 (x_uu, x_uv, x_vv per coordinate).
-  void operator()(const Eigen::MatrixXd& x, const Eigen::MatrixXd& J, const Eigen::MatrixXd& second, double reaction,
-                  Eigen::VectorXd& out) {
-    out.resize(x.rows());
-    for (Eigen::Index q = 0; q < x.rows(); ++q) {
-      const Eigen::Vector3d xu(J(q, 0), J(q, 2), J(q, 4)), xv(J(q, 1), J(q, 3), J(q, 5));
-      const Eigen::Vector3d xuu(second(q, 0), second(q, 3), second(q, 6));
-      const Eigen::Vector3d xuv(second(q, 1), second(q, 4), second(q, 7));
-      const Eigen::Vector3d xvv(second(q, 2), second(q, 5), second(q, 8));
-      Eigen::Matrix2d G;
-      G << xu.dot(xu), xu.dot(xv), xu.dot(xv), xv.dot(xv);
-      const Eigen::Matrix2d Gi = G.inverse();
-      const Eigen::Vector3d n = xu.cross(xv).normalized();
-      const double kappa = -(Gi(0, 0) * xuu.dot(n) + 2 * Gi(0, 1) * xuv.dot(n) + Gi(1, 1) * xvv.dot(n));
-      const double px = x(q, 0), py = x(q, 1), pz = x(q, 2);
-      Eigen::Vector3d g;
-      Eigen::Matrix3d H;
-      for (int i = 0, h = 0; i < 3; ++i) {
-        g(i) = gradient[i](px, py, pz);
-        for (int j = i; j < 3; ++j, ++h) H(i, j) = H(j, i) = hessian[h](px, py, pz);
-      }
-      const double laplace_beltrami = H.trace() - n.dot(H * n) - kappa * g.dot(n);
-      double diffusion = -laplace_beltrami;
-      if (!coefficient.empty()) {
-        const Eigen::Vector3d grad_a(coefficient[1](px, py, pz), coefficient[2](px, py, pz), coefficient[3](px, py, pz));
-        diffusion = -coefficient[0](px, py, pz) * laplace_beltrami - grad_a.dot(g - g.dot(n) * n);
-      }
-      out[q] = diffusion + (reaction != 0 ? reaction * value(px, py, pz) : 0.0);
-    }
-  }
-};
-
-}  // namespace
-
-namespace {
-
 // The element loop shared by the serial matrix (CSC, lower triangle) and the distributed one:
 // every cell of `cells`, threaded, integrated once; emit(thread, order, Ke, Fe) receives the
 // cell's free dofs (sorted (dof, local index) pairs), its element matrix (all alive
@@ -207,19 +203,21 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   const bool variable_reaction = variable && !variable->reaction.empty();
   std::optional<ExpressionBatch> compiled_coefficients;
   if (variable) {
-    // On a surface: a scalar a (its derived source below); a matrix or a variable c only in the plane.
-    if (dim != 2 && (num_diffusion > 1 || variable_reaction))
-      throw InputError((variable->diffusion.empty() ? variable->reaction.where() : variable->diffusion.front().where()) +
-                       ": on a surface the coefficient is a scalar a(x, y, z) and the reaction a number");
+    // A matrix is 2x2 (three entries) in the plane and 3x3 (six) on a surface: the readers see to it.
+    if ((num_diffusion == 3 && dim != 2) || (num_diffusion == 6 && dim != 3))
+      throw std::logic_error("assemble_poisson: a coefficient matrix of the wrong size for the domain");
     std::vector<Expression> all = variable->diffusion;
     if (variable_reaction) all.push_back(variable->reaction);
     compiled_coefficients.emplace(all);
   }
   CoefficientFailure bad_coefficient;
-  // The derived surface source with a scalar coefficient needs grad(a): differentiated once
-  // here (GiNaC is not thread-safe).
-  std::optional<ExactSolution> surface_coefficient;
-  if (derived && form.source_diffusion) surface_coefficient = differentiate_surface_solution(*form.source_diffusion);
+  // The derived surface source needs the ambient derivatives of A's entries: differentiated
+  // once here (GiNaC is not thread-safe).
+  std::vector<ExactSolution> surface_coefficient;
+  if (derived && form.source_coefficients)
+    for (const Expression& a : form.source_coefficients->diffusion) surface_coefficient.push_back(differentiate_surface_solution(a));
+  const Expression* surface_reaction =
+      form.source_coefficients && !form.source_coefficients->reaction.empty() ? &form.source_coefficients->reaction : nullptr;
   // Nitsche's boundary terms first, serially (few cells; the data's evaluators are not
   // shared between threads), then added to their cells' element matrices in the loop.
   std::vector<NitscheCellTerms> nitsche;
@@ -243,7 +241,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
     if (compiled_coefficients) coefficient_values.emplace(*compiled_coefficients);
     Eigen::ArrayXd reaction_root;
     std::optional<DerivedSurfaceSource> derived_f;
-    if (derived) derived_f.emplace(*form.exact, surface_coefficient ? &*surface_coefficient : nullptr);
+    if (derived) derived_f.emplace(*form.exact, surface_coefficient, surface_reaction, form.source_reaction);
     CellBasis cb;
     CellFunctions cf;
     Eigen::MatrixXd G, KB, Ke, second;
@@ -280,7 +278,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
           failure = "the geometry has no second derivatives, needed for the curvature of the derived source";
           continue;
         }
-        (*derived_f)(at.x, at.jacobian, second, form.source_reaction, fq);
+        (*derived_f)(at.x, at.jacobian, second, fq);
       } else {
         fq.setZero();
       }
@@ -300,7 +298,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
       Eigen::MatrixXd& K = rows ? Ke : KB;
       if (coefficient_values) {
         coefficient_values->evaluate(at.x.col(0).data(), at.x.col(1).data(), dim == 3 ? at.x.col(2).data() : nullptr, nq);
-        if (!coefficients_admissible(*variable, *coefficient_values, at.x, c, bad_coefficient)) continue;
+        if (!coefficients_admissible(*variable, *coefficient_values, at, c, bad_coefficient)) continue;
         if (variable_reaction)
           reaction_root = (measure.array() * Eigen::Map<const Eigen::ArrayXd>(coefficient_values->result(num_diffusion), nq)).sqrt();
       }
@@ -313,7 +311,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
         }
         // A = L L^T at each point: the stacked gradients become L^T grad phi, so that the same
         // product gives sum_q m_q grad phi^T A grad phi.
-        if (num_diffusion > 0) apply_diffusion_factor(*coefficient_values, num_diffusion, dim, nq, G);
+        if (num_diffusion > 0) apply_diffusion_factor(*coefficient_values, num_diffusion, dim, nq, at.jacobian, G);
         // The lower triangle by a symmetric rank update (half the flops of G^T G), mirrored.
         K.setZero(value.cols(), value.cols());
         K.selfadjointView<Eigen::Lower>().rankUpdate((rows && num_diffusion == 0 ? cf.scaled_gradients : G).transpose(),
@@ -361,7 +359,9 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   if (!failure.empty()) throw std::invalid_argument(failure);
   if (bad_coefficient.cell >= 0 && bad_coefficient.cell < bad_cell) {
     std::ostringstream m;
-    m << ": " << bad_coefficient.what << " at (" << bad_coefficient.x << ", " << bad_coefficient.y << ") in "
+    m << ": " << bad_coefficient.what << " at (" << bad_coefficient.x << ", " << bad_coefficient.y;
+    if (bad_coefficient.surface) m << ", " << bad_coefficient.z;
+    m << ") in "
       << describe_cell(mesh, bad_coefficient.cell);
     throw InputError(bad_coefficient.field + m.str());
   }
@@ -397,7 +397,7 @@ PoissonForm poisson_form(const PoissonProblem& problem) {
   form.reaction = variable_reaction ? 1.0 : problem.reaction;
   form.source_reaction = problem.reaction;
   form.coefficients = problem.coefficients.constant() ? nullptr : &problem.coefficients;
-  if (problem.coefficients.diffusion.size() == 1) form.source_diffusion = &problem.coefficients.diffusion[0];
+  if (!problem.coefficients.constant()) form.source_coefficients = &problem.coefficients;
   form.source = problem.source.empty() ? nullptr : &problem.source;
   form.exact = problem.exact ? &*problem.exact : nullptr;
   if (problem.dirichlet_method == DirichletMethod::kNitsche) form.nitsche = &problem;

@@ -14,8 +14,7 @@ namespace knotwork {
 
 // What assemble_poisson integrates: the form
 //   a(u, v) = stiffness (A grad u, grad v) + reaction (c u, v),   l(v) = (f, v),
-// with A = I and c = 1 unless `coefficients` gives them (planar domains; on a surface a
-// scalar A only),
+// with A = I and c = 1 unless `coefficients` gives them (on a surface, A's tangential part),
 // with grad the physical gradient of a planar domain or the surface gradient of a surface
 // (Laplace-Beltrami): one routine for both, through the GeometryMap's dimension.
 struct PoissonForm {
@@ -33,9 +32,9 @@ struct PoissonForm {
   const Expression* source = nullptr;
   const ExactSolution* exact = nullptr;
   double source_reaction = 0;  // the problem's reaction in the derived f (the matrix's may differ: a mass pass)
-  // The scalar coefficient a in the derived f on a surface, -div(a grad u) (null: a = 1); kept
-  // when a mass pass drops `coefficients` from the matrix.
-  const Expression* source_diffusion = nullptr;
+  // A and c in the derived f on a surface, -div_G(A grad_G u) + c u (null: A = I and c the
+  // constant source_reaction); kept when a mass pass drops `coefficients` from the matrix.
+  const PoissonCoefficients* source_coefficients = nullptr;
   bool load = true;  // false: the right-hand side gets only the Dirichlet lifting
   // Non-null: this problem's Dirichlet sides are imposed weakly by Nitsche's method, adding
   //   - (du/dn, v)_D - (u, dv/dn)_D + gamma (u, v)_D   to a(u, v),

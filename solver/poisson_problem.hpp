@@ -29,7 +29,9 @@ enum class DirichletMethod { kProjection, kNitsche };
 
 // The variable coefficients of -div(A grad u) + c u = f. A is symmetric positive definite at
 // every point: the identity (no entries), a scalar function a times the identity (one entry),
-// or the matrix [[a11, a12], [a12, a22]] (three entries, in that order). c >= 0: the constant
+// in the plane the matrix [[a11, a12], [a12, a22]] (three entries, in that order), on a surface
+// a 3x3 matrix (six entries a11 a12 a13 a22 a23 a33) whose tangential part P A P acts and must
+// be positive definite on the tangent plane. c >= 0: the constant
 // PoissonProblem::reaction, or a function (`reaction`, when given). The assembly refuses, naming
 // the field and the point, an A that is not positive definite or a c that is negative at a
 // quadrature point.
@@ -40,8 +42,8 @@ struct PoissonCoefficients {
   bool constant() const { return diffusion.empty() && reaction.empty(); }
 };
 
-// -div(A grad u) + c u = f in the domain (planar; A and c as PoissonCoefficients say) or
-// -Laplace_Beltrami(u) + c u = f on a surface (constant c), with the boundary conditions above;
+// -div(A grad u) + c u = f in the domain or -div_G(A grad_G u) + c u = f on a surface (A and c as
+// PoissonCoefficients say), with the boundary conditions above;
 // Neumann data are the flux (A grad u).n. On a closed surface with c = 0 the operator has
 // the constants as kernel: u is sought with zero mean and f is made compatible by removing its
 // mean (solve_poisson reports both).

@@ -135,17 +135,19 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
   if (!mesh.closed())
     r.fail("[space] mesh", g.mesh_file + " has a boundary; Laplace-Beltrami problems are solved on closed surfaces");
   PoissonProblem& pb = c.problem;
-  // -div_G(a grad_G u) + c u: a scalar a(x, y, z) > 0 (a matrix would have to be tangential).
+  // -div_G(A grad_G u) + c u: a scalar a(x, y, z) > 0 or a 3x3 matrix whose tangential part is
+  // positive definite; c a number >= 0 (0: zero-mean solution) or a function c(x, y, z) >= 0.
   if (const DocumentNode* n = t.get("coefficient")) {
-    pb.coefficients.diffusion = read_coefficient(r, *n);
+    pb.coefficients.diffusion = read_coefficient(r, *n, 3);
     pb.coefficients.diffusion_where = f + ": [problem] coefficient";
-    if (pb.coefficients.diffusion.size() != 1)
-      r.fail("[problem] coefficient", "on a surface it is a scalar a(x, y, z) (a matrix is for planar meshes)");
   }
   if (const DocumentNode* n = t.get("reaction")) {
-    if (n->value_exact<std::string>()) r.fail("[problem] reaction", "must be a number on a surface (a constant c >= 0)");
-    pb.reaction = r.number(*n, "[problem] reaction");
-    if (!(pb.reaction >= 0)) r.fail("[problem] reaction", "must be >= 0 (0: zero-mean solution)");
+    if (n->value_exact<std::string>()) {
+      pb.coefficients.reaction = Expression::parse(r.string(*n, "[problem] reaction"), f + ": [problem] reaction");
+    } else {
+      pb.reaction = r.number(*n, "[problem] reaction");
+      if (!(pb.reaction >= 0) || !std::isfinite(pb.reaction)) r.fail("[problem] reaction", "must be >= 0 (0: zero-mean solution)");
+    }
   }
   if (const DocumentNode* e = t.get("exact"))
     pb.exact = differentiate_surface_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));

@@ -42,6 +42,7 @@ RUNS = [
     ("g1_sphere_xy.toml", [], {}),
     ("annulus_anisotropic.toml", [], {}),
     ("g1_variable_coefficient.toml", [], {}),
+    ("g1_sphere_anisotropic.toml", [], {}),
 ]
 
 
