@@ -8,6 +8,7 @@
 #include <cmath>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include "basis/core/input_error.hpp"
 #include "solver/expression.hpp"
@@ -71,6 +72,17 @@ std::string span_text(const Node& node, const std::string& text) {
   return part.front() == '(' && part.back() == ')' ? " " + part : " (" + part + ")";
 }
 
+// GiNaC allocates a power (and a quotient's power) before evaluating it, and loses it when the
+// evaluation throws (0^0, 0^-1, 1/0; found by fuzzing: `9^0^0`). Such a power is refused here,
+// before GiNaC sees it.
+void refuse_undefined_power(const GiNaC::ex& base, const GiNaC::ex& exponent) {
+  using namespace GiNaC;
+  if (!base.is_zero() || !is_a<numeric>(exponent)) return;
+  const numeric& p = ex_to<numeric>(exponent);
+  if (p.is_zero()) throw std::domain_error("0^0 is undefined");
+  if (!p.is_real() || p < 0) throw std::domain_error("division by zero");
+}
+
 // The tree as a GiNaC expression; `nested` receives the largest product of constant exponents
 // along a chain of nested powers inside it.
 GiNaC::ex to_ginac(const Node& node, const Symbols& s, const std::string& text, double& nested) {
@@ -89,7 +101,7 @@ GiNaC::ex to_ginac(const Node& node, const Symbols& s, const std::string& text, 
     case Node::kAdd: return a[0] + a[1];
     case Node::kSubtract: return a[0] - a[1];
     case Node::kMultiply: return a[0] * a[1];
-    case Node::kDivide: return a[0] / a[1];
+    case Node::kDivide: refuse_undefined_power(a[1], -1); return a[0] / a[1];
     case Node::kNegate: return -a[0];
     case Node::kPower: {
       const Node& base = *node.operands[0];
@@ -107,6 +119,7 @@ GiNaC::ex to_ginac(const Node& node, const Symbols& s, const std::string& text, 
             throw Refusal{"a constant power beyond double precision" + span_text(node, text)};
         }
       }
+      refuse_undefined_power(a[0], a[1]);
       return pow(a[0], a[1]);
     }
     case Node::kCall: {

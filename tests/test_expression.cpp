@@ -179,3 +179,14 @@ TEST_CASE("A power of numbers too large for exact arithmetic is refused, not com
   batch.evaluate(x, y, nullptr, 1);
   REQUIRE(std::isnan(batch.result(0)[0]));
 }
+
+TEST_CASE("Powers GiNaC cannot evaluate are refused before GiNaC sees them", "[expression]") {
+  // Found by fuzzing: 9^0^0 is 9^(0^0); GiNaC threw on 0^0 and lost the power it had allocated.
+  for (const char* text : {"9^0^0 + x", "x/(2-2)", "x*0^(-1)", "pow(0, -2)*y"}) {
+    INFO(text);
+    REQUIRE_THROWS_WITH(differentiate_exact_solution(Expression::parse(text, "c: [problem] exact")),
+                        Catch::StartsWith("c: [problem] exact: cannot differentiate") &&
+                            (Catch::Contains("undefined") || Catch::Contains("division by zero")));
+  }
+}
+
