@@ -498,13 +498,10 @@ std::vector<Expression> read_coefficient(const CaseReader& r, const DocumentNode
   return upper_triangle;
 }
 
-void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
-  PoissonProblem& pb = c.problem;
+void read_coefficient_and_reaction(const CaseReader& r, const DocumentNode& t, int matrix_size, PoissonProblem& pb) {
   const std::string& f = r.path();
-  if (const DocumentNode* e = t.get("exact"))
-    pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
   if (const DocumentNode* a = t.get("coefficient")) {
-    pb.coefficients.diffusion = read_coefficient(r, *a, 2);
+    pb.coefficients.diffusion = read_coefficient(r, *a, matrix_size);
     pb.coefficients.diffusion_where = f + ": [problem] coefficient";
   }
   if (const DocumentNode* n = t.get("reaction")) {
@@ -515,6 +512,14 @@ void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, Ca
       if (!(pb.reaction >= 0) || !std::isfinite(pb.reaction)) r.fail("[problem] reaction", "must be >= 0");
     }
   }
+}
+
+void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
+  PoissonProblem& pb = c.problem;
+  const std::string& f = r.path();
+  if (const DocumentNode* e = t.get("exact"))
+    pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
+  read_coefficient_and_reaction(r, t, 2, pb);
   const bool general = !pb.coefficients.constant() || pb.reaction != 0;
   if (const DocumentNode* s = t.get("source"))
     pb.source = Expression::parse(r.string(*s, "[problem] source"), f + ": [problem] source");

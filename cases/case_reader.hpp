@@ -83,11 +83,14 @@ std::string checked_name(const std::string& value, const std::vector<std::string
 // Shared section readers for the families whose domain is one NURBS patch.
 // [geometry] type = rectangle | quarter_annulus | lshape | nurbs (required).
 void read_patch_geometry(const CaseDocument& doc, CaseDescription& c);
-// [problem] exact and source of a planar problem (source defaults to -Laplace(exact)).
 // [problem] coefficient: an expression or number a (one entry: A = a I), or a symmetric
 // size x size matrix of them (size 2: the entries a11, a12, a22; size 3, on surfaces: a11, a12,
 // a13, a22, a23, a33; a_ji must equal a_ij).
 std::vector<Expression> read_coefficient(const CaseReader& r, const DocumentNode& n, int size);
+// [problem] coefficient (read_coefficient with matrix_size 2 in the plane, 3 on surfaces) and
+// reaction (a number >= 0, or an expression c checked >= 0 where it is integrated).
+void read_coefficient_and_reaction(const CaseReader& r, const DocumentNode& problem, int matrix_size, PoissonProblem& pb);
+// [problem] exact and source of a planar problem (source defaults to -div(A grad exact) + c exact).
 void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& problem, CaseDescription& c);
 // [problem] dirichlet_method ("projection", the default, or "nitsche") and nitsche_penalty.
 void read_dirichlet_method(const CaseReader& r, const DocumentNode& problem, PoissonProblem& pb);

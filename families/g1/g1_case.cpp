@@ -137,18 +137,7 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
   PoissonProblem& pb = c.problem;
   // -div_G(A grad_G u) + c u: a scalar a(x, y, z) > 0 or a 3x3 matrix whose tangential part is
   // positive definite; c a number >= 0 (0: zero-mean solution) or a function c(x, y, z) >= 0.
-  if (const DocumentNode* n = t.get("coefficient")) {
-    pb.coefficients.diffusion = read_coefficient(r, *n, 3);
-    pb.coefficients.diffusion_where = f + ": [problem] coefficient";
-  }
-  if (const DocumentNode* n = t.get("reaction")) {
-    if (n->value_exact<std::string>()) {
-      pb.coefficients.reaction = Expression::parse(r.string(*n, "[problem] reaction"), f + ": [problem] reaction");
-    } else {
-      pb.reaction = r.number(*n, "[problem] reaction");
-      if (!(pb.reaction >= 0) || !std::isfinite(pb.reaction)) r.fail("[problem] reaction", "must be >= 0 (0: zero-mean solution)");
-    }
-  }
+  read_coefficient_and_reaction(r, t, 3, pb);
   if (const DocumentNode* e = t.get("exact"))
     pb.exact = differentiate_surface_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
   // No source: derived from the exact solution on the discrete surface by the assembler.
