@@ -49,6 +49,8 @@ struct ExpressionEvaluator::Impl {
 ExpressionEvaluator::ExpressionEvaluator(const Expression& e) : impl_(std::make_unique<Impl>()) {
   if (e.empty()) throw std::logic_error("ExpressionEvaluator of an empty expression");
   impl_->compiled = e.compiled();  // immutable: shared
+  impl_->registers.resize(impl_->compiled->program.size());
+  impl_->compiled->program.set_constants(impl_->registers.data());
 }
 ExpressionEvaluator::~ExpressionEvaluator() = default;
 ExpressionEvaluator::ExpressionEvaluator(ExpressionEvaluator&&) noexcept = default;
@@ -56,8 +58,8 @@ ExpressionEvaluator::ExpressionEvaluator(ExpressionEvaluator&&) noexcept = defau
 double ExpressionEvaluator::operator()(double x, double y) { return (*this)(x, y, 0.0); }
 
 double ExpressionEvaluator::operator()(double x, double y, double z) {
-  impl_->compiled->program.run(impl_->registers, &x, &y, &z, 1);
-  return impl_->registers[impl_->compiled->output];
+  const CompiledExpression& c = *impl_->compiled;
+  return c.program.run_at(impl_->registers.data(), x, y, z, c.output);
 }
 
 struct ExpressionBatch::Impl {

@@ -363,6 +363,37 @@ std::vector<int> Program::append(const Program& other) {
   return here;
 }
 
+void Program::set_constants(double* r) const {
+  for (std::size_t i = 0; i < code_.size(); ++i)
+    if (code_[i].kind == Instruction::kConstant) r[i] = code_[i].constant;
+}
+
+double Program::run_at(double* r, double x, double y, double z, int output) const {
+  const Instruction* code = code_.data();
+  const std::size_t size = code_.size();
+  for (std::size_t i = 0; i < size; ++i) {
+    const Instruction& in = code[i];
+    const double a = in.a >= 0 ? r[in.a] : 0.0, b = in.b >= 0 ? r[in.b] : 0.0;
+    double& t = r[i];
+    switch (in.kind) {
+      case Instruction::kConstant: break;  // set once (set_constants)
+      case Instruction::kX: t = x; break;
+      case Instruction::kY: t = y; break;
+      case Instruction::kZ: t = z; break;
+      case Instruction::kSum: t = a + b; break;
+      case Instruction::kDifference: t = a - b; break;
+      case Instruction::kProduct: t = a * b; break;
+      case Instruction::kQuotient: t = a / b; break;
+      case Instruction::kNegate: t = -a; break;
+      case Instruction::kIntegerPower: t = integer_power(a, in.exponent); break;
+      case Instruction::kPower: t = std::pow(a, b); break;
+      case Instruction::kFunction1: t = in.function1(a); break;
+      case Instruction::kFunction2: t = in.function2(a, b); break;
+    }
+  }
+  return r[output];
+}
+
 void Program::run(std::vector<double>& registers, const double* x, const double* y, const double* z, long n) const {
   registers.resize(code_.size() * static_cast<std::size_t>(n));
   for (std::size_t i = 0; i < code_.size(); ++i) {

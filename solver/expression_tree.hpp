@@ -72,6 +72,10 @@ class Program {
   int size() const { return static_cast<int>(code_.size()); }
   // registers is resized to size() * n; register i at point k is registers[i * n + k].
   void run(std::vector<double>& registers, const double* x, const double* y, const double* z, long n) const;
+  // The same at one point, without the per-array work; returns register `output`. registers
+  // must hold size() values, with the constants written once by set_constants.
+  void set_constants(double* registers) const;
+  double run_at(double* registers, double x, double y, double z, int output) const;
 
  private:
   int add(const Instruction& in);
