@@ -193,7 +193,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   if (derived && (!form.exact || form.exact->hessian[0][0].empty() || dim != 3))
     throw std::invalid_argument("assemble_poisson: no source, and no exact solution on a surface to derive it from");
   const int first = cells.first, last = cells.last < 0 ? mesh.num_cells() : cells.last;
-  std::optional<ExpressionBatch> compiled_source;  // once: GiNaC is not thread-safe
+  std::optional<ExpressionBatch> compiled_source;  // merged once; each thread runs its own copy
   if (form.load && form.source) compiled_source.emplace(std::vector<Expression>{*form.source});
   std::optional<SeparableMesh> separable;
   if (quadrature.separable_cells) separable.emplace(mesh);

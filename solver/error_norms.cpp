@@ -21,7 +21,7 @@ void cell_squared_errors(const BezierMesh& mesh, const GeometryMap& geometry, co
   const bool surface = geometry.dimension() == 3;
   std::vector<Expression> wanted{exact.u, exact.u_x, exact.u_y};
   if (surface) wanted.push_back(exact.u_z);
-  const ExpressionBatch compiled(wanted);  // once: GiNaC is not thread-safe
+  const ExpressionBatch compiled(wanted);  // merged once; each thread runs its own copy
 #pragma omp parallel
   {
     ExpressionBatch ex(compiled);
