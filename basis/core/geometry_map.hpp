@@ -83,6 +83,7 @@ class PatchGeometryMap final : public GeometryMap {
   void evaluate_element_at_rule(int eu, int ev, int nu, int nv, GeometryAtPoints& out) const;
 
  private:
+  PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch, const ElementGrid* grid);  // both public ones
   struct Interval {
     int span, element;  // the patch's knot span and its index among the patch's elements
     double from, length;

@@ -48,20 +48,12 @@ Eigen::MatrixX3d homogeneous_net(const NurbsPatch& p) {
 }  // namespace
 
 PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch)
-    : mesh_(mesh),
-      patch_(std::move(patch)),
-      net_(homogeneous_net(patch_)),
-      extraction_u_(bezier_extraction(patch_.basis_u)),
-      extraction_v_(bezier_extraction(patch_.basis_v)),
-      breaks_u_(patch_.basis_u.breakpoints()),
-      breaks_v_(patch_.basis_v.breakpoints()),
-      lookup_(std::make_unique<Lookup>()) {
-  lookup_->serial = next_serial();
-  find_intervals();
-  check_intervals();
-}
+    : PatchGeometryMap(mesh, std::move(patch), nullptr) {}
 
 PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch, ElementGrid grid)
+    : PatchGeometryMap(mesh, std::move(patch), &grid) {}
+
+PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch, const ElementGrid* grid)
     : mesh_(mesh),
       patch_(std::move(patch)),
       net_(homogeneous_net(patch_)),
@@ -71,16 +63,20 @@ PatchGeometryMap::PatchGeometryMap(const BezierMesh& mesh, NurbsPatch patch, Ele
       breaks_v_(patch_.basis_v.breakpoints()),
       lookup_(std::make_unique<Lookup>()) {
   lookup_->serial = next_serial();
-  grid_columns_ = static_cast<int>(grid.u.size()) - 1;
-  first_row_ = grid.first_row;
-  const auto intervals = [](const std::vector<double>& b, const BSplineBasis1D& basis) {
-    std::vector<Interval> out;
-    for (size_t k = 0; k + 1 < b.size(); ++k)
-      out.push_back({basis.find_span(0.5 * (b[k] + b[k + 1])), 0, b[k], b[k + 1] - b[k]});
-    return out;
-  };
-  intervals_u_ = intervals(grid.u, patch_.basis_u);
-  intervals_v_ = intervals(grid.v, patch_.basis_v);
+  if (!grid) {
+    find_intervals();
+  } else {
+    grid_columns_ = static_cast<int>(grid->u.size()) - 1;
+    first_row_ = grid->first_row;
+    const auto intervals = [](const std::vector<double>& b, const BSplineBasis1D& basis) {
+      std::vector<Interval> out;
+      for (size_t k = 0; k + 1 < b.size(); ++k)
+        out.push_back({basis.find_span(0.5 * (b[k] + b[k + 1])), 0, b[k], b[k + 1] - b[k]});
+      return out;
+    };
+    intervals_u_ = intervals(grid->u, patch_.basis_u);
+    intervals_v_ = intervals(grid->v, patch_.basis_v);
+  }
   check_intervals();
 }
 
