@@ -65,8 +65,10 @@ Eigen::LLT<Eigen::Matrix3d> tangential_factor(const Eigen::Matrix3d& A, const Ei
   return Eigen::LLT<Eigen::Matrix3d>(P * A * P + n * n.transpose());
 }
 
+// With six entries (a surface) `tangential` receives L^T of tangential_factor at every point,
+// for apply_diffusion_factor: each is factored once.
 bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch& values, const GeometryAtPoints& at,
-                             int cell, CoefficientFailure& failure) {
+                             int cell, CoefficientFailure& failure, std::vector<Eigen::Matrix3d>& tangential) {
   const Eigen::MatrixXd& x = at.x;
   const Eigen::Index nq = x.rows();
   const int nd = static_cast<int>(k.diffusion.size());
@@ -95,7 +97,9 @@ bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch
     } else if (nd == 6) {
       const Eigen::Matrix3d A = matrix_at(values, q);
       const Eigen::LLT<Eigen::Matrix3d> factor = tangential_factor(A, unit_normal(at.jacobian, q));
-      if (!A.allFinite() || factor.info() != Eigen::Success || !(factor.matrixL().toDenseMatrix().diagonal().minCoeff() > 0)) {
+      if (tangential.size() < static_cast<size_t>(nq)) tangential.resize(nq);
+      tangential[q] = factor.matrixU();
+      if (!A.allFinite() || factor.info() != Eigen::Success) {
         const Eigen::IOFormat row(Eigen::StreamPrecision, Eigen::DontAlignCols, ", ", ", ", "[", "]", "[", "]");
         std::ostringstream m;
         m << "the coefficient matrix " << A.format(row) << " is not positive definite on the tangent plane";
@@ -132,20 +136,18 @@ bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch
 // Rows d * nq + q of G (the scaled gradients, per coordinate d and point q) become L^T g at
 // each point, A = L L^T: a scalar a scales them by sqrt(a); a 2x2 matrix by its Cholesky factor.
 void apply_diffusion_factor(const ExpressionBatch& values, int num_diffusion, int dim, Eigen::Index nq,
-                            const Eigen::MatrixXd& jacobian, Eigen::MatrixXd& G) {
+                            const std::vector<Eigen::Matrix3d>& tangential, Eigen::MatrixXd& G) {
   if (num_diffusion == 1) {
     const Eigen::Map<const Eigen::ArrayXd> a(values.result(0), nq);
     const Eigen::VectorXd root = a.sqrt().matrix();
     for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.asDiagonal() * G.middleRows(d * nq, nq);
     return;
   }
-  if (num_diffusion == 6) {  // a surface: the factor of P A P + n n^T (tangential_factor)
+  if (num_diffusion == 6) {  // a surface: L^T of P A P + n n^T, from coefficients_admissible
     Eigen::Matrix3Xd rows(3, G.cols());
     for (Eigen::Index q = 0; q < nq; ++q) {
-      const Eigen::Matrix3d Lt =
-          tangential_factor(matrix_at(values, q), unit_normal(jacobian, q)).matrixL().transpose().toDenseMatrix();
       for (int d = 0; d < 3; ++d) rows.row(d) = G.row(d * nq + q);
-      rows = Lt * rows;
+      rows = tangential[q] * rows;
       for (int d = 0; d < 3; ++d) G.row(d * nq + q) = rows.row(d);
     }
     return;
@@ -240,6 +242,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
     std::optional<ExpressionBatch> coefficient_values;
     if (compiled_coefficients) coefficient_values.emplace(*compiled_coefficients);
     Eigen::ArrayXd reaction_root;
+    std::vector<Eigen::Matrix3d> tangential;  // per point, a surface's 3x3 coefficient factored
     std::optional<DerivedSurfaceSource> derived_f;
     if (derived) derived_f.emplace(*form.exact, surface_coefficient, surface_reaction, form.source_reaction);
     CellBasis cb;
@@ -298,7 +301,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
       Eigen::MatrixXd& K = rows ? Ke : KB;
       if (coefficient_values) {
         coefficient_values->evaluate(at.x.col(0).data(), at.x.col(1).data(), dim == 3 ? at.x.col(2).data() : nullptr, nq);
-        if (!coefficients_admissible(*variable, *coefficient_values, at, c, bad_coefficient)) continue;
+        if (!coefficients_admissible(*variable, *coefficient_values, at, c, bad_coefficient, tangential)) continue;
         if (variable_reaction)
           reaction_root = (measure.array() * Eigen::Map<const Eigen::ArrayXd>(coefficient_values->result(num_diffusion), nq)).sqrt();
       }
@@ -311,7 +314,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
         }
         // A = L L^T at each point: the stacked gradients become L^T grad phi, so that the same
         // product gives sum_q m_q grad phi^T A grad phi.
-        if (num_diffusion > 0) apply_diffusion_factor(*coefficient_values, num_diffusion, dim, nq, at.jacobian, G);
+        if (num_diffusion > 0) apply_diffusion_factor(*coefficient_values, num_diffusion, dim, nq, tangential, G);
         // The lower triangle by a symmetric rank update (half the flops of G^T G), mirrored.
         K.setZero(value.cols(), value.cols());
         K.selfadjointView<Eigen::Lower>().rankUpdate((rows && num_diffusion == 0 ? cf.scaled_gradients : G).transpose(),
