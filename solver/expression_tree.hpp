@@ -76,6 +76,8 @@ class Program {
   // must hold size() values, with the constants written once by set_constants.
   void set_constants(double* registers) const;
   double run_at(double* registers, double x, double y, double z, int output) const;
+  // After run_at: whether every operand of a power or a function is finite and within limit.
+  bool operands_within(const double* registers, double limit) const;
 
  private:
   int add(const Instruction& in);

@@ -31,6 +31,9 @@ TEST_CASE("Syntax errors name the place and the character", "[expression]") {
   // Nesting and length are bounded (the tree is walked recursively).
   REQUIRE_THROWS_WITH(Expression::parse(std::string(300, '(') + "x" + std::string(300, ')'), "f"),
                       Catch::Contains("nested deeper"));
+  std::string deep_calls = "x";
+  for (int i = 0; i < 70; ++i) deep_calls = "sin(" + deep_calls + ")";
+  REQUIRE_THROWS_WITH(Expression::parse(deep_calls, "f"), Catch::Contains("calls nested deeper than 64"));
   std::string long_sum = "x";
   while (long_sum.size() < 5000) long_sum += "+x";
   REQUIRE_THROWS_WITH(Expression::parse(long_sum, "f"), Catch::Contains("longer than 4096"));
