@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "basis/core/multipatch.hpp"
 #include "basis/core/nurbs_patch.hpp"
 #include "basis/tmesh/rectangular_partition.hpp"
 #include "cases/document_node.hpp"
@@ -54,8 +55,12 @@ struct CaseDescription {
   std::string family = "tensor";  // [space] family: a registered family (families/families.cpp)
   // [geometry] of the families whose domain is one NURBS patch (type rectangle,
   // quarter_annulus, lshape or nurbs); empty geometry_type for the others.
-  std::string geometry_type;
-  NurbsPatch geometry;
+  std::string geometry_type;  // "file" for [geometry] file
+  NurbsPatch geometry;        // the one patch (also of a one-patch file)
+  // [geometry] file: the domain as read, with its interfaces and the file's boundary labels
+  // (no patch otherwise). A domain of several patches leaves `geometry` empty.
+  MultiPatch domain;
+  bool multipatch() const { return domain.num_patches() > 1; }
   FamilySection section;                // the family's own settings
   bool allow_unverified_space = false;  // --allow-unverified-space: solve although the family's check failed
   QuadratureOptions quadrature;

@@ -12,7 +12,9 @@
 #include <sstream>
 #include <toml++/toml.h>
 
+#include "cases/boundary_labels.hpp"
 #include "cases/geometries.hpp"
+#include "cases/geometry_file.hpp"
 #include "cases/json_input.hpp"
 #include "solver/amg_preconditioner.hpp"
 #include "basis/core/input_error.hpp"
@@ -21,7 +23,6 @@ namespace knotwork {
 
 namespace {
 
-const std::vector<std::string> kSides = {"bottom", "right", "top", "left"};
 
 size_t edit_distance(const std::string& a, const std::string& b) {
   std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
@@ -324,19 +325,35 @@ NurbsPatch read_nurbs(const CaseReader& r, const DocumentNode& g, const std::str
   return p;
 }
 
-int side_index(const CaseReader& r, const std::string& side, const std::string& field) {
-  for (size_t i = 0; i < kSides.size(); ++i)
-    if (kSides[i] == side) return static_cast<int>(i);
-  r.fail(field, "unknown side '" + side + "' (" + closest_name(side, kSides) + "; sides are bottom, right, top, left)");
-}
 
 }  // namespace
 
-void read_patch_geometry(const CaseDocument& doc, CaseDescription& c) {
+void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multipatch_allowed) {
   const CaseReader& r = doc.reader;
   const DocumentNode& g = r.table(doc.root, "geometry", true);
   const DocumentNode* type = g.get("type");
-  if (!type) r.fail("[geometry] type", "missing (rectangle, quarter_annulus, lshape or nurbs)");
+  if (const DocumentNode* file = g.get("file")) {
+    r.check_keys(g, "geometry", {"type", "file"});
+    if (type && r.string(*type, "[geometry] type") != "nurbs")
+      r.fail("[geometry] type", "the geometry is read from [geometry] file: leave type out (or set it to \"nurbs\")");
+    const std::string name = r.string(*file, "[geometry] file");
+    if (name.empty()) r.fail("[geometry] file", "is empty");
+    std::filesystem::path at(name);
+    if (at.is_relative()) at = std::filesystem::path(c.path).parent_path() / at;  // relative to the case file
+    try {
+      c.domain = read_geometry_file(at.lexically_normal().string());
+    } catch (const InputError& e) {
+      throw InputError(c.path + ": [geometry] file: " + e.what());
+    }
+    c.geometry_type = "file";
+    if (c.domain.num_patches() == 1)
+      c.geometry = c.domain.patches.front();
+    else if (!multipatch_allowed)
+      r.fail("[geometry] file", "has " + std::to_string(c.domain.num_patches()) +
+                                    " patches, and [space] family = \"" + c.family + "\" works on one patch");
+    return;
+  }
+  if (!type) r.fail("[geometry] type", "missing (rectangle, quarter_annulus, lshape or nurbs; or give [geometry] file)");
   c.geometry_type = r.string(*type, "[geometry] type");
   if (c.geometry_type == "rectangle") {
     r.check_keys(g, "geometry", {"type", "corners"});
@@ -560,32 +577,49 @@ void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
   read_planar_exact_and_source(r, t, c);
   read_dirichlet_method(r, t, pb);
 
-  pb.boundary.assign(4, BoundaryCondition{});
+  // One condition per boundary id; sides are named as boundary_labels says.
+  const BoundaryLabels labels = boundary_labels(c);
+  const size_t sides = labels.names.size();
+  pb.boundary.assign(sides, BoundaryCondition{});
+  const auto ids_of = [&](const std::string& name, const std::string& field) {
+    const std::vector<int> ids = labels.resolve(name);
+    if (ids.empty()) {
+      const std::vector<std::string> all = labels.all_names();
+      std::string known;
+      for (size_t i = 0; i < all.size() && i < 12; ++i) known += (i ? ", " : "") + all[i];
+      if (all.size() > 12) known += ", ...";
+      const std::string closest = closest_name(name, all);
+      r.fail(field, "unknown side '" + name + "' (" + (closest.rfind("did you mean", 0) == 0 ? closest + "; " : "") +
+                        "sides are " + known + ")");
+    }
+    return ids;
+  };
   std::set<int> neumann;
   if (const DocumentNode* n = t.get("neumann")) {
     if (const DocumentNode* a = n->as_array()) {
-      for (size_t i = 0; i < a->size(); ++i) {
-        const int s = side_index(r, r.string(*a->get(i), "[problem] neumann"), "[problem] neumann");
-        pb.boundary[s].kind = BoundaryKind::kNeumann;
-        neumann.insert(s);
-      }
+      for (size_t i = 0; i < a->size(); ++i)
+        for (int s : ids_of(r.string(*a->get(i), "[problem] neumann"), "[problem] neumann")) {
+          pb.boundary[s].kind = BoundaryKind::kNeumann;
+          neumann.insert(s);
+        }
     } else if (const DocumentNode* nt = n->as_table()) {
       for (const auto& [k, v] : *nt) {
         const std::string field = "[problem] neumann." + k;
-        const int s = side_index(r, k, field);
         const std::string val = r.string(v, field);
-        pb.boundary[s].kind = BoundaryKind::kNeumann;
-        if (val != "exact") {
-          pb.boundary[s].from_exact = false;
-          pb.boundary[s].value = Expression::parse(val, f + ": " + field);
+        for (int s : ids_of(k, field)) {
+          pb.boundary[s].kind = BoundaryKind::kNeumann;
+          if (val != "exact") {
+            pb.boundary[s].from_exact = false;
+            pb.boundary[s].value = Expression::parse(val, f + ": " + field);
+          }
+          neumann.insert(s);
         }
-        neumann.insert(s);
       }
     } else {
       r.fail("[problem] neumann", "must be a list of sides or a table side = \"flux expression\"");
     }
   }
-  if (neumann.size() == 4)
+  if (neumann.size() == sides)
     r.fail("[problem] neumann", "every side is Neumann: the solution would only be defined up to a "
                                 "constant; keep at least one Dirichlet side");
   if (const DocumentNode* d = t.get("dirichlet")) {
@@ -596,22 +630,23 @@ void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
     } else if (const DocumentNode* dt = d->as_table()) {
       for (const auto& [k, v] : *dt) {
         const std::string field = "[problem] dirichlet." + k;
-        const int s = side_index(r, k, field);
-        if (neumann.count(s)) r.fail(field, "side is also listed under neumann");
         const std::string val = r.string(v, field);
-        if (val != "exact") {
-          pb.boundary[s].from_exact = false;
-          pb.boundary[s].value = Expression::parse(val, f + ": " + field);
+        for (int s : ids_of(k, field)) {
+          if (neumann.count(s)) r.fail(field, "side '" + labels.names[s] + "' is also listed under neumann");
+          if (val != "exact") {
+            pb.boundary[s].from_exact = false;
+            pb.boundary[s].value = Expression::parse(val, f + ": " + field);
+          }
         }
       }
     } else {
       r.fail("[problem] dirichlet", "must be an expression or a table side = \"expression\"");
     }
   }
-  for (size_t s = 0; s < 4; ++s)
+  for (size_t s = 0; s < sides; ++s)
     if (pb.boundary[s].from_exact && !pb.exact)
       r.fail("[problem] " + std::string(pb.boundary[s].kind == BoundaryKind::kDirichlet ? "dirichlet" : "neumann"),
-             "side '" + kSides[s] + "' takes its data from the exact solution, but [problem] exact is not given");
+             "side '" + labels.names[s] + "' takes its data from the exact solution, but [problem] exact is not given");
 }
 
 void read_output(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {

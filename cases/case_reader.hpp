@@ -81,8 +81,10 @@ std::string checked_name(const std::string& value, const std::vector<std::string
                          const std::string& file);
 
 // Shared section readers for the families whose domain is one NURBS patch.
-// [geometry] type = rectangle | quarter_annulus | lshape | nurbs (required).
-void read_patch_geometry(const CaseDocument& doc, CaseDescription& c);
+// [geometry] type = rectangle | quarter_annulus | lshape | nurbs, or [geometry] file = "PATH"
+// (G+Smo .xml or GeoPDEs .txt, relative to the case file; type then optional). A file of
+// several patches is refused unless `multipatch_allowed` (it fills c.domain only).
+void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multipatch_allowed = false);
 // [problem] coefficient: an expression or number a (one entry: A = a I), or a symmetric
 // size x size matrix of them (size 2: the entries a11, a12, a22; size 3, on surfaces: a11, a12,
 // a13, a22, a23, a33; a_ji must equal a_ij).
@@ -94,7 +96,7 @@ void read_coefficient_and_reaction(const CaseReader& r, const DocumentNode& prob
 void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& problem, CaseDescription& c);
 // [problem] dirichlet_method ("projection", the default, or "nitsche") and nitsche_penalty.
 void read_dirichlet_method(const CaseReader& r, const DocumentNode& problem, PoissonProblem& pb);
-// [problem] exact/source/dirichlet/neumann on the four sides bottom, right, top, left.
+// [problem] exact/source/dirichlet/neumann on the sides boundary_labels names.
 void read_patch_problem(const CaseDocument& doc, CaseDescription& c);
 // [space] quadrature_points / error_quadrature_points (int or pair; `pair` false: one int).
 void read_quadrature(const CaseReader& r, const DocumentNode& space, CaseDescription& c, bool pair = true);

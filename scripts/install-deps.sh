@@ -19,7 +19,7 @@ packages=(
   build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas-dev
   libvtk9-dev python3-vtk9
-  catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
+  catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libpugixml-dev
   libginac-dev libgmp-dev libboost-dev
   libbenchmark-dev libspectra-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest

@@ -144,4 +144,23 @@ class BezierCellsGeometryMap final : public GeometryMap {
   int dimension_ = 2;
 };
 
+// Several maps side by side: the cells of piece k are cells first_cell[k] .. first_cell[k+1]-1
+// of the whole mesh, and cell c of the whole is cell c - first_cell[k] of piece k (a multipatch
+// domain: one patch map per patch, each over its own patch's mesh).
+class PiecewiseGeometryMap final : public GeometryMap {
+ public:
+  PiecewiseGeometryMap(std::vector<std::unique_ptr<GeometryMap>> pieces, std::vector<int> first_cell);
+  int dimension() const override { return pieces_.front()->dimension(); }
+  void evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const override;
+  void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, GeometryAtPoints& out) const override;
+  BezierGeometryCell bezier_cell(int cell) const override;
+  bool second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                          Eigen::MatrixXd& out) const override;
+
+ private:
+  std::pair<const GeometryMap*, int> piece_of(int cell) const;
+  std::vector<std::unique_ptr<GeometryMap>> pieces_;
+  std::vector<int> first_cell_;
+};
+
 }  // namespace knotwork

@@ -49,7 +49,7 @@ const std::vector<std::string>& tensor_space_keys() {
 
 void read_tensor_case(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
-  read_patch_geometry(doc, c);
+  read_patch_geometry(doc, c, true);
   const DocumentNode& s = r.table(doc.root, "space", true);
   r.check_keys(s, "space", tensor_space_keys());
   TensorSpaceOptions& o = c.section.emplace<PatchSpaceSection>().space;
@@ -65,6 +65,8 @@ void read_tensor_case(const CaseDocument& doc, CaseDescription& c) {
   for (int d = 0; d < 2; ++d) {
     const std::string key = d == 0 ? "insert_knots_u" : "insert_knots_v";
     if (const DocumentNode* k = s.get(key)) {
+      if (c.multipatch())
+        r.fail("[space] " + key, "not used with a geometry of several patches (extra knots would break the interfaces)");
       o.extra_knots[d] = r.numbers(*k, "[space] " + key);
       const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
       for (double t : o.extra_knots[d])

@@ -5,6 +5,7 @@
 
 #include "solver/fast_diagonalization.hpp"
 #include "basis/core/geometry_map.hpp"
+#include "families/tensor/multipatch_tensor_space.hpp"
 #include "families/tensor/tensor_case.hpp"
 #include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
@@ -18,11 +19,16 @@ namespace {
 // its share of the cells).
 void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, int ranks = 1) {
   double cells = 1, functions = 1;
-  for (int d = 0; d < 2; ++d) {
-    const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
-    const double elements = double(g.num_elements()) * s.elements_per_span[d] + s.extra_knots[d].size();
-    cells *= elements;
-    functions *= elements + s.degree[d];
+  if (c.multipatch()) {
+    multipatch_tensor_size(c, s, cells, functions);
+    ranks = 1;  // every process builds the whole space
+  } else {
+    for (int d = 0; d < 2; ++d) {
+      const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
+      const double elements = double(g.num_elements()) * s.elements_per_span[d] + s.extra_knots[d].size();
+      cells *= elements;
+      functions *= elements + s.degree[d];
+    }
   }
   char what[160];
   if (ranks > 1)
@@ -138,12 +144,20 @@ SpaceFamily tensor_family() {
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
     TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
+    if (c.multipatch()) {
+      check_tensor_memory(c, s);
+      return make_multipatch_tensor_space(c, s);
+    }
     return std::make_unique<TensorSpace>(c, s);
   };
   f.build_part = [](const CaseDescription& c, int level, int rank, int ranks,
                     const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
     TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
+    if (c.multipatch()) {  // every process builds the whole space and assembles its range of cells
+      check_tensor_memory(c, s);
+      return make_multipatch_tensor_space(c, s);
+    }
     return std::make_unique<TensorSpace>(c, s, RowShare{rank, ranks});
   };
   f.override_options = [](CaseDescription& c, int degree, int elements) {

@@ -1,0 +1,243 @@
+#include "basis/core/multipatch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "basis/core/input_error.hpp"
+#include "quadrature/gauss_legendre.hpp"
+
+namespace knotwork {
+
+CellSide cell_side_of_patch_side(int side) {
+  switch (side) {
+    case 1: return kSideLeft;
+    case 2: return kSideRight;
+    case 3: return kSideBottom;
+    case 4: return kSideTop;
+  }
+  throw std::invalid_argument("patch side must be 1, 2, 3 or 4, got " + std::to_string(side));
+}
+
+int patch_side_of_cell_side(CellSide side) {
+  switch (side) {
+    case kSideLeft: return 1;
+    case kSideRight: return 2;
+    case kSideBottom: return 3;
+    case kSideTop: return 4;
+  }
+  return 0;
+}
+
+std::vector<PatchSideRef> exterior_sides(const MultiPatch& domain) {
+  std::vector<PatchSideRef> out;
+  for (int p = 0; p < domain.num_patches(); ++p)
+    for (int s = 1; s <= 4; ++s) {
+      const PatchSideRef side{p, s};
+      const bool glued = std::any_of(domain.interfaces.begin(), domain.interfaces.end(),
+                                     [&](const PatchInterface& i) { return i.a == side || i.b == side; });
+      if (!glued) out.push_back(side);
+    }
+  return out;
+}
+
+std::string side_name(const MultiPatch& domain, PatchSideRef side) {
+  const std::string label =
+      side.patch < static_cast<int>(domain.patch_labels.size()) ? domain.patch_labels[side.patch] : std::to_string(side.patch + 1);
+  return label + ":" + std::to_string(side.side);
+}
+
+namespace {
+
+// The point and the Jacobian (dx/du, dx/dv, dy/du, dy/dv) of a patch at (u, v).
+void patch_map(const NurbsPatch& patch, double u, double v, double x[2], double J[4]) {
+  const int p = patch.basis_u.degree(), q = patch.basis_v.degree(), nu = patch.basis_u.num_functions();
+  const int su = patch.basis_u.find_span(u), sv = patch.basis_v.find_span(v);
+  std::vector<double> bu(2 * (p + 1)), bv(2 * (q + 1));
+  patch.basis_u.evaluate_derivatives(su, u, 1, bu.data());
+  patch.basis_v.evaluate_derivatives(sv, v, 1, bv.data());
+  double h[3] = {0, 0, 0}, hu[3] = {0, 0, 0}, hv[3] = {0, 0, 0};
+  for (int b = 0; b <= q; ++b)
+    for (int a = 0; a <= p; ++a) {
+      const int i = (su - p + a) + nu * (sv - q + b);
+      const double w = patch.weights[i];
+      const double c[3] = {w * patch.control_points(i, 0), w * patch.control_points(i, 1), w};
+      for (int k = 0; k < 3; ++k) {
+        h[k] += c[k] * bu[a] * bv[b];
+        hu[k] += c[k] * bu[p + 1 + a] * bv[b];
+        hv[k] += c[k] * bu[a] * bv[q + 1 + b];
+      }
+    }
+  for (int k = 0; k < 2; ++k) {
+    x[k] = h[k] / h[2];
+    J[2 * k] = (hu[k] - x[k] * hu[2]) / h[2];
+    J[2 * k + 1] = (hv[k] - x[k] * hv[2]) / h[2];
+  }
+}
+
+double weight_at(const NurbsPatch& patch, double u, double v) {
+  const int p = patch.basis_u.degree(), q = patch.basis_v.degree(), nu = patch.basis_u.num_functions();
+  const int su = patch.basis_u.find_span(u), sv = patch.basis_v.find_span(v);
+  std::vector<double> bu(p + 1), bv(q + 1);
+  patch.basis_u.evaluate(su, u, bu.data());
+  patch.basis_v.evaluate(sv, v, bv.data());
+  double w = 0;
+  for (int b = 0; b <= q; ++b)
+    for (int a = 0; a <= p; ++a) w += patch.weights[(su - p + a) + nu * (sv - q + b)] * bu[a] * bv[b];
+  return w;
+}
+
+// The parameters (u, v) of the point at t in [0, 1] along a side (in the side's own direction).
+std::pair<double, double> side_parameters(const NurbsPatch& patch, int side, double t) {
+  const double u0 = patch.basis_u.domain_begin(), u1 = patch.basis_u.domain_end();
+  const double v0 = patch.basis_v.domain_begin(), v1 = patch.basis_v.domain_end();
+  switch (side) {
+    case 1: return {u0, v0 + t * (v1 - v0)};
+    case 2: return {u1, v0 + t * (v1 - v0)};
+    case 3: return {u0 + t * (u1 - u0), v0};
+    default: return {u0 + t * (u1 - u0), v1};
+  }
+}
+
+[[noreturn]] void fail(const std::string& where, const std::string& what) {
+  throw GeometryError(where.empty() ? what : where + ": " + what);
+}
+
+std::string patch_where(const MultiPatch& d, int p) {
+  return p < static_cast<int>(d.patch_where.size()) ? d.patch_where[p] : "";
+}
+
+std::string patch_name(const MultiPatch& d, int p) {
+  return "patch " + (p < static_cast<int>(d.patch_labels.size()) ? d.patch_labels[p] : std::to_string(p + 1));
+}
+
+void check_side_ref(const MultiPatch& d, const PatchSideRef& s, const std::string& where) {
+  if (s.patch < 0 || s.patch >= d.num_patches())
+    fail(where, "patch " + std::to_string(s.patch + 1) + " does not exist (the file has " + std::to_string(d.num_patches()) +
+                    " patches)");
+  if (s.side < 1 || s.side > 4) fail(where, "side " + std::to_string(s.side) + " does not exist (sides are 1 to 4)");
+}
+
+// det J at the Gauss points of every knot span (4 x 4 points): positive everywhere, else the
+// patch is inverted (all negative) or folds over.
+void check_orientation(const MultiPatch& d, int p) {
+  const NurbsPatch& patch = d.patches[p];
+  const auto bu = patch.basis_u.breakpoints(), bv = patch.basis_v.breakpoints();
+  const QuadratureRule1D rule = gauss_legendre(4);
+  bool positive = false, negative = false;
+  for (size_t i = 0; i + 1 < bu.size(); ++i)
+    for (size_t j = 0; j + 1 < bv.size(); ++j)
+      for (size_t a = 0; a < rule.nodes.size(); ++a)
+        for (size_t b = 0; b < rule.nodes.size(); ++b) {
+          const double u = bu[i] + (bu[i + 1] - bu[i]) * rule.nodes[a];
+          const double v = bv[j] + (bv[j + 1] - bv[j]) * rule.nodes[b];
+          double x[2], J[4];
+          patch_map(patch, u, v, x, J);
+          const double det = J[0] * J[3] - J[1] * J[2];
+          (det > 0 ? positive : negative) = true;
+        }
+  if (negative && !positive)
+    fail(patch_where(d, p), patch_name(d, p) + " is inverted (det J < 0 everywhere): reverse one of its parameter "
+                                               "directions or swap u and v");
+  if (negative)
+    fail(patch_where(d, p), patch_name(d, p) + " folds over (det J changes sign inside it)");
+}
+
+double domain_size(const MultiPatch& d) {
+  double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+  for (const NurbsPatch& p : d.patches)
+    for (Eigen::Index i = 0; i < p.control_points.rows(); ++i)
+      for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], p.control_points(i, k)), hi[k] = std::max(hi[k], p.control_points(i, k));
+  return std::hypot(hi[0] - lo[0], hi[1] - lo[1]);
+}
+
+// The two sides of an interface at points along them: 8 points per knot span of either side
+// and the ends, positions to `tolerance`, rational weights (normalized by their value at the
+// first point) to 1e-9.
+void check_interface_curves(const MultiPatch& d, const PatchInterface& f, double tolerance) {
+  const NurbsPatch& A = d.patches[f.a.patch];
+  const NurbsPatch& B = d.patches[f.b.patch];
+  auto side_breaks = [](const NurbsPatch& patch, int side) {
+    const BSplineBasis1D& b = side <= 2 ? patch.basis_v : patch.basis_u;
+    std::vector<double> t = b.breakpoints();
+    for (double& x : t) x = (x - t.front()) / (b.domain_end() - b.domain_begin());
+    return t;
+  };
+  std::vector<double> ts;
+  for (const auto& breaks : {side_breaks(A, f.a.side), side_breaks(B, f.b.side)})
+    for (size_t i = 0; i + 1 < breaks.size(); ++i)
+      for (int k = 0; k < 8; ++k) ts.push_back(breaks[i] + (breaks[i + 1] - breaks[i]) * (k + 0.5) / 8);
+  ts.push_back(0), ts.push_back(1);
+  double wa0 = 0, wb0 = 0;
+  for (double t : ts) {
+    const double tb = f.reversed ? 1 - t : t;
+    const auto [ua, va] = side_parameters(A, f.a.side, t);
+    const auto [ub, vb] = side_parameters(B, f.b.side, tb);
+    double xa[2], xb[2], J[4];
+    patch_map(A, ua, va, xa, J);
+    patch_map(B, ub, vb, xb, J);
+    const double gap = std::hypot(xa[0] - xb[0], xa[1] - xb[1]);
+    if (!(gap <= tolerance)) {
+      char m[320];
+      std::snprintf(m, sizeof m,
+                    "%s side %d and %s side %d are not the same curve: at (%.6g, %.6g) on the first the second is "
+                    "%.3g away (check the sides and the orientation%s)",
+                    patch_name(d, f.a.patch).c_str(), f.a.side, patch_name(d, f.b.patch).c_str(), f.b.side, xa[0], xa[1], gap,
+                    f.reversed ? ", given as reversed" : ", given as matching");
+      fail(f.where, m);
+    }
+    const double wa = weight_at(A, ua, va), wb = weight_at(B, ub, vb);
+    if (wa0 == 0) wa0 = wa, wb0 = wb;
+    if (std::abs(wa / wa0 - wb / wb0) > 1e-9 || std::abs(wa - wb) > 1e-9 * std::max(wa, wb)) {
+      char m[320];
+      std::snprintf(m, sizeof m,
+                    "%s side %d and %s side %d have different weights along the interface (%.12g and %.12g at the same "
+                    "point): a conforming NURBS space needs the same weights on both sides (scale the weights of one "
+                    "patch)",
+                    patch_name(d, f.a.patch).c_str(), f.a.side, patch_name(d, f.b.patch).c_str(), f.b.side, wa, wb);
+      fail(f.where, m);
+    }
+  }
+}
+
+}  // namespace
+
+void check_multipatch(const MultiPatch& d) {
+  if (d.patches.empty()) throw GeometryError("the geometry has no patch");
+  for (int p = 0; p < d.num_patches(); ++p) {
+    try {
+      d.patches[p].validate();
+    } catch (const std::invalid_argument& e) {
+      fail(patch_where(d, p), patch_name(d, p) + ": " + e.what());
+    }
+    check_orientation(d, p);
+  }
+  const double tolerance = 1e-9 * domain_size(d);
+  std::vector<PatchSideRef> used;
+  for (const PatchInterface& f : d.interfaces) {
+    check_side_ref(d, f.a, f.where);
+    check_side_ref(d, f.b, f.where);
+    if (f.a == f.b) fail(f.where, "an interface joins a side to itself");
+    for (const PatchSideRef& s : {f.a, f.b}) {
+      if (std::find(used.begin(), used.end(), s) != used.end())
+        fail(f.where, patch_name(d, s.patch) + " side " + std::to_string(s.side) + " is already in another interface");
+      used.push_back(s);
+    }
+    check_interface_curves(d, f, tolerance);
+  }
+  std::vector<PatchSideRef> named;
+  for (const NamedBoundary& b : d.boundaries)
+    for (const PatchSideRef& s : b.sides) {
+      check_side_ref(d, s, b.where);
+      if (std::find(used.begin(), used.end(), s) != used.end())
+        fail(b.where, "boundary \"" + b.name + "\" lists " + patch_name(d, s.patch) + " side " + std::to_string(s.side) +
+                          ", which is an interface");
+      if (std::find(named.begin(), named.end(), s) != named.end())
+        fail(b.where, "boundary \"" + b.name + "\" lists " + patch_name(d, s.patch) + " side " + std::to_string(s.side) +
+                          ", which is already in another boundary");
+      named.push_back(s);
+    }
+}
+
+}  // namespace knotwork

@@ -1,0 +1,50 @@
+#include "cases/boundary_labels.hpp"
+
+#include <algorithm>
+
+namespace knotwork {
+
+std::vector<int> BoundaryLabels::resolve(const std::string& name) const {
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return {static_cast<int>(i)};
+  for (const auto& [label, ids] : groups)
+    if (label == name) return ids;
+  return {};
+}
+
+std::vector<std::string> BoundaryLabels::all_names() const {
+  std::vector<std::string> out = names;
+  for (const auto& g : groups) out.push_back(g.first);
+  return out;
+}
+
+BoundaryLabels boundary_labels(const CaseDescription& c) {
+  BoundaryLabels l;
+  const MultiPatch& d = c.domain;
+  if (c.multipatch()) {
+    const std::vector<PatchSideRef> exterior = exterior_sides(d);
+    for (const PatchSideRef& s : exterior) l.names.push_back(side_name(d, s));
+    for (const NamedBoundary& b : d.boundaries) {
+      std::vector<int> ids;
+      for (const PatchSideRef& s : b.sides)
+        ids.push_back(static_cast<int>(std::find(exterior.begin(), exterior.end(), s) - exterior.begin()));
+      l.groups.emplace_back(b.name, ids);
+    }
+    return l;
+  }
+  l.names = {"bottom", "right", "top", "left"};
+  // Side s of the files is the mesh's id of that cell side (bottom 0, right 1, top 2, left 3).
+  auto id_of_side = [](int side) { return static_cast<int>(cell_side_of_patch_side(side)); };
+  for (const NamedBoundary& b : d.boundaries) {
+    std::vector<int> ids;
+    for (const PatchSideRef& s : b.sides) ids.push_back(id_of_side(s.side));
+    l.groups.emplace_back(b.name, ids);
+  }
+  if (d.num_patches() == 1)
+    for (int s = 1; s <= 4; ++s) l.groups.emplace_back(side_name(d, {0, s}), std::vector<int>{id_of_side(s)});
+  for (int s = 1; s <= 4; ++s)
+    if (l.resolve(std::to_string(s)).empty()) l.groups.emplace_back(std::to_string(s), std::vector<int>{id_of_side(s)});
+  return l;
+}
+
+}  // namespace knotwork

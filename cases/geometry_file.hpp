@@ -1,0 +1,28 @@
+#pragma once
+// The domains read from the field's own files: G+Smo's XML (`.xml`) and GeoPDEs' geometry text
+// format v2.1 (`.txt`), both read from their public descriptions. Every reader throws
+// InputError naming the file, the line and what is wrong; read_geometry_file also checks the
+// domain (check_multipatch: orientation, matching interfaces, boundary sides).
+#include <string>
+
+#include "basis/core/multipatch.hpp"
+
+namespace knotwork {
+
+MultiPatch read_geometry_file(const std::string& path);
+
+// GeoPDEs: patches numbered from 1 (their labels "1", "2", ...), control points in homogeneous
+// form (w x, w y), a boundary named "BOUNDARY n" labelled "n".
+MultiPatch read_geopdes_text(const std::string& path);
+
+// G+Smo: TensorBSpline2 and TensorNurbs2 geometries (Euclidean control points, weights in the
+// basis), labelled by their id; a MultiPatch's patches, interfaces and boundaries. Without a
+// MultiPatch every geometry of the file is a patch, with no interface.
+MultiPatch read_gismo_xml(const std::string& path);
+
+// Writes the domain as G+Smo XML (patch ids 0, 1, ...; named boundaries kept), which
+// read_gismo_xml reads back to the same patches, interfaces and boundaries. Throws InputError
+// when the file cannot be written.
+void write_gismo_xml(const MultiPatch& domain, const std::string& path);
+
+}  // namespace knotwork

@@ -1,0 +1,204 @@
+// GeoPDEs' geometry text format v2.1 (its doc/geo_specs_v21.txt and geo_specs_mp_v21.txt):
+// lines starting with '#' are comments; a header "ndim rdim Np [Ni [Ns]]"; per patch an
+// optional name line, the degrees, the numbers of control points, one knot vector per
+// direction, one line per coordinate of the weighted control points (w x, w y), numbered u
+// fastest, and the weights; per interface a name, "patch side" twice and the orientation flag;
+// per subdomain a name and its patches; then, to the end, boundaries: a name, the number of
+// sides and "patch side" per side. No library reads it: written here.
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "basis/core/input_error.hpp"
+#include "cases/geometry_file.hpp"
+
+namespace knotwork {
+
+namespace {
+
+constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t(256) << 20;
+constexpr long kMaxControlPoints = long(1) << 24;
+
+class LineReader {
+ public:
+  explicit LineReader(const std::string& path) : path_(path) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path + ": cannot read the geometry file (" + ec.message() + ")");
+    if (size > kMaxFileBytes) throw InputError(path + ": the geometry file is larger than 256 MB");
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot open the geometry file");
+    std::string line;
+    int n = 0;
+    while (std::getline(in, line)) {
+      ++n;
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      const size_t first = line.find_first_not_of(" \t");
+      if (first == std::string::npos || line[first] == '#') continue;
+      lines_.push_back(line.substr(first));
+      numbers_.push_back(n);
+    }
+  }
+  bool done() const { return at_ >= lines_.size(); }
+  const std::string& peek() const { return lines_[at_]; }
+  const std::string& next(const std::string& what) {
+    if (done()) throw InputError(path_ + ": the file ends where " + what + " should be");
+    line_ = numbers_[at_];
+    return lines_[at_++];
+  }
+  std::string where() const { return path_ + ": line " + std::to_string(line_); }
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(where() + ": " + what); }
+
+  std::vector<double> numbers(const std::string& what, long expected) {
+    const std::string& text = next(what);
+    std::vector<double> out;
+    const char* s = text.c_str();
+    while (true) {
+      while (*s == ' ' || *s == '\t' || *s == ',') ++s;
+      if (!*s) break;
+      char* end = nullptr;
+      errno = 0;
+      const double v = std::strtod(s, &end);
+      if (end == s || errno == ERANGE || !std::isfinite(v)) {
+        std::string token(s, std::min<size_t>(std::strcspn(s, " \t,"), 24));
+        fail(what + ": '" + token + "' is not a finite number");
+      }
+      out.push_back(v);
+      s = end;
+      if (*s && *s != ' ' && *s != '\t' && *s != ',') fail(what + ": a number is followed by '" + std::string(1, *s) + "'");
+    }
+    if (expected >= 0 && static_cast<long>(out.size()) != expected)
+      fail(what + ": expected " + std::to_string(expected) + " numbers, found " + std::to_string(out.size()));
+    return out;
+  }
+  std::vector<long> integers(const std::string& what, long min_count, long max_count) {
+    const std::vector<double> v = numbers(what, -1);
+    if (static_cast<long>(v.size()) < min_count || static_cast<long>(v.size()) > max_count)
+      fail(what + ": expected " + (min_count == max_count ? std::to_string(min_count)
+                                                          : std::to_string(min_count) + " to " + std::to_string(max_count)) +
+           " integers, found " + std::to_string(v.size()));
+    std::vector<long> out;
+    for (double x : v) {
+      if (x != std::floor(x) || std::abs(x) > 1e9) fail(what + ": " + std::to_string(x) + " is not an integer");
+      out.push_back(static_cast<long>(x));
+    }
+    return out;
+  }
+
+ private:
+  std::string path_;
+  std::vector<std::string> lines_;
+  std::vector<int> numbers_;
+  size_t at_ = 0;
+  int line_ = 0;
+};
+
+bool starts_with_number(const std::string& s) {
+  char* end = nullptr;
+  std::strtod(s.c_str(), &end);
+  return end != s.c_str();
+}
+
+PatchSideRef read_side(LineReader& in, const std::string& what, long patches) {
+  const auto v = in.integers(what, 2, 2);
+  if (v[0] < 1 || v[0] > patches)
+    in.fail(what + ": patch " + std::to_string(v[0]) + " does not exist (patches are 1 to " + std::to_string(patches) + ")");
+  if (v[1] < 1 || v[1] > 4) in.fail(what + ": side " + std::to_string(v[1]) + " does not exist (sides are 1 to 4)");
+  return {static_cast<int>(v[0] - 1), static_cast<int>(v[1])};
+}
+
+}  // namespace
+
+MultiPatch read_geopdes_text(const std::string& path) {
+  LineReader in(path);
+  const auto header = in.integers("the header (ndim rdim patches [interfaces [subdomains]])", 3, 5);
+  if (header[0] == 3) in.fail("a 3D (volume) geometry: knotwork reads planar geometries (ndim = 2) from GeoPDEs files");
+  if (header[0] != 2) in.fail("ndim must be 2, got " + std::to_string(header[0]));
+  if (header[1] != 2) in.fail("rdim must be 2 (a planar domain), got " + std::to_string(header[1]));
+  const long np = header[2], ni = header.size() > 3 ? header[3] : 0, ns = header.size() > 4 ? header[4] : 0;
+  if (np < 1 || np > 100000) in.fail("the number of patches must be in [1, 100000], got " + std::to_string(np));
+  if (ni < 0 || ni > 4 * np) in.fail("the number of interfaces must be in [0, 4 x patches], got " + std::to_string(ni));
+  if (ns < 0 || ns > np) in.fail("the number of subdomains must be in [0, patches], got " + std::to_string(ns));
+  MultiPatch d;
+  long total_points = 0;
+  for (long p = 1; p <= np; ++p) {
+    const std::string name = "patch " + std::to_string(p);
+    if (!in.done() && !starts_with_number(in.peek())) in.next(name);  // its name
+    const auto degree = in.integers(name + " degrees", 2, 2);
+    const std::string where = in.where();
+    for (long g : degree)
+      if (g < 1 || g > 10) in.fail(name + " degrees: must be in [1, 10], got " + std::to_string(g));
+    const auto count = in.integers(name + " numbers of control points", 2, 2);
+    for (int k = 0; k < 2; ++k)
+      if (count[k] < degree[k] + 1 || count[k] > kMaxControlPoints)
+        in.fail(name + " numbers of control points: must be in [degree + 1, 2^24], got " + std::to_string(count[k]));
+    total_points += count[0] * count[1];
+    if (count[0] * count[1] > kMaxControlPoints || total_points > kMaxControlPoints)
+      in.fail(name + ": more than 2^24 control points");
+    NurbsPatch patch;
+    for (int k = 0; k < 2; ++k) {
+      const std::string what = name + (k == 0 ? " knots_u" : " knots_v");
+      std::vector<double> knots = in.numbers(what, count[k] + degree[k] + 1);
+      try {
+        (k == 0 ? patch.basis_u : patch.basis_v) = BSplineBasis1D(static_cast<int>(degree[k]), std::move(knots));
+      } catch (const std::invalid_argument& e) {
+        in.fail(what + ": " + e.what());
+      }
+    }
+    const long n = count[0] * count[1];
+    const std::vector<double> wx = in.numbers(name + " weighted x coordinates", n);
+    const std::vector<double> wy = in.numbers(name + " weighted y coordinates", n);
+    const std::vector<double> w = in.numbers(name + " weights", n);
+    patch.control_points.resize(n, 2);
+    patch.weights.resize(n);
+    for (long i = 0; i < n; ++i) {
+      if (!(w[i] > 0)) in.fail(name + " weights: weight " + std::to_string(i + 1) + " must be positive");
+      patch.control_points(i, 0) = wx[i] / w[i];
+      patch.control_points(i, 1) = wy[i] / w[i];
+      patch.weights[i] = w[i];
+    }
+    d.patches.push_back(std::move(patch));
+    d.patch_labels.push_back(std::to_string(p));
+    d.patch_where.push_back(where);
+  }
+  for (long i = 1; i <= ni; ++i) {
+    const std::string name = "interface " + std::to_string(i);
+    in.next(name);  // its name
+    PatchInterface f;
+    f.a = read_side(in, name + " (patch side)", np);
+    f.where = in.where();
+    f.b = read_side(in, name + " (patch side)", np);
+    const auto o = in.integers(name + " orientation", 1, 1);
+    if (o[0] != 1 && o[0] != -1 && o[0] != 0)
+      in.fail(name + " orientation: must be 1 (the sides run the same way) or -1 (opposite ways), got " + std::to_string(o[0]));
+    f.reversed = o[0] != 1;
+    d.interfaces.push_back(f);
+  }
+  for (long s = 1; s <= ns; ++s) {
+    const std::string name = "subdomain " + std::to_string(s);
+    in.next(name);
+    for (long p : in.integers(name + " patches", 1, np))
+      if (p < 1 || p > np) in.fail(name + ": patch " + std::to_string(p) + " does not exist");
+  }
+  while (!in.done()) {
+    NamedBoundary b;
+    b.name = in.next("a boundary name");
+    if (b.name.rfind("BOUNDARY ", 0) == 0) b.name = b.name.substr(9);
+    while (!b.name.empty() && (b.name.back() == ' ' || b.name.back() == '\t')) b.name.pop_back();
+    b.where = in.where();
+    const auto count = in.integers("boundary " + b.name + " number of sides", 1, 1);
+    if (count[0] < 1 || count[0] > 4 * np)
+      in.fail("boundary " + b.name + ": the number of sides must be in [1, 4 x patches], got " + std::to_string(count[0]));
+    for (long k = 0; k < count[0]; ++k) b.sides.push_back(read_side(in, "boundary " + b.name + " (patch side)", np));
+    for (const NamedBoundary& other : d.boundaries)
+      if (other.name == b.name) in.fail("boundary " + b.name + " is given twice");
+    d.boundaries.push_back(std::move(b));
+  }
+  return d;
+}
+
+}  // namespace knotwork

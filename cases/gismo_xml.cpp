@@ -1,0 +1,354 @@
+// G+Smo's XML geometry files, read with pugixml: <Geometry type="TensorBSpline2|TensorNurbs2"
+// id="..."> with its <Basis> (a TensorBSplineBasis2 of two BSplineBasis <KnotVector
+// degree="p">, inside a TensorNurbsBasis2 with <weights> for NURBS) and <coefs geoDim="2">
+// (Euclidean control points, u fastest); <MultiPatch parDim="2"> with <patches type="id_range"
+// or "id_index">, <interfaces> (rows "patch side patch side", the direction map and the
+// orientation flags) and <boundary [name="..."]> ("patch side" pairs). Patches in interfaces
+// and boundaries are referred to by their id; a file whose references are not ids but all
+// lie in 0..N-1 refers by position in <patches> (both occur in the wild).
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <pugixml.hpp>
+#include <sstream>
+
+#include "basis/core/input_error.hpp"
+#include "cases/geometry_file.hpp"
+
+namespace knotwork {
+
+namespace {
+
+constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t(256) << 20;
+constexpr long kMaxControlPoints = long(1) << 24;
+
+class XmlFile {
+ public:
+  explicit XmlFile(const std::string& path) : path_(path) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path + ": cannot read the geometry file (" + ec.message() + ")");
+    if (size > kMaxFileBytes) throw InputError(path + ": the geometry file is larger than 256 MB");
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    text_ = s.str();
+    const pugi::xml_parse_result r = doc_.load_buffer(text_.data(), text_.size());
+    if (!r) throw InputError(at(r.offset) + ": malformed XML (" + r.description() + ")");
+  }
+  const pugi::xml_document& doc() const { return doc_; }
+  std::string at(std::ptrdiff_t offset) const {
+    long line = 1;
+    for (std::ptrdiff_t i = 0; i < offset && i < static_cast<std::ptrdiff_t>(text_.size()); ++i) line += text_[i] == '\n';
+    return path_ + ": line " + std::to_string(line);
+  }
+  std::string at(const pugi::xml_node& n) const { return at(n.offset_debug()); }
+  [[noreturn]] void fail(const pugi::xml_node& n, const std::string& what) const { throw InputError(at(n) + ": " + what); }
+
+  std::vector<double> numbers(const pugi::xml_node& n, const std::string& what) const {
+    std::vector<double> out;
+    const char* s = n.child_value();
+    while (true) {
+      while (*s && std::isspace(static_cast<unsigned char>(*s))) ++s;
+      if (!*s) break;
+      char* end = nullptr;
+      const double v = std::strtod(s, &end);
+      if (end == s || !std::isfinite(v) || (*end && !std::isspace(static_cast<unsigned char>(*end))))
+        fail(n, what + ": '" + std::string(s, std::min<size_t>(std::strcspn(s, " \t\r\n"), 24)) + "' is not a finite number");
+      out.push_back(v);
+      s = end;
+      if (out.size() > static_cast<size_t>(2 * kMaxControlPoints)) fail(n, what + ": too many numbers");
+    }
+    return out;
+  }
+  std::vector<long> integers(const pugi::xml_node& n, const std::string& what) const {
+    std::vector<long> out;
+    for (double v : numbers(n, what)) {
+      if (v != std::floor(v) || std::abs(v) > 1e9) fail(n, what + ": " + std::to_string(v) + " is not an integer");
+      out.push_back(static_cast<long>(v));
+    }
+    return out;
+  }
+  long integer_attribute(const pugi::xml_node& n, const char* name, const std::string& what) const {
+    const pugi::xml_attribute a = n.attribute(name);
+    if (!a) fail(n, what + ": the attribute " + name + " is missing");
+    char* end = nullptr;
+    const long v = std::strtol(a.value(), &end, 10);
+    if (end == a.value() || *end) fail(n, what + ": " + name + "=\"" + a.value() + "\" is not an integer");
+    return v;
+  }
+
+ private:
+  std::string path_, text_;
+  pugi::xml_document doc_;
+};
+
+pugi::xml_node child_of_type(const pugi::xml_node& n, const char* element, const char* type) {
+  for (pugi::xml_node c : n.children(element))
+    if (std::string(c.attribute("type").value()) == type) return c;
+  return {};
+}
+
+NurbsPatch read_patch(const XmlFile& f, const pugi::xml_node& g, const std::string& name) {
+  const std::string type = g.attribute("type").value();
+  const bool rational = type == "TensorNurbs2";
+  pugi::xml_node basis = child_of_type(g, "Basis", rational ? "TensorNurbsBasis2" : "TensorBSplineBasis2");
+  if (!basis) f.fail(g, name + ": no <Basis type=\"" + std::string(rational ? "TensorNurbsBasis2" : "TensorBSplineBasis2") + "\">");
+  pugi::xml_node tensor = rational ? child_of_type(basis, "Basis", "TensorBSplineBasis2") : basis;
+  if (!tensor) f.fail(basis, name + ": no <Basis type=\"TensorBSplineBasis2\"> inside the NURBS basis");
+  NurbsPatch p;
+  for (int k = 0; k < 2; ++k) {
+    pugi::xml_node b;
+    for (pugi::xml_node c : tensor.children("Basis"))
+      if (std::string(c.attribute("type").value()) == "BSplineBasis" && c.attribute("index").as_int(-1) == k) b = c;
+    if (!b) f.fail(tensor, name + ": no <Basis type=\"BSplineBasis\" index=\"" + std::to_string(k) + "\">");
+    pugi::xml_node kv = b.child("KnotVector");
+    if (!kv) f.fail(b, name + ": no <KnotVector> in direction " + std::to_string(k));
+    const long degree = f.integer_attribute(kv, "degree", name + " KnotVector");
+    if (degree < 1 || degree > 10) f.fail(kv, name + " KnotVector: degree must be in [1, 10], got " + std::to_string(degree));
+    std::vector<double> knots = f.numbers(kv, name + " KnotVector");
+    try {
+      (k == 0 ? p.basis_u : p.basis_v) = BSplineBasis1D(static_cast<int>(degree), std::move(knots));
+    } catch (const std::invalid_argument& e) {
+      f.fail(kv, name + " KnotVector: " + e.what());
+    }
+  }
+  const long n = static_cast<long>(p.basis_u.num_functions()) * p.basis_v.num_functions();
+  if (n > kMaxControlPoints) f.fail(g, name + ": more than 2^24 control points");
+  pugi::xml_node coefs = g.child("coefs");
+  if (!coefs) f.fail(g, name + ": no <coefs>");
+  const long dim = coefs.attribute("geoDim") ? f.integer_attribute(coefs, "geoDim", name + " coefs") : 2;
+  if (dim != 2) f.fail(coefs, name + " coefs: geoDim must be 2 (a planar domain), got " + std::to_string(dim));
+  const std::vector<double> c = f.numbers(coefs, name + " coefs");
+  if (static_cast<long>(c.size()) != 2 * n)
+    f.fail(coefs, name + " coefs: the knot vectors need " + std::to_string(n) + " points (" + std::to_string(2 * n) +
+                      " numbers), found " + std::to_string(c.size()) + " numbers");
+  p.control_points.resize(n, 2);
+  for (long i = 0; i < n; ++i) p.control_points(i, 0) = c[2 * i], p.control_points(i, 1) = c[2 * i + 1];
+  p.weights = Eigen::VectorXd::Ones(n);
+  if (rational) {
+    pugi::xml_node w = basis.child("weights");
+    if (!w) f.fail(basis, name + ": a TensorNurbsBasis2 without <weights>");
+    const std::vector<double> ws = f.numbers(w, name + " weights");
+    if (static_cast<long>(ws.size()) != n)
+      f.fail(w, name + " weights: expected " + std::to_string(n) + ", found " + std::to_string(ws.size()));
+    for (long i = 0; i < n; ++i) {
+      if (!(ws[i] > 0)) f.fail(w, name + " weights: weight " + std::to_string(i + 1) + " must be positive");
+      p.weights[i] = ws[i];
+    }
+  }
+  return p;
+}
+
+}  // namespace
+
+MultiPatch read_gismo_xml(const std::string& path) {
+  XmlFile f(path);
+  pugi::xml_node root = f.doc().child("xml");
+  if (!root) throw InputError(path + ": the root element must be <xml> (a G+Smo file)");
+  // Every planar tensor geometry, by id.
+  std::map<long, pugi::xml_node> geometry;
+  for (pugi::xml_node g : root.children("Geometry")) {
+    const long id = f.integer_attribute(g, "id", "Geometry");
+    if (geometry.count(id)) f.fail(g, "Geometry id " + std::to_string(id) + " is given twice");
+    geometry[id] = g;
+  }
+  auto check_type = [&](const pugi::xml_node& g, long id) {
+    const std::string type = g.attribute("type").value();
+    if (type == "TensorBSpline3" || type == "TensorNurbs3")
+      f.fail(g, "Geometry id " + std::to_string(id) + " is a volume (" + type + "): knotwork reads planar patches");
+    if (type != "TensorBSpline2" && type != "TensorNurbs2")
+      f.fail(g, "Geometry id " + std::to_string(id) + " has type \"" + type +
+                    "\": knotwork reads TensorBSpline2 and TensorNurbs2 patches");
+  };
+  MultiPatch d;
+  std::vector<long> ids;
+  pugi::xml_node mp = root.child("MultiPatch");
+  if (mp && mp.next_sibling("MultiPatch")) f.fail(mp.next_sibling("MultiPatch"), "more than one <MultiPatch>");
+  if (mp) {
+    if (mp.attribute("parDim") && mp.attribute("parDim").as_int() != 2)
+      f.fail(mp, std::string("MultiPatch parDim must be 2, got ") + mp.attribute("parDim").value());
+    pugi::xml_node patches = mp.child("patches");
+    if (!patches) f.fail(mp, "MultiPatch: no <patches>");
+    const std::string type = patches.attribute("type").value();
+    const std::vector<long> v = f.integers(patches, "patches");
+    if (type == "id_range") {
+      if (v.size() != 2 || v[1] < v[0] || v[1] - v[0] >= 100000)
+        f.fail(patches, "patches type=\"id_range\" must be \"first last\" with first <= last (at most 100000 patches)");
+      for (long id = v[0]; id <= v[1]; ++id) ids.push_back(id);
+    } else if (type == "id_index") {
+      if (v.empty() || v.size() > 100000) f.fail(patches, "patches type=\"id_index\" must list 1 to 100000 ids");
+      ids = v;
+    } else {
+      f.fail(patches, "patches type must be \"id_range\" or \"id_index\", got \"" + type + "\"");
+    }
+  } else {
+    for (const auto& [id, g] : geometry) ids.push_back(id);
+    if (ids.empty()) throw InputError(path + ": no <Geometry> and no <MultiPatch>");
+  }
+  long total = 0;
+  for (long id : ids) {
+    const auto it = geometry.find(id);
+    if (it == geometry.end()) f.fail(mp.child("patches"), "patch id " + std::to_string(id) + " has no <Geometry id=\"" + std::to_string(id) + "\">");
+    check_type(it->second, id);
+    d.patches.push_back(read_patch(f, it->second, "Geometry id " + std::to_string(id)));
+    total += d.patches.back().control_points.rows();
+    if (total > kMaxControlPoints) f.fail(it->second, "more than 2^24 control points in all");
+    d.patch_labels.push_back(std::to_string(id));
+    d.patch_where.push_back(f.at(it->second));
+  }
+  if (!mp) return d;
+
+  // References: ids if every one is an id, else positions if every one is one.
+  struct Ref {
+    long patch, side;
+    pugi::xml_node node;
+  };
+  std::vector<std::vector<long>> rows;
+  std::vector<Ref> refs;
+  for (pugi::xml_node in : mp.children("interfaces")) {
+    const std::vector<long> v = f.integers(in, "interfaces");
+    if (v.size() % 8 != 0)
+      f.fail(in, "interfaces: each row must have 8 integers (patch side patch side, 2 of the direction map, 2 orientation "
+                 "flags), found " + std::to_string(v.size()) + " integers");
+    for (size_t k = 0; k < v.size(); k += 8) refs.push_back({v[k], v[k + 1], in}), refs.push_back({v[k + 2], v[k + 3], in});
+  }
+  std::vector<NamedBoundary> boundaries;
+  for (pugi::xml_node b : mp.children("boundary")) {
+    const std::vector<long> v = f.integers(b, "boundary");
+    if (v.size() % 2 != 0) f.fail(b, "boundary: expected \"patch side\" pairs, found an odd number of integers");
+    for (size_t k = 0; k < v.size(); k += 2) refs.push_back({v[k], v[k + 1], b});
+  }
+  std::map<long, int> index_of_id;
+  for (size_t k = 0; k < ids.size(); ++k) index_of_id[ids[k]] = static_cast<int>(k);
+  bool by_id = true, by_position = true;
+  for (const Ref& r : refs) {
+    by_id = by_id && index_of_id.count(r.patch);
+    by_position = by_position && r.patch >= 0 && r.patch < static_cast<long>(ids.size());
+  }
+  auto resolve = [&](const Ref& r) {
+    if (!by_id && !by_position)
+      f.fail(r.node, "patch " + std::to_string(r.patch) + " is neither a patch id nor a position in <patches>");
+    if (r.side < 1 || r.side > 4) f.fail(r.node, "side " + std::to_string(r.side) + " does not exist (sides are 1 to 4)");
+    return PatchSideRef{by_id ? index_of_id[r.patch] : static_cast<int>(r.patch), static_cast<int>(r.side)};
+  };
+  size_t at = 0;
+  for (pugi::xml_node in : mp.children("interfaces")) {
+    const std::vector<long> v = f.integers(in, "interfaces");
+    for (size_t k = 0; k < v.size(); k += 8) {
+      PatchInterface i;
+      i.a = resolve(refs[at++]);
+      i.b = resolve(refs[at++]);
+      i.where = f.at(in) + ": interface " + std::to_string(k / 8 + 1);
+      // The tangential direction of each side (v on sides 1 and 2, u on 3 and 4) must map to
+      // the other's; its orientation flag says whether they run the same way.
+      const int ta = i.a.side <= 2 ? 1 : 0, tb = i.b.side <= 2 ? 1 : 0;
+      if (v[k + 4 + ta] != tb)
+        f.fail(in, i.where.substr(f.at(in).size() + 2) + ": the direction map takes the side's direction " + std::to_string(ta) +
+                       " to " + std::to_string(v[k + 4 + ta]) + ", not to the other side's direction " + std::to_string(tb));
+      const long o = v[k + 6 + ta];
+      if (o != 0 && o != 1) f.fail(in, "interfaces: orientation flags must be 0 or 1, got " + std::to_string(o));
+      i.reversed = o == 0;
+      d.interfaces.push_back(i);
+    }
+  }
+  for (pugi::xml_node b : mp.children("boundary")) {
+    const std::vector<long> v = f.integers(b, "boundary");
+    NamedBoundary nb;
+    nb.name = b.attribute("name").value();
+    nb.where = f.at(b);
+    for (size_t k = 0; k < v.size(); k += 2) nb.sides.push_back(resolve(refs[at++]));
+    if (nb.name.empty()) continue;  // an unnamed list only says which sides are boundary
+    for (const NamedBoundary& other : d.boundaries)
+      if (other.name == nb.name) f.fail(b, "boundary \"" + nb.name + "\" is given twice");
+    d.boundaries.push_back(std::move(nb));
+  }
+  return d;
+}
+
+namespace {
+std::string escaped(const std::string& text) {
+  std::string out;
+  for (char ch : text) {
+    switch (ch) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += ch;
+    }
+  }
+  return out;
+}
+}  // namespace
+
+void write_gismo_xml(const MultiPatch& d, const std::string& path) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- written by knotwork -->\n<xml>\n";
+  for (int p = 0; p < d.num_patches(); ++p) {
+    const NurbsPatch& patch = d.patches[p];
+    const bool rational = (patch.weights.array() != 1.0).any();
+    s << " <Geometry type=\"" << (rational ? "TensorNurbs2" : "TensorBSpline2") << "\" id=\"" << p << "\">\n";
+    if (rational) s << "  <Basis type=\"TensorNurbsBasis2\">\n";
+    s << "  <Basis type=\"TensorBSplineBasis2\">\n";
+    for (int k = 0; k < 2; ++k) {
+      const BSplineBasis1D& b = k == 0 ? patch.basis_u : patch.basis_v;
+      s << "   <Basis type=\"BSplineBasis\" index=\"" << k << "\">\n    <KnotVector degree=\"" << b.degree() << "\">";
+      for (size_t i = 0; i < b.knots().size(); ++i) s << (i ? " " : "") << b.knots()[i];
+      s << "</KnotVector>\n   </Basis>\n";
+    }
+    s << "  </Basis>\n";
+    if (rational) {
+      s << "  <weights>";
+      for (Eigen::Index i = 0; i < patch.weights.size(); ++i) s << (i ? " " : "") << patch.weights[i];
+      s << "</weights>\n  </Basis>\n";
+    }
+    s << "  <coefs geoDim=\"2\">\n";
+    for (Eigen::Index i = 0; i < patch.control_points.rows(); ++i)
+      s << patch.control_points(i, 0) << " " << patch.control_points(i, 1) << "\n";
+    s << "  </coefs>\n </Geometry>\n";
+  }
+  s << " <MultiPatch parDim=\"2\" id=\"" << d.num_patches() << "\">\n  <patches type=\"id_range\">0 "
+    << d.num_patches() - 1 << "</patches>\n";
+  if (!d.interfaces.empty()) {
+    s << "  <interfaces>\n";
+    for (const PatchInterface& i : d.interfaces) {
+      const int ta = i.a.side <= 2 ? 1 : 0, tb = i.b.side <= 2 ? 1 : 0;
+      int map[2], orient[2];
+      map[ta] = tb, map[1 - ta] = 1 - tb;
+      orient[ta] = i.reversed ? 0 : 1, orient[1 - ta] = 1;
+      s << "   " << i.a.patch << " " << i.a.side << " " << i.b.patch << " " << i.b.side << " " << map[0] << " " << map[1]
+        << " " << orient[0] << " " << orient[1] << "\n";
+    }
+    s << "  </interfaces>\n";
+  }
+  std::vector<PatchSideRef> named;
+  for (const NamedBoundary& b : d.boundaries) {
+    s << "  <boundary name=\"" << escaped(b.name) << "\">\n";
+    for (const PatchSideRef& r : b.sides) s << "   " << r.patch << " " << r.side << "\n", named.push_back(r);
+    s << "  </boundary>\n";
+  }
+  std::ostringstream rest;
+  for (const PatchSideRef& r : exterior_sides(d))
+    if (std::find(named.begin(), named.end(), r) == named.end()) rest << "   " << r.patch << " " << r.side << "\n";
+  if (!rest.str().empty()) s << "  <boundary>\n" << rest.str() << "  </boundary>\n";
+  s << " </MultiPatch>\n</xml>\n";
+  const std::string tmp = path + ".partial";
+  {
+    std::ofstream out(tmp);
+    out << s.str();
+    if (!out) throw InputError(path + ": cannot write the geometry file");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw InputError(path + ": cannot write the geometry file (" + ec.message() + ")");
+}
+
+}  // namespace knotwork

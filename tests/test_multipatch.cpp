@@ -1,0 +1,277 @@
+// Multipatch domains: the two peer formats read to the same domain, G+Smo XML round-trips,
+// a domain cut into patches gives the same discrete solution as the one patch it was cut from
+// (the same space: C0 knots where the cuts are), and turning a patch's parameter square in
+// the file changes nothing.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "basis/core/bspline_basis.hpp"
+#include "basis/core/input_error.hpp"
+#include "cases/geometries.hpp"
+#include "cases/geometry_file.hpp"
+#include "cli_sandbox.hpp"
+
+using namespace knotwork;
+using namespace cli_test;
+
+namespace {
+
+const std::string kGeometries = std::string(KNOTWORK_SOURCE_DIR) + "/cases/geometries/";
+
+void require_same_domain(const MultiPatch& a, const MultiPatch& b) {
+  REQUIRE(a.num_patches() == b.num_patches());
+  for (int p = 0; p < a.num_patches(); ++p) {
+    const NurbsPatch &x = a.patches[p], &y = b.patches[p];
+    REQUIRE(x.basis_u.knots() == y.basis_u.knots());
+    REQUIRE(x.basis_v.knots() == y.basis_v.knots());
+    REQUIRE(x.basis_u.degree() == y.basis_u.degree());
+    REQUIRE(x.basis_v.degree() == y.basis_v.degree());
+    // GeoPDEs stores w x (one rounding), G+Smo x: the points agree to a few ulps.
+    REQUIRE((x.control_points - y.control_points).cwiseAbs().maxCoeff() <= 8e-16 * (1 + x.control_points.cwiseAbs().maxCoeff()));
+    REQUIRE((x.weights - y.weights).cwiseAbs().maxCoeff() == 0);
+  }
+  REQUIRE(a.interfaces.size() == b.interfaces.size());
+  for (size_t i = 0; i < a.interfaces.size(); ++i) {
+    REQUIRE(a.interfaces[i].a == b.interfaces[i].a);
+    REQUIRE(a.interfaces[i].b == b.interfaces[i].b);
+    REQUIRE(a.interfaces[i].reversed == b.interfaces[i].reversed);
+  }
+  REQUIRE(a.boundaries.size() == b.boundaries.size());
+  for (size_t i = 0; i < a.boundaries.size(); ++i) {
+    REQUIRE(a.boundaries[i].name == b.boundaries[i].name);
+    REQUIRE(a.boundaries[i].sides == b.boundaries[i].sides);
+  }
+}
+
+// The patch with its parameter square turned by a quarter turn: (u, v) -> (v, 1 - u) in the
+// parameters, so the new control net is the old one transposed and reversed along the new u.
+NurbsPatch turned(const NurbsPatch& p) {
+  NurbsPatch t;
+  std::vector<double> ku = p.basis_v.knots(), kv = p.basis_u.knots();
+  std::reverse(ku.begin(), ku.end());
+  const double a = p.basis_v.domain_begin(), b = p.basis_v.domain_end();
+  for (double& k : ku) k = a + b - k;
+  t.basis_u = BSplineBasis1D(p.basis_v.degree(), ku);
+  t.basis_v = BSplineBasis1D(p.basis_u.degree(), kv);
+  const int nu = p.basis_u.num_functions(), nv = p.basis_v.num_functions();
+  t.control_points.resize(nu * nv, 2);
+  t.weights.resize(nu * nv);
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {  // old (i, j) -> new (nv - 1 - j, i), the new u has nv functions
+      const int to = (nv - 1 - j) + nv * i;
+      t.control_points.row(to) = p.control_points.row(i + nu * j);
+      t.weights[to] = p.weights[i + nu * j];
+    }
+  return t;
+}
+
+// Columns [from, to) of control points of a patch whose u knots are C0 at the cut: a patch of
+// its own on [0, 1] (degree-1 or C0 pieces: the columns are the piece's net).
+NurbsPatch columns(const NurbsPatch& p, int from, int to) {
+  NurbsPatch c;
+  const int du = p.basis_u.degree(), nu = p.basis_u.num_functions(), nv = p.basis_v.num_functions();
+  std::vector<double> k(du + 1, 0.0);
+  k.insert(k.end(), du + 1, 1.0);
+  c.basis_u = BSplineBasis1D(du, k);
+  c.basis_v = p.basis_v;
+  const int n = to - from;
+  c.control_points.resize(n * nv, 2);
+  c.weights.resize(n * nv);
+  for (int j = 0; j < nv; ++j)
+    for (int i = from; i < to; ++i) {
+      c.control_points.row((i - from) + n * j) = p.control_points.row(i + nu * j);
+      c.weights[(i - from) + n * j] = p.weights[i + nu * j];
+    }
+  (void)nu;
+  return c;
+}
+
+NurbsPatch transposed(const NurbsPatch& p) {  // u <-> v (orientation reversed)
+  NurbsPatch t;
+  t.basis_u = p.basis_v, t.basis_v = p.basis_u;
+  const int nu = p.basis_u.num_functions(), nv = p.basis_v.num_functions();
+  t.control_points.resize(nu * nv, 2);
+  t.weights.resize(nu * nv);
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) t.control_points.row(j + nv * i) = p.control_points.row(i + nu * j), t.weights[j + nv * i] = p.weights[i + nu * j];
+  return t;
+}
+
+struct Errors {
+  double l2, h1;
+};
+
+Errors solve(const Sandbox& box, const MultiPatch& domain, const std::string& name, const std::string& problem) {
+  write_gismo_xml(domain, (box.dir() / (name + ".xml")).string());
+  box.file(name + ".toml", "[geometry]\nfile = \"" + name + ".xml\"\n[space]\ndegree = 2\nelements = 3\n[problem]\n" + problem);
+  const Result r = box.run("run --json --no-output " + name + ".toml");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  return {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error")};
+}
+
+// The domain's interfaces from coinciding sides (as the case script finds them).
+void glue(MultiPatch& d) {
+  d.patch_labels.clear();
+  for (int p = 0; p < d.num_patches(); ++p) d.patch_labels.push_back(std::to_string(p));
+  d.interfaces.clear();
+  auto corner = [&](int p, int s, bool last) {
+    const NurbsPatch& patch = d.patches[p];
+    const double t = last ? 1.0 : 0.0;
+    const double u = s == 1 ? 0 : s == 2 ? 1 : t, v = s == 3 ? 0 : s == 4 ? 1 : t;
+    return patch_point(patch, patch.basis_u.domain_begin() + u * (patch.basis_u.domain_end() - patch.basis_u.domain_begin()),
+                       patch.basis_v.domain_begin() + v * (patch.basis_v.domain_end() - patch.basis_v.domain_begin()));
+  };
+  std::vector<PatchSideRef> used;
+  for (int a = 0; a < d.num_patches(); ++a)
+    for (int sa = 1; sa <= 4; ++sa)
+      for (int b = a + 1; b < d.num_patches(); ++b)
+        for (int sb = 1; sb <= 4; ++sb) {
+          const bool same = (corner(a, sa, false) - corner(b, sb, false)).norm() < 1e-12 &&
+                            (corner(a, sa, true) - corner(b, sb, true)).norm() < 1e-12;
+          const bool opposite = (corner(a, sa, false) - corner(b, sb, true)).norm() < 1e-12 &&
+                                (corner(a, sa, true) - corner(b, sb, false)).norm() < 1e-12;
+          if (same || opposite) d.interfaces.push_back({{a, sa}, {b, sb}, opposite, ""});
+        }
+}
+
+}  // namespace
+
+TEST_CASE("GeoPDEs text and G+Smo XML of each shipped domain read to the same domain, and XML round-trips",
+          "[multipatch]") {
+  for (const char* name : {"lshape_3patches", "ring_4patches", "plate_with_hole", "plus_12patches"}) {
+    INFO(name);
+    const MultiPatch text = read_geometry_file(kGeometries + name + ".txt");
+    const MultiPatch xml = read_geometry_file(kGeometries + name + ".xml");
+    require_same_domain(text, xml);
+    Sandbox box;
+    const std::string again = (box.dir() / "again.xml").string();
+    write_gismo_xml(text, again);
+    require_same_domain(text, read_geometry_file(again));
+  }
+}
+
+TEST_CASE("The L-shape cut along its C0 fold into two patches gives the one patch's solution", "[multipatch]") {
+  // lshape_patch is bilinear with a C0 knot at u = 1/2: its control columns 0-1 and 1-2 are the
+  // two quads. Degree 2 keeps the fold C0, so both spaces are the same.
+  const NurbsPatch whole = lshape_patch();
+  const std::string problem = "exact = \"sin(2*x)*cosh(y) + x*y\"\nneumann = [\"1\"]\n";
+  Sandbox box;
+  MultiPatch one;
+  one.patches = {whole};
+  one.patch_labels = {"0"};
+  const Errors e1 = solve(box, one, "one", problem);
+  for (int turns = 0; turns < 4; ++turns) {
+    MultiPatch two;
+    NurbsPatch second = columns(whole, 1, 3);
+    for (int k = 0; k < turns; ++k) second = turned(second);
+    two.patches = {columns(whole, 0, 2), second};
+    glue(two);
+    REQUIRE(two.interfaces.size() == 1);
+    // Side 1 of the single patch (u = 0) is side 1 of the first piece.
+    two.boundaries = {{"1", {{0, 1}}, ""}};
+    const Errors e2 = solve(box, two, "two" + std::to_string(turns), problem);
+    INFO("quarter turns of the second patch: " << turns);
+    REQUIRE(std::abs(e1.l2 - e2.l2) <= 1e-12);
+    REQUIRE(std::abs(e1.h1 - e2.h1) <= 1e-12);
+  }
+}
+
+TEST_CASE("The quarter annulus cut into 2 x 2 NURBS patches gives the one patch's solution, however they are turned",
+          "[multipatch]") {
+  // Knots inserted at 1/2 to C0 in both directions (once in u, degree 1; twice in v, degree 2)
+  // leave the same geometry; its single patch and its four pieces carry the same space.
+  NurbsPatch p = quarter_annulus_patch(1, 2);
+  auto insert = [](NurbsPatch& patch, bool along_u, double t) {
+    const BSplineBasis1D& b = along_u ? patch.basis_u : patch.basis_v;
+    const int nu = patch.basis_u.num_functions(), nv = patch.basis_v.num_functions();
+    const int n = along_u ? nu : nv, m = along_u ? nv : nu;
+    Eigen::MatrixXd c(n, 3 * m);  // homogeneous points of each line across, side by side
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int k = along_u ? i + nu * j : j + nu * i;
+        c(i, 3 * j) = patch.weights[k] * patch.control_points(k, 0);
+        c(i, 3 * j + 1) = patch.weights[k] * patch.control_points(k, 1);
+        c(i, 3 * j + 2) = patch.weights[k];
+      }
+    const BSplineBasis1D refined = insert_knot(b, c, t);
+    (along_u ? patch.basis_u : patch.basis_v) = refined;
+    const int n2 = refined.num_functions(), nu2 = along_u ? n2 : nu;
+    patch.control_points.resize(n2 * m, 2);
+    patch.weights.resize(n2 * m);
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < n2; ++i) {
+        const int k = along_u ? i + nu2 * j : j + nu2 * i;
+        patch.weights[k] = c(i, 3 * j + 2);
+        patch.control_points(k, 0) = c(i, 3 * j) / c(i, 3 * j + 2);
+        patch.control_points(k, 1) = c(i, 3 * j + 1) / c(i, 3 * j + 2);
+      }
+  };
+  insert(p, true, 0.5);
+  insert(p, false, 0.5);
+  insert(p, false, 0.5);
+  const std::string problem = "exact = \"exp(x/2)*sin(y) + x*y/4\"\nneumann = [\"2\"]\n";
+  Sandbox box;
+  MultiPatch one;
+  one.patches = {p};
+  one.patch_labels = {"0"};
+  const Errors e1 = solve(box, one, "one", problem);
+  // The pieces: u columns {0,1}, {1,2}; v rows {0..2}, {2..4}.
+  auto piece = [&](int iu, int iv) {
+    NurbsPatch q = columns(p, iu, iu + 2);
+    NurbsPatch qt = columns(transposed(q), 2 * iv, 2 * iv + 3);  // rows of q as columns of its transpose
+    return transposed(qt);
+  };
+  for (int variant = 0; variant < 3; ++variant) {
+    MultiPatch four;
+    for (int iv = 0; iv < 2; ++iv)
+      for (int iu = 0; iu < 2; ++iu) {
+        NurbsPatch q = piece(iu, iv);
+        const int k = iu + 2 * iv;
+        for (int t = 0; t < (variant == 0 ? 0 : variant == 1 ? k : 3 - k); ++t) q = turned(q);
+        four.patches.push_back(q);
+      }
+    glue(four);
+    REQUIRE(four.interfaces.size() == 4);
+    // Side 2 of the whole (u = 1, the outer circle) is where the turned pieces have it: find it.
+    NamedBoundary outer{"2", {}, ""};
+    for (int k = 0; k < 4; ++k)
+      for (int s = 1; s <= 4; ++s) {
+        const NurbsPatch& q = four.patches[k];
+        const double u = s == 1 ? 0 : s == 2 ? 1 : 0.5, v = s == 3 ? 0 : s == 4 ? 1 : 0.5;
+        if (std::abs(patch_point(q, u, v).norm() - 2) < 1e-12) outer.sides.push_back({k, s});
+      }
+    REQUIRE(outer.sides.size() == 2);
+    four.boundaries = {outer};
+    const Errors e2 = solve(box, four, "four" + std::to_string(variant), problem);
+    INFO("variant " << variant);
+    REQUIRE(std::abs(e1.l2 - e2.l2) <= 1e-12);
+    REQUIRE(std::abs(e1.h1 - e2.h1) <= 1e-12);
+  }
+}
+
+TEST_CASE("Each shipped multipatch case converges at the optimal rates for p = 1..4", "[multipatch][rates]") {
+  // Rates between the last two of 3 uniform levels: L2 like h^(p+1), H1 like h^p (smooth exact
+  // solutions). Degree 1 is below the degree-2 NURBS and curved geometries: B-splines
+  // (rational = false) on the exact geometry there, as the isoparametric space cannot be.
+  for (const char* name : {"multipatch_lshape", "multipatch_lshape_geopdes", "multipatch_ring", "multipatch_plate_with_hole",
+                           "multipatch_plus"}) {
+    const std::string text = slurp(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name + ".toml");
+    for (int p = 1; p <= 4; ++p) {
+      Sandbox box;
+      std::string c = replace(text, "file = \"geometries/", "file = \"" + kGeometries);
+      c = replace(c, "degree = 2", "degree = " + std::to_string(p) + (p == 1 ? "\nrational = false" : ""));
+      box.file("case.toml", c);
+      const Result r = box.run("converge --levels 3 --json case.toml");
+      INFO(name << ", p = " << p << ": " << r.err);
+      REQUIRE(r.code == 0);
+      const auto last_rate = [&](const std::string& key) {
+        const auto at = r.out.rfind("\"" + key + "\": ");
+        REQUIRE(at != std::string::npos);
+        return std::stod(r.out.substr(at + key.size() + 4));
+      };
+      CHECK(last_rate("l2_rate") > p + 1 - 0.15);
+      CHECK(last_rate("h1_rate") > p - 0.1);
+    }
+  }
+}
