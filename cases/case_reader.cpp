@@ -332,7 +332,10 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
   const CaseReader& r = doc.reader;
   const DocumentNode& g = r.table(doc.root, "geometry", true);
   const DocumentNode* type = g.get("type");
-  if (const DocumentNode* file = g.get("file")) {
+  const DocumentNode* file = g.get("file");
+  const auto ext = file && file->value_exact<std::string>() ? std::filesystem::path(*file->value_exact<std::string>()).extension().string()
+                                                            : std::string();
+  if (file && ext != ".toml") {  // a peer's file; a .toml file is a nurbs patch, read below
     r.check_keys(g, "geometry", {"type", "file"});
     if (type && r.string(*type, "[geometry] type") != "nurbs")
       r.fail("[geometry] type", "the geometry is read from [geometry] file: leave type out (or set it to \"nurbs\")");
@@ -418,6 +421,11 @@ void read_quadrature(const CaseReader& r, const DocumentNode& s, CaseDescription
   };
   read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
   read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
+  if (const DocumentNode* k = s.get("boundary_quadrature_points")) {
+    const long n = r.integer(*k, "[space] boundary_quadrature_points");
+    if (n < 1 || n > 30) r.fail("[space] boundary_quadrature_points", "must be in [1, 30], got " + std::to_string(n));
+    c.quadrature.boundary_points = static_cast<int>(n);
+  }
 }
 
 // cells = [[x0, y0, x1, y1], ...] with exact coordinates (`field` names the key).

@@ -500,6 +500,7 @@ void make_evaluators(const PoissonProblem& problem, const BoundaryCondition& bc,
 }
 
 int side_points(const QuadratureOptions& q, const BezierCell& cell) {
+  if (q.boundary_points > 0) return q.boundary_points;
   return std::max(rule_points(q.points_u, cell.degree_u, 1), rule_points(q.points_v, cell.degree_v, 1)) + 1;
 }
 

@@ -63,6 +63,10 @@ struct PoissonProblem {
 struct QuadratureOptions {
   int points_u = 0, points_v = 0;              // matrix and load; 0 means degree+1
   int error_points_u = 0, error_points_v = 0;  // error norms; 0 means degree+2
+  // Boundary integrals (the Dirichlet projection, Neumann data, Nitsche's terms): points per
+  // side; 0 means one more than the interior rule has. GeoPDEs and G+Smo use the interior
+  // rule's own number: set it to that to reproduce their discretizations to the last digit.
+  int boundary_points = 0;
   // Cells whose functions are products f(u) g(v) are integrated from univariate tables
   // (solver/separable_cells); false forces the dense C * B path on every cell (the tests
   // compare the two).

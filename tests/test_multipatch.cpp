@@ -275,3 +275,29 @@ TEST_CASE("Each shipped multipatch case converges at the optimal rates for p = 1
     }
   }
 }
+
+TEST_CASE("[space] boundary_quadrature_points: the default is the interior rule plus one, and it is read", "[quadrature]") {
+  // The GeoPDEs convention (the interior rule's points on sides) changes the boundary
+  // integrals, so the errors move; giving the default's number explicitly changes nothing.
+  const std::string text = slurp(std::string(KNOTWORK_SOURCE_DIR) + "/cases/multipatch_plate_with_hole.toml");
+  Sandbox box;
+  auto errors = [&](const std::string& extra) {
+    std::string c = replace(text, "file = \"geometries/", "file = \"" + kGeometries);
+    c = replace(c, "elements = 4", "elements = 4\nquadrature_points = 3" + extra);
+    box.file("case.toml", c);
+    const Result r = box.run("run --json --no-output case.toml");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    return json_number_of(r.out, "h1_seminorm_error");
+  };
+  const double by_default = errors(""), explicit_default = errors("\nboundary_quadrature_points = 4");
+  const double peers = errors("\nboundary_quadrature_points = 3");
+  REQUIRE(by_default == explicit_default);
+  REQUIRE(peers != by_default);
+  REQUIRE(std::abs(peers - by_default) < 1e-2 * by_default);  // a quadrature change, not another problem
+  box.file("bad.toml", replace(replace(text, "file = \"geometries/", "file = \"" + kGeometries), "elements = 4",
+                               "elements = 4\nboundary_quadrature_points = 0"));
+  const Result bad = box.run("run -q bad.toml");
+  REQUIRE(bad.code == 2);
+  REQUIRE(bad.err.find("[space] boundary_quadrature_points: must be in [1, 30], got 0") != std::string::npos);
+}

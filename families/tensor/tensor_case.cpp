@@ -43,7 +43,8 @@ void read_patch_degree_elements(const CaseDocument& doc, TensorSpaceOptions& s, 
 
 const std::vector<std::string>& tensor_space_keys() {
   static const std::vector<std::string> keys{"family", "degree", "elements", "continuity", "rational", "quadrature_points",
-                                             "error_quadrature_points", "insert_knots_u", "insert_knots_v"};
+                                             "error_quadrature_points", "boundary_quadrature_points", "insert_knots_u",
+                                             "insert_knots_v"};
   return keys;
 }
 
