@@ -59,8 +59,8 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
     // h shrinks where Jacobi's grows like 1/h (docs/SOLVERS.md).
     r.preconditioner = structured.empty() ? kBoomerAmgName : structured;
     if (structured.empty())
-      r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc), since family \"" +
-               c.family + "\" has no structured preconditioner";
+      r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc), since this space (family \"" +
+               c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ") has no structured preconditioner";
   } else if (asked == "jacobi" || asked == kBoomerAmgName) {
     r.preconditioner = asked;  // algebraic: they apply to every family
   } else if (asked == structured) {
