@@ -1,10 +1,24 @@
 #include "cases/geometry_file.hpp"
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "basis/core/input_error.hpp"
 
 namespace knotwork {
+
+std::string read_geometry_text(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path + ": is a directory, not a geometry file");
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) throw InputError(path + ": cannot read the geometry file (" + ec.message() + ")");
+  if (size > (std::uintmax_t(256) << 20)) throw InputError(path + ": the geometry file is larger than 256 MB");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  if (!(in && s << in.rdbuf())) throw InputError(path + ": cannot read the geometry file");
+  return s.str();
+}
 
 MultiPatch read_geometry_file(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();

@@ -11,6 +11,10 @@ namespace knotwork {
 
 MultiPatch read_geometry_file(const std::string& path);
 
+// The whole text of a geometry file; InputError when it is missing, a directory, unreadable
+// or larger than 256 MB (both readers hold it in memory).
+std::string read_geometry_text(const std::string& path);
+
 // GeoPDEs: patches numbered from 1 (their labels "1", "2", ...), control points in homogeneous
 // form (w x, w y), a boundary named "BOUNDARY n" labelled "n".
 MultiPatch read_geopdes_text(const std::string& path);

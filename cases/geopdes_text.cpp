@@ -9,8 +9,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "basis/core/input_error.hpp"
@@ -20,18 +18,12 @@ namespace knotwork {
 
 namespace {
 
-constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t(256) << 20;
 constexpr long kMaxControlPoints = long(1) << 24;
 
 class LineReader {
  public:
   explicit LineReader(const std::string& path) : path_(path) {
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(path, ec);
-    if (ec) throw InputError(path + ": cannot read the geometry file (" + ec.message() + ")");
-    if (size > kMaxFileBytes) throw InputError(path + ": the geometry file is larger than 256 MB");
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot open the geometry file");
+    std::istringstream in(read_geometry_text(path));
     std::string line;
     int n = 0;
     while (std::getline(in, line)) {

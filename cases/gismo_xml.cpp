@@ -25,20 +25,11 @@ namespace knotwork {
 
 namespace {
 
-constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t(256) << 20;
 constexpr long kMaxControlPoints = long(1) << 24;
 
 class XmlFile {
  public:
-  explicit XmlFile(const std::string& path) : path_(path) {
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(path, ec);
-    if (ec) throw InputError(path + ": cannot read the geometry file (" + ec.message() + ")");
-    if (size > kMaxFileBytes) throw InputError(path + ": the geometry file is larger than 256 MB");
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    text_ = s.str();
+  explicit XmlFile(const std::string& path) : path_(path), text_(read_geometry_text(path)) {
     const pugi::xml_parse_result r = doc_.load_buffer(text_.data(), text_.size());
     if (!r) throw InputError(at(r.offset) + ": malformed XML (" + r.description() + ")");
   }
@@ -205,65 +196,60 @@ MultiPatch read_gismo_xml(const std::string& path) {
   }
   if (!mp) return d;
 
-  // References: ids if every one is an id, else positions if every one is one.
-  struct Ref {
-    long patch, side;
-    pugi::xml_node node;
-  };
-  std::vector<std::vector<long>> rows;
-  std::vector<Ref> refs;
+  // Each <interfaces> and <boundary> parsed once; patch references are ids if every one is an
+  // id, else positions if every one is one.
+  std::vector<std::pair<pugi::xml_node, std::vector<long>>> interface_lists, boundary_lists;
   for (pugi::xml_node in : mp.children("interfaces")) {
-    const std::vector<long> v = f.integers(in, "interfaces");
-    if (v.size() % 8 != 0)
+    interface_lists.emplace_back(in, f.integers(in, "interfaces"));
+    if (interface_lists.back().second.size() % 8 != 0)
       f.fail(in, "interfaces: each row must have 8 integers (patch side patch side, 2 of the direction map, 2 orientation "
-                 "flags), found " + std::to_string(v.size()) + " integers");
-    for (size_t k = 0; k < v.size(); k += 8) refs.push_back({v[k], v[k + 1], in}), refs.push_back({v[k + 2], v[k + 3], in});
+                 "flags), found " + std::to_string(interface_lists.back().second.size()) + " integers");
   }
-  std::vector<NamedBoundary> boundaries;
   for (pugi::xml_node b : mp.children("boundary")) {
-    const std::vector<long> v = f.integers(b, "boundary");
-    if (v.size() % 2 != 0) f.fail(b, "boundary: expected \"patch side\" pairs, found an odd number of integers");
-    for (size_t k = 0; k < v.size(); k += 2) refs.push_back({v[k], v[k + 1], b});
+    boundary_lists.emplace_back(b, f.integers(b, "boundary"));
+    if (boundary_lists.back().second.size() % 2 != 0)
+      f.fail(b, "boundary: expected \"patch side\" pairs, found an odd number of integers");
   }
   std::map<long, int> index_of_id;
   for (size_t k = 0; k < ids.size(); ++k) index_of_id[ids[k]] = static_cast<int>(k);
   bool by_id = true, by_position = true;
-  for (const Ref& r : refs) {
-    by_id = by_id && index_of_id.count(r.patch);
-    by_position = by_position && r.patch >= 0 && r.patch < static_cast<long>(ids.size());
-  }
-  auto resolve = [&](const Ref& r) {
-    if (!by_id && !by_position)
-      f.fail(r.node, "patch " + std::to_string(r.patch) + " is neither a patch id nor a position in <patches>");
-    if (r.side < 1 || r.side > 4) f.fail(r.node, "side " + std::to_string(r.side) + " does not exist (sides are 1 to 4)");
-    return PatchSideRef{by_id ? index_of_id[r.patch] : static_cast<int>(r.patch), static_cast<int>(r.side)};
+  auto note = [&](long patch) {
+    by_id = by_id && index_of_id.count(patch);
+    by_position = by_position && patch >= 0 && patch < static_cast<long>(ids.size());
   };
-  size_t at = 0;
-  for (pugi::xml_node in : mp.children("interfaces")) {
-    const std::vector<long> v = f.integers(in, "interfaces");
+  for (const auto& [node, v] : interface_lists)
+    for (size_t k = 0; k < v.size(); k += 8) note(v[k]), note(v[k + 2]);
+  for (const auto& [node, v] : boundary_lists)
+    for (size_t k = 0; k < v.size(); k += 2) note(v[k]);
+  auto resolve = [&](const pugi::xml_node& node, long patch, long side) {
+    if (!by_id && !by_position)
+      f.fail(node, "patch " + std::to_string(patch) + " is neither a patch id nor a position in <patches>");
+    if (side < 1 || side > 4) f.fail(node, "side " + std::to_string(side) + " does not exist (sides are 1 to 4)");
+    return PatchSideRef{by_id ? index_of_id[patch] : static_cast<int>(patch), static_cast<int>(side)};
+  };
+  for (const auto& [in, v] : interface_lists)
     for (size_t k = 0; k < v.size(); k += 8) {
       PatchInterface i;
-      i.a = resolve(refs[at++]);
-      i.b = resolve(refs[at++]);
-      i.where = f.at(in) + ": interface " + std::to_string(k / 8 + 1);
+      i.a = resolve(in, v[k], v[k + 1]);
+      i.b = resolve(in, v[k + 2], v[k + 3]);
+      const std::string row = "interface " + std::to_string(k / 8 + 1);
+      i.where = f.at(in) + ": " + row;
       // The tangential direction of each side (v on sides 1 and 2, u on 3 and 4) must map to
       // the other's; its orientation flag says whether they run the same way.
       const int ta = i.a.side <= 2 ? 1 : 0, tb = i.b.side <= 2 ? 1 : 0;
       if (v[k + 4 + ta] != tb)
-        f.fail(in, i.where.substr(f.at(in).size() + 2) + ": the direction map takes the side's direction " + std::to_string(ta) +
-                       " to " + std::to_string(v[k + 4 + ta]) + ", not to the other side's direction " + std::to_string(tb));
+        f.fail(in, row + ": the direction map takes the side's direction " + std::to_string(ta) + " to " +
+                       std::to_string(v[k + 4 + ta]) + ", not to the other side's direction " + std::to_string(tb));
       const long o = v[k + 6 + ta];
-      if (o != 0 && o != 1) f.fail(in, "interfaces: orientation flags must be 0 or 1, got " + std::to_string(o));
+      if (o != 0 && o != 1) f.fail(in, row + ": orientation flags must be 0 or 1, got " + std::to_string(o));
       i.reversed = o == 0;
       d.interfaces.push_back(i);
     }
-  }
-  for (pugi::xml_node b : mp.children("boundary")) {
-    const std::vector<long> v = f.integers(b, "boundary");
+  for (const auto& [b, v] : boundary_lists) {
     NamedBoundary nb;
     nb.name = b.attribute("name").value();
     nb.where = f.at(b);
-    for (size_t k = 0; k < v.size(); k += 2) nb.sides.push_back(resolve(refs[at++]));
+    for (size_t k = 0; k < v.size(); k += 2) nb.sides.push_back(resolve(b, v[k], v[k + 1]));
     if (nb.name.empty()) continue;  // an unnamed list only says which sides are boundary
     for (const NamedBoundary& other : d.boundaries)
       if (other.name == nb.name) f.fail(b, "boundary \"" + nb.name + "\" is given twice");

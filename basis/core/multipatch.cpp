@@ -50,44 +50,6 @@ std::string side_name(const MultiPatch& domain, PatchSideRef side) {
 
 namespace {
 
-// The point and the Jacobian (dx/du, dx/dv, dy/du, dy/dv) of a patch at (u, v).
-void patch_map(const NurbsPatch& patch, double u, double v, double x[2], double J[4]) {
-  const int p = patch.basis_u.degree(), q = patch.basis_v.degree(), nu = patch.basis_u.num_functions();
-  const int su = patch.basis_u.find_span(u), sv = patch.basis_v.find_span(v);
-  std::vector<double> bu(2 * (p + 1)), bv(2 * (q + 1));
-  patch.basis_u.evaluate_derivatives(su, u, 1, bu.data());
-  patch.basis_v.evaluate_derivatives(sv, v, 1, bv.data());
-  double h[3] = {0, 0, 0}, hu[3] = {0, 0, 0}, hv[3] = {0, 0, 0};
-  for (int b = 0; b <= q; ++b)
-    for (int a = 0; a <= p; ++a) {
-      const int i = (su - p + a) + nu * (sv - q + b);
-      const double w = patch.weights[i];
-      const double c[3] = {w * patch.control_points(i, 0), w * patch.control_points(i, 1), w};
-      for (int k = 0; k < 3; ++k) {
-        h[k] += c[k] * bu[a] * bv[b];
-        hu[k] += c[k] * bu[p + 1 + a] * bv[b];
-        hv[k] += c[k] * bu[a] * bv[q + 1 + b];
-      }
-    }
-  for (int k = 0; k < 2; ++k) {
-    x[k] = h[k] / h[2];
-    J[2 * k] = (hu[k] - x[k] * hu[2]) / h[2];
-    J[2 * k + 1] = (hv[k] - x[k] * hv[2]) / h[2];
-  }
-}
-
-double weight_at(const NurbsPatch& patch, double u, double v) {
-  const int p = patch.basis_u.degree(), q = patch.basis_v.degree(), nu = patch.basis_u.num_functions();
-  const int su = patch.basis_u.find_span(u), sv = patch.basis_v.find_span(v);
-  std::vector<double> bu(p + 1), bv(q + 1);
-  patch.basis_u.evaluate(su, u, bu.data());
-  patch.basis_v.evaluate(sv, v, bv.data());
-  double w = 0;
-  for (int b = 0; b <= q; ++b)
-    for (int a = 0; a <= p; ++a) w += patch.weights[(su - p + a) + nu * (sv - q + b)] * bu[a] * bv[b];
-  return w;
-}
-
 // The parameters (u, v) of the point at t in [0, 1] along a side (in the side's own direction).
 std::pair<double, double> side_parameters(const NurbsPatch& patch, int side, double t) {
   const double u0 = patch.basis_u.domain_begin(), u1 = patch.basis_u.domain_end();
@@ -132,9 +94,8 @@ void check_orientation(const MultiPatch& d, int p) {
         for (size_t b = 0; b < rule.nodes.size(); ++b) {
           const double u = bu[i] + (bu[i + 1] - bu[i]) * rule.nodes[a];
           const double v = bv[j] + (bv[j + 1] - bv[j]) * rule.nodes[b];
-          double x[2], J[4];
-          patch_map(patch, u, v, x, J);
-          const double det = J[0] * J[3] - J[1] * J[2];
+          const Eigen::Matrix2d J = patch_point_derivatives(patch, u, v).jacobian;
+          const double det = J(0, 0) * J(1, 1) - J(0, 1) * J(1, 0);
           (det > 0 ? positive : negative) = true;
         }
   if (negative && !positive)
@@ -153,15 +114,15 @@ double domain_size(const MultiPatch& d) {
 }
 
 // The two sides of an interface at points along them: 8 points per knot span of either side
-// and the ends, positions to `tolerance`, rational weights (normalized by their value at the
-// first point) to 1e-9.
+// and the ends, positions to `tolerance`, the weight functions to 1e-9 relative.
 void check_interface_curves(const MultiPatch& d, const PatchInterface& f, double tolerance) {
   const NurbsPatch& A = d.patches[f.a.patch];
   const NurbsPatch& B = d.patches[f.b.patch];
   auto side_breaks = [](const NurbsPatch& patch, int side) {
     const BSplineBasis1D& b = side <= 2 ? patch.basis_v : patch.basis_u;
     std::vector<double> t = b.breakpoints();
-    for (double& x : t) x = (x - t.front()) / (b.domain_end() - b.domain_begin());
+    const double from = b.domain_begin(), length = b.domain_end() - from;
+    for (double& x : t) x = (x - from) / length;
     return t;
   };
   std::vector<double> ts;
@@ -169,33 +130,28 @@ void check_interface_curves(const MultiPatch& d, const PatchInterface& f, double
     for (size_t i = 0; i + 1 < breaks.size(); ++i)
       for (int k = 0; k < 8; ++k) ts.push_back(breaks[i] + (breaks[i + 1] - breaks[i]) * (k + 0.5) / 8);
   ts.push_back(0), ts.push_back(1);
-  double wa0 = 0, wb0 = 0;
   for (double t : ts) {
-    const double tb = f.reversed ? 1 - t : t;
     const auto [ua, va] = side_parameters(A, f.a.side, t);
-    const auto [ub, vb] = side_parameters(B, f.b.side, tb);
-    double xa[2], xb[2], J[4];
-    patch_map(A, ua, va, xa, J);
-    patch_map(B, ub, vb, xb, J);
-    const double gap = std::hypot(xa[0] - xb[0], xa[1] - xb[1]);
+    const auto [ub, vb] = side_parameters(B, f.b.side, f.reversed ? 1 - t : t);
+    const PatchPointDerivatives a = patch_point_derivatives(A, ua, va), b = patch_point_derivatives(B, ub, vb);
+    const double gap = (a.x - b.x).norm();
     if (!(gap <= tolerance)) {
       char m[320];
       std::snprintf(m, sizeof m,
                     "%s side %d and %s side %d are not the same curve: at (%.6g, %.6g) on the first the second is "
                     "%.3g away (check the sides and the orientation%s)",
-                    patch_name(d, f.a.patch).c_str(), f.a.side, patch_name(d, f.b.patch).c_str(), f.b.side, xa[0], xa[1], gap,
-                    f.reversed ? ", given as reversed" : ", given as matching");
+                    patch_name(d, f.a.patch).c_str(), f.a.side, patch_name(d, f.b.patch).c_str(), f.b.side, a.x[0], a.x[1],
+                    gap, f.reversed ? ", given as reversed" : ", given as matching");
       fail(f.where, m);
     }
-    const double wa = weight_at(A, ua, va), wb = weight_at(B, ub, vb);
-    if (wa0 == 0) wa0 = wa, wb0 = wb;
-    if (std::abs(wa / wa0 - wb / wb0) > 1e-9 || std::abs(wa - wb) > 1e-9 * std::max(wa, wb)) {
+    if (std::abs(a.weight - b.weight) > 1e-9 * std::max(a.weight, b.weight)) {
       char m[320];
       std::snprintf(m, sizeof m,
                     "%s side %d and %s side %d have different weights along the interface (%.12g and %.12g at the same "
                     "point): a conforming NURBS space needs the same weights on both sides (scale the weights of one "
                     "patch)",
-                    patch_name(d, f.a.patch).c_str(), f.a.side, patch_name(d, f.b.patch).c_str(), f.b.side, wa, wb);
+                    patch_name(d, f.a.patch).c_str(), f.a.side, patch_name(d, f.b.patch).c_str(), f.b.side, a.weight,
+                    b.weight);
       fail(f.where, m);
     }
   }

@@ -7,21 +7,32 @@
 
 namespace knotwork {
 
-Eigen::Vector2d patch_point(const NurbsPatch& patch, double u, double v) {
+PatchPointDerivatives patch_point_derivatives(const NurbsPatch& patch, double u, double v) {
   const int p = patch.basis_u.degree(), q = patch.basis_v.degree(), nu = patch.basis_u.num_functions();
   const int su = patch.basis_u.find_span(u), sv = patch.basis_v.find_span(v);
-  std::vector<double> bu(p + 1), bv(q + 1);
-  patch.basis_u.evaluate(su, u, bu.data());
-  patch.basis_v.evaluate(sv, v, bv.data());
-  Eigen::Vector3d h = Eigen::Vector3d::Zero();
+  std::vector<double> bu(2 * (p + 1)), bv(2 * (q + 1));  // values, then first derivatives
+  patch.basis_u.evaluate_derivatives(su, u, 1, bu.data());
+  patch.basis_v.evaluate_derivatives(sv, v, 1, bv.data());
+  // Homogeneous (w x, w y, w) and its derivatives, then the quotient rule.
+  Eigen::Vector3d h = Eigen::Vector3d::Zero(), hu = h, hv = h;
   for (int b = 0; b <= q; ++b)
     for (int a = 0; a <= p; ++a) {
       const int i = (su - p + a) + nu * (sv - q + b);
-      const double w = patch.weights[i] * bu[a] * bv[b];
-      h += Eigen::Vector3d(w * patch.control_points(i, 0), w * patch.control_points(i, 1), w);
+      const double w = patch.weights[i];
+      const Eigen::Vector3d c(w * patch.control_points(i, 0), w * patch.control_points(i, 1), w);
+      h += c * (bu[a] * bv[b]);
+      hu += c * (bu[p + 1 + a] * bv[b]);
+      hv += c * (bu[a] * bv[q + 1 + b]);
     }
-  return h.head<2>() / h[2];
+  PatchPointDerivatives out;
+  out.weight = h[2];
+  out.x = h.head<2>() / h[2];
+  out.jacobian.col(0) = (hu.head<2>() - out.x * hu[2]) / h[2];
+  out.jacobian.col(1) = (hv.head<2>() - out.x * hv[2]) / h[2];
+  return out;
 }
+
+Eigen::Vector2d patch_point(const NurbsPatch& patch, double u, double v) { return patch_point_derivatives(patch, u, v).x; }
 
 void NurbsPatch::validate() const {
   const int nu = basis_u.num_functions(), nv = basis_v.num_functions();

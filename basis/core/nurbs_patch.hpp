@@ -18,4 +18,12 @@ struct NurbsPatch {
 // The patch's point at parameters (u, v).
 Eigen::Vector2d patch_point(const NurbsPatch& patch, double u, double v);
 
+// The point, its derivatives (columns x_u, x_v) and the weight function's value at (u, v).
+struct PatchPointDerivatives {
+  Eigen::Vector2d x;
+  Eigen::Matrix2d jacobian;
+  double weight = 1;
+};
+PatchPointDerivatives patch_point_derivatives(const NurbsPatch& patch, double u, double v);
+
 }  // namespace knotwork

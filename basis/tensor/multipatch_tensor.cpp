@@ -1,5 +1,6 @@
 #include "basis/tensor/multipatch_tensor.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -70,7 +71,7 @@ MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain,
   // Glue: the functions of two sides of an interface, in the order both run, are one each.
   std::vector<int> parent(first_function.back());
   std::iota(parent.begin(), parent.end(), 0);
-  std::vector<CellInterface> across;
+  std::vector<std::pair<CellInterface, std::array<int, 2>>> across;  // patch-local cells, and their patches
   for (const PatchInterface& f : domain.interfaces) {
     const TensorDiscretization& A = out.patches[f.a.patch];
     const TensorDiscretization& B = out.patches[f.b.patch];
@@ -97,7 +98,7 @@ MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain,
       }
       parent[find_root(parent, ga)] = find_root(parent, gb);
     }
-    // The cells along both sides, paired (patch-local numbers: offset once the mesh is built).
+    // The cells along both sides, paired (patch-local numbers until the mesh is built).
     const int m = static_cast<int>(sa.cells.size());
     for (int k = 0; k < m; ++k) {
       CellInterface ci;
@@ -107,7 +108,7 @@ MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain,
       ci.side_b = cell_side_of_patch_side(f.b.side);
       ci.b_from = f.reversed ? 1 : 0;
       ci.b_to = f.reversed ? 0 : 1;
-      across.push_back(ci);
+      across.push_back({ci, {f.a.patch, f.b.patch}});
     }
   }
 
@@ -165,15 +166,10 @@ MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain,
       ci.cell_a += out.first_cell[p], ci.cell_b += out.first_cell[p];
       interfaces.push_back(ci);
     }
-  size_t k = 0;
-  for (const PatchInterface& f : domain.interfaces) {
-    const int m = static_cast<int>(side_space(out.patches[f.a.patch], f.a.side).cells.size());
-    for (int j = 0; j < m; ++j, ++k) {
-      CellInterface ci = across[k];
-      ci.cell_a += out.first_cell[f.a.patch];
-      ci.cell_b += out.first_cell[f.b.patch];
-      interfaces.push_back(ci);
-    }
+  for (auto [ci, patches] : across) {
+    ci.cell_a += out.first_cell[patches[0]];
+    ci.cell_b += out.first_cell[patches[1]];
+    interfaces.push_back(ci);
   }
   mesh.set_interfaces(std::move(interfaces));
   return out;
