@@ -4,6 +4,7 @@
 // the file changes nothing.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 
 #include "basis/core/bspline_basis.hpp"
 #include "basis/core/input_error.hpp"
@@ -98,15 +99,24 @@ NurbsPatch transposed(const NurbsPatch& p) {  // u <-> v (orientation reversed)
 
 struct Errors {
   double l2, h1;
+  double condition;  // of the Jacobi-scaled stiffness matrix (run --condition)
 };
+
+// Two solves of the same space in two numberings differ by rounding only: by backward
+// stability their discrete solutions differ by about kappa eps |u_h|, and so do their errors.
+// |u_h|_H1 <= 10 for the smooth solutions used here, and 1000 leaves room for the growth of
+// rounding with the size of these small systems.
+double same_space_tolerance(const Errors& a, const Errors& b) {
+  return 1e4 * std::max(a.condition, b.condition) * std::numeric_limits<double>::epsilon();
+}
 
 Errors solve(const Sandbox& box, const MultiPatch& domain, const std::string& name, const std::string& problem) {
   write_gismo_xml(domain, (box.dir() / (name + ".xml")).string());
   box.file(name + ".toml", "[geometry]\nfile = \"" + name + ".xml\"\n[space]\ndegree = 2\nelements = 3\n[problem]\n" + problem);
-  const Result r = box.run("run --json --no-output " + name + ".toml");
+  const Result r = box.run("run --json --no-output --condition " + name + ".toml");
   INFO(r.err);
   REQUIRE(r.code == 0);
-  return {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error")};
+  return {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
 }
 
 // The domain's interfaces from coinciding sides (as the case script finds them).
@@ -171,8 +181,8 @@ TEST_CASE("The L-shape cut along its C0 fold into two patches gives the one patc
     two.boundaries = {{"1", {{0, 1}}, ""}};
     const Errors e2 = solve(box, two, "two" + std::to_string(turns), problem);
     INFO("quarter turns of the second patch: " << turns);
-    REQUIRE(std::abs(e1.l2 - e2.l2) <= 1e-12);
-    REQUIRE(std::abs(e1.h1 - e2.h1) <= 1e-12);
+    REQUIRE(std::abs(e1.l2 - e2.l2) <= same_space_tolerance(e1, e2));
+    REQUIRE(std::abs(e1.h1 - e2.h1) <= same_space_tolerance(e1, e2));
   }
 }
 
@@ -244,8 +254,8 @@ TEST_CASE("The quarter annulus cut into 2 x 2 NURBS patches gives the one patch'
     four.boundaries = {outer};
     const Errors e2 = solve(box, four, "four" + std::to_string(variant), problem);
     INFO("variant " << variant);
-    REQUIRE(std::abs(e1.l2 - e2.l2) <= 1e-12);
-    REQUIRE(std::abs(e1.h1 - e2.h1) <= 1e-12);
+    REQUIRE(std::abs(e1.l2 - e2.l2) <= same_space_tolerance(e1, e2));
+    REQUIRE(std::abs(e1.h1 - e2.h1) <= same_space_tolerance(e1, e2));
   }
 }
 
@@ -326,6 +336,6 @@ TEST_CASE("A patch's parameter domain need not be [0, 1]: the same squares on ot
   REQUIRE(moved.interfaces.size() == 1);
   REQUIRE_NOTHROW(check_multipatch(moved));
   const Errors a = solve(box, unit, "unit", problem), b = solve(box, moved, "moved", problem);
-  REQUIRE(std::abs(a.l2 - b.l2) <= 1e-12);
-  REQUIRE(std::abs(a.h1 - b.h1) <= 1e-12);
+  REQUIRE(std::abs(a.l2 - b.l2) <= same_space_tolerance(a, b));
+  REQUIRE(std::abs(a.h1 - b.h1) <= same_space_tolerance(a, b));
 }
