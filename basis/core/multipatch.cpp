@@ -42,10 +42,12 @@ std::vector<PatchSideRef> exterior_sides(const MultiPatch& domain) {
   return out;
 }
 
+std::string patch_label(const MultiPatch& domain, int p) {
+  return p < static_cast<int>(domain.patch_labels.size()) ? domain.patch_labels[p] : std::to_string(p + 1);
+}
+
 std::string side_name(const MultiPatch& domain, PatchSideRef side) {
-  const std::string label =
-      side.patch < static_cast<int>(domain.patch_labels.size()) ? domain.patch_labels[side.patch] : std::to_string(side.patch + 1);
-  return label + ":" + std::to_string(side.side);
+  return patch_label(domain, side.patch) + ":" + std::to_string(side.side);
 }
 
 namespace {
@@ -70,9 +72,7 @@ std::string patch_where(const MultiPatch& d, int p) {
   return p < static_cast<int>(d.patch_where.size()) ? d.patch_where[p] : "";
 }
 
-std::string patch_name(const MultiPatch& d, int p) {
-  return "patch " + (p < static_cast<int>(d.patch_labels.size()) ? d.patch_labels[p] : std::to_string(p + 1));
-}
+std::string patch_name(const MultiPatch& d, int p) { return "patch " + patch_label(d, p); }
 
 void check_side_ref(const MultiPatch& d, const PatchSideRef& s, const std::string& where) {
   if (s.patch < 0 || s.patch >= d.num_patches())

@@ -50,7 +50,9 @@ struct MultiPatch {
 // of a mesh built on the domain, in that order.
 std::vector<PatchSideRef> exterior_sides(const MultiPatch& domain);
 
-// "P:S" with the file's label of patch P.
+// The file's label of patch p (its 1-based number when the domain has no labels), and "P:S"
+// with it for side S.
+std::string patch_label(const MultiPatch& domain, int p);
 std::string side_name(const MultiPatch& domain, PatchSideRef side);
 
 // Checks the domain and throws GeometryError naming where the fault was read:

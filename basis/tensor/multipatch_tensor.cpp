@@ -66,7 +66,7 @@ MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain,
     out.patches.push_back(build_tensor_discretization(patch, options));
     first_function.push_back(first_function.back() + out.patches.back().mesh.num_functions());
   }
-  auto patch_name = [&](int p) { return "patch " + domain.patch_labels.at(p); };
+  auto patch_name = [&](int p) { return "patch " + patch_label(domain, p); };
 
   // Glue: the functions of two sides of an interface, in the order both run, are one each.
   std::vector<int> parent(first_function.back());
@@ -87,10 +87,10 @@ MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain,
                           "interface");
     const int n = static_cast<int>(sa.functions.size());
     for (int k = 0; k < n; ++k) {
-      const int ga = first_function[f.a.patch] + sa.functions[k];
-      const int gb = first_function[f.b.patch] + sb.functions[f.reversed ? n - 1 - k : k];
+      const int fa = sa.functions[k], fb = sb.functions[f.reversed ? n - 1 - k : k];
+      const int ga = first_function[f.a.patch] + fa, gb = first_function[f.b.patch] + fb;
       if (options.rational) {
-        const double wa = A.mesh.weights()[sa.functions[k]], wb = B.mesh.weights()[sb.functions[f.reversed ? n - 1 - k : k]];
+        const double wa = A.mesh.weights()[fa], wb = B.mesh.weights()[fb];
         if (std::abs(wa - wb) > 1e-9 * std::max(wa, wb))
           throw GeometryError(f.where + ": " + patch_name(f.a.patch) + " side " + std::to_string(f.a.side) + " and " +
                               patch_name(f.b.patch) + " side " + std::to_string(f.b.side) +
