@@ -333,18 +333,14 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
   const DocumentNode& g = r.table(doc.root, "geometry", true);
   const DocumentNode* type = g.get("type");
   const DocumentNode* file = g.get("file");
-  const auto ext = file && file->value_exact<std::string>() ? std::filesystem::path(*file->value_exact<std::string>()).extension().string()
-                                                            : std::string();
-  if (file && ext != ".toml") {  // a peer's file; a .toml file is a nurbs patch, read below
+  const std::optional<std::string> file_name = file ? std::optional(r.string(*file, "[geometry] file")) : std::nullopt;
+  if (file_name && std::filesystem::path(*file_name).extension() != ".toml") {  // a peer's file; .toml: a nurbs patch, below
     r.check_keys(g, "geometry", {"type", "file"});
     if (type && r.string(*type, "[geometry] type") != "nurbs")
       r.fail("[geometry] type", "the geometry is read from [geometry] file: leave type out (or set it to \"nurbs\")");
-    const std::string name = r.string(*file, "[geometry] file");
-    if (name.empty()) r.fail("[geometry] file", "is empty");
-    std::filesystem::path at(name);
-    if (at.is_relative()) at = std::filesystem::path(c.path).parent_path() / at;  // relative to the case file
+    const std::string path = r.readable_file(*file, "[geometry] file");  // relative to the case file
     try {
-      c.domain = read_geometry_file(at.lexically_normal().string());
+      c.domain = read_geometry_file(path);
     } catch (const InputError& e) {
       throw InputError(c.path + ": [geometry] file: " + e.what());
     }

@@ -25,8 +25,8 @@ MultiPatch read_geopdes_text(const std::string& path);
 MultiPatch read_gismo_xml(const std::string& path);
 
 // Writes the domain as G+Smo XML (patch ids 0, 1, ...; named boundaries kept), which
-// read_gismo_xml reads back to the same patches, interfaces and boundaries. Throws InputError
-// when the file cannot be written.
+// read_gismo_xml reads back to the same patches, interfaces and boundaries. Written whole or
+// not at all (write_file_atomically); InputError when it cannot be written.
 void write_gismo_xml(const MultiPatch& domain, const std::string& path);
 
 }  // namespace knotwork

@@ -12,14 +12,13 @@
 #include <cstring>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <pugixml.hpp>
 #include <sstream>
 
 #include "basis/core/input_error.hpp"
 #include "cases/geometry_file.hpp"
+#include "cases/output_files.hpp"
 
 namespace knotwork {
 
@@ -326,15 +325,7 @@ void write_gismo_xml(const MultiPatch& d, const std::string& path) {
     if (std::find(named.begin(), named.end(), r) == named.end()) rest << "   " << r.patch << " " << r.side << "\n";
   if (!rest.str().empty()) s << "  <boundary>\n" << rest.str() << "  </boundary>\n";
   s << " </MultiPatch>\n</xml>\n";
-  const std::string tmp = path + ".partial";
-  {
-    std::ofstream out(tmp);
-    out << s.str();
-    if (!out) throw InputError(path + ": cannot write the geometry file");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw InputError(path + ": cannot write the geometry file (" + ec.message() + ")");
+  write_file_atomically(path, "G+Smo XML geometry", [&](const std::string& staged) { write_text_file(staged, s.str()); });
 }
 
 }  // namespace knotwork
