@@ -43,6 +43,9 @@ RUNS = [
     ("annulus_anisotropic.toml", [], {}),
     ("g1_variable_coefficient.toml", [], {}),
     ("g1_sphere_anisotropic.toml", [], {}),
+    # Multipatch geometry files, G+Smo XML and GeoPDEs text: Python reads the same files.
+    ("multipatch_lshape.toml", [], {}),
+    ("multipatch_ring.toml", [], {}),
 ]
 
 
