@@ -67,7 +67,7 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
     r.preconditioner = asked;
   } else {
     throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" does not apply to family \"" + c.family +
-                     "\" (" + (structured.empty() ? std::string("use \"boomeramg\", \"jacobi\" or method = \"direct\"")
+                     "\"" + (c.multipatch() ? " on several patches" : "") + " (" + (structured.empty() ? std::string("use \"boomeramg\", \"jacobi\" or method = \"direct\"")
                                                    : "it has \"" + structured + "\"; or use \"boomeramg\" or \"jacobi\"") + ")");
   }
   return r;
