@@ -119,6 +119,12 @@ Errors solve(const Sandbox& box, const MultiPatch& domain, const std::string& na
   return {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
 }
 
+MultiPatch one_patch(const NurbsPatch& p) {
+  MultiPatch d;
+  d.patches = {p};
+  return d;
+}
+
 // The domain's interfaces from coinciding sides (as the case script finds them).
 void glue(MultiPatch& d) {
   d.patch_labels.clear();
@@ -166,10 +172,7 @@ TEST_CASE("The L-shape cut along its C0 fold into two patches gives the one patc
   const NurbsPatch whole = lshape_patch();
   const std::string problem = "exact = \"sin(2*x)*cosh(y) + x*y\"\nneumann = [\"1\"]\n";
   Sandbox box;
-  MultiPatch one;
-  one.patches = {whole};
-  one.patch_labels = {"0"};
-  const Errors e1 = solve(box, one, "one", problem);
+  const Errors e1 = solve(box, one_patch(whole), "one", problem);
   for (int turns = 0; turns < 4; ++turns) {
     MultiPatch two;
     NurbsPatch second = columns(whole, 1, 3);
@@ -221,10 +224,7 @@ TEST_CASE("The quarter annulus cut into 2 x 2 NURBS patches gives the one patch'
   insert(p, false, 0.5);
   const std::string problem = "exact = \"exp(x/2)*sin(y) + x*y/4\"\nneumann = [\"2\"]\n";
   Sandbox box;
-  MultiPatch one;
-  one.patches = {p};
-  one.patch_labels = {"0"};
-  const Errors e1 = solve(box, one, "one", problem);
+  const Errors e1 = solve(box, one_patch(p), "one", problem);
   // The pieces: u columns {0,1}, {1,2}; v rows {0..2}, {2..4}.
   auto piece = [&](int iu, int iv) {
     NurbsPatch q = columns(p, iu, iu + 2);
