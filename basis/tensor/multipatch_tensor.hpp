@@ -1,8 +1,8 @@
 #pragma once
 // Tensor-product B-splines and NURBS on a multipatch domain, C0-conforming across its
-// interfaces: every patch refined as build_tensor_discretization refines one, and the
-// functions of two glued sides identified (the only functions that do not vanish on a side of
-// an open knot vector are its boundary row, so equal side spaces give one shared trace).
+// interfaces: every patch refined as build_tensor_discretization refines one, the knots along
+// every interface compared, and the functions of two glued sides identified by their traces
+// (glue_patches).
 #include <vector>
 
 #include "basis/core/multipatch.hpp"

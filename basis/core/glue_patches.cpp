@@ -1,0 +1,262 @@
+// Gluing per-patch spaces by their traces (see glue_patches.hpp). Written here because it is
+// knotwork's own contract (BezierMesh) that is glued; no library knows it.
+#include "basis/core/glue_patches.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+#include <unordered_map>
+
+#include "basis/core/input_error.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// A function's trace counts when its largest Bernstein coefficient along the side exceeds
+// this, and two traces are one when they differ by at most this times the larger. Both are
+// decisions between structurally different things (a B-spline's coefficients on its support
+// are of order one; a trace that is not there is zero up to rounding), not rounding tests.
+constexpr double kTraceTolerance = 1e-9;
+
+// One cell along a patch side: its piece [t0, t1] of the side (the side's parameter mapped
+// onto [0, 1], in the direction of the interface's first side) and, per function of the cell,
+// its Bernstein coefficients along the piece in the direction t increases.
+struct SidePiece {
+  int cell = -1;
+  double t0 = 0, t1 = 0;
+  int degree = 0;
+  std::vector<std::pair<int, Eigen::VectorXd>> traces;  // (patch-local function, coefficients)
+};
+
+std::vector<SidePiece> side_pieces(const BezierMesh& mesh, const NurbsPatch& patch, int side, bool reversed) {
+  const CellSide cs = cell_side_of_patch_side(side);
+  const bool along_v = side <= 2;
+  const BSplineBasis1D& b = along_v ? patch.basis_v : patch.basis_u;
+  const double begin = b.domain_begin(), length = b.domain_end() - begin;
+  std::vector<SidePiece> out;
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    const BezierCell& cell = mesh.cell(c);
+    if (cell.boundary[cs] < 0) continue;
+    SidePiece s;
+    s.cell = c;
+    const double a = along_v ? cell.v0 : cell.u0, z = along_v ? cell.v1 : cell.u1;
+    s.t0 = (a - begin) / length;
+    s.t1 = (z - begin) / length;
+    const int p = cell.degree_u, q = cell.degree_v;
+    s.degree = along_v ? q : p;
+    std::vector<int> index;  // the Bernstein polynomials along the side, t increasing
+    for (int k = 0; k <= s.degree; ++k)
+      index.push_back(cs == kSideBottom ? k : cs == kSideTop ? k + (p + 1) * q : cs == kSideLeft ? (p + 1) * k : p + (p + 1) * k);
+    if (reversed) {
+      std::reverse(index.begin(), index.end());
+      std::tie(s.t0, s.t1) = std::pair(1 - s.t1, 1 - s.t0);
+    }
+    const Eigen::MatrixXd& e = mesh.extraction(c);
+    const auto functions = mesh.functions(c);
+    for (size_t r = 0; r < functions.size(); ++r) {
+      Eigen::VectorXd t(index.size());
+      for (size_t k = 0; k < index.size(); ++k) t[k] = e(static_cast<Eigen::Index>(r), index[k]);
+      if (t.cwiseAbs().maxCoeff() > 0) s.traces.push_back({functions[r], std::move(t)});
+    }
+    out.push_back(std::move(s));
+  }
+  std::sort(out.begin(), out.end(), [](const SidePiece& x, const SidePiece& y) { return x.t0 < y.t0; });
+  return out;
+}
+
+// A function's trace, piece by piece: (piece index, coefficients).
+using Trace = std::vector<std::pair<int, const Eigen::VectorXd*>>;
+
+std::unordered_map<int, Trace> traces_by_function(const std::vector<SidePiece>& pieces) {
+  std::unordered_map<int, Trace> out;
+  for (size_t k = 0; k < pieces.size(); ++k)
+    for (const auto& [f, t] : pieces[k].traces) out[f].push_back({static_cast<int>(k), &t});
+  return out;
+}
+
+double largest(const Trace& t) {
+  double m = 0;
+  for (const auto& [k, c] : t) m = std::max(m, c->cwiseAbs().maxCoeff());
+  return m;
+}
+
+bool same_trace(const Trace& x, const Trace& y, double tolerance) {
+  // Both are sorted by piece; a piece in one only must be zero there.
+  size_t i = 0, j = 0;
+  while (i < x.size() || j < y.size()) {
+    if (j == y.size() || (i < x.size() && x[i].first < y[j].first)) {
+      if (x[i++].second->cwiseAbs().maxCoeff() > tolerance) return false;
+    } else if (i == x.size() || y[j].first < x[i].first) {
+      if (y[j++].second->cwiseAbs().maxCoeff() > tolerance) return false;
+    } else {
+      if ((*x[i++].second - *y[j++].second).cwiseAbs().maxCoeff() > tolerance) return false;
+    }
+  }
+  return true;
+}
+
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+std::string number(double t) {
+  std::ostringstream s;
+  s << t;
+  return s.str();
+}
+
+}  // namespace
+
+GluedPatches glue_patches(const MultiPatch& domain, const std::vector<const BezierMesh*>& patches) {
+  const int np = domain.num_patches();
+  if (static_cast<int>(patches.size()) != np) throw std::invalid_argument("glue_patches: one space per patch is needed");
+  const bool rational = patches[0]->is_rational();
+  std::vector<int> first_function{0};
+  for (const BezierMesh* m : patches) {
+    if (m->is_rational() != rational) throw std::invalid_argument("glue_patches: the patches' spaces are not all rational or all not");
+    first_function.push_back(first_function.back() + m->num_functions());
+  }
+
+  std::vector<int> parent(first_function.back());
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<std::pair<CellInterface, std::array<int, 2>>> across;  // patch-local cells, and their patches
+  for (const PatchInterface& f : domain.interfaces) {
+    const int pa = f.a.patch, pb = f.b.patch;
+    const std::string sides = "patch " + patch_label(domain, pa) + " side " + std::to_string(f.a.side) + " and patch " +
+                              patch_label(domain, pb) + " side " + std::to_string(f.b.side);
+    auto refuse = [&](const std::string& what) {
+      throw GeometryError(f.where + ": the spaces of " + sides + " do not match: " + what +
+                          " (a conforming space needs the same functions along an interface)");
+    };
+    const std::vector<SidePiece> A = side_pieces(*patches[pa], domain.patches[pa], f.a.side, false);
+    const std::vector<SidePiece> B = side_pieces(*patches[pb], domain.patches[pb], f.b.side, f.reversed);
+    if (A.size() != B.size())
+      refuse("the sides are cut into " + std::to_string(A.size()) + " and " + std::to_string(B.size()) + " cells");
+    for (size_t k = 0; k < A.size(); ++k) {
+      if (std::abs(A[k].t0 - B[k].t0) > 1e-12 || std::abs(A[k].t1 - B[k].t1) > 1e-12)
+        refuse("cell " + std::to_string(k + 1) + " along the side spans [" + number(A[k].t0) + ", " + number(A[k].t1) +
+               "] of one and [" + number(B[k].t0) + ", " + number(B[k].t1) + "] of the other");
+      if (A[k].degree != B[k].degree)
+        refuse("the degree along the side is " + std::to_string(A[k].degree) + " and " + std::to_string(B[k].degree));
+    }
+    const auto ta = traces_by_function(A), tb = traces_by_function(B);
+    // Candidates on the other side, by piece.
+    std::vector<std::vector<int>> b_on_piece(B.size());
+    std::unordered_map<int, double> b_size;
+    for (const auto& [g, t] : tb) {
+      b_size[g] = largest(t);
+      if (b_size[g] > kTraceTolerance)
+        for (const auto& [k, c] : t) b_on_piece[k].push_back(g);
+    }
+    std::unordered_map<int, int> partner_of_b;
+    std::vector<int> a_functions;
+    for (const auto& [g, t] : ta) a_functions.push_back(g);
+    std::sort(a_functions.begin(), a_functions.end());
+    for (int g : a_functions) {
+      const Trace& t = ta.at(g);
+      const double size = largest(t);
+      if (size <= kTraceTolerance) continue;
+      const int piece = t.front().first;
+      int partner = -1;
+      for (int h : b_on_piece[piece])
+        if (same_trace(t, tb.at(h), kTraceTolerance * std::max(size, b_size[h]))) {
+          partner = h;
+          break;
+        }
+      if (partner < 0)
+        refuse("a function of patch " + patch_label(domain, pa) + " has a trace on the side, from [" +
+               number(A[piece].t0) + ", " + number(A[piece].t1) + "] on, that no function of patch " +
+               patch_label(domain, pb) + " has");
+      if (!partner_of_b.emplace(partner, g).second) refuse("two functions of one side have the same trace");
+      if (rational) {
+        const double wa = patches[pa]->weights()[g], wb = patches[pb]->weights()[partner];
+        if (std::abs(wa - wb) > 1e-9 * std::max(wa, wb))
+          throw GeometryError(f.where + ": " + sides +
+                              " have different weights: a conforming NURBS space needs the same weights on both sides");
+      }
+      parent[find_root(parent, first_function[pa] + g)] = find_root(parent, first_function[pb] + partner);
+    }
+    for (const auto& [h, size] : b_size)
+      if (size > kTraceTolerance && !partner_of_b.count(h))
+        refuse("a function of patch " + patch_label(domain, pb) + " has a trace on the side that no function of patch " +
+               patch_label(domain, pa) + " has");
+    for (size_t k = 0; k < A.size(); ++k) {
+      CellInterface ci;
+      ci.cell_a = A[k].cell;
+      ci.side_a = cell_side_of_patch_side(f.a.side);
+      ci.cell_b = B[k].cell;
+      ci.side_b = cell_side_of_patch_side(f.b.side);
+      ci.b_from = f.reversed ? 1 : 0;
+      ci.b_to = f.reversed ? 0 : 1;
+      across.push_back({ci, {pa, pb}});
+    }
+  }
+
+  // One number per class, in the order the patches' functions come.
+  GluedPatches out;
+  std::vector<int> root_number(parent.size(), -1);
+  out.global_function.resize(np);
+  int count = 0;
+  for (int p = 0; p < np; ++p)
+    for (int g = first_function[p]; g < first_function[p + 1]; ++g) {
+      int& r = root_number[find_root(parent, g)];
+      if (r < 0) r = count++;
+      out.global_function[p].push_back(r);
+    }
+
+  const std::vector<PatchSideRef> exterior = exterior_sides(domain);
+  std::vector<std::string> names;
+  for (const PatchSideRef& s : exterior) names.push_back(side_name(domain, s));
+  BezierMesh& mesh = out.mesh;
+  mesh.set_num_functions(count);
+  mesh.set_boundary_names(names);
+  if (rational) {
+    Eigen::VectorXd w(count);
+    for (int p = 0; p < np; ++p)
+      for (int i = 0; i < patches[p]->num_functions(); ++i) w[out.global_function[p][i]] = patches[p]->weights()[i];
+    mesh.set_weights(std::move(w));
+  }
+  out.first_cell.push_back(0);
+  std::vector<int> ids;
+  for (int p = 0; p < np; ++p) {
+    const BezierMesh& local = *patches[p];
+    std::vector<int> extraction(local.num_distinct_extractions());
+    for (int e = 0; e < local.num_distinct_extractions(); ++e) extraction[e] = mesh.add_extraction(local.pooled_extraction(e));
+    std::array<int, 4> boundary_id{-1, -1, -1, -1};  // per CellSide
+    for (size_t k = 0; k < exterior.size(); ++k)
+      if (exterior[k].patch == p) boundary_id[cell_side_of_patch_side(exterior[k].side)] = static_cast<int>(k);
+    for (int c = 0; c < local.num_cells(); ++c) {
+      BezierCell cell = local.cell(c);
+      cell.patch = p;
+      for (int s = 0; s < 4; ++s)
+        if (cell.boundary[s] >= 0) cell.boundary[s] = boundary_id[s];
+      ids.clear();
+      for (int f : local.functions(c)) ids.push_back(out.global_function[p][f]);
+      mesh.add_cell(cell, ids, extraction[local.extraction_id(c)]);
+    }
+    out.first_cell.push_back(mesh.num_cells());
+  }
+
+  // The estimator's neighbours: inside every patch, then across its interfaces.
+  std::vector<CellInterface> interfaces;
+  for (int p = 0; p < np; ++p) {
+    const std::vector<CellInterface> own =
+        patches[p]->has_interfaces() ? patches[p]->interfaces() : interfaces_from_parameter_boxes(*patches[p]);
+    for (CellInterface ci : own) {
+      ci.cell_a += out.first_cell[p], ci.cell_b += out.first_cell[p];
+      interfaces.push_back(ci);
+    }
+  }
+  for (auto [ci, pair] : across) {
+    ci.cell_a += out.first_cell[pair[0]];
+    ci.cell_b += out.first_cell[pair[1]];
+    interfaces.push_back(ci);
+  }
+  mesh.set_interfaces(std::move(interfaces));
+  return out;
+}
+
+}  // namespace knotwork
