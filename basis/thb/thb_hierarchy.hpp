@@ -48,6 +48,8 @@ class ThbHierarchy {
   int admissibility() const { return admissibility_; }
   bool exists(int level, int64_t i, int64_t j) const;
   bool is_refined(int level, int64_t i, int64_t j) const;
+  // The dyadic knots along u (0) or v (1), and the cells of a level that have children.
+  const DyadicKnots& knots(int direction) const { return direction == 0 ? u_ : v_; }
 
   struct KeyHash {
     size_t operator()(const std::pair<int64_t, int64_t>& k) const {
@@ -55,6 +57,10 @@ class ThbHierarchy {
     }
   };
   using CellSet = std::unordered_set<std::pair<int64_t, int64_t>, KeyHash>;
+  const CellSet& refined(int level) const {
+    static const CellSet none;
+    return level < static_cast<int>(refined_.size()) ? refined_[level] : none;
+  }
 
  private:
   void refine_cell(int level, int64_t i, int64_t j, int* extra);

@@ -131,9 +131,10 @@ std::unique_ptr<PatchGeometryMap> finish_patch_mesh(const CaseDescription& c, Be
 }
 
 const DocumentNode& read_dyadic_patch_start(const CaseDocument& doc, CaseDescription& c, const std::string& family,
-                                            const std::vector<std::string>& keys, const std::string& knots) {
+                                            const std::vector<std::string>& keys, const std::string& knots,
+                                            bool multipatch_allowed) {
   const CaseReader& r = doc.reader;
-  read_patch_geometry(doc, c);
+  read_patch_geometry(doc, c, multipatch_allowed);
   const DocumentNode& s = r.table(doc.root, "space", true);
   std::vector<std::string> valid = keys;
   valid.insert(valid.end(), {"continuity", "insert_knots_u", "insert_knots_v", "rational"});

@@ -57,9 +57,11 @@ std::unique_ptr<PatchGeometryMap> finish_patch_mesh(const CaseDescription& c, Be
 
 // The start of a dyadic one-patch family's reader: [geometry], then [space] checked
 // against `keys`, the tensor family's continuity, insert_knots_* and rational refused with the
-// reason (`knots`: what the family's knots are). Returns [space].
+// reason (`knots`: what the family's knots are). A geometry file of several patches is
+// refused unless `multipatch_allowed`. Returns [space].
 const DocumentNode& read_dyadic_patch_start(const CaseDocument& doc, CaseDescription& c, const std::string& family,
-                                            const std::vector<std::string>& keys, const std::string& knots);
+                                            const std::vector<std::string>& keys, const std::string& knots,
+                                            bool multipatch_allowed = false);
 
 // Refuses (InputError) a level-0 mesh of a dyadic one-patch family that would not fit in
 // memory, before it is built; `what` names its kind of cells.

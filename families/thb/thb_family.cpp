@@ -1,4 +1,5 @@
-// Family "thb": truncated hierarchical B-splines on one patch's parameter domain, starting
+// Family "thb": truncated hierarchical B-splines on one patch's parameter domain (or on every
+// patch of a multipatch domain, glued C0: thb_multipatch_space), starting
 // from the tensor mesh of [space] degree and elements on the geometry's knot spans (its C0
 // lines kept), refined by halving marked cells in both directions; graded to stay
 // T-admissible of class [space] admissibility (2 by default, 0: no grading).
@@ -7,6 +8,7 @@
 
 #include "basis/core/bezier_mesh.hpp"
 #include "families/tensor/tensor_case.hpp"
+#include "families/thb/thb_multipatch_space.hpp"
 #include "basis/thb/thb_hierarchy.hpp"
 #include "cases/case_reader.hpp"
 #include "cases/resource_limits.hpp"
@@ -31,7 +33,7 @@ const std::vector<std::string>& thb_space_keys() {
 
 void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
-  const DocumentNode& s = read_dyadic_patch_start(doc, c, "thb", thb_space_keys(), "new knots are C^(d-1)");
+  const DocumentNode& s = read_dyadic_patch_start(doc, c, "thb", thb_space_keys(), "new knots are C^(d-1)", true);
   ThbSection& t = c.section.emplace<ThbSection>();
   t.space.rational = false;
   if (const DocumentNode* a = s.get("admissibility")) {
@@ -112,6 +114,7 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
 
 std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
   const ThbSection& t = thb_section(c);
+  if (c.multipatch()) return make_thb_multipatch_space(c, t.space, t.admissibility, level);
   DyadicKnots u = patch_dyadic_knots(c.geometry, t.space, 0, level), v = patch_dyadic_knots(c.geometry, t.space, 1, level);
   check_dyadic_start_memory(c, u, v, "THB");
   return std::make_unique<ThbSpace>(c, ThbHierarchy(std::move(u), std::move(v), t.admissibility));
