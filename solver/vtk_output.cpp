@@ -89,6 +89,19 @@ void add_cell_fields(vtkUnstructuredGrid* grid, const CellFields& fields, int nc
   }
 }
 
+// On a mesh of several patches, the "patch" cell array: the patch each cell lies on (its
+// position in the domain, from 0), `quads` VTK cells per mesh cell. Decided on the whole mesh,
+// so that every piece of a parallel output has the array or none has.
+void add_patch_field(vtkUnstructuredGrid* grid, const BezierMesh& mesh, int first, int last, int quads) {
+  bool several = false;
+  for (int c = 1; c < mesh.num_cells() && !several; ++c) several = mesh.cell(c).patch != mesh.cell(0).patch;
+  if (!several) return;
+  auto a = scalar_array("patch", static_cast<vtkIdType>(last - first) * quads);
+  for (int c = first; c < last; ++c)
+    for (int k = 0; k < quads; ++k) a->SetValue(static_cast<vtkIdType>(c - first) * quads + k, mesh.cell(c).patch);
+  grid->GetCellData()->AddArray(a);
+}
+
 // The "exact" and "error" point arrays, present when an exact solution is known.
 struct ExactArrays {
   vtkSmartPointer<vtkDoubleArray> exact, error;
@@ -205,6 +218,7 @@ void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const Geo
   grid->GetPointData()->SetScalars(solution);
   ex.add_to(grid);
   add_cell_fields(grid, cell_fields, mesh.num_cells(), first, last);
+  add_patch_field(grid, mesh, first, last, 1);
   write_piece(path, grid, summary);
 }
 
@@ -297,6 +311,7 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   grid->GetPointData()->SetScalars(solution);
   grid->GetPointData()->AddArray(gradient);
   ex.add_to(grid);
+  add_patch_field(grid, mesh, first, last, s * s);
   write_piece(path, grid, summary);
 }
 

@@ -12,7 +12,8 @@
 namespace knotwork {
 
 // ParaView output. Point data: "solution", and with an exact solution also "exact" and
-// "error" (= solution - exact).
+// "error" (= solution - exact). Cell data, on a mesh of several patches: "patch" (the cell's
+// patch, its position in the domain from 0).
 
 // Exact Bezier quadrilaterals (VTK type 77): each cell's geometry control points, its
 // rational weights (point data "RationalWeights") and degrees (cell data

@@ -1,5 +1,6 @@
 // The adaptive study: estimate - mark (Doerfler) - refine (the family's local refinement) - solve,
 // repeated, with its history and ParaView files.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -88,7 +89,15 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
     write_text_file(stage->stage("adapt.json"), root.dump() + "\n");
     write_text_file(stage->stage("adapt.svg"),
                     loglog_svg(c.name + ": adaptive, " + description, "degrees of freedom", "error", plot));
-    if (!pvd.empty()) write_pvd(stage->stage("adapt.pvd"), pvd);
+    if (!pvd.empty()) {
+      // The interfaces of a multipatch domain drawn over every step (part 2).
+      const std::string interfaces = write_interface_lines(c, *stage);
+      const size_t steps_written = pvd.size();
+      for (size_t k = 0; k < steps_written; ++k)
+        if (!interfaces.empty() && pvd[k].part == 0) pvd.push_back({pvd[k].time, 2, interfaces});
+      std::stable_sort(pvd.begin(), pvd.end(), [](const PvdEntry& a, const PvdEntry& b) { return a.time < b.time; });
+      write_pvd(stage->stage("adapt.pvd"), pvd);
+    }
     out.outputs = stage->commit();
   }
   root.set("outputs", Json::strings(out.outputs));

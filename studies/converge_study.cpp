@@ -155,7 +155,16 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     write_text_file(stage->stage("convergence.json"), root.dump() + "\n");
     write_text_file(stage->stage("convergence.svg"),
                     loglog_svg(c.name + ": " + description, "h (largest cell diameter)", "error", {sl2, sh1}));
-    if (!pvd.empty()) write_pvd(stage->stage("convergence.pvd"), pvd);
+    if (!pvd.empty()) {
+      // Every level with the interfaces of a multipatch domain drawn over it (part 1).
+      const std::string interfaces = write_interface_lines(c, *stage);
+      std::vector<PvdEntry> entries;
+      for (const auto& [level, file] : pvd) {
+        entries.push_back({level, 0, file});
+        if (!interfaces.empty()) entries.push_back({level, 1, interfaces});
+      }
+      write_pvd(stage->stage("convergence.pvd"), entries);
+    }
     if (!pvd_sampled.empty()) write_pvd(stage->stage("convergence_sampled.pvd"), pvd_sampled);
     out.outputs = stage->commit();
   }

@@ -57,7 +57,20 @@ void write_run_output(const CaseDescription& c, const SplineSpace& space, const 
                      s.exact_mean);
   if (c.write_sampled)
     write_sampled_vtu(stage.stage("solution_sampled.vtu"), space.mesh(), space.geometry(), s.coefficients, exact,
-                      c.samples, s.exact_mean);
+                      c.samples, s.exact_mean);  write_interface_lines(c, stage);
+}
+
+std::string write_interface_lines(const CaseDescription& c, OutputStage& stage) {
+  if (!c.multipatch()) return "";
+  // 65 points draw a side of any degree smoothly; ParaView joins them with straight segments.
+  std::vector<Eigen::MatrixX2d> lines;
+  std::vector<int> number;
+  for (size_t k = 0; k < c.domain.interfaces.size(); ++k) {
+    lines.push_back(side_curve(c.domain, c.domain.interfaces[k].a, 65));
+    number.push_back(static_cast<int>(k) + 1);
+  }
+  write_polylines_vtp(stage.stage("interfaces.vtp"), lines, {{"interface", number}});
+  return "interfaces.vtp";
 }
 
 namespace {
@@ -69,6 +82,7 @@ void write_run_pieces(const CaseDescription& c, const SplineSpace& space, const 
   CellFields cell_fields;
   if (s.cell_h1_squared.size() > 0) cell_fields.emplace_back("h1_error_squared", s.cell_h1_squared);
   const CellRange cells = cells_to_write(space, world);
+  if (stage) write_interface_lines(c, *stage);
   if (c.write_bezier)
     write_pieces(stage, world, "solution", cells, [&](const std::string& path, CellRange mine, const PieceSummary* sum) {
       write_bezier_vtu(path, space.mesh(), space.geometry(), s.coefficients, exact, cell_fields, s.exact_mean, mine, sum);

@@ -56,6 +56,11 @@ Json run_json(const CaseDescription& c, const RunOutcome& r);
 // says) into `stage`.
 void write_run_output(const CaseDescription& c, const SplineSpace& space, const PoissonSolution& s, OutputStage& stage);
 
+// On a domain of several patches, its interfaces as polylines for ParaView (interfaces.vtp,
+// cell data "interface": the interface's number in the file, from 1). Returns the file's name,
+// or "" for one patch (nothing written).
+std::string write_interface_lines(const CaseDescription& c, OutputStage& stage);
+
 struct ConvergeLevel {
   double h = 0;
   int dofs = 0, cells = 0, free = 0;

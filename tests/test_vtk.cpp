@@ -5,9 +5,12 @@
 #include <vtkGenericCell.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkXMLPolyDataReader.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +18,7 @@
 
 #include "families/tensor/tensor_case.hpp"
 #include "studies/pipeline.hpp"
+#include "studies/studies.hpp"
 #include "cases/case_file.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/poisson_solver.hpp"
@@ -151,4 +155,72 @@ TEST_CASE("B-spline space on a NURBS geometry: Bezier output interpolates the so
   for (vtkIdType i = 0; i < cell->GetNumberOfPoints(); ++i) value += w[i] * sol->GetTuple1(cell->GetPointId(i));
   REQUIRE(std::abs(value - uh(0, 0)) < 1e-12);  // (1/2, 1/2) is one of the nodes
   fs::remove_all(dir);
+}
+
+TEST_CASE("Multipatch output: each cell's patch as cell data, the interfaces as lines, and none on one patch", "[vtk][multipatch]") {
+  const std::string dir = temp_dir();
+  // cases/geometries/lshape_3patches: patch 0 is [-1,0]x[-1,0], 1 is [-1,0]x[0,1], 2 is [0,1]^2;
+  // the interfaces are y = 0 for -1 <= x <= 0, and x = 0 for 0 <= y <= 1.
+  const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/multipatch_lshape.toml");
+  const RunOutcome r = run_study(c, Ordering::kAmd, &dir, {});
+  const double x0[3] = {-1, -1, 0}, y0[3] = {-1, 0, 0};
+  for (const char* name : {"solution.vtu", "solution_sampled.vtu"}) {
+    INFO(name);
+    auto grid = read(dir + "/" + name);
+    vtkDataArray* patch = grid->GetCellData()->GetArray("patch");
+    REQUIRE(patch != nullptr);
+    std::array<int, 3> count{0, 0, 0};
+    for (vtkIdType k = 0; k < grid->GetNumberOfCells(); ++k) {
+      const int p = static_cast<int>(patch->GetTuple1(k));
+      REQUIRE((p >= 0 && p < 3));
+      ++count[p];
+      // The cell's corners (the first four points of a Bezier or linear quad) lie in its patch.
+      vtkIdType n;
+      const vtkIdType* ids;
+      grid->GetCellPoints(k, n, ids);
+      for (int corner = 0; corner < 4; ++corner) {
+        double x[3];
+        grid->GetPoint(ids[corner], x);
+        REQUIRE(x[0] >= x0[p] - 1e-14);
+        REQUIRE(x[0] <= x0[p] + 1 + 1e-14);
+        REQUIRE(x[1] >= y0[p] - 1e-14);
+        REQUIRE(x[1] <= y0[p] + 1 + 1e-14);
+      }
+    }
+    CHECK(count[0] == count[1]);
+    CHECK(count[1] == count[2]);
+  }
+  vtkNew<vtkXMLPolyDataReader> reader;
+  reader->SetFileName((dir + "/interfaces.vtp").c_str());
+  reader->Update();
+  vtkPolyData* lines = reader->GetOutput();
+  REQUIRE(lines->GetNumberOfCells() == 2);
+  vtkDataArray* number = lines->GetCellData()->GetArray("interface");
+  REQUIRE(number != nullptr);
+  for (vtkIdType k = 0; k < 2; ++k) {
+    CHECK(number->GetTuple1(k) == k + 1);
+    vtkIdType n;
+    const vtkIdType* ids;
+    lines->GetCellPoints(k, n, ids);
+    REQUIRE(n >= 2);
+    double a[3], b[3];
+    lines->GetPoint(ids[0], a);
+    lines->GetPoint(ids[n - 1], b);
+    const bool horizontal = std::abs(a[1]) < 1e-14 && std::abs(b[1]) < 1e-14;
+    const bool vertical = std::abs(a[0]) < 1e-14 && std::abs(b[0]) < 1e-14;
+    CHECK(horizontal != vertical);
+    CHECK(std::hypot(a[0] - b[0], a[1] - b[1]) == Approx(1).epsilon(1e-14));
+    for (vtkIdType i = 0; i < n; ++i) {
+      double x[3];
+      lines->GetPoint(ids[i], x);
+      CHECK(std::abs(horizontal ? x[1] : x[0]) < 1e-14);
+    }
+  }
+  fs::remove_all(dir);
+  // One patch: no patch array and no interfaces file.
+  const std::string one = temp_dir();
+  run_study(load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/square_sinsin.toml"), Ordering::kAmd, &one, {});
+  CHECK(read(one + "/solution.vtu")->GetCellData()->GetArray("patch") == nullptr);
+  CHECK(!fs::exists(one + "/interfaces.vtp"));
+  fs::remove_all(one);
 }

@@ -64,6 +64,20 @@ std::pair<double, double> side_parameters(const NurbsPatch& patch, int side, dou
   }
 }
 
+}  // namespace
+
+Eigen::MatrixX2d side_curve(const MultiPatch& domain, PatchSideRef side, int points) {
+  const NurbsPatch& patch = domain.patches.at(side.patch);
+  Eigen::MatrixX2d out(points, 2);
+  for (int k = 0; k < points; ++k) {
+    const auto [u, v] = side_parameters(patch, side.side, points > 1 ? double(k) / (points - 1) : 0.0);
+    out.row(k) = patch_point(patch, u, v).transpose();
+  }
+  return out;
+}
+
+namespace {
+
 [[noreturn]] void fail(const std::string& where, const std::string& what) {
   throw GeometryError(where.empty() ? what : where + ": " + what);
 }

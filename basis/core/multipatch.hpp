@@ -55,6 +55,9 @@ std::vector<PatchSideRef> exterior_sides(const MultiPatch& domain);
 std::string patch_label(const MultiPatch& domain, int p);
 std::string side_name(const MultiPatch& domain, PatchSideRef side);
 
+// `points` equally spaced points (in the parameter) along a side, in the side's direction.
+Eigen::MatrixX2d side_curve(const MultiPatch& domain, PatchSideRef side, int points);
+
 // Checks the domain and throws GeometryError naming where the fault was read:
 // - every patch is valid (NurbsPatch::validate) and positively oriented (det J > 0 at the
 //   Gauss points of each of its knot spans: an inverted or folded patch is refused);
