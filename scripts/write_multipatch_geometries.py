@@ -169,10 +169,12 @@ def arc_patch(r0, r1, a0, a1):
     (linear), v along the angle (a rational quadratic arc); positively oriented."""
     h = (a1 - a0) / 2
     m = a0 + h
+    # cos(pi/2) is 6e-17 in floating point: the axes' points are written as exact zeros.
+    cos = lambda a: 0.0 if abs(math.cos(a)) < 1e-15 else math.cos(a)
+    sin = lambda a: 0.0 if abs(math.sin(a)) < 1e-15 else math.sin(a)
     rows, weights = [], []
     for r in (r0, r1):
-        rows.append([[r * math.cos(a0), r * math.sin(a0)], [r / math.cos(h) * math.cos(m), r / math.cos(h) * math.sin(m)],
-                     [r * math.cos(a1), r * math.sin(a1)]])
+        rows.append([[r * cos(a0), r * sin(a0)], [r / math.cos(h) * cos(m), r / math.cos(h) * sin(m)], [r * cos(a1), r * sin(a1)]])
         weights.append([1, math.cos(h), 1])
     return Patch(rows, weights).transposed()
 
@@ -184,6 +186,19 @@ def ring():
     patches = [q[0], q[1].turned(2), q[2], q[3].turned(1)]
     label = lambda x: "inner" if abs(np.hypot(*x) - 1) < 1e-9 else "outer"
     return "annulus 1 <= r <= 2, four patches", patches, label
+
+
+def quarter_ring():
+    """GeoPDEs' ring (one patch): the quarter annulus 1 <= r <= 2 in the first quadrant, as
+    knotwork builds it in (cases/geometries.cpp, quarter_annulus_patch): u along the radius, v
+    along the angle. Its sides are labelled by where they lie."""
+    patches = [arc_patch(1, 2, 0, math.pi / 2)]
+
+    def label(x):
+        r = np.hypot(*x)
+        return "inner" if abs(r - 1) < 1e-9 else "outer" if abs(r - 2) < 1e-9 else "x_axis" if abs(x[1]) < 1e-9 else "y_axis"
+
+    return "quarter annulus 1 <= r <= 2 (GeoPDEs' ring), one patch", patches, label
 
 
 def plate_with_hole():
@@ -241,7 +256,7 @@ def main():
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "cases", "geometries")
     os.makedirs(out, exist_ok=True)
     for name, build in (("lshape_3patches", lshape), ("ring_4patches", ring), ("plate_with_hole", plate_with_hole),
-                        ("plus_12patches", plus_domain)):
+                        ("plus_12patches", plus_domain), ("quarter_ring", quarter_ring)):
         title, patches, label = build()
         interfaces, boundary = topology(patches, label)
         write_geopdes(os.path.join(out, name + ".txt"), title, patches, interfaces, boundary)
