@@ -95,7 +95,8 @@ int main(int argc, char** argv) {
   knotwork::RunOptions run;
   CLI::App* run_cmd = app.add_subcommand("run", "Solve one case and write ParaView files");
   run_cmd->add_option("case", run.case_file,
-                     "Case file (TOML or JSON), e.g. cases/square_sinsin.toml; cases/README.md lists the shipped ones")
+                     "Case file (TOML or JSON), e.g. cases/square_sinsin.toml; cases/README.md lists the shipped ones. "
+                     "Or a G+Smo problem file (.xml: domain, source, boundary conditions; docs/GUIDE.md)")
       ->required();
   add_common(run_cmd, run);
   run_cmd->add_flag("--condition", run.condition,
@@ -108,7 +109,7 @@ int main(int argc, char** argv) {
 
   knotwork::ConvergeOptions conv;
   CLI::App* conv_cmd = app.add_subcommand("converge", "Uniform h-refinement study: errors and observed rates per level");
-  conv_cmd->add_option("case", conv.case_file, "Case file (TOML) with [problem] exact")->required();
+  conv_cmd->add_option("case", conv.case_file, "Case file (TOML or JSON, or a G+Smo problem file .xml) with an exact solution")->required();
   conv_cmd->add_option("--levels", conv.levels,
                       "Number of levels; level l is the case's space refined uniformly l times (elements doubled "
                       "per direction, or the quad mesh subdivided)")

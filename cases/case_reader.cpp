@@ -418,6 +418,11 @@ void read_quadrature(const CaseReader& r, const DocumentNode& s, CaseDescription
   read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
   read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
   if (const DocumentNode* k = s.get("boundary_quadrature_points")) {
+    // "interior": the interior rule's number along each side, as GeoPDEs and G+Smo integrate.
+    if (k->value_exact<std::string>() == std::optional<std::string>("interior")) {
+      c.quadrature.boundary_points = -1;
+      return;
+    }
     const long n = r.integer(*k, "[space] boundary_quadrature_points");
     if (n < 1 || n > 30) r.fail("[space] boundary_quadrature_points", "must be in [1, 30], got " + std::to_string(n));
     c.quadrature.boundary_points = static_cast<int>(n);
@@ -609,10 +614,23 @@ void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
     } else if (const DocumentNode* nt = n->as_table()) {
       for (const auto& [k, v] : *nt) {
         const std::string field = "[problem] neumann." + k;
-        const std::string val = r.string(v, field);
+        // A flux h = du/dn ("exact": from the exact solution), or a flux vector [Fx, Fy]: h = F.n.
+        std::vector<Expression> flux;
+        std::string val;
+        if (const DocumentNode* a = v.as_array()) {
+          if (a->size() != 2)
+            r.fail(field, "a flux vector is two expressions [Fx, Fy]; or give the flux du/dn as one expression");
+          for (size_t i = 0; i < 2; ++i)
+            flux.push_back(Expression::parse(r.string(*a->get(i), field), f + ": " + field + "[" + std::to_string(i) + "]"));
+        } else {
+          val = r.string(v, field);
+        }
         for (int s : ids_of(k, field)) {
           pb.boundary[s].kind = BoundaryKind::kNeumann;
-          if (val != "exact") {
+          if (!flux.empty()) {
+            pb.boundary[s].from_exact = false;
+            pb.boundary[s].flux = flux;
+          } else if (val != "exact") {
             pb.boundary[s].from_exact = false;
             pb.boundary[s].value = Expression::parse(val, f + ": " + field);
           }

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "cases/case_reader.hpp"
+#include "cases/gismo_problem.hpp"
 #include "cases/spline_space.hpp"
 #include "solver/amg_preconditioner.hpp"
 #include "basis/core/input_error.hpp"
@@ -62,6 +63,8 @@ CaseDescription load_case(const std::string& path) {
   if (std::filesystem::path(path).extension() == ".obj")
     throw InputError(path + ": a quad mesh (OBJ), not a case file: a case names it in its [space] mesh "
                             "(cases/README.md), and `knotwork basis --help` says how to check it");
+  // A G+Smo problem file is read as the case it describes (cases/gismo_problem.hpp).
+  if (std::filesystem::path(path).extension() == ".xml") return read_case(parse_document_text(gismo_problem_as_case(path), path), path);
   return read_case(parse_document(path), path);
 }
 

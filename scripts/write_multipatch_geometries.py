@@ -111,13 +111,17 @@ def write_geopdes(path, title, patches, interfaces, boundary):
                 f.write("%d %d\n" % (a + 1, s))
 
 
-def write_gismo(path, title, patches, interfaces, boundary):
+def write_gismo(path, title, patches, interfaces, boundary, problem=None):
+    """The domain as G+Smo XML; with `problem` (XML text of functions and boundary conditions),
+    a G+Smo problem file laid out as G+Smo's pde/ examples are: the MultiPatch has id 0 and the
+    patches ids from 100, leaving 1..4 to the source, conditions, exact solution and options."""
+    first_id, multipatch_id = (100, 0) if problem else (0, len(patches))
     with open(path, "w") as f:
         f.write('<?xml version="1.0" encoding="UTF-8"?>\n<!-- %s; written by knotwork\'s '
                 'scripts/write_multipatch_geometries.py -->\n<xml>\n' % title)
         for k, p in enumerate(patches):
             rational = bool((p.w != 1).any())
-            f.write(' <Geometry type="%s" id="%d">\n' % ("TensorNurbs2" if rational else "TensorBSpline2", k))
+            f.write(' <Geometry type="%s" id="%d">\n' % ("TensorNurbs2" if rational else "TensorBSpline2", first_id + k))
             if rational:
                 f.write('  <Basis type="TensorNurbsBasis2">\n')
             f.write('  <Basis type="TensorBSplineBasis2">\n')
@@ -134,22 +138,53 @@ def write_gismo(path, title, patches, interfaces, boundary):
                 for i in range(p.p + 1):
                     f.write("%s %s\n" % (number(p.cp[j, i, 0]), number(p.cp[j, i, 1])))
             f.write("  </coefs>\n </Geometry>\n")
-        f.write(' <MultiPatch parDim="2" id="%d">\n  <patches type="id_range">0 %d</patches>\n'
-                % (len(patches), len(patches) - 1))
+        f.write(' <MultiPatch parDim="2" id="%d">\n  <patches type="id_range">%d %d</patches>\n'
+                % (multipatch_id, first_id, first_id + len(patches) - 1))
         f.write("  <interfaces>\n")
         for a, sa, b, sb, rev in interfaces:
             ta, tb = (1 if sa <= 2 else 0), (1 if sb <= 2 else 0)
             dirmap, orient = [0, 0], [1, 1]
             dirmap[ta], dirmap[1 - ta] = tb, 1 - tb
             orient[ta] = 0 if rev else 1
-            f.write("   %d %d %d %d %d %d %d %d\n" % (a, sa, b, sb, dirmap[0], dirmap[1], orient[0], orient[1]))
+            f.write("   %d %d %d %d %d %d %d %d\n" % (first_id + a, sa, first_id + b, sb, dirmap[0], dirmap[1], orient[0],
+                                                     orient[1]))
         f.write("  </interfaces>\n")
         for name, sides in boundary.items():
             f.write('  <boundary name="%s">\n' % name)
             for a, s in sides:
-                f.write("   %d %d\n" % (a, s))
+                f.write("   %d %d\n" % (first_id + a, s))
             f.write("  </boundary>\n")
-        f.write(" </MultiPatch>\n</xml>\n")
+        f.write(" </MultiPatch>\n%s</xml>\n" % (problem or ""))
+
+
+def lshape_problem(patches, boundary):
+    """The Poisson problem of cases/multipatch_lshape.toml as a G+Smo problem file:
+    u = sin(2x) cosh(y) + x y, so -div grad u = 3 sin(2x) cosh(y); Dirichlet on the boundary
+    named "outer"; Neumann on the two re-entrant sides, one given the flux vector grad u (two
+    components) and the other the flux du/dn (one), to exercise both of G+Smo's forms."""
+    (pa, sa), (pb, sb) = boundary["reentrant"]
+    # Side b's outward normal: the re-entrant sides lie on x = 0 (normal +x) and y = 0 (normal -y).
+    x, y = patches[pb].point(*SIDES[sb](0.5))
+    flux_b = "2*cos(2*x)*cosh(y) + y" if abs(x) < 1e-12 else "-(sin(2*x)*sinh(y) + x)"
+    return """ <Function type="FunctionExpr" id="1" dim="2">3*sin(2*x)*cosh(y)</Function>
+ <boundaryConditions id="2" multipatch="0">
+  <Function type="FunctionExpr" dim="2" index="0">sin(2*x)*cosh(y) + x*y</Function>
+  <Function type="FunctionExpr" dim="2" index="1" c="2">
+   <c index="0">2*cos(2*x)*cosh(y) + y</c>
+   <c index="1">sin(2*x)*sinh(y) + x</c>
+  </Function>
+  <Function type="FunctionExpr" dim="2" index="2">%s</Function>
+  <bc type="Dirichlet" function="0" unknown="0" name="outer"/>
+  <bc type="Neumann" function="1" unknown="0">%d %d</bc>
+  <bc type="Neumann" function="2" unknown="0">%d %d</bc>
+ </boundaryConditions>
+ <Function type="FunctionExpr" id="3" dim="2">sin(2*x)*cosh(y) + x*y</Function>
+ <OptionList id="4">
+  <real label="quA" desc="Number of quadrature points: quA*deg + quB" value="1"/>
+  <int label="quB" desc="Number of quadrature points: quA*deg + quB" value="1"/>
+  <int label="quRule" desc="Quadrature rule [1:GaussLegendre,2:GaussLobatto]" value="1"/>
+ </OptionList>
+""" % (flux_b, pa, sa, pb, sb)
 
 
 def square(x0, y0, x1, y1):
@@ -261,6 +296,10 @@ def main():
         interfaces, boundary = topology(patches, label)
         write_geopdes(os.path.join(out, name + ".txt"), title, patches, interfaces, boundary)
         write_gismo(os.path.join(out, name + ".xml"), title, patches, interfaces, boundary)
+        if name == "lshape_3patches":
+            problem = os.path.join(out, "..", "multipatch_lshape_problem.xml")
+            write_gismo(problem, title + ", with the Poisson problem of cases/multipatch_lshape.toml", patches,
+                        interfaces, boundary, lshape_problem(patches, boundary))
         print("%s: %d patches, %d interfaces, boundaries %s" % (
             name, len(patches), len(interfaces), {k: len(v) for k, v in boundary.items()}))
 

@@ -471,15 +471,15 @@ void boundary_data(const PoissonProblem& problem, const BoundaryCondition& bc, c
   out.resize(n);
   for (Eigen::Index k = 0; k < n; ++k) {
     const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
-    if (bc.kind == BoundaryKind::kNeumann && bc.from_exact) {
-      Eigen::Vector2d flux((*ux)(x, y), (*uy)(x, y));
-      if (!diffusion.identity()) flux = diffusion(x, y) * flux;
+    if (bc.kind == BoundaryKind::kNeumann && (bc.from_exact || !bc.flux.empty())) {
+      Eigen::Vector2d flux((*ux)(x, y), (*uy)(x, y));  // grad u, or the given flux vector
+      if (bc.from_exact && !diffusion.identity()) flux = diffusion(x, y) * flux;
       out[k] = flux[0] * cb.normal(k, 0) + flux[1] * cb.normal(k, 1);
     } else
       out[k] = (*value)(x, y);
     if (!std::isfinite(out[k])) {
       std::ostringstream s;
-      const Expression& e = bc.from_exact ? problem.exact->u : bc.value;
+      const Expression& e = bc.from_exact ? problem.exact->u : bc.flux.empty() ? bc.value : bc.flux[0];
       s << e.where() << ": boundary data \"" << e.text() << "\" is not finite at (" << x << ", " << y << ")";
       throw InputError(s.str());
     }
@@ -494,6 +494,9 @@ void make_evaluators(const PoissonProblem& problem, const BoundaryCondition& bc,
     value.emplace(problem.exact->u);
     ux.emplace(problem.exact->u_x);
     uy.emplace(problem.exact->u_y);
+  } else if (!bc.flux.empty()) {
+    ux.emplace(bc.flux.at(0));
+    uy.emplace(bc.flux.at(1));
   } else {
     value.emplace(bc.value);
   }
@@ -501,7 +504,8 @@ void make_evaluators(const PoissonProblem& problem, const BoundaryCondition& bc,
 
 int side_points(const QuadratureOptions& q, const BezierCell& cell) {
   if (q.boundary_points > 0) return q.boundary_points;
-  return std::max(rule_points(q.points_u, cell.degree_u, 1), rule_points(q.points_v, cell.degree_v, 1)) + 1;
+  const int interior = std::max(rule_points(q.points_u, cell.degree_u, 1), rule_points(q.points_v, cell.degree_v, 1));
+  return q.boundary_points < 0 ? interior : interior + 1;
 }
 
 // Calls visit(cell, side basis, boundary data at the side's points) for every cell side

@@ -17,6 +17,9 @@ struct BoundaryCondition {
   BoundaryKind kind = BoundaryKind::kDirichlet;
   bool from_exact = true;
   Expression value;  // g (Dirichlet) or h = du/dn (Neumann) when not from_exact
+  // Neumann data given as a flux vector F, two entries in the plane: h = F.n with the outward
+  // unit normal n (G+Smo's vector-valued Neumann functions). `value` is then unused.
+  std::vector<Expression> flux;
 };
 
 // How Dirichlet sides are imposed. kProjection: strongly, the functions whose trace does not
@@ -64,8 +67,8 @@ struct QuadratureOptions {
   int points_u = 0, points_v = 0;              // matrix and load; 0 means degree+1
   int error_points_u = 0, error_points_v = 0;  // error norms; 0 means degree+2
   // Boundary integrals (the Dirichlet projection, Neumann data, Nitsche's terms): points per
-  // side; 0 means one more than the interior rule has. GeoPDEs and G+Smo use the interior
-  // rule's own number: set it to that to reproduce their discretizations to the last digit.
+  // side; 0 means one more than the interior rule has, -1 the interior rule's own number (as
+  // GeoPDEs and G+Smo integrate: their discretizations to the last digit).
   int boundary_points = 0;
   // Cells whose functions are products f(u) g(v) are integrated from univariate tables
   // (solver/separable_cells); false forces the dense C * B path on every cell (the tests

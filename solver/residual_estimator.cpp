@@ -230,9 +230,15 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       const Eigen::MatrixX3d sol = evaluate_solution(mesh, geometry, coefficients, c, u, v);
       GeometryAtPoints g;
       geometry.evaluate(c, u, v, g);
-      ExpressionEvaluator data(!bc.from_exact ? bc.value : weak_dirichlet ? problem.exact->u : problem.exact->u_x);
+      // A flux vector given as data (h = F.n) is evaluated like grad u, without A.
+      const bool flux_data = !weak_dirichlet && !bc.from_exact && !bc.flux.empty();
+      ExpressionEvaluator data(flux_data        ? bc.flux[0]
+                               : !bc.from_exact ? bc.value
+                               : weak_dirichlet ? problem.exact->u
+                                                : problem.exact->u_x);
       std::unique_ptr<ExpressionEvaluator> data_y;
-      if (bc.from_exact && !weak_dirichlet) data_y = std::make_unique<ExpressionEvaluator>(problem.exact->u_y);
+      if (flux_data) data_y = std::make_unique<ExpressionEvaluator>(bc.flux[1]);
+      else if (bc.from_exact && !weak_dirichlet) data_y = std::make_unique<ExpressionEvaluator>(problem.exact->u_y);
       double length = 0, integral = 0;
       for (int k = 0; k < n; ++k) {
         // Counter-clockwise tangent of the side; the outward normal is it turned clockwise
@@ -252,7 +258,9 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
           // The flux (A grad u).n: from the exact solution, or the side's data; u_h's the same way.
           const Eigen::Matrix2d A = coefficient.A(x, y);
           const Eigen::Vector2d normal(nx, ny);
-          const double gn = bc.from_exact ? (A * Eigen::Vector2d(data(x, y), (*data_y)(x, y))).dot(normal) : data(x, y);
+          const double gn = bc.from_exact ? (A * Eigen::Vector2d(data(x, y), (*data_y)(x, y))).dot(normal)
+                            : flux_data     ? Eigen::Vector2d(data(x, y), (*data_y)(x, y)).dot(normal)
+                                            : data(x, y);
           r = gn - (A * Eigen::Vector2d(sol(k, 1), sol(k, 2))).dot(normal);
         }
         const double ds = len * rule.weights[k];

@@ -46,6 +46,8 @@ RUNS = [
     # Multipatch geometry files, G+Smo XML and GeoPDEs text: Python reads the same files.
     ("multipatch_lshape.toml", [], {}),
     ("multipatch_ring.toml", [], {}),
+    # A G+Smo problem file (domain, source, boundary conditions) runs as the case it describes.
+    ("multipatch_lshape_problem.xml", ["--degree", "2", "--elements", "4"], {"degree": 2, "elements": 4}),
 ]
 
 
@@ -84,6 +86,13 @@ def test_adapt_equals_cli(tmp_path):
     assert len(study) == 4
     rates = study.column("h1_rate_vs_dofs")
     assert math.isnan(rates[0]) and all(r > 0 for r in rates[1:])
+
+
+def test_adapt_on_several_patches_equals_cli(tmp_path):
+    path = str(CASES / "multipatch_lshape_adaptive_thb.toml")
+    expected = cli_json(["adapt", path, "--steps", "5", "--out", str(tmp_path)])
+    study = knotwork.adapt(path, steps=5)
+    assert_same(expected["steps"], list(study))
 
 
 @pytest.mark.parametrize("case", ["lshape_adaptive_thb.toml", "lshape_adaptive_lr.toml"])
