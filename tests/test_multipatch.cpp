@@ -3,8 +3,11 @@
 // (the same space: C0 knots where the cuts are), and turning a patch's parameter square in
 // the file changes nothing.
 #include <catch2/catch.hpp>
+#include <array>
 #include <cmath>
+#include <fstream>
 #include <limits>
+#include <sstream>
 
 #include "basis/core/bspline_basis.hpp"
 #include "basis/core/input_error.hpp"
@@ -399,4 +402,68 @@ TEST_CASE("A G+Smo problem file runs as the case it describes", "[multipatch][gi
   const Result r = box.run("run --json --no-output " + problem);
   REQUIRE(r.code == 0);
   CHECK(json_number_of(r.out, "dofs") == 3 * 33 * 33 - 2 * 33);
+}
+
+TEST_CASE("G1 on a geometry file of bilinear patches is G1 on the quad mesh they make; curved patches are refused",
+          "[multipatch][g1]") {
+  // Each quad of a shipped OBJ mesh written as a bilinear patch (its corners turned by a
+  // different number of quarter turns per patch), glued where sides coincide: the same quad
+  // mesh, numbered and parametrized otherwise. The G1 space is the mesh's, so the errors agree
+  // to the rounding of the solve.
+  Sandbox box;
+  const std::string meshes = std::string(KNOTWORK_SOURCE_DIR) + "/cases/meshes/";
+  const std::string problem = "[problem]\noperator = \"laplace\"\nexact = \"cos(2*x)*exp(y) + x^2*y\"\n";
+  for (const char* name : {"three_quads", "pentagon"}) {
+    INFO(name);
+    std::vector<Eigen::Vector3d> v;
+    std::vector<std::array<int, 4>> faces;
+    {
+      std::ifstream in(meshes + name + ".obj");
+      for (std::string line; std::getline(in, line);) {
+        std::istringstream s(line);
+        std::string tag;
+        s >> tag;
+        if (tag == "v") {
+          Eigen::Vector3d x;
+          s >> x[0] >> x[1] >> x[2];
+          v.push_back(x);
+        } else if (tag == "f") {
+          std::array<int, 4> f;
+          for (int& k : f) s >> k, --k;
+          faces.push_back(f);
+        }
+      }
+    }
+    REQUIRE(!faces.empty());
+    MultiPatch d;
+    for (size_t k = 0; k < faces.size(); ++k) {
+      std::array<int, 4> f;
+      for (int j = 0; j < 4; ++j) f[j] = faces[k][(j + k) % 4];  // turned by k quarter turns
+      NurbsPatch p = rectangle_patch(0, 0, 1, 1);
+      const int corner[4] = {0, 1, 3, 2};  // (u, v) = (0,0), (1,0), (1,1), (0,1) in the net's order
+      for (int j = 0; j < 4; ++j) p.control_points.row(corner[j]) << v[f[j]][0], v[f[j]][1];
+      d.patches.push_back(p);
+    }
+    glue(d);
+    write_gismo_xml(d, (box.dir() / "patches.xml").string());
+    const std::string space = "[space]\nfamily = \"g1\"\ndegree = 4\nsplit_smoothness = 1\n";
+    box.file("obj.toml", space + "mesh = \"" + meshes + name + ".obj\"\n" + problem);
+    box.file("xml.toml", space + "[geometry]\nfile = \"patches.xml\"\n" + problem);
+    Errors e[2];
+    for (int k = 0; k < 2; ++k) {
+      const Result r = box.run(std::string("run --json --no-output --condition ") + (k ? "xml.toml" : "obj.toml"));
+      INFO(r.err);
+      REQUIRE(r.code == 0);
+      e[k] = {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
+    }
+    INFO("L2 " << e[0].l2 << " and " << e[1].l2 << ", H1 " << e[0].h1 << " and " << e[1].h1);
+    CHECK(std::abs(e[0].l2 - e[1].l2) <= same_space_tolerance(e[0], e[1]));
+    CHECK(std::abs(e[0].h1 - e[1].h1) <= same_space_tolerance(e[0], e[1]));
+  }
+  // The ring's patches are quadratic along the angle: refused, naming the patch.
+  box.file("curved.toml", "[space]\nfamily = \"g1\"\n[geometry]\nfile = \"" + kGeometries + "ring_4patches.txt\"\n" + problem);
+  const Result r = box.run("run -q --no-output curved.toml");
+  CHECK(r.code != 0);
+  CHECK(r.err.find("curved.toml: [geometry] file: ") != std::string::npos);
+  CHECK(r.err.find("patch 1 has degree 1x2") != std::string::npos);
 }

@@ -7,7 +7,10 @@
 
 
 #include "families/g1/gluing_file.hpp"
+#include "basis/g1/patches_as_quad_mesh.hpp"
 #include "basis/g1/quad_mesh.hpp"
+#include "basis/core/input_error.hpp"
+#include "cases/geometry_file.hpp"
 #include "cases/case_reader.hpp"
 
 namespace knotwork {
@@ -25,14 +28,31 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
   const DocumentNode& s = r.table(root, "space", true);
   r.check_keys(s, "space", g1_space_keys());
   const DocumentNode* m = s.get("mesh");
-  if (!m) r.fail("[space] mesh", "missing: the quad mesh (.obj) the G1 space lives on");
-  g.mesh_file = r.readable_file(*m, "[space] mesh");
+  const DocumentNode& geo = r.table(root, "geometry", false);
+  const DocumentNode* file = geo.get("file");
+  if (!m && !file)
+    r.fail("[space] mesh", "missing: the quad mesh (.obj) the G1 space lives on (or a [geometry] file of bilinear patches)");
+  if (m && file) r.fail("[geometry] file", "the quad mesh is given once: [space] mesh or [geometry] file, not both");
   QuadMesh mesh;
-  try {
-    mesh = QuadMesh::read_obj(g.mesh_file);
-  } catch (const std::invalid_argument& e) {
-    r.fail("[space] mesh", e.what());
+  if (m) {
+    g.mesh_file = r.readable_file(*m, "[space] mesh");
+    try {
+      mesh = QuadMesh::read_obj(g.mesh_file);
+    } catch (const std::invalid_argument& e) {
+      r.fail("[space] mesh", e.what());
+    }
+  } else {
+    // G+Smo XML or GeoPDEs text whose patches are bilinear: exactly a quad mesh.
+    g.mesh_file = r.readable_file(*file, "[geometry] file");
+    try {
+      mesh = quad_mesh_of_bilinear_patches(read_geometry_file(g.mesh_file), g.mesh_file);
+    } catch (const InputError& e) {
+      throw InputError(c.path + ": [geometry] file: " + e.what());
+    } catch (const std::invalid_argument& e) {
+      r.fail("[geometry] file", e.what());
+    }
   }
+  g.coarse = std::make_shared<const QuadMesh>(mesh);
   g.faces = mesh.num_faces();
   if (const DocumentNode* d = s.get("degree")) g.degree = static_cast<int>(r.integer(*d, "[space] degree"));
   if (g.degree < 2 || g.degree > 12) r.fail("[space] degree", "must be in [2, 12] (one integer: the bidegree k of the patches)");
@@ -60,8 +80,7 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
   if (g.refine < 0 || g.refine > 6) r.fail("[space] refine", "must be in [0, 6]");
   read_quadrature(r, s, c, false);
 
-  const DocumentNode& geo = r.table(root, "geometry", false);
-  r.check_keys(geo, "geometry", {"shape", "center", "radius", "major_radius", "minor_radius"});
+  r.check_keys(geo, "geometry", {"shape", "center", "radius", "major_radius", "minor_radius", "file"});
   if (const DocumentNode* n = geo.get("shape")) g.shape = r.string(*n, "[geometry] shape");
   if (g.shape != "bilinear" && g.shape != "sphere" && g.shape != "torus")
     r.fail("[geometry] shape", "unknown shape '" + g.shape + "' (" + closest_name(g.shape, {"bilinear", "sphere", "torus"}) + ")");

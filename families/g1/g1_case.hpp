@@ -3,6 +3,7 @@
 // spline fitted to the mesh ([geometry] shape) and the problem is planar Poisson or
 // Laplace-Beltrami on a closed surface ([problem] operator). See cases/README.md.
 #include <Eigen/Core>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -11,12 +12,16 @@
 namespace knotwork {
 
 struct CaseDocument;
+class QuadMesh;
 
 // The split smoothness of a case that does not name one: k - 2, at least 1.
 constexpr int default_split_smoothness(int degree) { return degree > 3 ? degree - 2 : 1; }
 
 struct G1Section : CaseSection {
-  std::string mesh_file;  // resolved against the case file's folder
+  std::string mesh_file;  // resolved against the case file's folder ([space] mesh or [geometry] file)
+  // The coarse quad mesh as read and checked with the case (an OBJ, or a geometry file of
+  // bilinear patches turned into quads).
+  std::shared_ptr<const QuadMesh> coarse;
   int faces = 0;          // of the coarse mesh (read and checked with the case)
   // Defaults chosen by measurement (docs/G1_POISSON.md, "The default is k = 5"): k = 5 with
   // r = k - 2 has the same unknowns per face as the paper's k = 4, r = 1 (2k - r + 1 = 8), the

@@ -149,7 +149,7 @@ G1Discretization discretize_g1(const CaseDescription& c, int extra_levels,
   const auto& g = g1_section(c);
   G1Discretization d;
   try {
-    d.coarse = QuadMesh::read_obj(g.mesh_file);
+    d.coarse = g.coarse ? *g.coarse : QuadMesh::read_obj(g.mesh_file);
   } catch (const std::invalid_argument& e) {
     throw InputError(c.path + ": [space] mesh: " + e.what());
   }
