@@ -404,7 +404,7 @@ TEST_CASE("A G+Smo problem file runs as the case it describes", "[multipatch][gi
   CHECK(json_number_of(r.out, "dofs") == 3 * 33 * 33 - 2 * 33);
 }
 
-TEST_CASE("G1 on a geometry file of bilinear patches is G1 on the quad mesh they make; curved patches are refused",
+TEST_CASE("G1 on a geometry file of bilinear patches is G1 on the quad mesh they make, and curved patches are refused",
           "[multipatch][g1]") {
   // Each quad of a shipped OBJ mesh written as a bilinear patch (its corners turned by a
   // different number of quarter turns per patch), glued where sides coincide: the same quad

@@ -52,7 +52,7 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
       r.fail("[geometry] file", e.what());
     }
   }
-  g.coarse = std::make_shared<const QuadMesh>(mesh);
+  if (file) g.coarse = std::make_shared<const QuadMesh>(mesh);  // an OBJ is read again from mesh_file
   g.faces = mesh.num_faces();
   if (const DocumentNode* d = s.get("degree")) g.degree = static_cast<int>(r.integer(*d, "[space] degree"));
   if (g.degree < 2 || g.degree > 12) r.fail("[space] degree", "must be in [2, 12] (one integer: the bidegree k of the patches)");

@@ -19,8 +19,8 @@ constexpr int default_split_smoothness(int degree) { return degree > 3 ? degree 
 
 struct G1Section : CaseSection {
   std::string mesh_file;  // resolved against the case file's folder ([space] mesh or [geometry] file)
-  // The coarse quad mesh as read and checked with the case (an OBJ, or a geometry file of
-  // bilinear patches turned into quads).
+  // The coarse quad mesh made from a geometry file of bilinear patches, as read and checked
+  // with the case; empty for an OBJ mesh (read again from mesh_file).
   std::shared_ptr<const QuadMesh> coarse;
   int faces = 0;          // of the coarse mesh (read and checked with the case)
   // Defaults chosen by measurement (docs/G1_POISSON.md, "The default is k = 5"): k = 5 with
