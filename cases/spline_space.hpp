@@ -100,6 +100,9 @@ class SplineSpace {
   // ([solver] preconditioner), "" when the family has none, and the preconditioner for the
   // free dofs of `layout` of `problem`'s operator (null when it does not apply to them).
   virtual std::string structured_preconditioner() const { return ""; }
+  // Whether [solver] = "auto" may choose it (CG with it from 10 000 functions on); false where
+  // measurements found algebraic multigrid or CHOLMOD better (docs/SOLVERS.md).
+  virtual bool structured_preconditioner_is_automatic() const { return true; }
   virtual std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& /*layout*/,
                                                                          const Eigen::SparseMatrix<double>& /*lower*/,
                                                                          const PoissonProblem& /*problem*/) const {

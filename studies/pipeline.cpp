@@ -48,8 +48,9 @@ constexpr int kAutoIterativeFunctions = 10000;
 SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) {
   SolverReport r;
   const std::string structured = space.structured_preconditioner();
+  const std::string automatic = space.structured_preconditioner_is_automatic() ? structured : "";
   if (c.solver.method == "auto")
-    r.method = !structured.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
+    r.method = !automatic.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
   else
     r.method = c.solver.method;
   if (r.method == "direct") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
@@ -57,10 +58,13 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
   if (asked == "auto") {
     // Without a structure to use: algebraic multigrid, whose iteration count stays bounded as
     // h shrinks where Jacobi's grows like 1/h (docs/SOLVERS.md).
-    r.preconditioner = structured.empty() ? kBoomerAmgName : structured;
+    r.preconditioner = automatic.empty() ? kBoomerAmgName : automatic;
     if (structured.empty())
       r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc), since this space (family \"" +
                c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ") has no structured preconditioner";
+    else if (automatic.empty())
+      r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc); this space's \"" + structured +
+               "\" is used only when asked for by name (docs/SOLVERS.md)";
   } else if (asked == "jacobi" || asked == kBoomerAmgName) {
     r.preconditioner = asked;  // algebraic: they apply to every family
   } else if (asked == structured) {

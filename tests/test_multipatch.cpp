@@ -467,3 +467,33 @@ TEST_CASE("G1 on a geometry file of bilinear patches is G1 on the quad mesh they
   CHECK(r.err.find("curved.toml: [geometry] file: ") != std::string::npos);
   CHECK(r.err.find("patch 1 has degree 1x2") != std::string::npos);
 }
+
+TEST_CASE("The per-patch fast diagonalization solves multipatch cases to the direct solution, and auto keeps BoomerAMG",
+          "[multipatch][solver]") {
+  // CG stops at a backward error of 1e-15; the two solutions then differ by about kappa times
+  // that, and so do their errors (same_space_tolerance, with the condition of the system).
+  Sandbox box;
+  for (const char* name : {"multipatch_ring", "multipatch_plus", "multipatch_lshape"}) {
+    INFO(name);
+    const std::string text = slurp(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name + ".toml");
+    std::string local = text;
+    for (size_t at = local.find("geometries/"); at != std::string::npos; at = local.find("geometries/", at + kGeometries.size()))
+      local.replace(at, std::string("geometries/").size(), kGeometries);
+    box.file("direct.toml", local);
+    box.file("fd.toml", local + "\n[solver]\nmethod = \"iterative\"\npreconditioner = \"fast_diagonalization\"\nmax_iterations = 5000\n");
+    box.file("auto.toml", local + "\n[solver]\nmethod = \"iterative\"\n");
+    Errors e[2];
+    for (int k = 0; k < 2; ++k) {
+      const Result r = box.run(std::string("run --json --no-output --condition --elements 6 ") + (k ? "fd.toml" : "direct.toml"));
+      INFO(r.err);
+      REQUIRE(r.code == 0);
+      e[k] = {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
+      if (k) CHECK(r.out.find("\"preconditioner\": \"fast_diagonalization\"") != std::string::npos);
+    }
+    CHECK(std::abs(e[0].l2 - e[1].l2) <= same_space_tolerance(e[0], e[1]));
+    CHECK(std::abs(e[0].h1 - e[1].h1) <= same_space_tolerance(e[0], e[1]));
+    const Result a = box.run("run --json --no-output --elements 6 auto.toml");
+    REQUIRE(a.code == 0);
+    CHECK(a.out.find("\"preconditioner\": \"boomeramg\"") != std::string::npos);
+  }
+}

@@ -5,10 +5,15 @@
 #include "basis/core/geometry_map.hpp"
 #include "basis/core/input_error.hpp"
 #include "basis/tensor/multipatch_tensor.hpp"
+#include "families/tensor/patch_separable_coefficients.hpp"
+#include "solver/additive_schwarz.hpp"
+#include "solver/fast_diagonalization.hpp"
 
 namespace knotwork {
 
 namespace {
+
+constexpr const char* kPatchFastDiagonalization = "fast_diagonalization";
 
 class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
  public:
@@ -21,9 +26,13 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
       throw InputError(c.path + ": [space]: " + e.what());
     }
     std::vector<std::unique_ptr<GeometryMap>> maps;
-    for (const TensorDiscretization& p : d_.patches)
-      maps.push_back(std::make_unique<PatchGeometryMap>(
-          p.mesh, p.patch, PatchGeometryMap::ElementGrid{p.space_u.breakpoints(), p.space_v.breakpoints(), 0}));
+    for (const TensorDiscretization& p : d_.patches) {
+      auto map = std::make_unique<PatchGeometryMap>(
+          p.mesh, p.patch, PatchGeometryMap::ElementGrid{p.space_u.breakpoints(), p.space_v.breakpoints(), 0});
+      patch_maps_.push_back(map.get());
+      maps.push_back(std::move(map));
+    }
+    exterior_ = exterior_sides(c.domain);
     geometry_ = std::make_unique<PiecewiseGeometryMap>(std::move(maps), d_.first_cell);
   }
   const SpaceReport& presentation() const override { return *this; }
@@ -36,6 +45,53 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
            std::to_string(options_.degree[1]) + ", C^" + std::to_string(ru) + " at new knots, " +
            std::to_string(d_.patches.size()) + " patches glued C^0";
   }
+  std::string structured_preconditioner() const override { return kPatchFastDiagonalization; }
+  // Measured (docs/SOLVERS.md, "Several patches"): without a coarse space its CG count grows
+  // with refinement and the number of patches, past BoomerAMG's; by name only.
+  bool structured_preconditioner_is_automatic() const override { return false; }
+  // One fast diagonalization per patch, summed (additive Schwarz, no coarse space): each
+  // patch's block is its free functions, interface functions included (so they overlap), the
+  // tensor hull of them inverted and restricted to them.
+  std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& layout,
+                                                                 const Eigen::SparseMatrix<double>& lower,
+                                                                 const PoissonProblem& problem) const override {
+    const Eigen::VectorXd diagonal = lower.diagonal();
+    std::vector<SchwarzBlock> blocks;
+    for (size_t k = 0; k < d_.patches.size(); ++k) {
+      const TensorDiscretization& t = d_.patches[k];
+      const int nu = t.space_u.num_functions(), nv = t.space_v.num_functions();
+      std::vector<bool> free_u(nu, false), free_v(nv, false);
+      for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i)
+          if (layout.dof[d_.global_function[k][i + nu * j]] >= 0) free_u[i] = free_v[j] = true;
+      DofLayout hull;
+      hull.dof.assign(static_cast<size_t>(nu) * nv, -1);
+      SchwarzBlock b;
+      std::vector<Eigen::Triplet<double>> diag;
+      for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i) {
+          if (!free_u[i] || !free_v[j]) continue;
+          const int f = i + nu * j, local = hull.num_free(), global = layout.dof[d_.global_function[k][f]];
+          hull.dof[f] = local;
+          hull.function_of_dof.push_back(f);
+          b.dofs.push_back(global);
+          diag.emplace_back(local, local, global >= 0 ? diagonal[global] : 0.0);
+        }
+      Eigen::SparseMatrix<double> local_lower(hull.num_free(), hull.num_free());
+      local_lower.setFromTriplets(diag.begin(), diag.end());
+      NitscheEnds ends;
+      ends.factor = problem.nitsche_penalty;
+      for (size_t id = 0; id < exterior_.size(); ++id)
+        if (exterior_[id].patch == static_cast<int>(k) && problem.dirichlet_method == DirichletMethod::kNitsche &&
+            id < problem.boundary.size() && problem.boundary[id].kind == BoundaryKind::kDirichlet)
+          ends.sides[cell_side_of_patch_side(exterior_[id].side)] = true;
+      b.local = fast_diagonalization(t.space_u, t.space_v, hull, local_lower,
+                                     patch_separable_coefficients(t, *patch_maps_[k]), ends);
+      if (!b.local) throw std::logic_error("fast diagonalization of a patch: its free functions' hull is not a tensor product");
+      blocks.push_back(std::move(b));
+    }
+    return additive_schwarz(std::move(blocks), layout.num_free());
+  }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9},
             {.key = "patches", .value = long(d_.patches.size()), .text = std::to_string(d_.patches.size())}};
@@ -45,6 +101,8 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
   TensorSpaceOptions options_;
   MultiPatchTensorDiscretization d_;
   std::unique_ptr<GeometryMap> geometry_;
+  std::vector<const PatchGeometryMap*> patch_maps_;  // owned by geometry_
+  std::vector<PatchSideRef> exterior_;               // boundary id -> patch side
 };
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "solver/fast_diagonalization.hpp"
+#include "families/tensor/patch_separable_coefficients.hpp"
 #include "basis/core/geometry_map.hpp"
 #include "families/tensor/multipatch_tensor_space.hpp"
 #include "families/tensor/tensor_case.hpp"
@@ -78,7 +79,7 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
     ends.factor = problem.nitsche_penalty;
     if (problem.dirichlet_method == DirichletMethod::kNitsche && problem.boundary.size() == 4)
       for (int s = 0; s < 4; ++s) ends.sides[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
-    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower, separable_coefficients(), ends);
+    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower, patch_separable_coefficients(d_, *geometry_), ends);
   }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
@@ -86,48 +87,6 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
   const MeshPart* part() const override { return d_.part ? &*d_.part : nullptr; }
 
  private:
-  // The stiffness coefficients at element midpoints, in parameter derivatives
-  // x_u = (dx/du_ref) / h_u: c11 = |x_v|^2 / det, c22 = |x_u|^2 / det; then their fit. Only
-  // every row against 32 sampled columns and every column against 32 sampled rows are
-  // evaluated: O(n) elements instead of n^2, and still exact for separable maps. From the
-  // patch itself, so that a part of the space (which holds a few rows) gets the whole fit.
-  SeparableCoefficients separable_coefficients() const {
-    const int nu = d_.space_u.num_elements(), nv = d_.space_v.num_elements();
-    auto sample = [](int n) {
-      std::vector<int> v;
-      const int m = std::min(n, 32);
-      for (int k = 0; k < m; ++k) v.push_back(m == 1 ? 0 : static_cast<int>((static_cast<long>(k) * (n - 1)) / (m - 1)));
-      return v;
-    };
-    auto lengths = [](const BSplineBasis1D& b) {
-      std::vector<double> h;
-      for (int s : b.element_spans()) h.push_back(b.knots()[s + 1] - b.knots()[s]);
-      return h;
-    };
-    const std::vector<double> h_u = lengths(d_.space_u), h_v = lengths(d_.space_v);
-    const std::vector<int> rows = sample(nu), columns = sample(nv);
-    std::vector<double> c11(static_cast<size_t>(nu) * nv, 1.0), c22(c11.size(), 1.0);
-    GeometryAtPoints at;
-    bool ok = true;
-    auto measure = [&](int i, int j) {
-      const size_t k = i + static_cast<size_t>(nu) * j;
-      geometry_->evaluate_element_at_rule(i, j, 1, 1, at);  // the one-point Gauss rule: the midpoint
-      const double hu = h_u[i], hv = h_v[j];
-      const double xu = at.jacobian(0, 0) / hu, xv = at.jacobian(0, 1) / hv;
-      const double yu = at.jacobian(0, 2) / hu, yv = at.jacobian(0, 3) / hv;
-      const double det = xu * yv - xv * yu;
-      if (!(det > 0)) return void(ok = false);  // assembly refuses such maps before this is built
-      c11[k] = (xv * xv + yv * yv) / det;
-      c22[k] = (xu * xu + yu * yu) / det;
-    };
-    for (int i = 0; i < nu; ++i)
-      for (int j : columns) measure(i, j);
-    for (int j = 0; j < nv; ++j)
-      for (int i : rows) measure(i, j);
-    if (!ok) return {};
-    return SeparableCoefficients::fit(nu, nv, c11, c22, rows, columns);
-  }
-
   TensorSpaceOptions options_;
   TensorDiscretization d_;
   std::unique_ptr<PatchGeometryMap> geometry_;
