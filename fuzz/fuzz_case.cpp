@@ -1,4 +1,5 @@
-// Case files, TOML or JSON (KNOTWORK_FUZZ_EXTENSION): load_case reads the top level, the
+// Case files (KNOTWORK_FUZZ_EXTENSION toml, json, or xml: a G+Smo problem file): load_case
+// reads the top level, the
 // family's [space] (with the files it names: T-meshes, collections, OBJ meshes, gluing data,
 // NURBS patches) and derives the problem symbolically. For a case that loads, the cheap
 // checks every command makes before building: the command-line overrides and the family's

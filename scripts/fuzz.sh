@@ -12,7 +12,7 @@ set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 seconds="${1:-600}"
 shift || true
-all=(fuzz_case_toml fuzz_case_json fuzz_tmesh fuzz_collection fuzz_quad_mesh fuzz_gluing fuzz_expression)
+all=(fuzz_case_toml fuzz_case_json fuzz_case_xml fuzz_geometry_txt fuzz_tmesh fuzz_collection fuzz_quad_mesh fuzz_gluing fuzz_expression)
 harnesses=("$@")
 if [[ $# -eq 0 ]]; then harnesses=("${all[@]}"); fi
 
@@ -30,6 +30,8 @@ seed() {  # seed HARNESS DIR: the shipped inputs of that format
                       /usr/bin/python3 -c 'import json,sys,tomllib; print(json.dumps(tomllib.load(open(sys.argv[1],"rb"))))' "$f" \
                         > "$dir/$(basename "$f" .toml).json"
                     done ;;
+    fuzz_case_xml) cp "$root"/cases/*.xml "$root"/cases/geometries/*.xml "$root"/tests/bad_inputs/*.xml "$dir"/ ;;
+    fuzz_geometry_txt) cp "$root"/cases/geometries/*.txt "$root"/tests/bad_inputs/*.txt "$dir"/ ;;
     fuzz_tmesh) cp "$root"/cases/tmeshes/*.toml "$root"/tests/bad_inputs/tmesh_*.toml "$dir"/ ;;
     fuzz_collection) cp "$root"/cases/collections/*.json "$root"/tests/bad_inputs/collection_*.json "$dir"/ ;;
     fuzz_quad_mesh) cp "$root"/cases/meshes/*.obj "$root"/tests/bad_inputs/*.obj "$dir"/ ;;
