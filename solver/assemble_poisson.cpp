@@ -633,7 +633,7 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
 }
 
 DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
-                                 const QuadratureOptions& quadrature, CellRange cells, int function_offset) {
+                                 const QuadratureOptions& quadrature, CellRange cells, const MeshPart& part) {
   DirichletPieces out;
   const int last = cells.last < 0 ? mesh.num_cells() : cells.last;
   auto is_dirichlet = [&](int id) {
@@ -653,7 +653,7 @@ DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geom
         for (Eigen::Index a = 0; a < C.rows(); ++a)
           if (std::abs(C(a, b)) > 1e-12 * scale && local[ids[a]] < 0) {
             local[ids[a]] = static_cast<int>(out.functions.size());
-            out.functions.push_back(ids[a] + function_offset);
+            out.functions.push_back(part.global(ids[a]));
           }
     }
   }
@@ -669,7 +669,7 @@ DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geom
                              out.load[local[ids[a]]] += re[a];
                              for (size_t b = 0; b < ids.size(); ++b)
                                if (local[ids[b]] >= 0)
-                                 out.mass.emplace_back(ids[a] + function_offset, ids[b] + function_offset, Me(a, b));
+                                 out.mass.emplace_back(part.global(ids[a]), part.global(ids[b]), Me(a, b));
                            }
                          });
   return out;
@@ -716,7 +716,7 @@ Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap
   fixed.assign(nf, false);
   Eigen::VectorXd result = Eigen::VectorXd::Zero(nf);
   for (const auto& [f, value] :
-       solve_dirichlet_projection(dirichlet_pieces(mesh, geometry, problem, quadrature, CellRange{}, 0))) {
+       solve_dirichlet_projection(dirichlet_pieces(mesh, geometry, problem, quadrature, CellRange{}, MeshPart{}))) {
     fixed[f] = true;
     result[f] = value;
   }

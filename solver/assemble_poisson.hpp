@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
+#include "basis/core/mesh_part.hpp"
 #include "basis/core/geometry_map.hpp"
 #include "solver/poisson_problem.hpp"
 #include "solver/sparsity.hpp"
@@ -89,7 +90,7 @@ Eigen::VectorXd project_dirichlet_data(const BezierMesh& mesh, const GeometryMap
 
 // The Dirichlet projection in two steps, so that ranks holding parts of a mesh can each bring
 // their cells' share: the functions of `cells` whose trace on a Dirichlet side is not zero
-// (numbered function + function_offset), and their boundary mass matrix and load entries
+// (numbered globally: part.global), and their boundary mass matrix and load entries
 // there (function numbers; entries of the same pair add up).
 struct DirichletPieces {
   std::vector<int> functions;
@@ -97,7 +98,7 @@ struct DirichletPieces {
   std::vector<Eigen::Triplet<double>> mass;
 };
 DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
-                                 const QuadratureOptions& quadrature, CellRange cells, int function_offset);
+                                 const QuadratureOptions& quadrature, CellRange cells, const MeshPart& part);
 // The projected value of every function of the pieces (sorted by function number). Throws
 // std::runtime_error when the traces are linearly dependent.
 std::vector<std::pair<int, double>> solve_dirichlet_projection(const DirichletPieces& pieces);

@@ -67,7 +67,7 @@ std::vector<std::pair<int, double>> project_dirichlet_over_ranks(const BezierMes
                                                                  const PoissonProblem& problem,
                                                                  const QuadratureOptions& quadrature,
                                                                  const MeshPart& part) {
-  const DirichletPieces mine = dirichlet_pieces(mesh, geometry, problem, quadrature, part.owned, part.function_offset);
+  const DirichletPieces mine = dirichlet_pieces(mesh, geometry, problem, quadrature, part.owned, part);
   // Sent as doubles (function numbers < 2^31 are exact): counts, then functions and load, then
   // the mass entries as (row, column, value).
   std::vector<double> flat{double(mine.functions.size()), double(mine.mass.size())};

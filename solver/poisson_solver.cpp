@@ -106,14 +106,14 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   std::vector<bool> fixed(mesh.num_functions(), false);
   Eigen::VectorXd fixed_values = Eigen::VectorXd::Zero(mesh.num_functions());
   for (int f = 0; f < mesh.num_functions(); ++f) {
-    const int g = f + part.function_offset, k = fixed_below(g);
+    const int g = part.global(f), k = fixed_below(g);
     if (k < static_cast<int>(fixed_functions.size()) && fixed_functions[k] == g)
       fixed[f] = true, fixed_values[f] = dirichlet[k].second;
   }
   const DofLayout layout = make_dof_layout(mesh.num_functions(), fixed);
   std::vector<int> row_of_dof(layout.num_free());
   for (int d = 0; d < layout.num_free(); ++d) {
-    const int g = layout.function_of_dof[d] + part.function_offset;
+    const int g = part.global(layout.function_of_dof[d]);
     row_of_dof[d] = g - fixed_below(g);
   }
   Eigen::SparseMatrix<double> K = lower_pattern_matrix(mesh, layout);
@@ -133,7 +133,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     if (sol.zero_mean)  // each rank adds its own rows
       for (int d = 0; d < layout.num_free(); ++d) {
         const int g = layout.function_of_dof[d];
-        if (g >= part.first_owned_function && g < part.last_owned_function) rhs[d] += mean.compatible_load(g);
+        if (part.global(g) >= part.first_owned_function && part.global(g) < part.last_owned_function) rhs[d] += mean.compatible_load(g);
       }
   });
   sol.timings.assembly = seconds_since(t);

@@ -90,11 +90,13 @@ void add_cell_fields(vtkUnstructuredGrid* grid, const CellFields& fields, int nc
 }
 
 // On a mesh of several patches, the "patch" cell array: the patch each cell lies on (its
-// position in the domain, from 0), `quads` VTK cells per mesh cell. Decided on the whole mesh,
-// so that every piece of a parallel output has the array or none has.
+// position in the domain, from 0), `quads` VTK cells per mesh cell. Decided on the whole mesh
+// a process holds (a part: its patches and its halo), by a cell off patch 0: every piece of a
+// parallel output of a connected multipatch domain then has the array (rank 0's part holds
+// patch 0 and the halo of a later one; the others hold later patches).
 void add_patch_field(vtkUnstructuredGrid* grid, const BezierMesh& mesh, int first, int last, int quads) {
   bool several = false;
-  for (int c = 1; c < mesh.num_cells() && !several; ++c) several = mesh.cell(c).patch != mesh.cell(0).patch;
+  for (int c = 0; c < mesh.num_cells() && !several; ++c) several = mesh.cell(c).patch != 0;
   if (!several) return;
   auto a = scalar_array("patch", static_cast<vtkIdType>(last - first) * quads);
   for (int c = first; c < last; ++c)

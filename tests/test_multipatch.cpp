@@ -3,6 +3,7 @@
 // (the same space: C0 knots where the cuts are), and turning a patch's parameter square in
 // the file changes nothing.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <fstream>
@@ -11,6 +12,7 @@
 
 #include "basis/core/bspline_basis.hpp"
 #include "basis/core/input_error.hpp"
+#include "basis/tensor/multipatch_tensor.hpp"
 #include "cases/geometries.hpp"
 #include "cases/geometry_file.hpp"
 #include "cli_sandbox.hpp"
@@ -495,5 +497,64 @@ TEST_CASE("The per-patch fast diagonalization solves multipatch cases to the dir
     const Result a = box.run("run --json --no-output --elements 6 auto.toml");
     REQUIRE(a.code == 0);
     CHECK(a.out.find("\"preconditioner\": \"boomeramg\"") != std::string::npos);
+  }
+}
+
+TEST_CASE("Parts of a multipatch space hold whole patches and the halo their functions need, checked against the whole",
+          "[multipatch][parts]") {
+  // By brute force against the whole space: the owned cells of all ranks tile it (same patch,
+  // box, functions by global number, extraction), the owned functions tile [0, N), and every
+  // cell of the whole space that carries an owned function is in the rank's part.
+  for (const char* name : {"plus_12patches.txt", "ring_4patches.txt", "lshape_3patches.xml"}) {
+    const MultiPatch domain = read_geometry_file(kGeometries + name);
+    TensorSpaceOptions o;
+    o.degree = {2, 2};
+    o.elements_per_span = {3, 3};
+    o.rational = std::string(name).find("lshape") == std::string::npos;
+    const MultiPatchTensorDiscretization whole = build_multipatch_tensor(domain, o);
+    const BezierMesh& W = whole.mesh;
+    for (int ranks : {2, 3}) {
+      INFO(name << ", " << ranks << " ranks");
+      std::vector<int> cell_owner(W.num_cells(), -1), function_owner(W.num_functions(), -1);
+      for (int rank = 0; rank < ranks; ++rank) {
+        const MultiPatchTensorPart p = build_multipatch_tensor_part(domain, o, rank, ranks);
+        const BezierMesh& M = p.mesh;
+        REQUIRE(p.part.global_functions == W.num_functions());
+        REQUIRE(p.part.global_cells == W.num_cells());
+        for (int g = p.part.first_owned_function; g < p.part.last_owned_function; ++g) {
+          REQUIRE(function_owner[g] < 0);
+          function_owner[g] = rank;
+        }
+        // Each part cell is the whole space's cell with the same patch and box.
+        std::vector<int> whole_cell(M.num_cells(), -1);
+        for (int c = 0; c < M.num_cells(); ++c) {
+          const BezierCell& a = M.cell(c);
+          for (int w = whole.first_cell[a.patch]; w < whole.first_cell[a.patch + 1]; ++w) {
+            const BezierCell& b = W.cell(w);
+            if (a.u0 == b.u0 && a.u1 == b.u1 && a.v0 == b.v0 && a.v1 == b.v1) whole_cell[c] = w;
+          }
+          REQUIRE(whole_cell[c] >= 0);
+          const int w = whole_cell[c];
+          CHECK(M.cell(c).boundary == W.cell(w).boundary);
+          CHECK((M.extraction(c) - W.extraction(w)).cwiseAbs().maxCoeff() == 0);
+          const auto fa = M.functions(c), fb = W.functions(w);
+          REQUIRE(fa.size() == fb.size());
+          for (size_t k = 0; k < fa.size(); ++k) CHECK(p.part.global(fa[k]) == fb[k]);
+          if (c >= p.part.owned.first && c < p.part.owned.last) {
+            REQUIRE(cell_owner[w] < 0);
+            cell_owner[w] = rank;
+          }
+        }
+        // The halo: every whole cell carrying an owned function is in the part.
+        std::vector<char> held(W.num_cells(), 0);
+        for (int w : whole_cell) held[w] = 1;
+        for (int w = 0; w < W.num_cells(); ++w)
+          for (int f : W.functions(w))
+            if (f >= p.part.first_owned_function && f < p.part.last_owned_function) CHECK(held[w]);
+        CHECK(M.num_cells() < W.num_cells());
+      }
+      CHECK(std::count(cell_owner.begin(), cell_owner.end(), -1) == 0);
+      CHECK(std::count(function_owner.begin(), function_owner.end(), -1) == 0);
+    }
   }
 }

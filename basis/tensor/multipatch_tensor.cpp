@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <sstream>
 
 #include "basis/core/glue_patches.hpp"
@@ -10,9 +11,6 @@
 namespace knotwork {
 
 namespace {
-
-// The space along side 1..4 of a patch (sides 1 and 2 run along v).
-const BSplineBasis1D& side_basis(const TensorDiscretization& d, int side) { return side <= 2 ? d.space_v : d.space_u; }
 
 // The knots mapped onto [0, 1], reversed (t -> 1 - t) when asked.
 std::vector<double> unit_knots(const BSplineBasis1D& b, bool reversed) {
@@ -36,16 +34,15 @@ std::string describe_knots(const BSplineBasis1D& b, const std::vector<double>& k
 
 }  // namespace
 
-MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain, const TensorSpaceOptions& options) {
-  MultiPatchTensorDiscretization out;
-  for (const NurbsPatch& patch : domain.patches) out.patches.push_back(build_tensor_discretization(patch, options));
-  auto patch_name = [&](int p) { return "patch " + patch_label(domain, p); };
+namespace {
 
-  // The knots along both sides of every interface first: a mismatch is named in knots, which
-  // says more than the traces glue_patches compares.
+// The knots along both sides of every interface: a mismatch is named in knots, which says
+// more than the traces glue_patches compares.
+void check_interface_knots(const MultiPatch& domain, const std::vector<std::array<BSplineBasis1D, 2>>& bases) {
+  auto patch_name = [&](int p) { return "patch " + patch_label(domain, p); };
   for (const PatchInterface& f : domain.interfaces) {
-    const BSplineBasis1D& a = side_basis(out.patches[f.a.patch], f.a.side);
-    const BSplineBasis1D& b = side_basis(out.patches[f.b.patch], f.b.side);
+    const BSplineBasis1D& a = bases[f.a.patch][f.a.side <= 2 ? 1 : 0];
+    const BSplineBasis1D& b = bases[f.b.patch][f.b.side <= 2 ? 1 : 0];
     const std::vector<double> ka = unit_knots(a, false), kb = unit_knots(b, f.reversed);
     bool same = a.degree() == b.degree() && ka.size() == kb.size();
     for (size_t i = 0; same && i < ka.size(); ++i) same = std::abs(ka[i] - kb[i]) <= 1e-12;
@@ -56,12 +53,171 @@ MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain,
                           ") do not match: a conforming space needs the same degree, knot spans and elements along an "
                           "interface");
   }
+}
+
+// The functions along side 1..4 of an nu x nv tensor space (function i + nu j), t increasing.
+std::vector<int> side_functions(int nu, int nv, int side) {
+  std::vector<int> out;
+  const int n = side <= 2 ? nv : nu;
+  for (int k = 0; k < n; ++k) out.push_back(side == 1 ? nu * k : side == 2 ? nu - 1 + nu * k : side == 3 ? k : k + nu * (nv - 1));
+  return out;
+}
+
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+}  // namespace
+
+MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain, const TensorSpaceOptions& options) {
+  MultiPatchTensorDiscretization out;
+  for (const NurbsPatch& patch : domain.patches) out.patches.push_back(build_tensor_discretization(patch, options));
+  std::vector<std::array<BSplineBasis1D, 2>> bases;
+  for (const TensorDiscretization& d : out.patches) bases.push_back({d.space_u, d.space_v});
+  check_interface_knots(domain, bases);
   std::vector<const BezierMesh*> meshes;
   for (const TensorDiscretization& d : out.patches) meshes.push_back(&d.mesh);
   GluedPatches glued = glue_patches(domain, meshes);
   out.mesh = std::move(glued.mesh);
   out.first_cell = std::move(glued.first_cell);
   out.global_function = std::move(glued.global_function);
+  return out;
+}
+
+MultiPatchTensorPart build_multipatch_tensor_part(const MultiPatch& domain, const TensorSpaceOptions& options, int rank,
+                                                  int ranks) {
+  const int np = domain.num_patches();
+  if (np < ranks)
+    throw std::invalid_argument("the domain has " + std::to_string(np) + " patches, fewer than the " + std::to_string(ranks) +
+                                " processes that share them patch by patch");
+  // Every patch's univariate bases: enough to number all functions.
+  std::vector<std::array<BSplineBasis1D, 2>> bases;
+  std::vector<int> first_function{0};
+  std::vector<long> cells{0};
+  for (const NurbsPatch& p : domain.patches) {
+    bases.push_back(tensor_space_bases(p, options));
+    first_function.push_back(first_function.back() + bases.back()[0].num_functions() * bases.back()[1].num_functions());
+    cells.push_back(cells.back() + long(bases.back()[0].num_elements()) * bases.back()[1].num_elements());
+  }
+  check_interface_knots(domain, bases);
+  std::vector<int> parent(first_function.back());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const PatchInterface& f : domain.interfaces) {
+    const std::vector<int> a = side_functions(bases[f.a.patch][0].num_functions(), bases[f.a.patch][1].num_functions(), f.a.side);
+    const std::vector<int> b = side_functions(bases[f.b.patch][0].num_functions(), bases[f.b.patch][1].num_functions(), f.b.side);
+    const size_t n = a.size();
+    for (size_t k = 0; k < n; ++k)
+      parent[find_root(parent, first_function[f.a.patch] + a[k])] =
+          find_root(parent, first_function[f.b.patch] + b[f.reversed ? n - 1 - k : k]);
+  }
+  // Numbered patch by patch, a shared function where it first occurs (as glue_patches does).
+  std::vector<int> root_number(parent.size(), -1), number(parent.size());
+  std::vector<int> first_number{0};  // functions first numbered in patch k: [first_number[k], first_number[k+1])
+  int count = 0;
+  for (int p = 0; p < np; ++p) {
+    for (int g = first_function[p]; g < first_function[p + 1]; ++g) {
+      int& r = root_number[find_root(parent, g)];
+      if (r < 0) r = count++;
+      number[g] = r;
+    }
+    first_number.push_back(count);
+  }
+  parent.clear();
+  root_number.clear();
+  // Whole patches per rank, balanced by cells: patch k goes to the rank its middle cell falls in.
+  std::vector<int> owner(np);
+  for (int p = 0; p < np; ++p)
+    owner[p] = std::min(ranks - 1, static_cast<int>((cells[p] + cells[p + 1]) / 2 * ranks / cells[np]));
+  for (int r = 0; r < ranks; ++r)  // a rank left without a patch: equal numbers of patches instead
+    if (std::find(owner.begin(), owner.end(), r) == owner.end()) {
+      for (int p = 0; p < np; ++p) owner[p] = static_cast<int>(long(p) * ranks / np);
+      break;
+    }
+  int own_from = np, own_to = 0;
+  for (int p = 0; p < np; ++p)
+    if (owner[p] == rank) own_from = std::min(own_from, p), own_to = p + 1;
+  MultiPatchTensorPart out;
+  MeshPart& part = out.part;
+  part.first_owned_function = own_from < own_to ? first_number[own_from] : 0;
+  part.last_owned_function = own_from < own_to ? first_number[own_to] : 0;
+  part.global_functions = count;
+  part.global_cells = static_cast<int>(cells[np]);
+  const auto owned_function = [&](int g) { return g >= part.first_owned_function && g < part.last_owned_function; };
+
+  // The pieces: the owned patches whole, then later patches' cells that hold owned functions.
+  const std::vector<PatchSideRef> exterior = exterior_sides(domain);
+  std::vector<char> is_local(count, 0);
+  std::vector<std::vector<int>> cell_functions;  // per local cell, global numbers
+  std::vector<std::pair<int, int>> cell_source;  // per local cell: piece, patch-local cell
+  for (int p = own_from; p < np; ++p) {
+    if (p >= own_to) {  // a halo patch only if it holds an owned function
+      bool holds = false;
+      for (int g = first_function[p]; g < first_function[p + 1] && !holds; ++g) holds = owned_function(number[g]);
+      if (!holds) continue;
+    }
+    TensorDiscretization d = build_tensor_discretization(domain.patches[p], options);
+    std::vector<int> chosen;
+    for (int c = 0; c < d.mesh.num_cells(); ++c) {
+      bool take = p < own_to;
+      for (int f : d.mesh.functions(c)) take = take || owned_function(number[first_function[p] + f]);
+      if (take) chosen.push_back(c);
+    }
+    const int piece = static_cast<int>(out.built.size());
+    for (int c : chosen) {
+      std::vector<int> g;
+      for (int f : d.mesh.functions(c)) g.push_back(number[first_function[p] + f]), is_local[g.back()] = 1;
+      cell_functions.push_back(std::move(g));
+      cell_source.push_back({piece, c});
+    }
+    out.patch_of_piece.push_back(p);
+    out.cells_of_piece.push_back(std::move(chosen));
+    out.built.push_back(std::move(d));
+  }
+  // Local numbers in increasing global order.
+  std::vector<int> local_of(count, -1);
+  for (int g = 0; g < count; ++g)
+    if (is_local[g]) local_of[g] = static_cast<int>(part.global_function.size()), part.global_function.push_back(g);
+  is_local.clear();
+  BezierMesh& mesh = out.mesh;
+  mesh.set_num_functions(static_cast<int>(part.global_function.size()));
+  std::vector<std::string> names;
+  for (const PatchSideRef& s : exterior) names.push_back(side_name(domain, s));
+  mesh.set_boundary_names(names);
+  if (options.rational) {
+    Eigen::VectorXd w(part.global_function.size());
+    for (size_t piece = 0; piece < out.built.size(); ++piece) {
+      const int p = out.patch_of_piece[piece];
+      const BezierMesh& m = out.built[piece].mesh;
+      for (int f = 0; f < m.num_functions(); ++f)
+        if (const int l = local_of[number[first_function[p] + f]]; l >= 0) w[l] = m.weights()[f];
+    }
+    mesh.set_weights(std::move(w));
+  }
+  std::vector<std::vector<int>> extraction(out.built.size());
+  out.first_cell.push_back(0);
+  std::vector<int> ids;
+  for (size_t k = 0; k < cell_source.size(); ++k) {
+    const auto [piece, c] = cell_source[k];
+    const BezierMesh& m = out.built[piece].mesh;
+    const int p = out.patch_of_piece[piece];
+    if (extraction[piece].empty()) extraction[piece].assign(m.num_distinct_extractions(), -1);
+    int& e = extraction[piece][m.extraction_id(c)];
+    if (e < 0) e = mesh.add_extraction(m.pooled_extraction(m.extraction_id(c)));
+    std::array<int, 4> boundary_id{-1, -1, -1, -1};
+    for (size_t s = 0; s < exterior.size(); ++s)
+      if (exterior[s].patch == p) boundary_id[cell_side_of_patch_side(exterior[s].side)] = static_cast<int>(s);
+    BezierCell cell = m.cell(c);
+    cell.patch = p;
+    for (int s = 0; s < 4; ++s)
+      if (cell.boundary[s] >= 0) cell.boundary[s] = boundary_id[s];
+    ids.clear();
+    for (int g : cell_functions[k]) ids.push_back(local_of[g]);
+    mesh.add_cell(cell, ids, e);
+    if (own_from + piece < own_to) part.owned.last = mesh.num_cells();
+  }
+  for (const std::vector<int>& chosen : out.cells_of_piece) out.first_cell.push_back(out.first_cell.back() + static_cast<int>(chosen.size()));
+  part.owned.first = 0;
   return out;
 }
 

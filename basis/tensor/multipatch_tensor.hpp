@@ -23,4 +23,24 @@ struct MultiPatchTensorDiscretization {
 // or their weights differ. The mesh's boundary ids are exterior_sides(domain), named "P:S".
 MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain, const TensorSpaceOptions& options);
 
+// One process's part of that space (under mpirun): rank r of R owns a contiguous run of whole
+// patches (balanced by cells) and the functions numbered first in them, which are one
+// contiguous run of the global numbering (functions are numbered patch by patch, a shared one
+// where it first occurs). The mesh holds the owned patches' cells, then the cells of later
+// patches on which owned functions live (the halo along their interfaces), with the functions
+// on those cells numbered locally in increasing global order (part.global_function). Every
+// rank numbers all functions from the patches' univariate bases, and builds the cells of
+// the patches it owns or takes halo cells from only. std::invalid_argument when there are
+// fewer patches than ranks; GeometryError as build_multipatch_tensor.
+struct MultiPatchTensorPart {
+  BezierMesh mesh;
+  MeshPart part;
+  std::vector<int> patch_of_piece;      // the patches whose cells the mesh holds, in order
+  std::vector<int> first_cell;          // piece k's cells are first_cell[k] .. first_cell[k+1]-1
+  std::vector<TensorDiscretization> built;  // per piece: its patch's whole space (cells numbered locally)
+  std::vector<std::vector<int>> cells_of_piece;  // per piece: the patch-local cells the mesh holds
+};
+MultiPatchTensorPart build_multipatch_tensor_part(const MultiPatch& domain, const TensorSpaceOptions& options, int rank,
+                                                  int ranks);
+
 }  // namespace knotwork

@@ -92,16 +92,29 @@ Eigen::MatrixXd kronecker(const Eigen::MatrixXd& cu, const Eigen::MatrixXd& cv) 
 
 }  // namespace
 
-TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& o,
-                                                 RowShare share) {
+namespace {
+
+std::array<DirectionPlan, 2> plan_patch(const NurbsPatch& patch, const TensorSpaceOptions& o) {
   patch.validate();
-  TensorDiscretization d;
   const int ru = o.continuity[0] < 0 ? o.degree[0] - 1 : o.continuity[0];
   const int rv = o.continuity[1] < 0 ? o.degree[1] - 1 : o.continuity[1];
   if (o.elements_per_span[0] < 1 || o.elements_per_span[1] < 1)
     throw std::invalid_argument("elements must be >= 1");
-  auto pu = plan_direction(patch.basis_u, o.degree[0], ru, o.elements_per_span[0], o.rational, o.extra_knots[0], "u");
-  auto pv = plan_direction(patch.basis_v, o.degree[1], rv, o.elements_per_span[1], o.rational, o.extra_knots[1], "v");
+  return {plan_direction(patch.basis_u, o.degree[0], ru, o.elements_per_span[0], o.rational, o.extra_knots[0], "u"),
+          plan_direction(patch.basis_v, o.degree[1], rv, o.elements_per_span[1], o.rational, o.extra_knots[1], "v")};
+}
+
+}  // namespace
+
+std::array<BSplineBasis1D, 2> tensor_space_bases(const NurbsPatch& patch, const TensorSpaceOptions& options) {
+  const auto plan = plan_patch(patch, options);
+  return {plan[0].space, plan[1].space};
+}
+
+TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& o,
+                                                 RowShare share) {
+  TensorDiscretization d;
+  auto [pu, pv] = plan_patch(patch, o);
   d.space_u = pu.space;
   d.space_v = pv.space;
   d.geometry_u = pu.geometry;

@@ -57,4 +57,8 @@ struct RowShare {
 TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& options,
                                                  RowShare share = {});
 
+// The analysis space's univariate bases alone (what build_tensor_discretization refines the
+// patch into, without building any cell): cheap, for counting and numbering functions.
+std::array<BSplineBasis1D, 2> tensor_space_bases(const NurbsPatch& patch, const TensorSpaceOptions& options);
+
 }  // namespace knotwork

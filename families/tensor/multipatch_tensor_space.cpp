@@ -15,6 +15,13 @@ namespace {
 
 constexpr const char* kPatchFastDiagonalization = "fast_diagonalization";
 
+std::string describe_multipatch(const TensorSpaceOptions& o, int patches) {
+  const int ru = o.continuity[0] < 0 ? o.degree[0] - 1 : o.continuity[0];
+  return std::string(o.rational ? "NURBS" : "B-spline") + ", degree " + std::to_string(o.degree[0]) + "x" +
+         std::to_string(o.degree[1]) + ", C^" + std::to_string(ru) + " at new knots, " + std::to_string(patches) +
+         " patches glued C^0";
+}
+
 class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
  public:
   MultiPatchTensorSpace(const CaseDescription& c, const TensorSpaceOptions& options) : options_(options) {
@@ -39,12 +46,7 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
   std::array<int, 2> degree() const override { return options_.degree; }
-  std::string description() const override {
-    const int ru = options_.continuity[0] < 0 ? options_.degree[0] - 1 : options_.continuity[0];
-    return std::string(options_.rational ? "NURBS" : "B-spline") + ", degree " + std::to_string(options_.degree[0]) + "x" +
-           std::to_string(options_.degree[1]) + ", C^" + std::to_string(ru) + " at new knots, " +
-           std::to_string(d_.patches.size()) + " patches glued C^0";
-  }
+  std::string description() const override { return describe_multipatch(options_, static_cast<int>(d_.patches.size())); }
   std::string structured_preconditioner() const override { return kPatchFastDiagonalization; }
   // Measured (docs/SOLVERS.md, "Several patches"): without a coarse space its CG count grows
   // with refinement and the number of patches, past BoomerAMG's; by name only.
@@ -105,7 +107,75 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
   std::vector<PatchSideRef> exterior_;               // boundary id -> patch side
 };
 
+// Some cells of another map, renumbered: cell k here is cell cells[k] there.
+class SubsetGeometryMap final : public GeometryMap {
+ public:
+  SubsetGeometryMap(const GeometryMap& whole, std::vector<int> cells) : whole_(whole), cells_(std::move(cells)) {}
+  int dimension() const override { return whole_.dimension(); }
+  void evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const override {
+    whole_.evaluate_at_rule(cells_[cell], nu, nv, out);
+  }
+  void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, GeometryAtPoints& out) const override {
+    whole_.evaluate(cells_[cell], u, v, out);
+  }
+  BezierGeometryCell bezier_cell(int cell) const override { return whole_.bezier_cell(cells_[cell]); }
+  bool second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, Eigen::MatrixXd& out) const override {
+    return whole_.second_derivatives(cells_[cell], u, v, out);
+  }
+
+ private:
+  const GeometryMap& whole_;
+  std::vector<int> cells_;
+};
+
+// One rank's part (basis/tensor's build_multipatch_tensor_part): the owned patches and the
+// halo cells of later ones, each patch's map over the cells the part holds.
+class MultiPatchTensorPartSpace final : public SplineSpace, public SpaceReport {
+ public:
+  MultiPatchTensorPartSpace(const CaseDescription& c, const TensorSpaceOptions& options, int rank, int ranks)
+      : options_(options) {
+    try {
+      d_ = build_multipatch_tensor_part(c.domain, options, rank, ranks);
+    } catch (const GeometryError& e) {
+      throw InputError(c.path + ": [geometry] file: " + e.what());
+    } catch (const std::invalid_argument& e) {
+      throw InputError(c.path + ": [space]: " + e.what());
+    }
+    std::vector<std::unique_ptr<GeometryMap>> maps;
+    for (size_t k = 0; k < d_.built.size(); ++k) {
+      const TensorDiscretization& t = d_.built[k];
+      patch_maps_.push_back(std::make_unique<PatchGeometryMap>(
+          t.mesh, t.patch, PatchGeometryMap::ElementGrid{t.space_u.breakpoints(), t.space_v.breakpoints(), 0}));
+      maps.push_back(std::make_unique<SubsetGeometryMap>(*patch_maps_.back(), d_.cells_of_piece[k]));
+    }
+    geometry_ = std::make_unique<PiecewiseGeometryMap>(std::move(maps), d_.first_cell);
+    patches_ = c.domain.num_patches();
+  }
+  const SpaceReport& presentation() const override { return *this; }
+  const BezierMesh& mesh() const override { return d_.mesh; }
+  const GeometryMap& geometry() const override { return *geometry_; }
+  std::array<int, 2> degree() const override { return options_.degree; }
+  const MeshPart* part() const override { return &d_.part; }
+  std::string description() const override { return describe_multipatch(options_, patches_); }
+  std::vector<ReportField> report() const override {
+    return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9},
+            {.key = "patches", .value = long(patches_), .text = std::to_string(patches_)}};
+  }
+
+ private:
+  TensorSpaceOptions options_;
+  MultiPatchTensorPart d_;
+  std::vector<std::unique_ptr<PatchGeometryMap>> patch_maps_;  // over each piece's whole patch
+  std::unique_ptr<GeometryMap> geometry_;
+  int patches_ = 0;
+};
+
 }  // namespace
+
+std::unique_ptr<SplineSpace> make_multipatch_tensor_part(const CaseDescription& c, const TensorSpaceOptions& options,
+                                                         int rank, int ranks) {
+  return std::make_unique<MultiPatchTensorPartSpace>(c, options, rank, ranks);
+}
 
 std::unique_ptr<SplineSpace> make_multipatch_tensor_space(const CaseDescription& c, const TensorSpaceOptions& options) {
   return std::make_unique<MultiPatchTensorSpace>(c, options);

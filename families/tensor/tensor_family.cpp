@@ -22,7 +22,9 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
   double cells = 1, functions = 1;
   if (c.multipatch()) {
     multipatch_tensor_size(c, s, cells, functions);
-    ranks = 1;  // every process builds the whole space
+    // In parts of whole patches when there are as many patches as processes (about 1/ranks of
+    // the space each, plus a halo along interfaces); else every process builds all of it.
+    if (c.domain.num_patches() < ranks) ranks = 1;
   } else {
     for (int d = 0; d < 2; ++d) {
       const BSplineBasis1D& g = d == 0 ? c.geometry.basis_u : c.geometry.basis_v;
@@ -113,8 +115,11 @@ SpaceFamily tensor_family() {
                     const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
     TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
-    if (c.multipatch()) {  // every process builds the whole space and assembles its range of cells
-      check_tensor_memory(c, s);
+    if (c.multipatch()) {
+      check_tensor_memory(c, s, ranks);
+      // Whole patches per process; with fewer patches than processes every process builds the
+      // whole space and assembles its range of cells (the report says which).
+      if (c.domain.num_patches() >= ranks) return make_multipatch_tensor_part(c, s, rank, ranks);
       return make_multipatch_tensor_space(c, s);
     }
     return std::make_unique<TensorSpace>(c, s, RowShare{rank, ranks});

@@ -12,9 +12,11 @@ change the errors far beyond that.
 With --rows N (a tensor case with N rows of cells along v), each process must hold only its
 part of the space on 2 and 3 ranks: at most its ceil(N / ranks) rows and the q rows below them
 (q the degree along v) where the functions of its matrix rows also live, of every row's
-cells/N cells; without it, the whole space (built on every rank).
+cells/N cells. With --patches (a multipatch case with at least 3 patches), each process must
+hold a part of whole patches and their halo: fewer cells than the whole space. Without either,
+the whole space (built on every rank).
 
-Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE [--rows N]
+Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE [--rows N | --patches]
 Everything runs on this machine (OpenMPI's shared-memory transport only) and stops by itself.
 """
 import json
@@ -56,6 +58,7 @@ def run(command, env):
 def main():
     binary, case = sys.argv[1], sys.argv[2]
     rows = int(sys.argv[4]) if len(sys.argv) > 4 and sys.argv[3] == "--rows" else None
+    patches = len(sys.argv) > 3 and sys.argv[3] == "--patches"
     env = mpi_environment()
     base = [binary, "run", case, "--json", "-q", "--no-output"]
     reference = run(base + ["--solver", "direct"], env)
@@ -83,6 +86,10 @@ def main():
             if not (got["space_parts"] and held <= limit and held < reference["cells"]):
                 failures.append(f"{what}: a process held {held} of {reference['cells']} cells "
                                 f"(parts: {got['space_parts']}; at most {limit})")
+        elif patches and ranks > 1:
+            if not (got["space_parts"] and held < reference["cells"]):
+                failures.append(f"{what}: a process held {held} of {reference['cells']} cells "
+                                f"(parts: {got['space_parts']}), not a part of whole patches")
         elif got["space_parts"] or held != reference["cells"]:
             failures.append(f"{what}: a process held {held} of {reference['cells']} cells (parts: {got['space_parts']}), "
                             "not the whole space")
