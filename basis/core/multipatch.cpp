@@ -1,8 +1,10 @@
 #include "basis/core/multipatch.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <stdexcept>
 
 #include "basis/core/input_error.hpp"
@@ -119,6 +121,62 @@ void check_orientation(const MultiPatch& d, int p) {
     fail(patch_where(d, p), patch_name(d, p) + " folds over (det J changes sign inside it)");
 }
 
+// The patch's parameters of point x, if x lies inside it (not within `margin` of its sides in
+// the unit-square parameters): Newton's method on x(u, v) = x from a 3 x 3 grid of starts,
+// kept in the parameter domain. A start that does not converge proves nothing; overlaps show
+// at many points, so the check below samples enough of them.
+bool strictly_inside(const NurbsPatch& patch, const Eigen::Vector2d& x, double tolerance, double margin) {
+  const double u0 = patch.basis_u.domain_begin(), u1 = patch.basis_u.domain_end();
+  const double v0 = patch.basis_v.domain_begin(), v1 = patch.basis_v.domain_end();
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      double u = u0 + (u1 - u0) * (0.5 * a + 0.25) / 1.75, v = v0 + (v1 - v0) * (0.5 * b + 0.25) / 1.75;
+      for (int it = 0; it < 40; ++it) {
+        const PatchPointDerivatives q = patch_point_derivatives(patch, u, v);
+        const Eigen::Vector2d r = q.x - x;
+        if (r.norm() <= tolerance) {
+          const double su = (u - u0) / (u1 - u0), sv = (v - v0) / (v1 - v0);
+          if (su > margin && su < 1 - margin && sv > margin && sv < 1 - margin) return true;
+          break;
+        }
+        const double det = q.jacobian.determinant();
+        if (!(std::abs(det) > 0)) break;
+        const Eigen::Vector2d step = q.jacobian.inverse() * r;
+        u = std::clamp(u - step[0], u0, u1);
+        v = std::clamp(v - step[1], v0, v1);
+      }
+    }
+  return false;
+}
+
+// No patch lies over another: points inside every patch (4 x 4 per knot span, away from its
+// sides) are looked for inside every other patch whose control box holds them.
+void check_overlaps(const MultiPatch& d, double size) {
+  const int np = d.num_patches();
+  std::vector<Eigen::AlignedBox2d> box(np);
+  for (int p = 0; p < np; ++p)
+    for (Eigen::Index i = 0; i < d.patches[p].control_points.rows(); ++i)
+      box[p].extend(Eigen::Vector2d(d.patches[p].control_points.row(i).transpose()));
+  for (int p = 0; p < np; ++p) {
+    const NurbsPatch& patch = d.patches[p];
+    const auto bu = patch.basis_u.breakpoints(), bv = patch.basis_v.breakpoints();
+    for (size_t i = 0; i + 1 < bu.size(); ++i)
+      for (size_t j = 0; j + 1 < bv.size(); ++j)
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b) {
+            const double u = bu[i] + (bu[i + 1] - bu[i]) * (a + 0.5) / 4, v = bv[j] + (bv[j + 1] - bv[j]) * (b + 0.5) / 4;
+            const Eigen::Vector2d x = patch_point(patch, u, v);
+            for (int q = 0; q < np; ++q)
+              if (q != p && box[q].contains(x) && strictly_inside(d.patches[q], x, 1e-12 * size, 1e-6)) {
+                std::ostringstream where;
+                where << "(" << x[0] << ", " << x[1] << ")";
+                fail(patch_where(d, p), patch_name(d, p) + " and " + patch_name(d, q) + " overlap: the point " + where.str() +
+                                            " of the first lies inside the second");
+              }
+          }
+  }
+}
+
 double domain_size(const MultiPatch& d) {
   double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
   for (const NurbsPatch& p : d.patches)
@@ -184,6 +242,7 @@ void check_multipatch(const MultiPatch& d) {
     check_orientation(d, p);
   }
   const double tolerance = 1e-9 * domain_size(d);
+  check_overlaps(d, domain_size(d));
   std::vector<PatchSideRef> used;
   for (const PatchInterface& f : d.interfaces) {
     check_side_ref(d, f.a, f.where);

@@ -61,6 +61,7 @@ Eigen::MatrixX2d side_curve(const MultiPatch& domain, PatchSideRef side, int poi
 // Checks the domain and throws GeometryError naming where the fault was read:
 // - every patch is valid (NurbsPatch::validate) and positively oriented (det J > 0 at the
 //   Gauss points of each of its knot spans: an inverted or folded patch is refused);
+// - no two patches overlap (points inside each patch, 16 per knot span, are not inside another);
 // - an interface joins two different existing sides, and no side is in two interfaces;
 // - the two sides of an interface are the same curve (to 1e-9 of the domain's size, at points
 //   along it), with the same weight function where the patches are rational;
