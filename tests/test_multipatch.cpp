@@ -115,13 +115,18 @@ double same_space_tolerance(const Errors& a, const Errors& b) {
   return 1e4 * std::max(a.condition, b.condition) * std::numeric_limits<double>::epsilon();
 }
 
-Errors solve(const Sandbox& box, const MultiPatch& domain, const std::string& name, const std::string& problem) {
-  write_gismo_xml(domain, (box.dir() / (name + ".xml")).string());
-  box.file(name + ".toml", "[geometry]\nfile = \"" + name + ".xml\"\n[space]\ndegree = 2\nelements = 3\n[problem]\n" + problem);
-  const Result r = box.run("run --json --no-output --condition " + name + ".toml");
+// `knotwork run ARGS --json --no-output --condition` in the sandbox: its errors and condition.
+Errors run_case(const Sandbox& box, const std::string& args) {
+  const Result r = box.run("run --json --no-output --condition " + args);
   INFO(r.err);
   REQUIRE(r.code == 0);
   return {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
+}
+
+Errors solve(const Sandbox& box, const MultiPatch& domain, const std::string& name, const std::string& problem) {
+  write_gismo_xml(domain, (box.dir() / (name + ".xml")).string());
+  box.file(name + ".toml", "[geometry]\nfile = \"" + name + ".xml\"\n[space]\ndegree = 2\nelements = 3\n[problem]\n" + problem);
+  return run_case(box, name + ".toml");
 }
 
 MultiPatch one_patch(const NurbsPatch& p) {
@@ -361,13 +366,7 @@ TEST_CASE("GeoPDEs' ring and iso-ring tests give the same errors from GeoPDEs' t
                                "\n[problem]\nexact = \"-(x^2+y^2-1)*(x^2+y^2-4)*x*y^2\"\n" + neumann;
       box.file("built_in.toml", "[geometry]\ntype = \"quarter_annulus\"\n" + rest);
       box.file("from_file.toml", "[geometry]\nfile = \"" + kGeometries + "quarter_ring.txt\"\n" + rest);
-      Errors e[2];
-      for (int k = 0; k < 2; ++k) {
-        const Result r = box.run(std::string("run --json --no-output --condition ") + (k ? "from_file.toml" : "built_in.toml"));
-        INFO(r.err);
-        REQUIRE(r.code == 0);
-        e[k] = {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
-      }
+      const Errors e[2] = {run_case(box, "built_in.toml"), run_case(box, "from_file.toml")};
       INFO((rational ? "iso-ring" : "ring") << (neumann.empty() ? ", Dirichlet" : ", mixed") << ": L2 " << e[0].l2 << " and "
                                            << e[1].l2 << ", H1 " << e[0].h1 << " and " << e[1].h1);
       CHECK(std::abs(e[0].l2 - e[1].l2) <= same_space_tolerance(e[0], e[1]));
@@ -384,17 +383,11 @@ TEST_CASE("A G+Smo problem file runs as the case it describes", "[multipatch][gi
   Sandbox box;
   const std::string problem = std::string(KNOTWORK_SOURCE_DIR) + "/cases/multipatch_lshape_problem.xml";
   for (int p : {2, 3}) {
-    const std::string args = " --json --no-output --condition --degree " + std::to_string(p) + " --elements 4";
+    const std::string args = "--degree " + std::to_string(p) + " --elements 4 ";
     box.file("same.toml", "[geometry]\nfile = \"" + kGeometries + "lshape_3patches.xml\"\n[space]\ndegree = 2\nelements = 4\n"
                           "rational = false\nboundary_quadrature_points = \"interior\"\n[problem]\n"
                           "exact = \"sin(2*x)*cosh(y) + x*y\"\nneumann = [\"reentrant\"]\n");
-    Errors e[2];
-    for (int k = 0; k < 2; ++k) {
-      const Result r = box.run("run" + args + " " + (k ? "same.toml" : problem));
-      INFO(r.err);
-      REQUIRE(r.code == 0);
-      e[k] = {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
-    }
+    const Errors e[2] = {run_case(box, args + problem), run_case(box, args + "same.toml")};
     INFO("degree " << p << ": L2 " << e[0].l2 << " and " << e[1].l2);
     CHECK(std::abs(e[0].l2 - e[1].l2) <= same_space_tolerance(e[0], e[1]));
     CHECK(std::abs(e[0].h1 - e[1].h1) <= same_space_tolerance(e[0], e[1]));
@@ -451,13 +444,7 @@ TEST_CASE("G1 on a geometry file of bilinear patches is G1 on the quad mesh they
     const std::string space = "[space]\nfamily = \"g1\"\ndegree = 4\nsplit_smoothness = 1\n";
     box.file("obj.toml", space + "mesh = \"" + meshes + name + ".obj\"\n" + problem);
     box.file("xml.toml", space + "[geometry]\nfile = \"patches.xml\"\n" + problem);
-    Errors e[2];
-    for (int k = 0; k < 2; ++k) {
-      const Result r = box.run(std::string("run --json --no-output --condition ") + (k ? "xml.toml" : "obj.toml"));
-      INFO(r.err);
-      REQUIRE(r.code == 0);
-      e[k] = {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
-    }
+    const Errors e[2] = {run_case(box, "obj.toml"), run_case(box, "xml.toml")};
     INFO("L2 " << e[0].l2 << " and " << e[1].l2 << ", H1 " << e[0].h1 << " and " << e[1].h1);
     CHECK(std::abs(e[0].l2 - e[1].l2) <= same_space_tolerance(e[0], e[1]));
     CHECK(std::abs(e[0].h1 - e[1].h1) <= same_space_tolerance(e[0], e[1]));
@@ -484,14 +471,10 @@ TEST_CASE("The per-patch fast diagonalization solves multipatch cases to the dir
     box.file("direct.toml", local);
     box.file("fd.toml", local + "\n[solver]\nmethod = \"iterative\"\npreconditioner = \"fast_diagonalization\"\nmax_iterations = 5000\n");
     box.file("auto.toml", local + "\n[solver]\nmethod = \"iterative\"\n");
-    Errors e[2];
-    for (int k = 0; k < 2; ++k) {
-      const Result r = box.run(std::string("run --json --no-output --condition --elements 6 ") + (k ? "fd.toml" : "direct.toml"));
-      INFO(r.err);
-      REQUIRE(r.code == 0);
-      e[k] = {json_number_of(r.out, "l2_error"), json_number_of(r.out, "h1_seminorm_error"), json_number_of(r.out, "stiffness")};
-      if (k) CHECK(r.out.find("\"preconditioner\": \"fast_diagonalization\"") != std::string::npos);
-    }
+    const Errors e[2] = {run_case(box, "--elements 6 direct.toml"), run_case(box, "--elements 6 fd.toml")};
+    const Result fd = box.run("run --json --no-output --elements 6 fd.toml");
+    REQUIRE(fd.code == 0);
+    CHECK(fd.out.find("\"preconditioner\": \"fast_diagonalization\"") != std::string::npos);
     CHECK(std::abs(e[0].l2 - e[1].l2) <= same_space_tolerance(e[0], e[1]));
     CHECK(std::abs(e[0].h1 - e[1].h1) <= same_space_tolerance(e[0], e[1]));
     const Result a = box.run("run --json --no-output --elements 6 auto.toml");

@@ -9,6 +9,7 @@
 #include "basis/core/bezier_mesh.hpp"
 #include "families/tensor/tensor_case.hpp"
 #include "families/thb/thb_multipatch_space.hpp"
+#include "families/thb/thb_refine.hpp"
 #include "basis/thb/thb_hierarchy.hpp"
 #include "cases/case_reader.hpp"
 #include "cases/resource_limits.hpp"
@@ -86,19 +87,7 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
   }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
                                       int* extended, const ProgressFunction& /*progress*/) && override {
-    // THB refinement halves a cell in both directions; the split direction does not apply.
-    std::vector<ThbCell> cells;
-    cells.reserve(marked.size());
-    for (int m : marked) cells.push_back(leaves_.at(m));
-    ThbHierarchy next = hierarchy_;
-    int extra = 0;
-    try {
-      extra = next.refine(cells);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(case_->path + ": [space]: " + e.what());
-    }
-    if (extended) *extended = extra;
-    check_refined_memory(*case_, double(next.num_leaves()), "THB");
+    ThbHierarchy next = refined_hierarchy(*case_, hierarchy_, leaves_, marked, extended);
     return std::make_unique<ThbSpace>(*case_, std::move(next));
   }
   KnotLines knot_lines() const override { return knot_lines_of_cells(mesh_, *geometry_); }

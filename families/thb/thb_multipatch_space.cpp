@@ -9,6 +9,7 @@
 #include "basis/thb/thb_multipatch.hpp"
 #include "cases/resource_limits.hpp"
 #include "families/tensor/tensor_case.hpp"
+#include "families/thb/thb_refine.hpp"
 
 namespace knotwork {
 
@@ -60,19 +61,7 @@ class ThbMultiPatchSpace final : public SplineSpace, public SpaceReport {
   }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
                                       int* extended, const ProgressFunction& /*progress*/) && override {
-    // THB refinement halves a cell in both directions; the split direction does not apply.
-    std::vector<ThbPatchCell> cells;
-    cells.reserve(marked.size());
-    for (int m : marked) cells.push_back(basis_.leaves.at(m));
-    ThbMultiPatch next = hierarchy_;
-    int extra = 0;
-    try {
-      extra = next.refine(cells);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(case_->path + ": [space]: " + e.what());
-    }
-    if (extended) *extended = extra;
-    check_refined_memory(*case_, double(next.num_leaves()), "THB");
+    ThbMultiPatch next = refined_hierarchy(*case_, hierarchy_, basis_.leaves, marked, extended);
     return std::make_unique<ThbMultiPatchSpace>(*case_, space_, std::move(next));
   }
   KnotLines knot_lines() const override { return knot_lines_of_cells(basis_.glued.mesh, *geometry_); }
