@@ -51,8 +51,10 @@ int basis_command(const BasisRequest& request, const std::vector<std::unique_ptr
     std::string inputs = "a case file";
     for (const auto& t : tools) inputs += ", " + t->selector();
     if (request.file.empty()) throw InputError("basis: give one input: " + inputs);
+    // A G+Smo problem file is a case (load_case reads it); the tools' files are TOML or JSON.
+    const bool xml = request.file.size() > 4 && request.file.compare(request.file.size() - 4, 4, ".xml") == 0;
     for (const auto& t : tools)
-      if (t->claims(request.file)) { chosen = t.get(); break; }
+      if (!xml && t->claims(request.file)) { chosen = t.get(); break; }
   }
   for (const auto& t : tools)
     if (t.get() != chosen) t->refuse_unused_options();
