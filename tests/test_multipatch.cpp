@@ -397,11 +397,6 @@ TEST_CASE("A G+Smo problem file runs as the case it describes", "[multipatch][gi
   const Result r = box.run("run --json --no-output " + problem);
   REQUIRE(r.code == 0);
   CHECK(json_number_of(r.out, "dofs") == 3 * 33 * 33 - 2 * 33);
-  // `basis` takes it as a case too.
-  const Result b = box.run("basis " + problem);
-  INFO(b.err);
-  CHECK(b.code == 0);
-  CHECK(b.out.find("linearly independent") != std::string::npos);
 }
 
 TEST_CASE("G1 on a geometry file of bilinear patches is G1 on the quad mesh they make, and curved patches are refused",
