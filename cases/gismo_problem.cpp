@@ -34,7 +34,7 @@ std::string trimmed(const std::string& s) {
 
 pugi::xml_node with_id(const pugi::xml_node& root, const char* element, int id) {
   for (pugi::xml_node n : root.children(element))
-    if (n.attribute("id") && n.attribute("id").as_int(-1) == id && std::string(n.attribute("id").value()) == std::to_string(id))
+    if (std::string(n.attribute("id").value()) == std::to_string(id))
       return n;
   return {};
 }

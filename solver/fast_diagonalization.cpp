@@ -185,7 +185,7 @@ void diagonalize(const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, const std::
 }  // namespace
 
 std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
-                                                     const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
+                                                     const DofLayout& layout, const Eigen::VectorXd& diag,
                                                      const SeparableCoefficients& geometry, const NitscheEnds& nitsche) {
   const int nu = space_u.num_functions(), nv = space_v.num_functions();
   if (static_cast<long>(layout.dof.size()) != static_cast<long>(nu) * nv) return nullptr;
@@ -226,7 +226,6 @@ std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space
     diagonalize(Mv, Kv, iv, Uv, lv);
   }
   // D = diag(K) / diag(P): P_dd = (K_u)_ii (M_v)_jj + (M_u)_ii (K_v)_jj.
-  const Eigen::VectorXd diag = lower.diagonal();
   Eigen::VectorXd scale(layout.num_free());
   for (size_t b = 0; b < iv.size(); ++b)
     for (size_t a = 0; a < iu.size(); ++a) {

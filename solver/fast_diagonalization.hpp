@@ -52,10 +52,10 @@ struct NitscheEnds {
 
 // For the tensor space of space_u x space_v (function i + n_u j) and the free dofs of
 // `layout`: the preconditioner, or null when the free functions are not a tensor product of
-// free univariate ones (then it does not apply). `lower` is the assembled matrix (its
-// diagonal gives the scaling).
+// free univariate ones (then it does not apply). `diagonal`: the assembled matrix's, one entry
+// per dof of `layout` (the scaling; an entry <= 0 leaves its dof unscaled).
 std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
-                                                     const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
+                                                     const DofLayout& layout, const Eigen::VectorXd& diagonal,
                                                      const SeparableCoefficients& geometry = {},
                                                      const NitscheEnds& nitsche = {});
 

@@ -4,10 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <sstream>
 #include <unordered_map>
 
+#include "basis/core/disjoint_sets.hpp"
 #include "basis/core/input_error.hpp"
 
 namespace knotwork {
@@ -97,11 +97,6 @@ bool same_trace(const Trace& x, const Trace& y, double tolerance) {
   return true;
 }
 
-int find_root(std::vector<int>& parent, int i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
-}
-
 std::string number(double t) {
   std::ostringstream s;
   s << t;
@@ -120,8 +115,7 @@ GluedPatches glue_patches(const MultiPatch& domain, const std::vector<const Bezi
     first_function.push_back(first_function.back() + m->num_functions());
   }
 
-  std::vector<int> parent(first_function.back());
-  std::iota(parent.begin(), parent.end(), 0);
+  DisjointSets copies(first_function.back());
   std::vector<std::pair<CellInterface, std::array<int, 2>>> across;  // patch-local cells, and their patches
   for (const PatchInterface& f : domain.interfaces) {
     const int pa = f.a.patch, pb = f.b.patch;
@@ -177,7 +171,7 @@ GluedPatches glue_patches(const MultiPatch& domain, const std::vector<const Bezi
           throw GeometryError(f.where + ": " + sides +
                               " have different weights: a conforming NURBS space needs the same weights on both sides");
       }
-      parent[find_root(parent, first_function[pa] + g)] = find_root(parent, first_function[pb] + partner);
+      copies.unite(first_function[pa] + g, first_function[pb] + partner);
     }
     for (const auto& [h, size] : b_size)
       if (size > kTraceTolerance && !partner_of_b.count(h))
@@ -197,22 +191,15 @@ GluedPatches glue_patches(const MultiPatch& domain, const std::vector<const Bezi
 
   // One number per class, in the order the patches' functions come.
   GluedPatches out;
-  std::vector<int> root_number(parent.size(), -1);
-  out.global_function.resize(np);
   int count = 0;
+  const std::vector<int> number = copies.numbering(&count);
   for (int p = 0; p < np; ++p)
-    for (int g = first_function[p]; g < first_function[p + 1]; ++g) {
-      int& r = root_number[find_root(parent, g)];
-      if (r < 0) r = count++;
-      out.global_function[p].push_back(r);
-    }
+    out.global_function.emplace_back(number.begin() + first_function[p], number.begin() + first_function[p + 1]);
 
   const std::vector<PatchSideRef> exterior = exterior_sides(domain);
-  std::vector<std::string> names;
-  for (const PatchSideRef& s : exterior) names.push_back(side_name(domain, s));
   BezierMesh& mesh = out.mesh;
   mesh.set_num_functions(count);
-  mesh.set_boundary_names(names);
+  mesh.set_boundary_names(exterior_side_names(domain, exterior));
   if (rational) {
     Eigen::VectorXd w(count);
     for (int p = 0; p < np; ++p)
@@ -225,17 +212,11 @@ GluedPatches glue_patches(const MultiPatch& domain, const std::vector<const Bezi
     const BezierMesh& local = *patches[p];
     std::vector<int> extraction(local.num_distinct_extractions());
     for (int e = 0; e < local.num_distinct_extractions(); ++e) extraction[e] = mesh.add_extraction(local.pooled_extraction(e));
-    std::array<int, 4> boundary_id{-1, -1, -1, -1};  // per CellSide
-    for (size_t k = 0; k < exterior.size(); ++k)
-      if (exterior[k].patch == p) boundary_id[cell_side_of_patch_side(exterior[k].side)] = static_cast<int>(k);
+    const std::array<int, 4> boundary_id = boundary_ids_of_patch(exterior, p);
     for (int c = 0; c < local.num_cells(); ++c) {
-      BezierCell cell = local.cell(c);
-      cell.patch = p;
-      for (int s = 0; s < 4; ++s)
-        if (cell.boundary[s] >= 0) cell.boundary[s] = boundary_id[s];
       ids.clear();
       for (int f : local.functions(c)) ids.push_back(out.global_function[p][f]);
-      mesh.add_cell(cell, ids, extraction[local.extraction_id(c)]);
+      mesh.add_cell(domain_cell(local.cell(c), p, boundary_id), ids, extraction[local.extraction_id(c)]);
     }
     out.first_cell.push_back(mesh.num_cells());
   }

@@ -44,6 +44,33 @@ std::vector<PatchSideRef> exterior_sides(const MultiPatch& domain) {
   return out;
 }
 
+std::array<int, 4> boundary_ids_of_patch(const std::vector<PatchSideRef>& exterior, int p) {
+  std::array<int, 4> id{-1, -1, -1, -1};
+  for (size_t k = 0; k < exterior.size(); ++k)
+    if (exterior[k].patch == p) id[cell_side_of_patch_side(exterior[k].side)] = static_cast<int>(k);
+  return id;
+}
+
+std::vector<std::string> exterior_side_names(const MultiPatch& domain, const std::vector<PatchSideRef>& exterior) {
+  std::vector<std::string> names;
+  for (const PatchSideRef& s : exterior) names.push_back(side_name(domain, s));
+  return names;
+}
+
+BezierCell domain_cell(BezierCell cell, int p, const std::array<int, 4>& boundary_id) {
+  cell.patch = p;
+  for (int s = 0; s < 4; ++s)
+    if (cell.boundary[s] >= 0) cell.boundary[s] = boundary_id[s];
+  return cell;
+}
+
+std::vector<int> side_indices(int nu, int nv, int side) {
+  std::vector<int> out;
+  const int n = side <= 2 ? nv : nu;
+  for (int k = 0; k < n; ++k) out.push_back(side == 1 ? nu * k : side == 2 ? nu - 1 + nu * k : side == 3 ? k : k + nu * (nv - 1));
+  return out;
+}
+
 std::string patch_label(const MultiPatch& domain, int p) {
   return p < static_cast<int>(domain.patch_labels.size()) ? domain.patch_labels[p] : std::to_string(p + 1);
 }
@@ -241,8 +268,8 @@ void check_multipatch(const MultiPatch& d) {
     }
     check_orientation(d, p);
   }
-  const double tolerance = 1e-9 * domain_size(d);
-  check_overlaps(d, domain_size(d));
+  const double size = domain_size(d), tolerance = 1e-9 * size;
+  check_overlaps(d, size);
   std::vector<PatchSideRef> used;
   for (const PatchInterface& f : d.interfaces) {
     check_side_ref(d, f.a, f.where);

@@ -3,6 +3,7 @@
 // (with the orientation of the shared side), and named groups of boundary sides. The sides of
 // a patch are numbered as G+Smo and GeoPDEs number them: 1 is u = 0, 2 is u = 1, 3 is v = 0,
 // 4 is v = 1.
+#include <array>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,19 @@ struct MultiPatch {
 // The sides that are not interfaces, patch by patch and side by side (1..4): the boundary ids
 // of a mesh built on the domain, in that order.
 std::vector<PatchSideRef> exterior_sides(const MultiPatch& domain);
+// Per CellSide, the boundary id (index into `exterior`) of patch p's side there; -1 where the
+// side is an interface.
+std::array<int, 4> boundary_ids_of_patch(const std::vector<PatchSideRef>& exterior, int p);
+
+// Their names, side_name of each, in that order (a mesh's boundary names).
+std::vector<std::string> exterior_side_names(const MultiPatch& domain, const std::vector<PatchSideRef>& exterior);
+// Patch p's cell as a cell of the domain's mesh: its patch set, its boundary sides renumbered
+// (`boundary_id`: boundary_ids_of_patch).
+BezierCell domain_cell(BezierCell cell, int p, const std::array<int, 4>& boundary_id);
+
+// The indices i + nu j of an nu x nv grid (of functions, of control points) along side 1..4,
+// in the side's direction (u increasing on sides 3 and 4, v on 1 and 2).
+std::vector<int> side_indices(int nu, int nv, int side);
 
 // The file's label of patch p (its 1-based number when the domain has no labels), and "P:S"
 // with it for side S.

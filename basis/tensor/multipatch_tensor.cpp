@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <sstream>
 
+#include "basis/core/disjoint_sets.hpp"
 #include "basis/core/glue_patches.hpp"
 #include "basis/core/input_error.hpp"
 
@@ -32,10 +32,6 @@ std::string describe_knots(const BSplineBasis1D& b, const std::vector<double>& k
   return s.str() + "]";
 }
 
-}  // namespace
-
-namespace {
-
 // The knots along both sides of every interface: a mismatch is named in knots, which says
 // more than the traces glue_patches compares.
 void check_interface_knots(const MultiPatch& domain, const std::vector<std::array<BSplineBasis1D, 2>>& bases) {
@@ -53,19 +49,6 @@ void check_interface_knots(const MultiPatch& domain, const std::vector<std::arra
                           ") do not match: a conforming space needs the same degree, knot spans and elements along an "
                           "interface");
   }
-}
-
-// The functions along side 1..4 of an nu x nv tensor space (function i + nu j), t increasing.
-std::vector<int> side_functions(int nu, int nv, int side) {
-  std::vector<int> out;
-  const int n = side <= 2 ? nv : nu;
-  for (int k = 0; k < n; ++k) out.push_back(side == 1 ? nu * k : side == 2 ? nu - 1 + nu * k : side == 3 ? k : k + nu * (nv - 1));
-  return out;
-}
-
-int find_root(std::vector<int>& parent, int i) {
-  while (parent[i] != i) i = parent[i] = parent[parent[i]];
-  return i;
 }
 
 }  // namespace
@@ -101,30 +84,24 @@ MultiPatchTensorPart build_multipatch_tensor_part(const MultiPatch& domain, cons
     cells.push_back(cells.back() + long(bases.back()[0].num_elements()) * bases.back()[1].num_elements());
   }
   check_interface_knots(domain, bases);
-  std::vector<int> parent(first_function.back());
-  std::iota(parent.begin(), parent.end(), 0);
+  // Numbered patch by patch, a shared function where it first occurs (as glue_patches does),
+  // from the tensor numbering along the glued sides.
+  DisjointSets copies(first_function.back());
   for (const PatchInterface& f : domain.interfaces) {
-    const std::vector<int> a = side_functions(bases[f.a.patch][0].num_functions(), bases[f.a.patch][1].num_functions(), f.a.side);
-    const std::vector<int> b = side_functions(bases[f.b.patch][0].num_functions(), bases[f.b.patch][1].num_functions(), f.b.side);
+    const std::vector<int> a = side_indices(bases[f.a.patch][0].num_functions(), bases[f.a.patch][1].num_functions(), f.a.side);
+    const std::vector<int> b = side_indices(bases[f.b.patch][0].num_functions(), bases[f.b.patch][1].num_functions(), f.b.side);
     const size_t n = a.size();
     for (size_t k = 0; k < n; ++k)
-      parent[find_root(parent, first_function[f.a.patch] + a[k])] =
-          find_root(parent, first_function[f.b.patch] + b[f.reversed ? n - 1 - k : k]);
+      copies.unite(first_function[f.a.patch] + a[k], first_function[f.b.patch] + b[f.reversed ? n - 1 - k : k]);
   }
-  // Numbered patch by patch, a shared function where it first occurs (as glue_patches does).
-  std::vector<int> root_number(parent.size(), -1), number(parent.size());
-  std::vector<int> first_number{0};  // functions first numbered in patch k: [first_number[k], first_number[k+1])
   int count = 0;
+  const std::vector<int> number = copies.numbering(&count);
+  std::vector<int> first_number{0};  // functions first numbered in patch k: [first_number[k], first_number[k+1])
   for (int p = 0; p < np; ++p) {
-    for (int g = first_function[p]; g < first_function[p + 1]; ++g) {
-      int& r = root_number[find_root(parent, g)];
-      if (r < 0) r = count++;
-      number[g] = r;
-    }
-    first_number.push_back(count);
+    int last = first_number.back();
+    for (int g = first_function[p]; g < first_function[p + 1]; ++g) last = std::max(last, number[g] + 1);
+    first_number.push_back(last);
   }
-  parent.clear();
-  root_number.clear();
   // Whole patches per rank, balanced by cells: patch k goes to the rank its middle cell falls in.
   std::vector<int> owner(np);
   for (int p = 0; p < np; ++p)
@@ -146,10 +123,7 @@ MultiPatchTensorPart build_multipatch_tensor_part(const MultiPatch& domain, cons
   const auto owned_function = [&](int g) { return g >= part.first_owned_function && g < part.last_owned_function; };
 
   // The pieces: the owned patches whole, then later patches' cells that hold owned functions.
-  const std::vector<PatchSideRef> exterior = exterior_sides(domain);
   std::vector<char> is_local(count, 0);
-  std::vector<std::vector<int>> cell_functions;  // per local cell, global numbers
-  std::vector<std::pair<int, int>> cell_source;  // per local cell: piece, patch-local cell
   for (int p = own_from; p < np; ++p) {
     if (p >= own_to) {  // a halo patch only if it holds an owned function
       bool holds = false;
@@ -161,14 +135,9 @@ MultiPatchTensorPart build_multipatch_tensor_part(const MultiPatch& domain, cons
     for (int c = 0; c < d.mesh.num_cells(); ++c) {
       bool take = p < own_to;
       for (int f : d.mesh.functions(c)) take = take || owned_function(number[first_function[p] + f]);
-      if (take) chosen.push_back(c);
-    }
-    const int piece = static_cast<int>(out.built.size());
-    for (int c : chosen) {
-      std::vector<int> g;
-      for (int f : d.mesh.functions(c)) g.push_back(number[first_function[p] + f]), is_local[g.back()] = 1;
-      cell_functions.push_back(std::move(g));
-      cell_source.push_back({piece, c});
+      if (!take) continue;
+      chosen.push_back(c);
+      for (int f : d.mesh.functions(c)) is_local[number[first_function[p] + f]] = 1;
     }
     out.patch_of_piece.push_back(p);
     out.cells_of_piece.push_back(std::move(chosen));
@@ -178,45 +147,34 @@ MultiPatchTensorPart build_multipatch_tensor_part(const MultiPatch& domain, cons
   std::vector<int> local_of(count, -1);
   for (int g = 0; g < count; ++g)
     if (is_local[g]) local_of[g] = static_cast<int>(part.global_function.size()), part.global_function.push_back(g);
-  is_local.clear();
+  is_local = {};
+  const std::vector<PatchSideRef> exterior = exterior_sides(domain);
   BezierMesh& mesh = out.mesh;
   mesh.set_num_functions(static_cast<int>(part.global_function.size()));
-  std::vector<std::string> names;
-  for (const PatchSideRef& s : exterior) names.push_back(side_name(domain, s));
-  mesh.set_boundary_names(names);
-  if (options.rational) {
-    Eigen::VectorXd w(part.global_function.size());
-    for (size_t piece = 0; piece < out.built.size(); ++piece) {
-      const int p = out.patch_of_piece[piece];
-      const BezierMesh& m = out.built[piece].mesh;
-      for (int f = 0; f < m.num_functions(); ++f)
-        if (const int l = local_of[number[first_function[p] + f]]; l >= 0) w[l] = m.weights()[f];
-    }
-    mesh.set_weights(std::move(w));
-  }
-  std::vector<std::vector<int>> extraction(out.built.size());
+  mesh.set_boundary_names(exterior_side_names(domain, exterior));
+  Eigen::VectorXd weights(options.rational ? part.global_function.size() : 0);
   out.first_cell.push_back(0);
   std::vector<int> ids;
-  for (size_t k = 0; k < cell_source.size(); ++k) {
-    const auto [piece, c] = cell_source[k];
-    const BezierMesh& m = out.built[piece].mesh;
+  for (size_t piece = 0; piece < out.built.size(); ++piece) {
     const int p = out.patch_of_piece[piece];
-    if (extraction[piece].empty()) extraction[piece].assign(m.num_distinct_extractions(), -1);
-    int& e = extraction[piece][m.extraction_id(c)];
-    if (e < 0) e = mesh.add_extraction(m.pooled_extraction(m.extraction_id(c)));
-    std::array<int, 4> boundary_id{-1, -1, -1, -1};
-    for (size_t s = 0; s < exterior.size(); ++s)
-      if (exterior[s].patch == p) boundary_id[cell_side_of_patch_side(exterior[s].side)] = static_cast<int>(s);
-    BezierCell cell = m.cell(c);
-    cell.patch = p;
-    for (int s = 0; s < 4; ++s)
-      if (cell.boundary[s] >= 0) cell.boundary[s] = boundary_id[s];
-    ids.clear();
-    for (int g : cell_functions[k]) ids.push_back(local_of[g]);
-    mesh.add_cell(cell, ids, e);
-    if (own_from + piece < own_to) part.owned.last = mesh.num_cells();
+    const BezierMesh& m = out.built[piece].mesh;
+    const auto local = [&](int f) { return local_of[number[first_function[p] + f]]; };
+    if (options.rational)
+      for (int f = 0; f < m.num_functions(); ++f)
+        if (local(f) >= 0) weights[local(f)] = m.weights()[f];
+    std::vector<int> extraction(m.num_distinct_extractions(), -1);
+    const std::array<int, 4> boundary_id = boundary_ids_of_patch(exterior, p);
+    for (int c : out.cells_of_piece[piece]) {
+      int& e = extraction[m.extraction_id(c)];
+      if (e < 0) e = mesh.add_extraction(m.pooled_extraction(m.extraction_id(c)));
+      ids.clear();
+      for (int f : m.functions(c)) ids.push_back(local(f));
+      mesh.add_cell(domain_cell(m.cell(c), p, boundary_id), ids, e);
+    }
+    out.first_cell.push_back(mesh.num_cells());
+    if (p < own_to) part.owned.last = mesh.num_cells();
   }
-  for (const std::vector<int>& chosen : out.cells_of_piece) out.first_cell.push_back(out.first_cell.back() + static_cast<int>(chosen.size()));
+  if (options.rational) mesh.set_weights(std::move(weights));
   part.owned.first = 0;
   return out;
 }

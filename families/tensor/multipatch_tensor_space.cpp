@@ -22,20 +22,36 @@ std::string describe_multipatch(const TensorSpaceOptions& o, int patches) {
          " patches glued C^0";
 }
 
+std::vector<ReportField> multipatch_report(const TensorSpaceOptions& o, int patches) {
+  return {{.key = "elements", .value = long(o.elements_per_span[0]), .column = true, .width = 9},
+          {.key = "patches", .value = long(patches), .text = std::to_string(patches)}};
+}
+
+// The map of a patch's whole space, on the grid of its elements.
+std::unique_ptr<PatchGeometryMap> patch_grid_map(const TensorDiscretization& t) {
+  return std::make_unique<PatchGeometryMap>(
+      t.mesh, t.patch, PatchGeometryMap::ElementGrid{t.space_u.breakpoints(), t.space_v.breakpoints(), 0});
+}
+
+// What basis/tensor's builders throw, as the case's errors.
+template <class Build>
+auto built(const CaseDescription& c, Build build) {
+  try {
+    return build();
+  } catch (const GeometryError& e) {
+    throw InputError(c.path + ": [geometry] file: " + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.path + ": [space]: " + e.what());
+  }
+}
+
 class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
  public:
-  MultiPatchTensorSpace(const CaseDescription& c, const TensorSpaceOptions& options) : options_(options) {
-    try {
-      d_ = build_multipatch_tensor(c.domain, options);
-    } catch (const GeometryError& e) {
-      throw InputError(c.path + ": [geometry] file: " + e.what());
-    } catch (const std::invalid_argument& e) {
-      throw InputError(c.path + ": [space]: " + e.what());
-    }
+  MultiPatchTensorSpace(const CaseDescription& c, const TensorSpaceOptions& options)
+      : options_(options), d_(built(c, [&] { return build_multipatch_tensor(c.domain, options); })) {
     std::vector<std::unique_ptr<GeometryMap>> maps;
     for (const TensorDiscretization& p : d_.patches) {
-      auto map = std::make_unique<PatchGeometryMap>(
-          p.mesh, p.patch, PatchGeometryMap::ElementGrid{p.space_u.breakpoints(), p.space_v.breakpoints(), 0});
+      auto map = patch_grid_map(p);
       patch_maps_.push_back(map.get());
       maps.push_back(std::move(map));
     }
@@ -69,35 +85,30 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
       DofLayout hull;
       hull.dof.assign(static_cast<size_t>(nu) * nv, -1);
       SchwarzBlock b;
-      std::vector<Eigen::Triplet<double>> diag;
+      std::vector<double> diag;
       for (int j = 0; j < nv; ++j)
         for (int i = 0; i < nu; ++i) {
           if (!free_u[i] || !free_v[j]) continue;
-          const int f = i + nu * j, local = hull.num_free(), global = layout.dof[d_.global_function[k][f]];
-          hull.dof[f] = local;
+          const int f = i + nu * j, global = layout.dof[d_.global_function[k][f]];
+          hull.dof[f] = hull.num_free();
           hull.function_of_dof.push_back(f);
           b.dofs.push_back(global);
-          diag.emplace_back(local, local, global >= 0 ? diagonal[global] : 0.0);
+          diag.push_back(global >= 0 ? diagonal[global] : 0.0);
         }
-      Eigen::SparseMatrix<double> local_lower(hull.num_free(), hull.num_free());
-      local_lower.setFromTriplets(diag.begin(), diag.end());
       NitscheEnds ends;
       ends.factor = problem.nitsche_penalty;
-      for (size_t id = 0; id < exterior_.size(); ++id)
-        if (exterior_[id].patch == static_cast<int>(k) && problem.dirichlet_method == DirichletMethod::kNitsche &&
-            id < problem.boundary.size() && problem.boundary[id].kind == BoundaryKind::kDirichlet)
-          ends.sides[cell_side_of_patch_side(exterior_[id].side)] = true;
-      b.local = fast_diagonalization(t.space_u, t.space_v, hull, local_lower,
+      const std::array<int, 4> boundary_id = boundary_ids_of_patch(exterior_, static_cast<int>(k));
+      for (int s = 0; s < 4; ++s)
+        ends.sides[s] = problem.dirichlet_method == DirichletMethod::kNitsche && boundary_id[s] >= 0 &&
+                        problem.boundary.at(boundary_id[s]).kind == BoundaryKind::kDirichlet;
+      b.local = fast_diagonalization(t.space_u, t.space_v, hull, Eigen::Map<const Eigen::VectorXd>(diag.data(), diag.size()),
                                      patch_separable_coefficients(t, *patch_maps_[k]), ends);
       if (!b.local) throw std::logic_error("fast diagonalization of a patch: its free functions' hull is not a tensor product");
       blocks.push_back(std::move(b));
     }
     return additive_schwarz(std::move(blocks), layout.num_free());
   }
-  std::vector<ReportField> report() const override {
-    return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9},
-            {.key = "patches", .value = long(d_.patches.size()), .text = std::to_string(d_.patches.size())}};
-  }
+  std::vector<ReportField> report() const override { return multipatch_report(options_, static_cast<int>(d_.patches.size())); }
 
  private:
   TensorSpaceOptions options_;
@@ -133,19 +144,10 @@ class SubsetGeometryMap final : public GeometryMap {
 class MultiPatchTensorPartSpace final : public SplineSpace, public SpaceReport {
  public:
   MultiPatchTensorPartSpace(const CaseDescription& c, const TensorSpaceOptions& options, int rank, int ranks)
-      : options_(options) {
-    try {
-      d_ = build_multipatch_tensor_part(c.domain, options, rank, ranks);
-    } catch (const GeometryError& e) {
-      throw InputError(c.path + ": [geometry] file: " + e.what());
-    } catch (const std::invalid_argument& e) {
-      throw InputError(c.path + ": [space]: " + e.what());
-    }
+      : options_(options), d_(built(c, [&] { return build_multipatch_tensor_part(c.domain, options, rank, ranks); })) {
     std::vector<std::unique_ptr<GeometryMap>> maps;
     for (size_t k = 0; k < d_.built.size(); ++k) {
-      const TensorDiscretization& t = d_.built[k];
-      patch_maps_.push_back(std::make_unique<PatchGeometryMap>(
-          t.mesh, t.patch, PatchGeometryMap::ElementGrid{t.space_u.breakpoints(), t.space_v.breakpoints(), 0}));
+      patch_maps_.push_back(patch_grid_map(d_.built[k]));
       maps.push_back(std::make_unique<SubsetGeometryMap>(*patch_maps_.back(), d_.cells_of_piece[k]));
     }
     geometry_ = std::make_unique<PiecewiseGeometryMap>(std::move(maps), d_.first_cell);
@@ -157,10 +159,7 @@ class MultiPatchTensorPartSpace final : public SplineSpace, public SpaceReport {
   std::array<int, 2> degree() const override { return options_.degree; }
   const MeshPart* part() const override { return &d_.part; }
   std::string description() const override { return describe_multipatch(options_, patches_); }
-  std::vector<ReportField> report() const override {
-    return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9},
-            {.key = "patches", .value = long(patches_), .text = std::to_string(patches_)}};
-  }
+  std::vector<ReportField> report() const override { return multipatch_report(options_, patches_); }
 
  private:
   TensorSpaceOptions options_;

@@ -81,7 +81,8 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
     ends.factor = problem.nitsche_penalty;
     if (problem.dirichlet_method == DirichletMethod::kNitsche && problem.boundary.size() == 4)
       for (int s = 0; s < 4; ++s) ends.sides[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
-    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower, patch_separable_coefficients(d_, *geometry_), ends);
+    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower.diagonal(), patch_separable_coefficients(d_, *geometry_),
+                                ends);
   }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
