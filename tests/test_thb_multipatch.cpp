@@ -121,6 +121,11 @@ TEST_CASE("THB on three patches stays a C0 partition of unity of independent fun
         }
       }
       CHECK(across > 0);
+      // The L-shape's patches are affine maps of unit squares: both sides compute the point
+      // from the same corners in a few operations, so they agree to a few ulps of |x| <= 1
+      // (1e-14 is 45 ulps). Function values are sums of at most (p + 1)^2 products of
+      // coefficients and Bernstein values in [0, 1]: rounding about 16 eps = 4e-15 at p = 3;
+      // 1e-13 is far below any function missing or unglued on one side (values of order 0.1).
       CHECK(worst_point < 1e-14);
       CHECK(worst_value < 1e-13);
       space = std::move(*space).refine(some_cells(*space, rng), {}, nullptr, {});
