@@ -175,8 +175,8 @@ TEST_CASE("Multipatch output: each cell's patch as cell data, the interfaces as 
       REQUIRE((p >= 0 && p < 3));
       ++count[p];
       // The cell's corners (the first four points of a Bezier or linear quad) lie in its patch.
-      // They are grid points k/8 of unit squares, exact in binary: 1e-14 only absorbs the
-      // geometry's evaluation.
+      // They are grid points k/16 of unit squares (4 elements, 4 samples), exact in binary: 1e-14
+      // only absorbs the geometry's evaluation.
       vtkIdType n;
       const vtkIdType* ids;
       grid->GetCellPoints(k, n, ids);
