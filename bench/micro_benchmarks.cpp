@@ -38,6 +38,33 @@ void BM_AssemblePoisson(benchmark::State& state) {
 }
 BENCHMARK(BM_AssemblePoisson)->Args({2, 128})->Args({4, 64})->Unit(benchmark::kMillisecond);
 
+// Rank 0 of 2 under mpirun, on one thread: its half of the cells, whole rows of its half of
+// the functions (PETSc's blocks, rank_rows_pattern), against the serial kernel on the same
+// cells (lower triangle), also on one thread. Run with OMP_NUM_THREADS=1 to compare kernels.
+void BM_AssembleHalf(benchmark::State& state) {
+  const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const std::unique_ptr<SplineSpace> space = build_space(c);
+  const SplineSpace& d = *space;
+  std::vector<bool> fixed;
+  const Eigen::VectorXd g = project_dirichlet_data(d.mesh(), d.geometry(), c.problem, c.quadrature, fixed);
+  const DofLayout layout = make_dof_layout(d.mesh().num_functions(), fixed);
+  const CellRange half{0, d.mesh().num_cells() / 2};
+  PoissonForm form;
+  form.source = &c.problem.source;
+  Eigen::VectorXd rhs;
+  if (state.range(2) == 1) {
+    std::vector<int> rows(layout.num_free());
+    for (int k = 0; k < layout.num_free(); ++k) rows[k] = k;
+    RankRows r = rank_rows_pattern(d.mesh(), layout, rows, 0, layout.num_free() / 2, half);
+    for (auto _ : state) assemble_poisson(d.mesh(), d.geometry(), form, layout, g, c.quadrature, r, rhs, half);
+  } else {
+    Eigen::SparseMatrix<double> K = lower_pattern_matrix(d.mesh(), layout);
+    for (auto _ : state) assemble_poisson(d.mesh(), d.geometry(), form, layout, g, c.quadrature, K, rhs, nullptr, half);
+  }
+  state.SetItemsProcessed(state.iterations() * half.last);
+}
+BENCHMARK(BM_AssembleHalf)->ArgNames({"p", "n", "rows"})->Args({2, 256, 0})->Args({2, 256, 1})->Args({4, 128, 0})->Args({4, 128, 1})->Unit(benchmark::kMillisecond);
+
 void BM_ErrorNorms(benchmark::State& state) {
   const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const std::unique_ptr<SplineSpace> space = build_space(c);
@@ -55,7 +82,7 @@ void BM_LowerPattern(benchmark::State& state) {
   const DofLayout layout = make_dof_layout(d.mesh().num_functions(), std::vector<bool>(d.mesh().num_functions(), false));
   for (auto _ : state) benchmark::DoNotOptimize(lower_pattern_matrix(d.mesh(), layout));
 }
-BENCHMARK(BM_LowerPattern)->Args({2, 128})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LowerPattern)->Args({2, 128})->Args({2, 1024})->Args({4, 512})->Unit(benchmark::kMillisecond);
 
 // CG's product with the stiffness matrix stored as its lower triangle (Eigen's selfadjointView).
 void BM_SymmetricProduct(benchmark::State& state) {

@@ -411,20 +411,21 @@ bool without_reaction(const PoissonProblem& problem) {
   return problem.reaction == 0 && problem.coefficients.reaction.empty();
 }
 
-void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
-                      const DofLayout& layout, const Eigen::VectorXd& fixed_values,
-                      const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
-                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals, CellRange cells) {
+namespace {
+
+// assemble_cells into one array of matrix values (nnz entries; scatter(order, Ke, values) adds
+// a cell's entries) and the load. Thread 0 adds into the results, the others into their own
+// copies (allocated by their thread, before its first cell), summed in thread order after the
+// loop: the sums do not depend on timing.
+template <class Scatter>
+void assemble_values(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
+                     const DofLayout& layout, const Eigen::VectorXd& fixed_values, const QuadratureOptions& quadrature,
+                     double* values, long nnz, Scatter scatter, Eigen::VectorXd& rhs, Eigen::VectorXd* integrals,
+                     CellRange cells) {
   const int nthreads = omp_get_max_threads();
-  const long nnz = matrix.nonZeros();
-  const int* outer = matrix.outerIndexPtr();
-  const int* inner = matrix.innerIndexPtr();
-  double* values = matrix.valuePtr();
   std::fill(values, values + nnz, 0.0);
   rhs.setZero(layout.num_free());
   if (integrals) integrals->setZero(mesh.num_functions());
-  // Thread 0 adds into the results, the others into their own copies (allocated by their
-  // thread, before its first cell), summed in thread order after the loop.
   std::vector<std::vector<double>> thread_values(nthreads - 1, std::vector<double>());
   std::vector<Eigen::VectorXd> thread_rhs(nthreads - 1), thread_integrals(nthreads - 1);
   auto integrals_of = [&](int tid) -> Eigen::VectorXd* {
@@ -445,7 +446,7 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
       my_rhs = &thread_rhs[tid - 1];
     }
     for (const auto& [d, a] : order) (*my_rhs)[d] += Fe[a];
-    scatter(outer, inner, order, Ke, my_values);
+    scatter(order, Ke, my_values);
   };
   assemble_cells(mesh, geometry, form, layout, fixed_values, quadrature, cells, emit, integrals_of);
   for (int t = 0; t < nthreads - 1; ++t) {
@@ -458,6 +459,89 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
     }
     if (integrals && thread_integrals[t].size() > 0) *integrals += thread_integrals[t];
   }
+}
+
+// A cell's rows, whole, into a rank's rows: an owned row's columns into the diagonal block
+// (owned columns) or the off-diagonal one (by global row), a halo row's into its entries.
+// Each row's sorted columns are walked once, as the cell's dofs ascend. Entry (i, j) is read
+// from Ke's lower triangle in the cell's dof order, as the serial scatter reads it, so that
+// both triangles hold the same numbers (Ke's products need not be symmetric to the last bit).
+void scatter_rows(const RankRows& r, const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke,
+                  double* values) {
+  const OwnedRows& o = r.owned;
+  const int m = static_cast<int>(order.size());
+  if (m == 0) return;
+  // Row k's entries in column order: Ke(a, b) left of the diagonal, Ke(b, a) from it on.
+  const auto add_row = [&](int k, const int* cols, int p, auto target, double* row_values) {
+    const int a = order[k].second;
+    for (int l = 0; l < k; ++l) {
+      while (cols[p] < target(order[l].first)) ++p;
+      row_values[p] += Ke(a, order[l].second);
+    }
+    for (int l = k; l < m; ++l) {
+      while (cols[p] < target(order[l].first)) ++p;
+      row_values[p] += Ke(order[l].second, a);
+    }
+  };
+  const auto diagonal_column = [&](int d) { return d - r.first; };
+  const auto own = [&](int d) { return d >= r.first && d < r.last; };
+  if (own(order.front().first) && own(order.back().first)) {  // the usual cell: only the diagonal block
+    for (int k = 0; k < m; ++k)
+      add_row(k, o.diagonal_cols.data(), o.diagonal_start[order[k].first - r.first], diagonal_column, values);
+    return;
+  }
+  // Owned rows get owned columns in the diagonal block, the others (global rows) in the
+  // off-diagonal one: two walks, each along its block's sorted columns.
+  double* off_values = values + o.diagonal_nonzeros();
+  double* halo_values = values + r.halo_offset();
+  for (int k = 0; k < m; ++k) {
+    const auto [row, a] = order[k];
+    if (!own(row)) {
+      add_row(k, r.halo_cols.data(), r.halo_start[row], [](int d) { return d; }, halo_values);
+      continue;
+    }
+    int diagonal = o.diagonal_start[row - r.first], off = o.off_start[row - r.first];
+    for (int l = 0; l < m; ++l) {
+      const double v = l < k ? Ke(a, order[l].second) : Ke(order[l].second, a);
+      const int col = order[l].first;
+      if (own(col)) {
+        while (o.diagonal_cols[diagonal] < col - r.first) ++diagonal;
+        values[diagonal] += v;
+      } else {
+        const int global = r.global_row[col];
+        while (o.off_cols[off] < global) ++off;
+        off_values[off] += v;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
+                      const DofLayout& layout, const Eigen::VectorXd& fixed_values,
+                      const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
+                      Eigen::VectorXd& rhs, Eigen::VectorXd* integrals, CellRange cells) {
+  const int* outer = matrix.outerIndexPtr();
+  const int* inner = matrix.innerIndexPtr();
+  assemble_values(
+      mesh, geometry, form, layout, fixed_values, quadrature, matrix.valuePtr(), matrix.nonZeros(),
+      [&](const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke, double* values) {
+        scatter(outer, inner, order, Ke, values);
+      },
+      rhs, integrals, cells);
+}
+
+void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
+                      const DofLayout& layout, const Eigen::VectorXd& fixed_values,
+                      const QuadratureOptions& quadrature, RankRows& rows, Eigen::VectorXd& rhs, CellRange cells) {
+  assemble_values(
+      mesh, geometry, form, layout, fixed_values, quadrature, rows.owned.values.data(),
+      static_cast<long>(rows.owned.values.size()),
+      [&](const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke, double* values) {
+        scatter_rows(rows, order, Ke, values);
+      },
+      rhs, nullptr, cells);
 }
 
 namespace {

@@ -62,6 +62,12 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
                       const DofLayout& layout, const Eigen::VectorXd& fixed_values,
                       const QuadratureOptions& quadrature, Eigen::SparseMatrix<double>& matrix,
                       Eigen::VectorXd& rhs, Eigen::VectorXd* integrals = nullptr, CellRange cells = {});
+// The same into a rank's rows of the distributed matrix (rank_rows_pattern; its values are
+// overwritten): every cell of `cells` adds its rows whole, owned rows into PETSc's two blocks,
+// the others into the halo rows.
+void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
+                      const DofLayout& layout, const Eigen::VectorXd& fixed_values,
+                      const QuadratureOptions& quadrature, RankRows& rows, Eigen::VectorXd& rhs, CellRange cells);
 
 // Adds the Neumann terms (h phi_i over the Neumann sides of `cells`) to rhs (free dofs).
 void add_neumann_terms(const BezierMesh& mesh, const GeometryMap& geometry,

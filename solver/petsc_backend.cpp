@@ -87,8 +87,8 @@ std::vector<std::pair<int, double>> project_dirichlet_over_ranks(const BezierMes
   return solve_dirichlet_projection(pieces);
 }
 
-void solve_with_petsc(Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& load, const DofLayout& layout,
-                    const std::vector<int>& row_of_dof, int first_row, int last_row, int n,
+void solve_with_petsc(RankRows&& rows, const Eigen::VectorXd& load, const DofLayout& layout, int first_row,
+                    int last_row, int n,
                     const std::vector<int>& fixed_functions, const MeshPart& part, const PoissonSolveOptions& options,
                     const DistributedSolveOptions& petsc, PoissonSolution& sol) {
   using clock = std::chrono::steady_clock;
@@ -100,81 +100,24 @@ void solve_with_petsc(Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& loa
   std::unique_ptr<DistributedSystem> system;
   on_all_ranks([&] { system = make_distributed_system(n, first_row, last_row); });
   on_all_ranks([&] {
-    // Both triangles, row by row, straight from the lower CSC: sweeping its columns j in
-    // order, row i >= j gets (j, v) and row j gets (i, v), so every row fills in ascending
-    // column order (row_of_dof is increasing). Owned rows go to PETSc as its two blocks
-    // (columns this rank owns, and the others); the other rows, what this rank's cells put
-    // there, are added to their owners' rows.
+    // The owned rows go to PETSc as they are; the halo rows, what this rank's cells put in
+    // rows other ranks own, are added to their owners' rows.
     const int nd = layout.num_free();
-    const auto owned = [&](int d) { return row_of_dof[d] >= first_row && row_of_dof[d] < last_row; };
-    const auto owned_column = [&](int d) { return owned(d); };  // same ranges: square blocks
-    const int* outer = K.outerIndexPtr();
-    const int* inner = K.innerIndexPtr();
-    const double* value = K.valuePtr();
-    // This rank's owned dofs are one contiguous run [first, last) of its local dofs.
-    int first = 0;
-    while (first < nd && !owned(first)) ++first;
-    int last = first;
-    while (last < nd && owned(last)) ++last;
-    if (last - first != last_row - first_row)
-      throw std::logic_error("distributed assembly: this rank's mesh does not hold all of its rows");
-    // Pass 1: the length of every row's part in each block (other rows: one count).
-    std::vector<int> diagonal_count(nd + 1, 0), off_count(nd + 1, 0);
-    const auto count = [&](int row, int col) { ++(owned(row) && owned_column(col) ? diagonal_count : off_count)[row + 1]; };
-    for (int j = 0; j < nd; ++j)
-      for (int p = outer[j]; p < outer[j + 1]; ++p) {
-        count(inner[p], j);
-        if (inner[p] != j) count(j, inner[p]);
-      }
-    OwnedRows rows;
-    rows.diagonal_start.assign(diagonal_count.begin() + first, diagonal_count.begin() + last + 1);
-    rows.off_start.assign(off_count.begin() + first, off_count.begin() + last + 1);
-    rows.diagonal_start[0] = rows.off_start[0] = 0;
-    for (int r = 0; r < last - first; ++r)
-      rows.diagonal_start[r + 1] += rows.diagonal_start[r], rows.off_start[r + 1] += rows.off_start[r];
-    std::vector<int> other_start(nd + 1, 0);  // rows owned elsewhere: all their entries
-    for (int d = 0; d < nd; ++d) other_start[d + 1] = other_start[d] + (d >= first && d < last ? 0 : off_count[d + 1]);
-    diagonal_count = off_count = {};
-    rows.diagonal_cols.resize(rows.diagonal_start.back()), rows.diagonal_values.resize(rows.diagonal_start.back());
-    rows.off_cols.resize(rows.off_start.back()), rows.off_values.resize(rows.off_start.back());
-    std::vector<int> other_cols(other_start[nd]);
-    std::vector<double> other_values(other_start[nd]);
-    // Pass 2: fill.
-    std::vector<int> next_diagonal(rows.diagonal_start.begin(), rows.diagonal_start.end() - 1);
-    std::vector<int> next_off(rows.off_start.begin(), rows.off_start.end() - 1);
-    std::vector<int> next_other(other_start.begin(), other_start.end() - 1);
-    const auto put = [&](int row, int col, double v) {
-      if (row >= first && row < last) {
-        if (owned_column(col))
-          rows.diagonal_cols[next_diagonal[row - first]] = row_of_dof[col] - first_row,
-          rows.diagonal_values[next_diagonal[row - first]++] = v;
-        else
-          rows.off_cols[next_off[row - first]] = row_of_dof[col], rows.off_values[next_off[row - first]++] = v;
-      } else {
-        other_cols[next_other[row]] = row_of_dof[col], other_values[next_other[row]++] = v;
-      }
-    };
-    for (int j = 0; j < nd; ++j)
-      for (int p = outer[j]; p < outer[j + 1]; ++p) {
-        put(inner[p], j, value[p]);
-        if (inner[p] != j) put(j, inner[p], value[p]);
-      }
-    K = Eigen::SparseMatrix<double>();
-    next_diagonal = next_off = next_other = {};
-    system->set_owned_rows(std::move(rows));
+    const std::vector<double> halo_values(rows.owned.values.begin() + rows.halo_offset(), rows.owned.values.end());
+    rows.owned.values.resize(rows.halo_offset());
+    system->set_owned_rows(std::move(rows.owned));
     std::vector<int> row_cols;
-    std::vector<double> row_values;
     for (int d = 0; d < nd; ++d) {
-      row_cols.clear(), row_values.clear();
-      for (int p = other_start[d]; p < other_start[d + 1]; ++p)
-        if (other_values[p] != 0) row_cols.push_back(other_cols[p]), row_values.push_back(other_values[p]);  // 0: no cell of this rank there
-      if (!row_cols.empty())
-        system->add_to_row(row_of_dof[d], static_cast<int>(row_cols.size()), row_cols.data(), row_values.data());
+      const int begin = rows.halo_start[d], end = rows.halo_start[d + 1];
+      if (begin == end) continue;
+      row_cols.clear();
+      for (int p = begin; p < end; ++p) row_cols.push_back(rows.global_row[rows.halo_cols[p]]);
+      system->add_to_row(rows.global_row[d], end - begin, row_cols.data(), halo_values.data() + begin);
     }
     std::vector<int> load_rows;
     std::vector<double> load_values;
     for (int d = 0; d < layout.num_free(); ++d)
-      if (load[d] != 0) load_rows.push_back(row_of_dof[d]), load_values.push_back(load[d]);
+      if (load[d] != 0) load_rows.push_back(rows.global_row[d]), load_values.push_back(load[d]);
     system->add_load(static_cast<int>(load_rows.size()), load_rows.data(), load_values.data());
   });
   on_all_ranks([&] { system->finish_assembly(); });
@@ -207,7 +150,7 @@ void solve_with_petsc(Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& loa
   }
   say("PETSc solve");
   DistributedSolveResult r;
-  solve_options.wanted_rows = &row_of_dof;
+  solve_options.wanted_rows = &rows.global_row;
   on_all_ranks([&] {
     try {
       r = system->solve(solve_options);

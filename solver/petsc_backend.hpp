@@ -30,15 +30,14 @@ std::vector<std::pair<int, double>> project_dirichlet_over_ranks(const BezierMes
                                                                  const QuadratureOptions& quadrature,
                                                                  const MeshPart& part);
 
-// The PETSc backend: the rank's assembled system (K: lower triangle over its local free dofs,
-// consumed; load: per local free dof), rows numbered by row_of_dof, this rank owning
-// [first_row, last_row) of the n global unknowns, becomes PETSc's distributed matrix and load
-// (owned rows handed over as PETSc's two blocks, without a copy; contributions to other ranks'
-// rows added), is solved with the KSP/PC `petsc` names, and the rank's free values are written
-// into sol.coefficients. Collective. Throws NotConverged when PETSc stops above its tolerance.
-void solve_with_petsc(Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& load, const DofLayout& layout,
-                      const std::vector<int>& row_of_dof, int first_row, int last_row, int n,
-                      const std::vector<int>& fixed_functions, const MeshPart& part, const PoissonSolveOptions& options,
-                      const DistributedSolveOptions& petsc, PoissonSolution& sol);
+// The PETSc backend: the rank's assembled rows (rank_rows_pattern, filled by assemble_poisson;
+// consumed) and load (per local free dof), this rank owning [first_row, last_row) of the n
+// global unknowns, become PETSc's distributed matrix and load (owned rows handed over as
+// PETSc's two blocks, without a copy; the halo rows added to their owners'), are solved with
+// the KSP/PC `petsc` names, and the rank's free values are written into sol.coefficients.
+// Collective. Throws NotConverged when PETSc stops above its tolerance.
+void solve_with_petsc(RankRows&& rows, const Eigen::VectorXd& load, const DofLayout& layout, int first_row,
+                      int last_row, int n, const std::vector<int>& fixed_functions, const MeshPart& part,
+                      const PoissonSolveOptions& options, const DistributedSolveOptions& petsc, PoissonSolution& sol);
 
 }  // namespace knotwork

@@ -72,14 +72,6 @@ struct DistributedSolveResult {
   double matrix_seconds = 0, setup_seconds = 0, solve_seconds = 0;  // max over ranks
 };
 
-// A rank's owned rows of the matrix as PETSc's MATMPIAIJ keeps them: the "diagonal" block
-// (columns this rank owns, numbered from its first row) and the "off-diagonal" block (the
-// other columns, global numbers), each CSR with ascending columns per row.
-struct OwnedRows {
-  std::vector<int> diagonal_start{0}, diagonal_cols, off_start{0}, off_cols;
-  std::vector<double> diagonal_values, off_values;
-};
-
 // The distributed matrix and load (a MATMPIAIJ and its vector), owned rows
 // [first_row, last_row) on this rank. The rank gives its owned rows whole (their pattern and
 // the values its own cells put there; PETSc keeps the arrays as they are, no copy, no count,
@@ -88,7 +80,8 @@ struct OwnedRows {
 class DistributedSystem {
  public:
   virtual ~DistributedSystem() = default;
-  // Collective, once: the owned rows (the system keeps them for the matrix's lifetime).
+  // Collective, once: the owned rows (solver/sparsity.hpp; the system keeps them for the
+  // matrix's lifetime).
   virtual void set_owned_rows(OwnedRows&& rows) = 0;
   // After set_owned_rows: adds n entries to a row another rank owns (inside its pattern).
   virtual void add_to_row(int row, int n, const int* cols, const double* values) = 0;

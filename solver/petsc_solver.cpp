@@ -180,8 +180,8 @@ class PetscSystem final : public DistributedSystem {
     rows_ = std::move(rows);
     check(MatCreateMPIAIJWithSplitArrays(PETSC_COMM_WORLD, local_, local_, num_free_, num_free_,
                                          rows_.diagonal_start.data(), rows_.diagonal_cols.data(),
-                                         rows_.diagonal_values.data(), rows_.off_start.data(), rows_.off_cols.data(),
-                                         rows_.off_values.data(), &A_),
+                                         rows_.values.data(), rows_.off_start.data(), rows_.off_cols.data(),
+                                         rows_.values.data() + rows_.diagonal_nonzeros(), &A_),
           "matrix rows");
     // An entry outside the pattern is knotwork's error, not a slow path.
     check(MatSetOption(A_, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE), "matrix option");

@@ -111,15 +111,25 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       fixed[f] = true, fixed_values[f] = dirichlet[k].second;
   }
   const DofLayout layout = make_dof_layout(mesh.num_functions(), fixed);
-  std::vector<int> row_of_dof(layout.num_free());
-  for (int d = 0; d < layout.num_free(); ++d) {
-    const int g = part.global(layout.function_of_dof[d]);
-    row_of_dof[d] = g - fixed_below(g);
-  }
-  Eigen::SparseMatrix<double> K = lower_pattern_matrix(mesh, layout);
-  sol.num_free = n;
-  sol.matrix_nonzeros = K.nonZeros();
   const CellRange mine = part.owned;
+  // Serially the lower triangle CHOLMOD reads; distributed, this rank's rows as PETSc takes them.
+  // (Built in place: Eigen 3.4's SparseMatrix has no move assignment, and a copy costs.)
+  Eigen::SparseMatrix<double> K = distributed ? Eigen::SparseMatrix<double>() : lower_pattern_matrix(mesh, layout);
+  RankRows rows;
+  const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
+  const int last_row = part.last_owned_function - fixed_below(part.last_owned_function);
+  if (distributed) {
+    std::vector<int> row_of_dof(layout.num_free());
+    for (int d = 0; d < layout.num_free(); ++d) {
+      const int g = part.global(layout.function_of_dof[d]);
+      row_of_dof[d] = g - fixed_below(g);
+    }
+    step([&] { rows = rank_rows_pattern(mesh, layout, std::move(row_of_dof), first_row, last_row, mine); });
+    sol.matrix_nonzeros = rows.owned.diagonal_nonzeros() + rows.owned.off_nonzeros();
+  } else {
+    sol.matrix_nonzeros = K.nonZeros();
+  }
+  sol.num_free = n;
   sol.timings.setup = seconds_since(t);
 
   // This process's cells (serially, all of them), threaded, into the lower triangle over its
@@ -128,7 +138,8 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   t = clock::now();
   Eigen::VectorXd rhs;
   step([&] {
-    assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, rhs, nullptr, mine);
+    if (distributed) assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, rows, rhs, mine);
+    else assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, rhs, nullptr, mine);
     add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs, mine);
     if (sol.zero_mean)  // each rank adds its own rows
       for (int d = 0; d < layout.num_free(); ++d) {
@@ -158,9 +169,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   // The backend.
   sol.coefficients = fixed_values;
   if (n > 0 && distributed) {  // global: every rank takes part, with or without rows of its own
-    const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
-    const int last_row = part.last_owned_function - fixed_below(part.last_owned_function);
-    solve_with_petsc(K, rhs, layout, row_of_dof, first_row, last_row, n, fixed_functions, part, options,
+    solve_with_petsc(std::move(rows), rhs, layout, first_row, last_row, n, fixed_functions, part, options,
                      *distribution->petsc, sol);
   } else if (n > 0 && options.iterative) {
     say("preconditioner");

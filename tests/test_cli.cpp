@@ -100,6 +100,19 @@ TEST_CASE("converge writes table, JSON, plot and collection", "[cli]") {
   REQUIRE(std::count(csv.begin(), csv.end(), '\n') == 4);
 }
 
+TEST_CASE("bench runs both solvers with and without the error norms", "[cli][bench]") {
+  // --no-errors once dropped the exact solution the iterative path's boundary data came from.
+  Sandbox box;
+  for (const char* solver : {"direct", "iterative"})
+    for (const bool errors : {true, false}) {
+      const Result r = box.run(std::string("bench --json --config 2:16 --solver ") + solver + (errors ? "" : " --no-errors"));
+      INFO(solver << (errors ? "" : " --no-errors") << ": " << r.err);
+      REQUIRE(r.code == 0);
+      REQUIRE((r.out.find("\"l2_error\": null") == std::string::npos) == errors);
+      REQUIRE(r.out.find("\"free_dofs\": 256") != std::string::npos);  // 16^2 interior functions of 18^2
+    }
+}
+
 TEST_CASE("every subcommand has --help", "[cli]") {
   Sandbox box;
   for (const char* c : {"--help", "run --help", "converge --help", "bench --help", "adapt --help", "basis --help",

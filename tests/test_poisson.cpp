@@ -11,7 +11,9 @@
 #include "cases/geometries.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/linear_solver.hpp"
+#include "solver/assemble_poisson.hpp"
 #include "solver/poisson_solver.hpp"
+#include "solver/sparsity.hpp"
 #include "solver/separable_cells.hpp"
 #include "tests/rounding_bounds.hpp"
 
@@ -359,6 +361,83 @@ TEST_CASE("Threaded results are bitwise reproducible run to run, and error norms
     REQUIRE(n.h1_semi == norms[0].h1_semi);
   }
   REQUIRE(norms[0].l2 == a.errors->l2);
+}
+
+TEST_CASE("A rank's rows are the serial matrix's rows over its cells, whole, in PETSc's two blocks", "[poisson][mpi]") {
+  // Under mpirun each rank integrates its cells straight into its rows (rank_rows_pattern);
+  // the reference is the serial lower-triangle assembly over the same cells, mirrored. Both
+  // add the same cell terms in the same order, so they agree to the bit; the pattern must hold
+  // every entry any cell makes in an owned row (other ranks add theirs there).
+  const CaseDescription c =
+      with_exact(quarter_annulus_patch(1, 2), 3, 6, "-(x^2+y^2-1)*(x^2+y^2-4)*x*y^2 + sin(3*x)*cos(2*y)");
+  const auto space = build_space(c);
+  const BezierMesh& mesh = space->mesh();
+  std::vector<bool> fixed;
+  const Eigen::VectorXd g = project_dirichlet_data(mesh, space->geometry(), c.problem, c.quadrature, fixed);
+  const DofLayout layout = make_dof_layout(mesh.num_functions(), fixed);
+  const int n = layout.num_free(), nc = mesh.num_cells();
+  const PoissonForm form = poisson_form(c.problem);
+  // Which dofs share a cell, counted from the cells themselves.
+  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> coupled = Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>::Zero(n, n);
+  for (int cell = 0; cell < mesh.num_cells(); ++cell)
+    for (int f : mesh.functions(cell))
+      for (int h : mesh.functions(cell))
+        if (layout.dof[f] >= 0 && layout.dof[h] >= 0) coupled(layout.dof[f], layout.dof[h]) = true;
+  std::vector<int> identity(n);
+  for (int d = 0; d < n; ++d) identity[d] = d;
+  const int threads = omp_get_max_threads();
+  for (const int t : {1, 2})
+    for (const int ranks : {1, 2, 3})
+      for (int rank = 0; rank < ranks; ++rank) {
+        omp_set_num_threads(t);
+        const CellRange cells{nc * rank / ranks, nc * (rank + 1) / ranks};
+        const int first = n * rank / ranks, last = n * (rank + 1) / ranks;
+        Eigen::SparseMatrix<double> K = lower_pattern_matrix(mesh, layout);
+        Eigen::VectorXd serial_rhs, rows_rhs;
+        assemble_poisson(mesh, space->geometry(), form, layout, g, c.quadrature, K, serial_rhs, nullptr, cells);
+        const Eigen::MatrixXd lower = K;  // mirrored: the whole matrix of these cells
+        const Eigen::MatrixXd F = lower + lower.transpose() - Eigen::MatrixXd(lower.diagonal().asDiagonal());
+        RankRows r = rank_rows_pattern(mesh, layout, identity, first, last, cells);
+        assemble_poisson(mesh, space->geometry(), form, layout, g, c.quadrature, r, rows_rhs, cells);
+        omp_set_num_threads(threads);
+        INFO(t << " threads, rank " << rank << " of " << ranks);
+        REQUIRE((rows_rhs.array() == serial_rhs.array()).all());
+        REQUIRE(r.first == first);
+        REQUIRE(r.last == last);
+        const OwnedRows& o = r.owned;
+        const double* off_values = o.values.data() + o.diagonal_nonzeros();
+        const double* halo_values = o.values.data() + r.halo_offset();
+        for (int i = 0; i < n; ++i) {
+          // The row as a dense vector from the blocks (or the halo), and its pattern.
+          Eigen::VectorXd row = Eigen::VectorXd::Zero(n);
+          std::vector<int> columns;
+          if (i >= first && i < last) {
+            for (int k = o.diagonal_start[i - first]; k < o.diagonal_start[i - first + 1]; ++k) {
+              REQUIRE(o.diagonal_cols[k] + first >= first);
+              REQUIRE(o.diagonal_cols[k] + first < last);
+              columns.push_back(o.diagonal_cols[k] + first), row[o.diagonal_cols[k] + first] = o.values[k];
+            }
+            for (int k = o.off_start[i - first]; k < o.off_start[i - first + 1]; ++k) {
+              REQUIRE((o.off_cols[k] < first || o.off_cols[k] >= last));
+              columns.push_back(o.off_cols[k]), row[o.off_cols[k]] = off_values[k];
+            }
+            std::sort(columns.begin(), columns.end());
+            // Exactly the columns any cell couples to row i (rank_rows_pattern's own blocks ascend).
+            std::vector<int> expected;
+            for (int j = 0; j < n; ++j)
+              if (coupled(i, j)) expected.push_back(j);
+            REQUIRE(columns == expected);
+            REQUIRE(std::is_sorted(o.diagonal_cols.begin() + o.diagonal_start[i - first],
+                                   o.diagonal_cols.begin() + o.diagonal_start[i - first + 1]));
+            REQUIRE(std::is_sorted(o.off_cols.begin() + o.off_start[i - first], o.off_cols.begin() + o.off_start[i - first + 1]));
+          } else {
+            REQUIRE(r.halo_start[i] <= r.halo_start[i + 1]);
+            for (int k = r.halo_start[i]; k < r.halo_start[i + 1]; ++k) row[r.halo_cols[k]] = halo_values[k];
+          }
+          // The values: the serial ones to the bit, nothing of this rank's cells left out.
+          REQUIRE((row.array() == F.row(i).transpose().array()).all());
+        }
+      }
 }
 
 // The case solved on one space by CHOLMOD and then by CG (CG's choices in *report).
