@@ -21,18 +21,28 @@ void BM_BezierExtraction(benchmark::State& state) {
 }
 BENCHMARK(BM_BezierExtraction)->Arg(2)->Arg(4);
 
-void BM_AssemblePoisson(benchmark::State& state) {
-  const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  const std::unique_ptr<SplineSpace> space = build_space(c);
-  const SplineSpace& d = *space;
-  std::vector<bool> fixed;
-  const Eigen::VectorXd g = project_dirichlet_data(d.mesh(), d.geometry(), c.problem, c.quadrature, fixed);
-  const DofLayout layout = make_dof_layout(d.mesh().num_functions(), fixed);
-  Eigen::SparseMatrix<double> K = lower_pattern_matrix(d.mesh(), layout);
-  Eigen::VectorXd rhs;
+// The benchmark square's space, its Dirichlet values and free dofs, and the form with its source.
+struct SquareProblem {
+  CaseDescription c;
+  std::unique_ptr<SplineSpace> space;
+  Eigen::VectorXd g;
+  DofLayout layout;
   PoissonForm form;
-  form.source = &c.problem.source;
-  for (auto _ : state) assemble_poisson(d.mesh(), d.geometry(), form, layout, g, c.quadrature, K, rhs);
+  explicit SquareProblem(const benchmark::State& state)
+      : c(square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)))), space(build_space(c)) {
+    std::vector<bool> fixed;
+    g = project_dirichlet_data(space->mesh(), space->geometry(), c.problem, c.quadrature, fixed);
+    layout = make_dof_layout(space->mesh().num_functions(), fixed);
+    form.source = &c.problem.source;
+  }
+};
+
+void BM_AssemblePoisson(benchmark::State& state) {
+  const SquareProblem s(state);
+  const SplineSpace& d = *s.space;
+  Eigen::SparseMatrix<double> K = lower_pattern_matrix(d.mesh(), s.layout);
+  Eigen::VectorXd rhs;
+  for (auto _ : state) assemble_poisson(d.mesh(), d.geometry(), s.form, s.layout, s.g, s.c.quadrature, K, rhs);
   state.SetItemsProcessed(state.iterations() * d.mesh().num_cells());
   state.counters["cells"] = d.mesh().num_cells();
 }
@@ -42,24 +52,20 @@ BENCHMARK(BM_AssemblePoisson)->Args({2, 128})->Args({4, 64})->Unit(benchmark::kM
 // the functions (PETSc's blocks, rank_rows_pattern), against the serial kernel on the same
 // cells (lower triangle), also on one thread. Run with OMP_NUM_THREADS=1 to compare kernels.
 void BM_AssembleHalf(benchmark::State& state) {
-  const CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  const std::unique_ptr<SplineSpace> space = build_space(c);
-  const SplineSpace& d = *space;
-  std::vector<bool> fixed;
-  const Eigen::VectorXd g = project_dirichlet_data(d.mesh(), d.geometry(), c.problem, c.quadrature, fixed);
-  const DofLayout layout = make_dof_layout(d.mesh().num_functions(), fixed);
+  const SquareProblem s(state);
+  const SplineSpace& d = *s.space;
+  const int n = s.layout.num_free();
   const CellRange half{0, d.mesh().num_cells() / 2};
-  PoissonForm form;
-  form.source = &c.problem.source;
   Eigen::VectorXd rhs;
   if (state.range(2) == 1) {
-    std::vector<int> rows(layout.num_free());
-    for (int k = 0; k < layout.num_free(); ++k) rows[k] = k;
-    RankRows r = rank_rows_pattern(d.mesh(), layout, rows, 0, layout.num_free() / 2, half);
-    for (auto _ : state) assemble_poisson(d.mesh(), d.geometry(), form, layout, g, c.quadrature, r, rhs, half);
+    std::vector<int> rows(n);
+    for (int k = 0; k < n; ++k) rows[k] = k;
+    RankRows r = rank_rows_pattern(d.mesh(), s.layout, rows, 0, n / 2, half);
+    for (auto _ : state) assemble_poisson(d.mesh(), d.geometry(), s.form, s.layout, s.g, s.c.quadrature, r, rhs, half);
   } else {
-    Eigen::SparseMatrix<double> K = lower_pattern_matrix(d.mesh(), layout);
-    for (auto _ : state) assemble_poisson(d.mesh(), d.geometry(), form, layout, g, c.quadrature, K, rhs, nullptr, half);
+    Eigen::SparseMatrix<double> K = lower_pattern_matrix(d.mesh(), s.layout);
+    for (auto _ : state)
+      assemble_poisson(d.mesh(), d.geometry(), s.form, s.layout, s.g, s.c.quadrature, K, rhs, nullptr, half);
   }
   state.SetItemsProcessed(state.iterations() * half.last);
 }
