@@ -17,6 +17,7 @@
 #include <string>
 
 #include "studies/studies.hpp"
+#include "studies/system_study.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/expression.hpp"
@@ -287,6 +288,24 @@ struct Run {
 
 py::object json_to_python(const Json& j) { return py::module_::import("json").attr("loads")(j.dump(-1)); }
 
+// ---- the assembled system ----
+
+struct System {
+  SharedCase case_;
+  Ordering ordering = Ordering::kAmd;
+  std::shared_ptr<const SplineSpace> space;
+  AssembledSystem system;
+  const CaseDescription& c() const { return *case_; }
+};
+
+// A compressed-row matrix as (data, indices, indptr): views of its arrays, kept alive by `owner`.
+py::tuple csr_views(const Eigen::SparseMatrix<double, Eigen::RowMajor>& a, py::handle owner) {
+  const py::ssize_t n = a.rows(), nnz = a.nonZeros();
+  return py::make_tuple(view(a.valuePtr(), {nnz}, {py::ssize_t(sizeof(double))}, owner),
+                        view(a.innerIndexPtr(), {nnz}, {py::ssize_t(sizeof(int))}, owner),
+                        view(a.outerIndexPtr(), {n + 1}, {py::ssize_t(sizeof(int))}, owner));
+}
+
 }  // namespace
 }  // namespace knotwork
 
@@ -396,6 +415,43 @@ PYBIND11_MODULE(_core, m) {
       return std::make_shared<RunOutcome>(run_study(*c, ordering, out ? &*out : nullptr, p));
     });
     return Run{c, std::move(outcome)};
+  });
+
+  py::class_<System>(m, "System")
+      .def_property_readonly("num_functions", [](const System& s) { return s.space->mesh().num_functions(); })
+      .def("stiffness_csr", [](py::object self) { return csr_views(self.cast<const System&>().system.stiffness, self); })
+      .def("mass_csr", [](py::object self) { return csr_views(self.cast<const System&>().system.mass, self); })
+      .def_property_readonly("load", [](py::object self) {
+        const Eigen::VectorXd& x = self.cast<const System&>().system.load;
+        return view(x.data(), {py::ssize_t(x.size())}, {py::ssize_t(sizeof(double))}, self);
+      })
+      .def_property_readonly("dirichlet", [](py::object self) {
+        const std::vector<int>& d = self.cast<const System&>().system.dirichlet;
+        return view(d.data(), {py::ssize_t(d.size())}, {py::ssize_t(sizeof(int))}, self);
+      })
+      .def_property_readonly("dirichlet_values", [](py::object self) {
+        const Eigen::VectorXd& x = self.cast<const System&>().system.dirichlet_values;
+        return view(x.data(), {py::ssize_t(x.size())}, {py::ssize_t(sizeof(double))}, self);
+      })
+      .def_property_readonly("zero_mean", [](const System& s) { return s.system.zero_mean; })
+      .def_property_readonly("space", [](const System& s) { return Space{s.case_, s.space}; })
+      .def("solve", [](const System& s, py::object progress) {
+        PythonHooks hooks(progress);
+        Eigen::VectorXd x = hooks.call([&](const ProgressFunction& p) {
+          return solve_case(s.c(), *s.space, s.ordering, p).coefficients;
+        });
+        return py::array_t<double>(x.size(), x.data());
+      });
+
+  m.def("system", [](py::object case_, const std::string& name, py::dict overrides, py::object progress) {
+    Ordering ordering;
+    const SharedCase c = std::make_shared<const CaseDescription>(prepared_case(case_, name, overrides, &ordering));
+    PythonHooks hooks(progress);
+    return hooks.call([&](const ProgressFunction& p) {
+      System s{c, ordering, std::shared_ptr<const SplineSpace>(build_space(*c, 0, p)), {}};
+      s.system = assemble_system(*c, *s.space, p);
+      return s;
+    });
   });
 
   m.def("converge", [](py::object case_, const std::string& name, int levels, py::dict overrides, py::object output,

@@ -22,7 +22,7 @@ packages=(
   catch2 libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libpugixml-dev
   libginac-dev libgmp-dev libboost-dev
   libbenchmark-dev libspectra-dev
-  pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pytest
+  pybind11-dev python3-dev python3-numpy python3-scipy python3-matplotlib python3-pytest
   petsc-dev openmpi-bin time
 )
 with_paraview=0

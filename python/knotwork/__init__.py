@@ -37,7 +37,8 @@ from ._core import InputError  # noqa: E402
 if not _user_blas_threads:
     _core.set_blas_threads(1)
 
-__all__ = ["run", "converge", "adapt", "space", "dimension", "InputError", "Result", "Study", "Space"]
+__all__ = ["run", "converge", "adapt", "space", "system", "dimension", "InputError", "Result", "Study", "Space",
+           "System"]
 
 InputError.__doc__ = ("Bad input: a case, an option or a file that knotwork refuses. A ValueError; "
                       "str(e) is the one-line message the command line prints.")
@@ -241,6 +242,88 @@ def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, degree=N
 def space(case, *, degree=None, elements=None, progress=None, name=None):
     """The spline space of a case (its [space], refined as the overrides say): a :class:`Space`."""
     return _core.space(case, _name(case, name), _overrides(degree, elements, None, None, "amd", False), progress)
+
+
+class System:
+    """The assembled linear system of a case over all its basis functions (``knotwork.system``),
+    before the Dirichlet functions are eliminated.
+
+    Rows and columns are the space's basis functions in its own numbering: the numbering of
+    ``Space.functions(cell)`` and of ``Result.coefficients``.
+
+    - ``stiffness``: the form's matrix a(phi_j, phi_i) = (A grad phi_j, grad phi_i) + (c phi_j,
+      phi_i), plus Nitsche's boundary terms when the case imposes Dirichlet data weakly;
+      ``scipy.sparse.csr_matrix``, whole and symmetric.
+    - ``mass``: (phi_j, phi_i), the same way.
+    - ``load``: (f, phi_i), the Neumann terms and Nitsche's data terms (numpy).
+    - ``dirichlet``: the functions the Dirichlet projection fixes (int32, ascending; empty with
+      Nitsche's method and on closed surfaces); ``dirichlet_values``: their projected values.
+    - ``free``: the other functions.
+    - ``space``: the :class:`Space`.
+    - ``zero_mean``: True on a closed surface without a reaction term. The stiffness then has the
+      constants in its kernel, and ``run`` removes f's mean and fixes the solution's mean to zero.
+
+    ``solve()`` gives the coefficients ``knotwork.run`` gives on this space (the case's
+    [solver]). The same solution from scipy, with the Dirichlet values moved to the right-hand
+    side::
+
+        K, F, d, f = s.stiffness, s.load, s.dirichlet, s.free
+        u = numpy.zeros(K.shape[0]); u[d] = s.dirichlet_values
+        u[f] = scipy.sparse.linalg.spsolve(K[f][:, f].tocsc(), F[f] - K[f][:, d] @ u[d])
+
+    The arrays are read-only views of the system's own data (no copy).
+    """
+
+    def __init__(self, core):
+        import scipy.sparse  # python3-scipy: only this part of knotwork needs it
+        self._core = core
+        n = core.num_functions
+        self.stiffness = scipy.sparse.csr_matrix(core.stiffness_csr(), shape=(n, n), copy=False)
+        self.mass = scipy.sparse.csr_matrix(core.mass_csr(), shape=(n, n), copy=False)
+
+    @property
+    def load(self):
+        return self._core.load
+
+    @property
+    def dirichlet(self):
+        return self._core.dirichlet
+
+    @property
+    def dirichlet_values(self):
+        return self._core.dirichlet_values
+
+    @property
+    def free(self):
+        keep = _np.ones(self._core.num_functions, dtype=bool)
+        keep[self._core.dirichlet] = False
+        return _np.flatnonzero(keep).astype(_np.int32)
+
+    @property
+    def space(self):
+        return self._core.space
+
+    @property
+    def zero_mean(self):
+        return self._core.zero_mean
+
+    def solve(self, progress=None):
+        """The coefficients of the discrete solution, one per basis function, as ``run`` gives them."""
+        return self._core.solve(progress)
+
+    def __repr__(self):
+        return (f"<knotwork.System {self.stiffness.shape[0]} functions, {self.stiffness.nnz} stiffness entries, "
+                f"{len(self.dirichlet)} Dirichlet>")
+
+
+def system(case, *, degree=None, elements=None, solver=None, tolerance=None, ordering="amd", progress=None,
+           name=None):
+    """The assembled system of a case: a :class:`System` (stiffness, mass, load, Dirichlet data).
+
+    Arguments as for :func:`run`; solver, tolerance and ordering are used by ``System.solve()``.
+    """
+    return System(_core.system(case, _name(case, name),
+                               _overrides(degree, elements, solver, tolerance, ordering, False), progress))
 
 
 def dimension(tmesh, *, exact=False, name=None):

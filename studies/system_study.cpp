@@ -1,0 +1,71 @@
+#include "studies/system_study.hpp"
+
+#include "basis/core/input_error.hpp"
+#include "solver/assemble_poisson.hpp"
+#include "solver/sparsity.hpp"
+
+namespace knotwork {
+
+namespace {
+
+// The lower triangle solve_poisson assembles, over every function, as a whole symmetric matrix.
+Eigen::SparseMatrix<double, Eigen::RowMajor> whole(const BezierMesh& mesh, const GeometryMap& geometry,
+                                                   const PoissonForm& form, const QuadratureOptions& quadrature,
+                                                   Eigen::VectorXd& load) {
+  const int n = mesh.num_functions();
+  const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
+  Eigen::SparseMatrix<double> lower = lower_pattern_matrix(mesh, all);
+  assemble_poisson(mesh, geometry, form, all, Eigen::VectorXd::Zero(n), quadrature, lower, load);
+  Eigen::SparseMatrix<double, Eigen::RowMajor> full = lower.selfadjointView<Eigen::Lower>();
+  full.makeCompressed();
+  return full;
+}
+
+}  // namespace
+
+AssembledSystem assemble_system(const CaseDescription& c, const SplineSpace& space, const ProgressFunction& progress) {
+  const auto say = [&](const std::string& what) {
+    if (progress) progress(what);
+  };
+  space.check_solvable();
+  const BezierMesh& mesh = space.mesh();
+  const GeometryMap& geometry = space.geometry();
+  const PoissonProblem& problem = c.problem;
+  const int n = mesh.num_functions();
+  AssembledSystem s;
+  try {
+    say("Dirichlet projection");
+    std::vector<bool> fixed;
+    const Eigen::VectorXd g = project_dirichlet_data(mesh, geometry, problem, c.quadrature, fixed);
+    for (int f = 0; f < n; ++f)
+      if (fixed[f]) s.dirichlet.push_back(f);
+    s.dirichlet_values.resize(static_cast<Eigen::Index>(s.dirichlet.size()));
+    for (size_t k = 0; k < s.dirichlet.size(); ++k) s.dirichlet_values[static_cast<Eigen::Index>(k)] = g[s.dirichlet[k]];
+    s.zero_mean = without_reaction(problem) && !has_boundary(mesh);
+
+    say("stiffness and load");
+    const PoissonForm form = poisson_form(problem);
+    s.stiffness = whole(mesh, geometry, form, c.quadrature, s.load);
+    const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
+    add_neumann_terms(mesh, geometry, problem, all, c.quadrature, s.load);
+
+    say("mass");
+    PoissonForm mass = form;  // the plain mass matrix, whatever A, c and the boundary terms
+    mass.stiffness = 0;
+    mass.reaction = 1;
+    mass.coefficients = nullptr;
+    mass.nitsche = nullptr;
+    mass.load = false;
+    Eigen::VectorXd unused;
+    s.mass = whole(mesh, geometry, mass, c.quadrature, unused);
+  } catch (const GeometryError& e) {
+    throw InputError(c.path + ": [geometry]: " + e.what());
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.path + ": " + e.what());
+  }
+  return s;
+}
+
+}  // namespace knotwork
