@@ -20,7 +20,9 @@
 #include "studies/system_study.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
 #include "solver/error_norms.hpp"
+#include "solver/cell_basis.hpp"
 #include "solver/expression.hpp"
+#include "solver/point_location.hpp"
 #include "basis/core/input_error.hpp"
 
 namespace py = pybind11;
@@ -283,8 +285,114 @@ py::dict sample(const CaseDescription& c, const SplineSpace& space, const Poisso
 struct Run {
   SharedCase case_;
   std::shared_ptr<RunOutcome> outcome;
+  std::shared_ptr<const PointLocator> locator;  // built by the first evaluate()
   const CaseDescription& c() const { return *case_; }
 };
+
+// Points as an n x dimension float64 array (a single point may be given flat).
+py::array_t<double, py::array::c_style> point_array(py::handle points, int dim, const char* what) {
+  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(points);
+  if (!a) throw InputError(std::string(what) + ": points must be an array of numbers");
+  if (a.ndim() == 1 && a.shape(0) == dim) a = a.reshape({py::ssize_t(1), py::ssize_t(dim)});
+  if (a.ndim() != 2 || a.shape(1) != dim)
+    throw InputError(std::string(what) + ": points must have shape (n, " + std::to_string(dim) + "), got " +
+                     py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim())))).cast<std::string>());
+  return a;
+}
+
+// u_h and its gradient at physical points; points outside the domain (or farther than
+// `distance` from a surface) are refused together, by index.
+py::dict evaluate_solution(Run& r, py::handle points, py::object distance) {
+  const SplineSpace& space = *r.outcome->space;
+  const int dim = space.geometry().dimension();
+  const auto p = point_array(points, dim, "evaluate");
+  const py::ssize_t n = p.shape(0);
+  double max_distance = 0;
+  {
+    py::gil_scoped_release nogil;
+    if (!r.locator) r.locator = std::make_shared<const PointLocator>(space.mesh(), space.geometry());
+  }
+  if (dim == 3) max_distance = distance.is_none() ? 1e-8 * r.locator->diameter() : distance.cast<double>();
+  if (!(max_distance >= 0)) throw InputError("evaluate: distance must be >= 0");
+  std::vector<LocatedPoint> located(n);
+  Eigen::VectorXd value;
+  Eigen::MatrixXd gradient;
+  std::vector<py::ssize_t> outside;
+  {
+    py::gil_scoped_release nogil;
+    const double* data = p.data();
+    for (py::ssize_t k = 0; k < n; ++k) {
+      bool finite = true;
+      for (int d = 0; d < dim; ++d) finite = finite && std::isfinite(data[k * dim + d]);
+      if (finite) located[k] = r.locator->locate(data + k * dim, max_distance);
+      if (located[k].cell < 0) outside.push_back(k);
+    }
+    if (outside.empty()) evaluate_at_points(space.mesh(), space.geometry(), r.outcome->solution.coefficients, located,
+                                            value, gradient);
+  }
+  if (!outside.empty()) {
+    std::string list;
+    for (size_t k = 0; k < outside.size() && k < 10; ++k) list += (k ? ", " : "") + std::to_string(outside[k]);
+    if (outside.size() > 10) list += ", ...";
+    throw InputError("evaluate: " + std::to_string(outside.size()) + " of " + std::to_string(n) + " points " +
+                     (dim == 3 ? "are not within " + std::to_string(max_distance) + " of the surface"
+                               : std::string("are outside the domain")) +
+                     " (indices " + list + ")");
+  }
+  py::array_t<double> values(n), gradients({n, py::ssize_t(dim)}), reference({n, py::ssize_t(2)}), distances(n);
+  py::array_t<int> cells(n);
+  for (py::ssize_t k = 0; k < n; ++k) {
+    values.mutable_at(k) = value[k];
+    for (int d = 0; d < dim; ++d) gradients.mutable_at(k, d) = gradient(k, d);
+    cells.mutable_at(k) = located[k].cell;
+    reference.mutable_at(k, 0) = located[k].u, reference.mutable_at(k, 1) = located[k].v;
+    distances.mutable_at(k) = located[k].distance;
+  }
+  py::dict out;
+  out["value"] = values;
+  out["gradient"] = gradients;
+  out["cell"] = cells;
+  out["reference"] = reference;
+  out["distance"] = distances;
+  return out;
+}
+
+// The functions alive on a cell, their values and physical gradients at reference points.
+py::dict evaluate_basis(const Space& s, long cell_index, py::handle uv) {
+  const int cell = s.checked_cell(cell_index);
+  const auto p = point_array(uv, 2, "evaluate_basis");
+  const py::ssize_t n = p.shape(0);
+  for (py::ssize_t k = 0; k < 2 * n; ++k)
+    if (!(p.data()[k] >= 0 && p.data()[k] <= 1))
+      throw InputError("evaluate_basis: reference coordinates must lie in [0, 1], got " + std::to_string(p.data()[k]));
+  Eigen::VectorXd u(n), v(n);
+  for (py::ssize_t k = 0; k < n; ++k) u[k] = p.at(k, 0), v[k] = p.at(k, 1);
+  CellBasis b;
+  {
+    py::gil_scoped_release nogil;
+    evaluate_cell_basis_at(s.mesh(), s.space->geometry(), cell, u, v, b);
+  }
+  const std::span<const int> ids = s.mesh().functions(cell);
+  const py::ssize_t m = static_cast<py::ssize_t>(ids.size());
+  const int dim = b.dimension;
+  const Eigen::MatrixXd values = b.value * b.C.transpose();
+  py::array_t<double> out_values({n, m}), out_gradient({n, m, py::ssize_t(dim)}), points({n, py::ssize_t(dim)});
+  for (py::ssize_t k = 0; k < n; ++k)
+    for (py::ssize_t a = 0; a < m; ++a) out_values.mutable_at(k, a) = values(k, a);
+  for (int d = 0; d < dim; ++d) {
+    const Eigen::MatrixXd g = b.grad(d) * b.C.transpose();
+    for (py::ssize_t k = 0; k < n; ++k) {
+      for (py::ssize_t a = 0; a < m; ++a) out_gradient.mutable_at(k, a, d) = g(k, a);
+      points.mutable_at(k, d) = b.geometry.x(k, d);
+    }
+  }
+  py::dict out;
+  out["functions"] = py::array_t<int>(m, ids.data());
+  out["value"] = out_values;
+  out["gradient"] = out_gradient;
+  out["points"] = points;
+  return out;
+}
 
 py::object json_to_python(const Json& j) { return py::module_::import("json").attr("loads")(j.dump(-1)); }
 
@@ -375,6 +483,7 @@ PYBIND11_MODULE(_core, m) {
         }
         return r < 0 ? py::object(py::none()) : py::object(py::int_(r));
       })
+      .def("evaluate_basis", [](const Space& s, long cell, py::handle uv) { return evaluate_basis(s, cell, uv); })
       .def("report", [](const Space& s) {
         std::optional<Json> j;
         {
@@ -398,6 +507,7 @@ PYBIND11_MODULE(_core, m) {
         return Space{r.case_, std::shared_ptr<const SplineSpace>(r.outcome, r.outcome->space.get())};
       })
       .def("sample", [](const Run& r, int n) { return sample(r.c(), *r.outcome->space, r.outcome->solution, n); })
+      .def("evaluate", [](Run& r, py::handle points, py::object distance) { return evaluate_solution(r, points, distance); })
       .def("write_paraview", [](const Run& r, py::object directory) {
         const std::string dir = *output_of(directory);
         py::gil_scoped_release nogil;

@@ -52,6 +52,9 @@ Per cell ``c``: ``functions(c)`` (int32 ids of the functions alive on the cell),
 ordered a + (p+1) b with a along u), ``cell(c)`` (patch, degree, parameter box and the
 boundary name of each side, bottom/right/top/left). ``weights()``: one weight per function for
 rational spaces (empty otherwise). Arrays are read-only views of the space's own data.
+``evaluate_basis(c, uv)``: for the reference points uv ((n, 2), in [0, 1]^2) of cell ``c``,
+the ids of its functions (``functions``), their values (n, functions), physical gradients
+(n, functions, dim) and the physical points (n, dim).
 Checks of ``knotwork basis``: ``partition_of_unity_error()``, ``rank()`` (numerical rank of
 all functions' Bezier coefficients; None when too large for the dense check), and
 ``dimension_check()`` (functions, rank and the family's dimension counts), and ``report()``:
@@ -141,6 +144,23 @@ class Result:
         ``pcolormesh`` works per cell: ``plt.pcolormesh(P[c, ..., 0], P[c, ..., 1], U[c])``.
         """
         return self._core.sample(int(n))
+
+    def evaluate(self, points, distance=None):
+        """u_h and its gradient at physical points.
+
+        points: an (n, 2) array, or (n, 3) on surfaces (one point may be given flat). Each point
+        is found in its cell through an R-tree of the cells' boxes, and the geometry map is
+        inverted there by Newton's method. On a surface that gives the closest point of the
+        surface, which is accepted within ``distance`` of it (default 1e-8 times the surface's
+        size). A point on an edge between cells takes the cell with the lowest number.
+
+        Returns a dict of numpy arrays: ``value`` (n), ``gradient`` (n, dim; the surface
+        gradient on surfaces), ``cell`` (n), ``reference`` (n, 2: the point in the cell's
+        reference square, as in :meth:`Space.evaluate_basis`) and ``distance`` (n; rounding in
+        the plane, the distance to a surface). Points outside the domain raise
+        :class:`InputError`, which names their indices.
+        """
+        return self._core.evaluate(points, distance)
 
     def write_paraview(self, directory):
         """Writes the ParaView files of the case's [output] (solution.vtu, solution_sampled.vtu)
