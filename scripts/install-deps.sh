@@ -23,6 +23,7 @@ packages=(
   libginac-dev libgmp-dev libboost-dev
   libbenchmark-dev libspectra-dev
   pybind11-dev python3-dev python3-numpy python3-scipy python3-matplotlib python3-pytest
+  python3-pip python3-setuptools python3-wheel python3-venv
   petsc-dev openmpi-bin time
 )
 with_paraview=0

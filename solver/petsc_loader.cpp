@@ -1,10 +1,12 @@
 // Loads the PETSc module (libknotwork_petsc.so: solver/petsc_solver.cpp, amg_preconditioner.cpp)
 // on first use, so that runs that do not ask for PETSc do not load it and its ~85 libraries.
 #include <dlfcn.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 
 #include "solver/amg_preconditioner.hpp"
 #include "solver/petsc_module_api.hpp"
@@ -13,13 +15,26 @@ namespace knotwork {
 
 namespace {
 
+// Where the module is: next to the file that holds this code when it is there (an installed
+// Python package: knotwork/_core*.so and knotwork/libknotwork_petsc.so), else where the build
+// put it.
+std::string module_path() {
+  Dl_info self{};
+  if (dladdr(reinterpret_cast<void*>(&module_path), &self) && self.dli_fname) {
+    std::string next = self.dli_fname;
+    next = next.substr(0, next.find_last_of('/') + 1) + "libknotwork_petsc.so";
+    if (access(next.c_str(), R_OK) == 0) return next;
+  }
+  return KNOTWORK_PETSC_MODULE;
+}
+
 const PetscModuleApi& api() {
   static std::once_flag once;
   static const PetscModuleApi* table = nullptr;
   static std::string error;
   std::call_once(once, [] {
     const char* given = std::getenv("KNOTWORK_PETSC_MODULE");
-    const std::string path = given && *given ? given : KNOTWORK_PETSC_MODULE;
+    const std::string path = given && *given ? given : module_path();
     void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!module) {
       error = "PETSc module: cannot load " + path + " (" + dlerror() + "); rebuild knotwork, or set KNOTWORK_PETSC_MODULE";
