@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -32,6 +33,82 @@ extern "C" void openblas_set_num_threads(int);
 namespace knotwork {
 namespace {
 
+// ---- problems given as Python functions ----
+
+// The first error a case's Python functions raised while C++ evaluated them (in any thread): the
+// function returns NaN there, and the error is raised again when the study returns.
+struct PythonErrors {
+  std::mutex mutex;
+  std::optional<py::error_already_set> first;
+  void record(py::error_already_set&& e) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!first) first.emplace(std::move(e));
+  }
+  // Raises the recorded error, if any (with the GIL held).
+  void raise() {
+    std::optional<py::error_already_set> e;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      e.swap(first);
+    }
+    if (e) throw std::move(*e);
+  }
+};
+using SharedErrors = std::shared_ptr<PythonErrors>;
+
+// A vectorized numpy function f(x, y) (or f(x, y, z), by its signature) as an ExternalFunction:
+// called once per batch of points (a cell's quadrature points) with the GIL taken; it returns n
+// values, or one for all. The Python object is released with the GIL held, whichever thread
+// drops the last copy.
+ExternalFunction python_function(py::object f, const std::string& where, SharedErrors errors) {
+  const int arity = [&] {
+    try {
+      py::object signature = py::module_::import("inspect").attr("signature")(f);
+      int positional = 0;
+      for (py::handle p : signature.attr("parameters").attr("values")()) {
+        const std::string kind = py::str(p.attr("kind").attr("name"));
+        if (kind == "VAR_POSITIONAL") return 3;
+        if (kind == "POSITIONAL_ONLY" || kind == "POSITIONAL_OR_KEYWORD") ++positional;
+      }
+      return positional >= 3 ? 3 : 2;
+    } catch (py::error_already_set&) {
+      return 2;  // a builtin or ufunc without a signature: f(x, y)
+    }
+  }();
+  std::shared_ptr<py::object> held(new py::object(std::move(f)), [](py::object* o) {
+    py::gil_scoped_acquire gil;
+    delete o;
+  });
+  return [held, arity, where, errors](const double* x, const double* y, const double* z, long n, double* out) {
+    py::gil_scoped_acquire gil;
+    try {
+      py::array_t<double> X(n, x), Y(n, y), Z(n);
+      std::fill(Z.mutable_data(), Z.mutable_data() + n, 0.0);
+      if (z) std::copy(z, z + n, Z.mutable_data());
+      py::object r = arity == 3 ? (*held)(X, Y, Z) : (*held)(X, Y);
+      py::array_t<double> a = py::array_t<double, py::array::forcecast>::ensure(r);
+      if (!a) throw std::invalid_argument(where + ": the Python function returned " + py::repr(r).cast<std::string>() + ", not numbers");
+      if (a.ndim() == 0 || (a.ndim() == 1 && a.shape(0) == 1)) std::fill(out, out + n, a.data()[0]);
+      else if (a.ndim() == 1 && a.shape(0) == n) std::copy(a.data(), a.data() + n, out);
+      else
+        throw std::invalid_argument(where + ": the Python function must return n values (or one) for n points; for " +
+                                    std::to_string(n) + " it returned shape " +
+                                    py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim())))).cast<std::string>());
+    } catch (py::error_already_set& e) {
+      errors->record(std::move(e));
+      std::fill(out, out + n, std::numeric_limits<double>::quiet_NaN());
+    } catch (const std::exception& e) {  // a result of the wrong kind (nothing may leave an OpenMP region)
+      PyErr_SetString(PyExc_ValueError, e.what());
+      errors->record(py::error_already_set());
+      std::fill(out, out + n, std::numeric_limits<double>::quiet_NaN());
+    }
+  };
+}
+
+bool is_python_function(py::handle v) {
+  return PyCallable_Check(v.ptr()) && !py::isinstance<py::type>(v);
+}
+
 // ---- dict cases: the same document tree a TOML or JSON file becomes ----
 
 constexpr int kMaxDepth = 200;  // as for JSON files
@@ -46,9 +123,20 @@ std::string member_name(const std::string& where, const std::string& key, int de
   throw InputError(name + ": " + (where.empty() ? std::string("case") : where) + ": " + what);
 }
 
-DocumentNode to_document(py::handle v, const std::string& name, const std::string& where, int depth) {
+// Where a dict case's Python functions go: each becomes a placeholder name in the document,
+// which Expression::parse reads as the function while `names` is alive.
+struct DictFunctions {
+  ExternalFunctionNames* names = nullptr;
+  SharedErrors errors;
+};
+
+DocumentNode to_document(py::handle v, const std::string& name, const std::string& where, int depth,
+                         DictFunctions* functions = nullptr) {
   if (depth > kMaxDepth) refuse(name, where, "nested deeper than " + std::to_string(kMaxDepth) + " levels");
   if (v.is_none()) refuse(name, where, "None is not a value (leave the key out for the default)");
+  if (functions && is_python_function(v) && !py::hasattr(v, "ndim"))
+    return DocumentNode::string(functions->names->add(std::make_shared<const ExternalFunction>(
+        python_function(py::reinterpret_borrow<py::object>(v), name + ": " + where, functions->errors))));
   if (py::isinstance<py::bool_>(v)) return DocumentNode::boolean(v.cast<bool>());
   if (py::isinstance<py::float_>(v)) return DocumentNode::floating(v.cast<double>());
   if (PyIndex_Check(v.ptr())) {  // Python and numpy integers
@@ -66,17 +154,17 @@ DocumentNode to_document(py::handle v, const std::string& name, const std::strin
       if (!py::isinstance<py::str>(item.first))
         refuse(name, where, "key " + py::repr(item.first).cast<std::string>() + " is not a string");
       const std::string key = item.first.cast<std::string>();
-      t.insert(key, to_document(item.second, name, member_name(where, key, depth), depth + 1));
+      t.insert(key, to_document(item.second, name, member_name(where, key, depth), depth + 1, functions));
     }
     return t;
   }
   if (py::hasattr(v, "tolist") && py::hasattr(v, "ndim"))  // numpy arrays and scalars
-    return to_document(v.attr("tolist")(), name, where, depth);
+    return to_document(v.attr("tolist")(), name, where, depth, functions);
   if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
     DocumentNode a = DocumentNode::array();
     size_t i = 0;
     for (auto item : v) {
-      a.push_back(to_document(item, name, where + "[" + std::to_string(i) + "]", depth + 1));
+      a.push_back(to_document(item, name, where + "[" + std::to_string(i) + "]", depth + 1, functions));
       ++i;
     }
     return a;
@@ -86,11 +174,79 @@ DocumentNode to_document(py::handle v, const std::string& name, const std::strin
              " is not a case-file value (use numbers, strings, booleans, lists and dicts)");
 }
 
+// A case and where its Python functions' errors go (null for a file).
+struct LoadedCase {
+  CaseDescription c;
+  SharedErrors errors;
+};
+
+// A dict case whose [problem] exact is a Python function: that function and its gradient
+// (exact_gradient: 2 functions in the plane, 3 on surfaces) are taken out of the dict (the
+// readers differentiate `exact`) and become the case's exact solution once it is read; the
+// source, which cannot be derived from them, must be given.
+LoadedCase load_dict_case(py::dict d, const std::string& name) {
+  LoadedCase loaded{CaseDescription(), std::make_shared<PythonErrors>()};
+  py::object exact, gradient;
+  if (d.contains("problem") && py::isinstance<py::dict>(d["problem"])) {
+    // Copies (py::dict(x) of a dict is the same dict): the caller's dicts are left as they were.
+    py::dict problem = py::reinterpret_steal<py::dict>(PyDict_Copy(py::object(d["problem"]).ptr()));
+    if (problem.contains("exact") && is_python_function(problem["exact"])) {
+      exact = problem["exact"];
+      PyDict_DelItemString(problem.ptr(), "exact");
+      if (!problem.contains("exact_gradient"))
+        refuse(name, "[problem] exact_gradient",
+               "missing: a Python exact solution needs its gradient, as Python functions (u_x, u_y), or (u_x, u_y, u_z) "
+               "on a surface (the error norms and flux data use it)");
+      gradient = problem["exact_gradient"];
+      PyDict_DelItemString(problem.ptr(), "exact_gradient");
+      const bool sequence = py::isinstance<py::list>(gradient) || py::isinstance<py::tuple>(gradient);
+      const size_t n = sequence ? py::len(gradient) : 0;
+      bool callables = sequence && (n == 2 || n == 3);
+      if (callables)
+        for (py::handle g : gradient) callables = callables && is_python_function(g);
+      if (!callables)
+        refuse(name, "[problem] exact_gradient",
+               "give 2 Python functions (u_x, u_y), or 3 (u_x, u_y, u_z) on a surface, not " +
+                   py::repr(gradient).cast<std::string>());
+      if (!problem.contains("source"))
+        refuse(name, "[problem] source",
+               "missing: it cannot be derived from a Python exact solution (give it as a formula or a Python function)");
+    } else if (problem.contains("exact_gradient")) {
+      refuse(name, "[problem] exact_gradient", "only with a Python function as exact (a formula's gradient is derived)");
+    }
+    // The readers see exact = "0" (its derivatives are harmless to compute; data that come
+    // "from the exact solution" are then accepted) and the functions replace it below.
+    if (exact) problem["exact"] = "0";
+    d = py::reinterpret_steal<py::dict>(PyDict_Copy(d.ptr()));
+    d["problem"] = problem;
+  }
+  ExternalFunctionNames names;
+  DictFunctions functions{&names, loaded.errors};
+  loaded.c = load_case_document(to_document(d, name, "", 0, &functions), name);
+  if (exact) {
+    const auto external = [&](py::handle f, const std::string& field) {
+      const std::string where = name + ": [problem] " + field;
+      return Expression::external(
+          std::make_shared<const ExternalFunction>(
+              python_function(py::reinterpret_borrow<py::object>(f), where, loaded.errors)),
+          "Python function " + py::str(py::getattr(f, "__name__", py::str("?"))).cast<std::string>(), where);
+    };
+    ExactSolution u;
+    u.u = external(exact, "exact");
+    std::vector<py::handle> g(gradient.begin(), gradient.end());
+    u.u_x = external(g[0], "exact_gradient[0]");
+    u.u_y = external(g[1], "exact_gradient[1]");
+    if (g.size() == 3) u.u_z = external(g[2], "exact_gradient[2]");
+    loaded.c.problem.exact = std::move(u);
+  }
+  return loaded;
+}
+
 // A case given as a path (str or os.PathLike) or as a dict in the case-file schema.
-CaseDescription load_any_case(py::handle c, const std::string& name) {
-  if (py::isinstance<py::dict>(c)) return load_case_document(to_document(c, name, "", 0), name);
+LoadedCase load_any_case(py::handle c, const std::string& name) {
+  if (py::isinstance<py::dict>(c)) return load_dict_case(py::reinterpret_borrow<py::dict>(c), name);
   if (py::isinstance<py::str>(c) || py::hasattr(c, "__fspath__"))
-    return load_case(py::module_::import("os").attr("fspath")(c).cast<std::string>());
+    return {load_case(py::module_::import("os").attr("fspath")(c).cast<std::string>()), nullptr};
   throw InputError("case: give a case-file path or a dict in the case-file schema, not a " +
                    py::str(py::type::of(c).attr("__name__")).cast<std::string>());
 }
@@ -103,7 +259,8 @@ struct PythonRaised {};
 
 class PythonHooks {
  public:
-  explicit PythonHooks(py::object callback) : callback_(std::move(callback)) {}
+  explicit PythonHooks(py::object callback, SharedErrors errors = nullptr)
+      : callback_(std::move(callback)), errors_(std::move(errors)) {}
   // Called with the GIL released; takes it for the callback and the signal check.
   ProgressFunction progress() {
     return [this](const std::string& what) {
@@ -118,20 +275,30 @@ class PythonHooks {
     };
   }
   // Runs f(progress) without the GIL; a Python error raised inside is raised again here.
+  // An error raised by one of the case's Python functions comes first: the study's own error
+  // (a source that is not finite) is its consequence.
   template <class F>
   auto call(F&& f) {
     try {
-      py::gil_scoped_release nogil;
-      return f(progress());
+      auto result = [&] {
+        py::gil_scoped_release nogil;
+        return f(progress());
+      }();
+      if (errors_) errors_->raise();
+      return result;
     } catch (const PythonRaised&) {
       py::error_already_set e = std::move(*error_);
       error_.reset();
       throw e;
+    } catch (const InputError&) {
+      if (errors_) errors_->raise();
+      throw;
     }
   }
 
  private:
   py::object callback_;
+  SharedErrors errors_;
   std::optional<py::error_already_set> error_;
 };
 
@@ -183,8 +350,11 @@ Overrides read_overrides(const py::dict& d) {
   return o;
 }
 
-CaseDescription prepared_case(py::handle case_, const std::string& name, const py::dict& overrides, Ordering* ordering) {
-  CaseDescription c = load_any_case(case_, name);
+CaseDescription prepared_case(py::handle case_, const std::string& name, const py::dict& overrides, Ordering* ordering,
+                              SharedErrors* errors = nullptr) {
+  LoadedCase loaded = load_any_case(case_, name);
+  if (errors) *errors = loaded.errors;
+  CaseDescription c = std::move(loaded.c);
   const Overrides o = read_overrides(overrides);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance);
   c.allow_unverified_space = o.allow_unverified_space;
@@ -285,6 +455,7 @@ py::dict sample(const CaseDescription& c, const SplineSpace& space, const Poisso
 struct Run {
   SharedCase case_;
   std::shared_ptr<RunOutcome> outcome;
+  SharedErrors errors;                          // of the case's Python functions (sample() evaluates exact)
   std::shared_ptr<const PointLocator> locator;  // built by the first evaluate()
   const CaseDescription& c() const { return *case_; }
 };
@@ -400,6 +571,7 @@ py::object json_to_python(const Json& j) { return py::module_::import("json").at
 
 struct System {
   SharedCase case_;
+  SharedErrors errors;
   Ordering ordering = Ordering::kAmd;
   std::shared_ptr<const SplineSpace> space;
   AssembledSystem system;
@@ -506,7 +678,11 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("space", [](const Run& r) {
         return Space{r.case_, std::shared_ptr<const SplineSpace>(r.outcome, r.outcome->space.get())};
       })
-      .def("sample", [](const Run& r, int n) { return sample(r.c(), *r.outcome->space, r.outcome->solution, n); })
+      .def("sample", [](const Run& r, int n) {
+        py::dict d = sample(r.c(), *r.outcome->space, r.outcome->solution, n);
+        if (r.errors) r.errors->raise();
+        return d;
+      })
       .def("evaluate", [](Run& r, py::handle points, py::object distance) { return evaluate_solution(r, points, distance); })
       .def("write_paraview", [](const Run& r, py::object directory) {
         const std::string dir = *output_of(directory);
@@ -518,13 +694,14 @@ PYBIND11_MODULE(_core, m) {
 
   m.def("run", [](py::object case_, const std::string& name, py::dict overrides, py::object output, py::object progress) {
     Ordering ordering;
-    const SharedCase c = std::make_shared<const CaseDescription>(prepared_case(case_, name, overrides, &ordering));
+    SharedErrors errors;
+    const SharedCase c = std::make_shared<const CaseDescription>(prepared_case(case_, name, overrides, &ordering, &errors));
     const std::optional<std::string> out = output_of(output);
-    PythonHooks hooks(progress);
+    PythonHooks hooks(progress, errors);
     auto outcome = hooks.call([&](const ProgressFunction& p) {
       return std::make_shared<RunOutcome>(run_study(*c, ordering, out ? &*out : nullptr, p));
     });
-    return Run{c, std::move(outcome)};
+    return Run{c, std::move(outcome), errors, nullptr};
   });
 
   py::class_<System>(m, "System")
@@ -546,7 +723,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("zero_mean", [](const System& s) { return s.system.zero_mean; })
       .def_property_readonly("space", [](const System& s) { return Space{s.case_, s.space}; })
       .def("solve", [](const System& s, py::object progress) {
-        PythonHooks hooks(progress);
+        PythonHooks hooks(progress, s.errors);
         Eigen::VectorXd x = hooks.call([&](const ProgressFunction& p) {
           return solve_case(s.c(), *s.space, s.ordering, p).coefficients;
         });
@@ -555,10 +732,11 @@ PYBIND11_MODULE(_core, m) {
 
   m.def("system", [](py::object case_, const std::string& name, py::dict overrides, py::object progress) {
     Ordering ordering;
-    const SharedCase c = std::make_shared<const CaseDescription>(prepared_case(case_, name, overrides, &ordering));
-    PythonHooks hooks(progress);
+    SharedErrors errors;
+    const SharedCase c = std::make_shared<const CaseDescription>(prepared_case(case_, name, overrides, &ordering, &errors));
+    PythonHooks hooks(progress, errors);
     return hooks.call([&](const ProgressFunction& p) {
-      System s{c, ordering, std::shared_ptr<const SplineSpace>(build_space(*c, 0, p)), {}};
+      System s{c, errors, ordering, std::shared_ptr<const SplineSpace>(build_space(*c, 0, p)), {}};
       s.system = assemble_system(*c, *s.space, p);
       return s;
     });
@@ -567,9 +745,10 @@ PYBIND11_MODULE(_core, m) {
   m.def("converge", [](py::object case_, const std::string& name, int levels, py::dict overrides, py::object output,
                        py::object progress) {
     Ordering ordering;
-    const CaseDescription c = prepared_case(case_, name, overrides, &ordering);
+    SharedErrors errors;
+    const CaseDescription c = prepared_case(case_, name, overrides, &ordering, &errors);
     const std::optional<std::string> out = output_of(output);
-    PythonHooks hooks(progress);
+    PythonHooks hooks(progress, errors);
     const Json j = hooks.call([&](const ProgressFunction& p) {
       return converge_study(c, levels, ordering, out ? &*out : nullptr, p).json;
     });
@@ -579,12 +758,13 @@ PYBIND11_MODULE(_core, m) {
   m.def("adapt", [](py::object case_, const std::string& name, py::dict overrides, int steps, double theta, long max_dofs,
                     py::object output, int output_every, py::object progress) {
     Ordering ordering;
-    CaseDescription c = prepared_case(case_, name, overrides, &ordering);
+    SharedErrors errors;
+    CaseDescription c = prepared_case(case_, name, overrides, &ordering, &errors);
     if (steps) c.adapt.steps = steps;
     if (theta) c.adapt.theta = theta;
     if (max_dofs) c.adapt.max_dofs = max_dofs;
     const std::optional<std::string> out = output_of(output);
-    PythonHooks hooks(progress);
+    PythonHooks hooks(progress, errors);
     const Json j = hooks.call([&](const ProgressFunction& p) {
       return adapt_study(c, ordering, out ? &*out : nullptr, p, output_every).json;
     });

@@ -2,7 +2,9 @@
 // the evaluators run that program. The symbolic side is expression_symbolic.cpp.
 #include "solver/expression.hpp"
 
+#include <map>
 #include <sstream>
+#include <stdexcept>
 
 #include "basis/core/input_error.hpp"
 #include "solver/expression_tree.hpp"
@@ -39,6 +41,38 @@ Expression Expression::constant(double value) {
   s.precision(17);
   s << value;
   return from_tree(s.str(), "constant", expression_detail::number_node(value));
+}
+
+namespace {
+// The names an ExternalFunctionNames on this thread holds (null: none alive).
+thread_local std::map<std::string, std::shared_ptr<const ExternalFunction>>* external_names = nullptr;
+}  // namespace
+
+ExternalFunctionNames::ExternalFunctionNames() {
+  if (external_names) throw std::logic_error("ExternalFunctionNames: one per thread at a time");
+  external_names = new std::map<std::string, std::shared_ptr<const ExternalFunction>>();
+}
+
+ExternalFunctionNames::~ExternalFunctionNames() {
+  delete external_names;
+  external_names = nullptr;
+}
+
+std::string ExternalFunctionNames::add(std::shared_ptr<const ExternalFunction> f) {
+  const std::string name = "python_function_" + std::to_string(external_names->size());
+  (*external_names)[name] = std::move(f);
+  return name;
+}
+
+std::shared_ptr<const ExternalFunction> ExternalFunctionNames::find(const std::string& name) {
+  if (!external_names) return nullptr;
+  const auto it = external_names->find(name);
+  return it == external_names->end() ? nullptr : it->second;
+}
+
+Expression Expression::external(std::shared_ptr<const ExternalFunction> f, const std::string& text,
+                                const std::string& where) {
+  return from_tree(text, where, expression_detail::external_node(std::move(f)));
 }
 
 struct ExpressionEvaluator::Impl {

@@ -1,5 +1,6 @@
 #pragma once
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,6 +22,26 @@ struct CompiledExpression;
 //              abs pow(a, b)
 // The same tree is differentiated (GiNaC) and evaluated (a compiled program), so the source
 // derived from an exact solution and the solution itself are the same function.
+// A function the caller gives instead of a formula (a Python callable): values at n points,
+// z null in the plane. It is evaluated in batches, never differentiated: what would be derived
+// from it must be given too.
+using ExternalFunction = std::function<void(const double* x, const double* y, const double* z, long n, double* out)>;
+
+// While one is alive on this thread, a bare name it holds stands for its function in the texts
+// Expression::parse reads (the Python module puts a placeholder name where a dict case has a
+// callable, then reads the case as usual).
+class ExternalFunctionNames {
+ public:
+  ExternalFunctionNames();
+  ~ExternalFunctionNames();
+  ExternalFunctionNames(const ExternalFunctionNames&) = delete;
+  ExternalFunctionNames& operator=(const ExternalFunctionNames&) = delete;
+  // A fresh name for f (python_function_<k>).
+  std::string add(std::shared_ptr<const ExternalFunction> f);
+  // The function of a name, or null.
+  static std::shared_ptr<const ExternalFunction> find(const std::string& name);
+};
+
 class Expression {
  public:
   Expression() = default;
@@ -28,6 +49,9 @@ class Expression {
   // `where` names the file and field, e.g. "square.toml: [problem] exact".
   static Expression parse(const std::string& text, const std::string& where);
   static Expression constant(double value);
+  // A function given by the caller; `text` describes it in messages.
+  static Expression external(std::shared_ptr<const ExternalFunction> f, const std::string& text,
+                             const std::string& where);
   const std::string& text() const { return text_; }
   const std::string& where() const { return where_; }
   bool empty() const { return text_.empty(); }

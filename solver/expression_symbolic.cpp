@@ -64,6 +64,7 @@ struct Symbols {
 
 struct Refusal {
   std::string why;
+  bool whole = false;  // the message is `why` alone (not a cost of exact arithmetic)
 };
 
 std::string span_text(const Node& node, const std::string& text) {
@@ -122,6 +123,10 @@ GiNaC::ex to_ginac(const Node& node, const Symbols& s, const std::string& text, 
       refuse_undefined_power(a[0], a[1]);
       return pow(a[0], a[1]);
     }
+    case Node::kExternal:
+      throw Refusal{"a Python function cannot be differentiated: give what is derived from it as well (the "
+                    "source; with a Python exact solution, its gradient as exact_gradient)",
+                    true};
     case Node::kCall: {
       const std::string& f = node.name;
       if (f == "atan2") return atan2(a[0], a[1]);
@@ -190,6 +195,7 @@ class Differentiator {
       double nested = 1;
       r = to_ginac(e.tree(), s_, e.text(), nested);
     } catch (const Refusal& refusal) {
+      if (refusal.whole) throw InputError(e.where() + ": " + refusal.why);
       throw InputError(e.where() + ": cannot differentiate \"" + e.text() + "\" symbolically: " + refusal.why +
                        " makes exact arithmetic compute numbers of millions of digits; give `source` explicitly");
     } catch (const std::exception& error) {  // GiNaC's own: a division by zero, log(0)

@@ -205,6 +205,11 @@ class Reader {
       n.value = word == "pi" ? std::numbers::pi : std::numbers::e;
     } else if (is_unary_function(word) || word == "atan2" || word == "pow") {
       throw ParseError{"'" + word + "' is a function: write " + word + "(...)", long(begin)};
+    } else if (auto f = ExternalFunctionNames::find(word)) {
+      n.kind = Node::kExternal;
+      n.name = word;
+      n.external = std::move(f);
+      n.has_variables = true;
     } else {
       throw ParseError{"unknown name '" + word + "' (the variables are x, y and z; the constants pi and e)", long(begin)};
     }
@@ -224,6 +229,15 @@ class Reader {
 NodePtr parse_tree(const std::string& text) { return Reader(text).read(); }
 
 bool is_unary_function(const std::string& name) { return unary_function(name) != nullptr; }
+
+NodePtr external_node(std::shared_ptr<const ExternalFunction> f) {
+  Node n;
+  n.kind = Node::kExternal;
+  n.name = "external";
+  n.external = std::move(f);
+  n.has_variables = true;
+  return std::make_shared<const Node>(std::move(n));
+}
 
 NodePtr number_node(double value) {
   Node n;
@@ -272,6 +286,7 @@ double constant_value(const Node& node) {
     case Node::kCall:
       if (node.name == "atan2") return std::atan2(constant_value(*o[0]), constant_value(*o[1]));
       return unary_function(node.name)(constant_value(*o[0]));
+    case Node::kExternal: break;  // has variables
   }
   return std::nan("");
 }
@@ -289,7 +304,8 @@ double integer_power(double a, int n) {
 std::string key_of(const Instruction& in) {
   std::ostringstream s;
   s << int(in.kind) << ':' << in.a << ',' << in.b << ',' << in.exponent << ','
-    << reinterpret_cast<const void*>(in.function1) << reinterpret_cast<const void*>(in.function2) << ',';
+    << reinterpret_cast<const void*>(in.function1) << reinterpret_cast<const void*>(in.function2)
+    << reinterpret_cast<const void*>(in.external) << ',';
   std::uint64_t bits;
   std::memcpy(&bits, &in.constant, sizeof bits);  // the bits: 0.0 and -0.0 differ
   s << bits;
@@ -335,6 +351,11 @@ int Program::compile(const Node& node) {
       in.b = compile(*o[1]);
       return add(in);
     }
+    case Node::kExternal:
+      in.kind = Instruction::kExternal;
+      in.external = node.external.get();
+      externals_.push_back(node.external);
+      return add(in);
     case Node::kCall:
       in.a = compile(*o[0]);
       if (node.name == "atan2") {
@@ -355,6 +376,7 @@ int Program::compile(const Node& node) {
 }
 
 std::vector<int> Program::append(const Program& other) {
+  externals_.insert(externals_.end(), other.externals_.begin(), other.externals_.end());
   std::vector<int> here(other.code_.size());
   for (std::size_t r = 0; r < other.code_.size(); ++r) {
     Instruction in = other.code_[r];
@@ -391,6 +413,7 @@ double Program::run_at(double* r, double x, double y, double z, int output) cons
       case Instruction::kPower: t = std::pow(a, b); break;
       case Instruction::kFunction1: t = in.function1(a); break;
       case Instruction::kFunction2: t = in.function2(a, b); break;
+      case Instruction::kExternal: (*in.external)(&x, &y, &z, 1, &t); break;
     }
   }
   return r[output];
@@ -431,6 +454,7 @@ void Program::run(std::vector<double>& registers, const double* x, const double*
       case Instruction::kPower: for (long k = 0; k < n; ++k) t[k] = std::pow(a[k], b[k]); break;
       case Instruction::kFunction1: for (long k = 0; k < n; ++k) t[k] = in.function1(a[k]); break;
       case Instruction::kFunction2: for (long k = 0; k < n; ++k) t[k] = in.function2(a[k], b[k]); break;
+      case Instruction::kExternal: (*in.external)(x, y, z, n, t); break;
     }
   }
 }

@@ -13,19 +13,22 @@
 #include <unordered_map>
 #include <vector>
 
+#include "solver/expression.hpp"
+
 namespace knotwork::expression_detail {
 
 struct Node;
 using NodePtr = std::shared_ptr<const Node>;
 
 struct Node {
-  enum Kind { kNumber, kConstant, kVariable, kAdd, kSubtract, kMultiply, kDivide, kNegate, kPower, kCall };
+  enum Kind { kNumber, kConstant, kVariable, kAdd, kSubtract, kMultiply, kDivide, kNegate, kPower, kCall, kExternal };
   Kind kind = kNumber;
   double value = 0;       // kNumber, kConstant: the value in double
   std::string name;       // kNumber: the literal as written (GiNaC reads it exactly); kConstant
                           // ("pi", "e") and kCall: the name
   int variable = 0;       // kVariable: 0 = x, 1 = y, 2 = z
   std::vector<NodePtr> operands;
+  std::shared_ptr<const ExternalFunction> external;  // kExternal: the caller's function of (x, y, z)
   long begin = -1, end = -1;  // the span of the text it was read from; -1 if derived
   bool has_variables = false;
 };
@@ -41,6 +44,7 @@ NodePtr parse_tree(const std::string& text);
 constexpr std::size_t kMaxExpressionLength = 4096;
 
 NodePtr number_node(double value);
+NodePtr external_node(std::shared_ptr<const ExternalFunction> f);
 NodePtr variable_node(int variable);
 NodePtr binary_node(Node::Kind kind, NodePtr a, NodePtr b);
 NodePtr call_node(const std::string& name, std::vector<NodePtr> arguments);
@@ -53,13 +57,14 @@ double constant_value(const Node& node);
 // instruction i. Equal instructions (same kind, operands and constant) share a register.
 struct Instruction {
   enum Kind { kConstant, kX, kY, kZ, kSum, kDifference, kProduct, kQuotient, kNegate, kIntegerPower,
-              kPower, kFunction1, kFunction2 };
+              kPower, kFunction1, kFunction2, kExternal };
   Kind kind = kConstant;
   int a = -1, b = -1;  // operand registers
   double constant = 0;
   int exponent = 0;
   double (*function1)(double) = nullptr;
   double (*function2)(double, double) = nullptr;
+  const ExternalFunction* external = nullptr;  // kExternal (kept alive by its program)
 };
 
 class Program {
@@ -82,6 +87,7 @@ class Program {
  private:
   int add(const Instruction& in);
   std::vector<Instruction> code_;
+  std::vector<std::shared_ptr<const ExternalFunction>> externals_;  // what kExternal points to
   std::unordered_map<std::string, int> registers_;  // an instruction's key -> its register
 };
 

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 
+#include "basis/core/input_error.hpp"
 #include "solver/assemble_poisson.hpp"
 #include "solver/petsc_backend.hpp"
 #include "solver/sparsity.hpp"
@@ -59,6 +60,11 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     if (options.progress) options.progress(s);
   };
   if (problem.reaction < 0) throw std::invalid_argument("reaction must be >= 0");
+  // A gradient given by the caller (a Python exact solution) has as many components as it was given.
+  if (problem.exact && problem.exact->on_surface() != (geometry.dimension() == 3))
+    throw InputError(problem.exact->u.where() + ": the exact solution's gradient has " +
+                     (problem.exact->on_surface() ? "3 components on a planar domain (give u_x, u_y)"
+                                                  : "2 components on a surface (give u_x, u_y, u_z)"));
   const bool distributed = distribution != nullptr;
   // Serially a step's exception is the caller's as it is; distributed, every rank agrees on it.
   const auto step = [&](const std::function<void()>& f) {

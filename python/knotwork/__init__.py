@@ -2,7 +2,9 @@
 
 A case is a case-file path (TOML or JSON, as for the command line) or a dict with the same
 keys; it is validated exactly like a file, and bad input raises :class:`InputError` with the
-CLI's one-line message. Every study returns what ``knotwork <command> --json`` prints, as
+CLI's one-line message. In a dict, the expressions of [problem] may be vectorized numpy
+functions f(x, y) (or f(x, y, z)) instead of formulas; a function ``exact`` needs
+``exact_gradient`` (a tuple of functions) and ``source`` (docs/PYTHON.md). Every study returns what ``knotwork <command> --json`` prints, as
 Python dicts and lists, and the numbers are the CLI's to the last bit.
 
     import knotwork
