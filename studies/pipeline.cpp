@@ -162,6 +162,14 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
       return solve_poisson(space.mesh(), space.geometry(), c.problem, so, &distribution);
     }
     return solve_poisson(space.mesh(), space.geometry(), c.problem, so);
+  } catch (...) {
+    rethrow_as_case_error(c);
+  }
+}
+
+void rethrow_as_case_error(const CaseDescription& c) {
+  try {
+    throw;
   } catch (const NotConverged& e) {
     throw InputError(c.path + ": [solver]: " + e.what() + "; raise max_iterations, loosen tolerance or use method = \"direct\"");
   } catch (const GeometryError& e) {

@@ -33,6 +33,11 @@ struct SolverReport {
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
                            const ProgressFunction& progress = {}, SolverReport* report = nullptr);
 
+// Inside a catch block: the exception being handled again, as the user's error. A solve that
+// did not converge names [solver], a degenerate geometry "[geometry]", and another
+// std::invalid_argument the case file; an InputError, and anything else, as it is.
+[[noreturn]] void rethrow_as_case_error(const CaseDescription& c);
+
 // The benchmark problem: unit square, u = sin(pi x) sin(pi y), degree p, n x n elements.
 CaseDescription unit_square_benchmark_case(int p, int n);
 

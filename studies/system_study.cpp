@@ -1,6 +1,5 @@
 #include "studies/system_study.hpp"
 
-#include "basis/core/input_error.hpp"
 #include "solver/assemble_poisson.hpp"
 #include "solver/sparsity.hpp"
 
@@ -58,12 +57,8 @@ AssembledSystem assemble_system(const CaseDescription& c, const SplineSpace& spa
     mass.load = false;
     Eigen::VectorXd unused;
     s.mass = whole(mesh, geometry, mass, c.quadrature, unused);
-  } catch (const GeometryError& e) {
-    throw InputError(c.path + ": [geometry]: " + e.what());
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::invalid_argument& e) {
-    throw InputError(c.path + ": " + e.what());
+  } catch (...) {
+    rethrow_as_case_error(c);
   }
   return s;
 }
