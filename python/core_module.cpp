@@ -479,10 +479,8 @@ py::dict evaluate_solution(Run& r, py::handle points, py::object distance) {
   const auto p = point_array(points, dim, "evaluate");
   const py::ssize_t n = p.shape(0);
   double max_distance = 0;
-  {
-    py::gil_scoped_release nogil;
-    if (!r.locator) r.locator = std::make_shared<const PointLocator>(space.mesh(), space.geometry());
-  }
+  // Built with the GIL held: two Python threads evaluating one result must not both build it.
+  if (!r.locator) r.locator = std::make_shared<const PointLocator>(space.mesh(), space.geometry());
   if (dim == 3) max_distance = distance.is_none() ? 1e-8 * r.locator->diameter() : distance.cast<double>();
   if (!(max_distance >= 0)) throw InputError("evaluate: distance must be >= 0");
   std::vector<LocatedPoint> located(n);
