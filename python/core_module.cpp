@@ -684,10 +684,16 @@ PYBIND11_MODULE(_core, m) {
       .def("evaluate", [](Run& r, py::handle points, py::object distance) { return evaluate_solution(r, points, distance); })
       .def("write_paraview", [](const Run& r, py::object directory) {
         const std::string dir = *output_of(directory);
+        std::optional<OutputStage> stage;
+        {
+          py::gil_scoped_release nogil;
+          stage.emplace(dir);
+          write_run_output(r.c(), *r.outcome->space, r.outcome->solution, *stage);
+        }
+        // The files hold the exact solution too: a Python function that raised leaves none.
+        if (r.errors) r.errors->raise();
         py::gil_scoped_release nogil;
-        OutputStage stage(dir);
-        write_run_output(r.c(), *r.outcome->space, r.outcome->solution, stage);
-        return stage.commit();
+        return stage->commit();
       });
 
   m.def("run", [](py::object case_, const std::string& name, py::dict overrides, py::object output, py::object progress) {

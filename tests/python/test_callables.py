@@ -120,3 +120,21 @@ def test_boundary_data_as_python_functions():
     functions = dict(SQUARE, problem={"exact": "x^2 - y^2", "source": "0", "dirichlet": lambda x, y: x**2 - y**2,
                                       "neumann": {"right": lambda x, y: 2 * x}})
     assert_same_solution(formula, functions)
+
+
+def test_a_function_that_raises_while_writing_leaves_no_files(tmp_path):
+    broken = {"now": False}
+
+    def exact(x, y):
+        if broken["now"]:
+            raise RuntimeError("exact broke while writing")
+        return x * y
+
+    case = dict(SQUARE, problem={"exact": exact, "exact_gradient": (lambda x, y: y, lambda x, y: x), "source": "0"})
+    r = knotwork.run(case)
+    broken["now"] = True
+    with pytest.raises(RuntimeError, match="exact broke while writing"):
+        r.write_paraview(tmp_path / "out")
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+    with pytest.raises(RuntimeError, match="exact broke while writing"):
+        r.sample(2)
