@@ -134,7 +134,7 @@ DocumentNode to_document(py::handle v, const std::string& name, const std::strin
                          DictFunctions* functions = nullptr) {
   if (depth > kMaxDepth) refuse(name, where, "nested deeper than " + std::to_string(kMaxDepth) + " levels");
   if (v.is_none()) refuse(name, where, "None is not a value (leave the key out for the default)");
-  if (functions && is_python_function(v) && !py::hasattr(v, "ndim"))
+  if (functions && is_python_function(v))
     return DocumentNode::string(functions->names->add(std::make_shared<const ExternalFunction>(
         python_function(py::reinterpret_borrow<py::object>(v), name + ": " + where, functions->errors))));
   if (py::isinstance<py::bool_>(v)) return DocumentNode::boolean(v.cast<bool>());

@@ -407,6 +407,16 @@ PoissonForm poisson_form(const PoissonProblem& problem) {
   return form;
 }
 
+PoissonForm mass_form(const PoissonForm& form) {
+  PoissonForm mass = form;
+  mass.stiffness = 0;
+  mass.reaction = 1;
+  mass.load = false;
+  mass.nitsche = nullptr;
+  mass.coefficients = nullptr;
+  return mass;
+}
+
 bool without_reaction(const PoissonProblem& problem) {
   return problem.reaction == 0 && problem.coefficients.reaction.empty();
 }

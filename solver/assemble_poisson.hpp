@@ -47,6 +47,9 @@ struct PoissonForm {
 // The form of a problem: its coefficients, source (or exact solution to derive it from on a
 // surface) and Nitsche data.
 PoissonForm poisson_form(const PoissonProblem& problem);
+// The plain mass matrix's form, (u, v), from a problem's form: no stiffness, coefficients,
+// boundary terms or load, whatever the problem's.
+PoissonForm mass_form(const PoissonForm& form);
 // True when the problem has no reaction term (constant or variable).
 bool without_reaction(const PoissonProblem& problem);
 

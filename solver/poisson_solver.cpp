@@ -28,10 +28,8 @@ ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry,
   const int n = mesh.num_functions();
   const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
   Eigen::SparseMatrix<double> M = lower_pattern_matrix(mesh, all);
-  PoissonForm mass = load_form;
-  mass.stiffness = 0;
-  mass.reaction = 1;
-  mass.coefficients = nullptr;  // the plain mass matrix, whatever A is
+  PoissonForm mass = mass_form(load_form);
+  mass.load = load_form.load;  // and the load (f, v), in the same pass
   ZeroMeanData z;
   assemble_poisson(mesh, geometry, mass, all, Eigen::VectorXd::Zero(n), quadrature, M, z.load, &z.integrals);
   SparseCholesky chol(ordering);
@@ -159,15 +157,9 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     say("condition estimates");
     sol.stiffness_spectrum = jacobi_scaled_spectrum(K);
     // The mass matrix over the same free dofs (the matrix a reaction term would add).
-    PoissonForm mass = form;
-    mass.stiffness = 0;
-    mass.reaction = 1;
-    mass.load = false;
-    mass.nitsche = nullptr;
-    mass.coefficients = nullptr;
-    Eigen::SparseMatrix<double> M = lower_pattern_matrix(mesh, layout);
+    Eigen::SparseMatrix<double> M = K;  // the same pattern; its values are overwritten
     Eigen::VectorXd unused;
-    assemble_poisson(mesh, geometry, mass, layout, Eigen::VectorXd::Zero(mesh.num_functions()), options.quadrature, M,
+    assemble_poisson(mesh, geometry, mass_form(form), layout, Eigen::VectorXd::Zero(mesh.num_functions()), options.quadrature, M,
                      unused);
     sol.mass_spectrum = jacobi_scaled_spectrum(M);
   }

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 
 #include <omp.h>
-#include <stdexcept>
 
 namespace knotwork {
 

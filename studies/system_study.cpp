@@ -7,14 +7,13 @@ namespace knotwork {
 
 namespace {
 
-// The lower triangle solve_poisson assembles, over every function, as a whole symmetric matrix.
+// The lower triangle solve_poisson assembles, into a copy of `pattern` (every function free), as
+// a whole symmetric matrix.
 Eigen::SparseMatrix<double, Eigen::RowMajor> whole(const BezierMesh& mesh, const GeometryMap& geometry,
                                                    const PoissonForm& form, const QuadratureOptions& quadrature,
+                                                   const DofLayout& all, Eigen::SparseMatrix<double> lower,
                                                    Eigen::VectorXd& load) {
-  const int n = mesh.num_functions();
-  const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
-  Eigen::SparseMatrix<double> lower = lower_pattern_matrix(mesh, all);
-  assemble_poisson(mesh, geometry, form, all, Eigen::VectorXd::Zero(n), quadrature, lower, load);
+  assemble_poisson(mesh, geometry, form, all, Eigen::VectorXd::Zero(mesh.num_functions()), quadrature, lower, load);
   Eigen::SparseMatrix<double, Eigen::RowMajor> full = lower.selfadjointView<Eigen::Lower>();
   full.makeCompressed();
   return full;
@@ -44,19 +43,14 @@ AssembledSystem assemble_system(const CaseDescription& c, const SplineSpace& spa
 
     say("stiffness and load");
     const PoissonForm form = poisson_form(problem);
-    s.stiffness = whole(mesh, geometry, form, c.quadrature, s.load);
     const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
+    const Eigen::SparseMatrix<double> pattern = lower_pattern_matrix(mesh, all);
+    s.stiffness = whole(mesh, geometry, form, c.quadrature, all, pattern, s.load);
     add_neumann_terms(mesh, geometry, problem, all, c.quadrature, s.load);
 
     say("mass");
-    PoissonForm mass = form;  // the plain mass matrix, whatever A, c and the boundary terms
-    mass.stiffness = 0;
-    mass.reaction = 1;
-    mass.coefficients = nullptr;
-    mass.nitsche = nullptr;
-    mass.load = false;
     Eigen::VectorXd unused;
-    s.mass = whole(mesh, geometry, mass, c.quadrature, unused);
+    s.mass = whole(mesh, geometry, mass_form(form), c.quadrature, all, pattern, unused);
   } catch (...) {
     rethrow_as_case_error(c);
   }
