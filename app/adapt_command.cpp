@@ -28,6 +28,8 @@ int adapt_command(const AdaptOptions& o) {
   if (o.max_dofs) c.adapt.max_dofs = o.max_dofs;
   c.allow_unverified_space = o.allow_unverified_space;
   if (!o.marking.empty()) c.adapt.mark_functions = o.marking == "functions";
+  if (!o.strategy.empty()) c.adapt.maximum_strategy = o.strategy == "maximum";
+  if (o.min_fraction >= 0) c.adapt.min_fraction = o.min_fraction;
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);
@@ -40,8 +42,10 @@ int adapt_command(const AdaptOptions& o) {
   const std::vector<AdaptiveStep>& steps = r.steps;
   const std::string& description = r.description;
   const std::vector<std::string>& outputs = r.outputs;
-  std::printf("knotwork adapt %s: %s, Doerfler theta = %g%s\n", c.path.c_str(), description.c_str(), c.adapt.theta,
-              c.adapt.mark_functions ? " on functions" : "");
+  std::printf("knotwork adapt %s: %s, %s theta = %g%s", c.path.c_str(), description.c_str(),
+              c.adapt.maximum_strategy ? "maximum strategy" : "Doerfler", c.adapt.theta, c.adapt.mark_functions ? " on functions" : "");
+  if (c.adapt.min_fraction > 0) std::printf(", at least %g of them", c.adapt.min_fraction);
+  std::printf("\n");
   for (size_t s = 0; s < steps.size(); ++s)
     for (const auto& n : steps[s].notes) std::printf("  note     step %zu: %s\n", s, n.c_str());
   std::printf("%4s %8s %8s %7s %13s %13s %13s %7s\n", "step", "dofs", "cells", "marked", "estimator", "L2 error",

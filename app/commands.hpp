@@ -41,6 +41,8 @@ struct AdaptOptions : CommonOptions {
   int output_every = 1;  // ParaView files of every K-th step (and the last)
   bool allow_unverified_space = false;  // --allow-dependent
   std::string marking;                  // "": [adapt] marking
+  std::string strategy;                 // "": [adapt] strategy
+  double min_fraction = -1;             // < 0: [adapt] min_fraction
 };
 
 struct BenchOptions {

@@ -121,20 +121,33 @@ int main(int argc, char** argv) {
 
   knotwork::AdaptOptions adapt;
   CLI::App* adapt_cmd = app.add_subcommand(
-      "adapt", "Adaptive refinement: solve, estimate (residual), mark (Doerfler), refine marked cells, repeat");
+      "adapt", "Adaptive refinement: solve, estimate (residual), mark (Doerfler or maximum), refine marked cells, repeat");
   adapt_cmd->add_option("case", adapt.case_file, "Case file (TOML or JSON) whose [space] family refines cells locally (" +
                                                      local_families() + ")")
       ->required();
   adapt_cmd->add_option("--steps", adapt.steps, "Number of solves (overrides [adapt] steps; default 10)");
   adapt_cmd->add_option("--theta", adapt.theta,
-                        "Doerfler fraction: mark the fewest cells holding this share of the estimated error squared "
-                        "(overrides [adapt] theta; default 0.5)");
+                        "Marking fraction in (0, 1]: Doerfler marks the fewest cells holding this share of the estimated "
+                        "error squared, maximum every cell whose indicator is at least this share of the largest "
+                        "(overrides [adapt] theta; default 0.5)")
+      ->check([](const std::string& text) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        return *end == 0 && x > 0 && x <= 1 ? "" : "must be in (0, 1], got " + text;
+      });
+  adapt_cmd->add_option("--strategy", adapt.strategy,
+                        "Marking strategy: dorfler (default) or maximum (overrides [adapt] strategy)")
+      ->check(CLI::IsMember({"dorfler", "maximum"}));
+  adapt_cmd->add_option("--min-fraction", adapt.min_fraction,
+                        "Mark at least this share of the cells (or functions), largest indicators first, so that "
+                        "every step grows the space (overrides [adapt] min_fraction; default 0)")
+      ->check(CLI::Range(0.0, 1.0));
   adapt_cmd->add_option("--max-dofs", adapt.max_dofs, "Stop once a space has this many functions (overrides [adapt] max_dofs)");
   adapt_cmd->add_flag("--no-output", adapt.no_output, "Write no files (the table and timing only)");
   adapt_cmd->add_option("--output-every", adapt.output_every,
                         "ParaView files of every K-th step only, and of the last (default 1: every step; adapt.csv/json/svg always)");
   adapt_cmd->add_option("--marking", adapt.marking,
-                        "What Doerfler marks: cells (default), or functions (their indicator the sum over the cells they "
+                        "What is marked: cells (default), or functions (their indicator the sum over the cells they "
                         "live on; the cells of their supports are refined) (overrides [adapt] marking)")
       ->check(CLI::IsMember({"cells", "functions"}));
   adapt_cmd->add_flag("--allow-dependent", adapt.allow_unverified_space,

@@ -96,6 +96,11 @@ struct CaseDescription {
     // eta_K^2 over the cells a function lives on), refining the cells of their supports, as
     // hierarchical codes do; "cells" (default): Doerfler marking of cells.
     bool mark_functions = false;
+    // [adapt] strategy = "maximum": mark every cell (function) whose indicator eta is at least
+    // theta times the largest; "dorfler" (default): the fewest holding theta of eta^2's sum.
+    bool maximum_strategy = false;
+    // [adapt] min_fraction: mark at least this share of the cells (functions), largest first.
+    double min_fraction = 0;
   } adapt;
 };
 

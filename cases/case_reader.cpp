@@ -690,7 +690,16 @@ void read_output(const CaseReader& r, const DocumentNode& t, CaseDescription& c)
 }
 
 void read_adapt(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
-  r.check_keys(t, "adapt", {"steps", "theta", "max_dofs", "marking"});
+  r.check_keys(t, "adapt", {"steps", "theta", "max_dofs", "marking", "strategy", "min_fraction"});
+  if (const DocumentNode* n = t.get("strategy")) {
+    const std::string m = r.string(*n, "[adapt] strategy");
+    if (m != "dorfler" && m != "maximum") r.fail("[adapt] strategy", "must be \"dorfler\" or \"maximum\", not \"" + m + "\"");
+    c.adapt.maximum_strategy = m == "maximum";
+  }
+  if (const DocumentNode* n = t.get("min_fraction")) {
+    c.adapt.min_fraction = r.number(*n, "[adapt] min_fraction");
+    if (!(c.adapt.min_fraction >= 0 && c.adapt.min_fraction <= 1)) r.fail("[adapt] min_fraction", "must be in [0, 1]");
+  }
   if (const DocumentNode* n = t.get("marking")) {
     const std::string m = r.string(*n, "[adapt] marking");
     if (m != "cells" && m != "functions") r.fail("[adapt] marking", "must be \"cells\" or \"functions\", not \"" + m + "\"");

@@ -310,6 +310,8 @@ struct Overrides {
   double tolerance = 0;
   bool allow_unverified_space = false;
   std::string marking;  // adapt: "" (the case's), "cells" or "functions"
+  std::string strategy;  // adapt: "" (the case's), "dorfler" or "maximum"
+  double min_fraction = -1;  // adapt: < 0 (the case's), or in [0, 1]
 };
 
 Overrides read_overrides(const py::dict& d) {
@@ -344,6 +346,16 @@ Overrides read_overrides(const py::dict& d) {
       text(o.marking);
       if (o.marking != "cells" && o.marking != "functions")
         throw InputError("marking: must be \"cells\" or \"functions\", got \"" + o.marking + "\"");
+    } else if (key == "strategy") {
+      text(o.strategy);
+      if (o.strategy != "dorfler" && o.strategy != "maximum")
+        throw InputError("strategy: must be \"dorfler\" or \"maximum\", got \"" + o.strategy + "\"");
+    } else if (key == "min_fraction") {
+      if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::float_>(v) || PyIndex_Check(v.ptr())))
+        throw InputError("min_fraction: must be a number, got " + py::repr(v).cast<std::string>());
+      o.min_fraction = py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
+      if (!(o.min_fraction >= 0 && o.min_fraction <= 1))
+        throw InputError("min_fraction: must be in [0, 1], got " + py::repr(v).cast<std::string>());
     }
     else throw std::logic_error("unknown override " + key);  // knotwork/__init__.py passes only these
   }
@@ -359,6 +371,8 @@ CaseDescription prepared_case(py::handle case_, const std::string& name, const p
   override_case(c, o.degree, o.elements, o.solver, o.tolerance);
   c.allow_unverified_space = o.allow_unverified_space;
   if (!o.marking.empty()) c.adapt.mark_functions = o.marking == "functions";
+  if (!o.strategy.empty()) c.adapt.maximum_strategy = o.strategy == "maximum";
+  if (o.min_fraction >= 0) c.adapt.min_fraction = o.min_fraction;
   if (ordering) *ordering = parse_ordering(o.ordering);
   return c;
 }

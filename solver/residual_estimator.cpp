@@ -279,28 +279,38 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
   return ind;
 }
 
-std::vector<int> dorfler_marking(const Eigen::VectorXd& eta_squared, double theta) {
-  if (!(theta > 0 && theta <= 1)) throw std::invalid_argument("the marking fraction theta must be in (0, 1]");
+std::vector<int> mark(const Eigen::VectorXd& eta_squared, const Marking& marking) {
+  if (!(marking.theta > 0 && marking.theta <= 1)) throw std::invalid_argument("the marking fraction theta must be in (0, 1]");
+  if (!(marking.min_fraction >= 0 && marking.min_fraction <= 1))
+    throw std::invalid_argument("the minimum marked fraction must be in [0, 1]");
+  if (!eta_squared.allFinite()) throw std::invalid_argument("an error indicator is not finite");
   std::vector<int> order(eta_squared.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return eta_squared[a] > eta_squared[b]; });
-  const double goal = theta * eta_squared.sum();
-  double sum = 0;
-  std::vector<int> marked;
-  for (int c : order) {
-    if (sum >= goal && !marked.empty()) break;
-    marked.push_back(c);
-    sum += eta_squared[c];
+  if (order.empty()) return {};
+  // Both strategies mark a prefix of `order`; count it.
+  size_t count = 0;
+  if (marking.strategy == Marking::Strategy::kDorfler) {
+    const double goal = marking.theta * eta_squared.sum();
+    double sum = 0;
+    while (count < order.size() && (count == 0 || sum < goal)) sum += eta_squared[order[count++]];
+  } else {
+    // eta >= theta * max eta, compared squared (no square roots, the same set).
+    const double bound = marking.theta * marking.theta * eta_squared[order.front()];
+    while (count < order.size() && (count == 0 || eta_squared[order[count]] >= bound)) ++count;
   }
-  return marked;
+  const size_t at_least = static_cast<size_t>(std::ceil(marking.min_fraction * double(order.size())));
+  order.resize(std::max(count, std::min(at_least, order.size())));
+  return order;
 }
 
-std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared, double theta) {
+std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared,
+                                           const Marking& marking) {
   Eigen::VectorXd per_function = Eigen::VectorXd::Zero(mesh.num_functions());
   for (int c = 0; c < mesh.num_cells(); ++c)
     for (int f : mesh.functions(c)) per_function[f] += eta_squared[c];
   std::vector<char> marked(mesh.num_functions(), 0);
-  for (int f : dorfler_marking(per_function, theta)) marked[f] = 1;
+  for (int f : mark(per_function, marking)) marked[f] = 1;
   std::vector<int> cells;
   for (int c = 0; c < mesh.num_cells(); ++c)
     for (int f : mesh.functions(c))

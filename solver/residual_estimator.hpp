@@ -32,13 +32,32 @@ struct ErrorIndicators {
 ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
                                     const Eigen::VectorXd& coefficients, const PoissonProblem& problem);
 
-// Doerfler (bulk) marking: the fewest cells, largest indicators first, whose eta^2 add up to
-// at least theta times the total. theta in (0, 1].
-std::vector<int> dorfler_marking(const Eigen::VectorXd& eta_squared, double theta);
+// How the loop chooses what to refine from the indicators eta^2 (of cells, or of functions).
+// - Doerfler (bulk): the fewest items, largest first, whose eta^2 add up to at least theta
+//   times the total.
+// - Maximum: every item whose eta is at least theta times the largest eta.
+// Either way, at least min_fraction of all items (largest first) are marked, so that a loop
+// whose markings stay local (a corner singularity) still grows the space by a fixed factor per
+// step and needs O(log N) steps. theta in (0, 1], min_fraction in [0, 1].
+struct Marking {
+  enum class Strategy { kDorfler, kMaximum } strategy = Strategy::kDorfler;
+  double theta = 0.5;
+  double min_fraction = 0;
+};
 
-// Doerfler marking of functions, as hierarchical codes do: a function's indicator is the sum
-// of eta_K^2 over the cells it lives on; the fewest functions holding theta of their sum are
-// marked, and the cells of their supports returned (sorted).
-std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared, double theta);
+// The marked items, largest indicator first (ties: the lower index first).
+std::vector<int> mark(const Eigen::VectorXd& eta_squared, const Marking& marking);
+inline std::vector<int> dorfler_marking(const Eigen::VectorXd& eta_squared, double theta) {
+  return mark(eta_squared, Marking{Marking::Strategy::kDorfler, theta, 0});
+}
+
+// Marking of functions, as hierarchical codes do: a function's indicator is the sum of eta_K^2
+// over the cells it lives on; the functions are marked as `marking` says, and the cells of
+// their supports returned (sorted).
+std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared,
+                                           const Marking& marking);
+inline std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared, double theta) {
+  return cells_of_marked_functions(mesh, eta_squared, Marking{Marking::Strategy::kDorfler, theta, 0});
+}
 
 }  // namespace knotwork

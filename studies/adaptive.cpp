@@ -32,6 +32,8 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
   auto t_start = clock::now();
   std::unique_ptr<SplineSpace> space = family.build(c, 0, say);
   double t_space = since(t_start);
+  const Marking marking{c.adapt.maximum_strategy ? Marking::Strategy::kMaximum : Marking::Strategy::kDorfler,
+                        c.adapt.theta, c.adapt.min_fraction};
   std::vector<AdaptiveStep> steps;
   for (int s = 0; s < c.adapt.steps; ++s) {
     const auto t0 = clock::now();
@@ -52,6 +54,7 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     }
     st.seconds_space = t_space;
     st.seconds_solve = t_solve;
+    st.solve_phases = sol.timings;
     st.seconds_estimate = since(t1);
     st.dofs = sol.num_functions;
     st.cells = space->mesh().num_cells();
@@ -65,8 +68,8 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     }
     const bool last = s + 1 == c.adapt.steps || st.dofs >= c.adapt.max_dofs;
     std::vector<int> marked;
-    if (!last) marked = c.adapt.mark_functions ? cells_of_marked_functions(space->mesh(), ind.eta_squared, c.adapt.theta)
-                                               : dorfler_marking(ind.eta_squared, c.adapt.theta);
+    if (!last) marked = c.adapt.mark_functions ? cells_of_marked_functions(space->mesh(), ind.eta_squared, marking)
+                                               : mark(ind.eta_squared, marking);
     st.marked = static_cast<int>(marked.size());
     if (on_step) on_step({s, *space, sol, ind, marked, last});
     if (!last) {

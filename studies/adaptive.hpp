@@ -19,6 +19,7 @@ struct AdaptiveStep {
   // CHOLMOD, error norms), the estimator, and the refinement that makes the next step's
   // space (the family's refinement and the construction of the refined space).
   double seconds_space = 0, seconds_solve = 0, seconds_estimate = 0, seconds_refine = 0;
+  PoissonTimings solve_phases;  // the solve's own phases (assembly, the linear solve, errors)
   std::vector<std::string> notes;  // the family's notes on this step's space
 };
 

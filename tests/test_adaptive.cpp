@@ -220,6 +220,26 @@ TEST_CASE("Doerfler marking takes the fewest largest indicators reaching theta",
   CHECK_THROWS(dorfler_marking(eta2, 1.5));
 }
 
+TEST_CASE("Maximum marking takes every indicator within theta of the largest, and at least a minimum share", "[adaptive]") {
+  Eigen::VectorXd eta2(6);
+  eta2 << 1, 16, 4, 9, 4, 0;  // eta: 1, 4, 2, 3, 2, 0
+  using S = Marking::Strategy;
+  CHECK(mark(eta2, {S::kMaximum, 0.5, 0}) == std::vector<int>{1, 3, 2, 4});  // eta >= 2 (ties: lower index first)
+  CHECK(mark(eta2, {S::kMaximum, 0.75, 0}) == std::vector<int>{1, 3});       // eta >= 3
+  CHECK(mark(eta2, {S::kMaximum, 1.0, 0}) == std::vector<int>{1});
+  // The minimum share: ceil(0.5 * 6) = 3 items even where the strategy picks fewer.
+  CHECK(mark(eta2, {S::kMaximum, 1.0, 0.5}) == std::vector<int>{1, 3, 2});
+  CHECK(mark(eta2, {S::kDorfler, 0.3, 0.5}) == std::vector<int>{1, 3, 2});  // Doerfler alone: {1} (16 >= 10.2)
+  CHECK(mark(eta2, {S::kDorfler, 0.3, 0}) == std::vector<int>{1});
+  CHECK(mark(eta2, {S::kMaximum, 0.5, 1.0}).size() == 6);
+  CHECK(mark(Eigen::VectorXd(), {S::kMaximum, 0.5, 0.5}).empty());
+  CHECK_THROWS(mark(eta2, {S::kMaximum, 0.0, 0}));
+  CHECK_THROWS(mark(eta2, {S::kMaximum, 0.5, -0.1}));
+  CHECK_THROWS(mark(eta2, {S::kMaximum, 0.5, 1.1}));
+  eta2[2] = NAN;
+  CHECK_THROWS(mark(eta2, {S::kDorfler, 0.5, 0}));
+}
+
 TEST_CASE("Marking by functions refines the supports of the functions Doerfler picks", "[adaptive]") {
   // Four cells in a row, linear hats 0..4: hat k lives on cells k-1 and k.
   BezierMesh mesh;
@@ -236,6 +256,11 @@ TEST_CASE("Marking by functions refines the supports of the functions Doerfler p
   CHECK(cells_of_marked_functions(mesh, eta2, 0.5) == std::vector<int>{0, 1});
   // 0.75 of 28 = 21: functions 1, 0, then 3 (4): cells 0, 1, 2, 3 (function 3 lives on 2 and 3).
   CHECK(cells_of_marked_functions(mesh, eta2, 0.75) == std::vector<int>{0, 1, 2, 3});
+  // Maximum strategy, theta = 0.6: eta of the functions 3, 3.16, 1, 2, 2; at least 0.6 * 3.16 = 1.90:
+  // functions 0, 1, 3, 4, whose supports are every cell.
+  CHECK(cells_of_marked_functions(mesh, eta2, {Marking::Strategy::kMaximum, 0.6, 0}) == std::vector<int>{0, 1, 2, 3});
+  // theta = 0.9 (2.85): functions 1 and 0, cells 0 and 1.
+  CHECK(cells_of_marked_functions(mesh, eta2, {Marking::Strategy::kMaximum, 0.9, 0}) == std::vector<int>{0, 1});
 }
 
 TEST_CASE("Adaptive knot segments on the L-shape: H1 error ~ N^(-p/2), uniform ~ N^(-1/3)", "[adaptive][slow]") {

@@ -234,12 +234,13 @@ def converge(case, levels=4, *, degree=None, elements=None, solver=None, toleran
     return Study(j.pop("levels"), j)
 
 
-def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, degree=None, elements=None, solver=None,
+def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, strategy=None, min_fraction=None, degree=None, elements=None, solver=None,
           tolerance=None, ordering="amd", allow_dependent=False, output=None, output_every=1, progress=None,
           name=None):
-    """The adaptive loop (estimate, Doerfler marking, local refinement, solve), like ``knotwork adapt``.
+    """The adaptive loop (estimate, mark, refine locally, solve), like ``knotwork adapt``.
 
-    steps, theta, max_dofs, marking ("cells" or "functions"): override the case's [adapt]
+    steps, theta, max_dofs, marking ("cells" or "functions"), strategy ("dorfler" or
+    "maximum"), min_fraction (in [0, 1]): override the case's [adapt]
     (None: as the case says). allow_dependent: go on when an LR space is found linearly
     dependent (``--allow-dependent``). Returns a
     :class:`Study` of the steps (the ``steps`` of ``adapt --json``). The case's family must
@@ -256,6 +257,8 @@ def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, degree=N
         raise InputError(f"max_dofs: must be a positive integer, got {max_dofs!r}")
     overrides = _overrides(degree, elements, solver, tolerance, ordering, bool(allow_dependent))
     overrides["marking"] = marking
+    overrides["strategy"] = strategy
+    overrides["min_fraction"] = min_fraction
     j = _core.adapt(case, _name(case, name), overrides, steps or 0, float(theta or 0), max_dofs or 0, output,
                     output_every, progress)
     return Study(j.pop("steps"), j)
