@@ -13,27 +13,42 @@ void SpaceReport::export_functions(const std::string&, const std::string&) const
 }
 
 KnotLines knot_lines_of_cells(const BezierMesh& mesh, const GeometryMap& geometry, int samples) {
-  KnotLines k;
-  Eigen::VectorXd u(samples), v(samples);
-  GeometryAtPoints g;
-  // A side from (ua, va) to (ub, vb) in the cell's reference square.
-  auto side = [&](int cell, double ua, double va, double ub, double vb) {
-    for (int s = 0; s < samples; ++s) {
-      const double t = double(s) / (samples - 1);
-      u[s] = (1 - t) * ua + t * ub;
-      v[s] = (1 - t) * va + t * vb;
-    }
-    geometry.evaluate(cell, u, v, g);
-    k.lines.push_back(g.x.leftCols(2));
-    k.kind.push_back(2);
-    k.multiplicity.push_back(1);
+  // Each cell draws its bottom and left sides, and its top and right ones on the boundary.
+  // The sides are listed first, then sampled in parallel (an adaptive loop draws them at every
+  // step, on up to 10^5 cells).
+  struct Side {
+    int cell;
+    double ua, va, ub, vb;
   };
+  std::vector<Side> sides;
+  sides.reserve(2 * static_cast<size_t>(mesh.num_cells()));
   for (int c = 0; c < mesh.num_cells(); ++c) {
     const BezierCell& b = mesh.cell(c);
-    side(c, 0, 0, 1, 0);
-    side(c, 0, 0, 0, 1);
-    if (b.boundary[kSideTop] >= 0) side(c, 0, 1, 1, 1);
-    if (b.boundary[kSideRight] >= 0) side(c, 1, 0, 1, 1);
+    sides.push_back({c, 0, 0, 1, 0});
+    sides.push_back({c, 0, 0, 0, 1});
+    if (b.boundary[kSideTop] >= 0) sides.push_back({c, 0, 1, 1, 1});
+    if (b.boundary[kSideRight] >= 0) sides.push_back({c, 1, 0, 1, 1});
+  }
+  const long n = static_cast<long>(sides.size());
+  KnotLines k;
+  k.lines.resize(n);
+  k.kind.assign(n, 2);
+  k.multiplicity.assign(n, 1);
+#pragma omp parallel
+  {
+    Eigen::VectorXd u(samples), v(samples);
+    GeometryAtPoints g;
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) {
+      const Side& e = sides[i];
+      for (int s = 0; s < samples; ++s) {
+        const double t = double(s) / (samples - 1);
+        u[s] = (1 - t) * e.ua + t * e.ub;
+        v[s] = (1 - t) * e.va + t * e.vb;
+      }
+      geometry.evaluate(e.cell, u, v, g);
+      k.lines[i] = g.x.leftCols(2);
+    }
   }
   return k;
 }

@@ -1,5 +1,6 @@
 #pragma once
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -58,10 +59,21 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
                        const Eigen::VectorXd& coefficients, const ExactSolution* exact, int samples,
                        double exact_offset = 0, CellRange cells = {}, const PieceSummary* summary = nullptr);
 
+// A file's dataset built, not yet written: calling it compresses and writes the file. It owns
+// its data (the mesh and solution may change after prepare_*), so that a loop can write one
+// step's files on another thread while it computes the next (knotwork adapt).
+using PreparedWrite = std::function<void()>;
+PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
+                                 const Eigen::VectorXd& coefficients, const ExactSolution* exact,
+                                 const CellFields& cell_fields = {}, double exact_offset = 0, CellRange cells = {},
+                                 const PieceSummary* summary = nullptr);
+
 // Polylines in the plane (.vtp), e.g. the knot lines of a mesh, each with integer cell data
 // (one array per name, one value per line).
 void write_polylines_vtp(const std::string& path, const std::vector<Eigen::MatrixX2d>& lines,
                          const std::vector<std::pair<std::string, std::vector<int>>>& line_fields);
+PreparedWrite prepare_polylines_vtp(const std::string& path, const std::vector<Eigen::MatrixX2d>& lines,
+                                    const std::vector<std::pair<std::string, std::vector<int>>>& line_fields);
 
 // A ParaView collection (.pvd): (time value, file name relative to the .pvd) per entry.
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& entries);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <future>
 #include <optional>
 
 #include "studies/adaptive.hpp"
@@ -26,6 +27,7 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
   check_adaptive_family(c);
   if (c.adapt.steps < 1 || c.adapt.steps > 200) throw InputError("--steps: must be in [1, 200], got " + std::to_string(c.adapt.steps));
   if (!(c.adapt.theta > 0 && c.adapt.theta <= 1)) throw InputError("--theta: must be in (0, 1]");
+  if (!(c.adapt.min_fraction >= 0 && c.adapt.min_fraction <= 1)) throw InputError("--min-fraction: must be in [0, 1]");
   if (c.adapt.max_dofs < 1) throw InputError("--max-dofs: must be positive");
   std::optional<OutputStage> stage;
   if (output_directory) stage.emplace(*output_directory);
@@ -34,24 +36,45 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
   AdaptOutcome out;
   std::vector<PvdEntry> pvd;
   std::string& description = out.description;
+  std::vector<double> output_seconds;  // per step: building its ParaView files, and waiting for the last step's
+  // A step's files are built on this thread (they need its space) and compressed and written
+  // on another while the loop goes on; at most one step's files wait to be written.
+  std::future<void> writing;
+  const auto finish_writing = [&] {
+    if (writing.valid()) writing.get();  // rethrows what the writer threw
+  };
   out.steps = adapt_case(c, ordering, say, [&](const AdaptiveStepView& v) {
     if (v.step == 0) description = v.space.presentation().description();
+    output_seconds.push_back(0);
     if (!stage || !c.write_bezier || (!v.last && v.step % output_every != 0)) return;
+    const auto t0 = std::chrono::steady_clock::now();
     say("writing ParaView output");
     Eigen::VectorXd eta = v.indicators.eta_squared.cwiseSqrt();
     Eigen::VectorXd flag = Eigen::VectorXd::Zero(eta.size());
     for (int m : v.marked) flag[m] = 1;
     const std::string name = "step_" + std::to_string(v.step);
-    write_bezier_vtu(stage->stage(name + ".vtu"), v.space.mesh(), v.space.geometry(), v.solution.coefficients, exact,
-                     {{"error_indicator", eta}, {"marked", flag}}, v.solution.exact_mean);
+    std::vector<PreparedWrite> files;
+    files.push_back(prepare_bezier_vtu(stage->stage(name + ".vtu"), v.space.mesh(), v.space.geometry(),
+                                       v.solution.coefficients, exact, {{"error_indicator", eta}, {"marked", flag}},
+                                       v.solution.exact_mean));
     pvd.push_back({double(v.step), 0, name + ".vtu"});
     const KnotLines knots = v.space.presentation().knot_lines();
     if (!knots.lines.empty()) {
-      write_polylines_vtp(stage->stage(name + "_knots.vtp"), knots.lines,
-                          {{"kind", knots.kind}, {"multiplicity", knots.multiplicity}});
+      files.push_back(prepare_polylines_vtp(stage->stage(name + "_knots.vtp"), knots.lines,
+                                            {{"kind", knots.kind}, {"multiplicity", knots.multiplicity}}));
       pvd.push_back({double(v.step), 1, name + "_knots.vtp"});
     }
+    finish_writing();
+    writing = std::async(std::launch::async, [files = std::move(files)] {
+      for (const PreparedWrite& f : files) f();
+    });
+    output_seconds.back() = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   });
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    finish_writing();
+    if (!output_seconds.empty()) output_seconds.back() += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
   const std::vector<AdaptiveStep>& steps = out.steps;
   std::string csv = "step,dofs,cells,marked,estimator,l2_error,h1_seminorm_error,h1_rate_vs_dofs\n";
   Json js = Json::array();
@@ -67,7 +90,14 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
         .set("h1_seminorm_error", v.h1_semi).set("h1_rate_vs_dofs", v.h1_rate).set("seconds", v.seconds)
         .set("seconds_space", v.seconds_space).set("seconds_solve", v.seconds_solve)
         .set("seconds_estimate", v.seconds_estimate).set("seconds_refine", v.seconds_refine)
+        .set("seconds_output", output_seconds.at(s))
         .set("notes", Json::strings(v.notes));
+    const PoissonTimings& t = v.solve_phases;
+    Json phases = Json::object();
+    phases.set("setup", t.setup).set("assembly", t.assembly).set("analysis", t.analysis)
+        .set("factorization", t.factorization).set("solve", t.solve).set("preconditioner", t.preconditioner)
+        .set("iterations", t.iterations).set("errors", t.errors);
+    j.set("solve_phases", phases);
     js.push(j);
     se.x.push_back(v.dofs);
     se.y.push_back(v.estimator);
@@ -81,7 +111,9 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
   std::vector<PlotSeries> plot{se};
   if (!sl2.x.empty()) plot.insert(plot.end(), {sl2, sh1});
   Json& root = out.json;
-  root.set("case", c.path).set("family", c.family).set("space", description).set("theta", c.adapt.theta).set("marking", c.adapt.mark_functions ? "functions" : "cells").set("steps", js);
+  root.set("case", c.path).set("family", c.family).set("space", description).set("theta", c.adapt.theta).set("marking", c.adapt.mark_functions ? "functions" : "cells")
+      .set("strategy", c.adapt.maximum_strategy ? "maximum" : "dorfler").set("min_fraction", c.adapt.min_fraction)
+      .set("steps", js);
   if (steps.size() >= 4 && !std::isnan(steps.back().h1_semi))
     root.set("h1_rate_last_half", fitted_h1_rate(steps, steps.size() / 2));
   if (stage) {

@@ -9,7 +9,7 @@ import pytest
 from conftest import CASES, cli_json
 
 # Keys that are measurements of time or memory, or name files: not results.
-VOLATILE = {"timings", "seconds", "seconds_space", "seconds_solve", "seconds_estimate", "seconds_refine", "outputs",
+VOLATILE = {"timings", "seconds", "seconds_space", "seconds_solve", "seconds_estimate", "seconds_refine", "seconds_output", "solve_phases", "outputs",
             "peak_memory_mb_per_rank"}
 
 def assert_same(cli_value, py_value, where="result"):
@@ -106,6 +106,20 @@ def test_adapt_marking_functions_equals_cli(tmp_path, case):
     assert [s["dofs"] for s in cells] != [s["dofs"] for s in study]  # a different marking, different meshes
     with pytest.raises(knotwork.InputError, match="marking"):
         knotwork.adapt(path, steps=2, marking="elements")
+
+
+def test_adapt_maximum_strategy_equals_cli(tmp_path):
+    path = str(CASES / "lshape_adaptive_thb.toml")
+    args = ["--steps", "5", "--strategy", "maximum", "--theta", "0.5", "--min-fraction", "0.1", "--marking", "functions"]
+    expected = cli_json(["adapt", path, *args, "--out", str(tmp_path)])
+    assert (expected["strategy"], expected["min_fraction"], expected["marking"]) == ("maximum", 0.1, "functions")
+    study = knotwork.adapt(path, steps=5, strategy="maximum", theta=0.5, min_fraction=0.1, marking="functions")
+    assert_same(expected["steps"], list(study))
+    assert (study.info["strategy"], study.info["min_fraction"]) == ("maximum", 0.1)
+    with pytest.raises(knotwork.InputError, match="strategy"):
+        knotwork.adapt(path, steps=2, strategy="bulk")
+    with pytest.raises(knotwork.InputError, match="min_fraction"):
+        knotwork.adapt(path, steps=2, min_fraction=1.5)
 
 
 def test_adapt_output_every_writes_every_kth_step_and_the_last(tmp_path):
