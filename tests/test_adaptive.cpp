@@ -1,6 +1,8 @@
 // The adaptive loop and its parts: geometry Hessians, the residual estimator, Doerfler
 // marking, and the observed rates on the L-shape and an interior layer.
 #include <catch2/catch.hpp>
+#include <Eigen/SVD>
+#include <limits>
 #include <cmath>
 #include <map>
 
@@ -325,4 +327,80 @@ TEST_CASE("Adaptive knot segments resolve an interior layer with fewer dofs than
 TEST_CASE("Adaptivity refuses spaces it cannot refine", "[adaptive]") {
   CaseDescription c = shipped("square_sinsin.toml");
   REQUIRE_THROWS_WITH(adapt_case(c, Ordering::kAmd, {}), Catch::Contains("family") && Catch::Contains("knot_segments"));
+}
+
+namespace {
+
+// Every basis function of `mesh` at the parameter points (u_k, v_k) of one patch, each found in
+// the cell whose parameter box holds it: points x functions. Polynomial spaces.
+Eigen::MatrixXd basis_at_parameter_points(const BezierMesh& mesh, const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
+  REQUIRE_FALSE(mesh.is_rational());
+  Eigen::MatrixXd values = Eigen::MatrixXd::Zero(u.size(), mesh.num_functions());
+  std::vector<int> found(u.size(), 0);
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    const BezierCell& b = mesh.cell(c);
+    REQUIRE(b.patch == 0);
+    for (Eigen::Index k = 0; k < u.size(); ++k) {
+      if (u[k] < b.u0 || u[k] >= b.u1 || v[k] < b.v0 || v[k] >= b.v1) continue;
+      ++found[k];
+      Eigen::VectorXd ru(1), rv(1);
+      ru << (u[k] - b.u0) / (b.u1 - b.u0);
+      rv << (v[k] - b.v0) / (b.v1 - b.v0);
+      Eigen::MatrixXd B, Bu, Bv;
+      tensor_bernstein(b.degree_u, b.degree_v, ru, rv, B, Bu, Bv);
+      const Eigen::VectorXd n = mesh.extraction(c) * B.row(0).transpose();
+      const auto ids = mesh.functions(c);
+      for (size_t a = 0; a < ids.size(); ++a) values(k, ids[a]) = n[a];
+    }
+  }
+  for (int f : found) REQUIRE(f == 1);
+  return values;
+}
+
+}  // namespace
+
+TEST_CASE("The adaptive spaces on the L-shape are nested; the error rises only where a step adds no free function", "[adaptive]") {
+  // The span of step s's basis lies in step s+1's iff the least-squares fit of the old functions
+  // by the new ones, sampled on a grid off every dyadic line, leaves a residual at rounding level:
+  // below 100 kappa eps, kappa the sampled new basis's condition number. Transitions whose
+  // newest cells are too small for the grid to sample every function (kappa > 1e6) are not
+  // judged. The reverse fit (new by old) must fail where the space grew: the check can fail.
+  const int n = 90;
+  Eigen::VectorXd u(n * n), v(n * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) u[i + n * j] = (i + 0.3711) / n, v[i + n * j] = (j + 0.6173) / n;
+  for (const char* name : {"lshape_adaptive_thb.toml", "lshape_adaptive_lr.toml", "lshape_adaptive_pt.toml", "lshape_adaptive.toml"}) {
+    CaseDescription c = shipped(name);
+    patch_space(c).degree = {3, 3};
+    c.adapt.steps = 7;
+    std::vector<Eigen::MatrixXd> sampled;
+    std::vector<int> free;
+    std::vector<double> error;
+    adapt_case(c, Ordering::kAmd, {}, [&](const AdaptiveStepView& s) {
+      sampled.push_back(basis_at_parameter_points(s.space.mesh(), u, v));
+      free.push_back(s.solution.num_free);
+      error.push_back(s.solution.errors->h1_semi);
+    });
+    int judged = 0;
+    for (size_t s = 0; s + 1 < sampled.size(); ++s) {
+      const Eigen::MatrixXd &old_basis = sampled[s], &new_basis = sampled[s + 1];
+      const Eigen::BDCSVD<Eigen::MatrixXd> svd(new_basis, Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const double kappa = svd.singularValues()(0) / svd.singularValues().tail(1)(0);
+      INFO(name << ", step " << s << " -> " << s + 1 << ": " << old_basis.cols() << " -> " << new_basis.cols()
+                << " functions, kappa " << kappa);
+      if (!(kappa < 1e6)) continue;
+      ++judged;
+      const double residual = (new_basis * svd.solve(old_basis) - old_basis).norm() / old_basis.norm();
+      CHECK(residual < 100 * kappa * std::numeric_limits<double>::epsilon());
+      if (new_basis.cols() > old_basis.cols()) {
+        const Eigen::BDCSVD<Eigen::MatrixXd> back(old_basis, Eigen::ComputeThinU | Eigen::ComputeThinV);
+        CHECK((old_basis * back.solve(new_basis) - new_basis).norm() / new_basis.norm() > 1e-3);
+      }
+      // Nested spaces: Galerkin's solution is the best in the energy norm among functions with
+      // the same boundary values. A step that adds only Dirichlet functions keeps the free space
+      // and changes the boundary projection of g, and only there may the H1 error rise.
+      if (error[s + 1] > error[s]) CHECK(free[s + 1] == free[s]);
+    }
+    CHECK(judged >= 4);
+  }
 }
