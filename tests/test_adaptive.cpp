@@ -359,7 +359,7 @@ Eigen::MatrixXd basis_at_parameter_points(const BezierMesh& mesh, const Eigen::V
 
 }  // namespace
 
-TEST_CASE("The adaptive spaces on the L-shape are nested; the error rises only where a step adds no free function", "[adaptive]") {
+TEST_CASE("The adaptive spaces on the L-shape are nested, and the error rises only where a step adds no free function", "[adaptive]") {
   // The span of step s's basis lies in step s+1's iff the least-squares fit of the old functions
   // by the new ones, sampled on a grid off every dyadic line, leaves a residual at rounding level:
   // below 100 kappa eps, kappa the sampled new basis's condition number. Transitions whose
