@@ -471,50 +471,48 @@ void assemble_values(const BezierMesh& mesh, const GeometryMap& geometry, const 
   }
 }
 
-// A cell's rows, whole, into a rank's rows: an owned row's columns into the diagonal block
-// (owned columns) or the off-diagonal one (by global row), a halo row's into its entries.
-// Each row's sorted columns are walked once, as the cell's dofs ascend. Entry (i, j) is read
-// from Ke's lower triangle in the cell's dof order, as the serial scatter reads it, so that
-// both triangles hold the same numbers (Ke's products need not be symmetric to the last bit).
+// A cell's rows into a rank's rows: an owned row's columns into the diagonal block (owned
+// columns) or the off-diagonal one (by global row), a halo row's into its entries. In the
+// diagonal block only the lower triangle (column <= row) is added here, as the serial scatter
+// adds it: the upper one is its mirror image, copied once after the loop
+// (mirror_diagonal_block), which costs less than adding 625 entries per cell instead of 325 at
+// p = 4. Each row's sorted columns are walked once, as the cell's dofs ascend. Entry (i, j) is
+// read from Ke's lower triangle in the cell's dof order, as the serial scatter reads it.
 void scatter_rows(const RankRows& r, const std::vector<std::pair<int, int>>& order, const Eigen::MatrixXd& Ke,
                   double* values) {
   const OwnedRows& o = r.owned;
   const int m = static_cast<int>(order.size());
   if (m == 0) return;
-  // Row k's entries in column order: Ke(a, b) left of the diagonal, Ke(b, a) from it on.
-  const auto add_row = [&](int k, const int* cols, int p, auto target, double* row_values) {
-    const int a = order[k].second;
-    for (int l = 0; l < k; ++l) {
-      while (cols[p] < target(order[l].first)) ++p;
-      row_values[p] += Ke(a, order[l].second);
-    }
-    for (int l = k; l < m; ++l) {
-      while (cols[p] < target(order[l].first)) ++p;
-      row_values[p] += Ke(order[l].second, a);
-    }
-  };
-  const auto diagonal_column = [&](int d) { return d - r.first; };
   const auto own = [&](int d) { return d >= r.first && d < r.last; };
   if (own(order.front().first) && own(order.back().first)) {  // the usual cell: only the diagonal block
-    for (int k = 0; k < m; ++k)
-      add_row(k, o.diagonal_cols.data(), o.diagonal_start[order[k].first - r.first], diagonal_column, values);
+    for (int k = 0; k < m; ++k) {
+      const auto [row, a] = order[k];
+      const int* cols = o.diagonal_cols.data();
+      int p = o.diagonal_start[row - r.first];
+      for (int l = 0; l <= k; ++l) {
+        while (cols[p] < order[l].first - r.first) ++p;
+        values[p] += Ke(a, order[l].second);
+      }
+    }
     return;
   }
-  // Owned rows get owned columns in the diagonal block, the others (global rows) in the
-  // off-diagonal one: two walks, each along its block's sorted columns.
+  // Owned rows get owned columns (up to the diagonal) in the diagonal block, the others (global
+  // rows) in the off-diagonal one: two walks, each along its block's sorted columns.
   double* off_values = values + o.diagonal_nonzeros();
   double* halo_values = values + r.halo_offset();
   for (int k = 0; k < m; ++k) {
     const auto [row, a] = order[k];
-    if (!own(row)) {
-      add_row(k, r.halo_cols.data(), r.halo_start[row], [](int d) { return d; }, halo_values);
-      continue;
-    }
-    int diagonal = o.diagonal_start[row - r.first], off = o.off_start[row - r.first];
+    const bool owned_row = own(row);
+    int diagonal = owned_row ? o.diagonal_start[row - r.first] : 0, off = owned_row ? o.off_start[row - r.first] : 0;
+    int halo = owned_row ? 0 : r.halo_start[row];
     for (int l = 0; l < m; ++l) {
       const double v = l < k ? Ke(a, order[l].second) : Ke(order[l].second, a);
       const int col = order[l].first;
-      if (own(col)) {
+      if (!owned_row) {
+        while (r.halo_cols[halo] < col) ++halo;
+        halo_values[halo] += v;
+      } else if (own(col)) {
+        if (l > k) continue;  // the upper triangle: mirrored after the loop
         while (o.diagonal_cols[diagonal] < col - r.first) ++diagonal;
         values[diagonal] += v;
       } else {
@@ -552,6 +550,7 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
         scatter_rows(rows, order, Ke, values);
       },
       rhs, nullptr, cells);
+  mirror_diagonal_block(rows.owned);
 }
 
 namespace {

@@ -31,6 +31,10 @@ struct OwnedRows {
   long off_nonzeros() const { return off_start.back(); }
 };
 
+// Copies the lower triangle (column < row) of the diagonal block into its upper one, the
+// block's pattern being symmetric (it is a coupling pattern): entry (j, i) := entry (i, j).
+void mirror_diagonal_block(OwnedRows& rows);
+
 // What one rank adds to the distributed matrix (mpirun, method = "petsc"), laid out so that its
 // element loop adds straight into it (assemble_poisson) and its owned rows go to PETSc as they
 // are: whole rows, both triangles, not the lower triangle CHOLMOD reads, which would have to be
