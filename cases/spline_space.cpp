@@ -12,6 +12,12 @@ void SpaceReport::export_functions(const std::string&, const std::string&) const
   throw InputError("--export: the space " + description() + " has no function export");
 }
 
+std::function<KnotLines()> SpaceReport::knot_lines_later() const {
+  KnotLines lines = knot_lines();
+  if (lines.lines.empty()) return {};
+  return [lines = std::move(lines)] { return lines; };
+}
+
 KnotLines knot_lines_of_cells(const BezierMesh& mesh, const GeometryMap& geometry, int samples) {
   // Each cell draws its bottom and left sides, and its top and right ones on the boundary.
   // The sides are listed first, then sampled in parallel (an adaptive loop draws them at every

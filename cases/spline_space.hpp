@@ -68,6 +68,10 @@ class SpaceReport {
   virtual void export_functions(const std::string& file, const std::string& source) const;
   // The knot lines of ParaView output (physical polylines; none by default).
   virtual KnotLines knot_lines() const { return {}; }
+  // The same, to be computed later, on another thread and after this space is gone (what it
+  // needs is copied): adapt draws a step's knots while the next step computes. Null when the
+  // family draws none. By default knot_lines(), computed now.
+  virtual std::function<KnotLines()> knot_lines_later() const;
 };
 
 // A spline space of some family, built from a case: what the pipeline needs (the mesh, its

@@ -58,10 +58,12 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
                                        v.solution.coefficients, exact, {{"error_indicator", eta}, {"marked", flag}},
                                        v.solution.exact_mean));
     pvd.push_back({double(v.step), 0, name + ".vtu"});
-    const KnotLines knots = v.space.presentation().knot_lines();
-    if (!knots.lines.empty()) {
-      files.push_back(prepare_polylines_vtp(stage->stage(name + "_knots.vtp"), knots.lines,
-                                            {{"kind", knots.kind}, {"multiplicity", knots.multiplicity}}));
+    // The knots are drawn on the writer thread too (some families take long: knot segments).
+    if (std::function<KnotLines()> knots = v.space.presentation().knot_lines_later()) {
+      files.push_back([knots = std::move(knots), path = stage->stage(name + "_knots.vtp")] {
+        const KnotLines k = knots();
+        prepare_polylines_vtp(path, k.lines, {{"kind", k.kind}, {"multiplicity", k.multiplicity}})();
+      });
       pvd.push_back({double(v.step), 1, name + "_knots.vtp"});
     }
     finish_writing();
