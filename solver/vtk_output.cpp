@@ -139,23 +139,6 @@ struct ExactArrays {
   }
 };
 
-// Values at the equispaced nodes of each cell: solution (and exact) in the geometry's points.
-struct NodeValues {
-  Eigen::VectorXd u, exact;
-};
-
-NodeValues node_values(const BezierMesh& mesh, const GeometryMap& geometry, const Eigen::VectorXd& coeffs,
-                       const ExactSolution* exact, int cell, const Eigen::VectorXd& u,
-                       const Eigen::VectorXd& v, const Eigen::MatrixXd& x, ExpressionEvaluator* ev, double offset) {
-  NodeValues r;
-  r.u = evaluate_solution(mesh, geometry, coeffs, cell, u, v).col(0);
-  if (exact) {
-    r.exact.resize(u.size());
-    for (Eigen::Index k = 0; k < u.size(); ++k) r.exact[k] = exact_at(*ev, x, k, offset);
-  }
-  return r;
-}
-
 }  // namespace
 
 void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
@@ -189,10 +172,12 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
   connectivity->SetNumberOfValues(total);
   for (int c = 0; c <= nc; ++c) offsets->SetValue(c, start[c]);
   std::exception_ptr failure;
+  std::optional<ExpressionBatch> compiled_exact;  // compiled once; each thread runs its own copy
+  if (exact) compiled_exact.emplace(std::vector<Expression>{exact->u});
 #pragma omp parallel
   {
-    std::optional<ExpressionEvaluator> exact_u;
-    if (exact) exact_u.emplace(exact->u);
+    std::optional<ExpressionBatch> exact_u;
+    if (exact) exact_u.emplace(*compiled_exact);
     int last_p = -1, last_q = -1;
     Eigen::MatrixXd inverse, collocation;
     Eigen::VectorXd nu, nv;
@@ -217,17 +202,30 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
           last_p = p;
           last_q = q;
         }
-        // Field coefficients f with sum w_b B_b f_b / W = value at every node.
-        geometry.evaluate(first + c, nu, nv, at);
-        const NodeValues val = node_values(mesh, geometry, coeffs, exact, first + c, nu, nv, at.x,
-                                           exact_u ? &*exact_u : nullptr, exact_offset);
+        // Field coefficients f with sum w_b B_b f_b / W = value at every node. A polynomial
+        // solution on a polynomial cell of the geometry's degree is its own Bezier form,
+        // C^T times its coefficients: no evaluation (which was half of an adaptive step's output).
+        const BezierCell& cell = mesh.cell(first + c);
+        const bool polynomial = !mesh.is_rational() && cell.degree_u == p && cell.degree_v == q &&
+                                (g.weights.array() == 1.0).all();
         const Eigen::VectorXd W = collocation * g.weights;
         auto to_bezier = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
           return (inverse * W.cwiseProduct(v)).cwiseQuotient(g.weights);
         };
-        const Eigen::VectorXd fu = to_bezier(val.u);
-        Eigen::VectorXd fe;
-        if (exact) fe = to_bezier(val.exact);
+        Eigen::VectorXd fu, fe;
+        if (polynomial) {
+          const auto ids = mesh.functions(first + c);
+          Eigen::VectorXd local(static_cast<Eigen::Index>(ids.size()));
+          for (size_t a = 0; a < ids.size(); ++a) local[a] = coeffs[ids[a]];
+          fu = mesh.extraction(first + c).transpose() * local;
+        }
+        if (!polynomial || exact) geometry.evaluate(first + c, nu, nv, at);
+        if (!polynomial) fu = to_bezier(evaluate_solution(mesh, geometry, coeffs, first + c, nu, nv).col(0));
+        if (exact) {
+          exact_u->evaluate(at.x.col(0).data(), at.x.col(1).data(), at.x.cols() == 3 ? at.x.col(2).data() : nullptr,
+                            at.x.rows());
+          fe = to_bezier(Eigen::Map<const Eigen::VectorXd>(exact_u->result(0), at.x.rows()).array() - exact_offset);
+        }
         const int order[2] = {p, q};
         for (int j = 0; j <= q; ++j)
           for (int i = 0; i <= p; ++i) {
