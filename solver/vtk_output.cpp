@@ -154,13 +154,23 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   const int first = range.first, last = range.last < 0 ? mesh.num_cells() : range.last, nc = last - first;
-  // Cell c's points are [start[c], start[c + 1]): the cells are filled in parallel (the
-  // values at their nodes cost as much as a solve's error norms), each into its own range.
-  std::vector<vtkIdType> start(nc + 1, 0);
+  // The geometry's Bezier cells (of the cell's degree, or the map's where that is higher), then
+  // cell c's points are [start[c], start[c + 1]): the cells are filled in parallel, each into
+  // its own range.
+  std::vector<BezierGeometryCell> bezier(nc);
+  std::exception_ptr failure;
+#pragma omp parallel for schedule(dynamic, 64)
   for (int c = 0; c < nc; ++c) {
-    const BezierCell& cell = mesh.cell(first + c);
-    start[c + 1] = start[c] + static_cast<vtkIdType>(cell.degree_u + 1) * (cell.degree_v + 1);
+    try {
+      bezier[c] = geometry.bezier_cell(first + c);
+    } catch (...) {
+#pragma omp critical(write_bezier_vtu_failure)
+      if (!failure) failure = std::current_exception();
+    }
   }
+  if (failure) std::rethrow_exception(failure);
+  std::vector<vtkIdType> start(nc + 1, 0);
+  for (int c = 0; c < nc; ++c) start[c + 1] = start[c] + bezier[c].points.rows();
   const vtkIdType total = start[nc];
   points->SetNumberOfPoints(total);
   auto weights = scalar_array("RationalWeights", total);
@@ -171,7 +181,6 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
   offsets->SetNumberOfValues(nc + 1);
   connectivity->SetNumberOfValues(total);
   for (int c = 0; c <= nc; ++c) offsets->SetValue(c, start[c]);
-  std::exception_ptr failure;
   std::optional<ExpressionBatch> compiled_exact;  // compiled once; each thread runs its own copy
   if (exact) compiled_exact.emplace(std::vector<Expression>{exact->u});
 #pragma omp parallel
@@ -185,10 +194,8 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
 #pragma omp for schedule(dynamic, 64)
     for (int c = 0; c < nc; ++c) {
       try {
-        const BezierGeometryCell g = geometry.bezier_cell(first + c);
+        const BezierGeometryCell& g = bezier[c];
         const int p = g.degree_u, q = g.degree_v, nb = (p + 1) * (q + 1);
-        if (g.points.rows() != start[c + 1] - start[c])
-          throw std::logic_error("write_bezier_vtu: the geometry's Bezier cell and the mesh's cell differ in degree");
         if (p != last_p || q != last_q) {
           inverse = bernstein_interpolation_inverse(p, q);
           collocation = inverse.inverse();
