@@ -327,6 +327,11 @@ Overrides read_overrides(const py::dict& d) {
       if (x < 1 || x > std::numeric_limits<int>::max()) throw InputError(key + ": must be >= 1, got " + std::to_string(x));
       out = static_cast<int>(x);
     };
+    auto number = [&](double& out) {
+      if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::float_>(v) || PyIndex_Check(v.ptr())))
+        throw InputError(key + ": must be a number, got " + py::repr(v).cast<std::string>());
+      out = py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
+    };
     auto text = [&](std::string& out) {
       if (!py::isinstance<py::str>(v)) throw InputError(key + ": must be a string, got " + py::repr(v).cast<std::string>());
       out = v.cast<std::string>();
@@ -336,9 +341,7 @@ Overrides read_overrides(const py::dict& d) {
     else if (key == "solver") text(o.solver);
     else if (key == "ordering") text(o.ordering);
     else if (key == "tolerance") {
-      if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::float_>(v) || PyIndex_Check(v.ptr())))
-        throw InputError("tolerance: must be a number, got " + py::repr(v).cast<std::string>());
-      o.tolerance = py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
+      number(o.tolerance);
       // The range is checked by override_solver, as for --tolerance; 0 means "not given" there.
       if (o.tolerance == 0) throw InputError("tolerance: must be in (0, 1), got 0");
     } else if (key == "allow_unverified_space") o.allow_unverified_space = py::bool_(py::reinterpret_borrow<py::object>(v)).cast<bool>();
@@ -351,9 +354,7 @@ Overrides read_overrides(const py::dict& d) {
       if (o.strategy != "dorfler" && o.strategy != "maximum")
         throw InputError("strategy: must be \"dorfler\" or \"maximum\", got \"" + o.strategy + "\"");
     } else if (key == "min_fraction") {
-      if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::float_>(v) || PyIndex_Check(v.ptr())))
-        throw InputError("min_fraction: must be a number, got " + py::repr(v).cast<std::string>());
-      o.min_fraction = py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
+      number(o.min_fraction);
       if (!(o.min_fraction >= 0 && o.min_fraction <= 1))
         throw InputError("min_fraction: must be in [0, 1], got " + py::repr(v).cast<std::string>());
     }

@@ -47,17 +47,11 @@ struct Marking {
 
 // The marked items, largest indicator first (ties: the lower index first).
 std::vector<int> mark(const Eigen::VectorXd& eta_squared, const Marking& marking);
-inline std::vector<int> dorfler_marking(const Eigen::VectorXd& eta_squared, double theta) {
-  return mark(eta_squared, Marking{Marking::Strategy::kDorfler, theta, 0});
-}
 
 // Marking of functions, as hierarchical codes do: a function's indicator is the sum of eta_K^2
 // over the cells it lives on; the functions are marked as `marking` says, and the cells of
 // their supports returned (sorted).
 std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared,
                                            const Marking& marking);
-inline std::vector<int> cells_of_marked_functions(const BezierMesh& mesh, const Eigen::VectorXd& eta_squared, double theta) {
-  return cells_of_marked_functions(mesh, eta_squared, Marking{Marking::Strategy::kDorfler, theta, 0});
-}
 
 }  // namespace knotwork

@@ -215,11 +215,11 @@ TEST_CASE("The estimator bounds the error on the L-shape, and jumps appear only 
 TEST_CASE("Doerfler marking takes the fewest largest indicators reaching theta", "[adaptive]") {
   Eigen::VectorXd eta2(6);
   eta2 << 1, 8, 2, 5, 3, 1;  // total 20
-  CHECK(dorfler_marking(eta2, 0.5) == std::vector<int>{1, 3});        // 8 + 5 = 13 >= 10
-  CHECK(dorfler_marking(eta2, 0.7) == std::vector<int>{1, 3, 4});     // 16 >= 14
-  CHECK(dorfler_marking(eta2, 1.0).size() == 6);
-  CHECK_THROWS(dorfler_marking(eta2, 0.0));
-  CHECK_THROWS(dorfler_marking(eta2, 1.5));
+  CHECK(mark(eta2, {Marking::Strategy::kDorfler, 0.5, 0}) == std::vector<int>{1, 3});        // 8 + 5 = 13 >= 10
+  CHECK(mark(eta2, {Marking::Strategy::kDorfler, 0.7, 0}) == std::vector<int>{1, 3, 4});     // 16 >= 14
+  CHECK(mark(eta2, {Marking::Strategy::kDorfler, 1.0, 0}).size() == 6);
+  CHECK_THROWS(mark(eta2, {Marking::Strategy::kDorfler, 0.0, 0}));
+  CHECK_THROWS(mark(eta2, {Marking::Strategy::kDorfler, 1.5, 0}));
 }
 
 TEST_CASE("Maximum marking takes every indicator within theta of the largest, and at least a minimum share", "[adaptive]") {
@@ -255,9 +255,9 @@ TEST_CASE("Marking by functions refines the supports of the functions Doerfler p
   Eigen::VectorXd eta2(4);
   eta2 << 9, 1, 0, 4;  // per function: 9, 10, 1, 4, 4 (total 28)
   // Half of 28: function 1 (10) then 0 (9) = 19 >= 14: cells 0 and 1.
-  CHECK(cells_of_marked_functions(mesh, eta2, 0.5) == std::vector<int>{0, 1});
+  CHECK(cells_of_marked_functions(mesh, eta2, {Marking::Strategy::kDorfler, 0.5, 0}) == std::vector<int>{0, 1});
   // 0.75 of 28 = 21: functions 1, 0, then 3 (4): cells 0, 1, 2, 3 (function 3 lives on 2 and 3).
-  CHECK(cells_of_marked_functions(mesh, eta2, 0.75) == std::vector<int>{0, 1, 2, 3});
+  CHECK(cells_of_marked_functions(mesh, eta2, {Marking::Strategy::kDorfler, 0.75, 0}) == std::vector<int>{0, 1, 2, 3});
   // Maximum strategy, theta = 0.6: eta of the functions 3, 3.16, 1, 2, 2; at least 0.6 * 3.16 = 1.90:
   // functions 0, 1, 3, 4, whose supports are every cell.
   CHECK(cells_of_marked_functions(mesh, eta2, {Marking::Strategy::kMaximum, 0.6, 0}) == std::vector<int>{0, 1, 2, 3});

@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -114,7 +115,10 @@ TEST_CASE("Bezier .vtu round trip: cell types, degrees, active attributes, exact
           double exact_value = 0;
           for (vtkIdType i = 0; i < cell->GetNumberOfPoints(); ++i)
             exact_value += w[i] * grid->GetPointData()->GetArray("exact")->GetTuple1(cell->GetPointId(i));
-          REQUIRE(std::abs(exact_value - u_exact(at.x(0, 0), at.x(0, 1))) < 1e-12);
+          // Interpolation at the nodes and VTK's evaluation there: a few dozen roundings of
+          // values of size |u| (the tensor Bernstein interpolation inverse of p <= 3 has inf-norm 32).
+          const double u0 = u_exact(at.x(0, 0), at.x(0, 1));
+          REQUIRE(std::abs(exact_value - u0) < 1e3 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(u0)));
         }
       }
     }
