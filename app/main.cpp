@@ -25,6 +25,9 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
   cmd->add_option("--solver", o.solver,
                   "Linear solve: direct (CHOLMOD), iterative (preconditioned CG), auto, or petsc (PETSc's KSP, "
                   "distributed over the processes of mpirun -n N; overrides [solver] method)");
+  cmd->add_option("--preconditioner", o.preconditioner,
+                  "Iterative solve: auto, jacobi, boomeramg, or the family's own (tensor: fast_diagonalization, "
+                  "multigrid) (overrides [solver] preconditioner)");
   cmd->add_option("--tolerance", o.tolerance,
                   "Iterative solve: backward error to reach (default 1e-15), or with --solver petsc the relative "
                   "residual (default 1e-10) (overrides [solver] tolerance)");

@@ -16,7 +16,8 @@ namespace knotwork {
 
 int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
-  override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr,
+                o.preconditioner);
   c.allow_unverified_space = o.allow_unverified_space;
   c.solver.estimate_condition = o.condition;
   const Ordering ordering = parse_ordering(o.ordering);

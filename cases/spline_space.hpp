@@ -100,14 +100,19 @@ class SplineSpace {
                                               int* /*extended*/ = nullptr, const ProgressFunction& /*progress*/ = {}) && {
     return nullptr;
   }
-  // A preconditioner that knows the space's structure, for the iterative solve: its name
-  // ([solver] preconditioner), "" when the family has none, and the preconditioner for the
-  // free dofs of `layout` of `problem`'s operator (null when it does not apply to them).
-  virtual std::string structured_preconditioner() const { return ""; }
-  // Whether [solver] = "auto" may choose it (CG with it from 10 000 functions on); false where
-  // measurements found algebraic multigrid or CHOLMOD better (docs/SOLVERS.md).
+  // Preconditioners that know the space's structure, for the iterative solve: their names
+  // ([solver] preconditioner; none when the family has none), the first the one "auto" takes,
+  // and the one named for the free dofs of `layout` of `problem`'s operator (null when it
+  // does not apply to them).
+  virtual std::vector<std::string> structured_preconditioners() const { return {}; }
+  // Whether [solver] = "auto" may choose the first (CG with it from 10 000 functions on); false
+  // where measurements found algebraic multigrid or CHOLMOD better (docs/SOLVERS.md).
   virtual bool structured_preconditioner_is_automatic() const { return true; }
-  virtual std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& /*layout*/,
+  // Whether the named one also serves method = "petsc" as a PCShell, built from the matrix's
+  // diagonal alone (the fast diagonalization does; a multigrid that needs the whole matrix does not).
+  virtual bool structured_preconditioner_needs_only_diagonal(const std::string& /*name*/) const { return true; }
+  virtual std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& /*name*/,
+                                                                         const DofLayout& /*layout*/,
                                                                          const Eigen::SparseMatrix<double>& /*lower*/,
                                                                          const PoissonProblem& /*problem*/) const {
     return nullptr;
@@ -156,9 +161,9 @@ struct SpaceFamily {
   // The family's own mode of `knotwork basis`: adds its options to the command and returns
   // the tool that holds them; null: the family has none.
   std::function<std::unique_ptr<BasisTool>(CLI::App& basis)> add_basis_tool;
-  // The name of its spaces' structured preconditioner ([solver] preconditioner; "" none):
-  // what SplineSpace::structured_preconditioner returns.
-  std::string structured_preconditioner;
+  // The names of its spaces' structured preconditioners ([solver] preconditioner): what
+  // SplineSpace::structured_preconditioners may return.
+  std::vector<std::string> structured_preconditioners;
 };
 
 // Throws InputError naming [space] family unless the case's family refines cells locally

@@ -1,5 +1,6 @@
 // load_case: the top level of a case file and the sections every family shares; the family
 // named by [space] family (default "tensor") reads the rest through its own reader.
+#include <algorithm>
 #include <filesystem>
 
 #include "cases/case_reader.hpp"
@@ -44,7 +45,9 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
   read_solver(r, r.table(root, "solver", false), c);
   std::vector<std::string> preconditioners{"auto", "jacobi", kBoomerAmgName};
   for (const SpaceFamily& f : space_families())
-    if (!f.structured_preconditioner.empty()) preconditioners.push_back(f.structured_preconditioner);
+    for (const std::string& name : f.structured_preconditioners)
+      if (std::find(preconditioners.begin(), preconditioners.end(), name) == preconditioners.end())
+        preconditioners.push_back(name);
   checked_name(c.solver.preconditioner, preconditioners, "[solver] preconditioner", path);
   check_petsc_options(c, "[solver] petsc_options");
   if (root.get("adapt")) {

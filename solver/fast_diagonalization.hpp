@@ -19,12 +19,17 @@
 
 namespace knotwork {
 
-// The univariate mass and stiffness matrices of a B-spline basis on its parameter domain
-// (dense; Gauss quadrature with p + 1 points per element: exact), each weighted by a constant
-// per element (in element_spans() order; empty: weight 1).
-void univariate_mass_stiffness(const BSplineBasis1D& b, Eigen::MatrixXd& mass, Eigen::MatrixXd& stiffness,
-                               const std::vector<double>& mass_weight = {},
-                               const std::vector<double>& stiffness_weight = {});
+// One direction of a separable operator: the univariate mass and stiffness matrices of a
+// B-spline basis on its parameter domain (Gauss quadrature with p + 1 points per element:
+// exact), each weighted by a constant per element (in element_spans() order; empty: weight 1),
+// the stiffness with the 1D Nitsche terms (NitscheEnds) at the ends asked for. Sparse: 2p + 1
+// diagonals.
+struct UnivariatePair {
+  Eigen::SparseMatrix<double> mass, stiffness;
+};
+UnivariatePair univariate_pair(const BSplineBasis1D& b, const std::vector<double>& mass_weight = {},
+                               const std::vector<double>& stiffness_weight = {}, bool nitsche_start = false,
+                               bool nitsche_end = false, double nitsche_factor = 2);
 
 // The geometry's stiffness coefficients as products of univariate factors, one value per
 // element and direction: c11(i, j) ~ a1[i] b1[j], c22(i, j) ~ a2[i] b2[j], fitted by least
@@ -49,6 +54,10 @@ struct NitscheEnds {
   std::array<bool, 4> sides{};
   double factor = 2;
 };
+
+// The free univariate indices of each direction, when the free dofs of `layout` (over the
+// functions i + nu j) are their tensor product, numbered a + |iu| b; false otherwise.
+bool tensor_free_indices(int nu, int nv, const DofLayout& layout, std::vector<int>& iu, std::vector<int>& iv);
 
 // For the tensor space of space_u x space_v (function i + n_u j) and the free dofs of
 // `layout`: the preconditioner, or null when the free functions are not a tensor product of

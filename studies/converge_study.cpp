@@ -59,7 +59,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     if (c.solver.estimate_condition)
       for (auto& f : condition_fields(s)) lv.fields.push_back(std::move(f));
     // The CG count of the level (null where the level was solved directly: `auto` decides by size).
-    if (c.solver.method == "iterative" || (c.solver.method == "auto" && !space->structured_preconditioner().empty() &&
+    if (c.solver.method == "iterative" || (c.solver.method == "auto" && !space->structured_preconditioners().empty() &&
                                              space->structured_preconditioner_is_automatic()))
       lv.fields.push_back({.key = "cg_iterations",
                            .value = solver.method == "iterative" ? ReportValue(long(s.iterative.iterations)) : ReportValue{},

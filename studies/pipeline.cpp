@@ -47,8 +47,9 @@ constexpr int kAutoIterativeFunctions = 10000;
 
 SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) {
   SolverReport r;
-  const std::string structured = space.structured_preconditioner();
-  const std::string automatic = space.structured_preconditioner_is_automatic() ? structured : "";
+  const std::vector<std::string> structured = space.structured_preconditioners();
+  const std::string automatic =
+      !structured.empty() && space.structured_preconditioner_is_automatic() ? structured.front() : "";
   if (c.solver.method == "auto")
     r.method = !automatic.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
   else
@@ -63,16 +64,21 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
       r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc), since this space (family \"" +
                c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ") has no structured preconditioner";
     else if (automatic.empty())
-      r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc); this space's \"" + structured +
+      r.note = "[solver] preconditioner = \"auto\": boomeramg (hypre BoomerAMG through PETSc); this space's \"" + structured.front() +
                "\" is used only when asked for by name (docs/SOLVERS.md)";
   } else if (asked == "jacobi" || asked == kBoomerAmgName) {
     r.preconditioner = asked;  // algebraic: they apply to every family
-  } else if (asked == structured) {
+  } else if (std::find(structured.begin(), structured.end(), asked) != structured.end()) {
+    if (r.method == "petsc" && !space.structured_preconditioner_needs_only_diagonal(asked))
+      throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" runs in knotwork's own CG only (method = "
+                       "\"iterative\"); with method = \"petsc\" use \"boomeramg\" (docs/SOLVERS.md)");
     r.preconditioner = asked;
   } else {
+    std::string names;
+    for (const std::string& s : structured) names += (names.empty() ? "\"" : ", \"") + s + "\"";
     throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" does not apply to family \"" + c.family +
                      "\"" + (c.multipatch() ? " on several patches" : "") + " (" + (structured.empty() ? std::string("use \"boomeramg\", \"jacobi\" or method = \"direct\"")
-                                                   : "it has \"" + structured + "\"; or use \"boomeramg\" or \"jacobi\"") + ")");
+                                                   : "it has " + names + "; or use \"boomeramg\" or \"jacobi\"") + ")");
   }
   return r;
 }
@@ -140,7 +146,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
       const std::string name = chosen.preconditioner, path = c.path;
       const PoissonProblem* problem = &c.problem;
       so.preconditioner = [&space, name, path, problem](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
-        std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(layout, lower, *problem);
+        std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(name, layout, lower, *problem);
         if (!p)
           throw InputError(path + ": [solver] preconditioner: \"" + name +
                            "\" does not apply to this problem's unknowns (they are not a tensor product: use \"boomeramg\", \"jacobi\" "

@@ -380,7 +380,9 @@ TEST_CASE("bad input: [solver] and --solver", "[cli][bad-input][solver]") {
   Sandbox box;
   const std::string iterative = kGood + "[solver]\nmethod = \"iterative\"\n";
   expect_rejected(box, kGood + "[solver]\nmethod = \"iterativ\"\n", {"bad.toml", "[solver] method", "did you mean 'iterative'"});
-  expect_rejected(box, kGood + "[solver]\npreconditioner = \"multigrid\"\n", {"bad.toml", "[solver] preconditioner", "not a choice"});
+  expect_rejected(box, kGood + "[solver]\npreconditioner = \"multigird\"\n",
+                  {"bad.toml", "[solver] preconditioner", "did you mean 'multigrid'"});
+  expect_rejected(box, kGood + "[solver]\npreconditioner = \"amg\"\n", {"bad.toml", "[solver] preconditioner", "not a choice"});
   expect_rejected(box, kGood + "[solver]\ntolerance = 0\n", {"bad.toml", "[solver] tolerance", "(0, 1)"});
   expect_rejected(box, kGood + "[solver]\ntolerance = 1.5\n", {"bad.toml", "[solver] tolerance", "(0, 1)"});
   expect_rejected(box, kGood + "[solver]\nmax_iterations = 0\n", {"bad.toml", "[solver] max_iterations", "[1, 1000000]"});
@@ -394,10 +396,15 @@ TEST_CASE("bad input: [solver] and --solver", "[cli][bad-input][solver]") {
                   {"bad.toml", "[solver]", "CG stopped after 2 iterations", "backward error", "above the tolerance"});
   expect_rejected(box, kGood, {"--solver", "'cg' is not a choice"}, "--solver cg");
   expect_rejected(box, kGood, {"--tolerance", "(0, 1)"}, "--tolerance -1");
+  expect_rejected(box, kGood, {"--preconditioner", "did you mean 'multigrid'"}, "--preconditioner multigird");
+  expect_rejected(box, kGood, {"bad.toml", "[solver] preconditioner", "\"multigrid\" runs in knotwork's own CG only"},
+                  "--solver petsc --preconditioner multigrid");
   // A preconditioner the family does not have: one line naming the family and what to use.
   const std::string segments = replace(kGood, "[space]\n", "[space]\nfamily = \"knot_segments\"\n") +
                                "[solver]\nmethod = \"iterative\"\npreconditioner = \"fast_diagonalization\"\n";
   expect_rejected(box, segments, {"bad.toml", "[solver] preconditioner", "family \"knot_segments\"", "jacobi"});
+  expect_rejected(box, segments, {"bad.toml", "[solver] preconditioner", "\"multigrid\" does not apply", "knot_segments"},
+                  "--preconditioner multigrid");
 }
 
 TEST_CASE("run --solver iterative reports the solver, and agrees with the direct solve", "[cli][solver]") {

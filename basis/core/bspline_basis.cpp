@@ -263,6 +263,44 @@ Eigen::MatrixXd elevation_matrix(const BSplineBasis1D& coarse, const BSplineBasi
   return A.colPivHouseholderQr().solve(B);
 }
 
+// The knot insertion matrix of two bases of one degree, the fine knots containing the coarse
+// ones, by the Oslo algorithm (Lyche and Morken, Spline Methods, ch. 4): row i holds the
+// discrete B-splines at i, the coarse B-splines of the span holding fine knot i evaluated by
+// the Cox-de Boor recursion with argument fine_knot[i + k] at level k. O(p^2) per row and
+// sparse from the start, where repeated Boehm insertion into a dense matrix costs O(n^2) per
+// knot (a multigrid hierarchy on 4 096 elements inserts 2 048 knots).
+Eigen::SparseMatrix<double> knot_insertion_matrix(const BSplineBasis1D& coarse, const BSplineBasis1D& fine) {
+  const int p = coarse.degree(), nc = coarse.num_functions(), nf = fine.num_functions();
+  const auto& t = coarse.knots();
+  const auto& tau = fine.knots();
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<size_t>(nf) * (p + 1));
+  std::vector<double> b(p + 1), next(p + 1);
+  auto ratio = [](double a, double d) { return d > 0 ? a / d : 0.0; };
+  int mu = p;
+  for (int i = 0; i < nf; ++i) {
+    // The coarse span [t_mu, t_mu+1) holding tau_i (non-empty, inside the domain).
+    while (mu + 1 < nc && t[mu + 1] <= tau[i]) ++mu;
+    b[0] = 1;
+    for (int k = 1; k <= p; ++k) {
+      const double x = tau[i + k];
+      // b holds the k functions mu-k+1..mu of degree k-1; next the k+1 functions mu-k..mu.
+      for (int j = 0; j <= k; ++j) {
+        const int r = mu - k + j;
+        const double left = j > 0 ? ratio(x - t[r], t[r + k] - t[r]) * b[j - 1] : 0.0;
+        const double right = j < k ? ratio(t[r + k + 1] - x, t[r + k + 1] - t[r + 1]) * b[j] : 0.0;
+        next[j] = left + right;
+      }
+      std::copy(next.begin(), next.begin() + k + 1, b.begin());
+    }
+    for (int j = 0; j <= p; ++j)
+      if (b[j] != 0) entries.emplace_back(i, mu - p + j, b[j]);
+  }
+  Eigen::SparseMatrix<double> T(nf, nc);
+  T.setFromTriplets(entries.begin(), entries.end());
+  return T;
+}
+
 }  // namespace
 
 Eigen::SparseMatrix<double> refinement_matrix(const BSplineBasis1D& coarse,
@@ -271,10 +309,9 @@ Eigen::SparseMatrix<double> refinement_matrix(const BSplineBasis1D& coarse,
   if (pf < pc) throw std::invalid_argument("refinement_matrix: fine degree below coarse degree");
   if (coarse.domain_begin() != fine.domain_begin() || coarse.domain_end() != fine.domain_end())
     throw std::invalid_argument("refinement_matrix: the two bases have different domains");
-  // 1. Elevate on the coarse mesh; 2. insert the missing knots by Boehm's algorithm.
+  // 1. Elevate on the coarse mesh; 2. insert the missing knots (Oslo on open knot vectors of one
+  // degree, else Boehm's algorithm).
   const BSplineBasis1D mid = elevated_basis(coarse, pf - pc);
-  Eigen::MatrixXd T = pf > pc ? elevation_matrix(coarse, mid)
-                              : Eigen::MatrixXd::Identity(coarse.num_functions(), coarse.num_functions());
   std::vector<double> L = mid.knots();
   const auto& Uf = fine.knots();
   for (double k : L)
@@ -288,6 +325,15 @@ Eigen::SparseMatrix<double> refinement_matrix(const BSplineBasis1D& coarse,
     if (have > static_cast<long>(j - i))
       throw std::invalid_argument("refinement_matrix: the fine space does not contain the coarse one at knot " +
                                   num(Uf[i]));
+    i = j;
+  }
+  if (pf == pc && coarse.is_open() && fine.is_open()) return knot_insertion_matrix(coarse, fine);
+  Eigen::MatrixXd T = pf > pc ? elevation_matrix(coarse, mid)
+                              : Eigen::MatrixXd::Identity(coarse.num_functions(), coarse.num_functions());
+  for (size_t i = 0; i < Uf.size();) {
+    size_t j = i;
+    while (j < Uf.size() && Uf[j] == Uf[i]) ++j;
+    const long have = std::count(L.begin(), L.end(), Uf[i]);
     for (long k = have; k < static_cast<long>(j - i); ++k) boehm(L, T, pf, Uf[i]);
     i = j;
   }

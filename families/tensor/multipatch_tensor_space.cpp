@@ -63,14 +63,15 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
   const GeometryMap& geometry() const override { return *geometry_; }
   std::array<int, 2> degree() const override { return options_.degree; }
   std::string description() const override { return describe_multipatch(options_, static_cast<int>(d_.patches.size())); }
-  std::string structured_preconditioner() const override { return kPatchFastDiagonalization; }
+  std::vector<std::string> structured_preconditioners() const override { return {kPatchFastDiagonalization}; }
   // Measured (docs/SOLVERS.md, "Several patches"): without a coarse space its CG count grows
   // with refinement and the number of patches, past BoomerAMG's; by name only.
   bool structured_preconditioner_is_automatic() const override { return false; }
   // One fast diagonalization per patch, summed (additive Schwarz, no coarse space): each
   // patch's block is its free functions, interface functions included (so they overlap), the
   // tensor hull of them inverted and restricted to them.
-  std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& layout,
+  std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& /*name: the one*/,
+                                                                 const DofLayout& layout,
                                                                  const Eigen::SparseMatrix<double>& lower,
                                                                  const PoissonProblem& problem) const override {
     const Eigen::VectorXd diagonal = lower.diagonal();

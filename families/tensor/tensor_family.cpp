@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "solver/fast_diagonalization.hpp"
+#include "solver/tensor_multigrid.hpp"
 #include "families/tensor/patch_separable_coefficients.hpp"
 #include "basis/core/geometry_map.hpp"
 #include "families/tensor/multipatch_tensor_space.hpp"
@@ -53,6 +54,7 @@ std::string describe(const TensorSpaceOptions& s) {
 }
 
 constexpr const char* kFastDiagonalization = "fast_diagonalization";
+constexpr const char* kMultigrid = "multigrid";
 
 class TensorSpace final : public SplineSpace, public SpaceReport {
  public:
@@ -73,14 +75,17 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
   const GeometryMap& geometry() const override { return *geometry_; }
   std::string description() const override { return describe(options_); }
   std::array<int, 2> degree() const override { return options_.degree; }
-  std::string structured_preconditioner() const override { return kFastDiagonalization; }
-  std::unique_ptr<Preconditioner> make_structured_preconditioner(const DofLayout& layout,
+  std::vector<std::string> structured_preconditioners() const override { return {kFastDiagonalization, kMultigrid}; }
+  bool structured_preconditioner_needs_only_diagonal(const std::string& name) const override { return name != kMultigrid; }
+  std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& name, const DofLayout& layout,
                                                                  const Eigen::SparseMatrix<double>& lower,
                                                                  const PoissonProblem& problem) const override {
     NitscheEnds ends;
     ends.factor = problem.nitsche_penalty;
     if (problem.dirichlet_method == DirichletMethod::kNitsche && problem.boundary.size() == 4)
       for (int s = 0; s < 4; ++s) ends.sides[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
+    if (name == kMultigrid)
+      return tensor_multigrid(d_.space_u, d_.space_v, layout, lower, patch_separable_coefficients(d_, *geometry_), ends);
     return fast_diagonalization(d_.space_u, d_.space_v, layout, lower.diagonal(), patch_separable_coefficients(d_, *geometry_),
                                 ends);
   }
@@ -101,7 +106,7 @@ SpaceFamily tensor_family() {
   SpaceFamily f;
   f.name = "tensor";
   f.read_case = read_tensor_case;
-  f.structured_preconditioner = kFastDiagonalization;
+  f.structured_preconditioners = {kFastDiagonalization, kMultigrid};
   f.space_keys = tensor_space_keys();
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
     TensorSpaceOptions s = patch_space(c);

@@ -1,0 +1,326 @@
+#include "solver/tensor_multigrid.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+namespace knotwork {
+
+bool halved_basis(const BSplineBasis1D& fine, BSplineBasis1D& coarse) {
+  const std::vector<double> b = fine.breakpoints();
+  const std::vector<int> m = fine.multiplicities();
+  const int elements = static_cast<int>(b.size()) - 1;
+  if (elements < 2 || elements % 2 != 0 || !fine.is_open()) return false;
+  const int p = fine.degree();
+  std::vector<double> knots;
+  for (int k = 0; k <= elements; k += 2) knots.insert(knots.end(), k == 0 || k == elements ? p + 1 : m[k], b[k]);
+  coarse = BSplineBasis1D(p, std::move(knots));
+  return true;
+}
+
+namespace {
+
+using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+// A run of free univariate indices and the generalized eigenbasis of its principal block of
+// the direction's (K, M): U^T M U = I, U^T K U = diag(lambda).
+struct Window {
+  int begin = 0, size = 0;
+  Eigen::MatrixXd U;
+  Eigen::VectorXd lambda;
+};
+
+// One direction of one level: its basis, free range, element weights of the separable
+// operator, and the windows of each tiling.
+struct Direction {
+  BSplineBasis1D basis;
+  int first = 0, count = 0;  // free functions first..first + count - 1
+  int fixed_at_end = 0;      // 1 when the last function is not free
+  std::vector<double> mass_weight, stiffness_weight;
+  bool nitsche_start = false, nitsche_end = false;
+  double nitsche_factor = 2;
+  Eigen::VectorXd mass_diagonal, stiffness_diagonal;  // over the free functions
+  std::vector<std::vector<Window>> tilings;
+};
+
+// Windows of `block` indices covering 0..n-1, the first one `offset` long when offset > 0; a
+// last window shorter than block / 2 joins the one before (every window stays longer than p,
+// so windows two apart never couple).
+std::vector<std::pair<int, int>> tile(int n, int block, int offset) {
+  std::vector<std::pair<int, int>> w;
+  int s = 0;
+  if (offset > 0 && offset < n) w.emplace_back(0, s = offset);
+  while (s < n) {
+    const int e = std::min(n, s + block);
+    w.emplace_back(s, e - s);
+    s = e;
+  }
+  if (w.size() > 1 && w.back().second < block / 2) {
+    w[w.size() - 2].second += w.back().second;
+    w.pop_back();
+  }
+  return w;
+}
+
+void build_windows(Direction& d, int block, int tilings) {
+  const UnivariatePair pair =
+      univariate_pair(d.basis, d.mass_weight, d.stiffness_weight, d.nitsche_start, d.nitsche_end, d.nitsche_factor);
+  const Eigen::VectorXd m = pair.mass.diagonal(), k = pair.stiffness.diagonal();
+  d.mass_diagonal = m.segment(d.first, d.count);
+  d.stiffness_diagonal = k.segment(d.first, d.count);
+  const Eigen::MatrixXd M = Eigen::MatrixXd(pair.mass), K = Eigen::MatrixXd(pair.stiffness);
+  d.tilings.assign(tilings, {});
+  for (int t = 0; t < tilings; ++t)
+    for (const auto& [begin, size] : tile(d.count, block, t == 0 ? 0 : block / 2)) {
+      Window w;
+      w.begin = begin;
+      w.size = size;
+      const int f = d.first + begin;
+      Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K.block(f, f, size, size), M.block(f, f, size, size));
+      if (es.info() != Eigen::Success)
+        throw std::runtime_error("multigrid: a univariate mass block is not positive definite");
+      w.U = es.eigenvectors();
+      w.lambda = es.eigenvalues();
+      d.tilings[t].push_back(std::move(w));
+    }
+}
+
+// The coarser direction (halved when it can be: `halved` says) and its prolongation over the
+// free functions (fine count x coarse count).
+Direction coarser(const Direction& fine, bool& halved, RowMatrix& prolongation) {
+  Direction c = fine;
+  c.tilings.clear();
+  halved = halved_basis(fine.basis, c.basis);
+  if (!halved) {
+    prolongation.resize(fine.count, fine.count);
+    prolongation.setIdentity();
+    return c;
+  }
+  c.count = c.basis.num_functions() - c.first - c.fixed_at_end;
+  // Coarse element e is fine elements 2e and 2e + 1: the fit's weights are log-linear, so their
+  // geometric mean.
+  auto merge = [](const std::vector<double>& w) {
+    std::vector<double> out;
+    for (size_t e = 0; e + 1 < w.size(); e += 2) out.push_back(std::sqrt(w[e] * w[e + 1]));
+    return out;
+  };
+  if (!fine.mass_weight.empty()) c.mass_weight = merge(fine.mass_weight);
+  if (!fine.stiffness_weight.empty()) c.stiffness_weight = merge(fine.stiffness_weight);
+  const RowMatrix T = refinement_matrix(c.basis, fine.basis);
+  prolongation = T.block(fine.first, c.first, fine.count, c.count);
+  prolongation.makeCompressed();
+  return c;
+}
+
+struct Level {
+  Direction u, v;
+  RowMatrix A;            // the whole matrix over this level's free dofs, a + count_u b
+  Eigen::VectorXd scale;  // D^{-1/2}, D = diag(A) / diag(P)
+  RowMatrix Pu, Pv;       // from the next coarser level (empty on the coarsest)
+  long size() const { return static_cast<long>(u.count) * v.count; }
+};
+
+class TensorMultigrid final : public Preconditioner {
+ public:
+  TensorMultigrid(std::vector<Level> levels, Eigen::SparseMatrix<double> coarsest)
+      : levels_(std::move(levels)), work_(levels_.size()) {
+    coarse_.compute(coarsest);
+    if (coarse_.info() != Eigen::Success)
+      throw std::runtime_error("multigrid: the coarsest operator is not positive definite");
+  }
+
+  void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override {
+    z.resize(r.size());
+    cycle(0, r, z);
+  }
+
+ private:
+  struct Work {
+    Eigen::VectorXd residual, coarse_rhs, coarse_x;
+  };
+
+  // x := the V-cycle's approximation of A_l^{-1} b.
+  void cycle(size_t l, const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+    if (l + 1 == levels_.size()) {
+      x = coarse_.solve(b);
+      return;
+    }
+    const Level& L = levels_[l];
+    Work& w = work_[l];
+    x.setZero(b.size());
+    const int tilings = static_cast<int>(L.u.tilings.size());
+    for (int t = 0; t < tilings; ++t)
+      for (int c = 0; c < 4; ++c) sweep(L, t, c, b, x);
+    w.residual.resize(b.size());
+    const int n = static_cast<int>(b.size());
+#pragma omp parallel for schedule(static)
+    for (int d = 0; d < n; ++d) w.residual[d] = b[d] - row_dot(L.A, d, x.data());
+    // Restriction (P_v (x) P_u)^T r and prolongation, with vectors as count_u x count_v arrays.
+    const Level& C = levels_[l + 1];
+    {
+      const Eigen::Map<const Eigen::MatrixXd> R(w.residual.data(), L.u.count, L.v.count);
+      const Eigen::MatrixXd T = L.Pu.transpose() * R;
+      w.coarse_rhs.resize(C.size());
+      Eigen::Map<Eigen::MatrixXd>(w.coarse_rhs.data(), C.u.count, C.v.count) = T * L.Pv;
+    }
+    cycle(l + 1, w.coarse_rhs, w.coarse_x);
+    {
+      const Eigen::Map<const Eigen::MatrixXd> X(w.coarse_x.data(), C.u.count, C.v.count);
+      const Eigen::MatrixXd T = L.Pu * X;
+      Eigen::Map<Eigen::MatrixXd>(x.data(), L.u.count, L.v.count) += T * L.Pv.transpose();
+    }
+    for (int t = tilings - 1; t >= 0; --t)
+      for (int c = 3; c >= 0; --c) sweep(L, t, c, b, x);
+  }
+
+  static double row_dot(const RowMatrix& A, int row, const double* x) {
+    const int* col = A.innerIndexPtr();
+    const double* val = A.valuePtr();
+    double s = 0;
+    for (int k = A.outerIndexPtr()[row]; k < A.outerIndexPtr()[row + 1]; ++k) s += val[k] * x[col[k]];
+    return s;
+  }
+
+  // One colour of one tiling: every block (a, c) with a = cu, c = cv mod 2 gets
+  // x_B += D^{-1/2} P_B^{-1} D^{-1/2} (b - A x)_B. Such blocks do not couple, so they are done
+  // at once, each reading only its own rows.
+  static void sweep(const Level& L, int tiling, int colour, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+    const std::vector<Window>& wu = L.u.tilings[tiling];
+    const std::vector<Window>& wv = L.v.tilings[tiling];
+    const int cu = colour & 1, cv = colour >> 1;
+    const int na = (static_cast<int>(wu.size()) - cu + 1) / 2, nb = (static_cast<int>(wv.size()) - cv + 1) / 2;
+    const int nu = L.u.count;
+#pragma omp parallel for schedule(dynamic)
+    for (int k = 0; k < na * nb; ++k) {
+      const Window& U = wu[cu + 2 * (k % na)];
+      const Window& V = wv[cv + 2 * (k / na)];
+      thread_local Eigen::MatrixXd R, T;
+      R.resize(U.size, V.size);
+      for (int j = 0; j < V.size; ++j)
+        for (int i = 0; i < U.size; ++i) {
+          const int d = U.begin + i + nu * (V.begin + j);
+          R(i, j) = (b[d] - row_dot(L.A, d, x.data())) * L.scale[d];
+        }
+      T.noalias() = U.U.transpose() * R;
+      R.noalias() = T * V.U;
+      for (int j = 0; j < V.size; ++j)
+        for (int i = 0; i < U.size; ++i) R(i, j) /= U.lambda[i] + V.lambda[j];
+      T.noalias() = U.U * R;
+      R.noalias() = T * V.U.transpose();
+      for (int j = 0; j < V.size; ++j)
+        for (int i = 0; i < U.size; ++i) {
+          const int d = U.begin + i + nu * (V.begin + j);
+          x[d] += L.scale[d] * R(i, j);
+        }
+    }
+  }
+
+  std::vector<Level> levels_;
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> coarse_;
+  mutable std::vector<Work> work_;
+};
+
+// The free range of one direction, from its free indices (contiguous, missing at most the first
+// and the last function); false otherwise.
+bool free_range(const std::vector<int>& free, int n, Direction& d) {
+  if (free.empty() || free.back() - free.front() + 1 != static_cast<int>(free.size())) return false;
+  if (free.front() > 1 || free.back() < n - 2) return false;
+  d.first = free.front();
+  d.count = static_cast<int>(free.size());
+  d.fixed_at_end = n - 1 - free.back();
+  return true;
+}
+
+void set_scale(Level& L) {
+  const Eigen::VectorXd diagonal = L.A.diagonal();
+  L.scale.resize(L.size());
+  for (int j = 0; j < L.v.count; ++j)
+    for (int i = 0; i < L.u.count; ++i) {
+      const long d = i + static_cast<long>(L.u.count) * j;
+      const double p = L.u.stiffness_diagonal[i] * L.v.mass_diagonal[j] + L.u.mass_diagonal[i] * L.v.stiffness_diagonal[j];
+      L.scale[d] = diagonal[d] > 0 && p > 0 ? std::sqrt(p / diagonal[d]) : 1.0;
+    }
+}
+
+// P^T A P with P = P_v (x) P_u. (Contracting one direction at a time, (P_v (x) I)^T (I (x)
+// P_u)^T A (I (x) P_u)(P_v (x) I), measured 1.7 s against 1.0 s at 1M dofs, p = 2, with
+// Eigen's products.)
+RowMatrix galerkin(const RowMatrix& A, const RowMatrix& Pu, const RowMatrix& Pv) {
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<size_t>(Pu.nonZeros()) * Pv.nonZeros());
+  for (int j = 0; j < Pv.outerSize(); ++j)
+    for (RowMatrix::InnerIterator pv(Pv, j); pv; ++pv)
+      for (int i = 0; i < Pu.outerSize(); ++i)
+        for (RowMatrix::InnerIterator pu(Pu, i); pu; ++pu)
+          entries.emplace_back(i + Pu.rows() * j, pu.col() + Pu.cols() * pv.col(), pu.value() * pv.value());
+  RowMatrix P(Pu.rows() * Pv.rows(), Pu.cols() * Pv.cols());
+  P.setFromTriplets(entries.begin(), entries.end());
+  entries = {};
+  const RowMatrix AP = A * P;
+  return RowMatrix(P.transpose() * AP);
+}
+
+}  // namespace
+
+std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
+                                                 const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
+                                                 const SeparableCoefficients& geometry, const NitscheEnds& nitsche,
+                                                 const TensorMultigridOptions& options, TensorMultigridReport* report) {
+  const int nu = space_u.num_functions(), nv = space_v.num_functions();
+  std::vector<int> iu, iv;
+  if (!tensor_free_indices(nu, nv, layout, iu, iv) || !space_u.is_open() || !space_v.is_open()) return nullptr;
+  // (Reserved: Eigen 3.4's SparseMatrix has no move constructor, so a reallocation would copy
+  // every level's matrix.)
+  std::vector<Level> levels;
+  levels.reserve(64);
+  levels.emplace_back();
+  Level& fine = levels.back();
+  if (!free_range(iu, nu, fine.u) || !free_range(iv, nv, fine.v)) return nullptr;
+  const int p = std::max(space_u.degree(), space_v.degree());
+  const int block = options.block > 0 ? std::max(options.block, 2 * p + 2) : std::max(32, 2 * p + 2);
+  const auto& side = nitsche.sides;  // bottom, right, top, left
+  fine.u.basis = space_u;
+  fine.u.mass_weight = geometry.a2;
+  fine.u.stiffness_weight = geometry.a1;
+  fine.u.nitsche_start = side[3];
+  fine.u.nitsche_end = side[1];
+  fine.v.basis = space_v;
+  fine.v.mass_weight = geometry.b1;
+  fine.v.stiffness_weight = geometry.b2;
+  fine.v.nitsche_start = side[0];
+  fine.v.nitsche_end = side[2];
+  fine.u.nitsche_factor = fine.v.nitsche_factor = nitsche.factor;
+  fine.A = lower.selfadjointView<Eigen::Lower>();
+  while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity()) {
+    Level& f = levels.back();
+    bool hu = false, hv = false;
+    Direction u = coarser(f.u, hu, f.Pu), v = coarser(f.v, hv, f.Pv);
+    if (!hu && !hv) {
+      f.Pu = f.Pv = RowMatrix();
+      break;
+    }
+    levels.emplace_back();
+    Level& c = levels.back();
+    c.u = std::move(u);
+    c.v = std::move(v);
+    c.A = galerkin(f.A, f.Pu, f.Pv);
+  }
+  for (size_t l = 0; l + 1 < levels.size(); ++l) {
+    build_windows(levels[l].u, block, options.tilings);
+    build_windows(levels[l].v, block, options.tilings);
+    set_scale(levels[l]);
+  }
+  if (report) {
+    report->free_dofs.clear();
+    for (const Level& L : levels) report->free_dofs.push_back(L.size());
+    report->block = block;
+  }
+  Eigen::SparseMatrix<double> coarsest = levels.back().A;
+  levels.back().A = RowMatrix();
+  return std::make_unique<TensorMultigrid>(std::move(levels), std::move(coarsest));
+}
+
+}  // namespace knotwork
