@@ -2,10 +2,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <thread>
+#include <vector>
 
 #include "app/commands.hpp"
 #include "studies/bench_study.hpp"
@@ -31,7 +33,7 @@ BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool
     BenchResult r;
     int code = 0;
     try {
-      r = bench_configuration(p, n, ordering, with_errors, floor, o.solver, o.tolerance);
+      r = bench_configuration(p, n, ordering, with_errors, floor, o.solver, o.tolerance, o.preconditioner);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "knotwork bench: p=%d n=%d failed: %s\n", p, n, e.what());
       code = 1;
@@ -73,12 +75,19 @@ int bench_command(const BenchOptions& o) {
     throw InputError("--solver: '" + o.solver + "' is not direct or iterative");
   if (!(o.tolerance > 0 && o.tolerance < 1)) throw InputError("--tolerance: must be in (0, 1)");
   if (o.solver == "iterative" && o.floor) throw InputError("--floor: times CHOLMOD, not used with --solver iterative");
+  const std::vector<std::string> preconditioners{"auto", "fast_diagonalization", "multigrid", "boomeramg", "jacobi"};
+  if (std::find(preconditioners.begin(), preconditioners.end(), o.preconditioner) == preconditioners.end())
+    throw InputError("--preconditioner: '" + o.preconditioner +
+                     "' is not auto, fast_diagonalization, multigrid, boomeramg or jacobi");
+  if (o.solver != "iterative" && o.preconditioner != "auto")
+    throw InputError("--preconditioner: used with --solver iterative only");
   const bool cg = o.solver == "iterative";
   std::vector<BenchResult> results;
   if (!o.json && cg)
-    std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, CG + the space's preconditioner "
+    std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, CG + %s "
                 "to backward error %.0e\n%3s %6s %9s %10s %6s %8s %8s %8s %8s %7s %8s %9s\n",
-                std::thread::hardware_concurrency(), o.tolerance, "p", "n", "dofs", "nnz(A)", "iters", "setup", "assemb",
+                std::thread::hardware_concurrency(),
+                o.preconditioner == "auto" ? "the space's preconditioner" : o.preconditioner.c_str(), o.tolerance, "p", "n", "dofs", "nnz(A)", "iters", "setup", "assemb",
                 "precond", "CG", "errors", "total", "peak RSS");
   else if (!o.json)
     std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, ordering %s\n"

@@ -55,6 +55,7 @@ struct BenchOptions {
   bool floor = false;  // also time bare CHOLMOD (default settings) on the same matrix
   std::string solver = "direct";  // direct | iterative (CG + the space's preconditioner)
   double tolerance = 1e-15;
+  std::string preconditioner = "auto";  // with solver "iterative": as [solver] preconditioner
 };
 
 struct DimensionOptions {

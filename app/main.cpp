@@ -168,6 +168,10 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("--solver", bench.solver, "direct (CHOLMOD) or iterative (CG with the space's preconditioner)")
       ->capture_default_str();
   bench_cmd->add_option("--tolerance", bench.tolerance, "--solver iterative: backward error to reach")->capture_default_str();
+  bench_cmd->add_option("--preconditioner", bench.preconditioner,
+                        "--solver iterative: auto (the space's: fast_diagonalization), fast_diagonalization, multigrid, "
+                        "boomeramg or jacobi")
+      ->capture_default_str();
   bench_cmd->add_flag("!--no-errors", bench.with_errors, "Skip the error norms");
   bench_cmd->add_flag("--floor", bench.floor,
                       "Also time bare CHOLMOD with its default settings on the same matrix (the floor)");

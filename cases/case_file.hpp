@@ -70,6 +70,9 @@ struct CaseDescription {
   int samples = 4;  // linear sub-cells per cell and direction in the sampled output
   // [solver]: the linear solve (docs/SOLVERS.md; --solver and --tolerance override).
   struct Solver {
+    // "auto" picks CG for spaces with a structured preconditioner from this many functions on
+    // (docs/SOLVERS.md: where the measured times cross), and CHOLMOD otherwise.
+    static constexpr int kAutoIterativeFunctions = 10000;
     // direct (CHOLMOD) | iterative (CG) | auto (docs/SOLVERS.md) | petsc (PETSc's KSP, on every
     // process mpirun started: docs/SCALING.md)
     std::string method = "auto";

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "basis/core/input_error.hpp"
 
@@ -16,6 +17,20 @@ double galerkin_bytes(double cells, double functions, int p, int q) {
   const double nnz = functions * coupling;
   const double factor = nnz * std::max(1.0, std::log2(std::max(functions, 2.0)));
   return cells * per_cell * 4 + nnz * 12 * 3 + factor * 8;
+}
+
+double iterative_bytes(double cells, double functions, int p, int q, double preconditioner) {
+  const double per_cell = double(p + 1) * (q + 1);
+  const double coupling = double(2 * p + 1) * (2 * q + 1) / 2;
+  return cells * per_cell * 4 + functions * coupling * 12 * 3 + functions * 8 * 8 + preconditioner;
+}
+
+double preconditioner_bytes(const std::string& name, double functions, double n_u, double n_v, int p, int q) {
+  const double whole = functions * double(2 * p + 1) * (2 * q + 1) * 12;
+  if (name == "multigrid") return whole * 4 / 3 + functions * 8 * 6;
+  if (name == "boomeramg") return whole * 3;
+  if (name == "jacobi") return functions * 8;
+  return 4 * (n_u * n_u + n_v * n_v) * 8;
 }
 
 void check_memory(const std::string& where, double bytes, const std::string& what) {

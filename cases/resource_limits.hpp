@@ -11,6 +11,18 @@ namespace knotwork {
 // on 2D IGA matrices: 0.73-0.75 log2(n), docs/records/performance-2026-11-22-to-12-04.md; the estimate keeps a margin).
 double galerkin_bytes(double cells, double functions, int p, int q);
 
+// Memory of the iterative path (CG): the same cell lists and matrix as galerkin_bytes, no
+// factor, CG's vectors, and `preconditioner` bytes for the preconditioner's own storage
+// (preconditioner_bytes).
+double iterative_bytes(double cells, double functions, int p, int q, double preconditioner);
+
+// The storage of a preconditioner by name for `functions` functions of bi-degree (p, q), n_u x
+// n_v of them per direction on one patch: "multigrid" holds the whole matrix (both
+// triangles, with indices) and its coarse levels (a third more), "boomeramg" hypre's copy of
+// it and a hierarchy of about twice its size, "fast_diagonalization" (and "auto" on one
+// patch) four dense n x n arrays per direction, "jacobi" a vector.
+double preconditioner_bytes(const std::string& name, double functions, double n_u, double n_v, int p, int q);
+
 // Throws InputError "<where>: about X GB needed for <what>, more than this machine's Y GB"
 // when `bytes` exceeds 90% of the physical memory.
 void check_memory(const std::string& where, double bytes, const std::string& what);

@@ -306,7 +306,7 @@ class PythonHooks {
 
 struct Overrides {
   int degree = 0, elements = 0;
-  std::string solver, ordering = "amd";
+  std::string solver, ordering = "amd", preconditioner;
   double tolerance = 0;
   bool allow_unverified_space = false;
   std::string marking;  // adapt: "" (the case's), "cells" or "functions"
@@ -340,6 +340,7 @@ Overrides read_overrides(const py::dict& d) {
     else if (key == "elements") positive_int(o.elements);
     else if (key == "solver") text(o.solver);
     else if (key == "ordering") text(o.ordering);
+    else if (key == "preconditioner") text(o.preconditioner);
     else if (key == "tolerance") {
       number(o.tolerance);
       // The range is checked by override_solver, as for --tolerance; 0 means "not given" there.
@@ -369,7 +370,7 @@ CaseDescription prepared_case(py::handle case_, const std::string& name, const p
   if (errors) *errors = loaded.errors;
   CaseDescription c = std::move(loaded.c);
   const Overrides o = read_overrides(overrides);
-  override_case(c, o.degree, o.elements, o.solver, o.tolerance);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance, nullptr, o.preconditioner);
   c.allow_unverified_space = o.allow_unverified_space;
   if (!o.marking.empty()) c.adapt.mark_functions = o.marking == "functions";
   if (!o.strategy.empty()) c.adapt.maximum_strategy = o.strategy == "maximum";

@@ -9,7 +9,7 @@ namespace knotwork {
 
 // The benchmark problem: unit square, u = sin(pi x) sin(pi y), homogeneous Dirichlet.
 BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_errors, bool floor, const std::string& solver,
-                                double tolerance) {
+                                double tolerance, const std::string& preconditioner) {
   CaseDescription c = unit_square_benchmark_case(p, n);
   const auto t0 = std::chrono::steady_clock::now();
   const std::unique_ptr<SplineSpace> d = build_space(c);
@@ -19,6 +19,7 @@ BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_error
   if (solver == "iterative") {
     c.solver.method = "iterative";
     c.solver.tolerance = tolerance;
+    c.solver.preconditioner = preconditioner;
     if (!with_errors) {  // no exact solution, so no error norms: the boundary data it gave (u = 0) stated instead
       for (BoundaryCondition& side : c.problem.boundary) side.from_exact = false, side.value = Expression::constant(0);
       c.problem.exact.reset();

@@ -22,8 +22,9 @@ struct BenchResult {
 };
 
 // Solves the configuration with the direct solver (and, with `floor`, bare CHOLMOD on the same
-// matrix) or, with solver "iterative", CG to backward error `tolerance`.
+// matrix) or, with solver "iterative", CG to backward error `tolerance` with `preconditioner`
+// (as [solver] preconditioner).
 BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_errors, bool floor, const std::string& solver,
-                                double tolerance);
+                                double tolerance, const std::string& preconditioner = "auto");
 
 }  // namespace knotwork

@@ -41,9 +41,7 @@ CellRange cells_to_write(const SplineSpace& space, ParallelWorld world) {
 
 namespace {
 
-// "auto" picks CG for spaces with a structured preconditioner from this many functions on
-// (docs/SOLVERS.md: where the measured times cross), and CHOLMOD otherwise.
-constexpr int kAutoIterativeFunctions = 10000;
+constexpr int kAutoIterativeFunctions = CaseDescription::Solver::kAutoIterativeFunctions;
 
 SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) {
   SolverReport r;

@@ -20,7 +20,7 @@ namespace {
 // Refuses discretizations that cannot fit in memory before allocating anything (a rank's part:
 // its share of the cells).
 void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, int ranks = 1) {
-  double cells = 1, functions = 1;
+  double cells = 1, functions = 1, per_direction[2] = {1, 1};
   if (c.multipatch()) {
     multipatch_tensor_size(c, s, cells, functions);
     // In parts of whole patches when there are as many patches as processes (about 1/ranks of
@@ -32,16 +32,28 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
       const double elements = double(g.num_elements()) * s.elements_per_span[d] + s.extra_knots[d].size();
       cells *= elements;
       functions *= elements + s.degree[d];
+      per_direction[d] = elements + s.degree[d];
     }
   }
+  // The path the solve will take (studies/pipeline.cpp resolves it the same way): on one patch,
+  // serially, CG with "auto" from kAutoIterativeFunctions functions on; CG keeps no factor.
+  const std::string& method = c.solver.method;
+  const bool iterative = !c.multipatch() && ranks == 1 &&
+                         (method == "iterative" || (method == "auto" && functions >= CaseDescription::Solver::kAutoIterativeFunctions));
   char what[160];
   if (ranks > 1)
     std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d on each of %d processes", cells / ranks, s.degree[0],
                   s.degree[1], ranks);
   else
     std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d", cells, s.degree[0], s.degree[1]);
-  check_memory(c.path + ": [space] elements", galerkin_bytes(cells / ranks, functions / ranks, s.degree[0], s.degree[1]),
-               what);
+  const int p = s.degree[0], q = s.degree[1];
+  if (iterative) {
+    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d with CG + %s", cells, p, q, c.solver.preconditioner == "auto" ? "fast_diagonalization" : c.solver.preconditioner.c_str());
+    const double pc = preconditioner_bytes(c.solver.preconditioner, functions, per_direction[0], per_direction[1], p, q);
+    check_memory(c.path + ": [space] elements", iterative_bytes(cells, functions, p, q, pc), what);
+    return;
+  }
+  check_memory(c.path + ": [space] elements", galerkin_bytes(cells / ranks, functions / ranks, p, q), what);
 }
 
 std::string describe(const TensorSpaceOptions& s) {

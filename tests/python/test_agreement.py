@@ -35,6 +35,8 @@ RUNS = [
     ("quarter_annulus.toml", [], {}),
     ("quarter_annulus.toml", ["--solver", "iterative", "--degree", "3"], {"solver": "iterative", "degree": 3}),
     ("quarter_annulus.toml", ["--solver", "petsc"], {"solver": "petsc"}),
+    ("lshape.toml", ["--solver", "iterative", "--preconditioner", "multigrid", "--elements", "48"],
+     {"solver": "iterative", "preconditioner": "multigrid", "elements": 48}),
     ("lshape.toml", [], {}),
     ("square_knot_segments.toml", [], {}),
     ("lshape_adaptive_pt.toml", [], {}),

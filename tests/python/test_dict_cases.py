@@ -156,6 +156,8 @@ BAD_OVERRIDES = [
     (dict(tolerance=2.0), "tolerance: must be in (0, 1)"),
     (dict(tolerance="small"), "tolerance: must be a number"),
     (dict(ordering="random"), "random"),
+    (dict(preconditioner="multigird"), "--preconditioner: 'multigird' is not a choice (did you mean 'multigrid'"),
+    (dict(preconditioner=2), "preconditioner: must be a string"),
 ]
 
 
