@@ -113,3 +113,25 @@ TEST_CASE("CG + multigrid: the direct solve's errors", "[multigrid][solver]") {
         REQUIRE(cg.errors->h1_semi == Approx(direct.errors->h1_semi).epsilon(1e-4));
       }
 }
+
+// Where the fast diagonalization (the automatic choice) is far from the operator, the run says
+// which preconditioner keeps CG bounded; where it is exact (a separable map), it says nothing.
+TEST_CASE("Many CG iterations with the fast diagonalization name multigrid in a note", "[multigrid][solver]") {
+  for (const char* name : {"lshape", "quarter_annulus"}) {
+    CaseDescription c = shipped(name);
+    patch_space(c).elements_per_span = {48, 48};
+    c.solver.method = "iterative";
+    const auto space = build_space(c);
+    SolverReport report;
+    const PoissonSolution s = solve_case(c, *space, Ordering::kAmd, {}, &report);
+    INFO(name << ": " << s.iterative.iterations << " iterations, note: " << report.note);
+    REQUIRE(report.preconditioner == "fast_diagonalization");
+    if (std::string(name) == "lshape") {
+      REQUIRE(s.iterative.iterations > 15);
+      REQUIRE(report.note.find("preconditioner = \"multigrid\"") != std::string::npos);
+    } else {
+      REQUIRE(s.iterative.iterations <= 15);
+      REQUIRE(report.note.empty());
+    }
+  }
+}
