@@ -56,8 +56,12 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
     r.method = !automatic.empty() && space.mesh().num_functions() >= kAutoIterativeFunctions ? "iterative" : "direct";
   else
     r.method = c.solver.method;
-  if (r.method == "direct") return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
   const std::string& asked = c.solver.preconditioner;
+  const bool algebraic = asked == "auto" || asked == "jacobi" || asked == kBoomerAmgName;
+  // A structured preconditioner the space does not have is refused even where the direct path
+  // is taken (so that `auto` on a small case does not hide a name that would never apply).
+  if (r.method == "direct" && (algebraic || std::find(structured.begin(), structured.end(), asked) != structured.end()))
+    return r;  // auto: the documented choice (docs/SOLVERS.md), not a fallback
   if (asked == "auto") {
     // Without a structure to use: algebraic multigrid, whose iteration count stays bounded as
     // h shrinks where Jacobi's grows like 1/h (docs/SOLVERS.md).
@@ -79,7 +83,7 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
     std::string names;
     for (const std::string& s : structured) names += (names.empty() ? "\"" : ", \"") + s + "\"";
     throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" does not apply to family \"" + c.family +
-                     "\"" + (c.multipatch() ? " on several patches" : "") + " (" + (structured.empty() ? std::string("use \"boomeramg\", \"jacobi\" or method = \"direct\"")
+                     "\"" + (c.multipatch() ? " on several patches" : "") + " (" + (structured.empty() ? std::string("use \"auto\", \"boomeramg\" or \"jacobi\"")
                                                    : "it has " + names + "; or use \"boomeramg\" or \"jacobi\"") + ")");
   }
   return r;

@@ -405,6 +405,9 @@ TEST_CASE("bad input: [solver] and --solver", "[cli][bad-input][solver]") {
   expect_rejected(box, segments, {"bad.toml", "[solver] preconditioner", "family \"knot_segments\"", "jacobi"});
   expect_rejected(box, segments, {"bad.toml", "[solver] preconditioner", "\"multigrid\" does not apply", "knot_segments"},
                   "--preconditioner multigrid");
+  // Also where the direct solve is taken: a name that would never apply is not kept silently.
+  expect_rejected(box, segments, {"bad.toml", "[solver] preconditioner", "\"multigrid\" does not apply", "knot_segments"},
+                  "--preconditioner multigrid --solver direct");
 }
 
 TEST_CASE("run --solver iterative reports the solver, and agrees with the direct solve", "[cli][solver]") {
