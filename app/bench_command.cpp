@@ -2,18 +2,18 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <thread>
-#include <vector>
 
 #include "app/commands.hpp"
 #include "studies/bench_study.hpp"
 #include "studies/pipeline.hpp"
 #include "cases/json_output.hpp"
+#include "cases/case_reader.hpp"
 #include "cases/geometries.hpp"
+#include "cases/spline_space.hpp"
 #include "basis/core/input_error.hpp"
 #include "solver/linear_solver.hpp"
 #include "solver/poisson_solver.hpp"
@@ -75,10 +75,7 @@ int bench_command(const BenchOptions& o) {
     throw InputError("--solver: '" + o.solver + "' is not direct or iterative");
   if (!(o.tolerance > 0 && o.tolerance < 1)) throw InputError("--tolerance: must be in (0, 1)");
   if (o.solver == "iterative" && o.floor) throw InputError("--floor: times CHOLMOD, not used with --solver iterative");
-  const std::vector<std::string> preconditioners{"auto", "fast_diagonalization", "multigrid", "boomeramg", "jacobi"};
-  if (std::find(preconditioners.begin(), preconditioners.end(), o.preconditioner) == preconditioners.end())
-    throw InputError("--preconditioner: '" + o.preconditioner +
-                     "' is not auto, fast_diagonalization, multigrid, boomeramg or jacobi");
+  checked_name(o.preconditioner, preconditioner_names(), "--preconditioner", "");
   if (o.solver != "iterative" && o.preconditioner != "auto")
     throw InputError("--preconditioner: used with --solver iterative only");
   const bool cg = o.solver == "iterative";

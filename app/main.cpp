@@ -16,6 +16,18 @@
 
 namespace {
 
+// The families' own preconditioners, for the help: "tensor: a, b; ..." from the registry.
+std::string family_preconditioners() {
+  std::string text;
+  for (const auto& f : knotwork::space_families()) {
+    if (f.structured_preconditioners.empty()) continue;
+    text += (text.empty() ? "" : "; ") + f.name + ":";
+    for (size_t k = 0; k < f.structured_preconditioners.size(); ++k)
+      text += (k ? ", " : " ") + f.structured_preconditioners[k];
+  }
+  return text;
+}
+
 void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
   cmd->add_option("--degree", o.degree, "Polynomial degree in both directions (overrides [space] degree)");
   cmd->add_option("--elements", o.elements, "Elements per geometry knot span and direction (overrides [space] elements)");
@@ -26,8 +38,8 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
                   "Linear solve: direct (CHOLMOD), iterative (preconditioned CG), auto, or petsc (PETSc's KSP, "
                   "distributed over the processes of mpirun -n N; overrides [solver] method)");
   cmd->add_option("--preconditioner", o.preconditioner,
-                  "Iterative solve: auto, jacobi, boomeramg, or the family's own (tensor: fast_diagonalization, "
-                  "multigrid) (overrides [solver] preconditioner)");
+                  "Iterative solve: auto, jacobi, boomeramg, or the family's own (" + family_preconditioners() +
+                      ") (overrides [solver] preconditioner)");
   cmd->add_option("--tolerance", o.tolerance,
                   "Iterative solve: backward error to reach (default 1e-15), or with --solver petsc the relative "
                   "residual (default 1e-10) (overrides [solver] tolerance)");
@@ -169,8 +181,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench_cmd->add_option("--tolerance", bench.tolerance, "--solver iterative: backward error to reach")->capture_default_str();
   bench_cmd->add_option("--preconditioner", bench.preconditioner,
-                        "--solver iterative: auto (the space's: fast_diagonalization), fast_diagonalization, multigrid, "
-                        "boomeramg or jacobi")
+                        "--solver iterative: auto (the space's own), jacobi, boomeramg or the family's own (" +
+                            family_preconditioners() + ")")
       ->capture_default_str();
   bench_cmd->add_flag("!--no-errors", bench.with_errors, "Skip the error norms");
   bench_cmd->add_flag("--floor", bench.floor,

@@ -25,12 +25,9 @@ double iterative_bytes(double cells, double functions, int p, int q, double prec
   return cells * per_cell * 4 + functions * coupling * 12 * 3 + functions * 8 * 8 + preconditioner;
 }
 
-double preconditioner_bytes(const std::string& name, double functions, double n_u, double n_v, int p, int q) {
-  const double whole = functions * double(2 * p + 1) * (2 * q + 1) * 12;
-  if (name == "multigrid") return whole * 4 / 3 + functions * 8 * 6;
-  if (name == "boomeramg") return whole * 3;
+double algebraic_preconditioner_bytes(const std::string& name, double functions, int p, int q) {
   if (name == "jacobi") return functions * 8;
-  return 4 * (n_u * n_u + n_v * n_v) * 8;
+  return functions * double(2 * p + 1) * (2 * q + 1) * 12 * 3;  // BoomerAMG
 }
 
 void check_memory(const std::string& where, double bytes, const std::string& what) {

@@ -16,12 +16,10 @@ double galerkin_bytes(double cells, double functions, int p, int q);
 // (preconditioner_bytes).
 double iterative_bytes(double cells, double functions, int p, int q, double preconditioner);
 
-// The storage of a preconditioner by name for `functions` functions of bi-degree (p, q), n_u x
-// n_v of them per direction on one patch: "multigrid" holds the whole matrix (both
-// triangles, with indices) and its coarse levels (a third more), "boomeramg" hypre's copy of
-// it and a hierarchy of about twice its size, "fast_diagonalization" (and "auto" on one
-// patch) four dense n x n arrays per direction, "jacobi" a vector.
-double preconditioner_bytes(const std::string& name, double functions, double n_u, double n_v, int p, int q);
+// The storage of an algebraic preconditioner for `functions` functions of bi-degree (p, q):
+// "boomeramg" hypre's copy of the whole matrix and a hierarchy of about twice its size,
+// "jacobi" a vector. (A structured one's is its owner's to say.)
+double algebraic_preconditioner_bytes(const std::string& name, double functions, int p, int q);
 
 // Throws InputError "<where>: about X GB needed for <what>, more than this machine's Y GB"
 // when `bytes` exceeds 90% of the physical memory.

@@ -174,6 +174,9 @@ void check_adaptive_family(const CaseDescription& c);
 const std::vector<SpaceFamily>& space_families();
 // The case's family; throws InputError naming [space] family if it is not registered.
 const SpaceFamily& space_family(const CaseDescription& c);
+// Every name [solver] preconditioner (and --preconditioner) takes: the algebraic ones, then
+// every family's structured ones, each once.
+std::vector<std::string> preconditioner_names();
 
 // The sides of a mesh's cells through its geometry, as KnotLines (each side once: bottom and
 // left sides, and top and right sides on the boundary; `samples` points per side): the knot

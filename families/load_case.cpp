@@ -1,6 +1,5 @@
 // load_case: the top level of a case file and the sections every family shares; the family
 // named by [space] family (default "tensor") reads the rest through its own reader.
-#include <algorithm>
 #include <filesystem>
 
 #include "cases/case_reader.hpp"
@@ -43,12 +42,7 @@ CaseDescription read_case(const DocumentNode& root, const std::string& path) {
   family->read_case(CaseDocument{r, root}, c);
   read_output(r, r.table(root, "output", false), c);
   read_solver(r, r.table(root, "solver", false), c);
-  std::vector<std::string> preconditioners{"auto", "jacobi", kBoomerAmgName};
-  for (const SpaceFamily& f : space_families())
-    for (const std::string& name : f.structured_preconditioners)
-      if (std::find(preconditioners.begin(), preconditioners.end(), name) == preconditioners.end())
-        preconditioners.push_back(name);
-  checked_name(c.solver.preconditioner, preconditioners, "[solver] preconditioner", path);
+  checked_name(c.solver.preconditioner, preconditioner_names(), "[solver] preconditioner", path);
   check_petsc_options(c, "[solver] petsc_options");
   if (root.get("adapt")) {
     if (!family->local_refinement)

@@ -59,6 +59,10 @@ struct NitscheEnds {
 // functions i + nu j) are their tensor product, numbered a + |iu| b; false otherwise.
 bool tensor_free_indices(int nu, int nv, const DofLayout& layout, std::vector<int>& iu, std::vector<int>& iv);
 
+// Its storage for n_u x n_v functions: the eigenvectors and a product's workspace, four dense
+// n x n arrays per direction (for memory guards).
+inline double fast_diagonalization_bytes(double n_u, double n_v) { return 4 * (n_u * n_u + n_v * n_v) * 8; }
+
 // For the tensor space of space_u x space_v (function i + n_u j) and the free dofs of
 // `layout`: the preconditioner, or null when the free functions are not a tensor product of
 // free univariate ones (then it does not apply). `diagonal`: the assembled matrix's, one entry

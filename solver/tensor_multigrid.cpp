@@ -10,6 +10,10 @@
 
 namespace knotwork {
 
+double tensor_multigrid_bytes(double functions, int p, int q) {
+  return functions * double(2 * p + 1) * (2 * q + 1) * 12 * 4 / 3 + functions * 8 * 6;
+}
+
 bool halved_basis(const BSplineBasis1D& fine, BSplineBasis1D& coarse) {
   const std::vector<double> b = fine.breakpoints();
   const std::vector<int> m = fine.multiplicities();
@@ -72,7 +76,6 @@ void build_windows(Direction& d, int block, int tilings) {
   const Eigen::VectorXd m = pair.mass.diagonal(), k = pair.stiffness.diagonal();
   d.mass_diagonal = m.segment(d.first, d.count);
   d.stiffness_diagonal = k.segment(d.first, d.count);
-  const Eigen::MatrixXd M = Eigen::MatrixXd(pair.mass), K = Eigen::MatrixXd(pair.stiffness);
   d.tilings.assign(tilings, {});
   for (int t = 0; t < tilings; ++t)
     for (const auto& [begin, size] : tile(d.count, block, t == 0 ? 0 : block / 2)) {
@@ -80,7 +83,8 @@ void build_windows(Direction& d, int block, int tilings) {
       w.begin = begin;
       w.size = size;
       const int f = d.first + begin;
-      Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K.block(f, f, size, size), M.block(f, f, size, size));
+      const Eigen::MatrixXd K = pair.stiffness.block(f, f, size, size), M = pair.mass.block(f, f, size, size);
+      Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K, M);
       if (es.info() != Eigen::Success)
         throw std::runtime_error("multigrid: a univariate mass block is not positive definite");
       w.U = es.eigenvectors();
@@ -279,6 +283,10 @@ void whole_from_lower(const Eigen::SparseMatrix<double>& L, int nu, int pu, int 
     count[d + 1] = c;
   }
   for (int d = 0; d < n; ++d) count[d + 1] += count[d];
+  // Every strictly lower entry found from its row: the pattern stays within the tensor
+  // neighbourhood (functions more than a degree apart never share a cell).
+  if (count[n] != 2 * static_cast<long>(L.nonZeros()) - n)
+    throw std::logic_error("multigrid: the matrix couples functions more than a degree apart, or lacks a diagonal entry");
   A.resize(n, n);
   A.resizeNonZeros(count[n]);
   std::copy(count.begin(), count.end(), A.outerIndexPtr());

@@ -50,6 +50,11 @@ std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, 
                                                  const NitscheEnds& nitsche = {}, const TensorMultigridOptions& options = {},
                                                  TensorMultigridReport* report = nullptr);
 
+// Its storage for `functions` functions of bi-degree (p, q): the whole matrix (both triangles,
+// with indices), its coarse levels (a third more) and six vectors per level (for memory
+// guards; measured 0.95-0.99 GB at 1M dofs and 3.9 GB at 4.2M, p = 2, whole runs).
+double tensor_multigrid_bytes(double functions, int p, int q);
+
 // The basis with every other breakpoint dropped (the odd ones, each with its multiplicity), the
 // next coarser level of a uniform refinement; none when the number of elements is odd.
 bool halved_basis(const BSplineBasis1D& fine, BSplineBasis1D& coarse);

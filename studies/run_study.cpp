@@ -1,5 +1,4 @@
 // The run study: one case, one solve (and its files), as `knotwork run` and Python run it.
-#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <cstdio>
@@ -9,7 +8,6 @@
 #include "studies/studies.hpp"
 #include "cases/case_reader.hpp"
 #include "cases/spline_space.hpp"
-#include "solver/amg_preconditioner.hpp"
 #include "basis/core/input_error.hpp"
 #include "solver/petsc_backend.hpp"
 #include "solver/petsc_module.hpp"
@@ -28,11 +26,7 @@ void override_case(CaseDescription& c, int degree, int elements, const std::stri
   space_family(c).override_options(c, degree, elements);
   if (!preconditioner.empty()) {
     // Any known name; whether it applies to the case's space is the solve's to say, as for the key.
-    std::vector<std::string> names{"auto", "jacobi", kBoomerAmgName};
-    for (const SpaceFamily& f : space_families())
-      for (const std::string& name : f.structured_preconditioners)
-        if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
-    c.solver.preconditioner = checked_name(preconditioner, names, "--preconditioner", "");
+    c.solver.preconditioner = checked_name(preconditioner, preconditioner_names(), "--preconditioner", "");
   }
   override_solver(c, solver, tolerance, petsc_options);
 }

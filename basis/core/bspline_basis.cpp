@@ -318,25 +318,19 @@ Eigen::SparseMatrix<double> refinement_matrix(const BSplineBasis1D& coarse,
     if (std::count(Uf.begin(), Uf.end(), k) < std::count(L.begin(), L.end(), k))
       throw std::invalid_argument("refinement_matrix: the fine space does not contain the coarse one at knot " +
                                   num(k));
+  std::vector<std::pair<double, long>> missing;  // knot, how many more times
   for (size_t i = 0; i < Uf.size();) {
     size_t j = i;
     while (j < Uf.size() && Uf[j] == Uf[i]) ++j;
-    const long have = std::count(L.begin(), L.end(), Uf[i]);
-    if (have > static_cast<long>(j - i))
-      throw std::invalid_argument("refinement_matrix: the fine space does not contain the coarse one at knot " +
-                                  num(Uf[i]));
+    // (Never negative: every knot of L was counted in Uf above.)
+    missing.emplace_back(Uf[i], static_cast<long>(j - i) - std::count(L.begin(), L.end(), Uf[i]));
     i = j;
   }
   if (pf == pc && coarse.is_open() && fine.is_open()) return knot_insertion_matrix(coarse, fine);
   Eigen::MatrixXd T = pf > pc ? elevation_matrix(coarse, mid)
                               : Eigen::MatrixXd::Identity(coarse.num_functions(), coarse.num_functions());
-  for (size_t i = 0; i < Uf.size();) {
-    size_t j = i;
-    while (j < Uf.size() && Uf[j] == Uf[i]) ++j;
-    const long have = std::count(L.begin(), L.end(), Uf[i]);
-    for (long k = have; k < static_cast<long>(j - i); ++k) boehm(L, T, pf, Uf[i]);
-    i = j;
-  }
+  for (const auto& [knot, times] : missing)
+    for (long k = 0; k < times; ++k) boehm(L, T, pf, knot);
   return T.sparseView(0.0, 0.0);
 }
 

@@ -17,6 +17,9 @@ namespace knotwork {
 
 namespace {
 
+const std::string kFastDiagonalization = "fast_diagonalization";
+const std::string kMultigrid = "multigrid";
+
 // Refuses discretizations that cannot fit in memory before allocating anything (a rank's part:
 // its share of the cells).
 void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, int ranks = 1) {
@@ -48,8 +51,11 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
     std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d", cells, s.degree[0], s.degree[1]);
   const int p = s.degree[0], q = s.degree[1];
   if (iterative) {
-    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d with CG + %s", cells, p, q, c.solver.preconditioner == "auto" ? "fast_diagonalization" : c.solver.preconditioner.c_str());
-    const double pc = preconditioner_bytes(c.solver.preconditioner, functions, per_direction[0], per_direction[1], p, q);
+    const std::string& name = c.solver.preconditioner == "auto" ? kFastDiagonalization : c.solver.preconditioner;
+    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d with CG + %s", cells, p, q, name.c_str());
+    const double pc = name == kFastDiagonalization ? fast_diagonalization_bytes(per_direction[0], per_direction[1])
+                      : name == kMultigrid         ? tensor_multigrid_bytes(functions, p, q)
+                                                   : algebraic_preconditioner_bytes(name, functions, p, q);
     check_memory(c.path + ": [space] elements", iterative_bytes(cells, functions, p, q, pc), what);
     return;
   }
@@ -64,9 +70,6 @@ std::string describe(const TensorSpaceOptions& s) {
   if (rv != ru) r += "/C^" + std::to_string(rv);
   return r + " at new knots";
 }
-
-constexpr const char* kFastDiagonalization = "fast_diagonalization";
-constexpr const char* kMultigrid = "multigrid";
 
 class TensorSpace final : public SplineSpace, public SpaceReport {
  public:
