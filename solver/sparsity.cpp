@@ -149,25 +149,32 @@ Eigen::SparseMatrix<double> lower_pattern_matrix(const BezierMesh& mesh, const D
   return A;
 }
 
-void mirror_diagonal_block(OwnedRows& o) {
+std::vector<int> diagonal_positions(const OwnedRows& o) {
   const int n = static_cast<int>(o.diagonal_start.size()) - 1;
-  // Row i's upper entries, in column order, are the lower entries (j, i) of the rows j > i in
-  // row order: one cursor per row, from just after its diagonal.
-  std::vector<int> cursor(n);
+  std::vector<int> at(n);
   for (int i = 0; i < n; ++i) {
     const int* begin = o.diagonal_cols.data() + o.diagonal_start[i];
     const int* end = o.diagonal_cols.data() + o.diagonal_start[i + 1];
     const int* diagonal = std::lower_bound(begin, end, i);
-    if (diagonal == end || *diagonal != i) throw std::logic_error("mirror_diagonal_block: row without its diagonal entry");
-    cursor[i] = static_cast<int>(diagonal - o.diagonal_cols.data()) + 1;
+    if (diagonal == end || *diagonal != i) throw std::logic_error("diagonal_positions: a row without its diagonal entry");
+    at[i] = static_cast<int>(diagonal - o.diagonal_cols.data());
   }
+  return at;
+}
+
+void mirror_diagonal_block(OwnedRows& o, const std::vector<int>& diagonal) {
+  const int n = static_cast<int>(o.diagonal_start.size()) - 1;
+  // Row j's lower entries (j, i), i ascending, are the upper entries (i, j) of the rows i < j,
+  // met in row order: one cursor per row, from just after its diagonal.
+  std::vector<int> cursor(n);
+  for (int i = 0; i < n; ++i) cursor[i] = diagonal[i] + 1;
   for (int j = 0; j < n; ++j)
-    for (int q = o.diagonal_start[j]; q < o.diagonal_start[j + 1] && o.diagonal_cols[q] < j; ++q) {
+    for (int q = o.diagonal_start[j]; q < diagonal[j]; ++q) {
       const int i = o.diagonal_cols[q];
-      const int target = cursor[i]++;
-      if (target >= o.diagonal_start[i + 1] || o.diagonal_cols[target] != j)
+      const int source = cursor[i]++;
+      if (source >= o.diagonal_start[i + 1] || o.diagonal_cols[source] != j)
         throw std::logic_error("mirror_diagonal_block: the diagonal block's pattern is not symmetric");
-      o.values[target] = o.values[q];
+      o.values[q] = o.values[source];
     }
 }
 

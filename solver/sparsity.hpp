@@ -31,9 +31,13 @@ struct OwnedRows {
   long off_nonzeros() const { return off_start.back(); }
 };
 
-// Copies the lower triangle (column < row) of the diagonal block into its upper one, the
+// Where each row's diagonal entry sits in the diagonal block's arrays.
+std::vector<int> diagonal_positions(const OwnedRows& rows);
+
+// Copies the upper triangle (column > row) of the diagonal block into its lower one, the
 // block's pattern being symmetric (it is a coupling pattern): entry (j, i) := entry (i, j).
-void mirror_diagonal_block(OwnedRows& rows);
+// `diagonal` is diagonal_positions(rows).
+void mirror_diagonal_block(OwnedRows& rows, const std::vector<int>& diagonal);
 
 // What one rank adds to the distributed matrix (mpirun, method = "petsc"), laid out so that its
 // element loop adds straight into it (assemble_poisson) and its owned rows go to PETSc as they
