@@ -7,6 +7,9 @@
 #include "solver/assemble_poisson.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/sparsity.hpp"
+#include "solver/tensor_operator.hpp"
+#include "basis/tensor/tensor_patch.hpp"
+#include "families/tensor/tensor_case.hpp"
 
 using namespace knotwork;
 
@@ -110,6 +113,25 @@ void BM_SymmetricProduct(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * K.nonZeros());
 }
 BENCHMARK(BM_SymmetricProduct)->Args({2, 512})->Args({4, 256})->Unit(benchmark::kMillisecond);
+
+// The same product without a matrix: sum factorization element by element, the geometry
+// evaluated from its control net at every application (solver/tensor_operator), over all
+// functions of the same square. Compare with BM_SymmetricProduct at the same arguments.
+void BM_TensorOperatorApply(benchmark::State& state) {
+  CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const TensorDiscretization d = build_tensor_discretization(c.geometry, patch_space(c));
+  const Eigen::VectorXd weights = d.mesh.is_rational() ? d.mesh.weights() : Eigen::VectorXd();
+  const TensorPoissonOperator A({&d.space_u, &d.space_v, &weights, &d.geometry_u, &d.geometry_v, &d.geometry_homogeneous},
+                                1.0, 0.0);
+  const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(A.num_functions(), 0, 1);
+  Eigen::VectorXd y(A.num_functions());
+  for (auto _ : state) {
+    A.apply(x, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+  state.SetItemsProcessed(state.iterations() * A.num_functions());
+}
+BENCHMARK(BM_TensorOperatorApply)->Args({2, 512})->Args({4, 256})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

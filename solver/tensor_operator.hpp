@@ -1,0 +1,71 @@
+#pragma once
+// The Poisson operator of a tensor-product spline space on one patch, applied without a
+// matrix: y = K x by sum factorization, element by element (docs/SOLVERS.md, "Without a
+// matrix"). Written here because no library on this machine (Eigen, PETSc, hypre) evaluates
+// spline spaces; the small contractions are plain loops, as in solver/separable_cells.cpp.
+//
+// K_ab = c_s int grad R_a . grad R_b + c_r int R_a R_b over the patch, R_a = w_a N_a / W the
+// space's functions (W = sum w_a N_a; w = 1 for B-splines), with Gauss rules of the
+// assembly's size. Per element the solution's values and parameter gradients at the points
+// come from one direction at a time (O(p^3) flops per element, not the O(p^4) of an element
+// matrix), and so do the geometry's, from its homogeneous control net: nothing is stored per
+// point, so the operator needs O(n_u + n_v) memory besides the vectors.
+#include <Eigen/Core>
+#include <vector>
+
+#include "basis/core/bspline_basis.hpp"
+
+namespace knotwork {
+
+// What the operator reads of a tensor space: its univariate bases (function i + n_u j), its
+// weights per function (empty: B-splines), and the geometry as a spline over the same elements
+// in homogeneous form (w x, w y, w), control point i + n_u^g j of geometry_u x geometry_v.
+struct TensorPatch {
+  const BSplineBasis1D* space_u = nullptr;
+  const BSplineBasis1D* space_v = nullptr;
+  const Eigen::VectorXd* weights = nullptr;
+  const BSplineBasis1D* geometry_u = nullptr;
+  const BSplineBasis1D* geometry_v = nullptr;
+  const Eigen::MatrixX3d* geometry = nullptr;
+};
+
+class TensorPoissonOperator {
+ public:
+  // points_u, points_v: Gauss points per element and direction (0: degree + 1, the assembly's
+  // default). Throws std::invalid_argument for degrees above kMaxDegree, bases whose
+  // elements differ, or a net of the wrong size.
+  TensorPoissonOperator(const TensorPatch& patch, double stiffness, double reaction, int points_u = 0,
+                        int points_v = 0);
+  static constexpr int kMaxDegree = 15;
+
+  int num_functions() const { return n_u_ * n_v_; }
+  // y = K x over all functions (threaded over bands of element rows; y is overwritten).
+  void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  // K's diagonal, by the same quadrature (one pass, O(p^2) per point).
+  Eigen::VectorXd diagonal() const;
+
+ private:
+  struct Direction {
+    int degree = 0, geometry_degree = 0, points = 0, elements = 0;
+    std::vector<int> first, geometry_first;  // per element: its first function, first net index
+    // Per element, point-major: values then derivatives (d/dparameter) of the p + 1 functions
+    // alive there, and of the geometry's g + 1; and the rule's weights times the length.
+    std::vector<double> value, derivative, geometry_value, geometry_derivative, weight;
+  };
+  static Direction direction(const BSplineBasis1D& space, const BSplineBasis1D& geometry, int points);
+  // p + 1 when every size (functions and points, both directions, geometry too) is p + 1, else 0.
+  int uniform_size() const;
+  template <int N, class Kernel>
+  void for_each_element(Kernel kernel) const;
+  template <int N>
+  void apply_sized(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+
+  Direction u_, v_;
+  int n_u_ = 0, n_v_ = 0, net_u_ = 0;
+  Eigen::VectorXd weights_;  // empty: B-splines (or NURBS of equal weights, the same functions)
+  Eigen::MatrixX3d net_;
+  bool polynomial_map_ = false;  // the net's weights are equal (then scaled to 1)
+  double stiffness_ = 1, reaction_ = 0;
+};
+
+}  // namespace knotwork
