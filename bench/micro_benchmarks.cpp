@@ -8,8 +8,6 @@
 #include "solver/error_norms.hpp"
 #include "solver/sparsity.hpp"
 #include "solver/tensor_operator.hpp"
-#include "basis/tensor/tensor_patch.hpp"
-#include "families/tensor/tensor_case.hpp"
 
 using namespace knotwork;
 
@@ -117,12 +115,21 @@ BENCHMARK(BM_SymmetricProduct)->Args({2, 512})->Args({4, 256})->Unit(benchmark::
 // The same product without a matrix: sum factorization element by element, the geometry
 // evaluated from its control net at every application (solver/tensor_operator), over all
 // functions of the same square. Compare with BM_SymmetricProduct at the same arguments.
+// The square is the identity map written in the space itself: control points at the
+// Greville abscissae (B-splines reproduce linear functions), weights 1.
 void BM_TensorOperatorApply(benchmark::State& state) {
-  CaseDescription c = square(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
-  const TensorDiscretization d = build_tensor_discretization(c.geometry, patch_space(c));
-  const Eigen::VectorXd weights = d.mesh.is_rational() ? d.mesh.weights() : Eigen::VectorXd();
-  const TensorPoissonOperator A({&d.space_u, &d.space_v, &weights, &d.geometry_u, &d.geometry_v, &d.geometry_homogeneous},
-                                1.0, 0.0);
+  const int p = static_cast<int>(state.range(0)), n = static_cast<int>(state.range(1));
+  const BSplineBasis1D b = BSplineBasis1D::open_uniform(p, 0, 1, n);
+  const int m = b.num_functions();
+  Eigen::MatrixX3d net(long(m) * m, 3);
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < m; ++i) {
+      double x = 0, y = 0;
+      for (int k = 1; k <= p; ++k) x += b.knots()[i + k] / p, y += b.knots()[j + k] / p;
+      net.row(i + long(m) * j) << x, y, 1.0;
+    }
+  const Eigen::VectorXd weights;
+  const TensorPoissonOperator A({&b, &b, &weights, &b, &b, &net}, 1.0, 0.0);
   const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(A.num_functions(), 0, 1);
   Eigen::VectorXd y(A.num_functions());
   for (auto _ : state) {
