@@ -23,7 +23,7 @@ namespace knotwork {
 int adapt_command(const AdaptOptions& o) {
   CaseDescription c = load_case(o.case_file);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr,
-                o.preconditioner);
+                o.preconditioner, o.matrix);
   if (o.steps) c.adapt.steps = o.steps;
   if (o.theta) c.adapt.theta = o.theta;
   if (o.max_dofs) c.adapt.max_dofs = o.max_dofs;

@@ -17,6 +17,7 @@ struct CommonOptions {
   std::string solver;    // "": [solver] method of the case
   double tolerance = 0;  // 0: [solver] tolerance of the case
   std::string preconditioner;  // "": [solver] preconditioner of the case
+  std::string matrix;          // "": [solver] matrix of the case
   std::string petsc_options;  // --petsc-options, when given (petsc_options_given)
   bool petsc_options_given = false;
   bool condition = false;  // --condition (run, converge)

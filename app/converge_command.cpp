@@ -21,7 +21,7 @@ namespace knotwork {
 int converge_command(const ConvergeOptions& o) {
   CaseDescription c = load_case(o.case_file);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr,
-                o.preconditioner);
+                o.preconditioner, o.matrix);
   c.solver.estimate_condition = o.condition;
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;

@@ -17,7 +17,7 @@ namespace knotwork {
 int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr,
-                o.preconditioner);
+                o.preconditioner, o.matrix);
   c.allow_unverified_space = o.allow_unverified_space;
   c.solver.estimate_condition = o.condition;
   const Ordering ordering = parse_ordering(o.ordering);
@@ -47,8 +47,9 @@ int run_command(const RunOptions& o) {
     std::printf("  surface  area %.6f; mean %.3e removed from the source and %.3e from the exact solution\n", s.area,
                 s.source_mean, s.exact_mean);
   if (solver.method == "iterative")
-    std::printf("  solver   CG + %s: %d iterations, backward error %.2e (tolerance %.0e), relative residual %.2e\n",
-                solver.preconditioner.c_str(), s.iterative.iterations, s.iterative.backward_error, c.solver.tolerance,
+    std::printf("  solver   CG + %s%s: %d iterations, backward error %s%.2e (tolerance %.0e), relative residual %.2e\n",
+                solver.preconditioner.c_str(), solver.matrix_free ? ", no matrix" : "", s.iterative.iterations,
+                solver.matrix_free ? "at most " : "", s.iterative.backward_error, c.solver.tolerance,
                 s.iterative.relative_residual);
   if (solver.method == "petsc")
     std::printf("  solver   PETSc %s + %s%s%s on %d process%s: %d iteration%s, relative residual %.2e (tolerance %.0e)\n",

@@ -746,7 +746,9 @@ void check_tolerance(double t, const std::string& what, const std::string& file)
 }  // namespace
 
 void read_solver(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
-  r.check_keys(t, "solver", {"method", "preconditioner", "tolerance", "max_iterations", "petsc_options"});
+  r.check_keys(t, "solver", {"method", "preconditioner", "tolerance", "max_iterations", "petsc_options", "matrix"});
+  if (const DocumentNode* n = t.get("matrix"))
+    c.solver.matrix = checked_name(r.string(*n, "[solver] matrix"), {"auto", "assembled", "matrix_free"}, "[solver] matrix", r.path());
   if (const DocumentNode* n = t.get("petsc_options")) c.solver.petsc_options = r.string(*n, "[solver] petsc_options");
   if (const DocumentNode* n = t.get("method"))
     c.solver.method = checked_name(r.string(*n, "[solver] method"), solver_methods(), "[solver] method", r.path());

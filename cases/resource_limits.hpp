@@ -13,8 +13,8 @@ double galerkin_bytes(double cells, double functions, int p, int q);
 
 // Memory of the iterative path (CG): the same cell lists and matrix as galerkin_bytes, no
 // factor, CG's vectors, and `preconditioner` bytes for the preconditioner's own storage
-// (preconditioner_bytes).
-double iterative_bytes(double cells, double functions, int p, int q, double preconditioner);
+// (preconditioner_bytes); with_matrix false: K applied without one ([solver] matrix).
+double iterative_bytes(double cells, double functions, int p, int q, double preconditioner, bool with_matrix = true);
 
 // The storage of an algebraic preconditioner for `functions` functions of bi-degree (p, q):
 // "boomeramg" hypre's copy of the whole matrix and a hierarchy of about twice its size,

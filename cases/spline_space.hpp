@@ -16,6 +16,7 @@
 #include "cases/case_file.hpp"
 #include "basis/core/geometry_map.hpp"
 #include "solver/iterative_solver.hpp"
+#include "solver/matrix_free.hpp"
 #include "solver/poisson_problem.hpp"
 #include "solver/sparsity.hpp"
 
@@ -115,6 +116,12 @@ class SplineSpace {
                                                                          const DofLayout& /*layout*/,
                                                                          const Eigen::SparseMatrix<double>& /*lower*/,
                                                                          const PoissonProblem& /*problem*/) const {
+    return nullptr;
+  }
+  // Its Poisson operator applied without a matrix, K = stiffness (grad, grad) + reaction (., .)
+  // by `quadrature`'s rules, when the family has one for this space (null otherwise).
+  virtual std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double /*stiffness*/, double /*reaction*/,
+                                                                  const QuadratureOptions& /*quadrature*/) const {
     return nullptr;
   }
   // A space SpaceFamily::build_part made: which cells and functions of the global space its

@@ -26,22 +26,17 @@ std::unique_ptr<Preconditioner> jacobi_preconditioner(const Eigen::SparseMatrix<
   return std::make_unique<JacobiPreconditioner>(std::move(d));
 }
 
-Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& b,
-                                  const Preconditioner& preconditioner, double tolerance, int max_iterations,
-                                  IterativeStats& stats) {
-  const Eigen::Index n = b.size();
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), r = b, z(n), p(n), q(n);
-  const double b_norm = b.norm();
-  stats = {};
-  if (b_norm == 0) {
-    stats.converged = true;
-    return x;
-  }
-  // ||K||_inf: the largest absolute row sum, and the most nonzeros in a row (lower triangle
-  // stored: each entry counts in its row and, off the diagonal, in its column's row).
-  Eigen::VectorXd row_sums = Eigen::VectorXd::Zero(n);
-  Eigen::VectorXi row_count = Eigen::VectorXi::Zero(n);
-  {
+namespace {
+
+// A matrix of which the lower triangle is stored: its ||K||_inf (the largest absolute row sum)
+// and most nonzeros in a row, each entry counting in its row and, off the diagonal, in its
+// column's row.
+class LowerTriangle final : public SymmetricOperator {
+ public:
+  explicit LowerTriangle(const Eigen::SparseMatrix<double>& lower) : lower_(lower) {
+    const Eigen::Index n = lower.rows();
+    Eigen::VectorXd row_sums = Eigen::VectorXd::Zero(n);
+    Eigen::VectorXi row_count = Eigen::VectorXi::Zero(n);
     const int* outer = lower.outerIndexPtr();
     const int* inner = lower.innerIndexPtr();
     const double* value = lower.valuePtr();
@@ -51,9 +46,41 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
         ++row_count[inner[k]];
         if (inner[k] != j) row_sums[j] += std::abs(value[k]), ++row_count[j];
       }
+    norm_ = n > 0 ? row_sums.maxCoeff() : 0;
+    most_ = n > 0 ? row_count.maxCoeff() : 0;
   }
-  const double k_norm = row_sums.maxCoeff(), b_inf = b.lpNorm<Eigen::Infinity>();
-  const double m_eps = (row_count.maxCoeff() + 1) * std::numeric_limits<double>::epsilon();
+  void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override {
+    y.noalias() = lower_.selfadjointView<Eigen::Lower>() * x;
+  }
+  double inf_norm() const override { return norm_; }
+  int max_row_nonzeros() const override { return most_; }
+
+ private:
+  const Eigen::SparseMatrix<double>& lower_;
+  double norm_ = 0;
+  int most_ = 0;
+};
+
+}  // namespace
+
+Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& b,
+                                  const Preconditioner& preconditioner, double tolerance, int max_iterations,
+                                  IterativeStats& stats) {
+  return preconditioned_cg(LowerTriangle(lower), b, preconditioner, tolerance, max_iterations, stats);
+}
+
+Eigen::VectorXd preconditioned_cg(const SymmetricOperator& K, const Eigen::VectorXd& b, const Preconditioner& preconditioner,
+                                  double tolerance, int max_iterations, IterativeStats& stats) {
+  const Eigen::Index n = b.size();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), r = b, z(n), p(n), q(n);
+  const double b_norm = b.norm();
+  stats = {};
+  if (b_norm == 0) {
+    stats.converged = true;
+    return x;
+  }
+  const double k_norm = K.inf_norm(), b_inf = b.lpNorm<Eigen::Infinity>();
+  const double m_eps = (K.max_row_nonzeros() + 1) * std::numeric_limits<double>::epsilon();
   stats.attainable = m_eps / (1 - std::min(m_eps, 0.5));
   auto backward_error = [&](const Eigen::VectorXd& residual) {
     return residual.lpNorm<Eigen::Infinity>() / (k_norm * x.lpNorm<Eigen::Infinity>() + b_inf);
@@ -71,7 +98,7 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
     double rz = r.dot(z);
     bool breakdown = false;
     while (stats.iterations < max_iterations) {
-      q.noalias() = lower.selfadjointView<Eigen::Lower>() * p;
+      K.apply(p, q);
       const double pq = p.dot(q);
       if (!(pq > 0)) {  // not positive definite along p, or a NaN
         breakdown = true;
@@ -95,7 +122,7 @@ Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, cons
       p = z + (rz_next / rz) * p;
       rz = rz_next;
     }
-    q.noalias() = lower.selfadjointView<Eigen::Lower>() * x;
+    K.apply(x, q);
     r = b - q;
     stats.relative_residual = r.norm() / b_norm;
     stats.backward_error = backward_error(r);

@@ -48,9 +48,22 @@ struct IterativeStats {
 // ill-conditioned systems, so the iteration goes on to max_iterations.
 constexpr double kStagnationFactor = 1e3;
 
-// CG on K (symmetric positive definite, lower triangle stored) from x = 0 until the
-// backward error of x is at most `tolerance` (measured with the true residual b - K x) or
-// max_iterations.
+// K for CG: its product, ||K||_inf (or a lower bound of it: the backward errors CG then
+// measures are upper bounds of the true ones, so it never stops early) and the most nonzeros
+// in a row (the attainable accuracy).
+class SymmetricOperator {
+ public:
+  virtual ~SymmetricOperator() = default;
+  virtual void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const = 0;
+  virtual double inf_norm() const = 0;
+  virtual int max_row_nonzeros() const = 0;
+};
+
+// CG on K (symmetric positive definite) from x = 0 until the backward error of x is at most
+// `tolerance` (measured with the true residual b - K x) or max_iterations.
+Eigen::VectorXd preconditioned_cg(const SymmetricOperator& K, const Eigen::VectorXd& b, const Preconditioner& preconditioner,
+                                  double tolerance, int max_iterations, IterativeStats& stats);
+// The same on a matrix of which the lower triangle is stored.
 Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& b,
                                   const Preconditioner& preconditioner, double tolerance, int max_iterations,
                                   IterativeStats& stats);

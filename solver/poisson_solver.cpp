@@ -16,6 +16,41 @@
 
 namespace knotwork {
 
+namespace {
+
+// K over the free dofs of `layout`, from an operator over all functions: the fixed ones are
+// zero in x and dropped from y. Its ||K||_inf is a lower bound (no matrix to sum rows of):
+// the largest of the diagonal and |K s|_inf for s = +-1 alternating, so CG's backward errors
+// are upper bounds of the true ones.
+class FreeDofsOperator final : public SymmetricOperator {
+ public:
+  FreeDofsOperator(const MatrixFreePoisson& op, const DofLayout& layout, const Eigen::VectorXd& diagonal)
+      : op_(op), layout_(layout), x_(Eigen::VectorXd::Zero(op.num_functions())) {
+    norm_ = diagonal.size() > 0 ? diagonal.maxCoeff() : 0;
+    Eigen::VectorXd s(diagonal.size()), y;
+    for (Eigen::Index d = 0; d < s.size(); ++d) s[d] = d % 2 ? -1.0 : 1.0;
+    apply(s, y);
+    if (y.size() > 0) norm_ = std::max(norm_, y.lpNorm<Eigen::Infinity>());
+  }
+  void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override {
+    const int n = layout_.num_free();
+    for (int d = 0; d < n; ++d) x_[layout_.function_of_dof[d]] = x[d];
+    op_.apply(x_, all_);
+    y.resize(n);
+    for (int d = 0; d < n; ++d) y[d] = all_[layout_.function_of_dof[d]];
+  }
+  double inf_norm() const override { return norm_; }
+  int max_row_nonzeros() const override { return op_.max_row_nonzeros(); }
+
+ private:
+  const MatrixFreePoisson& op_;
+  const DofLayout& layout_;
+  mutable Eigen::VectorXd x_, all_;  // fixed entries of x_ stay zero
+  double norm_ = 0;
+};
+
+}  // namespace
+
 bool has_boundary(const BezierMesh& mesh) {
   for (int c = 0; c < mesh.num_cells(); ++c)
     for (int b : mesh.cell(c).boundary)
@@ -118,7 +153,16 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   const CellRange mine = part.owned;
   // Serially the lower triangle CHOLMOD reads; distributed, this rank's rows as PETSc takes them.
   // (Built in place: Eigen 3.4's SparseMatrix has no move assignment, and a copy costs.)
-  Eigen::SparseMatrix<double> K = distributed ? Eigen::SparseMatrix<double>() : lower_pattern_matrix(mesh, layout);
+  const bool matrix_free = options.matrix_free != nullptr;
+  if (matrix_free) {
+    const bool constant = !form.coefficients || form.coefficients->constant();
+    if (distributed || !options.iterative || geometry.dimension() != 2 || !constant || !form.source || form.nitsche ||
+        sol.zero_mean || options.on_system || options.estimate_condition)
+      throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
+                             "coefficients, a given source and no Nitsche terms");
+  }
+  Eigen::SparseMatrix<double> K =
+      distributed || matrix_free ? Eigen::SparseMatrix<double>() : lower_pattern_matrix(mesh, layout);
   RankRows rows;
   const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
   const int last_row = part.last_owned_function - fixed_below(part.last_owned_function);
@@ -131,7 +175,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     step([&] { rows = rank_rows_pattern(mesh, layout, std::move(row_of_dof), first_row, last_row, mine); });
     sol.matrix_nonzeros = rows.owned.diagonal_nonzeros() + rows.owned.off_nonzeros();
   } else {
-    sol.matrix_nonzeros = K.nonZeros();
+    sol.matrix_nonzeros = K.nonZeros();  // none stored without a matrix
   }
   sol.num_free = n;
   sol.timings.setup = seconds_since(t);
@@ -141,6 +185,24 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   say("assembly");
   t = clock::now();
   Eigen::VectorXd rhs;
+  std::unique_ptr<MatrixFreePoisson> op;
+  Eigen::VectorXd free_diagonal;
+  if (matrix_free) {
+    // F over the free dofs, less K g for the Dirichlet values g; Neumann terms as assembled.
+    op = options.matrix_free();
+    const Eigen::VectorXd load = form.load ? op->load(*form.source) : Eigen::VectorXd::Zero(mesh.num_functions());
+    Eigen::VectorXd lifting;
+    if (fixed_values.lpNorm<Eigen::Infinity>() > 0) op->apply(fixed_values, lifting);
+    const Eigen::VectorXd diagonal = op->diagonal();
+    rhs.resize(layout.num_free());
+    free_diagonal.resize(layout.num_free());
+    for (int d = 0; d < layout.num_free(); ++d) {
+      const int f = layout.function_of_dof[d];
+      rhs[d] = load[f] - (lifting.size() > 0 ? lifting[f] : 0.0);
+      free_diagonal[d] = diagonal[f];
+    }
+    add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs, mine);
+  } else
   step([&] {
     if (distributed) assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, rows, rhs, mine);
     else assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, rhs, nullptr, mine);
@@ -172,12 +234,21 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   } else if (n > 0 && options.iterative) {
     say("preconditioner");
     t = clock::now();
+    if (matrix_free) {  // the preconditioner's matrix: K's diagonal alone
+      K.resize(layout.num_free(), layout.num_free());
+      K.reserve(Eigen::VectorXi::Ones(layout.num_free()));
+      for (int d = 0; d < layout.num_free(); ++d) K.insert(d, d) = free_diagonal[d];
+      K.makeCompressed();
+    }
     std::unique_ptr<Preconditioner> pc = options.preconditioner ? options.preconditioner(layout, K) : nullptr;
     if (!pc) pc = jacobi_preconditioner(K);
     sol.timings.preconditioner = seconds_since(t);
     say("iterations");
     t = clock::now();
-    const Eigen::VectorXd x = preconditioned_cg(K, rhs, *pc, options.tolerance, options.max_iterations, sol.iterative);
+    const Eigen::VectorXd x =
+        matrix_free ? preconditioned_cg(FreeDofsOperator(*op, layout, free_diagonal), rhs, *pc, options.tolerance,
+                                        options.max_iterations, sol.iterative)
+                    : preconditioned_cg(K, rhs, *pc, options.tolerance, options.max_iterations, sol.iterative);
     sol.timings.iterations = seconds_since(t);
     if (!sol.iterative.converged) {
       char b[400];

@@ -10,6 +10,7 @@
 #include "basis/core/geometry_map.hpp"
 #include "solver/condition_estimate.hpp"
 #include "solver/iterative_solver.hpp"
+#include "solver/matrix_free.hpp"
 #include "solver/linear_solver.hpp"
 #include "solver/poisson_problem.hpp"
 #include "solver/sparsity.hpp"
@@ -42,6 +43,11 @@ struct PoissonSolveOptions {
   double tolerance = 1e-15;  // on the backward error (IterativeStats)
   int max_iterations = 1000;
   std::function<std::unique_ptr<Preconditioner>(const DofLayout&, const Eigen::SparseMatrix<double>&)> preconditioner;
+  // With `iterative`: K applied without a matrix (nothing assembled: the load and the Dirichlet
+  // lifting come from the operator, and `preconditioner` gets a matrix holding only K's
+  // diagonal). Planar problems with constant coefficients, a given source and no Nitsche terms,
+  // solved serially, without on_system or estimate_condition: solve_poisson refuses others.
+  std::function<std::unique_ptr<MatrixFreePoisson>()> matrix_free;
   // Called with the assembled system (lower triangle of K over the free dofs, and F)
   // before it is factored: for inspecting or exporting it, or benchmarking solvers on it.
   std::function<void(const Eigen::SparseMatrix<double>&, const Eigen::VectorXd&)> on_system;

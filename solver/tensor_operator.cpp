@@ -3,12 +3,15 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "quadrature/gauss_legendre.hpp"
+#include <memory>
+#include <optional>
 
 namespace knotwork {
 
@@ -147,6 +150,7 @@ namespace {
 struct Points {
   double d11[kMaxPoints * kMaxPoints], d12[kMaxPoints * kMaxPoints], d22[kMaxPoints * kMaxPoints];
   double measure[kMaxPoints * kMaxPoints], min_det = 0;
+  double x[kMaxPoints * kMaxPoints], y[kMaxPoints * kMaxPoints];  // the points themselves
   Field w;
 };
 
@@ -184,8 +188,10 @@ void TensorPoissonOperator::for_each_element(Kernel kernel) const {
         for (int i = 0; i < qu; ++i) {
           const int k = i + qu * j;
           double xu = h[0].du[k], xv = h[0].dv[k], yu = h[1].du[k], yv = h[1].dv[k];
+          pts.x[k] = h[0].value[k], pts.y[k] = h[1].value[k];
           if (!polynomial_map_) {  // x = X / W: x_u = (X_u - x W_u) / W
             const double w = h[2].value[k], x = h[0].value[k] / w, y = h[1].value[k] / w;
+            pts.x[k] = x, pts.y[k] = y;
             xu = (xu - x * h[2].du[k]) / w, xv = (xv - x * h[2].dv[k]) / w;
             yu = (yu - y * h[2].du[k]) / w, yv = (yv - y * h[2].dv[k]) / w;
           }
@@ -320,6 +326,46 @@ Eigen::VectorXd TensorPoissonOperator::diagonal() const {
     throw std::invalid_argument("TensorPoissonOperator: the geometry's Jacobian is not positive at a quadrature point (det J = " +
                                 std::to_string(min_det) + ")");
   return diagonal;
+}
+
+Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(num_functions());
+  double* f_out = out.data();
+  const bool rational = weights_.size() > 0;
+  const int pu = u_.degree + 1, pv = v_.degree + 1, qu = u_.points, qv = v_.points;
+  // One compiled program per thread (a program's registers are its own).
+  const ExpressionBatch compiled(std::vector<Expression>{source});
+  std::vector<std::optional<ExpressionBatch>> batches(omp_get_max_threads());
+  std::atomic<bool> finite{true};
+  for_each_element<0>([&](int, int, int fu, int fv, const double* bu, const double*, const double* bv, const double*,
+                          const Points& pts) {
+    std::optional<ExpressionBatch>& f = batches[omp_get_thread_num()];
+    if (!f) f.emplace(compiled);
+    f->evaluate(pts.x, pts.y, nullptr, qu * qv);
+    const double* value = f->result(0);
+    // F_a = w_a sum_q N_a (m f / W): the test functions' factors as in apply.
+    double h[kMaxPoints * kMaxPoints];
+    for (int k = 0; k < qu * qv; ++k) {
+      if (!std::isfinite(value[k])) finite.store(false, std::memory_order_relaxed);
+      h[k] = pts.measure[k] * value[k] / (rational ? pts.w.value[k] : 1.0);
+    }
+    for (int b = 0; b < pv; ++b) {
+      double a2[kMaxPoints];
+      for (int i = 0; i < qu; ++i) {
+        double s = 0;
+        for (int j = 0; j < qv; ++j) s += bv[j * pv + b] * h[i + qu * j];
+        a2[i] = s;
+      }
+      for (int a = 0; a < pu; ++a) {
+        double r = 0;
+        for (int i = 0; i < qu; ++i) r += bu[i * pu + a] * a2[i];
+        const int g = (fu + a) + n_u_ * (fv + b);
+        f_out[g] += rational ? weights_[g] * r : r;
+      }
+    }
+  });
+  if (!finite) throw std::invalid_argument("the source is not a finite number at a quadrature point");
+  return out;
 }
 
 }  // namespace knotwork

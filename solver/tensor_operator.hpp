@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "basis/core/bspline_basis.hpp"
+#include "solver/matrix_free.hpp"
 
 namespace knotwork {
 
@@ -29,7 +30,7 @@ struct TensorPatch {
   const Eigen::MatrixX3d* geometry = nullptr;
 };
 
-class TensorPoissonOperator {
+class TensorPoissonOperator final : public MatrixFreePoisson {
  public:
   // points_u, points_v: Gauss points per element and direction (0: degree + 1, the assembly's
   // default). Throws std::invalid_argument for degrees above kMaxDegree, bases whose
@@ -38,11 +39,15 @@ class TensorPoissonOperator {
                         int points_v = 0);
   static constexpr int kMaxDegree = 15;
 
-  int num_functions() const { return n_u_ * n_v_; }
+  int num_functions() const override { return n_u_ * n_v_; }
   // y = K x over all functions (threaded over bands of element rows; y is overwritten).
-  void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
-  // K's diagonal, by the same quadrature (one pass, O(p^2) per point).
-  Eigen::VectorXd diagonal() const;
+  void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override;
+  // K's diagonal, by the same quadrature (one pass, O(p^2) per point). Throws
+  // std::invalid_argument where det J <= 0 at a point.
+  Eigen::VectorXd diagonal() const override;
+  // int f R_a by the same rule, f evaluated at each element's points in one batch.
+  Eigen::VectorXd load(const Expression& source) const override;
+  int max_row_nonzeros() const override { return (2 * u_.degree + 1) * (2 * v_.degree + 1); }
 
  private:
   struct Direction {

@@ -112,6 +112,21 @@ void check_quadrature_points(const CaseDescription& c, const BezierMesh& mesh) {
         "|grad u_h|^2 of a degree-" + std::to_string(std::max(pu, pv)) + " solution exactly on straight cells");
 }
 
+// Why K cannot be applied without a matrix for this case and solver ("" when it can).
+std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& space, const SolverReport& chosen) {
+  if (chosen.method != "iterative") return "needs CG (method = \"iterative\", or \"auto\" from 10 000 functions)";
+  if (chosen.preconditioner == kBoomerAmgName ||
+      (chosen.preconditioner != "jacobi" && !space.structured_preconditioner_needs_only_diagonal(chosen.preconditioner)))
+    return "needs a preconditioner built from K's diagonal alone (not \"" + chosen.preconditioner + "\")";
+  if (space.geometry().dimension() != 2 || c.problem.source.empty()) return "serves planar problems with a given source";
+  if (!c.problem.coefficients.constant()) return "serves constant coefficients only (this case's [problem] coefficient or reaction varies)";
+  if (c.problem.dirichlet_method == DirichletMethod::kNitsche) return "does not add Nitsche's boundary terms";
+  if (c.solver.estimate_condition) return "has no matrix for --condition to estimate";
+  if (!space.matrix_free_operator(1.0, c.problem.reaction, c.quadrature))
+    return "is not available for this space (family \"" + c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ")";
+  return "";
+}
+
 }  // namespace
 
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
@@ -160,6 +175,20 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
         return p;
       };
     }
+  }
+  if (chosen.method == "iterative" && c.solver.matrix != "assembled") {
+    const std::string obstacle = matrix_free_obstacle(c, space, chosen);
+    if (c.solver.matrix == "matrix_free" && !obstacle.empty())
+      throw InputError(c.path + ": [solver] matrix: \"matrix_free\" " + obstacle + "; use \"assembled\" or \"auto\"");
+    if (c.solver.matrix == "matrix_free") {  // "auto" is "assembled" (CaseDescription::Solver::matrix)
+      const double reaction = c.problem.reaction;
+      const QuadratureOptions quadrature = c.quadrature;
+      so.matrix_free = [&space, reaction, quadrature] { return space.matrix_free_operator(1.0, reaction, quadrature); };
+      if (report) report->matrix_free = true;
+    }
+  } else if (c.solver.matrix == "matrix_free") {
+    throw InputError(c.path + ": [solver] matrix: \"matrix_free\" needs CG (method = \"iterative\", or \"auto\" from "
+                     "10 000 functions); this solve is " + chosen.method);
   }
   try {
     if (chosen.method == "petsc") {

@@ -29,6 +29,7 @@ CellRange cells_to_write(const SplineSpace& space, ParallelWorld world);
 // space ("auto" decided), and a note when the choice is not the one asked for by name.
 struct SolverReport {
   std::string method, preconditioner, note;
+  bool matrix_free = false;  // CG applied K without a matrix ([solver] matrix)
 };
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
                            const ProgressFunction& progress = {}, SolverReport* report = nullptr);

@@ -22,8 +22,9 @@ double since(std::chrono::steady_clock::time_point t) {
 }  // namespace
 
 void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance,
-                   const std::string* petsc_options, const std::string& preconditioner) {
+                   const std::string* petsc_options, const std::string& preconditioner, const std::string& matrix) {
   space_family(c).override_options(c, degree, elements);
+  if (!matrix.empty()) c.solver.matrix = checked_name(matrix, {"auto", "assembled", "matrix_free"}, "--matrix", "");
   if (!preconditioner.empty()) {
     // Any known name; whether it applies to the case's space is the solve's to say, as for the key.
     c.solver.preconditioner = checked_name(preconditioner, preconditioner_names(), "--preconditioner", "");
@@ -180,7 +181,8 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
   Json sj = Json::object();
   sj.set("method", r.solver.method);
   if (r.solver.method == "iterative")
-    sj.set("preconditioner", r.solver.preconditioner).set("iterations", s.iterative.iterations)
+    sj.set("preconditioner", r.solver.preconditioner).set("matrix", r.solver.matrix_free ? "matrix_free" : "assembled")
+        .set("iterations", s.iterative.iterations)
         .set("relative_residual", s.iterative.relative_residual).set("backward_error", s.iterative.backward_error)
         .set("tolerance", c.solver.tolerance);
   if (r.solver.method == "petsc") {

@@ -22,9 +22,11 @@ namespace knotwork {
 
 // The overrides every command and the Python module take: degree and elements (0: as the
 // case says, else through the family), solver method and tolerance ("" / 0: as [solver] says).
-// `preconditioner` ("": as [solver] says) must be one of the algebraic ones or one of the family's.
+// `preconditioner` ("": as [solver] says) must be one of the algebraic ones or one of the family's;
+// `matrix` ("": as [solver] says) auto, assembled or matrix_free.
 void override_case(CaseDescription& c, int degree, int elements, const std::string& solver, double tolerance,
-                   const std::string* petsc_options = nullptr, const std::string& preconditioner = "");
+                   const std::string* petsc_options = nullptr, const std::string& preconditioner = "",
+                   const std::string& matrix = "");
 
 // Under mpirun: every rank writes its cells of one output (`mine`, from cells_to_write) as the
 // piece `<base>_<rank>.vtu`, into rank 0's staging folder (`stage`, null on the other ranks),

@@ -408,6 +408,20 @@ TEST_CASE("bad input: [solver] and --solver", "[cli][bad-input][solver]") {
   // Also where the direct solve is taken: a name that would never apply is not kept silently.
   expect_rejected(box, segments, {"bad.toml", "[solver] preconditioner", "\"multigrid\" does not apply", "knot_segments"},
                   "--preconditioner multigrid --solver direct");
+  // K without a matrix: a misspelt name, and each condition it needs, named.
+  expect_rejected(box, kGood + "[solver]\nmatrix = \"matrixfree\"\n", {"bad.toml", "[solver] matrix", "did you mean 'matrix_free'"});
+  expect_rejected(box, kGood, {"--matrix", "not a choice"}, "--matrix free");
+  expect_rejected(box, kGood, {"bad.toml", "[solver] matrix", "needs CG", "this solve is direct"},
+                  "--solver direct --matrix matrix_free");
+  expect_rejected(box, kGood, {"bad.toml", "[solver] matrix", "diagonal alone", "\"multigrid\""},
+                  "--solver iterative --preconditioner multigrid --matrix matrix_free");
+  expect_rejected(box, kGood, {"bad.toml", "[solver] matrix", "diagonal alone", "\"boomeramg\""},
+                  "--solver iterative --preconditioner boomeramg --matrix matrix_free");
+  expect_rejected(box, replace(kGood, "[problem]\n", "[problem]\ncoefficient = \"1 + x^2\"\n"),
+                  {"bad.toml", "[solver] matrix", "constant coefficients"}, "--solver iterative --matrix matrix_free");
+  expect_rejected(box, replace(kGood, "[space]\n", "[space]\nfamily = \"knot_segments\"\n"),
+                  {"bad.toml", "[solver] matrix", "not available for this space", "knot_segments"},
+                  "--solver iterative --preconditioner jacobi --matrix matrix_free");
 }
 
 TEST_CASE("run --solver iterative reports the solver, and agrees with the direct solve", "[cli][solver]") {

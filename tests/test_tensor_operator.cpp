@@ -2,12 +2,16 @@
 // against the assembled matrix's, and properties that do not depend on either (constants in
 // the kernel, the Dirichlet energy of the coordinate x equal to the domain's area).
 #include <catch2/catch.hpp>
+#include <Eigen/LU>
 #include <omp.h>
 
 #include <cmath>
 
 #include "basis/tensor/tensor_patch.hpp"
 #include "cases/case_file.hpp"
+#include "cases/spline_space.hpp"
+#include "solver/poisson_solver.hpp"
+#include "studies/pipeline.hpp"
 #include "families/tensor/tensor_case.hpp"
 #include "solver/assemble_poisson.hpp"
 #include "solver/sparsity.hpp"
@@ -122,4 +126,47 @@ TEST_CASE("Matrix-free tensor operator: constants in the kernel, |grad x|^2 inte
       // and 4e-16 at p = 4 on 5 x 6 elements).
       REQUIRE(std::abs(coordinate.dot(y) - area) <= (std::string(name) == "quarter_annulus" ? 1e-8 : 1e-12) * area);
     }
+}
+
+// Through the pipeline ([solver] matrix = "matrix_free"): no matrix, the load, the Dirichlet
+// lifting and Neumann terms from the operator and the assembly's boundary code; the solution
+// must be the assembled CG's to what the two backward errors allow.
+TEST_CASE("Matrix-free CG solves what assembled CG solves", "[tensor_operator][solver]") {
+  for (const auto& [name, p] : std::vector<std::pair<const char*, int>>{{"square_exp_sin", 3}, {"quarter_annulus", 2}, {"lshape", 4}}) {
+    CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name + ".toml");
+    patch_space(c).degree = {p, p};
+    c.solver.method = "iterative";
+    const auto space = build_space(c);
+    // kappa_inf(K) over the free dofs, from the assembled matrix made dense (a few hundred dofs).
+    double kappa = 0;
+    {
+      PoissonSolveOptions o;
+      o.compute_errors = false;
+      o.on_system = [&](const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd&) {
+        const Eigen::MatrixXd K = Eigen::MatrixXd(Eigen::SparseMatrix<double>(lower.selfadjointView<Eigen::Lower>()));
+        const Eigen::MatrixXd inverse = K.inverse();
+        kappa = K.cwiseAbs().rowwise().sum().maxCoeff() * inverse.cwiseAbs().rowwise().sum().maxCoeff();
+      };
+      solve_poisson(space->mesh(), space->geometry(), c.problem, o);
+    }
+    REQUIRE(kappa > 0);
+    c.solver.matrix = "assembled";
+    SolverReport assembled_report, free_report;
+    const PoissonSolution assembled = solve_case(c, *space, Ordering::kAmd, {}, &assembled_report);
+    c.solver.matrix = "matrix_free";
+    const PoissonSolution free = solve_case(c, *space, Ordering::kAmd, {}, &free_report);
+    REQUIRE_FALSE(assembled_report.matrix_free);
+    REQUIRE(free_report.matrix_free);
+    REQUIRE(free.matrix_nonzeros == 0);
+    REQUIRE(assembled.iterative.converged);
+    REQUIRE(free.iterative.converged);
+    // Each solves K x = b to a backward error <= tol, so each is within about 2 kappa tol of the
+    // exact solution (relative, infinity norm; first order, kappa tol << 1).
+    const double tol = c.solver.tolerance, scale = assembled.coefficients.lpNorm<Eigen::Infinity>();
+    const double difference = (free.coefficients - assembled.coefficients).lpNorm<Eigen::Infinity>();
+    INFO(name << ", p = " << p << ": kappa " << kappa << ", |x_free - x_assembled| / |x| = " << difference / scale);
+    REQUIRE(kappa * tol < 1e-3);
+    REQUIRE(difference <= 4 * kappa * tol * scale);
+    REQUIRE(std::abs(free.errors->h1_semi - assembled.errors->h1_semi) <= 1e-6 * assembled.errors->h1_semi);
+  }
 }

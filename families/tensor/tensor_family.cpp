@@ -5,6 +5,7 @@
 
 #include "solver/fast_diagonalization.hpp"
 #include "solver/tensor_multigrid.hpp"
+#include "solver/tensor_operator.hpp"
 #include "families/tensor/patch_separable_coefficients.hpp"
 #include "basis/core/geometry_map.hpp"
 #include "families/tensor/multipatch_tensor_space.hpp"
@@ -52,11 +53,13 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
   const int p = s.degree[0], q = s.degree[1];
   if (iterative) {
     const std::string& name = c.solver.preconditioner == "auto" ? kFastDiagonalization : c.solver.preconditioner;
-    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d with CG + %s", cells, p, q, name.c_str());
+    std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d with CG + %s%s", cells, p, q, name.c_str(),
+                  c.solver.matrix == "matrix_free" ? ", no matrix" : "");
     const double pc = name == kFastDiagonalization ? fast_diagonalization_bytes(per_direction[0], per_direction[1])
                       : name == kMultigrid         ? tensor_multigrid_bytes(functions, p, q)
                                                    : algebraic_preconditioner_bytes(name, functions, p, q);
-    check_memory(c.path + ": [space] elements", iterative_bytes(cells, functions, p, q, pc), what);
+    check_memory(c.path + ": [space] elements", iterative_bytes(cells, functions, p, q, pc, c.solver.matrix != "matrix_free"),
+                 what);
     return;
   }
   check_memory(c.path + ": [space] elements", galerkin_bytes(cells / ranks, functions / ranks, p, q), what);
@@ -103,6 +106,14 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
       return tensor_multigrid(d_.space_u, d_.space_v, layout, lower, patch_separable_coefficients(d_, *geometry_), ends);
     return fast_diagonalization(d_.space_u, d_.space_v, layout, lower.diagonal(), patch_separable_coefficients(d_, *geometry_),
                                 ends);
+  }
+  std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double stiffness, double reaction,
+                                                          const QuadratureOptions& quadrature) const override {
+    if (d_.part) return nullptr;  // a rank's part: the operator covers whole patches
+    const Eigen::VectorXd* weights = d_.mesh.is_rational() ? &d_.mesh.weights() : nullptr;
+    return std::make_unique<TensorPoissonOperator>(
+        TensorPatch{&d_.space_u, &d_.space_v, weights, &d_.geometry_u, &d_.geometry_v, &d_.geometry_homogeneous}, stiffness,
+        reaction, quadrature.points_u, quadrature.points_v);
   }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};

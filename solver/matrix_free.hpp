@@ -1,0 +1,24 @@
+#pragma once
+// A Poisson operator applied without a matrix, over all of a space's functions: what a
+// family with such an operator gives the driver (SplineSpace::matrix_free_operator), which
+// then assembles nothing (docs/SOLVERS.md, "Without a matrix").
+#include <Eigen/Core>
+
+#include "solver/expression.hpp"
+
+namespace knotwork {
+
+class MatrixFreePoisson {
+ public:
+  virtual ~MatrixFreePoisson() = default;
+  virtual int num_functions() const = 0;
+  // y = K x (y overwritten).
+  virtual void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const = 0;
+  virtual Eigen::VectorXd diagonal() const = 0;
+  // F_a = int f R_a, f a planar source f(x, y).
+  virtual Eigen::VectorXd load(const Expression& source) const = 0;
+  // The most functions one function couples with (itself included): the attainable accuracy.
+  virtual int max_row_nonzeros() const = 0;
+};
+
+}  // namespace knotwork
