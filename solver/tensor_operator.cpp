@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <type_traits>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -71,6 +72,10 @@ void over_row_bands(int rows, int reach, Row row) {
   }
 }
 
+bool all_equal(const Eigen::VectorXd& w) {
+  return (w.array() - w[0]).abs().maxCoeff() <= 64 * std::numeric_limits<double>::epsilon() * std::abs(w[0]);
+}
+
 }  // namespace
 
 TensorPoissonOperator::Direction TensorPoissonOperator::direction(const BSplineBasis1D& space,
@@ -115,6 +120,20 @@ TensorPoissonOperator::Direction TensorPoissonOperator::direction(const BSplineB
       d.weight[size_t(e) * q + i] = rule.weights[i] * length;
     }
   }
+  const int P = p + 1;
+  d.stiffness.assign(size_t(d.elements) * P * P, 0.0);
+  d.mass.assign(d.stiffness.size(), 0.0);
+  d.mixed.assign(d.stiffness.size(), 0.0);
+  for (int e = 0; e < d.elements; ++e)
+    for (int i = 0; i < q; ++i) {
+      const double w = d.weight[size_t(e) * q + i], *B = &d.value[(size_t(e) * q + i) * P], *D = &d.derivative[(size_t(e) * q + i) * P];
+      for (int a = 0; a < P; ++a)
+        for (int c = 0; c < P; ++c) {
+          d.stiffness[(size_t(e) * P + a) * P + c] += w * D[a] * D[c];
+          d.mass[(size_t(e) * P + a) * P + c] += w * B[a] * B[c];
+          d.mixed[(size_t(e) * P + a) * P + c] += w * D[a] * B[c];
+        }
+    }
   return d;
 }
 
@@ -132,14 +151,19 @@ TensorPoissonOperator::TensorPoissonOperator(const TensorPatch& patch, double st
   if (patch.weights && patch.weights->size() > 0) {
     if (patch.weights->size() != num_functions())
       throw std::invalid_argument("TensorPoissonOperator: one weight per function expected");
-    // Equal weights w: R_a = w N_a / (w sum N) = N_a, the B-splines themselves.
-    const Eigen::VectorXd& w = *patch.weights;
-    if ((w.array() != w[0]).any()) weights_ = w;
+    // Equal weights w: R_a = w N_a / (w sum N) = N_a, the B-splines themselves. (Equal to 64
+    // eps: refining a net of weights 1 can leave 1 +- 1 ulp, and the functions differ from the
+    // B-splines by as much.)
+    if (!all_equal(*patch.weights)) weights_ = *patch.weights;
   }
   // A net of equal weights w0 is a polynomial map: scaled to w = 1, its W needs no evaluating.
   const Eigen::VectorXd w = net_.col(2);
-  polynomial_map_ = w.size() > 0 && (w.array() == w[0]).all();
-  if (polynomial_map_) net_ /= w[0];
+  polynomial_map_ = w.size() > 0 && all_equal(w);
+  if (polynomial_map_) {
+    net_ /= w[0];
+    net_.col(2).setOnes();
+  }
+  if (weights_.size() == 0) find_affine_elements();
 }
 
 namespace {
@@ -156,8 +180,8 @@ struct Points {
 
 }  // namespace
 
-template <int N, class Kernel>
-void TensorPoissonOperator::for_each_element(Kernel kernel) const {
+template <int N, class Kernel, class Affine>
+void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine) const {
   const Direction &U = u_, &V = v_;
   const int pu = N ? N : U.degree + 1, pv = N ? N : V.degree + 1, gu = N ? N : U.geometry_degree + 1,
             gv = N ? N : V.geometry_degree + 1;
@@ -168,6 +192,13 @@ void TensorPoissonOperator::for_each_element(Kernel kernel) const {
     Field h[3];
     double c[kMaxP * kMaxP];
     for (int eu = 0; eu < U.elements; ++eu) {
+      if constexpr (!std::is_same_v<Affine, std::nullptr_t>) {
+        const std::array<double, 4>* f = affine_factors(eu, ev);
+        if (f) {
+          affine(eu, ev, U.first[eu], V.first[ev], *f);
+          continue;
+        }
+      }
       const double *bu = &U.value[size_t(eu) * qu * pu], *du = &U.derivative[size_t(eu) * qu * pu];
       const double *bv = &V.value[size_t(ev) * qv * pv], *dv = &V.derivative[size_t(ev) * qv * pv];
       const double *gbu = &U.geometry_value[size_t(eu) * qu * gu], *gdu = &U.geometry_derivative[size_t(eu) * qu * gu];
@@ -209,6 +240,34 @@ void TensorPoissonOperator::for_each_element(Kernel kernel) const {
   });
 }
 
+// Affine elements: the same factors at every point (to 64 eps of the largest).
+void TensorPoissonOperator::find_affine_elements() {
+  affine_.assign(size_t(u_.elements) * v_.elements, {0, 0, 0, 0});
+  const int qu = u_.points, qv = v_.points;
+  for_each_element<0>([&](int eu, int ev, int, int, const double*, const double*, const double*, const double*,
+                          const Points& pts) {
+    // The factor matrix D to 64 eps of its largest entry, |det J| to 64 eps of itself.
+    std::array<double, 4> first{};
+    double largest_d = 0, spread_d = 0, largest_det = 0, spread_det = 0;
+    for (int j = 0; j < qv; ++j)
+      for (int i = 0; i < qu; ++i) {
+        const int k = i + qu * j;
+        const double w = u_.weight[size_t(eu) * qu + i] * v_.weight[size_t(ev) * qv + j];
+        const std::array<double, 4> f{pts.d11[k] / w, pts.d12[k] / w, pts.d22[k] / w, pts.measure[k] / w};
+        if (k == 0) first = f;
+        for (int m = 0; m < 3; ++m) {
+          largest_d = std::max(largest_d, std::abs(f[m]));
+          spread_d = std::max(spread_d, std::abs(f[m] - first[m]));
+        }
+        largest_det = std::max(largest_det, f[3]);
+        spread_det = std::max(spread_det, std::abs(f[3] - first[3]));
+      }
+    const double eps64 = 64 * std::numeric_limits<double>::epsilon();
+    if (pts.min_det > 0 && spread_d <= eps64 * largest_d && spread_det <= eps64 * largest_det)
+      affine_[size_t(eu) + size_t(u_.elements) * ev] = first;
+  });
+}
+
 int TensorPoissonOperator::uniform_size() const {
   const int n = u_.degree + 1;
   for (int k : {v_.degree + 1, u_.geometry_degree + 1, v_.geometry_degree + 1, u_.points, v_.points})
@@ -237,6 +296,37 @@ void TensorPoissonOperator::apply_sized(const Eigen::VectorXd& x, Eigen::VectorX
   y.setZero(num_functions());
   double* out = y.data();
   const int pu = N ? N : u_.degree + 1, pv = N ? N : v_.degree + 1, qu = N ? N : u_.points, qv = N ? N : v_.points;
+  // An element whose factors are constant (an affine map there): K_e X = d11 Ku X Mv^T +
+  // d22 Mu X Kv^T + d12 (Cu X Cv + Cu^T X Cv^T) + c |det| Mu X Mv^T, from the element's
+  // univariate matrices (affine_factors), with no geometry and no points.
+  const auto affine = [&](int eu, int ev, int fu, int fv, const std::array<double, 4>& f) {
+    const double *Ku = &u_.stiffness[size_t(eu) * pu * pu], *Mu = &u_.mass[size_t(eu) * pu * pu], *Cu = &u_.mixed[size_t(eu) * pu * pu];
+    const double *Kv = &v_.stiffness[size_t(ev) * pv * pv], *Mv = &v_.mass[size_t(ev) * pv * pv], *Cv = &v_.mixed[size_t(ev) * pv * pv];
+    double X[kMaxP][kMaxP], t1[kMaxP][kMaxP], t2[kMaxP][kMaxP], t3[kMaxP][kMaxP], t4[kMaxP][kMaxP];
+    for (int b = 0; b < pv; ++b)
+      for (int a = 0; a < pu; ++a) X[b][a] = xw[(fu + a) + n_u_ * (fv + b)];
+    // Over v: t1 = X Mv^T, t2 = X Kv^T, t3 = X Cv, t4 = X Cv^T (column b of each, a fastest).
+    for (int b = 0; b < pv; ++b)
+      for (int a = 0; a < pu; ++a) {
+        double s1 = 0, s2 = 0, s3 = 0, s4 = 0;
+        for (int c = 0; c < pv; ++c) {
+          s1 += X[c][a] * Mv[b * pv + c];
+          s2 += X[c][a] * Kv[b * pv + c];
+          s3 += X[c][a] * Cv[c * pv + b];
+          s4 += X[c][a] * Cv[b * pv + c];
+        }
+        t1[b][a] = s1, t2[b][a] = s2, t3[b][a] = s3, t4[b][a] = s4;
+      }
+    const double d11 = stiffness_ * f[0], d12 = stiffness_ * f[1], d22 = stiffness_ * f[2], r = reaction_ * f[3];
+    for (int b = 0; b < pv; ++b)
+      for (int a = 0; a < pu; ++a) {
+        double y = 0;
+        for (int c = 0; c < pu; ++c)
+          y += (d11 * Ku[a * pu + c] + r * Mu[a * pu + c]) * t1[b][c] + d22 * Mu[a * pu + c] * t2[b][c] +
+               d12 * (Cu[a * pu + c] * t3[b][c] + Cu[c * pu + a] * t4[b][c]);
+        out[(fu + a) + n_u_ * (fv + b)] += y;
+      }
+  };
   for_each_element<N>([&](int, int, int fu, int fv, const double* bu, const double* du, const double* bv, const double* dv,
                           const Points& pts) {
     double c[kMaxP * kMaxP];
@@ -285,7 +375,7 @@ void TensorPoissonOperator::apply_sized(const Eigen::VectorXd& x, Eigen::VectorX
         const int f = (fu + a) + n_u_ * (fv + b);
         out[f] += rational ? weights_[f] * r : r;
       }
-  });
+  }, affine);
 }
 
 Eigen::VectorXd TensorPoissonOperator::diagonal() const {

@@ -11,6 +11,8 @@
 // matrix), and so do the geometry's, from its homogeneous control net: nothing is stored per
 // point, so the operator needs O(n_u + n_v) memory besides the vectors.
 #include <Eigen/Core>
+#include <array>
+#include <cstddef>
 #include <vector>
 
 #include "basis/core/bspline_basis.hpp"
@@ -48,6 +50,12 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // int f R_a by the same rule, f evaluated at each element's points in one batch.
   Eigen::VectorXd load(const Expression& source) const override;
   int max_row_nonzeros() const override { return (2 * u_.degree + 1) * (2 * v_.degree + 1); }
+  // How many elements have an affine map (applied from univariate matrices, with no geometry).
+  long affine_elements() const {
+    long n = 0;
+    for (const auto& f : affine_) n += f[3] > 0;
+    return n;
+  }
 
  private:
   struct Direction {
@@ -56,12 +64,26 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
     // Per element, point-major: values then derivatives (d/dparameter) of the p + 1 functions
     // alive there, and of the geometry's g + 1; and the rule's weights times the length.
     std::vector<double> value, derivative, geometry_value, geometry_derivative, weight;
+    // Per element, (p+1) x (p+1), row-major: sum_i w_i of N_a' N_c', N_a N_c and N_a' N_c (the
+    // element's univariate stiffness, mass and mixed matrices, for affine elements).
+    std::vector<double> stiffness, mass, mixed;
   };
   static Direction direction(const BSplineBasis1D& space, const BSplineBasis1D& geometry, int points);
   // p + 1 when every size (functions and points, both directions, geometry too) is p + 1, else 0.
   int uniform_size() const;
-  template <int N, class Kernel>
-  void for_each_element(Kernel kernel) const;
+  void find_affine_elements();
+  // Every element, threaded: kernel(eu, ev, first u function, first v function, tables, Points)
+  // with the geometry at its points; or, given `affine`, affine(eu, ev, fu, fv, factors) for the
+  // elements that have constant factors, without the geometry.
+  template <int N, class Kernel, class Affine = std::nullptr_t>
+  void for_each_element(Kernel kernel, Affine affine = nullptr) const;
+  // The element's constant factors (H, -F, E) / |det J| and |det J|, when its map is affine
+  // (they are the same at every point, to 64 eps); null otherwise.
+  const std::array<double, 4>* affine_factors(int eu, int ev) const {
+    if (affine_.empty()) return nullptr;
+    const std::array<double, 4>& f = affine_[size_t(eu) + size_t(u_.elements) * ev];
+    return f[3] > 0 ? &f : nullptr;
+  }
   template <int N>
   void apply_sized(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
 
@@ -70,6 +92,9 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   Eigen::VectorXd weights_;  // empty: B-splines (or NURBS of equal weights, the same functions)
   Eigen::MatrixX3d net_;
   bool polynomial_map_ = false;  // the net's weights are equal (then scaled to 1)
+  // Per element (eu + n_eu ev), its affine factors, |det J| = 0 where not affine; empty for
+  // NURBS spaces (whose functions are not products there).
+  std::vector<std::array<double, 4>> affine_;
   double stiffness_ = 1, reaction_ = 0;
 };
 
