@@ -87,8 +87,9 @@ struct CaseDescription {
     double petsc_tolerance() const { return tolerance_given ? tolerance : 1e-10; }
     int max_iterations = 1000;
     // How CG gets K: "assembled" (a sparse matrix), "matrix_free" (the family's operator applied
-    // without a matrix: docs/SOLVERS.md, "Without a matrix"; about 20% less memory, no faster)
-    // or "auto", which is "assembled": measured as fast or faster at every size that runs.
+    // without a matrix: docs/SOLVERS.md, "Without a matrix"; about 20% less memory) or "auto":
+    // matrix-free where it applies and every element is affine (measured faster there),
+    // assembled otherwise (measured faster on curved elements).
     std::string matrix = "auto";
     // --condition: estimate the Jacobi-scaled condition numbers of the stiffness and mass
     // matrices (solver/condition_estimate.hpp); a command-line request, not a case key.

@@ -19,6 +19,10 @@ class MatrixFreePoisson {
   virtual Eigen::VectorXd load(const Expression& source) const = 0;
   // The most functions one function couples with (itself included): the attainable accuracy.
   virtual int max_row_nonzeros() const = 0;
+  // Whether every element's map is affine: then a product costs a few small univariate
+  // products per element, and CG without a matrix was measured faster than with one
+  // (docs/SOLVERS.md, "Without a matrix"): what [solver] matrix = "auto" asks.
+  virtual bool all_elements_affine() const { return false; }
 };
 
 }  // namespace knotwork

@@ -185,7 +185,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   say("assembly");
   t = clock::now();
   Eigen::VectorXd rhs;
-  std::unique_ptr<MatrixFreePoisson> op;
+  std::shared_ptr<const MatrixFreePoisson> op;
   Eigen::VectorXd free_diagonal;
   if (matrix_free) {
     // F over the free dofs, less K g for the Dirichlet values g; Neumann terms as assembled.

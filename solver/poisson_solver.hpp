@@ -47,7 +47,7 @@ struct PoissonSolveOptions {
   // lifting come from the operator, and `preconditioner` gets a matrix holding only K's
   // diagonal). Planar problems with constant coefficients, a given source and no Nitsche terms,
   // solved serially, without on_system or estimate_condition: solve_poisson refuses others.
-  std::function<std::unique_ptr<MatrixFreePoisson>()> matrix_free;
+  std::function<std::shared_ptr<const MatrixFreePoisson>()> matrix_free;
   // Called with the assembled system (lower triangle of K over the free dofs, and F)
   // before it is factored: for inspecting or exporting it, or benchmarking solvers on it.
   std::function<void(const Eigen::SparseMatrix<double>&, const Eigen::VectorXd&)> on_system;

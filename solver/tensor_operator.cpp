@@ -204,9 +204,16 @@ void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine) const
       const double *gbu = &U.geometry_value[size_t(eu) * qu * gu], *gdu = &U.geometry_derivative[size_t(eu) * qu * gu];
       const double *gbv = &V.geometry_value[size_t(ev) * qv * gv], *gdv = &V.geometry_derivative[size_t(ev) * qv * gv];
       for (int k = 0; k < (polynomial_map_ ? 2 : 3); ++k) {
+        // A polynomial map relative to the element's first control point (the functions sum to
+        // 1 and their derivatives to 0): the Jacobian then sums terms of the element's size,
+        // not of the domain's, and rounds to a few eps of itself whatever the mesh size.
+        const long first = U.geometry_first[eu] + long(net_u_) * V.geometry_first[ev];
+        const double origin = polynomial_map_ ? net_(first, k) : 0.0;
         for (int b = 0; b < gv; ++b)
-          for (int a = 0; a < gu; ++a) c[a + gu * b] = net_((U.geometry_first[eu] + a) + net_u_ * (V.geometry_first[ev] + b), k);
+          for (int a = 0; a < gu; ++a) c[a + gu * b] = net_(first + a + long(net_u_) * b, k) - origin;
         evaluate_field<N>(c, gu, gv, qu, qv, gbu, gdu, gbv, gdv, h[k]);
+        if (origin != 0)
+          for (int q = 0; q < qu * qv; ++q) h[k].value[q] += origin;
       }
       const int fu = U.first[eu], fv = V.first[ev];
       if (rational) {
@@ -262,7 +269,21 @@ void TensorPoissonOperator::find_affine_elements() {
         largest_det = std::max(largest_det, f[3]);
         spread_det = std::max(spread_det, std::abs(f[3] - first[3]));
       }
-    const double eps64 = 64 * std::numeric_limits<double>::epsilon();
+    // The net's points carry rounding of their own size, so the element's shape is known to
+    // eps |P| / |P - P_0| relative (1 / h on a mesh of the unit square): variations below 64
+    // times that are the data's rounding, not its geometry.
+    const Direction &U = u_, &V = v_;
+    const long corner = U.geometry_first[eu] + long(net_u_) * V.geometry_first[ev];
+    double size = 0, extent = 0;
+    for (int b = 0; b <= V.geometry_degree; ++b)
+      for (int a = 0; a <= U.geometry_degree; ++a)
+        for (int k = 0; k < 2; ++k) {
+          const long m = corner + a + long(net_u_) * b;
+          const double x = net_(m, k) / net_(m, 2);
+          size = std::max(size, std::abs(x));
+          extent = std::max(extent, std::abs(x - net_(corner, k) / net_(corner, 2)));
+        }
+    const double eps64 = 64 * std::numeric_limits<double>::epsilon() * (extent > 0 ? std::max(1.0, size / extent) : 1.0);
     if (pts.min_det > 0 && spread_d <= eps64 * largest_d && spread_det <= eps64 * largest_det)
       affine_[size_t(eu) + size_t(u_.elements) * ev] = first;
   });

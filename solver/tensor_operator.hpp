@@ -50,6 +50,7 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // int f R_a by the same rule, f evaluated at each element's points in one batch.
   Eigen::VectorXd load(const Expression& source) const override;
   int max_row_nonzeros() const override { return (2 * u_.degree + 1) * (2 * v_.degree + 1); }
+  bool all_elements_affine() const override { return affine_elements() == long(u_.elements) * v_.elements; }
   // How many elements have an affine map (applied from univariate matrices, with no geometry).
   long affine_elements() const {
     long n = 0;

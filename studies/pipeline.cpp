@@ -112,8 +112,10 @@ void check_quadrature_points(const CaseDescription& c, const BezierMesh& mesh) {
         "|grad u_h|^2 of a degree-" + std::to_string(std::max(pu, pv)) + " solution exactly on straight cells");
 }
 
-// Why K cannot be applied without a matrix for this case and solver ("" when it can).
-std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& space, const SolverReport& chosen) {
+// Why K cannot be applied without a matrix for this case and solver ("" when it can, and then
+// `op` is the operator).
+std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& space, const SolverReport& chosen,
+                                 std::shared_ptr<const MatrixFreePoisson>& op) {
   if (chosen.method != "iterative") return "needs CG (method = \"iterative\", or \"auto\" from 10 000 functions)";
   if (chosen.preconditioner == kBoomerAmgName ||
       (chosen.preconditioner != "jacobi" && !space.structured_preconditioner_needs_only_diagonal(chosen.preconditioner)))
@@ -122,8 +124,8 @@ std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& sp
   if (!c.problem.coefficients.constant()) return "serves constant coefficients only (this case's [problem] coefficient or reaction varies)";
   if (c.problem.dirichlet_method == DirichletMethod::kNitsche) return "does not add Nitsche's boundary terms";
   if (c.solver.estimate_condition) return "has no matrix for --condition to estimate";
-  if (!space.matrix_free_operator(1.0, c.problem.reaction, c.quadrature))
-    return "is not available for this space (family \"" + c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ")";
+  op = space.matrix_free_operator(1.0, c.problem.reaction, c.quadrature);
+  if (!op) return "is not available for this space (family \"" + c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ")";
   return "";
 }
 
@@ -177,13 +179,14 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     }
   }
   if (chosen.method == "iterative" && c.solver.matrix != "assembled") {
-    const std::string obstacle = matrix_free_obstacle(c, space, chosen);
+    std::shared_ptr<const MatrixFreePoisson> op;
+    const std::string obstacle = matrix_free_obstacle(c, space, chosen, op);
     if (c.solver.matrix == "matrix_free" && !obstacle.empty())
       throw InputError(c.path + ": [solver] matrix: \"matrix_free\" " + obstacle + "; use \"assembled\" or \"auto\"");
-    if (c.solver.matrix == "matrix_free") {  // "auto" is "assembled" (CaseDescription::Solver::matrix)
-      const double reaction = c.problem.reaction;
-      const QuadratureOptions quadrature = c.quadrature;
-      so.matrix_free = [&space, reaction, quadrature] { return space.matrix_free_operator(1.0, reaction, quadrature); };
+    // "auto": without a matrix where every element is affine, measured faster there and slower
+    // on curved elements (docs/SOLVERS.md); not a fallback, the documented choice.
+    if (obstacle.empty() && (c.solver.matrix == "matrix_free" || op->all_elements_affine())) {
+      so.matrix_free = [op] { return op; };
       if (report) report->matrix_free = true;
     }
   } else if (c.solver.matrix == "matrix_free") {
