@@ -306,7 +306,7 @@ class PythonHooks {
 
 struct Overrides {
   int degree = 0, elements = 0;
-  std::string solver, ordering = "amd", preconditioner;
+  std::string solver, ordering = "amd", preconditioner, matrix;
   double tolerance = 0;
   bool allow_unverified_space = false;
   std::string marking;  // adapt: "" (the case's), "cells" or "functions"
@@ -341,6 +341,7 @@ Overrides read_overrides(const py::dict& d) {
     else if (key == "solver") text(o.solver);
     else if (key == "ordering") text(o.ordering);
     else if (key == "preconditioner") text(o.preconditioner);
+    else if (key == "matrix") text(o.matrix);
     else if (key == "tolerance") {
       number(o.tolerance);
       // The range is checked by override_solver, as for --tolerance; 0 means "not given" there.
@@ -370,7 +371,7 @@ CaseDescription prepared_case(py::handle case_, const std::string& name, const p
   if (errors) *errors = loaded.errors;
   CaseDescription c = std::move(loaded.c);
   const Overrides o = read_overrides(overrides);
-  override_case(c, o.degree, o.elements, o.solver, o.tolerance, nullptr, o.preconditioner);
+  override_case(c, o.degree, o.elements, o.solver, o.tolerance, nullptr, o.preconditioner, o.matrix);
   c.allow_unverified_space = o.allow_unverified_space;
   if (!o.marking.empty()) c.adapt.mark_functions = o.marking == "functions";
   if (!o.strategy.empty()) c.adapt.maximum_strategy = o.strategy == "maximum";

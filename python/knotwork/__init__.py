@@ -86,10 +86,11 @@ def _name(case, name):
     return _DICT_NAME if isinstance(case, dict) else ""
 
 
-def _overrides(degree, elements, solver, tolerance, ordering, allow_unverified_space, preconditioner=None):
+def _overrides(degree, elements, solver, tolerance, ordering, allow_unverified_space, preconditioner=None,
+               matrix=None):
     return {"degree": degree, "elements": elements, "solver": solver, "tolerance": tolerance,
             "ordering": ordering, "allow_unverified_space": allow_unverified_space,
-            "preconditioner": preconditioner}
+            "preconditioner": preconditioner, "matrix": matrix}
 
 
 class Result:
@@ -199,7 +200,7 @@ class Study(list):
 
 
 def run(case, *, degree=None, elements=None, solver=None, tolerance=None, ordering="amd",
-        allow_unverified_space=False, output=None, progress=None, name=None, preconditioner=None):
+        allow_unverified_space=False, output=None, progress=None, name=None, preconditioner=None, matrix=None):
     """Solves a case once, like ``knotwork run``; returns a :class:`Result`.
 
     case: a case-file path, or a dict in the case-file schema.
@@ -208,7 +209,8 @@ def run(case, *, degree=None, elements=None, solver=None, tolerance=None, orderi
     this one process, with [solver] petsc_options); tolerance: the iterative solve's backward
     error, or PETSc's relative residual (as --tolerance). preconditioner: the iterative solve's
     ("auto", "jacobi", "boomeramg" or the family's own, e.g. "fast_diagonalization" or
-    "multigrid" for tensor-product spaces; as --preconditioner). ordering: CHOLMOD's
+    "multigrid" for tensor-product spaces; as --preconditioner). matrix: how CG gets K, "auto",
+    "assembled" or "matrix_free" (as --matrix). ordering: CHOLMOD's
     fill-reducing ordering. allow_unverified_space: as --allow-unverified-space.
     output: a directory for the ParaView files (None: nothing is written).
     progress: a callable taking one string per phase.
@@ -217,12 +219,12 @@ def run(case, *, degree=None, elements=None, solver=None, tolerance=None, orderi
     """
     return Result(_core.run(case, _name(case, name),
                             _overrides(degree, elements, solver, tolerance, ordering, allow_unverified_space,
-                                       preconditioner),
+                                       preconditioner, matrix),
                             output, progress))
 
 
 def converge(case, levels=4, *, degree=None, elements=None, solver=None, tolerance=None, ordering="amd",
-             output=None, progress=None, name=None, preconditioner=None):
+             output=None, progress=None, name=None, preconditioner=None, matrix=None):
     """A convergence study under uniform refinement, like ``knotwork converge``.
 
     Returns a :class:`Study` of ``levels`` dicts (the ``levels`` of ``converge --json``).
@@ -234,13 +236,14 @@ def converge(case, levels=4, *, degree=None, elements=None, solver=None, toleran
     if not 1 <= levels <= 12:
         raise InputError(f"levels: must be in [1, 12], got {levels}")
     j = _core.converge(case, _name(case, name), levels,
-                       _overrides(degree, elements, solver, tolerance, ordering, False, preconditioner), output, progress)
+                       _overrides(degree, elements, solver, tolerance, ordering, False, preconditioner, matrix), output,
+                       progress)
     return Study(j.pop("levels"), j)
 
 
 def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, strategy=None, min_fraction=None, degree=None, elements=None, solver=None,
           tolerance=None, ordering="amd", allow_dependent=False, output=None, output_every=1, progress=None,
-          name=None, preconditioner=None):
+          name=None, preconditioner=None, matrix=None):
     """The adaptive loop (estimate, mark, refine locally, solve), like ``knotwork adapt``.
 
     steps, theta, max_dofs, marking ("cells" or "functions"), strategy ("dorfler" or
@@ -259,7 +262,7 @@ def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, strategy
         raise InputError(f"theta: must be in (0, 1], got {theta!r}")
     if max_dofs is not None and (isinstance(max_dofs, bool) or not isinstance(max_dofs, int) or max_dofs < 1):
         raise InputError(f"max_dofs: must be a positive integer, got {max_dofs!r}")
-    overrides = _overrides(degree, elements, solver, tolerance, ordering, bool(allow_dependent), preconditioner)
+    overrides = _overrides(degree, elements, solver, tolerance, ordering, bool(allow_dependent), preconditioner, matrix)
     overrides["marking"] = marking
     overrides["strategy"] = strategy
     overrides["min_fraction"] = min_fraction

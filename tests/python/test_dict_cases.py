@@ -158,6 +158,9 @@ BAD_OVERRIDES = [
     (dict(ordering="random"), "random"),
     (dict(preconditioner="multigird"), "--preconditioner: 'multigird' is not a choice (did you mean 'multigrid'"),
     (dict(preconditioner=2), "preconditioner: must be a string"),
+    (dict(matrix="free"), "--matrix: 'free' is not a choice"),
+    (dict(matrix=1), "matrix: must be a string"),
+    (dict(matrix="matrix_free", solver="direct"), "[solver] matrix: \"matrix_free\" needs CG"),
 ]
 
 
