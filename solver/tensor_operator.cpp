@@ -181,7 +181,7 @@ struct Points {
 }  // namespace
 
 template <int N, class Kernel, class Affine>
-void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine) const {
+void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine, const std::atomic<bool>* stop) const {
   const Direction &U = u_, &V = v_;
   const int pu = N ? N : U.degree + 1, pv = N ? N : V.degree + 1, gu = N ? N : U.geometry_degree + 1,
             gv = N ? N : V.geometry_degree + 1;
@@ -192,6 +192,7 @@ void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine) const
     Field h[3];
     double c[kMaxP * kMaxP];
     for (int eu = 0; eu < U.elements; ++eu) {
+      if (stop && stop->load(std::memory_order_relaxed)) return;
       if constexpr (!std::is_same_v<Affine, std::nullptr_t>) {
         const std::array<double, 4>* f = affine_factors(eu, ev);
         if (f) {
@@ -250,6 +251,7 @@ void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine) const
 // Affine elements: the same factors at every point (to 64 eps of the largest).
 void TensorPoissonOperator::find_affine_elements() {
   affine_.assign(size_t(u_.elements) * v_.elements, {0, 0, 0, 0});
+  std::atomic<bool> curved{false};  // then the search stops: a curved mesh costs a few elements
   const int qu = u_.points, qv = v_.points;
   for_each_element<0>([&](int eu, int ev, int, int, const double*, const double*, const double*, const double*,
                           const Points& pts) {
@@ -286,7 +288,10 @@ void TensorPoissonOperator::find_affine_elements() {
     const double eps64 = 64 * std::numeric_limits<double>::epsilon() * (extent > 0 ? std::max(1.0, size / extent) : 1.0);
     if (pts.min_det > 0 && spread_d <= eps64 * largest_d && spread_det <= eps64 * largest_det)
       affine_[size_t(eu) + size_t(u_.elements) * ev] = first;
-  });
+    else
+      curved.store(true, std::memory_order_relaxed);
+  }, nullptr, &curved);
+  if (curved) affine_ = {};
 }
 
 int TensorPoissonOperator::uniform_size() const {

@@ -12,6 +12,7 @@
 // point, so the operator needs O(n_u + n_v) memory besides the vectors.
 #include <Eigen/Core>
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <vector>
 
@@ -76,8 +77,9 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // Every element, threaded: kernel(eu, ev, first u function, first v function, tables, Points)
   // with the geometry at its points; or, given `affine`, affine(eu, ev, fu, fv, factors) for the
   // elements that have constant factors, without the geometry.
+  // `stop`: once it is true, the remaining elements are skipped.
   template <int N, class Kernel, class Affine = std::nullptr_t>
-  void for_each_element(Kernel kernel, Affine affine = nullptr) const;
+  void for_each_element(Kernel kernel, Affine affine = nullptr, const std::atomic<bool>* stop = nullptr) const;
   // The element's constant factors (H, -F, E) / |det J| and |det J|, when its map is affine
   // (they are the same at every point, to 64 eps); null otherwise.
   const std::array<double, 4>* affine_factors(int eu, int ev) const {
@@ -93,8 +95,9 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   Eigen::VectorXd weights_;  // empty: B-splines (or NURBS of equal weights, the same functions)
   Eigen::MatrixX3d net_;
   bool polynomial_map_ = false;  // the net's weights are equal (then scaled to 1)
-  // Per element (eu + n_eu ev), its affine factors, |det J| = 0 where not affine; empty for
-  // NURBS spaces (whose functions are not products there).
+  // Per element (eu + n_eu ev), its affine factors, when every element is affine; empty
+  // otherwise (the search stops at the first curved element) and for NURBS spaces (whose
+  // functions are not products there).
   std::vector<std::array<double, 4>> affine_;
   double stiffness_ = 1, reaction_ = 0;
 };
