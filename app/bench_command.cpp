@@ -108,6 +108,13 @@ int bench_command(const BenchOptions& o) {
       std::fflush(stdout);
     }
   }
+  if (!o.json && cg)
+    for (const BenchResult& r : results)
+      if (r.matrix_nonzeros == 0) {
+        std::printf("nnz(A) 0: CG applied K without a matrix ([solver] matrix = \"auto\" on affine elements: "
+                    "docs/SOLVERS.md, \"Without a matrix\")\n");
+        break;
+      }
   if (o.json) {
     Json arr = Json::array();
     for (const auto& r : results) {
