@@ -4,15 +4,14 @@
 
 #include <algorithm>
 #include <atomic>
-#include <type_traits>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "quadrature/gauss_legendre.hpp"
-#include <memory>
-#include <optional>
 
 namespace knotwork {
 
@@ -204,11 +203,11 @@ void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine, const
       const double *bv = &V.value[size_t(ev) * qv * pv], *dv = &V.derivative[size_t(ev) * qv * pv];
       const double *gbu = &U.geometry_value[size_t(eu) * qu * gu], *gdu = &U.geometry_derivative[size_t(eu) * qu * gu];
       const double *gbv = &V.geometry_value[size_t(ev) * qv * gv], *gdv = &V.geometry_derivative[size_t(ev) * qv * gv];
+      // A polynomial map relative to the element's first control point (the functions sum to 1
+      // and their derivatives to 0): the Jacobian then sums terms of the element's size, not of
+      // the domain's, and rounds to a few eps of itself whatever the mesh size.
+      const long first = U.geometry_first[eu] + long(net_u_) * V.geometry_first[ev];
       for (int k = 0; k < (polynomial_map_ ? 2 : 3); ++k) {
-        // A polynomial map relative to the element's first control point (the functions sum to
-        // 1 and their derivatives to 0): the Jacobian then sums terms of the element's size,
-        // not of the domain's, and rounds to a few eps of itself whatever the mesh size.
-        const long first = U.geometry_first[eu] + long(net_u_) * V.geometry_first[ev];
         const double origin = polynomial_map_ ? net_(first, k) : 0.0;
         for (int b = 0; b < gv; ++b)
           for (int a = 0; a < gu; ++a) c[a + gu * b] = net_(first + a + long(net_u_) * b, k) - origin;
