@@ -118,6 +118,17 @@ class SplineSpace {
                                                                          const PoissonProblem& /*problem*/) const {
     return nullptr;
   }
+  // Whether the named one also serves CG without a matrix ([solver] matrix): those built from
+  // the diagonal alone do, through make_structured_preconditioner; the others through
+  // make_structured_preconditioner_without_matrix, from the operator matrix_free_operator gave.
+  virtual bool structured_preconditioner_without_matrix(const std::string& name) const {
+    return structured_preconditioner_needs_only_diagonal(name);
+  }
+  virtual std::unique_ptr<Preconditioner> make_structured_preconditioner_without_matrix(
+      const std::string& /*name*/, const DofLayout& /*layout*/, std::shared_ptr<const MatrixFreePoisson> /*op*/,
+      const Eigen::VectorXd& /*free_diagonal*/) const {
+    return nullptr;
+  }
   // Its Poisson operator applied without a matrix, K = stiffness (grad, grad) + reaction (., .)
   // by `quadrature`'s rules, when the family has one for this space (null otherwise).
   virtual std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double /*stiffness*/, double /*reaction*/,

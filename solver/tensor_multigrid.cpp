@@ -8,9 +8,13 @@
 #include <stdexcept>
 #include <utility>
 
+#include "solver/tensor_rediscretize.hpp"
+
 namespace knotwork {
 
-double tensor_multigrid_bytes(double functions, int p, int q) {
+double tensor_multigrid_bytes(double functions, int p, int q, bool with_matrix) {
+  const double vectors = functions * 8 * 6 * 4 / 3;
+  if (!with_matrix) return vectors + functions * 24 * 2;
   return functions * double(2 * p + 1) * (2 * q + 1) * 12 * 4 / 3 + functions * 8 * 6;
 }
 
@@ -123,6 +127,9 @@ Direction coarser(const Direction& fine, bool& halved, RowMatrix& prolongation) 
 struct Level {
   Direction u, v;
   RowMatrix A;            // the whole matrix over this level's free dofs, a + count_u b
+  // Or, without a matrix, the level's operator and its free functions (a box of them).
+  std::shared_ptr<const TensorPoissonOperator> op;
+  TensorPoissonOperator::FunctionBox free;
   Eigen::VectorXd scale;  // D^{-1/2}, D = diag(A) / diag(P)
   RowMatrix Pu, Pv;       // from the next coarser level (empty on the coarsest)
   long size() const { return static_cast<long>(u.count) * v.count; }
@@ -161,8 +168,13 @@ class TensorMultigrid final : public Preconditioner {
       for (int c = 0; c < 4; ++c) sweep(L, t, c, b, x);
     w.residual.resize(b.size());
     const int n = static_cast<int>(b.size());
+    if (L.op) {
+      L.op->apply_within(x.data(), L.free, w.residual.data());
+      w.residual = b - w.residual;
+    } else {
 #pragma omp parallel for schedule(static)
-    for (int d = 0; d < n; ++d) w.residual[d] = b[d] - row_dot(L.A, d, x.data());
+      for (int d = 0; d < n; ++d) w.residual[d] = b[d] - row_dot(L.A, d, x.data());
+    }
     // Restriction (P_v (x) P_u)^T r and prolongation, with vectors as count_u x count_v arrays.
     const Level& C = levels_[l + 1];
     {
@@ -204,11 +216,21 @@ class TensorMultigrid final : public Preconditioner {
       const Window& V = wv[cv + 2 * (k / na)];
       thread_local Eigen::MatrixXd R, T;
       R.resize(U.size, V.size);
-      for (int j = 0; j < V.size; ++j)
-        for (int i = 0; i < U.size; ++i) {
-          const int d = U.begin + i + nu * (V.begin + j);
-          R(i, j) = (b[d] - row_dot(L.A, d, x.data())) * L.scale[d];
-        }
+      if (L.op) {  // (A x)_B from the elements that touch the block
+        const TensorPoissonOperator::FunctionBox rows{L.free.first_u + U.begin, U.size, L.free.first_v + V.begin, V.size};
+        L.op->apply_rows(x.data(), L.free, rows, R.data());
+        for (int j = 0; j < V.size; ++j)
+          for (int i = 0; i < U.size; ++i) {
+            const int d = U.begin + i + nu * (V.begin + j);
+            R(i, j) = (b[d] - R(i, j)) * L.scale[d];
+          }
+      } else {
+        for (int j = 0; j < V.size; ++j)
+          for (int i = 0; i < U.size; ++i) {
+            const int d = U.begin + i + nu * (V.begin + j);
+            R(i, j) = (b[d] - row_dot(L.A, d, x.data())) * L.scale[d];
+          }
+      }
       T.noalias() = U.U.transpose() * R;
       R.noalias() = T * V.U;
       for (int j = 0; j < V.size; ++j)
@@ -239,8 +261,7 @@ bool free_range(const std::vector<int>& free, int n, Direction& d) {
   return true;
 }
 
-void set_scale(Level& L) {
-  const Eigen::VectorXd diagonal = L.A.diagonal();
+void set_scale(Level& L, const Eigen::VectorXd& diagonal) {
   L.scale.resize(L.size());
   for (int j = 0; j < L.v.count; ++j)
     for (int i = 0; i < L.u.count; ++i) {
@@ -420,12 +441,101 @@ std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, 
   for (size_t l = 0; l + 1 < levels.size(); ++l) {
     build_windows(levels[l].u, block, options.tilings);
     build_windows(levels[l].v, block, options.tilings);
-    set_scale(levels[l]);
+    set_scale(levels[l], levels[l].A.diagonal());
   }
   if (report) {
     report->free_dofs.clear();
     for (const Level& L : levels) report->free_dofs.push_back(L.size());
     report->block = block;
+  }
+  Eigen::SparseMatrix<double> coarsest = levels.back().A;
+  levels.back().A = RowMatrix();
+  return std::make_unique<TensorMultigrid>(std::move(levels), std::move(coarsest));
+}
+
+std::unique_ptr<Preconditioner> tensor_multigrid(std::shared_ptr<const TensorPoissonOperator> op, const DofLayout& layout,
+                                                 const Eigen::VectorXd& free_diagonal, const SeparableCoefficients& geometry,
+                                                 const TensorMultigridOptions& options, TensorMultigridReport* report) {
+  const BSplineBasis1D &space_u = op->space_u(), &space_v = op->space_v();
+  const int nu = space_u.num_functions(), nv = space_v.num_functions();
+  std::vector<int> iu, iv;
+  if (!tensor_free_indices(nu, nv, layout, iu, iv) || !space_u.is_open() || !space_v.is_open()) return nullptr;
+  std::vector<Level> levels;
+  levels.reserve(64);
+  std::vector<Eigen::VectorXd> diagonals;  // per level, over its free functions
+  levels.emplace_back();
+  Level& fine = levels.back();
+  if (!free_range(iu, nu, fine.u) || !free_range(iv, nv, fine.v)) return nullptr;
+  const int p = std::max(space_u.degree(), space_v.degree());
+  const int block = options.block > 0 ? std::max(options.block, 2 * p + 2) : std::max(32, 2 * p + 2);
+  fine.u.basis = space_u;
+  fine.u.mass_weight = geometry.a2;
+  fine.u.stiffness_weight = geometry.a1;
+  fine.v.basis = space_v;
+  fine.v.mass_weight = geometry.b1;
+  fine.v.stiffness_weight = geometry.b2;
+  auto box = [](const Level& L) {
+    return TensorPoissonOperator::FunctionBox{L.u.first, L.u.count, L.v.first, L.v.count};
+  };
+  fine.op = std::move(op);
+  fine.free = box(fine);
+  diagonals.push_back(free_diagonal);
+  // Rediscretized levels while the geometry lives on the coarser elements; from the first that
+  // cannot be, the matrix of the last operator (by probing) and Galerkin products below it.
+  while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity()) {
+    Level& f = levels.back();
+    bool hu = false, hv = false;
+    Direction u = coarser(f.u, hu, f.Pu), v = coarser(f.v, hv, f.Pv);
+    if (!hu && !hv) {
+      f.Pu = f.Pv = RowMatrix();
+      break;
+    }
+    std::shared_ptr<const TensorPoissonOperator> coarse_op;
+    if (f.op) {
+      coarse_op = rediscretized_operator(*f.op, hu, hv);
+      // On the finest level that would mean assembling the matrix the caller chose not to
+      // store: the multigrid without a matrix does not apply.
+      if (!coarse_op && levels.size() == 1) return nullptr;
+      if (!coarse_op) {
+        f.A = matrix_by_probing(*f.op, f.free);
+        f.op = nullptr;
+      }
+    }
+    levels.emplace_back();
+    Level& c = levels.back();
+    Level& f2 = levels[levels.size() - 2];
+    c.u = std::move(u);
+    c.v = std::move(v);
+    if (coarse_op) {
+      c.op = std::move(coarse_op);
+      c.free = box(c);
+      const Eigen::VectorXd all = c.op->diagonal();
+      Eigen::VectorXd d(c.size());
+      for (int j = 0; j < c.v.count; ++j)
+        for (int i = 0; i < c.u.count; ++i) d[i + long(c.u.count) * j] = all[(c.u.first + i) + long(c.u.basis.num_functions()) * (c.v.first + j)];
+      diagonals.push_back(std::move(d));
+    } else {
+      galerkin(f2.A, f2.u.count, f2.v.count, f2.Pu, f2.Pv, hu, hv, c.A);
+      diagonals.push_back(c.A.diagonal());
+    }
+  }
+  // A fine level that does not coarsen (odd element counts) would be factored whole.
+  if (levels.size() == 1 && levels.back().size() > options.coarsest_functions) return nullptr;
+  if (levels.back().op) {
+    levels.back().A = matrix_by_probing(*levels.back().op, levels.back().free);
+    levels.back().op = nullptr;
+  }
+  for (size_t l = 0; l + 1 < levels.size(); ++l) {
+    build_windows(levels[l].u, block, options.tilings);
+    build_windows(levels[l].v, block, options.tilings);
+    set_scale(levels[l], diagonals[l]);
+  }
+  if (report) {
+    report->free_dofs.clear();
+    for (const Level& L : levels) report->free_dofs.push_back(L.size());
+    report->block = block;
+    report->without_matrix = 0;
+    for (const Level& L : levels) report->without_matrix += L.op != nullptr;
   }
   Eigen::SparseMatrix<double> coarsest = levels.back().A;
   levels.back().A = RowMatrix();

@@ -25,6 +25,7 @@
 #include "solver/fast_diagonalization.hpp"
 #include "solver/iterative_solver.hpp"
 #include "solver/sparsity.hpp"
+#include "solver/tensor_operator.hpp"
 
 namespace knotwork {
 
@@ -38,6 +39,7 @@ struct TensorMultigridOptions {
 struct TensorMultigridReport {
   std::vector<long> free_dofs;  // per level, finest first; the last is solved by Cholesky
   int block = 0;
+  int without_matrix = 0;  // the first levels, applied without a matrix (the variant below)
 };
 
 // The V-cycle (symmetric: the post-smoother sweeps the colours backwards) for the tensor space
@@ -50,10 +52,25 @@ std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, 
                                                  const NitscheEnds& nitsche = {}, const TensorMultigridOptions& options = {},
                                                  TensorMultigridReport* report = nullptr);
 
+// The same V-cycle without the fine matrix: the levels are the operator `op` rediscretized on
+// the halved spaces (rediscretized_operator: the geometry moved to their elements), their
+// smoothers' block residuals computed from the elements that touch each block, as long as the
+// geometry lives on the coarser elements; the first level where it does not, and the coarsest,
+// get their matrix by probing the operator, and Galerkin products below. On affine elements the
+// quadrature is exact and the rediscretized operators are the Galerkin ones: the V-cycle is the
+// one above. `free_diagonal`: K's diagonal over the free dofs. Null where the assembled one is
+// null, or when the first coarser level cannot be rediscretized (that would store the matrix).
+std::unique_ptr<Preconditioner> tensor_multigrid(std::shared_ptr<const TensorPoissonOperator> op, const DofLayout& layout,
+                                                 const Eigen::VectorXd& free_diagonal, const SeparableCoefficients& geometry = {},
+                                                 const TensorMultigridOptions& options = {},
+                                                 TensorMultigridReport* report = nullptr);
+
 // Its storage for `functions` functions of bi-degree (p, q): the whole matrix (both triangles,
 // with indices), its coarse levels (a third more) and six vectors per level (for memory
 // guards; measured 0.95-0.99 GB at 1M dofs and 3.9 GB at 4.2M, p = 2, whole runs).
-double tensor_multigrid_bytes(double functions, int p, int q);
+// Without a matrix (with_matrix false): the six vectors per level, the first coarser level's
+// net and the knot removal's dense copies of the fine net (24 bytes per function each).
+double tensor_multigrid_bytes(double functions, int p, int q, bool with_matrix = true);
 
 // The basis with every other breakpoint dropped (the odd ones, each with its multiplicity), the
 // next coarser level of a uniform refinement; none when the number of elements is odd.

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "quadrature/gauss_legendre.hpp"
 
@@ -138,7 +139,12 @@ TensorPoissonOperator::Direction TensorPoissonOperator::direction(const BSplineB
 
 TensorPoissonOperator::TensorPoissonOperator(const TensorPatch& patch, double stiffness, double reaction, int points_u,
                                              int points_v)
-    : stiffness_(stiffness), reaction_(reaction) {
+    : space_u_(*patch.space_u),
+      space_v_(*patch.space_v),
+      geometry_u_(*patch.geometry_u),
+      geometry_v_(*patch.geometry_v),
+      stiffness_(stiffness),
+      reaction_(reaction) {
   u_ = direction(*patch.space_u, *patch.geometry_u, points_u);
   v_ = direction(*patch.space_v, *patch.geometry_v, points_v);
   n_u_ = patch.space_u->num_functions();
@@ -180,17 +186,19 @@ struct Points {
 }  // namespace
 
 template <int N, class Kernel, class Affine>
-void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine, const std::atomic<bool>* stop) const {
+void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine, const std::atomic<bool>* stop,
+                                             const std::array<int, 4>* elements) const {
   const Direction &U = u_, &V = v_;
   const int pu = N ? N : U.degree + 1, pv = N ? N : V.degree + 1, gu = N ? N : U.geometry_degree + 1,
             gv = N ? N : V.geometry_degree + 1;
   const int qu = N ? N : U.points, qv = N ? N : V.points;
   const bool rational = weights_.size() > 0;
-  over_row_bands(V.elements, V.degree, [&](int ev) {
+  const int eu_first = elements ? (*elements)[0] : 0, eu_last = elements ? (*elements)[1] : U.elements - 1;
+  const auto row = [&](int ev) {
     Points pts;
     Field h[3];
     double c[kMaxP * kMaxP];
-    for (int eu = 0; eu < U.elements; ++eu) {
+    for (int eu = eu_first; eu <= eu_last; ++eu) {
       if (stop && stop->load(std::memory_order_relaxed)) return;
       if constexpr (!std::is_same_v<Affine, std::nullptr_t>) {
         const std::array<double, 4>* f = affine_factors(eu, ev);
@@ -244,13 +252,19 @@ void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine, const
       pts.min_det = min_det;
       kernel(eu, ev, fu, fv, bu, du, bv, dv, pts);
     }
-  });
+  };
+  if (elements) {
+    for (int ev = (*elements)[2]; ev <= (*elements)[3]; ++ev) row(ev);
+  } else {
+    over_row_bands(V.elements, V.degree, row);
+  }
 }
 
 // Affine elements: the same factors at every point (to 64 eps of the largest).
 void TensorPoissonOperator::find_affine_elements() {
   affine_.assign(size_t(u_.elements) * v_.elements, {0, 0, 0, 0});
   std::atomic<bool> curved{false};  // then the search stops: a curved mesh costs a few elements
+  std::atomic<double> known{0.0};   // the largest rounding tolerance of an element's factors
   const int qu = u_.points, qv = v_.points;
   for_each_element<0>([&](int eu, int ev, int, int, const double*, const double*, const double*, const double*,
                           const Points& pts) {
@@ -285,12 +299,48 @@ void TensorPoissonOperator::find_affine_elements() {
           extent = std::max(extent, std::abs(x - net_(corner, k) / net_(corner, 2)));
         }
     const double eps64 = 64 * std::numeric_limits<double>::epsilon() * (extent > 0 ? std::max(1.0, size / extent) : 1.0);
+    for (double seen = known.load(); eps64 > seen && !known.compare_exchange_weak(seen, eps64);) {
+    }
     if (pts.min_det > 0 && spread_d <= eps64 * largest_d && spread_det <= eps64 * largest_det)
       affine_[size_t(eu) + size_t(u_.elements) * ev] = first;
     else
       curved.store(true, std::memory_order_relaxed);
   }, nullptr, &curved);
-  if (curved) affine_ = {};
+  if (curved) {
+    affine_ = {};
+    return;
+  }
+  // One set of factors for every element (a map affine on the whole patch, the unit square's):
+  // equal to what the data's rounding can tell apart, as above.
+  const std::array<double, 4> f0 = affine_[0];
+  const double tolerance = known.load(), largest_d = std::max({std::abs(f0[0]), std::abs(f0[1]), std::abs(f0[2])});
+  for (const std::array<double, 4>& f : affine_) {
+    for (int m = 0; m < 3; ++m)
+      if (std::abs(f[m] - f0[m]) > tolerance * largest_d) return;
+    if (std::abs(f[3] - f0[3]) > tolerance * f0[3]) return;
+  }
+  uniform_ = true;
+  band_u_ = band(u_);
+  band_v_ = band(v_);
+}
+
+TensorPoissonOperator::Band TensorPoissonOperator::band(const Direction& d) {
+  Band b;
+  const int p = d.degree, P = p + 1, width = 2 * p + 1;
+  b.n = d.first.empty() ? 0 : d.first.back() + P;
+  b.p = p;
+  b.K.assign(size_t(b.n) * width, 0.0);
+  b.M.assign(b.K.size(), 0.0);
+  b.C.assign(b.K.size(), 0.0);
+  for (int e = 0; e < d.elements; ++e)
+    for (int a = 0; a < P; ++a)
+      for (int c = 0; c < P; ++c) {
+        const size_t to = size_t(d.first[e] + a) * width + (c - a + p), from = (size_t(e) * P + a) * P + c;
+        b.K[to] += d.stiffness[from];
+        b.M[to] += d.mass[from];
+        b.C[to] += d.mixed[from];
+      }
+  return b;
 }
 
 int TensorPoissonOperator::uniform_size() const {
@@ -300,26 +350,185 @@ int TensorPoissonOperator::uniform_size() const {
   return n;
 }
 
-void TensorPoissonOperator::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
-  if (x.size() != num_functions()) throw std::invalid_argument("TensorPoissonOperator::apply: wrong vector size");
+template <class Sized>
+void TensorPoissonOperator::dispatch(Sized sized) const {
   switch (uniform_size()) {
-    case 2: return apply_sized<2>(x, y);
-    case 3: return apply_sized<3>(x, y);
-    case 4: return apply_sized<4>(x, y);
-    case 5: return apply_sized<5>(x, y);
-    case 6: return apply_sized<6>(x, y);
-    case 7: return apply_sized<7>(x, y);
-    default: return apply_sized<0>(x, y);
+    case 2: return sized(std::integral_constant<int, 2>{});
+    case 3: return sized(std::integral_constant<int, 3>{});
+    case 4: return sized(std::integral_constant<int, 4>{});
+    case 5: return sized(std::integral_constant<int, 5>{});
+    case 6: return sized(std::integral_constant<int, 6>{});
+    case 7: return sized(std::integral_constant<int, 7>{});
+    default: return sized(std::integral_constant<int, 0>{});
   }
 }
 
-template <int N>
-void TensorPoissonOperator::apply_sized(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+void TensorPoissonOperator::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  if (x.size() != num_functions()) throw std::invalid_argument("TensorPoissonOperator::apply: wrong vector size");
+  if (uniform_) {
+    y.resize(num_functions());
+    apply_within(x.data(), FunctionBox{0, n_u_, 0, n_v_}, y.data());
+    return;
+  }
   const bool rational = weights_.size() > 0;
   const Eigen::VectorXd scaled = rational ? Eigen::VectorXd(x.cwiseProduct(weights_)) : Eigen::VectorXd();
   const double* xw = rational ? scaled.data() : x.data();
+  const double* w = rational ? weights_.data() : nullptr;
   y.setZero(num_functions());
   double* out = y.data();
+  const long n = n_u_;
+  dispatch([&](auto size) {
+    product<decltype(size)::value>([xw, n](int i, int j) { return xw[i + n * j]; },
+                                   [out, w, n](int i, int j, double v) { out[i + n * j] += w ? w[i + n * j] * v : v; },
+                                   nullptr);
+  });
+}
+
+bool TensorPoissonOperator::elements_touching(const FunctionBox& rows, std::array<int, 4>& elements) const {
+  // An element's functions are first .. first + degree, and `first` does not decrease.
+  auto range = [](const Direction& d, int from, int count, int& e0, int& e1) {
+    e0 = static_cast<int>(std::lower_bound(d.first.begin(), d.first.end(), from - d.degree) - d.first.begin());
+    e1 = static_cast<int>(std::upper_bound(d.first.begin(), d.first.end(), from + count - 1) - d.first.begin()) - 1;
+    return count > 0 && e0 <= e1;
+  };
+  return range(u_, rows.first_u, rows.count_u, elements[0], elements[1]) &&
+         range(v_, rows.first_v, rows.count_v, elements[2], elements[3]);
+}
+
+void TensorPoissonOperator::apply_rows(const double* x, const FunctionBox& given, const FunctionBox& rows, double* y) const {
+  std::fill(y, y + long(rows.count_u) * rows.count_v, 0.0);
+  std::array<int, 4> elements;
+  if (!elements_touching(rows, elements)) return;
+  // The touched elements' functions lie within a degree of the rows: x on that padded box
+  // (zero outside `given`, times the weights when rational) and the products into another, so
+  // that the kernels index without bounds checks.
+  const int pu = u_.degree, pv = v_.degree, u0 = rows.first_u - pu, v0 = rows.first_v - pv;
+  const long mu = rows.count_u + 2 * pu, mv = rows.count_v + 2 * pv;
+  thread_local std::vector<double> in, out;
+  in.assign(size_t(mu * mv), 0.0);
+  out.assign(size_t(mu * mv), 0.0);
+  const double* w = weights_.size() > 0 ? weights_.data() : nullptr;
+  const long n = n_u_;
+  for (int b = 0; b < mv; ++b) {
+    const int j = v0 + b, gj = j - given.first_v;
+    if (gj < 0 || gj >= given.count_v) continue;
+    for (int a = 0; a < mu; ++a) {
+      const int i = u0 + a, gi = i - given.first_u;
+      if (gi < 0 || gi >= given.count_u) continue;
+      const double v = x[gi + long(given.count_u) * gj];
+      in[a + mu * b] = w ? v * w[i + n * j] : v;
+    }
+  }
+  if (uniform_) {  // (affine elements only: no weights)
+    kronecker_rows(in.data(), mu, rows, y);
+    return;
+  }
+  const double* in_at = in.data() - u0 - mu * v0;  // in_at[i + mu j]: function (i, j)
+  double* out_at = out.data() - u0 - mu * v0;
+  dispatch([&](auto size) {
+    product<decltype(size)::value>([in_at, mu](int i, int j) { return in_at[i + mu * j]; },
+                                   [out_at, mu](int i, int j, double v) { out_at[i + mu * j] += v; }, &elements);
+  });
+  for (int b = 0; b < rows.count_v; ++b)
+    for (int a = 0; a < rows.count_u; ++a) {
+      const int i = rows.first_u + a, j = rows.first_v + b;
+      const double v = out[(a + pu) + mu * (b + pv)];
+      y[a + long(rows.count_u) * b] = w ? v * w[i + n * j] : v;
+    }
+}
+
+void TensorPoissonOperator::apply_within(const double* x, const FunctionBox& given, double* y) const {
+  // Bands of rows, each from the elements that touch it: a band of h rows recomputes p element
+  // rows of its neighbours', so bands stay at least 16 (p + 1) rows tall.
+  const int bands = std::clamp(given.count_v / (16 * (v_.degree + 1)), 1, 8 * omp_get_max_threads());
+#pragma omp parallel for schedule(dynamic)
+  for (int k = 0; k < bands; ++k) {
+    const int b0 = static_cast<int>(long(given.count_v) * k / bands), b1 = static_cast<int>(long(given.count_v) * (k + 1) / bands);
+    const FunctionBox rows{given.first_u, given.count_u, given.first_v + b0, b1 - b0};
+    apply_rows(x, given, rows, y + long(given.count_u) * b0);
+  }
+}
+
+namespace {
+
+// The Kronecker form's two passes, W = 2p + 1 band entries per row when known (0: p at run
+// time): s_t = X B_t^T along v over the padded u range, then y = sum_t A_t s_t along u.
+template <int W>
+void kronecker_sized(const double* in, long mu, int pu_, int pv_, int first_u, int count_u, int first_v, int count_v,
+                     const double* Ku, const double* Mu, const double* Cu, int nu, const double* Kv, const double* Mv,
+                     const double* Cv, int nv, double d11, double d12, double d22, double r, double* y) {
+  const int wu = W ? W : 2 * pu_ + 1, wv = W ? W : 2 * pv_ + 1, pu = (wu - 1) / 2;
+  const bool mixed = d12 != 0;
+  thread_local std::vector<double> s1, s2, s3, s4;
+  const size_t size = size_t(mu) * count_v;
+  s1.resize(size), s2.resize(size);
+  if (mixed) s3.resize(size), s4.resize(size);
+  for (int jj = 0; jj < count_v; ++jj) {
+    const int j = first_v + jj;
+    const double *mv = Mv + size_t(j) * wv, *kv = Kv + size_t(j) * wv, *cv = Cv + size_t(j) * wv;
+    for (long a = 0; a < mu; ++a) {
+      double t1 = 0, t2 = 0;
+      for (int k = 0; k < wv; ++k) {
+        const double x = in[a + mu * (jj + k)];
+        t1 += mv[k] * x, t2 += kv[k] * x;
+      }
+      s1[a + mu * jj] = t1, s2[a + mu * jj] = t2;
+    }
+    if (mixed)
+      for (long a = 0; a < mu; ++a) {
+        // X C_v: sum_c x(a, c) C_v(c, j), C_v(c, j) at row c, entry j - c + p = 2p - k; X C_v^T: C_v(j, c).
+        double t3 = 0, t4 = 0;
+        const int pv = (wv - 1) / 2;
+        for (int k = 0; k < wv; ++k) {
+          const int c = j + k - pv;
+          const double x = in[a + mu * (jj + k)];
+          if (c >= 0 && c < nv) t3 += Cv[size_t(c) * wv + (wv - 1 - k)] * x;
+          t4 += cv[k] * x;
+        }
+        s3[a + mu * jj] = t3, s4[a + mu * jj] = t4;
+      }
+  }
+  for (int jj = 0; jj < count_v; ++jj)
+    for (int ii = 0; ii < count_u; ++ii) {
+      const int i = first_u + ii;
+      const double *ku = Ku + size_t(i) * wu, *mu_ = Mu + size_t(i) * wu, *cu = Cu + size_t(i) * wu;
+      const double* t1 = &s1[ii + mu * jj];
+      const double* t2 = &s2[ii + mu * jj];
+      double sum = 0;
+      for (int k = 0; k < wu; ++k) sum += (d11 * ku[k] + r * mu_[k]) * t1[k] + d22 * mu_[k] * t2[k];
+      if (mixed) {
+        const double* t3 = &s3[ii + mu * jj];
+        const double* t4 = &s4[ii + mu * jj];
+        for (int k = 0; k < wu; ++k) {
+          const int c = i + k - pu;
+          if (c >= 0 && c < nu) sum += d12 * (cu[k] * t3[k] + Cu[size_t(c) * wu + (wu - 1 - k)] * t4[k]);
+          else sum += d12 * cu[k] * t3[k];
+        }
+      }
+      y[ii + long(count_u) * jj] = sum;
+    }
+}
+
+}  // namespace
+
+void TensorPoissonOperator::kronecker_rows(const double* in, long mu, const FunctionBox& rows, double* y) const {
+  const std::array<double, 4>& f = affine_[0];
+  const double d11 = stiffness_ * f[0], d12 = stiffness_ * f[1], d22 = stiffness_ * f[2], r = reaction_ * f[3];
+  const int pu = u_.degree, pv = v_.degree;
+  auto run = [&](auto width) {
+    kronecker_sized<decltype(width)::value>(in, mu, pu, pv, rows.first_u, rows.count_u, rows.first_v, rows.count_v,
+                                            band_u_.K.data(), band_u_.M.data(), band_u_.C.data(), band_u_.n,
+                                            band_v_.K.data(), band_v_.M.data(), band_v_.C.data(), band_v_.n, d11, d12, d22, r, y);
+  };
+  if (pu == pv && pu == 2) return run(std::integral_constant<int, 5>{});
+  if (pu == pv && pu == 3) return run(std::integral_constant<int, 7>{});
+  if (pu == pv && pu == 4) return run(std::integral_constant<int, 9>{});
+  return run(std::integral_constant<int, 0>{});
+}
+
+template <int N, class Gather, class Scatter>
+void TensorPoissonOperator::product(Gather gather, Scatter scatter, const std::array<int, 4>* elements) const {
+  const bool rational = weights_.size() > 0;
   const int pu = N ? N : u_.degree + 1, pv = N ? N : v_.degree + 1, qu = N ? N : u_.points, qv = N ? N : v_.points;
   // An element whose factors are constant (an affine map there): K_e X = d11 Ku X Mv^T +
   // d22 Mu X Kv^T + d12 (Cu X Cv + Cu^T X Cv^T) + c |det| Mu X Mv^T, from the element's
@@ -329,7 +538,7 @@ void TensorPoissonOperator::apply_sized(const Eigen::VectorXd& x, Eigen::VectorX
     const double *Kv = &v_.stiffness[size_t(ev) * pv * pv], *Mv = &v_.mass[size_t(ev) * pv * pv], *Cv = &v_.mixed[size_t(ev) * pv * pv];
     double X[kMaxP][kMaxP], t1[kMaxP][kMaxP], t2[kMaxP][kMaxP], t3[kMaxP][kMaxP], t4[kMaxP][kMaxP];
     for (int b = 0; b < pv; ++b)
-      for (int a = 0; a < pu; ++a) X[b][a] = xw[(fu + a) + n_u_ * (fv + b)];
+      for (int a = 0; a < pu; ++a) X[b][a] = gather(fu + a, fv + b);
     // Over v: t1 = X Mv^T, t2 = X Kv^T, t3 = X Cv, t4 = X Cv^T (column b of each, a fastest).
     for (int b = 0; b < pv; ++b)
       for (int a = 0; a < pu; ++a) {
@@ -349,7 +558,7 @@ void TensorPoissonOperator::apply_sized(const Eigen::VectorXd& x, Eigen::VectorX
         for (int c = 0; c < pu; ++c)
           y += (d11 * Ku[a * pu + c] + r * Mu[a * pu + c]) * t1[b][c] + d22 * Mu[a * pu + c] * t2[b][c] +
                d12 * (Cu[a * pu + c] * t3[b][c] + Cu[c * pu + a] * t4[b][c]);
-        out[(fu + a) + n_u_ * (fv + b)] += y;
+        scatter(fu + a, fv + b, y);
       }
   };
   for_each_element<N>([&](int, int, int fu, int fv, const double* bu, const double* du, const double* bv, const double* dv,
@@ -357,7 +566,7 @@ void TensorPoissonOperator::apply_sized(const Eigen::VectorXd& x, Eigen::VectorX
     double c[kMaxP * kMaxP];
     Field s;
     for (int b = 0; b < pv; ++b)
-      for (int a = 0; a < pu; ++a) c[a + pu * b] = xw[(fu + a) + n_u_ * (fv + b)];
+      for (int a = 0; a < pu; ++a) c[a + pu * b] = gather(fu + a, fv + b);
     evaluate_field<N>(c, pu, pv, qu, qv, bu, du, bv, dv, s);
     // At each point the flux q = c_s D grad u and the reaction c_r m u, moved onto the test
     // functions' factors: grad R_a = w_a (grad N_a - N_a grad W / W) / W.
@@ -397,10 +606,9 @@ void TensorPoissonOperator::apply_sized(const Eigen::VectorXd& x, Eigen::VectorX
       for (int a = 0; a < pu; ++a) {
         double r = 0;
         for (int i = 0; i < qu; ++i) r += du[i * pu + a] * a1[b][i] + bu[i * pu + a] * a2[b][i];
-        const int f = (fu + a) + n_u_ * (fv + b);
-        out[f] += rational ? weights_[f] * r : r;
+        scatter(fu + a, fv + b, r);
       }
-  }, affine);
+  }, affine, nullptr, elements);
 }
 
 Eigen::VectorXd TensorPoissonOperator::diagonal() const {

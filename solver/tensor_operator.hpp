@@ -52,12 +52,40 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   Eigen::VectorXd load(const Expression& source) const override;
   int max_row_nonzeros() const override { return (2 * u_.degree + 1) * (2 * v_.degree + 1); }
   bool all_elements_affine() const override { return affine_elements() == long(u_.elements) * v_.elements; }
+  // Whether every element also has the same factors (applied in Kronecker form).
+  bool uniform_factors() const { return uniform_; }
   // How many elements have an affine map (applied from univariate matrices, with no geometry).
   long affine_elements() const {
     long n = 0;
     for (const auto& f : affine_) n += f[3] > 0;
     return n;
   }
+
+  // A rectangle of functions: u indices first_u .. first_u + count_u - 1, v likewise, numbered
+  // (i - first_u) + count_u (j - first_v).
+  struct FunctionBox {
+    int first_u = 0, count_u = 0, first_v = 0, count_v = 0;
+  };
+  // y = (K x) at the functions of `rows` (y numbered as `rows`), x given at the functions of
+  // `given` and zero at the others: a block smoother's residual, from the elements that touch
+  // the rows only ((m + p)^2 elements for m x m rows). Serial: callers run blocks in parallel.
+  void apply_rows(const double* x, const FunctionBox& given, const FunctionBox& rows, double* y) const;
+  // The same over all of `given` (y numbered as `given`), threaded over bands of rows.
+  void apply_within(const double* x, const FunctionBox& given, double* y) const;
+
+  // What the operator was made of, for a coarser operator of the same problem (the multigrid's
+  // rediscretized levels, solver/tensor_multigrid.cpp): the bases, the weights (empty when
+  // equal) and the geometry's homogeneous net (scaled to weights 1 when they are equal).
+  const BSplineBasis1D& space_u() const { return space_u_; }
+  const BSplineBasis1D& space_v() const { return space_v_; }
+  const BSplineBasis1D& geometry_u() const { return geometry_u_; }
+  const BSplineBasis1D& geometry_v() const { return geometry_v_; }
+  const Eigen::VectorXd& weights() const { return weights_; }
+  const Eigen::MatrixX3d& net() const { return net_; }
+  double stiffness() const { return stiffness_; }
+  double reaction() const { return reaction_; }
+  int points_u() const { return u_.points; }
+  int points_v() const { return v_.points; }
 
  private:
   struct Direction {
@@ -78,8 +106,10 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // with the geometry at its points; or, given `affine`, affine(eu, ev, fu, fv, factors) for the
   // elements that have constant factors, without the geometry.
   // `stop`: once it is true, the remaining elements are skipped.
+  // `elements` (first and last element in u, then in v, inclusive): only those, serially.
   template <int N, class Kernel, class Affine = std::nullptr_t>
-  void for_each_element(Kernel kernel, Affine affine = nullptr, const std::atomic<bool>* stop = nullptr) const;
+  void for_each_element(Kernel kernel, Affine affine = nullptr, const std::atomic<bool>* stop = nullptr,
+                        const std::array<int, 4>* elements = nullptr) const;
   // The element's constant factors (H, -F, E) / |det J| and |det J|, when its map is affine
   // (they are the same at every point, to 64 eps); null otherwise.
   const std::array<double, 4>* affine_factors(int eu, int ev) const {
@@ -87,10 +117,33 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
     const std::array<double, 4>& f = affine_[size_t(eu) + size_t(u_.elements) * ev];
     return f[3] > 0 ? &f : nullptr;
   }
-  template <int N>
-  void apply_sized(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  // y = K x element by element: gather(i, j) reads x at function (i, j) (times its weight when
+  // rational), scatter(i, j, value) adds into y; over `elements` only when given.
+  template <int N, class Gather, class Scatter>
+  void product(Gather gather, Scatter scatter, const std::array<int, 4>* elements) const;
+  template <class Sized>
+  void dispatch(Sized sized) const;
+  // The elements whose functions meet the box's rows (inclusive ranges); false when none do.
+  bool elements_touching(const FunctionBox& rows, std::array<int, 4>& elements) const;
+
+  // The univariate matrices assembled over the whole direction, as bands: entry (i, i + k - p)
+  // at i (2p + 1) + k.
+  struct Band {
+    int n = 0, p = 0;
+    std::vector<double> K, M, C;  // stiffness, mass, mixed (derivative on the row's function)
+  };
+  static Band band(const Direction& d);
+  // y at `rows` from x on the padded box of rows +- the degrees (in, mu x mv) by the Kronecker
+  // form of a patch whose elements share their factors.
+  void kronecker_rows(const double* in, long mu, const FunctionBox& rows, double* y) const;
 
   Direction u_, v_;
+  // Every element has the factors of affine_[0] (a map affine on the whole patch): then
+  // K = d11 K_u (x) M_v + d22 M_u (x) K_v + d12 (C_u (x) C_v^T + C_u^T (x) C_v) + c M_u (x) M_v
+  // with the bands below, about a tenth of the element-by-element flops.
+  bool uniform_ = false;
+  Band band_u_, band_v_;
+  BSplineBasis1D space_u_, space_v_, geometry_u_, geometry_v_;
   int n_u_ = 0, n_v_ = 0, net_u_ = 0;
   Eigen::VectorXd weights_;  // empty: B-splines (or NURBS of equal weights, the same functions)
   Eigen::MatrixX3d net_;

@@ -118,8 +118,8 @@ std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& sp
                                  std::shared_ptr<const MatrixFreePoisson>& op) {
   if (chosen.method != "iterative") return "needs CG (method = \"iterative\", or \"auto\" from 10 000 functions)";
   if (chosen.preconditioner == kBoomerAmgName ||
-      (chosen.preconditioner != "jacobi" && !space.structured_preconditioner_needs_only_diagonal(chosen.preconditioner)))
-    return "needs a preconditioner built from K's diagonal alone (not \"" + chosen.preconditioner + "\")";
+      (chosen.preconditioner != "jacobi" && !space.structured_preconditioner_without_matrix(chosen.preconditioner)))
+    return "needs a preconditioner that does without the matrix (not \"" + chosen.preconditioner + "\")";
   if (space.geometry().dimension() != 2 || c.problem.source.empty()) return "serves planar problems with a given source";
   if (!c.problem.coefficients.constant()) return "serves constant coefficients only (this case's [problem] coefficient or reaction varies)";
   if (c.problem.dirichlet_method == DirichletMethod::kNitsche) return "does not add Nitsche's boundary terms";
@@ -151,6 +151,9 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
   if (c.solver.estimate_condition && chosen.method == "petsc")
     throw InputError(c.path + ": --condition: estimated on the serial paths only (direct or iterative), not with "
                      "method = \"petsc\"");
+  // The operator CG applies when it runs without a matrix (set below), for a preconditioner
+  // that needs more of it than its diagonal.
+  const auto without_matrix = std::make_shared<std::shared_ptr<const MatrixFreePoisson>>();
   if (chosen.method == "iterative" || chosen.method == "petsc") {
     so.iterative = chosen.method == "iterative";
     so.tolerance = c.solver.tolerance;
@@ -168,8 +171,19 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     } else if (chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi") {
       const std::string name = chosen.preconditioner, path = c.path;
       const PoissonProblem* problem = &c.problem;
-      so.preconditioner = [&space, name, path, problem](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
-        std::unique_ptr<Preconditioner> p = space.make_structured_preconditioner(name, layout, lower, *problem);
+      so.preconditioner = [&space, name, path, problem, without_matrix](const DofLayout& layout,
+                                                                        const Eigen::SparseMatrix<double>& lower) {
+        std::unique_ptr<Preconditioner> p;
+        if (*without_matrix && !space.structured_preconditioner_needs_only_diagonal(name)) {
+          // Without a matrix, `lower` holds K's diagonal alone.
+          p = space.make_structured_preconditioner_without_matrix(name, layout, *without_matrix, lower.diagonal());
+          if (!p)
+            throw InputError(path + ": [solver] preconditioner: \"" + name + "\" without a matrix needs the unknowns to be a "
+                             "tensor product and the geometry to live on the elements of the first coarser level (every "
+                             "other breakpoint dropped); use [solver] matrix = \"assembled\" (--matrix assembled)");
+          return p;
+        }
+        p = space.make_structured_preconditioner(name, layout, lower, *problem);
         if (!p)
           throw InputError(path + ": [solver] preconditioner: \"" + name +
                            "\" does not apply to this problem's unknowns (they are not a tensor product: use \"boomeramg\", \"jacobi\" "
@@ -187,6 +201,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     // on curved elements (docs/SOLVERS.md); not a fallback, the documented choice.
     if (obstacle.empty() && (c.solver.matrix == "matrix_free" || op->all_elements_affine())) {
       so.matrix_free = [op] { return op; };
+      *without_matrix = op;
       if (report) report->matrix_free = true;
     }
   } else if (c.solver.matrix == "matrix_free") {

@@ -413,9 +413,10 @@ TEST_CASE("bad input: [solver] and --solver", "[cli][bad-input][solver]") {
   expect_rejected(box, kGood, {"--matrix", "not a choice"}, "--matrix free");
   expect_rejected(box, kGood, {"bad.toml", "[solver] matrix", "needs CG", "this solve is direct"},
                   "--solver direct --matrix matrix_free");
-  expect_rejected(box, kGood, {"bad.toml", "[solver] matrix", "diagonal alone", "\"multigrid\""},
-                  "--solver iterative --preconditioner multigrid --matrix matrix_free");
-  expect_rejected(box, kGood, {"bad.toml", "[solver] matrix", "diagonal alone", "\"boomeramg\""},
+  // Multigrid without a matrix needs a coarser level: 101 x 101 elements have none.
+  expect_rejected(box, kGood, {"bad.toml", "[solver] preconditioner", "\"multigrid\" without a matrix", "--matrix assembled"},
+                  "--solver iterative --preconditioner multigrid --matrix matrix_free --elements 101");
+  expect_rejected(box, kGood, {"bad.toml", "[solver] matrix", "does without the matrix", "\"boomeramg\""},
                   "--solver iterative --preconditioner boomeramg --matrix matrix_free");
   expect_rejected(box, replace(kGood, "[problem]\n", "[problem]\ncoefficient = \"1 + x^2\"\n"),
                   {"bad.toml", "[solver] matrix", "constant coefficients"}, "--solver iterative --matrix matrix_free");

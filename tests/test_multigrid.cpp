@@ -3,7 +3,9 @@
 // whose coefficients separate (the quarter annulus) and on one where they do not (the L-shape
 // patch, where the fast diagonalization needs three times as many).
 #include <catch2/catch.hpp>
+#include <unsupported/Eigen/KroneckerProduct>
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 #include "basis/tensor/tensor_patch.hpp"
@@ -13,6 +15,8 @@
 #include "families/tensor/tensor_case.hpp"
 #include "solver/poisson_solver.hpp"
 #include "solver/tensor_multigrid.hpp"
+#include "solver/tensor_operator.hpp"
+#include "solver/tensor_rediscretize.hpp"
 #include "studies/pipeline.hpp"
 #include "tests/solver_checks.hpp"
 
@@ -131,6 +135,187 @@ TEST_CASE("Many CG iterations with the fast diagonalization name multigrid in a 
     } else {
       REQUIRE(s.iterative.iterations <= 15);
       REQUIRE(report.note.empty());
+    }
+  }
+}
+
+// ---- Without a matrix: the operator on the halved spaces, its matrix read back by probing,
+// the block residuals from the elements that touch a block, and the V-cycle they make.
+
+namespace {
+
+struct Patch {
+  CaseDescription c;
+  TensorDiscretization d;
+  Eigen::VectorXd weights;
+  TensorPatch patch() const { return {&d.space_u, &d.space_v, &weights, &d.geometry_u, &d.geometry_v, &d.geometry_homogeneous}; }
+};
+
+Patch patch_of(const std::string& name, int p, int nu, int nv) {
+  Patch s;
+  s.c = shipped(name);
+  patch_space(s.c).degree = {p, p};
+  patch_space(s.c).elements_per_span = {nu, nv};
+  s.d = build_tensor_discretization(s.c.geometry, patch_space(s.c));
+  if (s.d.mesh.is_rational()) s.weights = s.d.mesh.weights();
+  return s;
+}
+
+// A bound on the rounding of sums of the same products in other orders: m = 8 (2p+1)^2 (p+1)^4
+// terms of size at most |K|_inf |x|_inf (as in tests/test_tensor_operator.cpp).
+double rounding_bound(int p, double size) {
+  return 8.0 * (2 * p + 1) * (2 * p + 1) * std::pow(p + 1, 4) * 2.2e-16 * size;
+}
+
+}  // namespace
+
+TEST_CASE("Matrix-free operator: rows of a box, the whole matrix by probing", "[multigrid][tensor_operator]") {
+  for (const char* name : {"square_sinsin", "quarter_annulus"})
+    for (int p : {2, 3}) {
+      const Patch s = patch_of(name, p, 9, 12);
+      const TensorPoissonOperator A(s.patch(), 1.0, 0.3);
+      const int nu = s.d.space_u.num_functions(), nv = s.d.space_v.num_functions();
+      // The interior functions, as under Dirichlet conditions on every side.
+      const TensorPoissonOperator::FunctionBox free{1, nu - 2, 1, nv - 2};
+      const Eigen::VectorXd x = Eigen::VectorXd::Random(long(free.count_u) * free.count_v);
+      Eigen::VectorXd whole = Eigen::VectorXd::Zero(A.num_functions()), y;
+      for (int j = 0; j < free.count_v; ++j)
+        for (int i = 0; i < free.count_u; ++i) whole[(1 + i) + long(nu) * (1 + j)] = x[i + long(free.count_u) * j];
+      A.apply(whole, y);
+      const double bound = rounding_bound(p, y.cwiseAbs().maxCoeff() + A.diagonal().maxCoeff() * (2 * p + 1) * (2 * p + 1));
+      for (const TensorPoissonOperator::FunctionBox& rows :
+           {TensorPoissonOperator::FunctionBox{1, 3, 1, 4}, {4, 5, 2, 7}, {1, nu - 2, nv - 3, 2}, {nu - 2, 1, 1, nv - 2}}) {
+        Eigen::VectorXd r(long(rows.count_u) * rows.count_v);
+        A.apply_rows(x.data(), free, rows, r.data());
+        double difference = 0;
+        for (int j = 0; j < rows.count_v; ++j)
+          for (int i = 0; i < rows.count_u; ++i)
+            difference = std::max(difference, std::abs(r[i + long(rows.count_u) * j] -
+                                                        y[(rows.first_u + i) + long(nu) * (rows.first_v + j)]));
+        INFO(name << ", p = " << p << ", rows at " << rows.first_u << ", " << rows.first_v << ": " << difference);
+        REQUIRE(difference <= bound);
+      }
+      Eigen::VectorXd within(x.size());
+      A.apply_within(x.data(), free, within.data());
+      for (int j = 0; j < free.count_v; ++j)
+        for (int i = 0; i < free.count_u; ++i)
+          REQUIRE(std::abs(within[i + long(free.count_u) * j] - y[(1 + i) + long(nu) * (1 + j)]) <= bound);
+      // Probing: column by column, K e_j = the product with the j-th indicator.
+      const Eigen::SparseMatrix<double, Eigen::RowMajor> K = matrix_by_probing(A, free);
+      REQUIRE((Eigen::VectorXd(K * x) - within).lpNorm<Eigen::Infinity>() <= bound);
+      for (int k : {0, 7, int(x.size()) / 2, int(x.size()) - 1}) {
+        Eigen::VectorXd e = Eigen::VectorXd::Zero(x.size()), column(x.size());
+        e[k] = 1;
+        A.apply_within(e.data(), free, column.data());
+        REQUIRE((Eigen::VectorXd(K.col(k)) - column).lpNorm<Eigen::Infinity>() <= rounding_bound(p, A.diagonal().maxCoeff()));
+      }
+    }
+}
+
+TEST_CASE("Rediscretized operator: the Galerkin operator on affine elements, the same domain on curved ones",
+          "[multigrid][tensor_operator]") {
+  const double pi = std::acos(-1.0);
+  for (const auto& [name, area] : std::vector<std::pair<const char*, double>>{{"square_sinsin", 1.0}, {"quarter_annulus", 3 * pi / 4}})
+    for (int p : {2, 4}) {
+      const Patch s = patch_of(name, p, 8, 12);
+      const TensorPoissonOperator fine(s.patch(), 1.0, 0.0);
+      const std::unique_ptr<TensorPoissonOperator> coarse = rediscretized_operator(fine, true, true);
+      REQUIRE(coarse);
+      REQUIRE(coarse->space_u().num_elements() == 4);
+      REQUIRE(coarse->space_v().num_elements() == 6);
+      // The coarse space's coordinate function x = sum (X_a / W_a) R_a (the geometry and the
+      // weights moved by knot removal): int |grad x|^2 is the domain's area, as on the fine one.
+      const Eigen::VectorXd coordinate = coarse->net().col(0).cwiseQuotient(coarse->net().col(2));
+      Eigen::VectorXd y;
+      coarse->apply(coordinate, y);
+      INFO(name << ", p = " << p << ": x^T K x = " << coordinate.dot(y));
+      // (Exact rules on the square; the annulus's rational integrand to the rule's error,
+      // as in tests/test_tensor_operator.cpp.)
+      REQUIRE(std::abs(coordinate.dot(y) - area) <= (std::string(name) == "quarter_annulus" ? 1e-7 : 1e-12) * area);
+      if (std::string(name) != "square_sinsin") continue;
+      // Affine elements, exact quadrature: K_c = P^T K P for P the refinement (the spaces nest).
+      REQUIRE(fine.all_elements_affine());
+      const Eigen::SparseMatrix<double> Pu = refinement_matrix(coarse->space_u(), fine.space_u()),
+                                        Pv = refinement_matrix(coarse->space_v(), fine.space_v());
+      const Eigen::SparseMatrix<double> P = Eigen::kroneckerProduct(Pv, Pu);
+      const Eigen::VectorXd xc = Eigen::VectorXd::Random(coarse->num_functions());
+      Eigen::VectorXd yc, yf;
+      coarse->apply(xc, yc);
+      fine.apply(P * xc, yf);
+      const Eigen::VectorXd galerkin = P.transpose() * yf;
+      INFO("|K_c x - P^T K P x| = " << (yc - galerkin).lpNorm<Eigen::Infinity>());
+      REQUIRE((yc - galerkin).lpNorm<Eigen::Infinity>() <= 16 * rounding_bound(p, fine.diagonal().maxCoeff() * 4));
+    }
+  // A net that does not live on the coarser elements (one interior control point moved): no
+  // rediscretized level, and no multigrid without a matrix (it would have to store the matrix).
+  Patch s = patch_of("square_sinsin", 2, 8, 8);
+  s.d.geometry_homogeneous(5 + 10 * 5, 0) += 1e-3;
+  const auto moved = std::make_shared<TensorPoissonOperator>(s.patch(), 1.0, 0.0);
+  REQUIRE_FALSE(rediscretized_operator(*moved, true, true));
+  const int n = moved->num_functions();
+  std::vector<bool> fixed(n, false);
+  for (int j = 0; j < 10; ++j)
+    for (int i = 0; i < 10; ++i) fixed[i + 10 * j] = i == 0 || j == 0 || i == 9 || j == 9;
+  const DofLayout layout = make_dof_layout(n, fixed);
+  TensorMultigridOptions options;
+  options.coarsest_functions = 10;
+  REQUIRE_FALSE(tensor_multigrid(moved, layout, Eigen::VectorXd::Ones(layout.num_free()), {}, options));
+}
+
+// The V-cycle without a matrix against the assembled one, through the driver, with deep
+// hierarchies: on affine elements its levels are the Galerkin ones, so CG takes the same
+// iterations (one more or less: rounding); on curved ones the counts stay bounded in h and p.
+// Both reach the direct solve's errors.
+TEST_CASE("Multigrid without a matrix: the assembled V-cycle's iterations", "[multigrid][solver][tensor_operator]") {
+  for (const char* name : {"square_sinsin", "quarter_annulus", "lshape"}) {
+    std::map<int, std::vector<int>> iterations;
+    for (int p : {2, 4})
+      // (At p = 4 on 128^2 the square's L2 error, 9e-13, is at the rounding floor, where CG and
+      // CHOLMOD differ by more than the 1e-4 require_direct_errors allows.)
+      for (int n : p == 2 ? std::vector<int>{32, 64, 128} : std::vector<int>{16, 32, 64}) {
+        CaseDescription c = shipped(name);
+        patch_space(c).degree = {p, p};
+        patch_space(c).elements_per_span = {n, n};
+        const auto space = build_space(c);
+        const TensorDiscretization d = build_tensor_discretization(c.geometry, patch_space(c));
+        const PatchGeometryMap map(d.mesh, d.patch, PatchGeometryMap::ElementGrid{d.space_u.breakpoints(), d.space_v.breakpoints(), d.first_row});
+        const SeparableCoefficients weights = patch_separable_coefficients(d, map);
+        TensorMultigridOptions options;
+        options.coarsest_functions = 40;
+        options.block = 8;
+        PoissonSolveOptions o;
+        o.iterative = true;
+        o.quadrature = c.quadrature;  // the L-shape's error rule, as the direct solve's
+        TensorMultigridReport assembled_report, free_report;
+        o.preconditioner = [&](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
+          return tensor_multigrid(d.space_u, d.space_v, layout, lower, weights, {}, options, &assembled_report);
+        };
+        const PoissonSolution assembled = solve_poisson(space->mesh(), space->geometry(), c.problem, o);
+        std::shared_ptr<const MatrixFreePoisson> op = space->matrix_free_operator(1.0, 0.0, c.quadrature);
+        REQUIRE(op);
+        o.matrix_free = [op] { return op; };
+        o.preconditioner = [&](const DofLayout& layout, const Eigen::SparseMatrix<double>& diagonal) {
+          return tensor_multigrid(std::dynamic_pointer_cast<const TensorPoissonOperator>(op), layout, diagonal.diagonal(),
+                                  weights, options, &free_report);
+        };
+        const PoissonSolution free = solve_poisson(space->mesh(), space->geometry(), c.problem, o);
+        c.solver.method = "direct";
+        const PoissonSolution direct = solve_case(c, *space, Ordering::kAmd);
+        INFO(name << ", p = " << p << ", n = " << n << ": " << free.iterative.iterations << " iterations without a matrix, "
+                  << assembled.iterative.iterations << " with; " << free_report.free_dofs.size() << " levels, "
+                  << free_report.without_matrix << " without a matrix");
+        REQUIRE(free.matrix_nonzeros == 0);
+        REQUIRE(free_report.free_dofs == assembled_report.free_dofs);
+        REQUIRE(free_report.without_matrix == int(free_report.free_dofs.size()) - 1);
+        require_direct_errors(free, direct);
+        if (std::string(name) == "square_sinsin")
+          REQUIRE(std::abs(free.iterative.iterations - assembled.iterative.iterations) <= 1);
+        iterations[p].push_back(free.iterative.iterations);
+      }
+    for (const auto& [p, counts] : iterations) {
+      INFO(name << ", p = " << p << ": " << counts[0] << ", " << counts[1] << ", " << counts[2]);
+      REQUIRE(counts.back() <= counts.front() + 2);
+      REQUIRE(*std::max_element(counts.begin(), counts.end()) <= 24);
     }
   }
 }

@@ -56,7 +56,7 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
     std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d with CG + %s%s", cells, p, q, name.c_str(),
                   c.solver.matrix == "matrix_free" ? ", no matrix" : "");
     const double pc = name == kFastDiagonalization ? fast_diagonalization_bytes(per_direction[0], per_direction[1])
-                      : name == kMultigrid         ? tensor_multigrid_bytes(functions, p, q)
+                      : name == kMultigrid         ? tensor_multigrid_bytes(functions, p, q, c.solver.matrix != "matrix_free")
                                                    : algebraic_preconditioner_bytes(name, functions, p, q);
     check_memory(c.path + ": [space] elements", iterative_bytes(cells, functions, p, q, pc, c.solver.matrix != "matrix_free"),
                  what);
@@ -106,6 +106,15 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
       return tensor_multigrid(d_.space_u, d_.space_v, layout, lower, patch_separable_coefficients(d_, *geometry_), ends);
     return fast_diagonalization(d_.space_u, d_.space_v, layout, lower.diagonal(), patch_separable_coefficients(d_, *geometry_),
                                 ends);
+  }
+  bool structured_preconditioner_without_matrix(const std::string&) const override { return true; }
+  std::unique_ptr<Preconditioner> make_structured_preconditioner_without_matrix(
+      const std::string& name, const DofLayout& layout, std::shared_ptr<const MatrixFreePoisson> op,
+      const Eigen::VectorXd& free_diagonal) const override {
+    // The operator is the one matrix_free_operator made.
+    std::shared_ptr<const TensorPoissonOperator> tensor = std::dynamic_pointer_cast<const TensorPoissonOperator>(op);
+    if (name != kMultigrid || !tensor) return nullptr;
+    return tensor_multigrid(std::move(tensor), layout, free_diagonal, patch_separable_coefficients(d_, *geometry_));
   }
   std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double stiffness, double reaction,
                                                           const QuadratureOptions& quadrature) const override {
