@@ -176,3 +176,45 @@ TEST_CASE("Matrix-free CG solves what assembled CG solves", "[tensor_operator][s
     REQUIRE(std::abs(free.errors->h1_semi - assembled.errors->h1_semi) <= 1e-6 * assembled.errors->h1_semi);
   }
 }
+
+// Affine elements with different factors (a map stretched twice as much right of a C^0 kink):
+// element by element, not the Kronecker form of a uniformly affine patch (the unit square's
+// above). Checked by what depends on neither: K 1 = 0, and the coordinates x and y, both in
+// the space, with x^T K x and y^T K y the domain's area.
+TEST_CASE("Matrix-free tensor operator: affine elements with different factors", "[tensor_operator]") {
+  const BSplineBasis1D u(2, {0, 0, 0, 0.25, 0.5, 0.5, 0.75, 1, 1, 1}), v = BSplineBasis1D::open_uniform(2, 0, 1, 3);
+  const int nu = u.num_functions(), nv = v.num_functions();
+  auto kinked = [](double t) { return t <= 0.5 ? t : 0.5 + 2 * (t - 0.5); };  // x in [0, 1.5]
+  Eigen::MatrixX3d net(long(nu) * nv, 3);
+  Eigen::VectorXd x(net.rows()), y(net.rows());
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      // Greville abscissae: linear functions (and, at the double knot, the kink) are reproduced.
+      const double gu = (u.knots()[i + 1] + u.knots()[i + 2]) / 2, gv = (v.knots()[j + 1] + v.knots()[j + 2]) / 2;
+      x[i + nu * j] = kinked(gu), y[i + nu * j] = gv;
+      net.row(i + long(nu) * j) << x[i + nu * j], y[i + nu * j], 1.0;
+    }
+  const Eigen::VectorXd none;
+  const TensorPoissonOperator A({&u, &v, &none, &u, &v, &net}, 1.0, 0.0);
+  REQUIRE(A.all_elements_affine());
+  REQUIRE_FALSE(A.uniform_factors());
+  Eigen::VectorXd k;
+  A.apply(Eigen::VectorXd::Ones(A.num_functions()), k);
+  REQUIRE(k.lpNorm<Eigen::Infinity>() <= 8.0 * 25 * 81 * 2.2e-16 * A.diagonal().maxCoeff());
+  for (const Eigen::VectorXd* c : {&x, &y}) {
+    A.apply(*c, k);
+    INFO("x^T K x = " << c->dot(k));
+    // Exact rules on affine elements: rounding only, in n sums of m terms of at most
+    // |c|_inf^2 max|K_ij| (and |K_ij| <= max diagonal: K is positive semi-definite).
+    const double m = 8.0 * 25 * 81, bound = m * 2.2e-16 * c->size() * c->squaredNorm() * A.diagonal().maxCoeff();
+    REQUIRE(std::abs(c->dot(k) - 1.5) <= bound);
+  }
+  // The unit square's elements share one set of factors.
+  const BSplineBasis1D s = BSplineBasis1D::open_uniform(3, 0, 1, 4);
+  Eigen::MatrixX3d square(49, 3);
+  for (int j = 0; j < 7; ++j)
+    for (int i = 0; i < 7; ++i)
+      square.row(i + 7 * j) << (s.knots()[i + 1] + s.knots()[i + 2] + s.knots()[i + 3]) / 3,
+          (s.knots()[j + 1] + s.knots()[j + 2] + s.knots()[j + 3]) / 3, 1.0;
+  REQUIRE(TensorPoissonOperator({&s, &s, &none, &s, &s, &square}, 1.0, 0.0).uniform_factors());
+}
