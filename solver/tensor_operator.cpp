@@ -320,8 +320,33 @@ void TensorPoissonOperator::find_affine_elements() {
     if (std::abs(f[3] - f0[3]) > tolerance * f0[3]) return;
   }
   uniform_ = true;
+  uniform_factors_ = f0;
+  affine_ = {};  // 32 bytes per element no product reads now
   band_u_ = band(u_);
   band_v_ = band(v_);
+}
+
+std::unique_ptr<TensorPoissonOperator> TensorPoissonOperator::uniformly_affine(const BSplineBasis1D& space_u,
+                                                                             const BSplineBasis1D& space_v,
+                                                                             const std::array<double, 4>& factors,
+                                                                             double stiffness, double reaction, int points_u,
+                                                                             int points_v) {
+  std::unique_ptr<TensorPoissonOperator> op(new TensorPoissonOperator());
+  // (The space stands in for the geometry's basis: the tables need its elements only.)
+  op->u_ = direction(space_u, space_u, points_u);
+  op->v_ = direction(space_v, space_v, points_v);
+  op->space_u_ = op->geometry_u_ = space_u;
+  op->space_v_ = op->geometry_v_ = space_v;
+  op->n_u_ = space_u.num_functions();
+  op->n_v_ = space_v.num_functions();
+  op->stiffness_ = stiffness;
+  op->reaction_ = reaction;
+  op->polynomial_map_ = true;
+  op->uniform_ = true;
+  op->uniform_factors_ = factors;
+  op->band_u_ = band(op->u_);
+  op->band_v_ = band(op->v_);
+  return op;
 }
 
 TensorPoissonOperator::Band TensorPoissonOperator::band(const Direction& d) {
@@ -512,7 +537,7 @@ void kronecker_sized(const double* in, long mu, int pu_, int pv_, int first_u, i
 }  // namespace
 
 void TensorPoissonOperator::kronecker_rows(const double* in, long mu, const FunctionBox& rows, double* y) const {
-  const std::array<double, 4>& f = affine_[0];
+  const std::array<double, 4>& f = uniform_factors_;
   const double d11 = stiffness_ * f[0], d12 = stiffness_ * f[1], d22 = stiffness_ * f[2], r = reaction_ * f[3];
   const int pu = u_.degree, pv = v_.degree;
   auto run = [&](auto width) {
@@ -612,6 +637,22 @@ void TensorPoissonOperator::product(Gather gather, Scatter scatter, const std::a
 }
 
 Eigen::VectorXd TensorPoissonOperator::diagonal() const {
+  if (uniform_) {  // the Kronecker form's diagonal (det J > 0 was checked with the factors)
+    const std::array<double, 4>& f = uniform_factors_;
+    const double d11 = stiffness_ * f[0], d12 = stiffness_ * f[1], d22 = stiffness_ * f[2], r = reaction_ * f[3];
+    const int wu = 2 * u_.degree + 1, wv = 2 * v_.degree + 1;
+    Eigen::VectorXd diagonal(num_functions());
+#pragma omp parallel for schedule(static)
+    for (int j = 0; j < n_v_; ++j) {
+      const size_t jv = size_t(j) * wv + v_.degree;
+      for (int i = 0; i < n_u_; ++i) {
+        const size_t iu = size_t(i) * wu + u_.degree;
+        diagonal[i + long(n_u_) * j] = d11 * band_u_.K[iu] * band_v_.M[jv] + d22 * band_u_.M[iu] * band_v_.K[jv] +
+                                       2 * d12 * band_u_.C[iu] * band_v_.C[jv] + r * band_u_.M[iu] * band_v_.M[jv];
+      }
+    }
+    return diagonal;
+  }
   Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(num_functions());
   double* out = diagonal.data();
   const bool rational = weights_.size() > 0;
@@ -652,6 +693,7 @@ Eigen::VectorXd TensorPoissonOperator::diagonal() const {
 }
 
 Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
+  if (net_.rows() == 0) throw std::logic_error("TensorPoissonOperator::load: an operator made without a geometry net");
   Eigen::VectorXd out = Eigen::VectorXd::Zero(num_functions());
   double* f_out = out.data();
   const bool rational = weights_.size() > 0;

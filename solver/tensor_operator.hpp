@@ -52,10 +52,19 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   Eigen::VectorXd load(const Expression& source) const override;
   int max_row_nonzeros() const override { return (2 * u_.degree + 1) * (2 * v_.degree + 1); }
   bool all_elements_affine() const override { return affine_elements() == long(u_.elements) * v_.elements; }
-  // Whether every element also has the same factors (applied in Kronecker form).
+  // Whether every element also has the same factors (applied in Kronecker form), and they.
   bool uniform_factors() const { return uniform_; }
+  const std::array<double, 4>& factors() const { return uniform_factors_; }
+  // The operator of a patch whose elements all have `factors` ((H, -F, E) / |det J| and
+  // |det J| in parameter coordinates, as factors() gives) on the spaces u x v, without a
+  // geometry net (load() refuses): a multigrid's coarse level of a uniformly affine patch,
+  // whose map is the same affine one on every mesh.
+  static std::unique_ptr<TensorPoissonOperator> uniformly_affine(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
+                                                                 const std::array<double, 4>& factors, double stiffness,
+                                                                 double reaction, int points_u, int points_v);
   // How many elements have an affine map (applied from univariate matrices, with no geometry).
   long affine_elements() const {
+    if (uniform_) return long(u_.elements) * v_.elements;
     long n = 0;
     for (const auto& f : affine_) n += f[3] > 0;
     return n;
@@ -138,10 +147,12 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   void kronecker_rows(const double* in, long mu, const FunctionBox& rows, double* y) const;
 
   Direction u_, v_;
-  // Every element has the factors of affine_[0] (a map affine on the whole patch): then
+  TensorPoissonOperator() = default;
+  // Every element has the factors uniform_factors_ (a map affine on the whole patch): then
   // K = d11 K_u (x) M_v + d22 M_u (x) K_v + d12 (C_u (x) C_v^T + C_u^T (x) C_v) + c M_u (x) M_v
   // with the bands below, about a tenth of the element-by-element flops.
   bool uniform_ = false;
+  std::array<double, 4> uniform_factors_{};
   Band band_u_, band_v_;
   BSplineBasis1D space_u_, space_v_, geometry_u_, geometry_v_;
   int n_u_ = 0, n_v_ = 0, net_u_ = 0;

@@ -50,6 +50,10 @@ std::unique_ptr<TensorPoissonOperator> rediscretized_operator(const TensorPoisso
   BSplineBasis1D su = fine.space_u(), sv = fine.space_v(), gu = fine.geometry_u(), gv = fine.geometry_v();
   if (halve_u && !(halved_basis(fine.space_u(), su) && halved_basis(fine.geometry_u(), gu))) return nullptr;
   if (halve_v && !(halved_basis(fine.space_v(), sv) && halved_basis(fine.geometry_v(), gv))) return nullptr;
+  // A map affine on the whole patch is the same on every mesh, and so are its factors.
+  if (fine.uniform_factors())
+    return TensorPoissonOperator::uniformly_affine(su, sv, fine.factors(), fine.stiffness(), fine.reaction(), fine.points_u(),
+                                                   fine.points_v());
   std::optional<Eigen::SparseMatrix<double>> Tu, Tv;
   if (halve_u) Tu = refinement_matrix(gu, fine.geometry_u());
   if (halve_v) Tv = refinement_matrix(gv, fine.geometry_v());

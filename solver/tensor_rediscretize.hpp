@@ -12,8 +12,9 @@ namespace knotwork {
 // The operator of the same problem on the space halved along u and/or v (halved_basis), with
 // the geometry's net (and the space's weights, when rational) moved to the coarse elements by
 // knot removal: least squares against the refinement matrix, kept only when it reproduces the
-// fine net (the geometry lives on the coarse elements). Null when a direction asked for does
-// not halve or the geometry does not live there.
+// fine net (the geometry lives on the coarse elements). A patch whose elements share one set of
+// factors (a map affine on the whole patch) keeps them, with no net. Null when a direction
+// asked for does not halve or the geometry does not live there.
 std::unique_ptr<TensorPoissonOperator> rediscretized_operator(const TensorPoissonOperator& fine, bool halve_u,
                                                               bool halve_v);
 

@@ -46,6 +46,11 @@ constexpr int kAutoIterativeFunctions = CaseDescription::Solver::kAutoIterativeF
 // its next one (measured: the fast diagonalization needs 2-5 where the operator separates,
 // 32-34 on the L-shape patch, where multigrid needs 11: docs/SOLVERS.md).
 constexpr int kManyStructuredIterations = 15;
+// From here "auto" takes multigrid for CG without a matrix on affine elements: measured on the
+// unit square at p = 2 (docs/SOLVERS.md), the fast diagonalization faster at 1024^2 (1.83 against
+// 2.09 s), multigrid at 2048^2 (9.0 against 10.1 s) and 4096^2.
+constexpr int kAutoMultigridFunctions = 2000000;
+const std::string kMultigridName = "multigrid";
 
 SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) {
   SolverReport r;
@@ -141,7 +146,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
   so.progress = progress;
   so.cell_errors = true;
   so.estimate_condition = c.solver.estimate_condition;
-  const SolverReport chosen = resolve_solver(c, space);
+  SolverReport chosen = resolve_solver(c, space);
   if (report) *report = chosen;
   const ParallelWorld launched = launched_world();
   if (launched.size > 1 && chosen.method != "petsc")
@@ -169,10 +174,12 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
         }
       };
     } else if (chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi") {
-      const std::string name = chosen.preconditioner, path = c.path;
+      const std::string path = c.path;
       const PoissonProblem* problem = &c.problem;
-      so.preconditioner = [&space, name, path, problem, without_matrix](const DofLayout& layout,
-                                                                        const Eigen::SparseMatrix<double>& lower) {
+      // (The name is read when the preconditioner is built: "auto" may still change it below.)
+      so.preconditioner = [&space, &chosen, path, problem, without_matrix](const DofLayout& layout,
+                                                                           const Eigen::SparseMatrix<double>& lower) {
+        const std::string& name = chosen.preconditioner;
         std::unique_ptr<Preconditioner> p;
         if (*without_matrix && !space.structured_preconditioner_needs_only_diagonal(name)) {
           // Without a matrix, `lower` holds K's diagonal alone.
@@ -203,6 +210,21 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
       so.matrix_free = [op] { return op; };
       *without_matrix = op;
       if (report) report->matrix_free = true;
+      // "auto" on affine elements from kAutoMultigridFunctions unknowns: multigrid, whose cost
+      // grows like N where the fast diagonalization's grows like N^1.5 (measured: docs/SOLVERS.md).
+      const std::vector<std::string> structured = space.structured_preconditioners();
+      if (c.solver.preconditioner == "auto" && !structured.empty() && chosen.preconditioner == structured.front() &&
+          std::find(structured.begin(), structured.end(), kMultigridName) != structured.end() &&
+          space.structured_preconditioner_without_matrix(kMultigridName) && op->all_elements_affine() &&
+          op->num_functions() >= kAutoMultigridFunctions) {
+        chosen.preconditioner = kMultigridName;
+        if (report) {
+          report->preconditioner = kMultigridName;
+          report->note = "[solver] preconditioner = \"auto\": multigrid, since CG runs without a matrix on affine elements "
+                         "and from " + std::to_string(kAutoMultigridFunctions) + " functions (measured faster there than \"" +
+                         structured.front() + "\", whose cost grows like N^1.5: docs/SOLVERS.md)";
+        }
+      }
     }
   } else if (c.solver.matrix == "matrix_free") {
     throw InputError(c.path + ": [solver] matrix: \"matrix_free\" needs CG (method = \"iterative\", or \"auto\" from "

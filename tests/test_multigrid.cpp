@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 #include "basis/tensor/tensor_patch.hpp"
 #include "cases/case_file.hpp"
@@ -224,15 +225,31 @@ TEST_CASE("Rediscretized operator: the Galerkin operator on affine elements, the
       REQUIRE(coarse->space_u().num_elements() == 4);
       REQUIRE(coarse->space_v().num_elements() == 6);
       // The coarse space's coordinate function x = sum (X_a / W_a) R_a (the geometry and the
-      // weights moved by knot removal): int |grad x|^2 is the domain's area, as on the fine one.
-      const Eigen::VectorXd coordinate = coarse->net().col(0).cwiseQuotient(coarse->net().col(2));
+      // weights moved by knot removal; on the square, whose map x = u is affine on the whole
+      // patch and keeps its factors with no net, the Greville abscissae): int |grad x|^2 is the
+      // domain's area, as on the fine one.
+      const bool square = std::string(name) == "square_sinsin";
+      REQUIRE(coarse->uniform_factors() == square);
+      Eigen::VectorXd coordinate;
+      if (square) {
+        const BSplineBasis1D& u = coarse->space_u();
+        coordinate.resize(coarse->num_functions());
+        for (int j = 0; j < coarse->space_v().num_functions(); ++j)
+          for (int i = 0; i < u.num_functions(); ++i) {
+            double g = 0;
+            for (int k = 1; k <= p; ++k) g += u.knots()[i + k] / p;
+            coordinate[i + long(u.num_functions()) * j] = g;
+          }
+      } else {
+        coordinate = coarse->net().col(0).cwiseQuotient(coarse->net().col(2));
+      }
       Eigen::VectorXd y;
       coarse->apply(coordinate, y);
       INFO(name << ", p = " << p << ": x^T K x = " << coordinate.dot(y));
       // (Exact rules on the square; the annulus's rational integrand to the rule's error,
       // as in tests/test_tensor_operator.cpp.)
       REQUIRE(std::abs(coordinate.dot(y) - area) <= (std::string(name) == "quarter_annulus" ? 1e-7 : 1e-12) * area);
-      if (std::string(name) != "square_sinsin") continue;
+      if (!square) continue;
       // Affine elements, exact quadrature: K_c = P^T K P for P the refinement (the spaces nest).
       REQUIRE(fine.all_elements_affine());
       const Eigen::SparseMatrix<double> Pu = refinement_matrix(coarse->space_u(), fine.space_u()),
@@ -317,5 +334,28 @@ TEST_CASE("Multigrid without a matrix: the assembled V-cycle's iterations", "[mu
       REQUIRE(counts.back() <= counts.front() + 2);
       REQUIRE(*std::max_element(counts.begin(), counts.end()) <= 24);
     }
+  }
+}
+
+// "auto" takes multigrid for CG without a matrix on affine elements from 2M functions (the
+// measured crossing with the fast diagonalization), and says so; below, and on curved
+// elements, the fast diagonalization.
+TEST_CASE("auto: multigrid without a matrix from 2M functions on affine elements", "[multigrid][solver]") {
+  for (const auto& [name, n, expected] : std::vector<std::tuple<const char*, int, const char*>>{
+           {"square_sinsin", 256, "fast_diagonalization"},
+           {"square_sinsin", 1448, "multigrid"},  // 2 102 500 functions
+           {"quarter_annulus", 1448, "fast_diagonalization"}}) {
+    CaseDescription c = shipped(name);
+    patch_space(c).elements_per_span = {n, n};
+    const auto space = build_space(c);
+    SolverReport report;
+    const PoissonSolution s = solve_case(c, *space, Ordering::kAmd, {}, &report);
+    INFO(name << " at " << n << "^2: " << report.preconditioner << ", " << s.iterative.iterations << " iterations; " << report.note);
+    REQUIRE(report.method == "iterative");
+    REQUIRE(report.preconditioner == expected);
+    REQUIRE(report.matrix_free == (std::string(name) == "square_sinsin"));
+    REQUIRE((report.note.find("multigrid, since CG runs without a matrix") != std::string::npos) ==
+            (std::string(expected) == "multigrid"));
+    REQUIRE(s.iterative.converged);
   }
 }
