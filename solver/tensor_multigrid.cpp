@@ -152,6 +152,7 @@ class TensorMultigrid final : public Preconditioner {
  private:
   struct Work {
     Eigen::VectorXd residual, coarse_rhs, coarse_x;
+    Eigen::MatrixXd half;  // one direction restricted or prolonged (kept: fresh pages cost)
   };
 
   // x := the V-cycle's approximation of A_l^{-1} b.
@@ -179,15 +180,28 @@ class TensorMultigrid final : public Preconditioner {
     const Level& C = levels_[l + 1];
     {
       const Eigen::Map<const Eigen::MatrixXd> R(w.residual.data(), L.u.count, L.v.count);
-      const Eigen::MatrixXd T = L.Pu.transpose() * R;
+      w.half.resize(C.u.count, L.v.count);
+      w.half.noalias() = L.Pu.transpose() * R;
       w.coarse_rhs.resize(C.size());
-      Eigen::Map<Eigen::MatrixXd>(w.coarse_rhs.data(), C.u.count, C.v.count) = T * L.Pv;
+      Eigen::Map<Eigen::MatrixXd>(w.coarse_rhs.data(), C.u.count, C.v.count).noalias() = w.half * L.Pv;
     }
     cycle(l + 1, w.coarse_rhs, w.coarse_x);
     {
       const Eigen::Map<const Eigen::MatrixXd> X(w.coarse_x.data(), C.u.count, C.v.count);
-      const Eigen::MatrixXd T = L.Pu * X;
-      Eigen::Map<Eigen::MatrixXd>(x.data(), L.u.count, L.v.count) += T * L.Pv.transpose();
+      w.half.resize(L.u.count, C.v.count);
+      w.half.noalias() = L.Pu * X;
+      const Eigen::MatrixXd& T = w.half;
+      // x(:, j) += sum_k P_v(j, k) T(:, k), fine column by fine column (Eigen's dense times
+      // transposed sparse product took 0.11 s of a 0.65 s V-cycle at 4.2M dofs).
+      const int nu = L.u.count, nv = L.v.count;
+#pragma omp parallel for schedule(static)
+      for (int j = 0; j < nv; ++j) {
+        double* column = x.data() + long(nu) * j;
+        for (RowMatrix::InnerIterator p(L.Pv, j); p; ++p) {
+          const double a = p.value(), *t = T.data() + long(nu) * p.col();
+          for (int i = 0; i < nu; ++i) column[i] += a * t[i];
+        }
+      }
     }
     for (int t = tilings - 1; t >= 0; --t)
       for (int c = 3; c >= 0; --c) sweep(L, t, c, b, x);
