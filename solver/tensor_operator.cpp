@@ -561,7 +561,8 @@ void TensorPoissonOperator::product(Gather gather, Scatter scatter, const std::a
   const auto affine = [&](int eu, int ev, int fu, int fv, const std::array<double, 4>& f) {
     const double *Ku = &u_.stiffness[size_t(eu) * pu * pu], *Mu = &u_.mass[size_t(eu) * pu * pu], *Cu = &u_.mixed[size_t(eu) * pu * pu];
     const double *Kv = &v_.stiffness[size_t(ev) * pv * pv], *Mv = &v_.mass[size_t(ev) * pv * pv], *Cv = &v_.mixed[size_t(ev) * pv * pv];
-    double X[kMaxP][kMaxP], t1[kMaxP][kMaxP], t2[kMaxP][kMaxP], t3[kMaxP][kMaxP], t4[kMaxP][kMaxP];
+    constexpr int M = N ? N : kMaxP;  // (sized to N when known: the stack stays small)
+    double X[M][M], t1[M][M], t2[M][M], t3[M][M], t4[M][M];
     for (int b = 0; b < pv; ++b)
       for (int a = 0; a < pu; ++a) X[b][a] = gather(fu + a, fv + b);
     // Over v: t1 = X Mv^T, t2 = X Kv^T, t3 = X Cv, t4 = X Cv^T (column b of each, a fastest).
