@@ -108,13 +108,19 @@ int bench_command(const BenchOptions& o) {
       std::fflush(stdout);
     }
   }
-  if (!o.json && cg)
+  if (!o.json && cg) {
     for (const BenchResult& r : results)
       if (r.matrix_nonzeros == 0) {
         std::printf("nnz(A) 0: CG applied K without a matrix ([solver] matrix = \"auto\" on affine elements: "
                     "docs/SOLVERS.md, \"Without a matrix\")\n");
         break;
       }
+    if (o.preconditioner == "auto") {  // what "auto" chose, configuration by configuration
+      std::printf("preconditioner (auto):");
+      for (const BenchResult& r : results) std::printf(" %d:%d %s", r.degree, r.elements, r.preconditioner_name);
+      std::printf("\n");
+    }
+  }
   if (o.json) {
     Json arr = Json::array();
     for (const auto& r : results) {
@@ -126,7 +132,7 @@ int bench_command(const BenchOptions& o) {
           .set("cholmod_peak_bytes", r.cholmod_peak_bytes).set("peak_rss_bytes", r.peak_rss_kb * 1024.0)
           .set("l2_error", r.l2).set("cholmod_default_floor_seconds", r.floor_seconds);
       if (cg)
-        j.set("solver", Json::object().set("method", "iterative").set("preconditioner", "auto")
+        j.set("solver", Json::object().set("method", "iterative").set("preconditioner", std::string(r.preconditioner_name))
                             .set("iterations", r.iterations).set("relative_residual", r.relative_residual)
                             .set("tolerance", o.tolerance))
             .set("preconditioner", r.preconditioner).set("iterations", r.cg);

@@ -1,6 +1,7 @@
 #include "studies/bench_study.hpp"
 
 #include <chrono>
+#include <cstdio>
 
 #include "solver/poisson_solver.hpp"
 #include "studies/pipeline.hpp"
@@ -16,6 +17,7 @@ BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_error
   const double t_space = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   double floor_seconds = NAN;
   PoissonSolution s;
+  SolverReport report;
   if (solver == "iterative") {
     c.solver.method = "iterative";
     c.solver.tolerance = tolerance;
@@ -24,7 +26,7 @@ BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_error
       for (BoundaryCondition& side : c.problem.boundary) side.from_exact = false, side.value = Expression::constant(0);
       c.problem.exact.reset();
     }
-    s = solve_case(c, *d, ordering);
+    s = solve_case(c, *d, ordering, {}, &report);
   } else {
     PoissonSolveOptions so;
     so.ordering = ordering;
@@ -40,6 +42,7 @@ BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_error
     s = solve_poisson(d->mesh(), d->geometry(), c.problem, so);
   }
   BenchResult r;
+  std::snprintf(r.preconditioner_name, sizeof r.preconditioner_name, "%s", report.preconditioner.c_str());
   r.floor_seconds = floor_seconds;
   r.degree = p;
   r.elements = n;

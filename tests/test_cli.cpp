@@ -110,7 +110,13 @@ TEST_CASE("bench runs both solvers with and without the error norms", "[cli][ben
       REQUIRE(r.code == 0);
       REQUIRE((r.out.find("\"l2_error\": null") == std::string::npos) == errors);
       REQUIRE(r.out.find("\"free_dofs\": 256") != std::string::npos);  // 16^2 interior functions of 18^2
+      // The preconditioner "auto" chose is named (the space's first, below 2M functions).
+      if (std::string(solver) == "iterative")
+        REQUIRE(r.out.find("\"preconditioner\": \"fast_diagonalization\"") != std::string::npos);
     }
+  const Result text = box.run("bench --config 2:16 --solver iterative");
+  REQUIRE(text.code == 0);
+  REQUIRE(text.out.find("preconditioner (auto): 2:16 fast_diagonalization") != std::string::npos);
 }
 
 TEST_CASE("every subcommand has --help", "[cli]") {
