@@ -33,7 +33,7 @@ int converge_command(const ConvergeOptions& o) {
   }
   const std::vector<ConvergeLevel>& levels = r.levels;
   const std::string& description = r.description;
-  const SolverReport &first_solver = r.first_solver, &iterative_solver = r.iterative_solver;
+  const SolverReport& first_solver = r.first_solver;
   const int iterative_levels = r.iterative_levels;
   const std::vector<std::string>& outputs = r.outputs;
   std::vector<const ReportField*> columns;
@@ -42,7 +42,7 @@ int converge_command(const ConvergeOptions& o) {
   std::printf("knotwork converge %s: %s\n", c.path.c_str(), description.c_str());
   if (!first_solver.note.empty()) std::printf("  note     %s\n", first_solver.note.c_str());
   if (iterative_levels > 0)
-    std::printf("  solver   CG + %s to backward error %.0e%s\n", iterative_solver.preconditioner.c_str(), c.solver.tolerance,
+    std::printf("  solver   %s to backward error %.0e%s\n", iterative_solvers_summary(levels).c_str(), c.solver.tolerance,
                 iterative_levels < static_cast<int>(levels.size()) ? " (levels with a count under CG; CHOLMOD elsewhere)" : "");
   std::printf("%5s", "level");
   for (const ReportField* f : columns) std::printf(" %*s", f->width > 0 ? f->width : 12, f->key.c_str());

@@ -17,6 +17,32 @@
 
 namespace knotwork {
 
+std::string iterative_solvers_summary(const std::vector<ConvergeLevel>& levels) {
+  struct Run {
+    std::string what;
+    size_t first, last;
+  };
+  std::vector<Run> runs;
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const SolverReport& s = levels[l].solver;
+    if (s.method != "iterative") continue;
+    const std::string what = s.preconditioner + (s.matrix_free ? " (no matrix)" : "");
+    if (!runs.empty() && runs.back().what == what && runs.back().last + 1 == l) runs.back().last = l;
+    else runs.push_back({what, l, l});
+  }
+  if (runs.empty()) return "";
+  bool one = true;
+  for (const Run& r : runs) one = one && r.what == runs.front().what;
+  if (one) return "CG + " + runs.front().what;
+  std::string out = "CG: ";
+  for (size_t k = 0; k < runs.size(); ++k) {
+    const Run& r = runs[k];
+    out += (k ? "; " : "") + r.what + (r.first == r.last ? " on level " + std::to_string(r.first)
+                                                         : " on levels " + std::to_string(r.first) + "-" + std::to_string(r.last));
+  }
+  return out;
+}
+
 ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Ordering ordering,
                                const std::string* output_directory, const ProgressFunction& progress) {
   const SpaceFamily& family = space_family(c);
@@ -47,6 +73,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     if (l == 0) first_solver = solver;
     if (solver.method == "iterative") iterative_solver = solver, ++iterative_levels;
     ConvergeLevel lv;
+    lv.solver = solver;
     lv.h = global_mesh_size(*space);
     lv.dofs = s.num_functions;
     lv.free = s.num_free;
@@ -129,6 +156,8 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
     j.set("level", static_cast<int>(l)).set("h", v.h).set("dofs", v.dofs).set("free_dofs", v.free).set("cells", v.cells)
         .set("l2_error", v.l2).set("h1_seminorm_error", v.h1_semi).set("h1_error", v.h1)
         .set("l2_rate", v.l2_rate).set("h1_rate", v.h1_rate).set("seconds", v.seconds);
+    if (v.solver.method == "iterative")
+      j.set("preconditioner", v.solver.preconditioner).set("matrix", v.solver.matrix_free ? "matrix_free" : "assembled");
     add_fields(j, v.fields);
     jl.push(j);
     sl2.x.push_back(v.h); sl2.y.push_back(v.l2);
@@ -146,7 +175,8 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
   sj.set("method", c.solver.method).set("iterative_levels", iterative_levels);
   if (c.solver.method == "petsc") sj.set("ranks", launched_world().size).set("tolerance", c.solver.petsc_tolerance());
   if (iterative_levels > 0)
-    sj.set("preconditioner", iterative_solver.preconditioner).set("tolerance", c.solver.tolerance);
+    sj.set("preconditioner", iterative_solver.preconditioner).set("summary", iterative_solvers_summary(levels))
+        .set("tolerance", c.solver.tolerance);
   root.set("case", c.path).set("family", c.family).set("space", description).set("solver", sj);
   if (const char* m = dirichlet_method_name(c.problem)) root.set("dirichlet_method", m);
   root.set("levels", jl);

@@ -71,6 +71,7 @@ struct ConvergeLevel {
   double l2_rate = NAN, h1_rate = NAN;  // NaN on the first level
   double seconds = 0;
   std::vector<ReportField> fields;  // the family's (report and solution checks)
+  SolverReport solver;              // how this level was solved ("auto" decides by size)
 };
 struct ConvergeOutcome {
   std::vector<ConvergeLevel> levels;
@@ -80,6 +81,10 @@ struct ConvergeOutcome {
   Json json = Json::object();  // convergence.json's object ("outputs" added when written)
   std::vector<std::string> outputs;
 };
+// The solver line of a study: "CG + P[ (no matrix)]" when every level solved by CG used the
+// same, else each run of levels named ("CG: fast_diagonalization (no matrix) on levels 0-3;
+// multigrid (no matrix) on level 4"); empty without CG.
+std::string iterative_solvers_summary(const std::vector<ConvergeLevel>& levels);
 // Levels 0..levels-1 of uniform refinement; checks the level count and the exact solution.
 ConvergeOutcome converge_study(const CaseDescription& c, int levels, Ordering ordering,
                                const std::string* output_directory, const ProgressFunction& progress);

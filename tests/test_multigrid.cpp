@@ -19,6 +19,7 @@
 #include "solver/tensor_operator.hpp"
 #include "solver/tensor_rediscretize.hpp"
 #include "studies/pipeline.hpp"
+#include "studies/studies.hpp"
 #include "tests/solver_checks.hpp"
 
 using namespace knotwork;
@@ -358,4 +359,23 @@ TEST_CASE("auto: multigrid without a matrix from 2M functions on affine elements
             (std::string(expected) == "multigrid"));
     REQUIRE(s.iterative.converged);
   }
+}
+
+// A study whose levels "auto" solved differently says which level took what.
+TEST_CASE("converge names each run of levels' solver when they differ", "[multigrid][converge]") {
+  auto level = [](const char* method, const char* preconditioner, bool matrix_free) {
+    ConvergeLevel l;
+    l.solver.method = method;
+    l.solver.preconditioner = preconditioner;
+    l.solver.matrix_free = matrix_free;
+    return l;
+  };
+  REQUIRE(iterative_solvers_summary({level("direct", "", false)}).empty());
+  REQUIRE(iterative_solvers_summary({level("direct", "", false), level("iterative", "fast_diagonalization", true),
+                                     level("iterative", "fast_diagonalization", true)}) ==
+          "CG + fast_diagonalization (no matrix)");
+  REQUIRE(iterative_solvers_summary({level("iterative", "fast_diagonalization", true),
+                                     level("iterative", "fast_diagonalization", true),
+                                     level("iterative", "multigrid", true)}) ==
+          "CG: fast_diagonalization (no matrix) on levels 0-1; multigrid (no matrix) on level 2");
 }
