@@ -3,6 +3,7 @@
 // family with such an operator gives the driver (SplineSpace::matrix_free_operator), which
 // then assembles nothing (docs/SOLVERS.md, "Without a matrix").
 #include <Eigen/Core>
+#include <array>
 
 #include "solver/expression.hpp"
 
@@ -23,6 +24,15 @@ class MatrixFreePoisson {
   // products per element, and CG without a matrix was measured faster than with one
   // (docs/SOLVERS.md, "Without a matrix"): what [solver] matrix = "auto" asks.
   virtual bool all_elements_affine() const { return false; }
+  // The squared L2 and H1-seminorm errors of u_h = sum_a c_a R_a against the exact solution
+  // (planar), by Gauss rules of points_u x points_v per cell (0: degree + 2, as error_norms),
+  // and |u - u_h|^2_H1 per cell of the space's mesh in `h1_per_cell` when given. False when
+  // the operator does not compute them (then error_norms does).
+  virtual bool squared_errors(const Eigen::VectorXd& /*coefficients*/, const ExactSolution& /*exact*/, int /*points_u*/,
+                              int /*points_v*/, std::array<double, 2>& /*squares*/,
+                              Eigen::VectorXd* /*h1_per_cell*/) const {
+    return false;
+  }
 };
 
 }  // namespace knotwork

@@ -284,10 +284,19 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       sol.exact_mean = integral / sol.area;
     }
     std::array<double, 2> squares{0, 0};
-    step([&] {
-      squares = squared_errors(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature, mine,
-                               options.cell_errors ? &sol.cell_h1_squared : nullptr, sol.exact_mean);
-    });
+    // Without a matrix the operator's own sum-factorized pass where it has one (the same rule
+    // and integrand, about half the time: docs/SOLVERS.md); else cell by cell.
+    Eigen::VectorXd* per_cell = options.cell_errors ? &sol.cell_h1_squared : nullptr;
+    const bool by_operator = op && !distributed && !sol.zero_mean &&
+                             op->squared_errors(sol.coefficients, *problem.exact, options.quadrature.error_points_u,
+                                                options.quadrature.error_points_v, squares, per_cell);
+    if (by_operator && per_cell && per_cell->size() != mesh.num_cells())
+      throw std::logic_error("solve_poisson: the operator's errors are not one per cell of the mesh");
+    if (!by_operator)
+      step([&] {
+        squares = squared_errors(mesh, geometry, sol.coefficients, *problem.exact, options.quadrature, mine, per_cell,
+                                 sol.exact_mean);
+      });
     if (distributed) {
       sum_over_ranks(squares.data(), 2);
       // A whole mesh on every rank gets every cell's error (a part has only its own cells').

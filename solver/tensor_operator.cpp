@@ -180,6 +180,8 @@ struct Points {
   double d11[kMaxPoints * kMaxPoints], d12[kMaxPoints * kMaxPoints], d22[kMaxPoints * kMaxPoints];
   double measure[kMaxPoints * kMaxPoints], min_det = 0;
   double x[kMaxPoints * kMaxPoints], y[kMaxPoints * kMaxPoints];  // the points themselves
+  // The Jacobian (x_u, x_v, y_u, y_v), for physical gradients (the error norms).
+  double xu[kMaxPoints * kMaxPoints], xv[kMaxPoints * kMaxPoints], yu[kMaxPoints * kMaxPoints], yv[kMaxPoints * kMaxPoints];
   Field w;
 };
 
@@ -187,8 +189,9 @@ struct Points {
 
 template <int N, class Kernel, class Affine>
 void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine, const std::atomic<bool>* stop,
-                                             const std::array<int, 4>* elements) const {
-  const Direction &U = u_, &V = v_;
+                                             const std::array<int, 4>* elements, const Direction* rule_u,
+                                             const Direction* rule_v) const {
+  const Direction &U = rule_u ? *rule_u : u_, &V = rule_v ? *rule_v : v_;
   const int pu = N ? N : U.degree + 1, pv = N ? N : V.degree + 1, gu = N ? N : U.geometry_degree + 1,
             gv = N ? N : V.geometry_degree + 1;
   const int qu = N ? N : U.points, qv = N ? N : V.points;
@@ -248,6 +251,7 @@ void TensorPoissonOperator::for_each_element(Kernel kernel, Affine affine, const
           pts.d12[k] = -scale * (xu * xv + yu * yv);
           pts.d22[k] = scale * (xu * xu + yu * yu);
           pts.measure[k] = weight * std::abs(det);
+          pts.xu[k] = xu, pts.xv[k] = xv, pts.yu[k] = yu, pts.yv[k] = yv;
         }
       pts.min_det = min_det;
       kernel(eu, ev, fu, fv, bu, du, bv, dv, pts);
@@ -732,6 +736,59 @@ Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
   });
   if (!finite) throw std::invalid_argument("the source is not a finite number at a quadrature point");
   return out;
+}
+
+bool TensorPoissonOperator::squared_errors(const Eigen::VectorXd& coefficients, const ExactSolution& exact, int points_u,
+                                           int points_v, std::array<double, 2>& squares,
+                                           Eigen::VectorXd* h1_per_element) const {
+  if (net_.rows() == 0) return false;  // (a coarse level's operator: no geometry to evaluate)
+  if (coefficients.size() != num_functions())
+    throw std::invalid_argument("TensorPoissonOperator::squared_errors: wrong vector size");
+  // The error rule's tables (error_norms's default: degree + 2 points per direction).
+  const Direction U = direction(space_u_, geometry_u_, points_u > 0 ? points_u : u_.degree + 2);
+  const Direction V = direction(space_v_, geometry_v_, points_v > 0 ? points_v : v_.degree + 2);
+  const bool rational = weights_.size() > 0;
+  const Eigen::VectorXd scaled = rational ? Eigen::VectorXd(coefficients.cwiseProduct(weights_)) : Eigen::VectorXd();
+  const double* cw = rational ? scaled.data() : coefficients.data();
+  const int pu = U.degree + 1, pv = V.degree + 1, qu = U.points, qv = V.points;
+  const ExpressionBatch compiled(std::vector<Expression>{exact.u, exact.u_x, exact.u_y});
+  std::vector<std::optional<ExpressionBatch>> batches(omp_get_max_threads());
+  // Per element, then summed in element order: the totals do not depend on the threads.
+  std::vector<double> l2(size_t(U.elements) * V.elements), h1(l2.size());
+  for_each_element<0>([&](int eu, int ev, int fu, int fv, const double* bu, const double* du, const double* bv,
+                          const double* dv, const Points& pts) {
+    std::optional<ExpressionBatch>& f = batches[omp_get_thread_num()];
+    if (!f) f.emplace(compiled);
+    f->evaluate(pts.x, pts.y, nullptr, qu * qv);
+    const double *u = f->result(0), *ux = f->result(1), *uy = f->result(2);
+    double c[kMaxP * kMaxP];
+    for (int b = 0; b < pv; ++b)
+      for (int a = 0; a < pu; ++a) c[a + pu * b] = cw[(fu + a) + long(n_u_) * (fv + b)];
+    Field s;
+    evaluate_field<0>(c, pu, pv, qu, qv, bu, du, bv, dv, s);
+    double e0 = 0, e1 = 0;
+    for (int k = 0; k < qu * qv; ++k) {
+      double uh = s.value[k], gu = s.du[k], gv = s.dv[k];
+      if (rational) {  // u_h = S / W, its parameter derivatives (S' - u_h W') / W
+        const double inv = 1 / pts.w.value[k];
+        uh *= inv;
+        gu = (gu - uh * pts.w.du[k]) * inv;
+        gv = (gv - uh * pts.w.dv[k]) * inv;
+      }
+      // grad u_h = J^-T (u_h,u, u_h,v).
+      const double det = pts.xu[k] * pts.yv[k] - pts.xv[k] * pts.yu[k];
+      const double gx = (pts.yv[k] * gu - pts.yu[k] * gv) / det, gy = (-pts.xv[k] * gu + pts.xu[k] * gv) / det;
+      const double e = u[k] - uh, ex = ux[k] - gx, ey = uy[k] - gy;
+      e0 += pts.measure[k] * e * e;
+      e1 += pts.measure[k] * (ex * ex + ey * ey);
+    }
+    l2[size_t(eu) + size_t(U.elements) * ev] = e0;
+    h1[size_t(eu) + size_t(U.elements) * ev] = e1;
+  }, nullptr, nullptr, nullptr, &U, &V);
+  squares = {0, 0};
+  for (size_t e = 0; e < l2.size(); ++e) squares[0] += l2[e], squares[1] += h1[e];
+  if (h1_per_element) *h1_per_element = Eigen::Map<const Eigen::VectorXd>(h1.data(), long(h1.size()));
+  return true;
 }
 
 }  // namespace knotwork

@@ -51,6 +51,11 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // int f R_a by the same rule, f evaluated at each element's points in one batch.
   Eigen::VectorXd load(const Expression& source) const override;
   int max_row_nonzeros() const override { return (2 * u_.degree + 1) * (2 * v_.degree + 1); }
+  // By points_u x points_v Gauss points per element (0: degree + 2), the values and gradients
+  // of u_h one direction at a time; per element (eu + n_eu ev) in h1_per_element. False for an
+  // operator made without a geometry net.
+  bool squared_errors(const Eigen::VectorXd& coefficients, const ExactSolution& exact, int points_u, int points_v,
+                      std::array<double, 2>& squares, Eigen::VectorXd* h1_per_element) const override;
   bool all_elements_affine() const override { return affine_elements() == long(u_.elements) * v_.elements; }
   // Whether every element also has the same factors (applied in Kronecker form), and they.
   bool uniform_factors() const { return uniform_; }
@@ -116,9 +121,11 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // elements that have constant factors, without the geometry.
   // `stop`: once it is true, the remaining elements are skipped.
   // `elements` (first and last element in u, then in v, inclusive): only those, serially.
+  // `rule_u`, `rule_v`: other tables (another rule) than the operator's.
   template <int N, class Kernel, class Affine = std::nullptr_t>
   void for_each_element(Kernel kernel, Affine affine = nullptr, const std::atomic<bool>* stop = nullptr,
-                        const std::array<int, 4>* elements = nullptr) const;
+                        const std::array<int, 4>* elements = nullptr, const Direction* rule_u = nullptr,
+                        const Direction* rule_v = nullptr) const;
   // The element's constant factors (H, -F, E) / |det J| and |det J|, when its map is affine
   // (they are the same at every point, to 64 eps); null otherwise.
   const std::array<double, 4>* affine_factors(int eu, int ev) const {

@@ -14,6 +14,7 @@
 #include "studies/pipeline.hpp"
 #include "families/tensor/tensor_case.hpp"
 #include "solver/assemble_poisson.hpp"
+#include "solver/error_norms.hpp"
 #include "solver/sparsity.hpp"
 #include "solver/tensor_operator.hpp"
 
@@ -217,4 +218,42 @@ TEST_CASE("Matrix-free tensor operator: affine elements with different factors",
       square.row(i + 7 * j) << (s.knots()[i + 1] + s.knots()[i + 2] + s.knots()[i + 3]) / 3,
           (s.knots()[j + 1] + s.knots()[j + 2] + s.knots()[j + 3]) / 3, 1.0;
   REQUIRE(TensorPoissonOperator({&s, &s, &none, &s, &s, &square}, 1.0, 0.0).uniform_factors());
+}
+
+// The error norms by sum factorization against error_norms' cell-by-cell ones, on the same
+// coefficients and rule: the same sums of the same integrand, evaluated in other orders. u_h
+// and its gradient differ by rounding, |d u_h| <= g eps (p+1)^2 |c|_inf and |d grad u_h| <= that
+// times the largest |grad R_a| (<= 2 p n / L for n elements over a side of length at least L:
+// 1 on these domains), so each norm moves by at most that times sqrt(area) (g = 64 for the
+// sums' lengths).
+TEST_CASE("Matrix-free error norms equal the cell-by-cell ones", "[tensor_operator]") {
+  for (const char* name : {"square_sinsin", "quarter_annulus", "lshape"})
+    for (int p : {2, 3}) {
+      const auto s = setup(name, p, 6);
+      const TensorPoissonOperator A(s->patch(), 1.0, 0.0);
+      // A discrete function far from u (errors of order one) and the Galerkin solution (the
+      // discretization's errors): both sizes of error.
+      CaseDescription direct_case = s->c;
+      direct_case.solver.method = "direct";
+      const auto space = build_space(direct_case);
+      const Eigen::VectorXd solution = solve_case(direct_case, *space, Ordering::kAmd).coefficients;
+      for (const Eigen::VectorXd& c : {Eigen::VectorXd(Eigen::VectorXd::Random(A.num_functions())), solution}) {
+      const ExactSolution& exact = *s->c.problem.exact;
+      std::array<double, 2> squares{};
+      Eigen::VectorXd per_cell;
+      REQUIRE(A.squared_errors(c, exact, s->c.quadrature.error_points_u, s->c.quadrature.error_points_v, squares, &per_cell));
+      Eigen::VectorXd expected_cells;
+      const ErrorNorms expected = error_norms(s->d.mesh, *s->map, c, exact, s->c.quadrature, &expected_cells);
+      const double n = std::max(s->d.elements_u, s->d.elements_v), area = 3.0;  // (the largest area here)
+      const double value = 64 * 2.2e-16 * (p + 1) * (p + 1) * c.lpNorm<Eigen::Infinity>();
+      const double l2_bound = value * std::sqrt(area), h1_bound = value * (1 + 2 * p * n) * std::sqrt(area);
+      INFO(name << ", p = " << p << ": L2 " << std::sqrt(squares[0]) << " against " << expected.l2 << ", H1 "
+                << std::sqrt(squares[1]) << " against " << expected.h1_semi);
+      REQUIRE(std::abs(std::sqrt(squares[0]) - expected.l2) <= l2_bound);
+      REQUIRE(std::abs(std::sqrt(squares[1]) - expected.h1_semi) <= h1_bound);
+      REQUIRE(per_cell.size() == s->d.mesh.num_cells());
+      for (Eigen::Index k = 0; k < per_cell.size(); ++k)
+        REQUIRE(std::abs(std::sqrt(per_cell[k]) - std::sqrt(expected_cells[k])) <= h1_bound);
+      }
+    }
 }
