@@ -407,6 +407,27 @@ void galerkin(const RowMatrix& A, int nu, int nv, const RowMatrix& Pu, const Row
   }
 }
 
+// The smoothers' windows and scalings of every level but the coarsest (from each level's
+// diagonal over its free dofs), the report, and the V-cycle with the coarsest level's factor.
+std::unique_ptr<Preconditioner> finish_hierarchy(std::vector<Level> levels, const std::vector<Eigen::VectorXd>& diagonals,
+                                                 int block, const TensorMultigridOptions& options,
+                                                 TensorMultigridReport* report) {
+  for (size_t l = 0; l + 1 < levels.size(); ++l) {
+    build_windows(levels[l].u, block, options.tilings);
+    build_windows(levels[l].v, block, options.tilings);
+    set_scale(levels[l], diagonals[l]);
+  }
+  if (report) {
+    report->free_dofs.clear();
+    report->without_matrix = 0;
+    for (const Level& L : levels) report->free_dofs.push_back(L.size()), report->without_matrix += L.op != nullptr;
+    report->block = block;
+  }
+  Eigen::SparseMatrix<double> coarsest = levels.back().A;
+  levels.back().A = RowMatrix();
+  return std::make_unique<TensorMultigrid>(std::move(levels), std::move(coarsest));
+}
+
 }  // namespace
 
 std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
@@ -452,19 +473,9 @@ std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, 
     c.v = std::move(v);
     galerkin(f.A, f.u.count, f.v.count, f.Pu, f.Pv, hu, hv, c.A);
   }
-  for (size_t l = 0; l + 1 < levels.size(); ++l) {
-    build_windows(levels[l].u, block, options.tilings);
-    build_windows(levels[l].v, block, options.tilings);
-    set_scale(levels[l], levels[l].A.diagonal());
-  }
-  if (report) {
-    report->free_dofs.clear();
-    for (const Level& L : levels) report->free_dofs.push_back(L.size());
-    report->block = block;
-  }
-  Eigen::SparseMatrix<double> coarsest = levels.back().A;
-  levels.back().A = RowMatrix();
-  return std::make_unique<TensorMultigrid>(std::move(levels), std::move(coarsest));
+  std::vector<Eigen::VectorXd> diagonals;
+  for (const Level& L : levels) diagonals.push_back(L.A.diagonal());
+  return finish_hierarchy(std::move(levels), diagonals, block, options, report);
 }
 
 std::unique_ptr<Preconditioner> tensor_multigrid(std::shared_ptr<const TensorPoissonOperator> op, const DofLayout& layout,
@@ -539,21 +550,7 @@ std::unique_ptr<Preconditioner> tensor_multigrid(std::shared_ptr<const TensorPoi
     levels.back().A = matrix_by_probing(*levels.back().op, levels.back().free);
     levels.back().op = nullptr;
   }
-  for (size_t l = 0; l + 1 < levels.size(); ++l) {
-    build_windows(levels[l].u, block, options.tilings);
-    build_windows(levels[l].v, block, options.tilings);
-    set_scale(levels[l], diagonals[l]);
-  }
-  if (report) {
-    report->free_dofs.clear();
-    for (const Level& L : levels) report->free_dofs.push_back(L.size());
-    report->block = block;
-    report->without_matrix = 0;
-    for (const Level& L : levels) report->without_matrix += L.op != nullptr;
-  }
-  Eigen::SparseMatrix<double> coarsest = levels.back().A;
-  levels.back().A = RowMatrix();
-  return std::make_unique<TensorMultigrid>(std::move(levels), std::move(coarsest));
+  return finish_hierarchy(std::move(levels), diagonals, block, options, report);
 }
 
 }  // namespace knotwork
