@@ -452,11 +452,15 @@ void TensorPoissonOperator::apply_rows(const double* x, const FunctionBox& given
     kronecker_rows(in.data(), mu, rows, y);
     return;
   }
-  const double* in_at = in.data() - u0 - mu * v0;  // in_at[i + mu j]: function (i, j)
-  double* out_at = out.data() - u0 - mu * v0;
+  // Function (i, j) at (i + mu j) - origin (an index: a pointer before the array's start
+  // would be undefined behaviour).
+  const long origin = u0 + mu * v0;
+  const double* in_at = in.data();
+  double* out_at = out.data();
   dispatch([&](auto size) {
-    product<decltype(size)::value>([in_at, mu](int i, int j) { return in_at[i + mu * j]; },
-                                   [out_at, mu](int i, int j, double v) { out_at[i + mu * j] += v; }, &elements);
+    product<decltype(size)::value>([in_at, mu, origin](int i, int j) { return in_at[i + mu * j - origin]; },
+                                   [out_at, mu, origin](int i, int j, double v) { out_at[i + mu * j - origin] += v; },
+                                   &elements);
   });
   for (int b = 0; b < rows.count_v; ++b)
     for (int a = 0; a < rows.count_u; ++a) {
