@@ -135,6 +135,16 @@ struct Level {
   long size() const { return static_cast<long>(u.count) * v.count; }
 };
 
+// The next coarser level's directions and f's prolongations; false (and none) when neither
+// direction halves.
+bool coarsen(Level& f, Direction& u, Direction& v, bool& halved_u, bool& halved_v) {
+  u = coarser(f.u, halved_u, f.Pu);
+  v = coarser(f.v, halved_v, f.Pv);
+  if (halved_u || halved_v) return true;
+  f.Pu = f.Pv = RowMatrix();
+  return false;
+}
+
 class TensorMultigrid final : public Preconditioner {
  public:
   TensorMultigrid(std::vector<Level> levels, Eigen::SparseMatrix<double> coarsest)
@@ -462,11 +472,8 @@ std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, 
   while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity()) {
     Level& f = levels.back();
     bool hu = false, hv = false;
-    Direction u = coarser(f.u, hu, f.Pu), v = coarser(f.v, hv, f.Pv);
-    if (!hu && !hv) {
-      f.Pu = f.Pv = RowMatrix();
-      break;
-    }
+    Direction u, v;
+    if (!coarsen(f, u, v, hu, hv)) break;
     levels.emplace_back();
     Level& c = levels.back();
     c.u = std::move(u);
@@ -510,11 +517,8 @@ std::unique_ptr<Preconditioner> tensor_multigrid(std::shared_ptr<const TensorPoi
   while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity()) {
     Level& f = levels.back();
     bool hu = false, hv = false;
-    Direction u = coarser(f.u, hu, f.Pu), v = coarser(f.v, hv, f.Pv);
-    if (!hu && !hv) {
-      f.Pu = f.Pv = RowMatrix();
-      break;
-    }
+    Direction u, v;
+    if (!coarsen(f, u, v, hu, hv)) break;
     std::shared_ptr<const TensorPoissonOperator> coarse_op;
     if (f.op) {
       coarse_op = rediscretized_operator(*f.op, hu, hv);
