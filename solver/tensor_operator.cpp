@@ -357,7 +357,6 @@ TensorPoissonOperator::Band TensorPoissonOperator::band(const Direction& d) {
   Band b;
   const int p = d.degree, P = p + 1, width = 2 * p + 1;
   b.n = d.first.empty() ? 0 : d.first.back() + P;
-  b.p = p;
   b.K.assign(size_t(b.n) * width, 0.0);
   b.M.assign(b.K.size(), 0.0);
   b.C.assign(b.K.size(), 0.0);
@@ -435,7 +434,6 @@ void TensorPoissonOperator::apply_rows(const double* x, const FunctionBox& given
   const long mu = rows.count_u + 2 * pu, mv = rows.count_v + 2 * pv;
   thread_local std::vector<double> in, out;
   in.assign(size_t(mu * mv), 0.0);
-  out.assign(size_t(mu * mv), 0.0);
   const double* w = weights_.size() > 0 ? weights_.data() : nullptr;
   const long n = n_u_;
   for (int b = 0; b < mv; ++b) {
@@ -452,6 +450,7 @@ void TensorPoissonOperator::apply_rows(const double* x, const FunctionBox& given
     kronecker_rows(in.data(), mu, rows, y);
     return;
   }
+  out.assign(size_t(mu * mv), 0.0);
   // Function (i, j) at (i + mu j) - origin (an index: a pointer before the array's start
   // would be undefined behaviour).
   const long origin = u0 + mu * v0;

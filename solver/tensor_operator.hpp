@@ -145,7 +145,7 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // The univariate matrices assembled over the whole direction, as bands: entry (i, i + k - p)
   // at i (2p + 1) + k.
   struct Band {
-    int n = 0, p = 0;
+    int n = 0;                    // functions
     std::vector<double> K, M, C;  // stiffness, mass, mixed (derivative on the row's function)
   };
   static Band band(const Direction& d);

@@ -257,3 +257,56 @@ TEST_CASE("Matrix-free error norms equal the cell-by-cell ones", "[tensor_operat
       }
     }
 }
+
+// A sheared patch (x = u + v / 2, y = v on graded knots): one affine map with d12 != 0, so
+// the Kronecker form's mixed terms are used (the unit square's d12 is 0). Checked by what does
+// not depend on it: the coordinates are in the space, with int |grad x|^2 = int |grad y|^2 =
+// area = 1 and int grad x . grad y = 0; K 1 = 0; with a reaction c, 1^T K 1 = c area.
+TEST_CASE("Matrix-free tensor operator: the Kronecker form's mixed terms on a sheared patch", "[tensor_operator]") {
+  const BSplineBasis1D u(3, {0, 0, 0, 0, 0.1, 0.3, 0.6, 1, 1, 1, 1}), v(3, {0, 0, 0, 0, 0.2, 0.5, 0.7, 0.9, 1, 1, 1, 1});
+  const int nu = u.num_functions(), nv = v.num_functions();
+  auto greville = [](const BSplineBasis1D& b, int i) { return (b.knots()[i + 1] + b.knots()[i + 2] + b.knots()[i + 3]) / 3; };
+  Eigen::MatrixX3d net(long(nu) * nv, 3);
+  Eigen::VectorXd x(net.rows()), y(net.rows());
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const long k = i + long(nu) * j;
+      x[k] = greville(u, i) + 0.5 * greville(v, j), y[k] = greville(v, j);
+      net.row(k) << x[k], y[k], 1.0;
+    }
+  const Eigen::VectorXd none;
+  for (const double reaction : {0.0, 2.0}) {
+    const TensorPoissonOperator A({&u, &v, &none, &u, &v, &net}, 1.0, reaction);
+    REQUIRE(A.uniform_factors());
+    REQUIRE(A.factors()[1] != 0);
+    // Rounding only: n sums of (2p+1)^2 terms of at most |c|_inf^2 max diagonal (K is
+    // positive semi-definite), as above.
+    const double m = 8.0 * 49 * 256, bound = m * 2.2e-16 * x.size() * 2.25 * A.diagonal().maxCoeff();
+    Eigen::VectorXd kx, ky, k1;
+    A.apply(x, kx);
+    A.apply(y, ky);
+    A.apply(Eigen::VectorXd::Ones(x.size()), k1);
+    INFO("reaction " << reaction << ": x^T K x " << x.dot(kx) << ", y^T K y " << y.dot(ky) << ", x^T K y " << x.dot(ky)
+                     << ", 1^T K 1 " << k1.sum());
+    if (reaction == 0) {
+      REQUIRE(std::abs(x.dot(kx) - 1) <= bound);
+      REQUIRE(std::abs(y.dot(ky) - 1) <= bound);
+      REQUIRE(std::abs(x.dot(ky)) <= bound);
+      REQUIRE(k1.lpNorm<Eigen::Infinity>() <= m * 2.2e-16 * A.diagonal().maxCoeff());
+    } else {
+      REQUIRE(std::abs(k1.sum() - reaction) <= bound);
+    }
+    // Rows of a box from a vector given on the interior functions: the whole product's rows.
+    const TensorPoissonOperator::FunctionBox free{1, nu - 2, 1, nv - 2}, rows{2, 3, 1, 4};
+    Eigen::VectorXd inner(long(free.count_u) * free.count_v), whole = Eigen::VectorXd::Zero(x.size()), all;
+    for (int j = 0; j < free.count_v; ++j)
+      for (int i = 0; i < free.count_u; ++i)
+        whole[(1 + i) + long(nu) * (1 + j)] = inner[i + long(free.count_u) * j] = x[(1 + i) + long(nu) * (1 + j)];
+    A.apply(whole, all);
+    Eigen::VectorXd r(long(rows.count_u) * rows.count_v);
+    A.apply_rows(inner.data(), free, rows, r.data());
+    for (int j = 0; j < rows.count_v; ++j)
+      for (int i = 0; i < rows.count_u; ++i)
+        REQUIRE(std::abs(r[i + long(rows.count_u) * j] - all[(rows.first_u + i) + long(nu) * (rows.first_v + j)]) <= bound);
+  }
+}
