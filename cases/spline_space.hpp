@@ -130,7 +130,8 @@ class SplineSpace {
     return nullptr;
   }
   // Its Poisson operator applied without a matrix, K = stiffness (grad, grad) + reaction (., .)
-  // by `quadrature`'s rules, when the family has one for this space (null otherwise).
+  // by `quadrature`'s rules, when the family has one for this space (null otherwise). It may
+  // read the space's data in place: the space must outlive it.
   virtual std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double /*stiffness*/, double /*reaction*/,
                                                                   const QuadratureOptions& /*quadrature*/) const {
     return nullptr;

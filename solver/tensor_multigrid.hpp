@@ -30,7 +30,7 @@
 namespace knotwork {
 
 struct TensorMultigridOptions {
-  int block = 0;                  // functions per block side; 0: max(32, 2p + 2)
+  int block = 0;                  // functions per block side (at least 2p + 2); 0: max(16, 5p + 2)
   int coarsest_functions = 3000;  // coarsen while a level has more free dofs than this
   int tilings = 2;                // 1: the tiling at 0 only; 2: and the one shifted by block / 2
 };

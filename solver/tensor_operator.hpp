@@ -31,6 +31,9 @@ struct TensorPatch {
   const BSplineBasis1D* geometry_u = nullptr;
   const BSplineBasis1D* geometry_v = nullptr;
   const Eigen::MatrixX3d* geometry = nullptr;
+  // True when `geometry` outlives the operator (a space's own net): the operator then reads it
+  // in place where it needs no scaling (weights 1), instead of copying 24 bytes per function.
+  bool geometry_outlives_operator = false;
 };
 
 class TensorPoissonOperator final : public MatrixFreePoisson {
@@ -40,6 +43,9 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // elements differ, or a net of the wrong size.
   TensorPoissonOperator(const TensorPatch& patch, double stiffness, double reaction, int points_u = 0,
                         int points_v = 0);
+  // (Not copied: it may point into itself.)
+  TensorPoissonOperator(const TensorPoissonOperator&) = delete;
+  TensorPoissonOperator& operator=(const TensorPoissonOperator&) = delete;
   static constexpr int kMaxDegree = 15;
 
   int num_functions() const override { return n_u_ * n_v_; }
@@ -89,13 +95,14 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
 
   // What the operator was made of, for a coarser operator of the same problem (the multigrid's
   // rediscretized levels, solver/tensor_multigrid.cpp): the bases, the weights (empty when
-  // equal) and the geometry's homogeneous net (scaled to weights 1 when they are equal).
+  // equal) and the geometry's homogeneous net (of weights 1 when they are equal: scaled to 1,
+  // or 1 to 64 eps when read in place).
   const BSplineBasis1D& space_u() const { return space_u_; }
   const BSplineBasis1D& space_v() const { return space_v_; }
   const BSplineBasis1D& geometry_u() const { return geometry_u_; }
   const BSplineBasis1D& geometry_v() const { return geometry_v_; }
   const Eigen::VectorXd& weights() const { return weights_; }
-  const Eigen::MatrixX3d& net() const { return net_; }
+  const Eigen::MatrixX3d& net() const { return *net_; }
   double stiffness() const { return stiffness_; }
   double reaction() const { return reaction_; }
   int points_u() const { return u_.points; }
@@ -116,13 +123,16 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // p + 1 when every size (functions and points, both directions, geometry too) is p + 1, else 0.
   int uniform_size() const;
   void find_affine_elements();
+  bool net_is_affine() const;
   // Every element, threaded: kernel(eu, ev, first u function, first v function, tables, Points)
   // with the geometry at its points; or, given `affine`, affine(eu, ev, fu, fv, factors) for the
   // elements that have constant factors, without the geometry.
   // `stop`: once it is true, the remaining elements are skipped.
   // `elements` (first and last element in u, then in v, inclusive): only those, serially.
   // `rule_u`, `rule_v`: other tables (another rule) than the operator's.
-  template <int N, class Kernel, class Affine = std::nullptr_t>
+  // N > 0: every function and geometry size is N; Q > 0: every point count is Q (known to the
+  // compiler: unrolled and vectorized contractions).
+  template <int N, int Q = N, class Kernel, class Affine = std::nullptr_t>
   void for_each_element(Kernel kernel, Affine affine = nullptr, const std::atomic<bool>* stop = nullptr,
                         const std::array<int, 4>* elements = nullptr, const Direction* rule_u = nullptr,
                         const Direction* rule_v = nullptr) const;
@@ -139,6 +149,10 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   void product(Gather gather, Scatter scatter, const std::array<int, 4>* elements) const;
   template <class Sized>
   void dispatch(Sized sized) const;
+  // sized(N, Q) for the tables U, V: N when every function and geometry size is N, Q when every
+  // point count is Q (each 0 otherwise, or beyond the sizes compiled).
+  template <class Sized>
+  void dispatch(const Direction& U, const Direction& V, Sized sized) const;
   // The elements whose functions meet the box's rows (inclusive ranges); false when none do.
   bool elements_touching(const FunctionBox& rows, std::array<int, 4>& elements) const;
 
@@ -149,6 +163,15 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
     std::vector<double> K, M, C;  // stiffness, mass, mixed (derivative on the row's function)
   };
   static Band band(const Direction& d);
+  // The Kronecker form's coefficients, band entry k of row i at k n + i (k-major: the passes
+  // run along rows, vectorized), zero outside the matrix, the factors folded in. Along u:
+  // a1 = d11 K_u + c M_u, a2 = d22 M_u, a3 = d12 C_u, a4 = d12 C_u^T; along v: M_v, K_v, C_v^T, C_v.
+  struct KroneckerForm {
+    std::vector<double> a1, a2, a3, a4, mv, kv, cvt, cv;
+    bool mixed = false;  // d12 != 0
+  };
+  // Sets uniform_ with `factors`, the bands and the Kronecker form.
+  void set_uniform(const std::array<double, 4>& factors);
   // y at `rows` from x on the padded box of rows +- the degrees (in, mu x mv) by the Kronecker
   // form of a patch whose elements share their factors.
   void kronecker_rows(const double* in, long mu, const FunctionBox& rows, double* y) const;
@@ -161,14 +184,16 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   bool uniform_ = false;
   std::array<double, 4> uniform_factors_{};
   Band band_u_, band_v_;
+  KroneckerForm kronecker_;
   BSplineBasis1D space_u_, space_v_, geometry_u_, geometry_v_;
   int n_u_ = 0, n_v_ = 0, net_u_ = 0;
   Eigen::VectorXd weights_;  // empty: B-splines (or NURBS of equal weights, the same functions)
-  Eigen::MatrixX3d net_;
+  Eigen::MatrixX3d own_net_;
+  const Eigen::MatrixX3d* net_ = &own_net_;  // own_net_, or the patch's (geometry_outlives_operator)
   bool polynomial_map_ = false;  // the net's weights are equal (then scaled to 1)
-  // Per element (eu + n_eu ev), its affine factors, when every element is affine; empty
-  // otherwise (the search stops at the first curved element) and for NURBS spaces (whose
-  // functions are not products there).
+  // Per element (eu + n_eu ev), its affine factors, when every element is affine and they
+  // differ; empty otherwise (the search stops at the first curved element), when uniform_ and
+  // for NURBS spaces (whose functions are not products there).
   std::vector<std::array<double, 4>> affine_;
   double stiffness_ = 1, reaction_ = 0;
 };

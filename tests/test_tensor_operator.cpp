@@ -27,7 +27,10 @@ struct Setup {
   TensorDiscretization d;
   std::unique_ptr<PatchGeometryMap> map;
   Eigen::VectorXd weights;
-  TensorPatch patch() const { return {&d.space_u, &d.space_v, &weights, &d.geometry_u, &d.geometry_v, &d.geometry_homogeneous}; }
+  // The net read in place, as the family's operator reads it (test_multigrid's copies it).
+  TensorPatch patch() const {
+    return {&d.space_u, &d.space_v, &weights, &d.geometry_u, &d.geometry_v, &d.geometry_homogeneous, true};
+  }
 };
 
 std::unique_ptr<Setup> setup(const std::string& name, int p, int n) {

@@ -120,9 +120,11 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
                                                           const QuadratureOptions& quadrature) const override {
     if (d_.part) return nullptr;  // a rank's part: the operator covers whole patches
     const Eigen::VectorXd* weights = d_.mesh.is_rational() ? &d_.mesh.weights() : nullptr;
+    // (The operator lives within a solve on this space: it may read the space's net in place.)
     return std::make_unique<TensorPoissonOperator>(
-        TensorPatch{&d_.space_u, &d_.space_v, weights, &d_.geometry_u, &d_.geometry_v, &d_.geometry_homogeneous}, stiffness,
-        reaction, quadrature.points_u, quadrature.points_v);
+        TensorPatch{&d_.space_u, &d_.space_v, weights, &d_.geometry_u, &d_.geometry_v, &d_.geometry_homogeneous,
+                    /*geometry_outlives_operator=*/true},
+        stiffness, reaction, quadrature.points_u, quadrature.points_v);
   }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
