@@ -221,6 +221,18 @@ TEST_CASE("Matrix-free tensor operator: affine elements with different factors",
       square.row(i + 7 * j) << (s.knots()[i + 1] + s.knots()[i + 2] + s.knots()[i + 3]) / 3,
           (s.knots()[j + 1] + s.knots()[j + 2] + s.knots()[j + 3]) / 3, 1.0;
   REQUIRE(TensorPoissonOperator({&s, &s, &none, &s, &s, &square}, 1.0, 0.0).uniform_factors());
+  // Decided from the net (its points are the map at the Greville abscissae). The last control
+  // point's function lives on the four elements of the far corner: moved by 1e-9, far above
+  // the 64 eps the data's rounding allows, it bends them while the first element stays affine,
+  // and the operator is not uniform (nor affine: those are curved). Moved by 4 ulp it still is.
+  Eigen::MatrixX3d bent = square;
+  bent(48, 0) += 1e-9;
+  const TensorPoissonOperator B({&s, &s, &none, &s, &s, &bent}, 1.0, 0.0);
+  REQUIRE_FALSE(B.uniform_factors());
+  REQUIRE_FALSE(B.all_elements_affine());
+  Eigen::MatrixX3d rounded = square;
+  rounded(48, 0) += 4 * 2.2e-16;
+  REQUIRE(TensorPoissonOperator({&s, &s, &none, &s, &s, &rounded}, 1.0, 0.0).uniform_factors());
 }
 
 // The error norms by sum factorization against error_norms' cell-by-cell ones, on the same
