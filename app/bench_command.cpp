@@ -33,7 +33,7 @@ BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool
     BenchResult r;
     int code = 0;
     try {
-      r = bench_configuration(p, n, ordering, with_errors, floor, o.solver, o.tolerance, o.preconditioner);
+      r = bench_configuration(p, n, ordering, with_errors, floor, o.solver, o.tolerance, o.preconditioner, o.matrix);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "knotwork bench: p=%d n=%d failed: %s\n", p, n, e.what());
       code = 1;
@@ -78,6 +78,8 @@ int bench_command(const BenchOptions& o) {
   checked_name(o.preconditioner, preconditioner_names(), "--preconditioner", "");
   if (o.solver != "iterative" && o.preconditioner != "auto")
     throw InputError("--preconditioner: used with --solver iterative only");
+  checked_name(o.matrix, {"auto", "assembled", "matrix_free"}, "--matrix", "");
+  if (o.solver != "iterative" && o.matrix != "auto") throw InputError("--matrix: used with --solver iterative only");
   const bool cg = o.solver == "iterative";
   std::vector<BenchResult> results;
   if (!o.json && cg)
@@ -133,6 +135,7 @@ int bench_command(const BenchOptions& o) {
           .set("l2_error", r.l2).set("cholmod_default_floor_seconds", r.floor_seconds);
       if (cg)
         j.set("solver", Json::object().set("method", "iterative").set("preconditioner", std::string(r.preconditioner_name))
+                            .set("matrix", r.matrix_nonzeros == 0 ? "matrix_free" : "assembled")
                             .set("iterations", r.iterations).set("relative_residual", r.relative_residual)
                             .set("tolerance", o.tolerance))
             .set("preconditioner", r.preconditioner).set("iterations", r.cg);

@@ -57,6 +57,7 @@ struct BenchOptions {
   std::string solver = "direct";  // direct | iterative (CG + the space's preconditioner)
   double tolerance = 1e-15;
   std::string preconditioner = "auto";  // with solver "iterative": as [solver] preconditioner
+  std::string matrix = "auto";          // with solver "iterative": as [solver] matrix
 };
 
 struct DimensionOptions {

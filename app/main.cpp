@@ -188,6 +188,10 @@ int main(int argc, char** argv) {
                         "--solver iterative: auto (the space's own), jacobi, boomeramg or the family's own (" +
                             family_preconditioners() + ")")
       ->capture_default_str();
+  bench_cmd->add_option("--matrix", bench.matrix,
+                        "--solver iterative: how CG gets K: auto (without a matrix on affine elements, as run), "
+                        "assembled or matrix_free")
+      ->capture_default_str();
   bench_cmd->add_flag("!--no-errors", bench.with_errors, "Skip the error norms");
   bench_cmd->add_flag("--floor", bench.floor,
                       "Also time bare CHOLMOD with its default settings on the same matrix (the floor)");

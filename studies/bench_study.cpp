@@ -10,7 +10,7 @@ namespace knotwork {
 
 // The benchmark problem: unit square, u = sin(pi x) sin(pi y), homogeneous Dirichlet.
 BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_errors, bool floor, const std::string& solver,
-                                double tolerance, const std::string& preconditioner) {
+                                double tolerance, const std::string& preconditioner, const std::string& matrix) {
   CaseDescription c = unit_square_benchmark_case(p, n);
   const auto t0 = std::chrono::steady_clock::now();
   const std::unique_ptr<SplineSpace> d = build_space(c);
@@ -22,6 +22,7 @@ BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_error
     c.solver.method = "iterative";
     c.solver.tolerance = tolerance;
     c.solver.preconditioner = preconditioner;
+    c.solver.matrix = matrix;
     if (!with_errors) {  // no exact solution, so no error norms: the boundary data it gave (u = 0) stated instead
       for (BoundaryCondition& side : c.problem.boundary) side.from_exact = false, side.value = Expression::constant(0);
       c.problem.exact.reset();

@@ -25,8 +25,9 @@ struct BenchResult {
 
 // Solves the configuration with the direct solver (and, with `floor`, bare CHOLMOD on the same
 // matrix) or, with solver "iterative", CG to backward error `tolerance` with `preconditioner`
-// (as [solver] preconditioner).
+// (as [solver] preconditioner) and K as `matrix` says (as [solver] matrix).
 BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_errors, bool floor, const std::string& solver,
-                                double tolerance, const std::string& preconditioner = "auto");
+                                double tolerance, const std::string& preconditioner = "auto",
+                                const std::string& matrix = "auto");
 
 }  // namespace knotwork

@@ -117,6 +117,21 @@ TEST_CASE("bench runs both solvers with and without the error norms", "[cli][ben
   const Result text = box.run("bench --config 2:16 --solver iterative");
   REQUIRE(text.code == 0);
   REQUIRE(text.out.find("preconditioner (auto): 2:16 fast_diagonalization") != std::string::npos);
+  // --matrix as run takes it: the square's affine elements run without one unless told.
+  for (const std::string matrix : {"auto", "matrix_free", "assembled"}) {
+    const Result r = box.run("bench --json --config 2:16 --solver iterative --matrix " + matrix);
+    INFO(matrix << ": " << r.err);
+    REQUIRE(r.code == 0);
+    const bool none = matrix != "assembled";
+    REQUIRE(r.out.find(none ? "\"matrix\": \"matrix_free\"" : "\"matrix\": \"assembled\"") != std::string::npos);
+    REQUIRE((r.out.find("\"matrix_nonzeros\": 0,") != std::string::npos) == none);
+  }
+  const Result bad = box.run("bench --config 2:16 --solver iterative --matrix sparse");
+  REQUIRE(bad.code != 0);
+  REQUIRE(bad.err.find("--matrix") != std::string::npos);
+  const Result direct = box.run("bench --config 2:16 --matrix assembled");
+  REQUIRE(direct.code != 0);
+  REQUIRE(direct.err.find("--matrix: used with --solver iterative only") != std::string::npos);
 }
 
 TEST_CASE("every subcommand has --help", "[cli]") {
