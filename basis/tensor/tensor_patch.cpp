@@ -3,7 +3,6 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -190,7 +189,8 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
   const auto Cu = bezier_extraction(d.space_u), Cv = bezier_extraction(d.space_v);
   std::vector<int> rep_u, rep_v;
   const auto idu = deduplicate(Cu, rep_u), idv = deduplicate(Cv, rep_v);
-  std::map<std::pair<int, int>, int> pool_index;
+  // The pool's matrix of each pair of distinct univariate extractions, made on first use.
+  std::vector<int> pool_index(rep_u.size() * rep_v.size(), -1);
   const auto& U = d.space_u.knots();
   const auto& V = d.space_v.knots();
   std::vector<int> ids((p + 1) * (q + 1));
@@ -198,10 +198,8 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
   mesh.reserve(static_cast<int>(cells), cells * (p + 1) * (q + 1));
   for (int iv = row_from; iv < row_to; ++iv)
     for (int iu = 0; iu < d.elements_u; ++iu) {
-      auto key = std::make_pair(idu[iu], idv[iv]);
-      auto it = pool_index.find(key);
-      if (it == pool_index.end())
-        it = pool_index.emplace(key, mesh.add_extraction(kronecker(Cu[rep_u[idu[iu]]], Cv[rep_v[idv[iv]]]))).first;
+      int& pooled = pool_index[idu[iu] + rep_u.size() * idv[iv]];
+      if (pooled < 0) pooled = mesh.add_extraction(kronecker(Cu[rep_u[idu[iu]]], Cv[rep_v[idv[iv]]]));
       BezierCell cell;
       cell.index_u = iu;
       cell.index_v = iv;
@@ -218,7 +216,7 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
       for (int av = 0; av <= q; ++av)
         for (int au = 0; au <= p; ++au)
           ids[au + (p + 1) * av] = (spans_u[iu] - p + au) + su * (spans_v[iv] - q + av) - offset;
-      mesh.add_cell(cell, ids, it->second);
+      mesh.add_cell(cell, ids, pooled);
     }
   return d;
 }
