@@ -571,7 +571,7 @@ void TensorPoissonOperator::apply_rows(const double* x, const FunctionBox& given
   const int a_from = std::max(0, given.first_u - u0), a_to = int(std::min<long>(mu, given.first_u + given.count_u - u0));
   for (int b = 0; b < mv; ++b) {
     const int j = v0 + b, gj = j - given.first_v;
-    if (gj < 0 || gj >= given.count_v) continue;
+    if (gj < 0 || gj >= given.count_v || a_from >= a_to) continue;
     const long at = long(given.count_u) * gj - given.first_u + u0;  // x's index of the box's column 0
     double* to = in.data() + mu * b;
     if (w)
