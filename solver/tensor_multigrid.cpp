@@ -282,14 +282,15 @@ class TensorMultigrid final : public Preconditioner {
   mutable std::vector<Work> work_;
 };
 
-// The block side: 16 functions at p = 2 up to 32 at p = 6. At 2048^2, p = 2, the V-cycles took
-// 17% less time with 16 than with 32, in the same iterations; at p = 6 (256^2, square) 16 took
-// 9 iterations where 32 took 7 (docs/SOLVERS.md).
-int default_block(int p) { return std::max(16, 5 * p + 2); }
+// The block side: as given (at least 2p + 2), else 16 functions at p = 2 up to 32 at p = 6. At
+// 2048^2, p = 2, the V-cycles took 17% less time with 16 than with 32, in the same iterations;
+// at p = 6 (256^2, square) 16 took 9 iterations where 32 took 7 (docs/SOLVERS.md).
+int block_side(const TensorMultigridOptions& options, int p) {
+  return options.block > 0 ? std::max(options.block, 2 * p + 2) : std::max(16, 5 * p + 2);
+}
 
 // The free range of one direction, from its free indices (contiguous, missing at most the first
 // and the last function); false otherwise.
-
 bool free_range(const std::vector<int>& free, int n, Direction& d) {
   if (free.empty() || free.back() - free.front() + 1 != static_cast<int>(free.size())) return false;
   if (free.front() > 1 || free.back() < n - 2) return false;
@@ -469,7 +470,7 @@ std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, 
   Level& fine = levels.back();
   if (!free_range(iu, nu, fine.u) || !free_range(iv, nv, fine.v)) return nullptr;
   const int p = std::max(space_u.degree(), space_v.degree());
-  const int block = options.block > 0 ? std::max(options.block, 2 * p + 2) : default_block(p);
+  const int block = block_side(options, p);
   const auto& side = nitsche.sides;  // bottom, right, top, left
   fine.u.basis = space_u;
   fine.u.mass_weight = geometry.a2;
@@ -513,7 +514,7 @@ std::unique_ptr<Preconditioner> tensor_multigrid(std::shared_ptr<const TensorPoi
   Level& fine = levels.back();
   if (!free_range(iu, nu, fine.u) || !free_range(iv, nv, fine.v)) return nullptr;
   const int p = std::max(space_u.degree(), space_v.degree());
-  const int block = options.block > 0 ? std::max(options.block, 2 * p + 2) : default_block(p);
+  const int block = block_side(options, p);
   fine.u.basis = space_u;
   fine.u.mass_weight = geometry.a2;
   fine.u.stiffness_weight = geometry.a1;

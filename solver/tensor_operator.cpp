@@ -73,19 +73,6 @@ void over_row_bands(int rows, int reach, Row row) {
   }
 }
 
-// The Greville abscissae: an affine function a + b t has the coefficients a + b xi_i.
-std::vector<double> greville_abscissae(const BSplineBasis1D& basis) {
-  const int p = basis.degree(), n = basis.num_functions();
-  const std::vector<double>& t = basis.knots();
-  std::vector<double> xi(n);
-  for (int i = 0; i < n; ++i) {
-    double sum = 0;
-    for (int k = 1; k <= p; ++k) sum += t[i + k];
-    xi[i] = sum / p;
-  }
-  return xi;
-}
-
 bool all_equal(Eigen::Ref<const Eigen::VectorXd> w) {
   return (w.array() - w[0]).abs().maxCoeff() <= 64 * std::numeric_limits<double>::epsilon() * std::abs(w[0]);
 }
@@ -450,7 +437,6 @@ void TensorPoissonOperator::set_uniform(const std::array<double, 4>& factors) {
       k.a4[to] = c >= 0 && c < nu ? d12 * band_u_.C[size_t(c) * wu + (wu - 1 - t)] : 0.0;
     }
   const int pv = v_.degree, wv = 2 * pv + 1, nv = band_v_.n;
-  k.mv = band_v_.M, k.kv = band_v_.K, k.cv = band_v_.C;
   k.cvt.assign(size_t(wv) * nv, 0.0);
   for (int j = 0; j < nv; ++j)
     for (int t = 0; t < wv; ++t) {
@@ -669,7 +655,7 @@ void TensorPoissonOperator::kronecker_rows(const double* in, long mu, const Func
   auto run = [&](auto width) {
     kronecker_sized<decltype(width)::value>(in, mu, 2 * pu + 1, 2 * pv + 1, rows.first_u, rows.count_u, rows.first_v,
                                             rows.count_v, band_u_.n, k.a1.data(), k.a2.data(), k.a3.data(), k.a4.data(),
-                                            k.mv.data(), k.kv.data(), k.cvt.data(), k.cv.data(), k.mixed, y);
+                                            band_v_.M.data(), band_v_.K.data(), k.cvt.data(), band_v_.C.data(), k.mixed, y);
   };
   if (pu == pv && pu == 2) return run(std::integral_constant<int, 5>{});
   if (pu == pv && pu == 3) return run(std::integral_constant<int, 7>{});

@@ -163,11 +163,12 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
     std::vector<double> K, M, C;  // stiffness, mass, mixed (derivative on the row's function)
   };
   static Band band(const Direction& d);
-  // The Kronecker form's coefficients, band entry k of row i at k n + i (k-major: the passes
-  // run along rows, vectorized), zero outside the matrix, the factors folded in. Along u:
-  // a1 = d11 K_u + c M_u, a2 = d22 M_u, a3 = d12 C_u, a4 = d12 C_u^T; along v: M_v, K_v, C_v^T, C_v.
+  // The Kronecker form's coefficients along u, band entry k of row i at k n + i (k-major: the
+  // pass runs along rows, vectorized), zero outside the matrix, the factors folded in:
+  // a1 = d11 K_u + c M_u, a2 = d22 M_u, a3 = d12 C_u, a4 = d12 C_u^T. Along v the bands M_v,
+  // K_v, C_v as they are, and C_v^T (cvt, row-major like them).
   struct KroneckerForm {
-    std::vector<double> a1, a2, a3, a4, mv, kv, cvt, cv;
+    std::vector<double> a1, a2, a3, a4, cvt;
     bool mixed = false;  // d12 != 0
   };
   // Sets uniform_ with `factors`, the bands and the Kronecker form.

@@ -77,6 +77,27 @@ TEST_CASE("Cox-de Boor values match the recursive definition, and partition of u
   }
 }
 
+// Linear precision, with the recursive definition as the basis: sum_i xi_i N_i(t) = t.
+// Rounding: p + 1 nonzero terms, each value to 64 eps (the recursion's p levels) times |xi_i|,
+// which is at most the largest |knot|.
+TEST_CASE("Greville abscissae reproduce the identity", "[bspline]") {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 100; ++trial) {
+    const int p = 1 + trial % 6;
+    const BSplineBasis1D B = random_basis(rng, p, p);
+    const std::vector<double> xi = greville_abscissae(B);
+    REQUIRE(static_cast<int>(xi.size()) == B.num_functions());
+    double largest = 0;
+    for (double k : B.knots()) largest = std::max(largest, std::abs(k));
+    for (double t : sample_points(rng, B, 10)) {
+      double sum = 0;
+      for (int i = 0; i < B.num_functions(); ++i) sum += xi[i] * cox_de_boor(B.knots(), i, p, t, B.domain_end());
+      REQUIRE(std::abs(sum - t) <= (p + 1) * 64 * 2.2e-16 * largest);
+    }
+  }
+  REQUIRE_THROWS_AS(greville_abscissae(std::vector<double>{0, 1}, 1), std::invalid_argument);
+}
+
 TEST_CASE("B-spline derivatives match finite differences", "[bspline]") {
   std::mt19937 rng(2);
   for (int trial = 0; trial < 100; ++trial) {

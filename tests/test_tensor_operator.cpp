@@ -215,11 +215,10 @@ TEST_CASE("Matrix-free tensor operator: affine elements with different factors",
   }
   // The unit square's elements share one set of factors.
   const BSplineBasis1D s = BSplineBasis1D::open_uniform(3, 0, 1, 4);
+  const std::vector<double> xi = greville_abscissae(s);
   Eigen::MatrixX3d square(49, 3);
   for (int j = 0; j < 7; ++j)
-    for (int i = 0; i < 7; ++i)
-      square.row(i + 7 * j) << (s.knots()[i + 1] + s.knots()[i + 2] + s.knots()[i + 3]) / 3,
-          (s.knots()[j + 1] + s.knots()[j + 2] + s.knots()[j + 3]) / 3, 1.0;
+    for (int i = 0; i < 7; ++i) square.row(i + 7 * j) << xi[i], xi[j], 1.0;
   REQUIRE(TensorPoissonOperator({&s, &s, &none, &s, &s, &square}, 1.0, 0.0).uniform_factors());
   // Decided from the net (its points are the map at the Greville abscissae). The last control
   // point's function lives on the four elements of the far corner: moved by 1e-9, far above
@@ -280,13 +279,13 @@ TEST_CASE("Matrix-free error norms equal the cell-by-cell ones", "[tensor_operat
 TEST_CASE("Matrix-free tensor operator: the Kronecker form's mixed terms on a sheared patch", "[tensor_operator]") {
   const BSplineBasis1D u(3, {0, 0, 0, 0, 0.1, 0.3, 0.6, 1, 1, 1, 1}), v(3, {0, 0, 0, 0, 0.2, 0.5, 0.7, 0.9, 1, 1, 1, 1});
   const int nu = u.num_functions(), nv = v.num_functions();
-  auto greville = [](const BSplineBasis1D& b, int i) { return (b.knots()[i + 1] + b.knots()[i + 2] + b.knots()[i + 3]) / 3; };
+  const std::vector<double> xi = greville_abscissae(u), eta = greville_abscissae(v);
   Eigen::MatrixX3d net(long(nu) * nv, 3);
   Eigen::VectorXd x(net.rows()), y(net.rows());
   for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; ++i) {
       const long k = i + long(nu) * j;
-      x[k] = greville(u, i) + 0.5 * greville(v, j), y[k] = greville(v, j);
+      x[k] = xi[i] + 0.5 * eta[j], y[k] = eta[j];
       net.row(k) << x[k], y[k], 1.0;
     }
   const Eigen::VectorXd none;

@@ -149,6 +149,18 @@ std::vector<int> BSplineBasis1D::multiplicities() const {
   return m;
 }
 
+std::vector<double> greville_abscissae(const std::vector<double>& knots, int degree) {
+  if (degree < 1 || knots.size() < size_t(degree) + 2)
+    throw std::invalid_argument("greville_abscissae: degree at least 1 and at least degree + 2 knots");
+  std::vector<double> xi(knots.size() - degree - 1);
+  for (size_t i = 0; i < xi.size(); ++i) {
+    double sum = 0;
+    for (int k = 1; k <= degree; ++k) sum += knots[i + k];
+    xi[i] = sum / degree;
+  }
+  return xi;
+}
+
 std::vector<int> BSplineBasis1D::element_spans() const {
   std::vector<int> spans;
   for (int s = p_; s < num_functions(); ++s)

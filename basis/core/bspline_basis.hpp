@@ -47,6 +47,14 @@ class BSplineBasis1D {
   std::vector<double> knots_;
 };
 
+// The Greville abscissae xi_i = (t_{i+1} + ... + t_{i+p}) / p of the functions of degree p >= 1
+// over `knots` (p + 1 + n knots for n functions): the affine function a + b t has the
+// coefficients a + b xi_i (linear precision).
+std::vector<double> greville_abscissae(const std::vector<double>& knots, int degree);
+inline std::vector<double> greville_abscissae(const BSplineBasis1D& basis) {
+  return greville_abscissae(basis.knots(), basis.degree());
+}
+
 // Value at t of the spline with the given coefficients (de Boor's algorithm).
 double de_boor(const BSplineBasis1D& basis, std::span<const double> coefficients, double t);
 

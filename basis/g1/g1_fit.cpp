@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "basis/core/bspline_basis.hpp"
 #include "basis/g1/g1_basis.hpp"
 
 namespace knotwork {
@@ -32,12 +33,7 @@ Eigen::MatrixX3d g1_fit(const QuadMesh& mesh, const G1Basis& basis,
   const int k = basis.k, r = basis.r, n = 2 * k - r + 1;
   // Greville abscissae: a B-spline combination with these as coefficients is the identity,
   // so the bilinear face has the bilinear map at (xi_i, xi_j) as its coefficients.
-  const std::vector<double> knots = g1_face_knots(k, r);
-  std::vector<double> xi(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    for (int l = 1; l <= k; ++l) xi[i] += knots[i + l];
-    xi[i] /= k;
-  }
+  const std::vector<double> xi = greville_abscissae(g1_face_knots(k, r), k);
   Eigen::MatrixX3d target(basis.unknowns(), 3);
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int i = 0; i < n; ++i)
