@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "solver/blas_kernel.hpp"
 #include "app/commands.hpp"
 #include "cases/output_files.hpp"
 #include "cases/spline_space.hpp"
@@ -92,20 +93,28 @@ std::string local_families() {
 //   solve took 15x (CHOLMOD) and 10x (CG) longer than with one OpenBLAS thread, which
 //   costs 15-35% of the factorization when the machine is quiet: OPENBLAS_NUM_THREADS=1.
 //   Assembly and error norms keep their OpenMP threads.
-// Both libraries read these when they load, before main, so the only way to choose them
+// And OpenBLAS's kernels where it does not know the CPU: OPENBLAS_CORETYPE (solver/blas_kernel.cpp).
+// The libraries read these when they load, before main, so the only way to choose them
 // from inside is to set them and start again. A user's own settings are kept.
-void prefer_robust_threading(char** argv) {
+void prefer_robust_defaults(char** argv) {
   bool changed = false;
   for (const auto& [name, value] : {std::pair{"OMP_WAIT_POLICY", "passive"}, std::pair{"OPENBLAS_NUM_THREADS", "1"}})
     if (std::getenv(name) == nullptr) {
       setenv(name, value, 1);
       changed = true;
     }
+  if (std::getenv("OPENBLAS_CORETYPE") == nullptr) {
+    const std::string kernel = knotwork::better_blas_kernel();
+    if (!kernel.empty()) {
+      setenv("OPENBLAS_CORETYPE", kernel.c_str(), 1);
+      changed = true;
+    }
+  }
   if (changed) execv("/proc/self/exe", argv);  // returns only on failure: then run as we are
 }
 
 int main(int argc, char** argv) {
-  prefer_robust_threading(argv);
+  prefer_robust_defaults(argv);
   knotwork::remove_partial_output_on_interrupt(knotwork::launched_world().rank == 0);
   CLI::App app{"knotwork: isogeometric Poisson solver (B-splines/NURBS -> Bezier extraction -> CHOLMOD -> ParaView)"};
   app.set_version_flag("--version", "knotwork 0.1.0");

@@ -20,6 +20,7 @@
 #include "studies/studies.hpp"
 #include "studies/system_study.hpp"
 #include "basis/core/bezier_mesh_checks.hpp"
+#include "solver/blas_kernel.hpp"
 #include "solver/error_norms.hpp"
 #include "solver/cell_basis.hpp"
 #include "solver/expression.hpp"
@@ -820,4 +821,9 @@ PYBIND11_MODULE(_core, m) {
   // OpenBLAS reads OPENBLAS_NUM_THREADS when it is loaded, which may have happened (numpy)
   // before knotwork is imported: the package sets it through the library too.
   m.def("set_blas_threads", [](int n) { openblas_set_num_threads(n); });
+  // The kernel OpenBLAS runs, and the one to name in OPENBLAS_CORETYPE where it took this CPU
+  // for a generic one (solver/blas_kernel.cpp; the package asks a fresh process, before
+  // OpenBLAS loads here).
+  m.def("blas_kernel", &knotwork::blas_kernel);
+  m.def("better_blas_kernel", &knotwork::better_blas_kernel);
 }

@@ -5,14 +5,22 @@
 # calls). A check of rounding must hold under each (tests/rounding_bounds.hpp). This is what CI
 # runs after scripts/test.sh (.ci/run).
 #
-# Usage: scripts/test_blas_kernels.sh [KERNEL ...]    (default: Prescott Haswell; a kernel that
-#        is already the machine's default is skipped: the full suite ran under it)
+# Usage: scripts/test_blas_kernels.sh [KERNEL ...]    (default: Prescott Haswell, and the kernel
+#        the knotwork command runs with if it is neither: it names a kernel where OpenBLAS takes
+#        the CPU for a generic one, solver/blas_kernel.cpp; a kernel that is already the machine's
+#        default is skipped: the full suite ran under it)
 # Needs the build of scripts/build.sh. About 3 minutes per kernel here (2 cores).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${KNOTWORK_BUILD_DIR:-$root/build}"
 kernels=("$@")
-[[ ${#kernels[@]} -eq 0 ]] && kernels=(Prescott Haswell)
+if [[ ${#kernels[@]} -eq 0 ]]; then
+  kernels=(Prescott Haswell)
+  command_kernel="$("$build/app/knotwork" bench --json --config 1:4 |
+    /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["blas_kernel"])')"
+  [[ -n "$command_kernel" && "$command_kernel" != Prescott && "$command_kernel" != Haswell ]] &&
+    kernels+=("$command_kernel")
+fi
 
 # The kernel OpenBLAS picks with the given OPENBLAS_CORETYPE ("" for its own choice).
 corename() {

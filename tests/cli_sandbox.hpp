@@ -40,8 +40,10 @@ class Sandbox {
     std::ofstream(dir_ / name) << text;
     return dir_ / name;
   }
-  Result run(const std::string& args) const {
-    const std::string cmd = "cd " + dir_.string() + " && " + KNOTWORK_BINARY + " " + args + " > stdout.txt 2> stderr.txt";
+  // env: a prefix such as "env -u NAME NAME2=value" for the program's environment.
+  Result run(const std::string& args, const std::string& env = "") const {
+    const std::string cmd =
+        "cd " + dir_.string() + " && " + env + " " + KNOTWORK_BINARY + " " + args + " > stdout.txt 2> stderr.txt";
     const int status = std::system(cmd.c_str());
     return {WEXITSTATUS(status), slurp(dir_ / "stdout.txt"), slurp(dir_ / "stderr.txt")};
   }

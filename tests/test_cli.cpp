@@ -5,7 +5,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include "tests/cli_sandbox.hpp"
@@ -98,6 +100,44 @@ TEST_CASE("converge writes table, JSON, plot and collection", "[cli]") {
   REQUIRE(r.out.find("\"h1_rate\"") != std::string::npos);
   const std::string csv = slurp(box.dir() / "conv/convergence.csv");
   REQUIRE(std::count(csv.begin(), csv.end(), '\n') == 4);
+}
+
+// The CPU's features as the kernel reports them, independently of the compiler's view of them.
+bool cpu_has_flags(std::initializer_list<const char*> flags) {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("flags", 0) == 0) {
+      std::istringstream words(line.substr(line.find(':') + 1));
+      std::set<std::string> have{std::istream_iterator<std::string>(words), std::istream_iterator<std::string>()};
+      for (const char* f : flags)
+        if (!have.count(f)) return false;
+      return true;
+    }
+  return false;
+}
+
+TEST_CASE("bench names the OpenBLAS kernel: not the generic one where the CPU has AVX2, unless the user says so",
+          "[cli][bench]") {
+  // Debian 12's OpenBLAS runs its generic "Prescott" kernels on CPU models newer than it knows.
+  Sandbox box;
+  const Result own = box.run("bench --json --config 1:4", "env -u OPENBLAS_CORETYPE");
+  INFO(own.err);
+  REQUIRE(own.code == 0);
+  const auto kernel_of = [](const std::string& out) {
+    const std::string key = "\"blas_kernel\": \"";
+    const auto at = out.find(key);
+    REQUIRE(at != std::string::npos);
+    return out.substr(at + key.size(), out.find('"', at + key.size()) - at - key.size());
+  };
+  const std::string kernel = kernel_of(own.out);
+  INFO("kernel " << kernel);
+  REQUIRE(!kernel.empty());  // the project links OpenBLAS
+  if (cpu_has_flags({"avx2", "fma"})) REQUIRE(kernel != "Prescott");
+  // A user's choice stands, and the text table names it too.
+  const Result told = box.run("bench --config 1:4", "OPENBLAS_CORETYPE=Prescott");
+  REQUIRE(told.code == 0);
+  REQUIRE(told.out.find("OpenBLAS kernel Prescott") != std::string::npos);
 }
 
 TEST_CASE("bench runs both solvers with and without the error norms", "[cli][bench]") {
