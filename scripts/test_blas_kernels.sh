@@ -22,9 +22,11 @@ if [[ ${#kernels[@]} -eq 0 ]]; then
     kernels+=("$command_kernel")
 fi
 
-# The kernel OpenBLAS picks with the given OPENBLAS_CORETYPE ("" for its own choice).
+# The kernel OpenBLAS picks with the given OPENBLAS_CORETYPE ("" for its own choice: the
+# variable unset: OpenBLAS 0.3.21 reads an empty one as a kernel name, and gave Cooperlake here).
 corename() {
-  OPENBLAS_CORETYPE="$1" /usr/bin/python3 -c '
+  if [[ -n "$1" ]]; then export OPENBLAS_CORETYPE="$1"; else unset OPENBLAS_CORETYPE; fi
+  /usr/bin/python3 -c '
 import ctypes
 blas = ctypes.CDLL("libopenblas.so.0")
 blas.openblas_get_corename.restype = ctypes.c_char_p

@@ -162,7 +162,9 @@ void apply_diffusion_factor(const ExpressionBatch& values, int num_diffusion, in
 }
 
 // Adds the element matrix into the lower-triangular CSC values: for each alive free
-// column, walk its sorted rows and the cell's sorted dofs together.
+// column, walk its sorted rows and the cell's sorted dofs together. The same walk fills the
+// upper triangle of a rank's diagonal block by rows (CSR), outer[i] being row i's diagonal
+// entry (scatter_rows).
 void scatter(const int* outer, const int* inner, const std::vector<std::pair<int, int>>& order,
              const Eigen::MatrixXd& Ke, double* values) {
   const int m = static_cast<int>(order.size());
@@ -487,14 +489,13 @@ void scatter_rows(const RankRows& r, const std::vector<int>& diagonal, const std
   const auto own = [&](int d) { return d >= r.first && d < r.last; };
   const int* cols = o.diagonal_cols.data();
   if (own(order.front().first) && own(order.back().first)) {  // the usual cell: only the diagonal block
-    for (int k = 0; k < m; ++k) {
-      const auto [row, a] = order[k];
-      int p = diagonal[row - r.first];
-      for (int l = k; l < m; ++l) {
-        while (cols[p] < order[l].first - r.first) ++p;
-        values[p] += Ke(order[l].second, a);
-      }
-    }
+    // The serial kernel itself, on the block's rows from their diagonal entries, in the block's
+    // numbering: written out here, inside the element loop's many live values, the walk kept
+    // its cursor in memory and took 1.3x the serial walk's instructions (cachegrind).
+    thread_local std::vector<std::pair<int, int>> local;
+    local.resize(m);
+    for (int k = 0; k < m; ++k) local[k] = {order[k].first - r.first, order[k].second};
+    scatter(diagonal.data(), cols, local, Ke, values);
     return;
   }
   // Owned rows get owned columns (from the diagonal on) in the diagonal block, the others
