@@ -83,7 +83,7 @@ int bench_command(const BenchOptions& o) {
   if (o.solver != "iterative" && o.matrix != "auto") throw InputError("--matrix: used with --solver iterative only");
   const bool cg = o.solver == "iterative";
   std::vector<BenchResult> results;
-  // The BLAS kernel belongs with the figures: the same CPU gives 2-3x slower runs on generic ones.
+  // The BLAS kernel belongs with the figures: on generic kernels the same CPU factorized 2-2.5x slower.
   const std::string kernel = blas_kernel();
   const std::string kernel_text = kernel.empty() ? "not OpenBLAS" : "OpenBLAS kernel " + kernel;
   if (!o.json && cg)

@@ -75,11 +75,11 @@ from ._core import InputError  # noqa: E402
 
 if not _user_blas_threads:
     _core.set_blas_threads(1)
-if "OPENBLAS_CORETYPE" not in _os.environ and _core.better_blas_kernel():
+_better_kernel = "" if "OPENBLAS_CORETYPE" in _os.environ else _core.better_blas_kernel()
+if _better_kernel:
     _warnings.warn("OpenBLAS runs its generic %s kernels on this CPU, which allows %s (2x faster factorizations): "
                    "set OPENBLAS_CORETYPE=%s before numpy or knotwork is imported"
-                   % (_core.blas_kernel(), _core.better_blas_kernel(), _core.better_blas_kernel()), RuntimeWarning,
-                   stacklevel=2)
+                   % (_core.blas_kernel(), _better_kernel, _better_kernel), RuntimeWarning, stacklevel=2)
 
 __all__ = ["run", "converge", "adapt", "space", "system", "dimension", "InputError", "Result", "Study", "Space",
            "System"]
