@@ -3,11 +3,14 @@
 // family with such an operator gives the driver (SplineSpace::matrix_free_operator), which
 // then assembles nothing (docs/SOLVERS.md, "Without a matrix").
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <array>
 
 #include "solver/expression.hpp"
 
 namespace knotwork {
+
+struct DofLayout;
 
 class MatrixFreePoisson {
  public:
@@ -33,6 +36,15 @@ class MatrixFreePoisson {
                               Eigen::VectorXd* /*h1_per_cell*/) const {
     return false;
   }
+  // Whether lower_matrix() can write K without an element loop (a tensor patch whose map is
+  // one affine map: K is a sum of Kronecker products of univariate band matrices, whose
+  // entries it adds up directly, O(1) work per entry: docs/SOLVERS.md, "The matrix from the
+  // Kronecker form").
+  virtual bool assembles_lower() const { return false; }
+  // K's lower triangle over the free dofs of `layout` (dof order is function order), with the
+  // pattern lower_pattern_matrix gives the space's mesh (functions that share a cell), in
+  // CHOLMOD's layout. Only where assembles_lower(); throws std::logic_error elsewhere.
+  virtual Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const;
 };
 
 }  // namespace knotwork

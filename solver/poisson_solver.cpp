@@ -154,15 +154,22 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   // Serially the lower triangle CHOLMOD reads; distributed, this rank's rows as PETSc takes them.
   // (Built in place: Eigen 3.4's SparseMatrix has no move assignment, and a copy costs.)
   const bool matrix_free = options.matrix_free != nullptr;
-  if (matrix_free) {
-    const bool constant = !form.coefficients || form.coefficients->constant();
-    if (distributed || !options.iterative || geometry.dimension() != 2 || !constant || !form.source || form.nitsche ||
-        sol.zero_mean || options.on_system || options.estimate_condition)
-      throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
-                             "coefficients, a given source and no Nitsche terms");
+  const bool constant = !form.coefficients || form.coefficients->constant();
+  // What an operator's load and lifting serve: the problems without a matrix and, where one
+  // is assembled, those whose operator writes it from its Kronecker form.
+  const bool operator_problem = !distributed && geometry.dimension() == 2 && constant && form.source && !form.nitsche &&
+                                !sol.zero_mean;
+  if (matrix_free && (!operator_problem || !options.iterative || options.on_system || options.estimate_condition))
+    throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
+                           "coefficients, a given source and no Nitsche terms");
+  std::shared_ptr<const MatrixFreePoisson> op;
+  if (!matrix_free && operator_problem && options.matrix_from_operator) {
+    op = options.matrix_from_operator();
+    if (op && (!op->assembles_lower() || op->num_functions() != mesh.num_functions())) op.reset();
   }
-  Eigen::SparseMatrix<double> K =
-      distributed || matrix_free ? Eigen::SparseMatrix<double>() : lower_pattern_matrix(mesh, layout);
+  const bool matrix_by_operator = op != nullptr;
+  Eigen::SparseMatrix<double> K = distributed || matrix_free || matrix_by_operator ? Eigen::SparseMatrix<double>()
+                                                                                  : lower_pattern_matrix(mesh, layout);
   RankRows rows;
   const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
   const int last_row = part.last_owned_function - fixed_below(part.last_owned_function);
@@ -185,21 +192,27 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   say("assembly");
   t = clock::now();
   Eigen::VectorXd rhs;
-  std::shared_ptr<const MatrixFreePoisson> op;
   Eigen::VectorXd free_diagonal;
-  if (matrix_free) {
+  if (matrix_free || matrix_by_operator) {
     // F over the free dofs, less K g for the Dirichlet values g; Neumann terms as assembled.
-    op = options.matrix_free();
+    if (matrix_free) op = options.matrix_free();
+    else {
+      Eigen::SparseMatrix<double> written = op->lower_matrix(layout);
+      K.swap(written);  // (no copy: Eigen 3.4's SparseMatrix has no move assignment)
+      sol.matrix_nonzeros = K.nonZeros();
+    }
     const Eigen::VectorXd load = form.load ? op->load(*form.source) : Eigen::VectorXd::Zero(mesh.num_functions());
     Eigen::VectorXd lifting;
     if (fixed_values.lpNorm<Eigen::Infinity>() > 0) op->apply(fixed_values, lifting);
-    const Eigen::VectorXd diagonal = op->diagonal();
     rhs.resize(layout.num_free());
-    free_diagonal.resize(layout.num_free());
     for (int d = 0; d < layout.num_free(); ++d) {
       const int f = layout.function_of_dof[d];
       rhs[d] = load[f] - (lifting.size() > 0 ? lifting[f] : 0.0);
-      free_diagonal[d] = diagonal[f];
+    }
+    if (matrix_free) {
+      const Eigen::VectorXd diagonal = op->diagonal();
+      free_diagonal.resize(layout.num_free());
+      for (int d = 0; d < layout.num_free(); ++d) free_diagonal[d] = diagonal[layout.function_of_dof[d]];
     }
     add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs, mine);
   } else

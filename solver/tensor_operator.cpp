@@ -7,11 +7,13 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
 
+#include "basis/core/input_error.hpp"
 #include "quadrature/gauss_legendre.hpp"
 
 namespace knotwork {
@@ -814,9 +816,11 @@ Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
   // One compiled program per thread (a program's registers are its own).
   const ExpressionBatch compiled(std::vector<Expression>{source});
   std::vector<std::optional<ExpressionBatch>> batches(omp_get_max_threads());
-  std::atomic<bool> finite{true};
+  // The first element (in the mesh's cell order) where f is not finite, and the point there.
+  long bad_cell = std::numeric_limits<long>::max();
+  double bad_x = 0, bad_y = 0;
   dispatch(u_, v_, [&](auto n, auto q) {
-  for_each_element<decltype(n)::value, decltype(q)::value>([&](int, int, int fu, int fv, const double* bu, const double*,
+  for_each_element<decltype(n)::value, decltype(q)::value>([&](int eu, int ev, int fu, int fv, const double* bu, const double*,
                                                                const double* bv, const double*, const Points& pts) {
     std::optional<ExpressionBatch>& f = batches[omp_get_thread_num()];
     if (!f) f.emplace(compiled);
@@ -825,7 +829,11 @@ Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
     // F_a = w_a sum_q N_a (m f / W): the test functions' factors as in apply.
     double h[kMaxPoints * kMaxPoints];
     for (int k = 0; k < qu * qv; ++k) {
-      if (!std::isfinite(value[k])) finite.store(false, std::memory_order_relaxed);
+      if (!std::isfinite(value[k])) {
+        const long cell = eu + long(u_.elements) * ev;
+#pragma omp critical(knotwork_operator_bad_source)
+        if (cell < bad_cell) bad_cell = cell, bad_x = pts.x[k], bad_y = pts.y[k];
+      }
       h[k] = pts.measure[k] * value[k] / (rational ? pts.w.value[k] : 1.0);
     }
     for (int b = 0; b < pv; ++b) {
@@ -844,7 +852,16 @@ Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
     }
   });
   });
-  if (!finite) throw std::invalid_argument("the source is not a finite number at a quadrature point");
+  if (bad_cell != std::numeric_limits<long>::max()) {
+    // As the element loop words it (solver/assemble_poisson.cpp), the cell numbered as the mesh's.
+    const std::vector<double> u = space_u_.breakpoints(), v = space_v_.breakpoints();
+    const long eu = bad_cell % u_.elements, ev = bad_cell / u_.elements;
+    std::ostringstream m;
+    m << source.where() << ": source \"" << source.text() << "\" is not a finite number at (" << bad_x << ", " << bad_y
+      << ") in cell " << bad_cell << " (u in [" << u[eu] << ", " << u[eu + 1] << "], v in [" << v[ev] << ", " << v[ev + 1]
+      << "])";
+    throw InputError(m.str());
+  }
   return out;
 }
 

@@ -63,6 +63,11 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   bool squared_errors(const Eigen::VectorXd& coefficients, const ExactSolution& exact, int points_u, int points_v,
                       std::array<double, 2>& squares, Eigen::VectorXd* h1_per_element) const override;
   bool all_elements_affine() const override { return affine_elements() == long(u_.elements) * v_.elements; }
+  // The matrix straight from the Kronecker form where the map is one affine map and the
+  // functions are B-splines (solver/tensor_operator_matrix.cpp): per entry four products of
+  // band entries, no quadrature and no scatter.
+  bool assembles_lower() const override { return uniform_ && weights_.size() == 0; }
+  Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const override;
   // Whether every element also has the same factors (applied in Kronecker form), and they.
   bool uniform_factors() const { return uniform_; }
   const std::array<double, 4>& factors() const { return uniform_factors_; }

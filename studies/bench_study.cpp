@@ -32,6 +32,7 @@ BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_error
     PoissonSolveOptions so;
     so.ordering = ordering;
     so.compute_errors = with_errors;
+    assemble_by_operator_where_possible(c, *d, so);  // as `run` assembles
     if (floor)
       so.on_system = [&](const Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& F) {
         const auto t = std::chrono::steady_clock::now();

@@ -34,6 +34,11 @@ struct SolverReport {
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
                            const ProgressFunction& progress = {}, SolverReport* report = nullptr);
 
+// Lets a serial solve that assembles its matrix take it from the space's operator where that
+// operator writes it itself (a tensor patch with one affine map: its Kronecker form, the same
+// matrix as the element loop's to rounding, docs/SOLVERS.md); solve_poisson decides per problem.
+void assemble_by_operator_where_possible(const CaseDescription& c, const SplineSpace& space, PoissonSolveOptions& so);
+
 // Inside a catch block: the exception being handled again, as the user's error. A solve that
 // did not converge names [solver], a degenerate geometry "[geometry]", and another
 // std::invalid_argument the case file; an InputError, and anything else, as it is.

@@ -3,6 +3,7 @@
 // the kernel, the Dirichlet energy of the coordinate x equal to the domain's area).
 #include <catch2/catch.hpp>
 #include <Eigen/LU>
+#include <Eigen/SparseCholesky>
 #include <omp.h>
 
 #include <cmath>
@@ -82,6 +83,9 @@ TEST_CASE("Matrix-free tensor operator: products equal the assembled matrix's", 
       const long elements = long(s->d.elements_u) * s->d.elements_v;
       if (std::string(name) == "square_sinsin") REQUIRE(A.affine_elements() == elements);
       if (std::string(name) == "quarter_annulus") REQUIRE(A.affine_elements() == 0);
+      // Only the square's map is one affine map: only its operator writes the matrix itself.
+      REQUIRE(A.assembles_lower() == (std::string(name) == "square_sinsin"));
+      if (!A.assembles_lower()) REQUIRE_THROWS_AS(A.lower_matrix(DofLayout{}), std::logic_error);
       const Eigen::VectorXd x = Eigen::VectorXd::Random(K.rows());
       const Eigen::VectorXd expected = K.selfadjointView<Eigen::Lower>() * x;
       Eigen::VectorXd y;
@@ -310,6 +314,19 @@ TEST_CASE("Matrix-free tensor operator: the Kronecker form's mixed terms on a sh
     } else {
       REQUIRE(std::abs(k1.sum() - reaction) <= bound);
     }
+    // The same identities from the matrix written from the Kronecker form, all functions free.
+    REQUIRE(A.assembles_lower());
+    const Eigen::SparseMatrix<double> lower = A.lower_matrix(make_dof_layout(int(x.size()), std::vector<bool>(x.size(), false)));
+    const Eigen::SparseMatrix<double> K = lower.selfadjointView<Eigen::Lower>();
+    const Eigen::VectorXd one = Eigen::VectorXd::Ones(x.size());
+    if (reaction == 0) {
+      REQUIRE(std::abs(x.dot(K * x) - 1) <= bound);
+      REQUIRE(std::abs(y.dot(K * y) - 1) <= bound);
+      REQUIRE(std::abs(x.dot(K * y)) <= bound);
+      REQUIRE((K * one).lpNorm<Eigen::Infinity>() <= m * 2.2e-16 * A.diagonal().maxCoeff());
+    } else {
+      REQUIRE(std::abs(one.dot(K * one) - reaction) <= bound);
+    }
     // Rows of a box from a vector given on the interior functions: the whole product's rows.
     const TensorPoissonOperator::FunctionBox free{1, nu - 2, 1, nv - 2}, rows{2, 3, 1, 4};
     Eigen::VectorXd inner(long(free.count_u) * free.count_v), whole = Eigen::VectorXd::Zero(x.size()), all;
@@ -323,4 +340,90 @@ TEST_CASE("Matrix-free tensor operator: the Kronecker form's mixed terms on a sh
       for (int i = 0; i < rows.count_u; ++i)
         REQUIRE(std::abs(r[i + long(rows.count_u) * j] - all[(rows.first_u + i) + long(nu) * (rows.first_v + j)]) <= bound);
   }
+}
+
+namespace {
+
+// The lower triangle and load that solve_poisson factors, captured through on_system, with the
+// element loop or with the operator's matrix.
+struct System {
+  Eigen::SparseMatrix<double> K;
+  Eigen::VectorXd F, coefficients;
+};
+
+System solved_system(const Setup& s, double reaction, bool from_operator) {
+  PoissonProblem problem = s.c.problem;
+  problem.reaction = reaction;
+  PoissonSolveOptions options;
+  options.quadrature = s.c.quadrature;
+  options.compute_errors = false;
+  System out;
+  options.on_system = [&out](const Eigen::SparseMatrix<double>& K, const Eigen::VectorXd& F) { out.K = K, out.F = F; };
+  bool asked = false;
+  if (from_operator)
+    options.matrix_from_operator = [&s, &asked, reaction] {
+      asked = true;
+      return std::make_shared<const TensorPoissonOperator>(s.patch(), 1.0, reaction);
+    };
+  out.coefficients = solve_poisson(s.d.mesh, *s.map, problem, options).coefficients;
+  REQUIRE(asked == from_operator);
+  return out;
+}
+
+}  // namespace
+
+// The matrix written from the Kronecker form (solver/tensor_operator_matrix.cpp) against the
+// element loop's, as solve_poisson factors them: the same pattern (functions that share a cell,
+// Dirichlet functions left out), entries and load equal to rounding, and each solution a
+// solution of the other system to a backward error of rounding size.
+TEST_CASE("The matrix from the Kronecker form is the element loop's", "[tensor_operator][solver]") {
+  for (const int continuity : {-1, 0})  // C^{p-1}, and C^0 lines: neighbours in index that share no cell
+    for (int p : {2, 3, 5}) {
+      const auto s = [&] {
+        auto c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/square_sinsin.toml");
+        patch_space(c).degree = {p, p};
+        patch_space(c).elements_per_span = {5, 6};
+        patch_space(c).continuity = {continuity, continuity};
+        auto setup = std::make_unique<Setup>();
+        setup->c = c;
+        setup->d = build_tensor_discretization(c.geometry, patch_space(c));
+        setup->map = std::make_unique<PatchGeometryMap>(setup->d.mesh, setup->d.patch,
+                                                        PatchGeometryMap::ElementGrid{setup->d.space_u.breakpoints(),
+                                                                                      setup->d.space_v.breakpoints(), 0});
+        if (setup->d.mesh.is_rational()) setup->weights = setup->d.mesh.weights();
+        return setup;
+      }();
+      for (const double reaction : {0.0, 0.7}) {
+        REQUIRE(TensorPoissonOperator(s->patch(), 1.0, reaction).assembles_lower());
+        const System loop = solved_system(*s, reaction, false), kron = solved_system(*s, reaction, true);
+        INFO("p = " << p << ", continuity " << continuity << ", reaction " << reaction);
+        const Eigen::SparseMatrix<double>&A = loop.K, &B = kron.K;
+        REQUIRE(A.rows() == B.rows());
+        REQUIRE(A.nonZeros() == B.nonZeros());
+        REQUIRE(std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, B.outerIndexPtr()));
+        REQUIRE(std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), B.innerIndexPtr()));
+        // Entry (a, b) sums, over at most (p+1)^2 cells of (p+1)^2 points, terms whose absolute
+        // sum is at most sqrt(K_aa K_bb) (Cauchy-Schwarz, the integrand being positive
+        // semi-definite); a few roundings per term on either side.
+        const double m = 8.0 * std::pow(p + 1, 4) * 2.2e-16;
+        for (int k = 0; k < A.outerSize(); ++k)
+          for (Eigen::SparseMatrix<double>::InnerIterator a(A, k), b(B, k); a; ++a, ++b)
+            REQUIRE(std::abs(a.value() - b.value()) <= m * std::sqrt(A.coeff(a.row(), a.row()) * A.coeff(k, k)));
+        // The load: f R_a by the same rule, and the lifting K g of the Dirichlet values: sums of
+        // at most (2p+1)^2 (p+1)^4 terms, each bounded by |F|_inf and |K|_inf |g|_inf.
+        const double load_bound = m * (2 * p + 1) * (2 * p + 1) *
+                                  (loop.F.lpNorm<Eigen::Infinity>() + inf_norm(A) * loop.coefficients.lpNorm<Eigen::Infinity>());
+        REQUIRE((loop.F - kron.F).lpNorm<Eigen::Infinity>() <= load_bound);
+        // The operator path's solution solves the element loop's system to a backward error of
+        // rounding size (both solved here by Eigen's LDL^T, not the CHOLMOD of the runs).
+        const Eigen::SparseMatrix<double> whole = A.selfadjointView<Eigen::Lower>();
+        const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(B);
+        REQUIRE(ldlt.info() == Eigen::Success);
+        const Eigen::VectorXd x = ldlt.solve(kron.F);
+        const double backward = (whole * x - loop.F).lpNorm<Eigen::Infinity>() /
+                                (inf_norm(A) * x.lpNorm<Eigen::Infinity>() + loop.F.lpNorm<Eigen::Infinity>());
+        INFO("backward error " << backward);
+        REQUIRE(backward <= m * (2 * p + 1) * (2 * p + 1));
+      }
+    }
 }

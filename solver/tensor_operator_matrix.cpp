@@ -1,0 +1,93 @@
+// The assembled matrix of a tensor patch whose map is one affine map, from the operator's
+// Kronecker form K = d11 K_u (x) M_v + d22 M_u (x) K_v + d12 (C_u (x) C_v^T + C_u^T (x) C_v)
+// + c M_u (x) M_v: each entry is four products of univariate band entries, written in place in
+// CHOLMOD's layout, where the element loop (solver/assemble_poisson.cpp) evaluates every
+// function at every point of every cell and scatters (p + 1)^4 products per cell. Gauss rules
+// of p + 1 points integrate both exactly, so the two give the same matrix up to rounding
+// (tests/test_tensor_operator.cpp). Written here: no library assembles spline matrices.
+#include <stdexcept>
+#include <vector>
+
+#include "solver/sparsity.hpp"
+#include "solver/tensor_operator.hpp"
+
+namespace knotwork {
+
+Eigen::SparseMatrix<double> MatrixFreePoisson::lower_matrix(const DofLayout&) const {
+  throw std::logic_error("MatrixFreePoisson::lower_matrix: this operator does not assemble its matrix");
+}
+
+namespace {
+
+// Per function of one direction, the functions it shares an element with: [low, high].
+struct Reach {
+  std::vector<int> low, high;
+};
+
+Reach reach(const std::vector<int>& first, int degree, int functions) {
+  Reach r;
+  r.low.assign(functions, functions);
+  r.high.assign(functions, -1);
+  for (int f : first)  // elements in order, their first function non-decreasing
+    for (int a = f; a <= f + degree; ++a) {
+      r.low[a] = std::min(r.low[a], f);
+      r.high[a] = std::max(r.high[a], f + degree);
+    }
+  return r;
+}
+
+}  // namespace
+
+Eigen::SparseMatrix<double> TensorPoissonOperator::lower_matrix(const DofLayout& layout) const {
+  if (!assembles_lower())
+    throw std::logic_error("TensorPoissonOperator::lower_matrix: the map is not one affine map, or the space is rational");
+  if (static_cast<long>(layout.dof.size()) != long(n_u_) * n_v_)
+    throw std::logic_error("TensorPoissonOperator::lower_matrix: a layout of another space");
+  const std::array<double, 4>& f = uniform_factors_;
+  const double d11 = stiffness_ * f[0], d12 = stiffness_ * f[1], d22 = stiffness_ * f[2], r = reaction_ * f[3];
+  const int pu = u_.degree, pv = v_.degree, wu = 2 * pu + 1, wv = 2 * pv + 1;
+  const Reach ru = reach(u_.first, pu, n_u_), rv = reach(v_.first, pv, n_v_);
+  const int n = layout.num_free();
+  Eigen::SparseMatrix<double> K(n, n);
+  int* outer = K.outerIndexPtr();
+  outer[0] = 0;
+  // Column d is function (i0, j0); its rows are the free functions (i, j) at or after it that
+  // share an element with it, in function order (= dof order): j from j0, i over i0's reach
+  // (from i0 on the column's own row of functions).
+  const auto for_rows = [&](int d, auto row) {
+    const int g = layout.function_of_dof[d], i0 = g % n_u_, j0 = g / n_u_;
+    for (int j = j0; j <= rv.high[j0]; ++j)
+      for (int i = j == j0 ? i0 : ru.low[i0]; i <= ru.high[i0]; ++i) {
+        const int dof = layout.dof[i + n_u_ * j];
+        if (dof >= 0) row(dof, i0, j0, i, j);
+      }
+  };
+#pragma omp parallel for schedule(static)
+  for (int d = 0; d < n; ++d) {
+    int count = 0;
+    for_rows(d, [&](int, int, int, int, int) { ++count; });
+    outer[d + 1] = count;
+  }
+  for (int d = 0; d < n; ++d) outer[d + 1] += outer[d];
+  K.resizeNonZeros(outer[n]);
+  int* inner = K.innerIndexPtr();
+  double* values = K.valuePtr();
+  const Band &bu = band_u_, &bv = band_v_;
+#pragma omp parallel for schedule(static)
+  for (int d = 0; d < n; ++d) {
+    long at = outer[d];
+    for_rows(d, [&](int dof, int i0, int j0, int i, int j) {
+      // X(a, c) of a band sits at a (2p + 1) + c - a + p.
+      const size_t u = size_t(i) * wu + (i0 - i + pu), ut = size_t(i0) * wu + (i - i0 + pu);
+      const size_t v = size_t(j) * wv + (j0 - j + pv), vt = size_t(j0) * wv + (j - j0 + pv);
+      double k = d11 * bu.K[u] * bv.M[v] + d22 * bu.M[u] * bv.K[v] + r * bu.M[u] * bv.M[v];
+      if (d12 != 0) k += d12 * (bu.C[u] * bv.C[vt] + bu.C[ut] * bv.C[v]);
+      inner[at] = dof;
+      values[at] = k;
+      ++at;
+    });
+  }
+  return K;
+}
+
+}  // namespace knotwork
