@@ -45,6 +45,12 @@ class MatrixFreePoisson {
   // pattern lower_pattern_matrix gives the space's mesh (functions that share a cell), in
   // CHOLMOD's layout. Only where assembles_lower(); throws std::logic_error elsewhere.
   virtual Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const;
+  // Whether lower_pattern() gives that pattern (zero values) for any problem on the space, also
+  // where the element loop must fill it (a curved or rational patch, variable coefficients):
+  // a tensor patch's from its two univariate bases, O(1) per entry, where the mesh's walks
+  // the cells of every function.
+  virtual bool gives_pattern() const { return false; }
+  virtual Eigen::SparseMatrix<double> lower_pattern(const DofLayout& layout) const;
 };
 
 }  // namespace knotwork

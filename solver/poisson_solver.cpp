@@ -162,14 +162,21 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   if (matrix_free && (!operator_problem || !options.iterative || options.on_system || options.estimate_condition))
     throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
                            "coefficients, a given source and no Nitsche terms");
-  std::shared_ptr<const MatrixFreePoisson> op;
-  if (!matrix_free && operator_problem && options.matrix_from_operator) {
-    op = options.matrix_from_operator();
-    if (op && (!op->assembles_lower() || op->num_functions() != mesh.num_functions())) op.reset();
+  // An operator that writes the matrix (then its load, lifting and errors are used too), or
+  // one that gives only its pattern, for the element loop to fill.
+  std::shared_ptr<const MatrixFreePoisson> op, pattern_from;
+  if (!matrix_free && !distributed && options.matrix_from_operator) {
+    std::shared_ptr<const MatrixFreePoisson> given = options.matrix_from_operator();
+    if (given && given->num_functions() == mesh.num_functions()) {
+      if (operator_problem && given->assembles_lower()) op = std::move(given);
+      else if (given->gives_pattern()) pattern_from = std::move(given);
+    }
   }
   const bool matrix_by_operator = op != nullptr;
   Eigen::SparseMatrix<double> K = distributed || matrix_free || matrix_by_operator ? Eigen::SparseMatrix<double>()
+                                  : pattern_from                                  ? pattern_from->lower_pattern(layout)
                                                                                   : lower_pattern_matrix(mesh, layout);
+  pattern_from.reset();
   RankRows rows;
   const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
   const int last_row = part.last_owned_function - fixed_below(part.last_owned_function);

@@ -51,7 +51,8 @@ struct PoissonSolveOptions {
   // Where the matrix is assembled (serially), an operator that may write it itself
   // (MatrixFreePoisson::assembles_lower: a tensor patch with one affine map) instead of the
   // element loop; its load, Dirichlet lifting and error norms are then used too. Taken only for
-  // the problems `matrix_free` serves (and on_system, estimate_condition); else ignored.
+  // the problems `matrix_free` serves (and on_system, estimate_condition). For the others, or
+  // where it cannot write the matrix, its pattern (gives_pattern) replaces the mesh's.
   std::function<std::shared_ptr<const MatrixFreePoisson>()> matrix_from_operator;
   // Called with the assembled system (lower triangle of K over the free dofs, and F)
   // before it is factored: for inspecting or exporting it, or benchmarking solvers on it.

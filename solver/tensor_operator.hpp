@@ -68,6 +68,8 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // band entries, no quadrature and no scatter.
   bool assembles_lower() const override { return uniform_ && weights_.size() == 0; }
   Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const override;
+  bool gives_pattern() const override { return true; }
+  Eigen::SparseMatrix<double> lower_pattern(const DofLayout& layout) const override;
   // Whether every element also has the same factors (applied in Kronecker form), and they.
   bool uniform_factors() const { return uniform_; }
   const std::array<double, 4>& factors() const { return uniform_factors_; }
@@ -178,6 +180,8 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   };
   // Sets uniform_ with `factors`, the bands and the Kronecker form.
   void set_uniform(const std::array<double, 4>& factors);
+  // K's lower triangle over the free dofs, with values (the Kronecker form) or zeros.
+  Eigen::SparseMatrix<double> write_lower(const DofLayout& layout, bool values) const;
   // y at `rows` from x on the padded box of rows +- the degrees (in, mu x mv) by the Kronecker
   // form of a patch whose elements share their factors.
   void kronecker_rows(const double* in, long mu, const FunctionBox& rows, double* y) const;

@@ -17,6 +17,10 @@ Eigen::SparseMatrix<double> MatrixFreePoisson::lower_matrix(const DofLayout&) co
   throw std::logic_error("MatrixFreePoisson::lower_matrix: this operator does not assemble its matrix");
 }
 
+Eigen::SparseMatrix<double> MatrixFreePoisson::lower_pattern(const DofLayout&) const {
+  throw std::logic_error("MatrixFreePoisson::lower_pattern: this operator does not give its pattern");
+}
+
 namespace {
 
 // Per function of one direction, the functions it shares an element with: [low, high].
@@ -41,8 +45,16 @@ Reach reach(const std::vector<int>& first, int degree, int functions) {
 Eigen::SparseMatrix<double> TensorPoissonOperator::lower_matrix(const DofLayout& layout) const {
   if (!assembles_lower())
     throw std::logic_error("TensorPoissonOperator::lower_matrix: the map is not one affine map, or the space is rational");
+  return write_lower(layout, true);
+}
+
+Eigen::SparseMatrix<double> TensorPoissonOperator::lower_pattern(const DofLayout& layout) const {
+  return write_lower(layout, false);
+}
+
+Eigen::SparseMatrix<double> TensorPoissonOperator::write_lower(const DofLayout& layout, bool with_values) const {
   if (static_cast<long>(layout.dof.size()) != long(n_u_) * n_v_)
-    throw std::logic_error("TensorPoissonOperator::lower_matrix: a layout of another space");
+    throw std::logic_error("TensorPoissonOperator::write_lower: a layout of another space");
   const std::array<double, 4>& f = uniform_factors_;
   const double d11 = stiffness_ * f[0], d12 = stiffness_ * f[1], d22 = stiffness_ * f[2], r = reaction_ * f[3];
   const int pu = u_.degree, pv = v_.degree, wu = 2 * pu + 1, wv = 2 * pv + 1;
@@ -76,6 +88,14 @@ Eigen::SparseMatrix<double> TensorPoissonOperator::lower_matrix(const DofLayout&
 #pragma omp parallel for schedule(static)
   for (int d = 0; d < n; ++d) {
     long at = outer[d];
+    if (!with_values) {
+      for_rows(d, [&](int dof, int, int, int, int) {
+        inner[at] = dof;
+        values[at] = 0.0;
+        ++at;
+      });
+      continue;
+    }
     for_rows(d, [&](int dof, int i0, int j0, int i, int j) {
       // X(a, c) of a band sits at a (2p + 1) + c - a + p.
       const size_t u = size_t(i) * wu + (i0 - i + pu), ut = size_t(i0) * wu + (i - i0 + pu);

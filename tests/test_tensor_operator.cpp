@@ -86,6 +86,17 @@ TEST_CASE("Matrix-free tensor operator: products equal the assembled matrix's", 
       // Only the square's map is one affine map: only its operator writes the matrix itself.
       REQUIRE(A.assembles_lower() == (std::string(name) == "square_sinsin"));
       if (!A.assembles_lower()) REQUIRE_THROWS_AS(A.lower_matrix(DofLayout{}), std::logic_error);
+      // Every tensor operator gives the pattern the mesh's cells give (some functions fixed).
+      {
+        std::vector<bool> fixed(K.rows(), false);
+        for (size_t f = 0; f < fixed.size(); f += 7) fixed[f] = true;
+        const DofLayout some = make_dof_layout(int(K.rows()), fixed);
+        const Eigen::SparseMatrix<double> mesh_pattern = lower_pattern_matrix(s->d.mesh, some), own = A.lower_pattern(some);
+        REQUIRE(A.gives_pattern());
+        REQUIRE(own.nonZeros() == mesh_pattern.nonZeros());
+        REQUIRE(std::equal(own.outerIndexPtr(), own.outerIndexPtr() + own.outerSize() + 1, mesh_pattern.outerIndexPtr()));
+        REQUIRE(std::equal(own.innerIndexPtr(), own.innerIndexPtr() + own.nonZeros(), mesh_pattern.innerIndexPtr()));
+      }
       const Eigen::VectorXd x = Eigen::VectorXd::Random(K.rows());
       const Eigen::VectorXd expected = K.selfadjointView<Eigen::Lower>() * x;
       Eigen::VectorXd y;
