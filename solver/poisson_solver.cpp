@@ -83,6 +83,11 @@ ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry,
   return z;
 }
 
+bool operator_serves(const PoissonProblem& problem, int dimension) {
+  return dimension == 2 && problem.coefficients.constant() && !problem.source.empty() &&
+         problem.dirichlet_method != DirichletMethod::kNitsche;
+}
+
 PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
                               const PoissonSolveOptions& options, const Distribution* distribution) {
   using clock = std::chrono::steady_clock;
@@ -154,11 +159,9 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   // Serially the lower triangle CHOLMOD reads; distributed, this rank's rows as PETSc takes them.
   // (Built in place: Eigen 3.4's SparseMatrix has no move assignment, and a copy costs.)
   const bool matrix_free = options.matrix_free != nullptr;
-  const bool constant = !form.coefficients || form.coefficients->constant();
   // What an operator's load and lifting serve: the problems without a matrix and, where one
   // is assembled, those whose operator writes it from its Kronecker form.
-  const bool operator_problem = !distributed && geometry.dimension() == 2 && constant && form.source && !form.nitsche &&
-                                !sol.zero_mean;
+  const bool operator_problem = !distributed && !sol.zero_mean && operator_serves(problem, geometry.dimension());
   if (matrix_free && (!operator_problem || !options.iterative || options.on_system || options.estimate_condition))
     throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
                            "coefficients, a given source and no Nitsche terms");

@@ -103,6 +103,11 @@ struct NotConverged : std::runtime_error {
 // Whether some cell side lies on the boundary (false: a closed surface).
 bool has_boundary(const BezierMesh& mesh);
 
+// Whether a space's operator (MatrixFreePoisson) can stand for the element loop on this problem:
+// planar, constant coefficients, a given source, Dirichlet data by projection; the driver also
+// asks for a boundary (no zero-mean solve) and a serial run.
+bool operator_serves(const PoissonProblem& problem, int dimension);
+
 // Closed surface, reaction 0: the mass matrix gives the constant 1 in the basis (M one = the
 // integrals of the functions), hence the area and the mean of f; the stiffness matrix with
 // one coefficient pinned (`pin`, the largest entry of `one`) gives a solution, shifted to zero

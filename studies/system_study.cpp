@@ -1,11 +1,20 @@
 #include "studies/system_study.hpp"
 
+#include <memory>
+#include <stdexcept>
+
 #include "solver/assemble_poisson.hpp"
 #include "solver/sparsity.hpp"
 
 namespace knotwork {
 
 namespace {
+
+Eigen::SparseMatrix<double, Eigen::RowMajor> whole(const Eigen::SparseMatrix<double>& lower) {
+  Eigen::SparseMatrix<double, Eigen::RowMajor> full = lower.selfadjointView<Eigen::Lower>();
+  full.makeCompressed();
+  return full;
+}
 
 // The lower triangle solve_poisson assembles, into a copy of `pattern` (every function free), as
 // a whole symmetric matrix.
@@ -14,9 +23,19 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> whole(const BezierMesh& mesh, const
                                                    const DofLayout& all, Eigen::SparseMatrix<double> lower,
                                                    Eigen::VectorXd& load) {
   assemble_poisson(mesh, geometry, form, all, Eigen::VectorXd::Zero(mesh.num_functions()), quadrature, lower, load);
-  Eigen::SparseMatrix<double, Eigen::RowMajor> full = lower.selfadjointView<Eigen::Lower>();
-  full.makeCompressed();
-  return full;
+  return whole(lower);
+}
+
+// The space's operator (null where it has none, or refuses this rule): a tensor patch's gives
+// its pattern, and on one affine map writes its matrices itself (docs/SOLVERS.md).
+std::shared_ptr<const MatrixFreePoisson> operator_of(const SplineSpace& space, double stiffness, double reaction,
+                                                     const QuadratureOptions& quadrature, int functions) {
+  try {
+    std::shared_ptr<const MatrixFreePoisson> op = space.matrix_free_operator(stiffness, reaction, quadrature);
+    return op && op->num_functions() == functions ? op : nullptr;
+  } catch (const std::invalid_argument&) {
+    return nullptr;  // its documented refusals (a degree or rule beyond its tables)
+  }
 }
 
 }  // namespace
@@ -44,7 +63,20 @@ AssembledSystem assemble_system(const CaseDescription& c, const SplineSpace& spa
     say("stiffness and load");
     const PoissonForm form = poisson_form(problem);
     const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
-    const Eigen::SparseMatrix<double> pattern = lower_pattern_matrix(mesh, all);
+    const std::shared_ptr<const MatrixFreePoisson> op = operator_of(space, 1.0, problem.reaction, c.quadrature, n);
+    if (op && op->assembles_lower() && !s.zero_mean && operator_serves(problem, geometry.dimension())) {
+      s.stiffness = whole(op->lower_matrix(all));
+      s.load = op->load(problem.source);
+      add_neumann_terms(mesh, geometry, problem, all, c.quadrature, s.load);
+      say("mass");
+      const std::shared_ptr<const MatrixFreePoisson> mass = operator_of(space, 0.0, 1.0, c.quadrature, n);
+      if (!mass || !mass->assembles_lower())
+        throw std::logic_error("assemble_system: the operator wrote the stiffness but not the mass matrix");
+      s.mass = whole(mass->lower_matrix(all));
+      return s;
+    }
+    const Eigen::SparseMatrix<double> pattern =
+        op && op->gives_pattern() ? op->lower_pattern(all) : lower_pattern_matrix(mesh, all);
     s.stiffness = whole(mesh, geometry, form, c.quadrature, all, pattern, s.load);
     add_neumann_terms(mesh, geometry, problem, all, c.quadrature, s.load);
 
