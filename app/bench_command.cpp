@@ -136,7 +136,8 @@ int bench_command(const BenchOptions& o) {
           .set("setup", r.setup).set("assembly", r.assembly).set("analysis", r.analysis)
           .set("factorization", r.factorization).set("solve", r.solve).set("errors", r.errors).set("total", r.total)
           .set("cholmod_peak_bytes", r.cholmod_peak_bytes).set("peak_rss_bytes", r.peak_rss_kb * 1024.0)
-          .set("l2_error", r.l2).set("cholmod_default_floor_seconds", r.floor_seconds);
+          .set("l2_error", r.l2).set("cholmod_default_floor_seconds", r.floor_seconds)
+          .set("assembly_method", std::string(r.assembly_name));
       if (cg)
         j.set("solver", Json::object().set("method", "iterative").set("preconditioner", std::string(r.preconditioner_name))
                             .set("matrix", r.matrix_nonzeros == 0 ? "matrix_free" : "assembled")

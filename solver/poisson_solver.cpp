@@ -205,6 +205,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   Eigen::VectorXd free_diagonal;
   if (matrix_free || matrix_by_operator) {
     // F over the free dofs, less K g for the Dirichlet values g; Neumann terms as assembled.
+    sol.assembly = matrix_free ? "none" : "kronecker_form";
     if (matrix_free) op = options.matrix_free();
     else {
       Eigen::SparseMatrix<double> written = op->lower_matrix(layout);

@@ -44,6 +44,7 @@ BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_error
     s = solve_poisson(d->mesh(), d->geometry(), c.problem, so);
   }
   BenchResult r;
+  std::snprintf(r.assembly_name, sizeof r.assembly_name, "%s", s.assembly.c_str());
   std::snprintf(r.preconditioner_name, sizeof r.preconditioner_name, "%s", report.preconditioner.c_str());
   r.floor_seconds = floor_seconds;
   r.degree = p;

@@ -19,6 +19,7 @@ struct BenchResult {
   // --solver iterative: CG with the space's own ([solver] preconditioner = "auto").
   int iterations = 0;
   double preconditioner = 0, cg = 0, relative_residual = 0;
+  char assembly_name[32] = {};  // PoissonSolution::assembly
   char preconditioner_name[32] = {};  // the one used (what "auto" chose); a char array: the
                                       // result crosses a pipe from the configuration's process
 };

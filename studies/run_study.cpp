@@ -179,7 +179,7 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
   }
   if (s.zero_mean) j.set("area", s.area).set("source_mean", s.source_mean).set("exact_mean", s.exact_mean);
   Json sj = Json::object();
-  sj.set("method", r.solver.method);
+  sj.set("method", r.solver.method).set("assembly_method", s.assembly);
   if (r.solver.method == "iterative")
     sj.set("preconditioner", r.solver.preconditioner).set("matrix", r.solver.matrix_free ? "matrix_free" : "assembled")
         .set("iterations", s.iterative.iterations)

@@ -25,6 +25,13 @@ TEST_CASE("run --json reports errors, timings and the files it wrote", "[cli]") 
                           "\"timings\"", "\"assembly\"", "\"factorization\"", "\"outputs\""})
     REQUIRE(r.out.find(key) != std::string::npos);
   REQUIRE(r.out.find("\"dofs\": 36") != std::string::npos);  // (4 + 2)^2
+  // How the matrix was made: the square is one affine map (its Kronecker form), the quarter
+  // annulus is curved (the element loop).
+  REQUIRE(r.out.find("\"assembly_method\": \"kronecker_form\"") != std::string::npos);
+  const Result curved = box.run(std::string("run -q --no-output --json --solver direct ") + KNOTWORK_SOURCE_DIR +
+                                "/cases/quarter_annulus.toml");
+  REQUIRE(curved.code == 0);
+  REQUIRE(curved.out.find("\"assembly_method\": \"element_loop\"") != std::string::npos);
   REQUIRE(fs::exists(box.dir() / "res/solution.vtu"));
   REQUIRE(fs::exists(box.dir() / "res/solution_sampled.vtu"));
   REQUIRE(r.err.empty());  // --quiet
@@ -165,6 +172,9 @@ TEST_CASE("bench runs both solvers with and without the error norms", "[cli][ben
     const bool none = matrix != "assembled";
     REQUIRE(r.out.find(none ? "\"matrix\": \"matrix_free\"" : "\"matrix\": \"assembled\"") != std::string::npos);
     REQUIRE((r.out.find("\"matrix_nonzeros\": 0,") != std::string::npos) == none);
+    // The unit square is one affine map: its matrix, when there is one, is the Kronecker form's.
+    REQUIRE(r.out.find(none ? "\"assembly_method\": \"none\"" : "\"assembly_method\": \"kronecker_form\"") !=
+            std::string::npos);
   }
   const Result bad = box.run("bench --config 2:16 --solver iterative --matrix sparse");
   REQUIRE(bad.code != 0);
