@@ -131,7 +131,8 @@ class SplineSpace {
   }
   // Its Poisson operator applied without a matrix, K = stiffness (grad, grad) + reaction (., .)
   // by `quadrature`'s rules, when the family has one for this space (null otherwise). It may
-  // read the space's data in place: the space must outlive it.
+  // read the space's data in place: the space must outlive it. Where a matrix is assembled, it
+  // may also write it or its pattern (MatrixFreePoisson::assembles_lower, gives_pattern).
   virtual std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double /*stiffness*/, double /*reaction*/,
                                                                   const QuadratureOptions& /*quadrature*/) const {
     return nullptr;

@@ -23,14 +23,17 @@
 
 namespace knotwork {
 
+std::string describe_cell(int c, double u0, double u1, double v0, double v1) {
+  std::ostringstream s;
+  s << "cell " << c << " (u in [" << u0 << ", " << u1 << "], v in [" << v0 << ", " << v1 << "])";
+  return s.str();
+}
+
 namespace {
 
 std::string describe_cell(const BezierMesh& mesh, int c) {
   const BezierCell& cell = mesh.cell(c);
-  std::ostringstream s;
-  s << "cell " << c << " (u in [" << cell.u0 << ", " << cell.u1 << "], v in [" << cell.v0 << ", "
-    << cell.v1 << "])";
-  return s.str();
+  return knotwork::describe_cell(c, cell.u0, cell.u1, cell.v0, cell.v1);
 }
 
 // The first point (lowest cell) where A is not positive definite or c is negative.

@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <functional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -43,6 +44,9 @@ struct PoissonForm {
   // with gamma constant on each boundary cell (PoissonProblem::nitsche_penalty).
   const PoissonProblem* nitsche = nullptr;
 };
+
+// How refusals name a cell: "cell c (u in [u0, u1], v in [v0, v1])", its parameter box.
+std::string describe_cell(int c, double u0, double u1, double v0, double v1);
 
 // The form of a problem: its coefficients, source (or exact solution to derive it from on a
 // surface) and Nitsche data.

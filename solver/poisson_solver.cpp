@@ -170,7 +170,9 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   std::shared_ptr<const MatrixFreePoisson> op, pattern_from;
   if (!matrix_free && !distributed && options.matrix_from_operator) {
     std::shared_ptr<const MatrixFreePoisson> given = options.matrix_from_operator();
-    if (given && given->num_functions() == mesh.num_functions()) {
+    if (given && given->num_functions() != mesh.num_functions())
+      throw std::logic_error("solve_poisson: matrix_from_operator gave an operator of another space");
+    if (given) {
       if (operator_problem && given->assembles_lower()) op = std::move(given);
       else if (given->gives_pattern()) pattern_from = std::move(given);
     }

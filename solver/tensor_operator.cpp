@@ -15,6 +15,7 @@
 
 #include "basis/core/input_error.hpp"
 #include "quadrature/gauss_legendre.hpp"
+#include "solver/assemble_poisson.hpp"
 
 namespace knotwork {
 
@@ -858,8 +859,7 @@ Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
     const long eu = bad_cell % u_.elements, ev = bad_cell / u_.elements;
     std::ostringstream m;
     m << source.where() << ": source \"" << source.text() << "\" is not a finite number at (" << bad_x << ", " << bad_y
-      << ") in cell " << bad_cell << " (u in [" << u[eu] << ", " << u[eu + 1] << "], v in [" << v[ev] << ", " << v[ev + 1]
-      << "])";
+      << ") in " << describe_cell(int(bad_cell), u[eu], u[eu + 1], v[ev], v[ev + 1]);
     throw InputError(m.str());
   }
   return out;

@@ -270,18 +270,20 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
   }
 }
 
+std::shared_ptr<const MatrixFreePoisson> space_operator(const SplineSpace& space, double stiffness, double reaction,
+                                                        const QuadratureOptions& quadrature) {
+  try {
+    return space.matrix_free_operator(stiffness, reaction, quadrature);
+  } catch (const std::invalid_argument&) {
+    // Then there is no operator, and the element loop assembles, as for every other space.
+    return nullptr;
+  }
+}
+
 void assemble_by_operator_where_possible(const CaseDescription& c, const SplineSpace& space, PoissonSolveOptions& so) {
   const double reaction = c.problem.reaction;
   const QuadratureOptions quadrature = c.quadrature;
-  so.matrix_from_operator = [&space, reaction, quadrature]() -> std::shared_ptr<const MatrixFreePoisson> {
-    try {
-      return space.matrix_free_operator(1.0, reaction, quadrature);
-    } catch (const std::invalid_argument&) {
-      // The operator's documented refusals (a degree or rule beyond its tables): then there is
-      // no operator, and the element loop assembles, as for every other space.
-      return nullptr;
-    }
-  };
+  so.matrix_from_operator = [&space, reaction, quadrature] { return space_operator(space, 1.0, reaction, quadrature); };
 }
 
 void rethrow_as_case_error(const CaseDescription& c) {

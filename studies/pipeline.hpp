@@ -34,6 +34,11 @@ struct SolverReport {
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
                            const ProgressFunction& progress = {}, SolverReport* report = nullptr);
 
+// The space's operator (SplineSpace::matrix_free_operator), or null where it has none or refuses
+// this rule (its documented refusals: a degree or rule beyond its tables).
+std::shared_ptr<const MatrixFreePoisson> space_operator(const SplineSpace& space, double stiffness, double reaction,
+                                                        const QuadratureOptions& quadrature);
+
 // Lets a serial solve that assembles its matrix take it from the space's operator where that
 // operator writes it itself (a tensor patch with one affine map: its Kronecker form, the same
 // matrix as the element loop's to rounding, docs/SOLVERS.md); solve_poisson decides per problem.

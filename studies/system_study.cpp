@@ -26,18 +26,6 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> whole(const BezierMesh& mesh, const
   return whole(lower);
 }
 
-// The space's operator (null where it has none, or refuses this rule): a tensor patch's gives
-// its pattern, and on one affine map writes its matrices itself (docs/SOLVERS.md).
-std::shared_ptr<const MatrixFreePoisson> operator_of(const SplineSpace& space, double stiffness, double reaction,
-                                                     const QuadratureOptions& quadrature, int functions) {
-  try {
-    std::shared_ptr<const MatrixFreePoisson> op = space.matrix_free_operator(stiffness, reaction, quadrature);
-    return op && op->num_functions() == functions ? op : nullptr;
-  } catch (const std::invalid_argument&) {
-    return nullptr;  // its documented refusals (a degree or rule beyond its tables)
-  }
-}
-
 }  // namespace
 
 AssembledSystem assemble_system(const CaseDescription& c, const SplineSpace& space, const ProgressFunction& progress) {
@@ -63,13 +51,16 @@ AssembledSystem assemble_system(const CaseDescription& c, const SplineSpace& spa
     say("stiffness and load");
     const PoissonForm form = poisson_form(problem);
     const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
-    const std::shared_ptr<const MatrixFreePoisson> op = operator_of(space, 1.0, problem.reaction, c.quadrature, n);
+    // The space's operator, where it has one: a tensor patch's gives the pattern, and on one
+    // affine map writes the matrices themselves (docs/SOLVERS.md).
+    const std::shared_ptr<const MatrixFreePoisson> op = space_operator(space, 1.0, problem.reaction, c.quadrature);
+    if (op && op->num_functions() != n) throw std::logic_error("assemble_system: an operator of another space");
     if (op && op->assembles_lower() && !s.zero_mean && operator_serves(problem, geometry.dimension())) {
       s.stiffness = whole(op->lower_matrix(all));
       s.load = op->load(problem.source);
       add_neumann_terms(mesh, geometry, problem, all, c.quadrature, s.load);
       say("mass");
-      const std::shared_ptr<const MatrixFreePoisson> mass = operator_of(space, 0.0, 1.0, c.quadrature, n);
+      const std::shared_ptr<const MatrixFreePoisson> mass = space_operator(space, 0.0, 1.0, c.quadrature);
       if (!mass || !mass->assembles_lower())
         throw std::logic_error("assemble_system: the operator wrote the stiffness but not the mass matrix");
       s.mass = whole(mass->lower_matrix(all));
