@@ -308,18 +308,23 @@ void TensorPoissonOperator::find_affine_elements() {
         spread_det = std::max(spread_det, std::abs(f[3] - first[3]));
       }
     // The net's points carry rounding of their own size, so the element's shape is known to
-    // eps |P| / |P - P_0| relative (1 / h on a mesh of the unit square): variations below 64
-    // times that are the data's rounding, not its geometry.
+    // eps |P| / |P - P_0| relative along each direction (1 / h on a mesh of the unit square,
+    // 1 / h_u for elements much shorter along u): variations below 64 times the larger are the
+    // data's rounding, not its geometry.
     const long corner = u_.geometry_first[eu] + long(net_u_) * v_.geometry_first[ev];
-    double size = 0, extent = 0;
+    const auto point = [&](int a, int b, int k) {
+      const long m = corner + a + long(net_u_) * b;
+      return net(m, k) / net(m, 2);
+    };
+    double size = 0, extent_u = 0, extent_v = 0;
     for (int b = 0; b <= v_.geometry_degree; ++b)
       for (int a = 0; a <= u_.geometry_degree; ++a)
         for (int k = 0; k < 2; ++k) {
-          const long m = corner + a + long(net_u_) * b;
-          const double x = net(m, k) / net(m, 2);
-          size = std::max(size, std::abs(x));
-          extent = std::max(extent, std::abs(x - net(corner, k) / net(corner, 2)));
+          size = std::max(size, std::abs(point(a, b, k)));
+          extent_u = std::max(extent_u, std::abs(point(a, b, k) - point(0, b, k)));
+          extent_v = std::max(extent_v, std::abs(point(a, b, k) - point(a, 0, k)));
         }
+    const double extent = std::min(extent_u, extent_v);
     eps64 = 64 * std::numeric_limits<double>::epsilon() * (extent > 0 ? std::max(1.0, size / extent) : 1.0);
     return pts.min_det > 0 && spread_d <= eps64 * largest_d && spread_det <= eps64 * largest_det;
   };

@@ -169,7 +169,12 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
   const int net_rows = geometry_spans_v[row_to - 1] + 1 - d.net_first_row;
   const Eigen::SparseMatrix<double> Tv = Tv_all.middleRows(d.net_first_row, net_rows);
   d.geometry_homogeneous.resize(static_cast<Eigen::Index>(gu) * net_rows, 3);
-  for (int k = 0; k < 3; ++k) {
+  // Equal weights (a polynomial map) stay equal: T w = w_0 T 1 = w_0 by the partition of unity.
+  // Computed, they would carry the refinement's rounding, which grows with the knots inserted
+  // (67 eps at degree 4 and 1000 elements), and the map would pass for a rational one.
+  const bool equal_weights = (patch.weights.array() == patch.weights[0]).all();
+  if (equal_weights) d.geometry_homogeneous.col(2).setConstant(patch.weights[0]);
+  for (int k = 0; k < (equal_weights ? 2 : 3); ++k) {
     Eigen::VectorXd h(static_cast<Eigen::Index>(nu) * nv);
     for (Eigen::Index i = 0; i < h.size(); ++i)
       h[i] = k < 2 ? patch.weights[i] * patch.control_points(i, k) : patch.weights[i];
