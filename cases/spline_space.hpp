@@ -133,6 +133,8 @@ class SplineSpace {
   // by `quadrature`'s rules, when the family has one for this space (null otherwise). It may
   // read the space's data in place: the space must outlive it. Where a matrix is assembled, it
   // may also write it or its pattern (MatrixFreePoisson::assembles_lower, gives_pattern).
+  // On a part (part() not null), the operator over the part's mesh, whose rows of the
+  // functions the part owns must be whole (the distributed solve writes those rows from it).
   virtual std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double /*stiffness*/, double /*reaction*/,
                                                                   const QuadratureOptions& /*quadrature*/) const {
     return nullptr;

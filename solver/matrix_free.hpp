@@ -45,6 +45,10 @@ class MatrixFreePoisson {
   // pattern lower_pattern_matrix gives the space's mesh (functions that share a cell), in
   // CHOLMOD's layout. Only where assembles_lower(); throws std::logic_error elsewhere.
   virtual Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const;
+  // K's entries (row, columns[k]) into values[k], functions numbered as the operator's, by the
+  // same sums: a distributed solve's owned rows, each written whole by its process. Only where
+  // assembles_lower(); throws std::logic_error elsewhere.
+  virtual void row_entries(int row, int count, const int* columns, double* values) const;
   // Whether lower_pattern() gives that pattern (zero values) for any problem on the space, also
   // where the element loop must fill it (a curved or rational patch, variable coefficients):
   // a tensor patch's from its two univariate bases, O(1) per entry, where the mesh's walks

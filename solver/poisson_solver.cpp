@@ -49,6 +49,41 @@ class FreeDofsOperator final : public SymmetricOperator {
   double norm_ = 0;
 };
 
+// The rows this process owns, whole, from an operator over its mesh's functions
+// (MatrixFreePoisson::row_entries), and no halo: what the other processes' cells add to those
+// rows is in the operator's rows already, and their own rows are written by them. The diagonal
+// block's upper triangle is written and mirrored (half its entries), the other block whole.
+void write_owned_rows(const MatrixFreePoisson& op, const DofLayout& layout, RankRows& rows) {
+  OwnedRows& owned = rows.owned;
+  const long diagonal_entries = owned.diagonal_nonzeros();
+  owned.values.resize(rows.halo_offset());
+  std::fill(rows.halo_start.begin(), rows.halo_start.end(), 0);
+  rows.halo_cols.clear();
+  const std::vector<int> diagonal = diagonal_positions(owned);
+  const int count = rows.last - rows.first;
+#pragma omp parallel
+  {
+    std::vector<int> columns;
+#pragma omp for schedule(static)
+    for (int r = 0; r < count; ++r) {
+      const int row = layout.function_of_dof[rows.first + r];
+      // The diagonal block's columns count from the first owned row, the others are global rows.
+      const int begin = diagonal[r], end = owned.diagonal_start[r + 1];
+      columns.clear();
+      for (int k = begin; k < end; ++k) columns.push_back(layout.function_of_dof[rows.first + owned.diagonal_cols[k]]);
+      op.row_entries(row, end - begin, columns.data(), owned.values.data() + begin);
+      const int off_begin = owned.off_start[r], off_end = owned.off_start[r + 1];
+      columns.clear();
+      for (int k = off_begin; k < off_end; ++k) {
+        const auto at = std::lower_bound(rows.global_row.begin(), rows.global_row.end(), owned.off_cols[k]);
+        columns.push_back(layout.function_of_dof[at - rows.global_row.begin()]);
+      }
+      op.row_entries(row, off_end - off_begin, columns.data(), owned.values.data() + diagonal_entries + off_begin);
+    }
+  }
+  mirror_diagonal_block(owned, diagonal);
+}
+
 }  // namespace
 
 bool has_boundary(const BezierMesh& mesh) {
@@ -161,20 +196,31 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   const bool matrix_free = options.matrix_free != nullptr;
   // What an operator's load and lifting serve: the problems without a matrix and, where one
   // is assembled, those whose operator writes it from its Kronecker form.
-  const bool operator_problem = !distributed && !sol.zero_mean && operator_serves(problem, geometry.dimension());
-  if (matrix_free && (!operator_problem || !options.iterative || options.on_system || options.estimate_condition))
+  const bool operator_problem = !sol.zero_mean && operator_serves(problem, geometry.dimension());
+  if (matrix_free && (distributed || !operator_problem || !options.iterative || options.on_system || options.estimate_condition))
     throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
                            "coefficients, a given source and no Nitsche terms");
   // An operator that writes the matrix (then its load, lifting and errors are used too), or
   // one that gives only its pattern, for the element loop to fill.
+  // Distributed, each process writes its owned rows whole from its operator, or none does: a
+  // process that adds its cells' entries to rows another one wrote whole would count them twice.
   std::shared_ptr<const MatrixFreePoisson> op, pattern_from;
-  if (!matrix_free && !distributed && options.matrix_from_operator) {
-    std::shared_ptr<const MatrixFreePoisson> given = options.matrix_from_operator();
-    if (given && given->num_functions() != mesh.num_functions())
-      throw std::logic_error("solve_poisson: matrix_from_operator gave an operator of another space");
-    if (given) {
-      if (operator_problem && given->assembles_lower()) op = std::move(given);
-      else if (given->gives_pattern()) pattern_from = std::move(given);
+  if (!matrix_free && options.matrix_from_operator) {
+    std::shared_ptr<const MatrixFreePoisson> given;
+    step([&] {
+      given = options.matrix_from_operator();
+      if (given && given->num_functions() != mesh.num_functions())
+        throw std::logic_error("solve_poisson: matrix_from_operator gave an operator of another space");
+    });
+    const bool writes = given && operator_problem && given->assembles_lower();
+    if (distributed) {
+      double some_cannot = writes ? 0 : 1;
+      max_over_ranks(&some_cannot, 1);
+      if (some_cannot == 0) op = std::move(given);
+    } else if (writes) {
+      op = std::move(given);
+    } else if (given && given->gives_pattern()) {
+      pattern_from = std::move(given);
     }
   }
   const bool matrix_by_operator = op != nullptr;
@@ -205,10 +251,13 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   t = clock::now();
   Eigen::VectorXd rhs;
   Eigen::VectorXd free_diagonal;
-  if (matrix_free || matrix_by_operator) {
+  if (matrix_free || matrix_by_operator)
+  step([&] {
     // F over the free dofs, less K g for the Dirichlet values g; Neumann terms as assembled.
+    // Distributed, the owned rows of F and K g (whole: the operator covers their elements).
     sol.assembly = matrix_free ? "none" : "kronecker_form";
     if (matrix_free) op = options.matrix_free();
+    else if (distributed) write_owned_rows(*op, layout, rows);
     else {
       Eigen::SparseMatrix<double> written = op->lower_matrix(layout);
       K.swap(written);  // (no copy: Eigen 3.4's SparseMatrix has no move assignment)
@@ -217,8 +266,9 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     const Eigen::VectorXd load = form.load ? op->load(*form.source) : Eigen::VectorXd::Zero(mesh.num_functions());
     Eigen::VectorXd lifting;
     if (fixed_values.lpNorm<Eigen::Infinity>() > 0) op->apply(fixed_values, lifting);
-    rhs.resize(layout.num_free());
-    for (int d = 0; d < layout.num_free(); ++d) {
+    rhs.setZero(layout.num_free());
+    const int first = distributed ? rows.first : 0, last = distributed ? rows.last : layout.num_free();
+    for (int d = first; d < last; ++d) {
       const int f = layout.function_of_dof[d];
       rhs[d] = load[f] - (lifting.size() > 0 ? lifting[f] : 0.0);
     }
@@ -228,7 +278,8 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       for (int d = 0; d < layout.num_free(); ++d) free_diagonal[d] = diagonal[layout.function_of_dof[d]];
     }
     add_neumann_terms(mesh, geometry, problem, layout, options.quadrature, rhs, mine);
-  } else
+  });
+  else
   step([&] {
     if (distributed) assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, rows, rhs, mine);
     else assemble_poisson(mesh, geometry, form, layout, fixed_values, options.quadrature, K, rhs, nullptr, mine);

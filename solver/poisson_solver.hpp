@@ -48,11 +48,14 @@ struct PoissonSolveOptions {
   // diagonal). Planar problems with constant coefficients, a given source and no Nitsche terms,
   // solved serially, without on_system or estimate_condition: solve_poisson refuses others.
   std::function<std::shared_ptr<const MatrixFreePoisson>()> matrix_free;
-  // Where the matrix is assembled (serially), an operator that may write it itself
+  // Where the matrix is assembled, an operator that may write it itself
   // (MatrixFreePoisson::assembles_lower: a tensor patch with one affine map) instead of the
   // element loop; its load, Dirichlet lifting and error norms are then used too. Taken only for
   // the problems `matrix_free` serves (and on_system, estimate_condition). For the others, or
   // where it cannot write the matrix, its pattern (gives_pattern) replaces the mesh's.
+  // Distributed (called on every process; the operator over the process's mesh), each process
+  // writes its owned rows and their load from it when every process can, else none does; no
+  // pattern is taken from it there.
   std::function<std::shared_ptr<const MatrixFreePoisson>()> matrix_from_operator;
   // Called with the assembled system (lower triangle of K over the free dofs, and F)
   // before it is factored: for inspecting or exporting it, or benchmarking solvers on it.

@@ -68,6 +68,7 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   // band entries, no quadrature and no scatter.
   bool assembles_lower() const override { return uniform_ && weights_.size() == 0; }
   Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const override;
+  void row_entries(int row, int count, const int* columns, double* values) const override;
   bool gives_pattern() const override { return true; }
   Eigen::SparseMatrix<double> lower_pattern(const DofLayout& layout) const override;
   // Whether every element also has the same factors (applied in Kronecker form), and they.
@@ -180,6 +181,23 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   };
   // Sets uniform_ with `factors`, the bands and the Kronecker form.
   void set_uniform(const std::array<double, 4>& factors);
+  // K's entry between functions (i, j) and (i0, j0) from the Kronecker form's bands, for
+  // |i - i0| <= p_u and |j - j0| <= p_v (zero there where they share no element).
+  struct KroneckerEntries {
+    double d11 = 0, d12 = 0, d22 = 0, r = 0;
+    int pu = 0, pv = 0;
+    const double *ku = nullptr, *mu = nullptr, *cu = nullptr, *kv = nullptr, *mv = nullptr, *cv = nullptr;
+    double operator()(int i, int j, int i0, int j0) const {
+      // X(a, c) of a band sits at a (2p + 1) + c - a + p.
+      const size_t wu = 2 * pu + 1, wv = 2 * pv + 1;
+      const size_t u = i * wu + (i0 - i + pu), ut = i0 * wu + (i - i0 + pu);
+      const size_t v = j * wv + (j0 - j + pv), vt = j0 * wv + (j - j0 + pv);
+      double k = d11 * ku[u] * mv[v] + d22 * mu[u] * kv[v] + r * mu[u] * mv[v];
+      if (d12 != 0) k += d12 * (cu[u] * cv[vt] + cu[ut] * cv[v]);
+      return k;
+    }
+  };
+  KroneckerEntries kronecker_entries() const;
   // K's lower triangle over the free dofs, with values (the Kronecker form) or zeros.
   Eigen::SparseMatrix<double> write_lower(const DofLayout& layout, bool values) const;
   // y at `rows` from x on the padded box of rows +- the degrees (in, mu x mv) by the Kronecker

@@ -4,7 +4,11 @@
 // CHOLMOD's layout, where the element loop (solver/assemble_poisson.cpp) evaluates every
 // function at every point of every cell and scatters (p + 1)^4 products per cell. Gauss rules
 // of p + 1 points integrate both exactly, so the two give the same matrix up to rounding
-// (tests/test_tensor_operator.cpp). Written here: no library assembles spline matrices.
+// (tests/test_tensor_operator.cpp). Also any row's entries (row_entries): a process's owned rows
+// of the distributed matrix, from the operator of its part of the patch (solver/poisson_solver.cpp).
+// Written here: no library assembles spline matrices.
+#include <cmath>
+#include <cstdlib>
 #include <stdexcept>
 #include <vector>
 
@@ -15,6 +19,10 @@ namespace knotwork {
 
 Eigen::SparseMatrix<double> MatrixFreePoisson::lower_matrix(const DofLayout&) const {
   throw std::logic_error("MatrixFreePoisson::lower_matrix: this operator does not assemble its matrix");
+}
+
+void MatrixFreePoisson::row_entries(int, int, const int*, double*) const {
+  throw std::logic_error("MatrixFreePoisson::row_entries: this operator does not assemble its matrix");
 }
 
 Eigen::SparseMatrix<double> MatrixFreePoisson::lower_pattern(const DofLayout&) const {
@@ -48,6 +56,32 @@ Eigen::SparseMatrix<double> TensorPoissonOperator::lower_matrix(const DofLayout&
   return write_lower(layout, true);
 }
 
+TensorPoissonOperator::KroneckerEntries TensorPoissonOperator::kronecker_entries() const {
+  const std::array<double, 4>& f = uniform_factors_;
+  KroneckerEntries e;
+  e.d11 = stiffness_ * f[0], e.d12 = stiffness_ * f[1], e.d22 = stiffness_ * f[2], e.r = reaction_ * f[3];
+  e.pu = u_.degree, e.pv = v_.degree;
+  e.ku = band_u_.K.data(), e.mu = band_u_.M.data(), e.cu = band_u_.C.data();
+  e.kv = band_v_.K.data(), e.mv = band_v_.M.data(), e.cv = band_v_.C.data();
+  return e;
+}
+
+void TensorPoissonOperator::row_entries(int row, int count, const int* columns, double* values) const {
+  if (!assembles_lower())
+    throw std::logic_error("TensorPoissonOperator::row_entries: the map is not one affine map, or the space is rational");
+  const KroneckerEntries entry = kronecker_entries();
+  const int i = row % n_u_, j = row / n_u_;
+  // A row's columns come in ascending order: one division per row of functions they cross,
+  // not two per entry (which cost as much as the entries).
+  int j0 = 0, start = 0, end = 0;
+  for (int k = 0; k < count; ++k) {
+    const int c = columns[k];
+    if (c < start || c >= end) j0 = c / n_u_, start = j0 * n_u_, end = start + n_u_;
+    const int i0 = c - start;
+    values[k] = std::abs(i - i0) <= entry.pu && std::abs(j - j0) <= entry.pv ? entry(i, j, i0, j0) : 0.0;
+  }
+}
+
 Eigen::SparseMatrix<double> TensorPoissonOperator::lower_pattern(const DofLayout& layout) const {
   return write_lower(layout, false);
 }
@@ -55,9 +89,7 @@ Eigen::SparseMatrix<double> TensorPoissonOperator::lower_pattern(const DofLayout
 Eigen::SparseMatrix<double> TensorPoissonOperator::write_lower(const DofLayout& layout, bool with_values) const {
   if (static_cast<long>(layout.dof.size()) != long(n_u_) * n_v_)
     throw std::logic_error("TensorPoissonOperator::write_lower: a layout of another space");
-  const std::array<double, 4>& f = uniform_factors_;
-  const double d11 = stiffness_ * f[0], d12 = stiffness_ * f[1], d22 = stiffness_ * f[2], r = reaction_ * f[3];
-  const int pu = u_.degree, pv = v_.degree, wu = 2 * pu + 1, wv = 2 * pv + 1;
+  const int pu = u_.degree, pv = v_.degree;
   const Reach ru = reach(u_.first, pu, n_u_), rv = reach(v_.first, pv, n_v_);
   const int n = layout.num_free();
   Eigen::SparseMatrix<double> K(n, n);
@@ -84,7 +116,7 @@ Eigen::SparseMatrix<double> TensorPoissonOperator::write_lower(const DofLayout& 
   K.resizeNonZeros(outer[n]);
   int* inner = K.innerIndexPtr();
   double* values = K.valuePtr();
-  const Band &bu = band_u_, &bv = band_v_;
+  const KroneckerEntries entry = kronecker_entries();
 #pragma omp parallel for schedule(static)
   for (int d = 0; d < n; ++d) {
     long at = outer[d];
@@ -97,13 +129,8 @@ Eigen::SparseMatrix<double> TensorPoissonOperator::write_lower(const DofLayout& 
       continue;
     }
     for_rows(d, [&](int dof, int i0, int j0, int i, int j) {
-      // X(a, c) of a band sits at a (2p + 1) + c - a + p.
-      const size_t u = size_t(i) * wu + (i0 - i + pu), ut = size_t(i0) * wu + (i - i0 + pu);
-      const size_t v = size_t(j) * wv + (j0 - j + pv), vt = size_t(j0) * wv + (j - j0 + pv);
-      double k = d11 * bu.K[u] * bv.M[v] + d22 * bu.M[u] * bv.K[v] + r * bu.M[u] * bv.M[v];
-      if (d12 != 0) k += d12 * (bu.C[u] * bv.C[vt] + bu.C[ut] * bv.C[v]);
       inner[at] = dof;
-      values[at] = k;
+      values[at] = entry(i, j, i0, j0);
       ++at;
     });
   }

@@ -237,10 +237,11 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     throw InputError(c.path + ": [solver] matrix: \"matrix_free\" needs CG (method = \"iterative\", or \"auto\" from "
                      "10 000 functions); this solve is " + chosen.method);
   }
-  // Where a matrix is assembled serially, the space's operator writes it itself when it can
-  // (a tensor patch with one affine map: its Kronecker form), the same matrix as the element
-  // loop's, up to rounding, in a fraction of the time (docs/SOLVERS.md).
-  if ((chosen.method == "direct" || chosen.method == "iterative") && !so.matrix_free)
+  // Where a matrix is assembled, the space's operator writes it itself when it can (a tensor
+  // patch with one affine map: its Kronecker form; under PETSc each process its own rows), the
+  // same matrix as the element loop's, up to rounding, in a fraction of the time
+  // (docs/SOLVERS.md).
+  if ((chosen.method == "direct" || chosen.method == "iterative" || chosen.method == "petsc") && !so.matrix_free)
     assemble_by_operator_where_possible(c, space, so);
   try {
     if (chosen.method == "petsc") {

@@ -7,6 +7,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <numeric>
 
 #include "basis/tensor/tensor_patch.hpp"
 #include "cases/case_file.hpp"
@@ -437,6 +438,77 @@ TEST_CASE("The matrix from the Kronecker form is the element loop's", "[tensor_o
         REQUIRE(backward <= m * (2 * p + 1) * (2 * p + 1));
       }
     }
+}
+
+// Under mpirun each process writes its owned rows of the matrix, whole, from the operator of
+// its part of the patch (SpaceFamily::build_part), and their load (solver/poisson_solver.cpp):
+// here every row of every part on 2 and 3 processes against the whole patch's element loop.
+// The case (tests/mpi/tensor_affine_rows.toml) shears (a mixed term), has a reaction, a C^0
+// knot and an extra knot where row boundaries fall.
+TEST_CASE("A part's operator writes its owned rows of the whole matrix", "[tensor_operator][solver]") {
+  const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/tests/mpi/tensor_affine_rows.toml");
+  const SpaceFamily& family = space_family(c);
+  const std::unique_ptr<SplineSpace> whole = family.build(c, 0, {});
+  const int n = whole->mesh().num_functions();
+  const DofLayout all_free = make_dof_layout(n, std::vector<bool>(n, false));
+  Eigen::SparseMatrix<double> lower = lower_pattern_matrix(whole->mesh(), all_free);
+  Eigen::VectorXd F;
+  const PoissonForm form = poisson_form(c.problem);
+  REQUIRE(form.reaction == 2.0);
+  assemble_poisson(whole->mesh(), whole->geometry(), form, all_free, Eigen::VectorXd::Zero(n), c.quadrature, lower, F);
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> K = lower.selfadjointView<Eigen::Lower>();
+  // As in the test above, p = 3 the larger degree.
+  const int p = 3;
+  const double m = 8.0 * std::pow(p + 1, 4) * 2.2e-16, load_bound = m * (2 * p + 1) * (2 * p + 1) * F.lpNorm<Eigen::Infinity>();
+  for (const int ranks : {2, 3})
+    for (int rank = 0; rank < ranks; ++rank) {
+      INFO(ranks << " processes, rank " << rank);
+      const std::unique_ptr<SplineSpace> part = family.build_part(c, 0, rank, ranks, {});
+      REQUIRE(part->part());
+      const MeshPart& share = *part->part();
+      REQUIRE(part->mesh().num_cells() < whole->mesh().num_cells());
+      const std::unique_ptr<MatrixFreePoisson> op = part->matrix_free_operator(1.0, c.problem.reaction, c.quadrature);
+      REQUIRE(op);
+      REQUIRE(op->num_functions() == part->mesh().num_functions());
+      REQUIRE(op->assembles_lower());
+      const Eigen::VectorXd load = op->load(c.problem.source);
+      std::vector<int> columns(part->mesh().num_functions());
+      std::iota(columns.begin(), columns.end(), 0);
+      std::vector<double> row(columns.size());
+      int owned = 0;
+      for (int f = 0; f < part->mesh().num_functions(); ++f) {
+        const int g = share.global(f);
+        if (g < share.first_owned_function || g >= share.last_owned_function) continue;
+        ++owned;
+        op->row_entries(f, int(columns.size()), columns.data(), row.data());
+        // Every entry of the whole row is among the part's functions, and equal to rounding.
+        int found = 0;
+        for (int h = 0; h < int(columns.size()); ++h) {
+          const double expected = K.coeff(g, share.global(h));
+          found += K.coeff(g, share.global(h)) != 0 || std::abs(row[h]) > 0 ? 1 : 0;
+          INFO("row " << g << ", column " << share.global(h) << ": " << row[h] << " against " << expected);
+          REQUIRE(std::abs(row[h] - expected) <= m * std::sqrt(K.coeff(g, g) * K.coeff(share.global(h), share.global(h))));
+        }
+        REQUIRE(found == K.row(g).nonZeros());
+        INFO("load of " << g << ": " << load[f] << " against " << F[g]);
+        REQUIRE(std::abs(load[f] - F[g]) <= load_bound);
+      }
+      REQUIRE(owned == share.last_owned_function - share.first_owned_function);
+    }
+}
+
+// Where the map is affine on some processes' rows only, those could write their rows from the
+// Kronecker form and the others could not: solve_poisson then has none do it
+// (tests/mpi/tensor_half_affine.toml checks the solve).
+TEST_CASE("A part's operator writes rows only where its own rows are affine", "[tensor_operator]") {
+  const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/tests/mpi/tensor_half_affine.toml");
+  const SpaceFamily& family = space_family(c);
+  const auto writes = [&](int rank, int ranks) {
+    return family.build_part(c, 0, rank, ranks, {})->matrix_free_operator(1.0, 0.0, c.quadrature)->assembles_lower();
+  };
+  REQUIRE(writes(0, 2));
+  REQUIRE_FALSE(writes(1, 2));
+  REQUIRE_FALSE(family.build(c, 0, {})->matrix_free_operator(1.0, 0.0, c.quadrature)->assembles_lower());
 }
 
 // Refining a polynomial patch (equal weights) keeps it polynomial: by the partition of unity

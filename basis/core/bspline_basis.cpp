@@ -161,6 +161,16 @@ std::vector<double> greville_abscissae(const std::vector<double>& knots, int deg
   return xi;
 }
 
+BSplineBasis1D consecutive_functions(const BSplineBasis1D& basis, int first, int count) {
+  const int p = basis.degree();
+  if (first < 0 || count <= p || first + count > basis.num_functions())
+    throw std::invalid_argument("consecutive_functions: functions " + std::to_string(first) + " .. " +
+                                std::to_string(first + count - 1) + " of " + std::to_string(basis.num_functions()) +
+                                " do not span an element of degree " + std::to_string(p));
+  const std::vector<double>& k = basis.knots();
+  return BSplineBasis1D(p, std::vector<double>(k.begin() + first, k.begin() + first + count + p + 1));
+}
+
 std::vector<int> BSplineBasis1D::element_spans() const {
   std::vector<int> spans;
   for (int s = p_; s < num_functions(); ++s)

@@ -55,6 +55,13 @@ inline std::vector<double> greville_abscissae(const BSplineBasis1D& basis) {
   return greville_abscissae(basis.knots(), basis.degree());
 }
 
+// The functions first .. first + count - 1 of `basis` alone, on their own knots (unclamped
+// where they stop short of the ends). Its domain is the elements on which only those
+// functions live, where they are the same functions as in `basis`: a process's rows of a
+// tensor patch (its matrix rows then come from its elements alone). Throws
+// std::invalid_argument when the range is outside the basis or spans no element.
+BSplineBasis1D consecutive_functions(const BSplineBasis1D& basis, int first, int count);
+
 // Value at t of the spline with the given coefficients (de Boor's algorithm).
 double de_boor(const BSplineBasis1D& basis, std::span<const double> coefficients, double t);
 

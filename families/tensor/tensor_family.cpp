@@ -118,11 +118,22 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
   }
   std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double stiffness, double reaction,
                                                           const QuadratureOptions& quadrature) const override {
-    if (d_.part) return nullptr;  // a rank's part: the operator covers whole patches
     const Eigen::VectorXd* weights = d_.mesh.is_rational() ? &d_.mesh.weights() : nullptr;
     // (The operator lives within a solve on this space: it may read the space's net in place.)
+    if (!d_.part)
+      return std::make_unique<TensorPoissonOperator>(
+          TensorPatch{&d_.space_u, &d_.space_v, weights, &d_.geometry_u, &d_.geometry_v, &d_.geometry_homogeneous,
+                      /*geometry_outlives_operator=*/true},
+          stiffness, reaction, quadrature.points_u, quadrature.points_v);
+    // A process's rows of the patch: the operator of its element rows alone, over the part's
+    // functions (their rows along v on their own knots, as the part's net holds the geometry's).
+    // Its rows of the functions the process owns are whole: they live on those elements only.
+    const int su = d_.space_u.num_functions(), gu = d_.geometry_u.num_functions();
+    const BSplineBasis1D rows_v = consecutive_functions(d_.space_v, d_.part->function_offset / su, d_.mesh.num_functions() / su);
+    const BSplineBasis1D net_rows_v =
+        consecutive_functions(d_.geometry_v, d_.net_first_row, static_cast<int>(d_.geometry_homogeneous.rows() / gu));
     return std::make_unique<TensorPoissonOperator>(
-        TensorPatch{&d_.space_u, &d_.space_v, weights, &d_.geometry_u, &d_.geometry_v, &d_.geometry_homogeneous,
+        TensorPatch{&d_.space_u, &rows_v, weights, &d_.geometry_u, &net_rows_v, &d_.geometry_homogeneous,
                     /*geometry_outlives_operator=*/true},
         stiffness, reaction, quadrature.points_u, quadrature.points_v);
   }

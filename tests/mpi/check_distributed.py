@@ -16,7 +16,12 @@ cells/N cells. With --patches (a multipatch case with at least 3 patches), each 
 hold a part of whole patches and their halo: fewer cells than the whole space. Without either,
 the whole space (built on every rank).
 
-Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE [--rows N | --patches]
+With --assembly METHOD (kronecker_form or element_loop), every distributed run must report
+that it made its matrix that way (`solver.assembly_method`): a patch with one affine map has
+each process write its owned rows from the Kronecker form; where only some processes' rows are
+affine, none may.
+
+Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE [--rows N | --patches] [--assembly METHOD]
 Everything runs on this machine (OpenMPI's shared-memory transport only) and stops by itself.
 """
 import json
@@ -56,9 +61,12 @@ def run(command, env):
 
 
 def main():
-    binary, case = sys.argv[1], sys.argv[2]
-    rows = int(sys.argv[4]) if len(sys.argv) > 4 and sys.argv[3] == "--rows" else None
-    patches = len(sys.argv) > 3 and sys.argv[3] == "--patches"
+    binary, case, options = sys.argv[1], sys.argv[2], sys.argv[3:]
+    def value_of(flag):
+        return options[options.index(flag) + 1] if flag in options else None
+    rows = int(value_of("--rows")) if "--rows" in options else None
+    patches = "--patches" in options
+    assembly = value_of("--assembly")
     env = mpi_environment()
     base = [binary, "run", case, "--json", "-q", "--no-output"]
     reference = run(base + ["--solver", "direct"], env)
@@ -93,6 +101,8 @@ def main():
         elif got["space_parts"] or held != reference["cells"]:
             failures.append(f"{what}: a process held {held} of {reference['cells']} cells (parts: {got['space_parts']}), "
                             "not the whole space")
+        if assembly and got["solver"]["assembly_method"] != assembly:
+            failures.append(f"{what}: the matrix by {got['solver']['assembly_method']}, not {assembly}")
         if got["free_dofs"] != reference["free_dofs"]:
             failures.append(f"{what}: {got['free_dofs']} unknowns, serial {reference['free_dofs']}")
         for key in ("l2_error", "h1_seminorm_error"):
