@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <array>
+#include <vector>
 
 #include "solver/expression.hpp"
 
@@ -55,6 +56,9 @@ class MatrixFreePoisson {
   // the cells of every function.
   virtual bool gives_pattern() const { return false; }
   virtual Eigen::SparseMatrix<double> lower_pattern(const DofLayout& layout) const;
+  // Where gives_pattern(): the functions that share an element with `function` (itself
+  // included), appended to `out` in ascending order: a distributed solve's owned rows.
+  virtual void coupled_functions(int function, std::vector<int>& out) const;
 };
 
 }  // namespace knotwork

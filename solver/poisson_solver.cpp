@@ -49,16 +49,14 @@ class FreeDofsOperator final : public SymmetricOperator {
   double norm_ = 0;
 };
 
-// The rows this process owns, whole, from an operator over its mesh's functions
-// (MatrixFreePoisson::row_entries), and no halo: what the other processes' cells add to those
-// rows is in the operator's rows already, and their own rows are written by them. The diagonal
-// block's upper triangle is written and mirrored (half its entries), the other block whole.
+// The rows this process owns (owned_rows_pattern: no halo), whole, from an operator over its
+// mesh's functions (MatrixFreePoisson::row_entries): what the other processes' cells add to
+// those rows is in the operator's rows already, and their own rows are written by them. The
+// diagonal block's upper triangle is written and mirrored (half its entries), the other block whole.
 void write_owned_rows(const MatrixFreePoisson& op, const DofLayout& layout, RankRows& rows) {
   OwnedRows& owned = rows.owned;
   const long diagonal_entries = owned.diagonal_nonzeros();
-  owned.values.resize(rows.halo_offset());
-  std::fill(rows.halo_start.begin(), rows.halo_start.end(), 0);
-  rows.halo_cols.clear();
+  if (rows.halo_start.back() != 0) throw std::logic_error("write_owned_rows: rows with a halo to send");
   const std::vector<int> diagonal = diagonal_positions(owned);
   const int count = rows.last - rows.first;
 #pragma omp parallel
@@ -237,7 +235,12 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       const int g = part.global(layout.function_of_dof[d]);
       row_of_dof[d] = g - fixed_below(g);
     }
-    step([&] { rows = rank_rows_pattern(mesh, layout, std::move(row_of_dof), first_row, last_row, mine); });
+    // Rows the operator writes whole need no halo, and their pattern comes from it.
+    step([&] {
+      rows = op ? owned_rows_pattern(layout, std::move(row_of_dof), first_row, last_row,
+                                     [&op](int f, std::vector<int>& out) { op->coupled_functions(f, out); })
+                : rank_rows_pattern(mesh, layout, std::move(row_of_dof), first_row, last_row, mine);
+    });
     sol.matrix_nonzeros = rows.owned.diagonal_nonzeros() + rows.owned.off_nonzeros();
   } else {
     sol.matrix_nonzeros = K.nonZeros();  // none stored without a matrix

@@ -178,6 +178,48 @@ void mirror_diagonal_block(OwnedRows& o, const std::vector<int>& diagonal) {
     }
 }
 
+namespace {
+
+// The owned dofs [first, last) of `global_row` (increasing), whose rows are [first_row, last_row).
+void find_owned(RankRows& r, int first_row, int last_row) {
+  const std::vector<int>& g = r.global_row;
+  r.first = static_cast<int>(std::lower_bound(g.begin(), g.end(), first_row) - g.begin());
+  r.last = static_cast<int>(std::lower_bound(g.begin(), g.end(), last_row) - g.begin());
+  if (r.last - r.first != last_row - first_row)
+    throw std::logic_error("rank rows: this rank's mesh does not hold all of its rows");
+}
+
+}  // namespace
+
+RankRows owned_rows_pattern(const DofLayout& layout, std::vector<int> global_row, int first_row, int last_row,
+                            const std::function<void(int, std::vector<int>&)>& coupled) {
+  RankRows r;
+  r.global_row = std::move(global_row);
+  find_owned(r, first_row, last_row);
+  std::array<Compressed, 2> p =
+      compress_rows<2>(r.last - r.first, [&](int k, std::array<std::vector<int>*, 2>& out, std::vector<int>&) {
+        thread_local std::vector<int> functions;
+        functions.clear();
+        coupled(layout.function_of_dof[r.first + k], functions);
+        // Ascending functions are ascending dofs and rows: the owned ones go to the diagonal
+        // block (numbered from `first`), the others to the off-diagonal one as global rows.
+        for (int f : functions) {
+          const int d = layout.dof[f];
+          if (d < 0) continue;
+          if (d >= r.first && d < r.last) out[0]->push_back(d - r.first);
+          else out[1]->push_back(r.global_row[d]);
+        }
+      });
+  OwnedRows& o = r.owned;
+  o.diagonal_start = std::move(p[0].start);
+  o.off_start = std::move(p[1].start);
+  o.diagonal_cols = std::move(p[0].entries);
+  o.off_cols = std::move(p[1].entries);
+  r.halo_start.assign(layout.num_free() + 1, 0);
+  o.values.assign(r.halo_offset(), 0.0);
+  return r;
+}
+
 RankRows rank_rows_pattern(const BezierMesh& mesh, const DofLayout& layout, std::vector<int> global_row, int first_row,
                            int last_row, CellRange own_cells) {
   const FunctionCells fc = function_cells(mesh);
@@ -185,10 +227,7 @@ RankRows rank_rows_pattern(const BezierMesh& mesh, const DofLayout& layout, std:
   RankRows r;
   r.global_row = std::move(global_row);
   const std::vector<int>& g = r.global_row;
-  r.first = static_cast<int>(std::lower_bound(g.begin(), g.end(), first_row) - g.begin());
-  r.last = static_cast<int>(std::lower_bound(g.begin(), g.end(), last_row) - g.begin());
-  if (r.last - r.first != last_row - first_row)
-    throw std::logic_error("rank_rows_pattern: this rank's mesh does not hold all of its rows");
+  find_owned(r, first_row, last_row);
   const int first_cell = own_cells.first, last_cell = own_cells.last < 0 ? mesh.num_cells() : own_cells.last;
   const auto is_owned = [&](int d) { return d >= r.first && d < r.last; };
   // Three patterns over all free dofs: the diagonal block's and the off-diagonal block's

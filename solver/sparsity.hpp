@@ -1,5 +1,6 @@
 #pragma once
 #include <Eigen/SparseCore>
+#include <functional>
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
@@ -62,5 +63,12 @@ struct RankRows {
 // own_cells: the cells this rank integrates. Threaded, in two passes (count, fill).
 RankRows rank_rows_pattern(const BezierMesh& mesh, const DofLayout& layout, std::vector<int> global_row, int first_row,
                            int last_row, CellRange own_cells);
+
+// The owned rows alone, no halo (a rank that writes its rows whole: nothing goes to other
+// ranks), from each owned function's couplings as coupled(function, out) appends them
+// (ascending, the function itself included): an operator's (MatrixFreePoisson::
+// coupled_functions), O(1) per entry where the mesh's pattern walks every function's cells.
+RankRows owned_rows_pattern(const DofLayout& layout, std::vector<int> global_row, int first_row, int last_row,
+                            const std::function<void(int, std::vector<int>&)>& coupled);
 
 }  // namespace knotwork

@@ -178,6 +178,8 @@ TensorPoissonOperator::TensorPoissonOperator(const TensorPatch& patch, double st
       own_net_.col(2).setOnes();
     }
   }
+  reach_u_ = reach(u_, n_u_);
+  reach_v_ = reach(v_, n_v_);
   if (weights_.size() == 0) find_affine_elements();
 }
 
@@ -420,6 +422,8 @@ std::unique_ptr<TensorPoissonOperator> TensorPoissonOperator::uniformly_affine(c
   op->stiffness_ = stiffness;
   op->reaction_ = reaction;
   op->polynomial_map_ = true;
+  op->reach_u_ = reach(op->u_, op->n_u_);
+  op->reach_v_ = reach(op->v_, op->n_v_);
   op->set_uniform(factors);
   return op;
 }

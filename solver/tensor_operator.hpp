@@ -71,6 +71,7 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   void row_entries(int row, int count, const int* columns, double* values) const override;
   bool gives_pattern() const override { return true; }
   Eigen::SparseMatrix<double> lower_pattern(const DofLayout& layout) const override;
+  void coupled_functions(int function, std::vector<int>& out) const override;
   // Whether every element also has the same factors (applied in Kronecker form), and they.
   bool uniform_factors() const { return uniform_; }
   const std::array<double, 4>& factors() const { return uniform_factors_; }
@@ -198,6 +199,11 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
     }
   };
   KroneckerEntries kronecker_entries() const;
+  // Per function of one direction, the functions it shares an element with: [low, high].
+  struct Reach {
+    std::vector<int> low, high;
+  };
+  static Reach reach(const Direction& d, int functions);
   // K's lower triangle over the free dofs, with values (the Kronecker form) or zeros.
   Eigen::SparseMatrix<double> write_lower(const DofLayout& layout, bool values) const;
   // y at `rows` from x on the padded box of rows +- the degrees (in, mu x mv) by the Kronecker
@@ -212,6 +218,7 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   bool uniform_ = false;
   std::array<double, 4> uniform_factors_{};
   Band band_u_, band_v_;
+  Reach reach_u_, reach_v_;
   KroneckerForm kronecker_;
   BSplineBasis1D space_u_, space_v_, geometry_u_, geometry_v_;
   int n_u_ = 0, n_v_ = 0, net_u_ = 0;

@@ -29,26 +29,27 @@ Eigen::SparseMatrix<double> MatrixFreePoisson::lower_pattern(const DofLayout&) c
   throw std::logic_error("MatrixFreePoisson::lower_pattern: this operator does not give its pattern");
 }
 
-namespace {
+void MatrixFreePoisson::coupled_functions(int, std::vector<int>&) const {
+  throw std::logic_error("MatrixFreePoisson::coupled_functions: this operator does not give its pattern");
+}
 
-// Per function of one direction, the functions it shares an element with: [low, high].
-struct Reach {
-  std::vector<int> low, high;
-};
-
-Reach reach(const std::vector<int>& first, int degree, int functions) {
+TensorPoissonOperator::Reach TensorPoissonOperator::reach(const Direction& d, int functions) {
   Reach r;
   r.low.assign(functions, functions);
   r.high.assign(functions, -1);
-  for (int f : first)  // elements in order, their first function non-decreasing
-    for (int a = f; a <= f + degree; ++a) {
+  for (int f : d.first)  // elements in order, their first function non-decreasing
+    for (int a = f; a <= f + d.degree; ++a) {
       r.low[a] = std::min(r.low[a], f);
-      r.high[a] = std::max(r.high[a], f + degree);
+      r.high[a] = std::max(r.high[a], f + d.degree);
     }
   return r;
 }
 
-}  // namespace
+void TensorPoissonOperator::coupled_functions(int function, std::vector<int>& out) const {
+  const int i0 = function % n_u_, j0 = function / n_u_;
+  for (int j = reach_v_.low[j0]; j <= reach_v_.high[j0]; ++j)
+    for (int i = reach_u_.low[i0]; i <= reach_u_.high[i0]; ++i) out.push_back(i + n_u_ * j);
+}
 
 Eigen::SparseMatrix<double> TensorPoissonOperator::lower_matrix(const DofLayout& layout) const {
   if (!assembles_lower())
@@ -89,8 +90,7 @@ Eigen::SparseMatrix<double> TensorPoissonOperator::lower_pattern(const DofLayout
 Eigen::SparseMatrix<double> TensorPoissonOperator::write_lower(const DofLayout& layout, bool with_values) const {
   if (static_cast<long>(layout.dof.size()) != long(n_u_) * n_v_)
     throw std::logic_error("TensorPoissonOperator::write_lower: a layout of another space");
-  const int pu = u_.degree, pv = v_.degree;
-  const Reach ru = reach(u_.first, pu, n_u_), rv = reach(v_.first, pv, n_v_);
+  const Reach &ru = reach_u_, &rv = reach_v_;
   const int n = layout.num_free();
   Eigen::SparseMatrix<double> K(n, n);
   int* outer = K.outerIndexPtr();

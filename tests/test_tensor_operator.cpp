@@ -494,6 +494,26 @@ TEST_CASE("A part's operator writes its owned rows of the whole matrix", "[tenso
         REQUIRE(std::abs(load[f] - F[g]) <= load_bound);
       }
       REQUIRE(owned == share.last_owned_function - share.first_owned_function);
+      // The owned rows' pattern from the operator's couplings is the one the mesh's cells give,
+      // with every seventh global function fixed (rows numbered past the fixed ones).
+      const int nf = part->mesh().num_functions();
+      std::vector<bool> fixed(nf);
+      for (int f = 0; f < nf; ++f) fixed[f] = share.global(f) % 7 == 3;
+      const DofLayout layout = make_dof_layout(nf, fixed);
+      const auto row_of = [](int g) { return g - (g + 3) / 7; };  // the fixed functions 3, 10, ... below g
+      std::vector<int> global_row(layout.num_free());
+      for (int d = 0; d < layout.num_free(); ++d) global_row[d] = row_of(share.global(layout.function_of_dof[d]));
+      const int first_row = row_of(share.first_owned_function), last_row = row_of(share.last_owned_function);
+      const RankRows from_mesh = rank_rows_pattern(part->mesh(), layout, global_row, first_row, last_row, share.owned);
+      const RankRows from_operator = owned_rows_pattern(layout, global_row, first_row, last_row,
+                                                        [&op](int f, std::vector<int>& out) { op->coupled_functions(f, out); });
+      REQUIRE(from_operator.first == from_mesh.first);
+      REQUIRE(from_operator.last == from_mesh.last);
+      REQUIRE(from_operator.owned.diagonal_start == from_mesh.owned.diagonal_start);
+      REQUIRE(from_operator.owned.diagonal_cols == from_mesh.owned.diagonal_cols);
+      REQUIRE(from_operator.owned.off_start == from_mesh.owned.off_start);
+      REQUIRE(from_operator.owned.off_cols == from_mesh.owned.off_cols);
+      REQUIRE(from_operator.halo_start.back() == 0);  // nothing to send
     }
 }
 
