@@ -64,6 +64,16 @@ void BM_KroneckerMatrix(benchmark::State& state) {
 }
 BENCHMARK(BM_KroneckerMatrix)->Args({2, 128})->Args({4, 64})->Args({2, 512})->Args({4, 256})->Unit(benchmark::kMillisecond);
 
+// What the Kronecker form's path still integrates: the load, f at every quadrature point of the
+// same square (the case's derived source, compiled), by the operator's sum factorization.
+void BM_OperatorLoad(benchmark::State& state) {
+  const SquareProblem s(state);
+  const std::unique_ptr<MatrixFreePoisson> op = s.space->matrix_free_operator(1.0, 0.0, s.c.quadrature);
+  for (auto _ : state) benchmark::DoNotOptimize(op->load(s.c.problem.source));
+  state.SetItemsProcessed(state.iterations() * s.space->mesh().num_cells());
+}
+BENCHMARK(BM_OperatorLoad)->Args({2, 512})->Args({4, 256})->Unit(benchmark::kMillisecond);
+
 // Rank 0 of 2 under mpirun, on one thread: its half of the cells, whole rows of its half of
 // the functions (PETSc's blocks, rank_rows_pattern), against the serial kernel on the same
 // cells (lower triangle), also on one thread. Run with OMP_NUM_THREADS=1 to compare kernels.
