@@ -199,9 +199,9 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
                            "coefficients, a given source and no Nitsche terms");
   // An operator that writes the matrix (then its load, lifting and errors are used too), or
-  // one that gives only its pattern, for the element loop to fill.
-  // Distributed, each process writes its owned rows whole from its operator, or none does: a
-  // process that adds its cells' entries to rows another one wrote whole would count them twice.
+  // one that gives only its pattern, for the element loop to fill. Distributed, each process
+  // writes its owned rows whole from its operator, or none does (a process that adds its
+  // cells' entries to rows another one wrote whole would count them twice); no pattern alone.
   std::shared_ptr<const MatrixFreePoisson> op, pattern_from;
   if (!matrix_free && options.matrix_from_operator) {
     std::shared_ptr<const MatrixFreePoisson> given;
