@@ -201,7 +201,8 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   // An operator that writes the matrix (then its load, lifting and errors are used too), or
   // one that gives only its pattern, for the element loop to fill. Distributed, each process
   // writes its owned rows whole from its operator, or none does (a process that adds its
-  // cells' entries to rows another one wrote whole would count them twice); no pattern alone.
+  // cells' entries to rows another one wrote whole would count them twice), or gives the
+  // pattern of its owned rows.
   std::shared_ptr<const MatrixFreePoisson> op, pattern_from;
   if (!matrix_free && options.matrix_from_operator) {
     std::shared_ptr<const MatrixFreePoisson> given;
@@ -215,6 +216,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       double some_cannot = writes ? 0 : 1;
       max_over_ranks(&some_cannot, 1);
       if (some_cannot == 0) op = std::move(given);
+      else if (given && given->gives_pattern()) pattern_from = std::move(given);
     } else if (writes) {
       op = std::move(given);
     } else if (given && given->gives_pattern()) {
@@ -225,7 +227,6 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   Eigen::SparseMatrix<double> K = distributed || matrix_free || matrix_by_operator ? Eigen::SparseMatrix<double>()
                                   : pattern_from                                  ? pattern_from->lower_pattern(layout)
                                                                                   : lower_pattern_matrix(mesh, layout);
-  pattern_from.reset();
   RankRows rows;
   const int first_row = part.first_owned_function - fixed_below(part.first_owned_function);
   const int last_row = part.last_owned_function - fixed_below(part.last_owned_function);
@@ -235,16 +236,22 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       const int g = part.global(layout.function_of_dof[d]);
       row_of_dof[d] = g - fixed_below(g);
     }
-    // Rows the operator writes whole need no halo, and their pattern comes from it.
+    // Rows the operator writes whole need no halo, and their pattern comes from it; where the
+    // element loop fills them, the owned rows' pattern may still come from the operator.
+    const MatrixFreePoisson* couplings_from = op ? op.get() : pattern_from.get();
+    const CoupledFunctions coupled = [couplings_from](int f, std::vector<int>& out) {
+      couplings_from->coupled_functions(f, out);
+    };
     step([&] {
-      rows = op ? owned_rows_pattern(layout, std::move(row_of_dof), first_row, last_row,
-                                     [&op](int f, std::vector<int>& out) { op->coupled_functions(f, out); })
-                : rank_rows_pattern(mesh, layout, std::move(row_of_dof), first_row, last_row, mine);
+      rows = op ? owned_rows_pattern(layout, std::move(row_of_dof), first_row, last_row, coupled)
+                : rank_rows_pattern(mesh, layout, std::move(row_of_dof), first_row, last_row, mine,
+                                    pattern_from ? &coupled : nullptr);
     });
     sol.matrix_nonzeros = rows.owned.diagonal_nonzeros() + rows.owned.off_nonzeros();
   } else {
     sol.matrix_nonzeros = K.nonZeros();  // none stored without a matrix
   }
+  pattern_from.reset();
   sol.num_free = n;
   sol.timings.setup = seconds_since(t);
 

@@ -189,26 +189,32 @@ void find_owned(RankRows& r, int first_row, int last_row) {
     throw std::logic_error("rank rows: this rank's mesh does not hold all of its rows");
 }
 
+// Owned row d's columns from its function's couplings (coupled: ascending functions, itself
+// included): ascending functions are ascending dofs and rows, the owned ones for the diagonal
+// block (numbered from `first`), the others for the off-diagonal one (as global rows).
+void owned_row_from_couplings(const DofLayout& layout, const RankRows& r, int d, const CoupledFunctions& coupled,
+                              std::vector<int>& functions, std::vector<int>& diagonal, std::vector<int>& off) {
+  functions.clear();
+  coupled(layout.function_of_dof[d], functions);
+  for (int f : functions) {
+    const int c = layout.dof[f];
+    if (c < 0) continue;
+    if (c >= r.first && c < r.last) diagonal.push_back(c - r.first);
+    else off.push_back(r.global_row[c]);
+  }
+}
+
 }  // namespace
 
 RankRows owned_rows_pattern(const DofLayout& layout, std::vector<int> global_row, int first_row, int last_row,
-                            const std::function<void(int, std::vector<int>&)>& coupled) {
+                            const CoupledFunctions& coupled) {
   RankRows r;
   r.global_row = std::move(global_row);
   find_owned(r, first_row, last_row);
   std::array<Compressed, 2> p =
       compress_rows<2>(r.last - r.first, [&](int k, std::array<std::vector<int>*, 2>& out, std::vector<int>&) {
         thread_local std::vector<int> functions;
-        functions.clear();
-        coupled(layout.function_of_dof[r.first + k], functions);
-        // Ascending functions are ascending dofs and rows: the owned ones go to the diagonal
-        // block (numbered from `first`), the others to the off-diagonal one as global rows.
-        for (int f : functions) {
-          const int d = layout.dof[f];
-          if (d < 0) continue;
-          if (d >= r.first && d < r.last) out[0]->push_back(d - r.first);
-          else out[1]->push_back(r.global_row[d]);
-        }
+        owned_row_from_couplings(layout, r, r.first + k, coupled, functions, *out[0], *out[1]);
       });
   OwnedRows& o = r.owned;
   o.diagonal_start = std::move(p[0].start);
@@ -221,7 +227,7 @@ RankRows owned_rows_pattern(const DofLayout& layout, std::vector<int> global_row
 }
 
 RankRows rank_rows_pattern(const BezierMesh& mesh, const DofLayout& layout, std::vector<int> global_row, int first_row,
-                           int last_row, CellRange own_cells) {
+                           int last_row, CellRange own_cells, const CoupledFunctions* coupled) {
   const FunctionCells fc = function_cells(mesh);
   const int n = layout.num_free();
   RankRows r;
@@ -236,6 +242,11 @@ RankRows rank_rows_pattern(const BezierMesh& mesh, const DofLayout& layout, std:
       compress_rows<3>(n, [&](int d, std::array<std::vector<int>*, 3>& out, std::vector<int>& seen) {
         if (!is_owned(d)) {
           coupled_dofs(mesh, layout, fc, d, 0, first_cell, last_cell, *out[2], seen);
+          return;
+        }
+        if (coupled) {
+          thread_local std::vector<int> functions;
+          owned_row_from_couplings(layout, r, d, *coupled, functions, *out[0], *out[1]);
           return;
         }
         std::vector<int>& off = *out[1];

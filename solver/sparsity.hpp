@@ -58,17 +58,22 @@ struct RankRows {
   long halo_offset() const { return owned.diagonal_nonzeros() + owned.off_nonzeros(); }
 };
 
+// A function's couplings as coupled(function, out) appends them (the functions that share a
+// cell with it, itself included, ascending): an operator's (MatrixFreePoisson::
+// coupled_functions), O(1) per entry where the mesh's pattern walks every function's cells.
+using CoupledFunctions = std::function<void(int, std::vector<int>&)>;
+
 // The pattern (zero values) of what this rank adds. global_row: each free dof's global row,
 // increasing, the owned rows [first_row, last_row) being a contiguous run of the free dofs;
-// own_cells: the cells this rank integrates. Threaded, in two passes (count, fill).
+// own_cells: the cells this rank integrates; coupled (optional): the owned rows' couplings,
+// instead of the walk over the mesh's cells (the halo rows still walk this rank's cells).
+// Threaded, in one pass (compress_rows).
 RankRows rank_rows_pattern(const BezierMesh& mesh, const DofLayout& layout, std::vector<int> global_row, int first_row,
-                           int last_row, CellRange own_cells);
+                           int last_row, CellRange own_cells, const CoupledFunctions* coupled = nullptr);
 
 // The owned rows alone, no halo (a rank that writes its rows whole: nothing goes to other
-// ranks), from each owned function's couplings as coupled(function, out) appends them
-// (ascending, the function itself included): an operator's (MatrixFreePoisson::
-// coupled_functions), O(1) per entry where the mesh's pattern walks every function's cells.
+// ranks), from the owned functions' couplings.
 RankRows owned_rows_pattern(const DofLayout& layout, std::vector<int> global_row, int first_row, int last_row,
-                            const std::function<void(int, std::vector<int>&)>& coupled);
+                            const CoupledFunctions& coupled);
 
 }  // namespace knotwork
