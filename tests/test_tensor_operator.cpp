@@ -440,6 +440,38 @@ TEST_CASE("The matrix from the Kronecker form is the element loop's", "[tensor_o
     }
 }
 
+namespace {
+
+// A part's free dofs with every `period`-th global function fixed (from `offset`), each free
+// dof's global row numbered past the fixed functions below it, and the owned rows' range.
+struct PartRows {
+  DofLayout layout;
+  std::vector<int> global_row;
+  int first_row = 0, last_row = 0;
+};
+
+PartRows part_rows(const MeshPart& share, int num_functions, int period, int offset) {
+  std::vector<bool> fixed(num_functions);
+  for (int f = 0; f < num_functions; ++f) fixed[f] = share.global(f) % period == offset;
+  PartRows r;
+  r.layout = make_dof_layout(num_functions, fixed);
+  const auto row_of = [&](int g) { return g - (g + period - 1 - offset) / period; };  // fixed ones below g
+  for (int d = 0; d < r.layout.num_free(); ++d) r.global_row.push_back(row_of(share.global(r.layout.function_of_dof[d])));
+  r.first_row = row_of(share.first_owned_function), r.last_row = row_of(share.last_owned_function);
+  return r;
+}
+
+void require_same_owned_rows(const RankRows& a, const RankRows& b) {
+  REQUIRE(a.first == b.first);
+  REQUIRE(a.last == b.last);
+  REQUIRE(a.owned.diagonal_start == b.owned.diagonal_start);
+  REQUIRE(a.owned.diagonal_cols == b.owned.diagonal_cols);
+  REQUIRE(a.owned.off_start == b.owned.off_start);
+  REQUIRE(a.owned.off_cols == b.owned.off_cols);
+}
+
+}  // namespace
+
 // Under mpirun each process writes its owned rows of the matrix, whole, from the operator of
 // its part of the patch (SpaceFamily::build_part), and their load (solver/poisson_solver.cpp):
 // here every row of every part on 2 and 3 processes against the whole patch's element loop.
@@ -496,23 +528,11 @@ TEST_CASE("A part's operator writes its owned rows of the whole matrix", "[tenso
       REQUIRE(owned == share.last_owned_function - share.first_owned_function);
       // The owned rows' pattern from the operator's couplings is the one the mesh's cells give,
       // with every seventh global function fixed (rows numbered past the fixed ones).
-      const int nf = part->mesh().num_functions();
-      std::vector<bool> fixed(nf);
-      for (int f = 0; f < nf; ++f) fixed[f] = share.global(f) % 7 == 3;
-      const DofLayout layout = make_dof_layout(nf, fixed);
-      const auto row_of = [](int g) { return g - (g + 3) / 7; };  // the fixed functions 3, 10, ... below g
-      std::vector<int> global_row(layout.num_free());
-      for (int d = 0; d < layout.num_free(); ++d) global_row[d] = row_of(share.global(layout.function_of_dof[d]));
-      const int first_row = row_of(share.first_owned_function), last_row = row_of(share.last_owned_function);
-      const RankRows from_mesh = rank_rows_pattern(part->mesh(), layout, global_row, first_row, last_row, share.owned);
-      const RankRows from_operator = owned_rows_pattern(layout, global_row, first_row, last_row,
+      const PartRows p = part_rows(share, part->mesh().num_functions(), 7, 3);
+      const RankRows from_mesh = rank_rows_pattern(part->mesh(), p.layout, p.global_row, p.first_row, p.last_row, share.owned);
+      const RankRows from_operator = owned_rows_pattern(p.layout, p.global_row, p.first_row, p.last_row,
                                                         [&op](int f, std::vector<int>& out) { op->coupled_functions(f, out); });
-      REQUIRE(from_operator.first == from_mesh.first);
-      REQUIRE(from_operator.last == from_mesh.last);
-      REQUIRE(from_operator.owned.diagonal_start == from_mesh.owned.diagonal_start);
-      REQUIRE(from_operator.owned.diagonal_cols == from_mesh.owned.diagonal_cols);
-      REQUIRE(from_operator.owned.off_start == from_mesh.owned.off_start);
-      REQUIRE(from_operator.owned.off_cols == from_mesh.owned.off_cols);
+      require_same_owned_rows(from_operator, from_mesh);
       REQUIRE(from_operator.halo_start.back() == 0);  // nothing to send
     }
 }
@@ -568,23 +588,12 @@ TEST_CASE("A part's operator gives its owned rows' pattern on a curved patch", "
       REQUIRE(op);
       REQUIRE_FALSE(op->assembles_lower());
       REQUIRE(op->gives_pattern());
-      const int nf = part->mesh().num_functions();
-      std::vector<bool> fixed(nf);
-      for (int f = 0; f < nf; ++f) fixed[f] = share.global(f) % 5 == 1;
-      const DofLayout layout = make_dof_layout(nf, fixed);
-      const auto row_of = [](int g) { return g - (g + 3) / 5; };  // the fixed functions 1, 6, ... below g
-      std::vector<int> global_row(layout.num_free());
-      for (int d = 0; d < layout.num_free(); ++d) global_row[d] = row_of(share.global(layout.function_of_dof[d]));
-      const int first_row = row_of(share.first_owned_function), last_row = row_of(share.last_owned_function);
+      const PartRows p = part_rows(share, part->mesh().num_functions(), 5, 1);
       const CoupledFunctions coupled = [&op](int f, std::vector<int>& out) { op->coupled_functions(f, out); };
-      const RankRows walked = rank_rows_pattern(part->mesh(), layout, global_row, first_row, last_row, share.owned);
-      const RankRows given = rank_rows_pattern(part->mesh(), layout, global_row, first_row, last_row, share.owned, &coupled);
-      REQUIRE(given.first == walked.first);
-      REQUIRE(given.last == walked.last);
-      REQUIRE(given.owned.diagonal_start == walked.owned.diagonal_start);
-      REQUIRE(given.owned.diagonal_cols == walked.owned.diagonal_cols);
-      REQUIRE(given.owned.off_start == walked.owned.off_start);
-      REQUIRE(given.owned.off_cols == walked.owned.off_cols);
+      const RankRows walked = rank_rows_pattern(part->mesh(), p.layout, p.global_row, p.first_row, p.last_row, share.owned);
+      const RankRows given =
+          rank_rows_pattern(part->mesh(), p.layout, p.global_row, p.first_row, p.last_row, share.owned, &coupled);
+      require_same_owned_rows(given, walked);
       REQUIRE(given.halo_start == walked.halo_start);
       REQUIRE(given.halo_cols == walked.halo_cols);
       REQUIRE(given.owned.values.size() == walked.owned.values.size());
