@@ -14,6 +14,17 @@
 
 namespace knotwork {
 
+namespace {
+
+// What a PCShell was built from, for the solver line.
+std::string shell_origin(const std::string& built_from) {
+  if (built_from == "operator") return " (PCShell, no matrix)";
+  if (built_from == "whole_matrix") return " (PCShell, from the whole matrix on each process)";
+  return " (PCShell)";
+}
+
+}  // namespace
+
 int run_command(const RunOptions& o) {
   CaseDescription c = load_case(o.case_file);
   override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr,
@@ -54,7 +65,7 @@ int run_command(const RunOptions& o) {
   if (solver.method == "petsc")
     std::printf("  solver   PETSc %s + %s%s%s on %d process%s: %d iteration%s, relative residual %.2e (tolerance %.0e)\n",
                 s.distributed.ksp.c_str(),
-                (s.distributed.pc == "shell" ? solver.preconditioner + " (PCShell)" : s.distributed.pc).c_str(), s.distributed.package.empty() ? "" : " ",
+                (s.distributed.pc == "shell" ? solver.preconditioner + shell_origin(solver.shell_built_from) : s.distributed.pc).c_str(), s.distributed.package.empty() ? "" : " ",
                 s.distributed.package.c_str(), s.distributed.ranks, s.distributed.ranks == 1 ? "" : "es",
                 s.iterative.iterations, s.iterative.iterations == 1 ? "" : "s", s.iterative.relative_residual,
                 c.solver.petsc_tolerance());

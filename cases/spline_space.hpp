@@ -109,8 +109,10 @@ class SplineSpace {
   // Whether [solver] = "auto" may choose the first (CG with it from 10 000 functions on); false
   // where measurements found algebraic multigrid or CHOLMOD better (docs/SOLVERS.md).
   virtual bool structured_preconditioner_is_automatic() const { return true; }
-  // Whether the named one also serves method = "petsc" as a PCShell, built from the matrix's
-  // diagonal alone (the fast diagonalization does; a multigrid that needs the whole matrix does not).
+  // Whether the named one is built from the matrix's diagonal alone (the fast diagonalization
+  // is; a multigrid that reads the whole matrix is not). Under method = "petsc" every structured
+  // one is a PCShell that each process applies to the whole residual: those built from the
+  // diagonal as they are, the others as they are built without a matrix (below).
   virtual bool structured_preconditioner_needs_only_diagonal(const std::string& /*name*/) const { return true; }
   virtual std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& /*name*/,
                                                                          const DofLayout& /*layout*/,
@@ -121,6 +123,9 @@ class SplineSpace {
   // Whether the named one also serves CG without a matrix ([solver] matrix): those built from
   // the diagonal alone do, through make_structured_preconditioner; the others through
   // make_structured_preconditioner_without_matrix, from the operator matrix_free_operator gave.
+  // On a part (method = "petsc"), `op` is the part's operator and the preconditioner acts on
+  // the whole space's free dofs (`layout`, `free_diagonal`): the family builds what it needs of
+  // the whole space from its own data, with op's coefficients and rules.
   virtual bool structured_preconditioner_without_matrix(const std::string& name) const {
     return structured_preconditioner_needs_only_diagonal(name);
   }

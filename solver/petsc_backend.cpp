@@ -124,24 +124,28 @@ void solve_with_petsc(RankRows&& rows, const Eigen::VectorXd& load, const DofLay
   sol.timings.assembly += seconds_since(t);
 
   // knotwork's own preconditioner as a PCShell: built on every rank from what it needs of
-  // the matrix, the diagonal.
+  // the matrix, the diagonal or the whole matrix.
   std::unique_ptr<Preconditioner> shell;
   DistributedSolveOptions solve_options = petsc;
   if (petsc.preconditioner == "shell") {
     say("preconditioner");
     t = clock::now();
-    Eigen::VectorXd diagonal;
-    on_all_ranks([&] { diagonal = system->diagonal(); });
-    Eigen::SparseMatrix<double> diagonal_matrix(n, n);
-    std::vector<Eigen::Triplet<double>> d;
-    for (int i = 0; i < n; ++i) d.emplace_back(i, i, diagonal[i]);
-    diagonal_matrix.setFromTriplets(d.begin(), d.end());
+    Eigen::SparseMatrix<double> matrix(n, n);
+    if (petsc.shell_reads_matrix) {
+      on_all_ranks([&] { matrix = system->whole_lower(); });
+    } else {
+      Eigen::VectorXd diagonal;
+      on_all_ranks([&] { diagonal = system->diagonal(); });
+      std::vector<Eigen::Triplet<double>> d;
+      for (int i = 0; i < n; ++i) d.emplace_back(i, i, diagonal[i]);
+      matrix.setFromTriplets(d.begin(), d.end());
+    }
     // It acts on every free dof of the global space (its numbering is the rows').
     std::vector<bool> fixed_globally(part.global_functions, false);
     for (int g : fixed_functions) fixed_globally[g] = true;
     const DofLayout global_layout = make_dof_layout(part.global_functions, fixed_globally);
     on_all_ranks([&] {
-      if (options.preconditioner) shell = options.preconditioner(global_layout, diagonal_matrix);
+      if (options.preconditioner) shell = options.preconditioner(global_layout, matrix);
       if (!shell) throw std::invalid_argument("[solver] preconditioner: the space's own preconditioner does not "
                                               "apply to this problem's unknowns");
     });

@@ -5,6 +5,7 @@
 // here names a PETSc type: only the module links PETSc and MPI, and only runs that ask for
 // them load their ~85 libraries.
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <memory>
 #include <optional>
 #include <string>
@@ -57,6 +58,9 @@ struct DistributedSolveOptions {
   // keeps its rows): a PCShell.
   std::string preconditioner = "boomeramg";
   const Preconditioner* shell = nullptr;
+  // Whether the shell is built from the whole matrix, gathered on every rank (whole_lower),
+  // rather than from its diagonal alone.
+  bool shell_reads_matrix = false;
   // The solution's entries this rank wants back (global rows, any order); null: all of them.
   const std::vector<int>* wanted_rows = nullptr;
 };
@@ -90,6 +94,10 @@ class DistributedSystem {
   virtual void finish_assembly() = 0;
   // Collective: the matrix's diagonal, every free dof, on every rank.
   virtual Eigen::VectorXd diagonal() = 0;
+  // Collective: the whole matrix's lower triangle (its upper rows read as columns) on every
+  // rank, for a preconditioner that every rank applies to the whole residual: as much memory
+  // per rank as the serial matrix.
+  virtual Eigen::SparseMatrix<double> whole_lower() = 0;
   // Collective: solves, and gathers the solution's wanted rows on each rank.
   virtual DistributedSolveResult solve(const DistributedSolveOptions& options) = 0;
   // Seconds this rank spent in set_owned_rows, add_to_row and finish_assembly (PETSc's share of assembly).

@@ -222,6 +222,40 @@ class PetscSystem final : public DistributedSystem {
     check(code, "diagonal");
     return result;
   }
+  Eigen::SparseMatrix<double> whole_lower() override {
+    IS all = nullptr;
+    Mat* copies = nullptr;
+    check(ISCreateStride(PETSC_COMM_SELF, num_free_, 0, 1, &all), "whole matrix");
+    PetscErrorCode code = MatCreateSubMatrices(A_, 1, &all, &all, MAT_INITIAL_MATRIX, &copies);
+    ISDestroy(&all);
+    check(code, "whole matrix");
+    // Row i's entries from its diagonal on are column i of the lower triangle (symmetric).
+    Eigen::SparseMatrix<double> lower(num_free_, num_free_);
+    std::vector<int> starts(num_free_ + 1, 0), rows;
+    std::vector<double> values;
+    MatInfo info;
+    if (!code && !(code = MatGetInfo(copies[0], MAT_LOCAL, &info))) {
+      rows.reserve(static_cast<size_t>((info.nz_used + num_free_) / 2));
+      values.reserve(rows.capacity());
+    }
+    for (PetscInt i = 0; i < num_free_ && !code; ++i) {
+      PetscInt n = 0;
+      const PetscInt* cols = nullptr;
+      const PetscScalar* v = nullptr;
+      if ((code = MatGetRow(copies[0], i, &n, &cols, &v))) break;
+      for (PetscInt k = 0; k < n; ++k)
+        if (cols[k] >= i) rows.push_back(cols[k]), values.push_back(v[k]);
+      starts[i + 1] = static_cast<int>(rows.size());
+      code = MatRestoreRow(copies[0], i, &n, &cols, &v);
+    }
+    MatDestroySubMatrices(1, &copies);
+    check(code, "whole matrix rows");
+    lower.resizeNonZeros(static_cast<Eigen::Index>(rows.size()));
+    std::copy(starts.begin(), starts.end(), lower.outerIndexPtr());
+    std::copy(rows.begin(), rows.end(), lower.innerIndexPtr());
+    std::copy(values.begin(), values.end(), lower.valuePtr());
+    return lower;
+  }
   double assembly_seconds() const override { return assembly_seconds_; }
   DistributedSolveResult solve(const DistributedSolveOptions& asked) override;
 

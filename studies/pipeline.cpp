@@ -82,7 +82,8 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
   } else if (asked == "jacobi" || asked == kBoomerAmgName) {
     r.preconditioner = asked;  // algebraic: they apply to every family
   } else if (std::find(structured.begin(), structured.end(), asked) != structured.end()) {
-    if (r.method == "petsc" && !space.structured_preconditioner_needs_only_diagonal(asked))
+    if (r.method == "petsc" && !space.structured_preconditioner_needs_only_diagonal(asked) &&
+        !space.structured_preconditioner_without_matrix(asked))
       throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" runs in knotwork's own CG only (method = "
                        "\"iterative\"); with method = \"petsc\" use \"boomeramg\" (docs/SOLVERS.md)");
     r.preconditioner = asked;
@@ -119,6 +120,17 @@ void check_quadrature_points(const CaseDescription& c, const BezierMesh& mesh) {
         "|grad u_h|^2 of a degree-" + std::to_string(std::max(pu, pv)) + " solution exactly on straight cells");
 }
 
+// Why the space's operator (SplineSpace::matrix_free_operator, K of the constant-coefficient
+// planar form) cannot stand for this case's K ("" when it can, and then `op` is it).
+std::string operator_obstacle(const CaseDescription& c, const SplineSpace& space, std::shared_ptr<const MatrixFreePoisson>& op) {
+  if (space.geometry().dimension() != 2) return "serves planar problems only (not surfaces)";
+  if (!c.problem.coefficients.constant()) return "serves constant coefficients only (this case's [problem] coefficient or reaction varies)";
+  if (c.problem.dirichlet_method == DirichletMethod::kNitsche) return "does not add Nitsche's boundary terms";
+  op = space.matrix_free_operator(1.0, c.problem.reaction, c.quadrature);
+  if (!op) return "is not available for this space (family \"" + c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ")";
+  return "";
+}
+
 // Why K cannot be applied without a matrix for this case and solver ("" when it can, and then
 // `op` is the operator).
 std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& space, const SolverReport& chosen,
@@ -127,13 +139,9 @@ std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& sp
   if (chosen.preconditioner == kBoomerAmgName ||
       (chosen.preconditioner != "jacobi" && !space.structured_preconditioner_without_matrix(chosen.preconditioner)))
     return "needs a preconditioner that does without the matrix (not \"" + chosen.preconditioner + "\")";
-  if (space.geometry().dimension() != 2 || c.problem.source.empty()) return "serves planar problems with a given source";
-  if (!c.problem.coefficients.constant()) return "serves constant coefficients only (this case's [problem] coefficient or reaction varies)";
-  if (c.problem.dirichlet_method == DirichletMethod::kNitsche) return "does not add Nitsche's boundary terms";
+  if (space.geometry().dimension() == 2 && c.problem.source.empty()) return "serves problems with a given source";
   if (c.solver.estimate_condition) return "has no matrix for --condition to estimate";
-  op = space.matrix_free_operator(1.0, c.problem.reaction, c.quadrature);
-  if (!op) return "is not available for this space (family \"" + c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ")";
-  return "";
+  return operator_obstacle(c, space, op);
 }
 
 }  // namespace
@@ -179,17 +187,20 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
       const std::string path = c.path;
       const PoissonProblem* problem = &c.problem;
       // (The name is read when the preconditioner is built: "auto" may still change it below.)
-      so.preconditioner = [&space, &chosen, path, problem, without_matrix](const DofLayout& layout,
-                                                                           const Eigen::SparseMatrix<double>& lower) {
+      const bool distributed = chosen.method == "petsc";
+      so.preconditioner = [&space, &chosen, path, problem, without_matrix, distributed](
+                              const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
         const std::string& name = chosen.preconditioner;
         std::unique_ptr<Preconditioner> p;
         if (*without_matrix && !space.structured_preconditioner_needs_only_diagonal(name)) {
-          // Without a matrix, `lower` holds K's diagonal alone.
+          // Without a matrix (and under PETSc), `lower` holds K's diagonal alone.
           p = space.make_structured_preconditioner_without_matrix(name, layout, *without_matrix, lower.diagonal());
           if (!p)
             throw InputError(path + ": [solver] preconditioner: \"" + name + "\" without a matrix needs the unknowns to be a "
                              "tensor product and the geometry to live on the elements of the first coarser level (every "
-                             "other breakpoint dropped); use [solver] matrix = \"assembled\" (--matrix assembled)");
+                             "other breakpoint dropped); " +
+                             (distributed ? "with method = \"petsc\" use \"boomeramg\", or method = \"iterative\" with matrix = \"assembled\""
+                                          : "use [solver] matrix = \"assembled\" (--matrix assembled)"));
           return p;
         }
         p = space.make_structured_preconditioner(name, layout, lower, *problem);
@@ -237,6 +248,29 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     throw InputError(c.path + ": [solver] matrix: \"matrix_free\" needs CG (method = \"iterative\", or \"auto\" from "
                      "10 000 functions); this solve is " + chosen.method);
   }
+  // Under PETSc a structured preconditioner that reads more than K's diagonal is a PCShell
+  // that every process applies to the whole residual. As serial CG's "auto" decides: where
+  // every element is affine, it is made without a matrix from the space's operator (the part's,
+  // from which the space makes the whole one); elsewhere from the whole matrix, gathered on
+  // every process (docs/SOLVERS.md, "Under PETSc"). Decided together: a process whose rows are
+  // affine may share the patch with one whose rows are not.
+  bool shell_reads_matrix = false;
+  if (chosen.method == "petsc" && chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi" &&
+      !space.structured_preconditioner_needs_only_diagonal(chosen.preconditioner)) {
+    std::shared_ptr<const MatrixFreePoisson> op;
+    std::string obstacle;
+    try {
+      obstacle = operator_obstacle(c, space, op);
+    } catch (const std::invalid_argument& e) {
+      obstacle = e.what();
+    }
+    double curved = !(obstacle.empty() && op->all_elements_affine());
+    max_over_ranks(&curved, 1);
+    if (curved != 0) shell_reads_matrix = true;
+    else *without_matrix = op;
+  }
+  if (report && chosen.method == "petsc" && chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi")
+    report->shell_built_from = shell_reads_matrix ? "whole_matrix" : *without_matrix ? "operator" : "diagonal";
   // Where a matrix is assembled, the space's operator writes it itself when it can (a tensor
   // patch with one affine map: its Kronecker form; under PETSc each process its own rows), the
   // same matrix as the element loop's, up to rounding, in a fraction of the time
@@ -250,6 +284,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
       petsc.preconditioner = chosen.preconditioner == kBoomerAmgName || chosen.preconditioner == "jacobi"
                                  ? chosen.preconditioner
                                  : "shell";
+      petsc.shell_reads_matrix = shell_reads_matrix;
       petsc.tolerance = c.solver.petsc_tolerance();
       petsc.max_iterations = c.solver.max_iterations;
       const Distribution distribution{space.part(), &petsc};

@@ -30,6 +30,9 @@ CellRange cells_to_write(const SplineSpace& space, ParallelWorld world);
 struct SolverReport {
   std::string method, preconditioner, note;
   bool matrix_free = false;  // CG applied K without a matrix ([solver] matrix)
+  // Under PETSc, what knotwork's PCShell was built from: "diagonal" (K's diagonal),
+  // "operator" (the space's operator, no matrix) or "whole_matrix" (gathered on every process).
+  std::string shell_built_from;
 };
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
                            const ProgressFunction& progress = {}, SolverReport* report = nullptr);

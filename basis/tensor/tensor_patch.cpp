@@ -110,6 +110,34 @@ std::array<BSplineBasis1D, 2> tensor_space_bases(const NurbsPatch& patch, const 
   return {plan[0].space, plan[1].space};
 }
 
+Eigen::MatrixX3d refined_homogeneous_net(const NurbsPatch& patch, const BSplineBasis1D& geometry_u,
+                                         const BSplineBasis1D& geometry_v, int first_row, int rows) {
+  const Eigen::SparseMatrix<double> Tu = refinement_matrix(patch.basis_u, geometry_u);
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> Tv_all = refinement_matrix(patch.basis_v, geometry_v);
+  if (rows < 0) rows = geometry_v.num_functions() - first_row;
+  if (first_row < 0 || first_row + rows > geometry_v.num_functions())
+    throw std::logic_error("refined_homogeneous_net: net rows outside the geometry's");
+  const int nu = patch.basis_u.num_functions(), nv = patch.basis_v.num_functions();
+  const int gu = geometry_u.num_functions();
+  const Eigen::SparseMatrix<double> Tv = Tv_all.middleRows(first_row, rows);
+  Eigen::MatrixX3d net(static_cast<Eigen::Index>(gu) * rows, 3);
+  // Equal weights (a polynomial map) stay equal: T w = w_0 T 1 = w_0 by the partition of unity.
+  // Computed, they would carry the refinement's rounding, which grows with the knots inserted
+  // (67 eps at degree 4 and 1000 elements), and the map would pass for a rational one.
+  const bool equal_weights = (patch.weights.array() == patch.weights[0]).all();
+  if (equal_weights) net.col(2).setConstant(patch.weights[0]);
+  for (int k = 0; k < (equal_weights ? 2 : 3); ++k) {
+    Eigen::VectorXd h(static_cast<Eigen::Index>(nu) * nv);
+    for (Eigen::Index i = 0; i < h.size(); ++i)
+      h[i] = k < 2 ? patch.weights[i] * patch.control_points(i, k) : patch.weights[i];
+    const Eigen::MatrixXd H = Eigen::Map<const Eigen::MatrixXd>(h.data(), nu, nv);
+    const Eigen::MatrixXd Hv = (Tv * H.transpose()).transpose();  // refined along v: nu x rows
+    // Written in place (no gu x rows temporary: 134 MB per column at 4096^2).
+    Eigen::Map<Eigen::MatrixXd>(net.col(k).data(), gu, rows).noalias() = Tu * Hv;
+  }
+  return net;
+}
+
 TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& o,
                                                  RowShare share) {
   TensorDiscretization d;
@@ -158,31 +186,12 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
   }
   d.first_row = row_from;
 
-  // Refine the homogeneous control net (w x, w y, w) onto the geometry bases; a part keeps
-  // the net rows its element rows use.
-  const Eigen::SparseMatrix<double> Tu = refinement_matrix(patch.basis_u, d.geometry_u);
-  const Eigen::SparseMatrix<double, Eigen::RowMajor> Tv_all = refinement_matrix(patch.basis_v, d.geometry_v);
-  const int nu = patch.basis_u.num_functions(), nv = patch.basis_v.num_functions();
-  const int gu = d.geometry_u.num_functions(), pg = d.geometry_v.degree();
+  // The homogeneous control net on the geometry bases; a part keeps the net rows its element
+  // rows use.
   const auto geometry_spans_v = d.geometry_v.element_spans();
-  d.net_first_row = geometry_spans_v[row_from] - pg;
+  d.net_first_row = geometry_spans_v[row_from] - d.geometry_v.degree();
   const int net_rows = geometry_spans_v[row_to - 1] + 1 - d.net_first_row;
-  const Eigen::SparseMatrix<double> Tv = Tv_all.middleRows(d.net_first_row, net_rows);
-  d.geometry_homogeneous.resize(static_cast<Eigen::Index>(gu) * net_rows, 3);
-  // Equal weights (a polynomial map) stay equal: T w = w_0 T 1 = w_0 by the partition of unity.
-  // Computed, they would carry the refinement's rounding, which grows with the knots inserted
-  // (67 eps at degree 4 and 1000 elements), and the map would pass for a rational one.
-  const bool equal_weights = (patch.weights.array() == patch.weights[0]).all();
-  if (equal_weights) d.geometry_homogeneous.col(2).setConstant(patch.weights[0]);
-  for (int k = 0; k < (equal_weights ? 2 : 3); ++k) {
-    Eigen::VectorXd h(static_cast<Eigen::Index>(nu) * nv);
-    for (Eigen::Index i = 0; i < h.size(); ++i)
-      h[i] = k < 2 ? patch.weights[i] * patch.control_points(i, k) : patch.weights[i];
-    const Eigen::MatrixXd H = Eigen::Map<const Eigen::MatrixXd>(h.data(), nu, nv);
-    const Eigen::MatrixXd Hv = (Tv * H.transpose()).transpose();  // refined along v: nu x net_rows
-    // Written in place (no gu x net_rows temporary: 134 MB per column at 4096^2).
-    Eigen::Map<Eigen::MatrixXd>(d.geometry_homogeneous.col(k).data(), gu, net_rows).noalias() = Tu * Hv;
-  }
+  d.geometry_homogeneous = refined_homogeneous_net(patch, d.geometry_u, d.geometry_v, d.net_first_row, net_rows);
 
   BezierMesh& mesh = d.mesh;
   const int offset = su * function_row_from;

@@ -57,6 +57,13 @@ struct RowShare {
 TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& options,
                                                  RowShare share = {});
 
+// The patch's homogeneous control net (w x, w y, w) refined onto geometry_u x geometry_v (bases
+// whose knots contain the patch's), net rows first_row .. first_row + rows - 1 along v (rows < 0:
+// to the last), numbered i + n_u j from first_row. A part's net is some rows of it; a process
+// that needs the whole patch's (a preconditioner applied whole on every process) asks for all.
+Eigen::MatrixX3d refined_homogeneous_net(const NurbsPatch& patch, const BSplineBasis1D& geometry_u,
+                                         const BSplineBasis1D& geometry_v, int first_row = 0, int rows = -1);
+
 // The analysis space's univariate bases alone (what build_tensor_discretization refines the
 // patch into, without building any cell): cheap, for counting and numbering functions.
 std::array<BSplineBasis1D, 2> tensor_space_bases(const NurbsPatch& patch, const TensorSpaceOptions& options);

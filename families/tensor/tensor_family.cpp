@@ -62,7 +62,15 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
                  what);
     return;
   }
-  check_memory(c.path + ": [space] elements", galerkin_bytes(cells / ranks, functions / ranks, p, q), what);
+  // Under PETSc every process also holds the whole PCShell: multigrid's hierarchy (from the
+  // whole matrix where the map is curved: counted so, the larger) or the fast diagonalization.
+  double shell = 0;
+  if (ranks > 1 && !c.multipatch() && method == "petsc") {
+    const std::string& name = c.solver.preconditioner;
+    if (name == kMultigrid) shell = tensor_multigrid_bytes(functions, p, q, true);
+    else if (name == kFastDiagonalization || name == "auto") shell = fast_diagonalization_bytes(per_direction[0], per_direction[1]);
+  }
+  check_memory(c.path + ": [space] elements", galerkin_bytes(cells / ranks, functions / ranks, p, q) + shell, what);
 }
 
 std::string describe(const TensorSpaceOptions& s) {
@@ -114,6 +122,7 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
     // The operator is the one matrix_free_operator made.
     std::shared_ptr<const TensorPoissonOperator> tensor = std::dynamic_pointer_cast<const TensorPoissonOperator>(op);
     if (name != kMultigrid || !tensor) return nullptr;
+    if (d_.part) tensor = whole_patch_operator(*tensor);
     return tensor_multigrid(std::move(tensor), layout, free_diagonal, patch_separable_coefficients(d_, *geometry_));
   }
   std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double stiffness, double reaction,
@@ -136,6 +145,19 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
         TensorPatch{&d_.space_u, &rows_v, weights, &d_.geometry_u, &net_rows_v, &d_.geometry_homogeneous,
                     /*geometry_outlives_operator=*/true},
         stiffness, reaction, quadrature.points_u, quadrature.points_v);
+  }
+  // On a part, the operator of the whole patch with the part's stiffness, reaction and rules:
+  // the PCShell applies the preconditioner to the whole residual on every process. Its net is
+  // refined whole here, 24 bytes per function, and copied into the operator (the part's own
+  // net holds a few rows only).
+  std::shared_ptr<const TensorPoissonOperator> whole_patch_operator(const TensorPoissonOperator& part) const {
+    const Eigen::MatrixX3d net = refined_homogeneous_net(d_.patch, d_.geometry_u, d_.geometry_v);
+    // Geometry and space bases coincide for an isoparametric space: the weights are the net's.
+    const Eigen::VectorXd weights = d_.mesh.is_rational() ? Eigen::VectorXd(net.col(2)) : Eigen::VectorXd();
+    return std::make_shared<const TensorPoissonOperator>(
+        TensorPatch{&d_.space_u, &d_.space_v, &weights, &d_.geometry_u, &d_.geometry_v, &net,
+                    /*geometry_outlives_operator=*/false},
+        part.stiffness(), part.reaction(), part.points_u(), part.points_v());
   }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
