@@ -7,6 +7,7 @@
 #include <array>
 #include <vector>
 
+#include "basis/core/mesh_part.hpp"
 #include "solver/expression.hpp"
 
 namespace knotwork {
@@ -30,11 +31,13 @@ class MatrixFreePoisson {
   virtual bool all_elements_affine() const { return false; }
   // The squared L2 and H1-seminorm errors of u_h = sum_a c_a R_a against the exact solution
   // (planar), by Gauss rules of points_u x points_v per cell (0: degree + 2, as error_norms),
-  // and |u - u_h|^2_H1 per cell of the space's mesh in `h1_per_cell` when given. False when
-  // the operator does not compute them (then error_norms does).
+  // and |u - u_h|^2_H1 per cell of the space's mesh in `h1_per_cell` when given. Over the
+  // mesh's cells `cells` only (a process's own, in the mesh's cell order; 0 per cell outside),
+  // as error_norms' squared_errors. False when the operator does not compute them (then
+  // error_norms does).
   virtual bool squared_errors(const Eigen::VectorXd& /*coefficients*/, const ExactSolution& /*exact*/, int /*points_u*/,
-                              int /*points_v*/, std::array<double, 2>& /*squares*/,
-                              Eigen::VectorXd* /*h1_per_cell*/) const {
+                              int /*points_v*/, std::array<double, 2>& /*squares*/, Eigen::VectorXd* /*h1_per_cell*/,
+                              CellRange /*cells*/ = {}) const {
     return false;
   }
   // Whether lower_matrix() can write K without an element loop (a tensor patch whose map is

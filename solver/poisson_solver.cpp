@@ -251,7 +251,6 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   } else {
     sol.matrix_nonzeros = K.nonZeros();  // none stored without a matrix
   }
-  pattern_from.reset();
   sol.num_free = n;
   sol.timings.setup = seconds_since(t);
 
@@ -372,11 +371,16 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     }
     std::array<double, 2> squares{0, 0};
     // Without a matrix the operator's own sum-factorized pass where it has one (the same rule
-    // and integrand, about half the time: docs/SOLVERS.md); else cell by cell.
+    // and integrand, about half the time: docs/SOLVERS.md), over this process's own cells
+    // when distributed; else cell by cell.
     Eigen::VectorXd* per_cell = options.cell_errors ? &sol.cell_h1_squared : nullptr;
-    const bool by_operator = op && !distributed && !sol.zero_mean &&
-                             op->squared_errors(sol.coefficients, *problem.exact, options.quadrature.error_points_u,
-                                                options.quadrature.error_points_v, squares, per_cell);
+    bool by_operator = false;
+    const MatrixFreePoisson* error_operator = op ? op.get() : pattern_from.get();
+    if (error_operator && !sol.zero_mean)
+      step([&] {
+        by_operator = error_operator->squared_errors(sol.coefficients, *problem.exact, options.quadrature.error_points_u,
+                                         options.quadrature.error_points_v, squares, per_cell, mine);
+      });
     if (by_operator && per_cell && per_cell->size() != mesh.num_cells())
       throw std::logic_error("solve_poisson: the operator's errors are not one per cell of the mesh");
     if (!by_operator)

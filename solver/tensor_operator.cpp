@@ -876,7 +876,7 @@ Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
 
 bool TensorPoissonOperator::squared_errors(const Eigen::VectorXd& coefficients, const ExactSolution& exact, int points_u,
                                            int points_v, std::array<double, 2>& squares,
-                                           Eigen::VectorXd* h1_per_element) const {
+                                           Eigen::VectorXd* h1_per_element, CellRange cells) const {
   if (net_->rows() == 0) return false;  // (a coarse level's operator: no geometry to evaluate)
   if (coefficients.size() != num_functions())
     throw std::invalid_argument("TensorPoissonOperator::squared_errors: wrong vector size");
@@ -893,14 +893,18 @@ bool TensorPoissonOperator::squared_errors(const Eigen::VectorXd& coefficients, 
   // on the threads. Per element only what was asked for (16 bytes per element less at 4096^2).
   std::vector<double> l2_rows(V.elements, 0.0), h1_rows(V.elements, 0.0);
   double* h1 = nullptr;
+  const long all = long(U.elements) * V.elements;
+  const long first = cells.first, last = cells.last < 0 ? all : cells.last;
   if (h1_per_element) {
-    h1_per_element->resize(long(U.elements) * V.elements);
+    h1_per_element->setZero(all);
     h1 = h1_per_element->data();
   }
   dispatch(U, V, [&](auto n, auto q) {
   constexpr int N = decltype(n)::value, Q = decltype(q)::value;
   for_each_element<N, Q>([&](int eu, int ev, int fu, int fv, const double* bu, const double* du, const double* bv,
                              const double* dv, const Points& pts) {
+    const long element = eu + long(U.elements) * ev;
+    if (element < first || element >= last) return;
     std::optional<ExpressionBatch>& f = batches[omp_get_thread_num()];
     if (!f) f.emplace(compiled);
     f->evaluate(pts.x, pts.y, nullptr, qu * qv);

@@ -58,10 +58,11 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   Eigen::VectorXd load(const Expression& source) const override;
   int max_row_nonzeros() const override { return (2 * u_.degree + 1) * (2 * v_.degree + 1); }
   // By points_u x points_v Gauss points per element (0: degree + 2), the values and gradients
-  // of u_h one direction at a time; per element (eu + n_eu ev) in h1_per_element. False for an
-  // operator made without a geometry net.
+  // of u_h one direction at a time; per element (eu + n_eu ev) in h1_per_element, the cell
+  // numbering of the space's mesh (also a part's: its element rows from its first). False for
+  // an operator made without a geometry net.
   bool squared_errors(const Eigen::VectorXd& coefficients, const ExactSolution& exact, int points_u, int points_v,
-                      std::array<double, 2>& squares, Eigen::VectorXd* h1_per_element) const override;
+                      std::array<double, 2>& squares, Eigen::VectorXd* h1_per_element, CellRange cells = {}) const override;
   bool all_elements_affine() const override { return affine_elements() == long(u_.elements) * v_.elements; }
   // The matrix straight from the Kronecker form where the map is one affine map and the
   // functions are B-splines (solver/tensor_operator_matrix.cpp): per entry four products of

@@ -599,3 +599,47 @@ TEST_CASE("A part's operator gives its owned rows' pattern on a curved patch", "
       REQUIRE(given.owned.values.size() == walked.owned.values.size());
     }
 }
+
+// Under PETSc each process sums the errors of its own cells (the halo's belong to the process
+// below) from its part's operator where the matrix came from it: against the cell-by-cell
+// errors of the same cells, with the rounding bound of "Matrix-free error norms equal the
+// cell-by-cell ones" (coefficients of order one, n = 8 elements per side, area at most 3).
+TEST_CASE("A part's operator gives the errors of its own cells", "[tensor_operator][solver]") {
+  for (const char* file : {"/tests/mpi/tensor_affine_rows.toml", "/tests/mpi/tensor_mixed_conditions.toml"}) {
+    const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + file);
+    const SpaceFamily& family = space_family(c);
+    const ExactSolution& exact = *c.problem.exact;
+    for (const int ranks : {2, 3}) {
+      int with_halo = 0;  // (every process but the first has one to leave out)
+      for (int rank = 0; rank < ranks; ++rank) {
+        INFO(file << ", " << ranks << " processes, rank " << rank);
+        const std::unique_ptr<SplineSpace> part = family.build_part(c, 0, rank, ranks, {});
+        REQUIRE(part->part());
+        const CellRange owned = part->part()->owned;
+        with_halo += owned.last - owned.first < part->mesh().num_cells();
+        const std::unique_ptr<MatrixFreePoisson> op = part->matrix_free_operator(1.0, 0.0, c.quadrature);
+        REQUIRE(op);
+        const Eigen::VectorXd coefficients = Eigen::VectorXd::Random(op->num_functions());
+        std::array<double, 2> squares{};
+        Eigen::VectorXd per_cell, expected_cells;
+        REQUIRE(op->squared_errors(coefficients, exact, c.quadrature.error_points_u, c.quadrature.error_points_v, squares,
+                                   &per_cell, owned));
+        const std::array<double, 2> expected = squared_errors(part->mesh(), part->geometry(), coefficients, exact,
+                                                              c.quadrature, owned, &expected_cells);
+        const int p = std::max(part->degree()[0], part->degree()[1]);
+        const double value = 64 * 2.2e-16 * (p + 1) * (p + 1) * coefficients.lpNorm<Eigen::Infinity>();
+        const double l2_bound = value * std::sqrt(3.0), h1_bound = value * (1 + 2 * p * 8) * std::sqrt(3.0);
+        REQUIRE(std::abs(std::sqrt(squares[0]) - std::sqrt(expected[0])) <= l2_bound);
+        REQUIRE(std::abs(std::sqrt(squares[1]) - std::sqrt(expected[1])) <= h1_bound);
+        REQUIRE(per_cell.size() == part->mesh().num_cells());
+        for (Eigen::Index k = 0; k < per_cell.size(); ++k) {
+          const bool own = k >= owned.first && k < owned.last;
+          INFO("cell " << k << (own ? " (owned)" : " (halo)") << ": " << per_cell[k] << " against " << expected_cells[k]);
+          if (own) REQUIRE(std::abs(std::sqrt(per_cell[k]) - std::sqrt(expected_cells[k])) <= h1_bound);
+          else REQUIRE(per_cell[k] == 0.0);
+        }
+      }
+      REQUIRE(with_halo == ranks - 1);
+    }
+  }
+}
