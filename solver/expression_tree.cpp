@@ -348,6 +348,7 @@ int Program::compile(const Node& node) {
         }
       }
       in.kind = Instruction::kPower;
+      in.array2 = array_pow();
       in.b = compile(*o[1]);
       return add(in);
     }
@@ -365,6 +366,7 @@ int Program::compile(const Node& node) {
       } else {
         in.kind = Instruction::kFunction1;
         in.function1 = unary_function(node.name);
+        in.array1 = array_function(node.name);
       }
       return add(in);
   }
@@ -410,8 +412,11 @@ double Program::run_at(double* r, double x, double y, double z, int output) cons
       case Instruction::kQuotient: t = a / b; break;
       case Instruction::kNegate: t = -a; break;
       case Instruction::kIntegerPower: t = integer_power(a, in.exponent); break;
-      case Instruction::kPower: t = std::pow(a, b); break;
-      case Instruction::kFunction1: t = in.function1(a); break;
+      case Instruction::kPower: in.array2(&a, &b, &t, 1); break;
+      case Instruction::kFunction1:
+        if (in.array1) in.array1(&a, &t, 1);
+        else t = in.function1(a);
+        break;
       case Instruction::kFunction2: t = in.function2(a, b); break;
       case Instruction::kExternal: (*in.external)(&x, &y, &z, 1, &t); break;
     }
@@ -451,8 +456,11 @@ void Program::run(std::vector<double>& registers, const double* x, const double*
       case Instruction::kQuotient: for (long k = 0; k < n; ++k) t[k] = a[k] / b[k]; break;
       case Instruction::kNegate: for (long k = 0; k < n; ++k) t[k] = -a[k]; break;
       case Instruction::kIntegerPower: for (long k = 0; k < n; ++k) t[k] = integer_power(a[k], in.exponent); break;
-      case Instruction::kPower: for (long k = 0; k < n; ++k) t[k] = std::pow(a[k], b[k]); break;
-      case Instruction::kFunction1: for (long k = 0; k < n; ++k) t[k] = in.function1(a[k]); break;
+      case Instruction::kPower: in.array2(a, b, t, n); break;
+      case Instruction::kFunction1:
+        if (in.array1) in.array1(a, t, n);
+        else for (long k = 0; k < n; ++k) t[k] = in.function1(a[k]);
+        break;
       case Instruction::kFunction2: for (long k = 0; k < n; ++k) t[k] = in.function2(a[k], b[k]); break;
       case Instruction::kExternal: (*in.external)(x, y, z, n, t); break;
     }

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "solver/expression.hpp"
+#include "solver/vector_math.hpp"
 
 namespace knotwork::expression_detail {
 
@@ -64,6 +65,10 @@ struct Instruction {
   int exponent = 0;
   double (*function1)(double) = nullptr;
   double (*function2)(double, double) = nullptr;
+  // The array forms, where solver/vector_math has them (then used at one point too, so that
+  // both runs give the same bits).
+  ArrayFunction1 array1 = nullptr;
+  ArrayFunction2 array2 = nullptr;
   const ExternalFunction* external = nullptr;  // kExternal (kept alive by its program)
 };
 

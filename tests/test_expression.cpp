@@ -1,8 +1,12 @@
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <vector>
 
 #include "solver/expression.hpp"
+#include "solver/vector_math.hpp"
 #include "basis/core/input_error.hpp"
 
 using namespace knotwork;
@@ -193,3 +197,71 @@ TEST_CASE("Powers GiNaC cannot evaluate are refused before GiNaC sees them", "[e
   }
 }
 
+
+// solver/vector_math: glibc's libmvec over arrays. Against the scalar functions within glibc's
+// bound of 4 ulp (finite results), the same special values (NaN, infinities, zeros), and a value
+// that does not depend on where it sits in the array or on the array's length (the padded tail).
+namespace {
+long ulps_apart(double a, double b) {
+  if (a == b) return 0;
+  std::int64_t x, y;
+  std::memcpy(&x, &a, 8);
+  std::memcpy(&y, &b, 8);
+  if ((x < 0) != (y < 0)) return std::numeric_limits<long>::max();
+  return static_cast<long>(x > y ? x - y : y - x);
+}
+bool same_special(double a, double b) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  if (std::isinf(a) || std::isinf(b)) return a == b;
+  return true;
+}
+}  // namespace
+
+TEST_CASE("Array functions from libmvec: scalar values within 4 ulp, special values, any position", "[expression]") {
+  INFO("lanes: " << vector_math_kind());
+  std::vector<double> a;
+  for (int k = 0; k < 2000; ++k) a.push_back(-60 + 0.0617 * k);
+  for (double v : {0.0, -0.0, 1e-300, -1e-300, 1e-8, 1.0, 2.0, 700.0, 710.0, -746.0, 1e5, 1e22, -1e22,
+                   std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::quiet_NaN()})
+    a.push_back(v);
+  const long n = static_cast<long>(a.size());
+  std::vector<double> t(n), b(n, 0.5), alone(1);
+  for (long k = 0; k < n; ++k) b[k] = k % 7 == 0 ? -2.0 : 0.25 * (k % 9) - 0.5;
+  const std::vector<std::pair<const char*, double (*)(double)>> unary{
+      {"sin", [](double x) { return std::sin(x); }}, {"cos", [](double x) { return std::cos(x); }},
+      {"exp", [](double x) { return std::exp(x); }}, {"log", [](double x) { return std::log(x); }}};
+  for (const auto& [name, scalar] : unary) {
+    const ArrayFunction1 f = array_function(name);
+    REQUIRE(f);
+    f(a.data(), t.data(), n);
+    for (long k = 0; k < n; ++k) {
+      INFO(name << "(" << a[k] << ") = " << t[k] << ", scalar " << scalar(a[k]));
+      REQUIRE(same_special(t[k], scalar(a[k])));
+      if (std::isfinite(scalar(a[k]))) REQUIRE(ulps_apart(t[k], scalar(a[k])) <= 4);
+      // Alone, and at every length up to 9 from here: the same bits.
+      f(&a[k], alone.data(), 1);
+      REQUIRE(std::memcmp(&alone[0], &t[k], 8) == 0);
+    }
+    for (long length = 1; length <= 9; ++length)
+      for (long first = 0; first + length <= 40; first += 3) {
+        std::vector<double> part(length);
+        f(&a[first], part.data(), length);
+        REQUIRE(std::memcmp(part.data(), &t[first], 8 * length) == 0);
+      }
+  }
+  const ArrayFunction2 pow_of = array_pow();
+  REQUIRE(pow_of);
+  std::vector<double> base(n);
+  for (long k = 0; k < n; ++k) base[k] = std::abs(a[k]) < 50 ? a[k] : 1.5;
+  pow_of(base.data(), b.data(), t.data(), n);
+  for (long k = 0; k < n; ++k) {
+    const double expected = std::pow(base[k], b[k]);
+    INFO("pow(" << base[k] << ", " << b[k] << ") = " << t[k] << ", scalar " << expected);
+    REQUIRE(same_special(t[k], expected));
+    if (std::isfinite(expected)) REQUIRE(ulps_apart(t[k], expected) <= 4);
+    pow_of(&base[k], &b[k], alone.data(), 1);
+    REQUIRE(std::memcmp(&alone[0], &t[k], 8) == 0);
+  }
+  REQUIRE(array_function("tan") == nullptr);  // the others stay scalar
+}

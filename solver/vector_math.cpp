@@ -1,0 +1,123 @@
+// glibc's libmvec called directly, dispatched once on the CPU (why: solver/vector_math.hpp).
+#include "solver/vector_math.hpp"
+
+#include <cmath>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+
+// libmvec's x86-64 vector ABI: 'b' 2 lanes in SSE registers, 'd' 4 lanes in AVX2 registers.
+extern "C" {
+__m128d _ZGVbN2v_sin(__m128d);
+__m128d _ZGVbN2v_cos(__m128d);
+__m128d _ZGVbN2v_exp(__m128d);
+__m128d _ZGVbN2v_log(__m128d);
+__m128d _ZGVbN2vv_pow(__m128d, __m128d);
+__m256d _ZGVdN4v_sin(__m256d);
+__m256d _ZGVdN4v_cos(__m256d);
+__m256d _ZGVdN4v_exp(__m256d);
+__m256d _ZGVdN4v_log(__m256d);
+__m256d _ZGVdN4vv_pow(__m256d, __m256d);
+}
+
+namespace knotwork {
+
+namespace {
+
+// The last n % lanes values in a vector padded with copies of the first of them.
+template <__m128d (*F)(__m128d)>
+void lanes2(const double* a, double* t, long n) {
+  long k = 0;
+  for (; k + 2 <= n; k += 2) _mm_storeu_pd(t + k, F(_mm_loadu_pd(a + k)));
+  if (k < n) {
+    alignas(16) double in[2] = {a[k], a[k]}, out[2];
+    _mm_store_pd(out, F(_mm_load_pd(in)));
+    t[k] = out[0];
+  }
+}
+template <__m128d (*F)(__m128d, __m128d)>
+void lanes2(const double* a, const double* b, double* t, long n) {
+  long k = 0;
+  for (; k + 2 <= n; k += 2) _mm_storeu_pd(t + k, F(_mm_loadu_pd(a + k), _mm_loadu_pd(b + k)));
+  if (k < n) {
+    alignas(16) double x[2] = {a[k], a[k]}, y[2] = {b[k], b[k]}, out[2];
+    _mm_store_pd(out, F(_mm_load_pd(x), _mm_load_pd(y)));
+    t[k] = out[0];
+  }
+}
+template <__m256d (*F)(__m256d)>
+__attribute__((target("avx2,fma"))) void lanes4(const double* a, double* t, long n) {
+  long k = 0;
+  for (; k + 4 <= n; k += 4) _mm256_storeu_pd(t + k, F(_mm256_loadu_pd(a + k)));
+  if (k < n) {
+    alignas(32) double in[4], out[4];
+    for (int l = 0; l < 4; ++l) in[l] = a[k + (k + l < n ? l : 0)];
+    _mm256_store_pd(out, F(_mm256_load_pd(in)));
+    for (; k < n; ++k) t[k] = out[k % 4];
+  }
+}
+template <__m256d (*F)(__m256d, __m256d)>
+__attribute__((target("avx2,fma"))) void lanes4(const double* a, const double* b, double* t, long n) {
+  long k = 0;
+  for (; k + 4 <= n; k += 4) _mm256_storeu_pd(t + k, F(_mm256_loadu_pd(a + k), _mm256_loadu_pd(b + k)));
+  if (k < n) {
+    alignas(32) double x[4], y[4], out[4];
+    for (int l = 0; l < 4; ++l) x[l] = a[k + (k + l < n ? l : 0)], y[l] = b[k + (k + l < n ? l : 0)];
+    _mm256_store_pd(out, F(_mm256_load_pd(x), _mm256_load_pd(y)));
+    for (; k < n; ++k) t[k] = out[k % 4];
+  }
+}
+
+bool wide() {
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return avx2;
+}
+
+}  // namespace
+
+ArrayFunction1 array_function(const std::string& name) {
+  const bool w = wide();
+  if (name == "sin") return w ? lanes4<_ZGVdN4v_sin> : lanes2<_ZGVbN2v_sin>;
+  if (name == "cos") return w ? lanes4<_ZGVdN4v_cos> : lanes2<_ZGVbN2v_cos>;
+  if (name == "exp") return w ? lanes4<_ZGVdN4v_exp> : lanes2<_ZGVbN2v_exp>;
+  if (name == "log") return w ? lanes4<_ZGVdN4v_log> : lanes2<_ZGVbN2v_log>;
+  return nullptr;
+}
+
+ArrayFunction2 array_pow() { return wide() ? lanes4<_ZGVdN4vv_pow> : lanes2<_ZGVbN2vv_pow>; }
+
+const char* vector_math_kind() { return wide() ? "avx2" : "sse2"; }
+
+}  // namespace knotwork
+
+#else  // other CPUs: the scalar functions, a value at a time
+
+namespace knotwork {
+
+namespace {
+template <double (*F)(double)>
+void one_by_one(const double* a, double* t, long n) {
+  for (long k = 0; k < n; ++k) t[k] = F(a[k]);
+}
+double sin_of(double a) { return std::sin(a); }
+double cos_of(double a) { return std::cos(a); }
+double exp_of(double a) { return std::exp(a); }
+double log_of(double a) { return std::log(a); }
+void pow_of(const double* a, const double* b, double* t, long n) {
+  for (long k = 0; k < n; ++k) t[k] = std::pow(a[k], b[k]);
+}
+}  // namespace
+
+ArrayFunction1 array_function(const std::string& name) {
+  if (name == "sin") return one_by_one<sin_of>;
+  if (name == "cos") return one_by_one<cos_of>;
+  if (name == "exp") return one_by_one<exp_of>;
+  if (name == "log") return one_by_one<log_of>;
+  return nullptr;
+}
+ArrayFunction2 array_pow() { return pow_of; }
+const char* vector_math_kind() { return "scalar"; }
+
+}  // namespace knotwork
+
+#endif
