@@ -193,7 +193,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
         const std::string& name = chosen.preconditioner;
         std::unique_ptr<Preconditioner> p;
         if (*without_matrix && !space.structured_preconditioner_needs_only_diagonal(name)) {
-          // Without a matrix (and under PETSc), `lower` holds K's diagonal alone.
+          // Without a matrix (serially, or a PCShell made so), `lower` holds K's diagonal alone.
           p = space.make_structured_preconditioner_without_matrix(name, layout, *without_matrix, lower.diagonal());
           if (!p)
             throw InputError(path + ": [solver] preconditioner: \"" + name + "\" without a matrix needs the unknowns to be a "
@@ -252,7 +252,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
   // that every process applies to the whole residual. As serial CG's "auto" decides: where
   // every element is affine, it is made without a matrix from the space's operator (the part's,
   // from which the space makes the whole one); elsewhere from the whole matrix, gathered on
-  // every process (docs/SOLVERS.md, "Under PETSc"). Decided together: a process whose rows are
+  // every process (docs/SOLVERS.md, "Multigrid under PETSc"). Decided together: a process whose rows are
   // affine may share the patch with one whose rows are not.
   bool shell_reads_matrix = false;
   if (chosen.method == "petsc" && chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi" &&
@@ -264,9 +264,9 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     } catch (const std::invalid_argument& e) {
       obstacle = e.what();
     }
-    double curved = !(obstacle.empty() && op->all_elements_affine());
-    max_over_ranks(&curved, 1);
-    if (curved != 0) shell_reads_matrix = true;
+    double needs_matrix = !(obstacle.empty() && op->all_elements_affine());
+    max_over_ranks(&needs_matrix, 1);
+    if (needs_matrix != 0) shell_reads_matrix = true;
     else *without_matrix = op;
   }
   if (report && chosen.method == "petsc" && chosen.preconditioner != kBoomerAmgName && chosen.preconditioner != "jacobi")
