@@ -85,7 +85,17 @@ void BSplineBasis1D::evaluate_derivatives(int s, double t, int order, double* ou
   // Piegl & Tiller A2.3: table of basis values and knot differences, then the
   // derivative recurrence. Derivatives above p are zero.
   const int p = p_;
-  std::vector<double> ndu((p + 1) * (p + 1)), left(p + 1), right(p + 1), a(2 * (p + 1));
+  // On the stack up to degree 15: the geometry is evaluated point by point at every side of an
+  // adaptive mesh, and four heap arrays per call were a fifth of that.
+  constexpr int kStackDegree = 15;
+  double stack[(kStackDegree + 1) * (kStackDegree + 5)];
+  std::vector<double> heap;
+  double* work = stack;
+  if (p > kStackDegree) {
+    heap.resize(size_t(p + 1) * (p + 5));
+    work = heap.data();
+  }
+  double *ndu = work, *left = ndu + (p + 1) * (p + 1), *right = left + (p + 1), *a_work = right + (p + 1);
   auto NDU = [&](int i, int j) -> double& { return ndu[i * (p + 1) + j]; };
   NDU(0, 0) = 1.0;
   for (int j = 1; j <= p; ++j) {
@@ -104,8 +114,8 @@ void BSplineBasis1D::evaluate_derivatives(int s, double t, int order, double* ou
   for (int k = 1; k <= order; ++k)
     for (int j = 0; j <= p; ++j) out[k * (p + 1) + j] = 0.0;
   for (int r = 0; r <= p; ++r) {
-    double* a0 = a.data();
-    double* a1 = a.data() + (p + 1);
+    double* a0 = a_work;
+    double* a1 = a_work + (p + 1);
     a0[0] = 1.0;
     for (int k = 1; k <= std::min(order, p); ++k) {
       double d = 0.0;

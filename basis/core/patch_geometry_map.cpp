@@ -276,7 +276,10 @@ namespace {
 class DerivativeCache {
  public:
   DerivativeCache(const BSplineBasis1D& basis, int span, int order)
-      : basis_(basis), span_(span), order_(order), size_((order + 1) * (basis.degree() + 1)) {}
+      : basis_(basis), span_(span), order_(order), size_((order + 1) * (basis.degree() + 1)) {
+    params_.reserve(8);
+    values_.reserve(8 * size_);
+  }
   const double* at(double t) {
     for (size_t k = 0; k < params_.size(); ++k)
       if (params_[k] == t) return values_.data() + k * size_;
@@ -298,27 +301,37 @@ void PatchGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen:
                                 GeometryAtPoints& out) const {
   const BezierCell& c = mesh_.cell(cell);
   const int p = patch_.basis_u.degree(), q = patch_.basis_v.degree(), nu = patch_.basis_u.num_functions();
-  Eigen::MatrixX3d h(u.size(), 3), hu(u.size(), 3), hv(u.size(), 3);
   // Span from the cell's middle, so a point on a cell edge uses the cell's own polynomial.
   const int su = patch_.basis_u.find_span(0.5 * (c.u0 + c.u1)), sv = patch_.basis_v.find_span(0.5 * (c.v0 + c.v1));
   DerivativeCache cu(patch_.basis_u, su, 1), cv(patch_.basis_v, sv, 1);
+  out.x.resize(u.size(), 2);
+  out.jacobian.resize(u.size(), 4);
   for (Eigen::Index k = 0; k < u.size(); ++k) {
     const double* du = cu.at(c.u0 + u[k] * (c.u1 - c.u0));
     const double* dv = cv.at(c.v0 + v[k] * (c.v1 - c.v0));
-    h.row(k).setZero();
-    hu.row(k).setZero();
-    hv.row(k).setZero();
+    // The homogeneous point (w x, w y, w) and its derivatives in the cell's reference u and v
+    // (dehomogenize_map's formulas, point by point: no arrays per call).
+    double h[3] = {0, 0, 0}, hu[3] = {0, 0, 0}, hv[3] = {0, 0, 0};
     for (int b = 0; b <= q; ++b)
       for (int a = 0; a <= p; ++a) {
         const int i = (su - p + a) + nu * (sv - q + b);
         const double w = patch_.weights[i];
-        const Eigen::RowVector3d P(w * patch_.control_points(i, 0), w * patch_.control_points(i, 1), w);
-        h.row(k) += du[a] * dv[b] * P;
-        hu.row(k) += du[p + 1 + a] * dv[b] * P * (c.u1 - c.u0);  // derivative in the cell's reference u
-        hv.row(k) += du[a] * dv[q + 1 + b] * P * (c.v1 - c.v0);
+        const double P[3] = {w * patch_.control_points(i, 0), w * patch_.control_points(i, 1), w};
+        const double n = du[a] * dv[b], n_u = du[p + 1 + a] * dv[b], n_v = du[a] * dv[q + 1 + b];
+        for (int d = 0; d < 3; ++d) {
+          h[d] += n * P[d];
+          hu[d] += n_u * P[d] * (c.u1 - c.u0);
+          hv[d] += n_v * P[d] * (c.v1 - c.v0);
+        }
       }
+    const double w = h[2], x = h[0] / w, y = h[1] / w;
+    out.x(k, 0) = x;
+    out.x(k, 1) = y;
+    out.jacobian(k, 0) = (hu[0] - x * hu[2]) / w;
+    out.jacobian(k, 1) = (hv[0] - x * hv[2]) / w;
+    out.jacobian(k, 2) = (hu[1] - y * hu[2]) / w;
+    out.jacobian(k, 3) = (hv[1] - y * hv[2]) / w;
   }
-  dehomogenize_map(h, hu, hv, out);
 }
 
 bool PatchGeometryMap::second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
