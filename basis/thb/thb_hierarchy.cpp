@@ -171,6 +171,9 @@ ThbHierarchy::Basis ThbHierarchy::build() const {
   std::vector<std::string> failure(omp_get_max_threads());
 #pragma omp parallel for schedule(dynamic, 1)
   for (int r = 0; r < roots; ++r) {
+    // Products into kept arrays: evaluated as written, every small product allocated two
+    // temporaries, a fifth of the build on the adaptive L-shape.
+    Eigen::MatrixXd half, product;
     try {
       struct Frame {
         int level;
@@ -212,8 +215,9 @@ ThbHierarchy::Basis ThbHierarchy::build() const {
           if (i == 0) o.cell.boundary[kSideLeft] = 3;
           o.extraction.resize(static_cast<int>(f.alive.size()), (p + 1) * (q + 1));
           for (size_t k = 0; k < f.alive.size(); ++k) {
-            const Eigen::MatrixXd C = Eu.transpose() * f.alive[k].coefficients * Ev;
-            o.extraction.row(static_cast<int>(k)) = Eigen::Map<const Eigen::RowVectorXd>(C.data(), C.size());
+            half.noalias() = Eu.transpose() * f.alive[k].coefficients;
+            product.noalias() = half * Ev;
+            o.extraction.row(static_cast<int>(k)) = Eigen::Map<const Eigen::RowVectorXd>(product.data(), product.size());
             o.ids.push_back(f.alive[k].id);
           }
           per_root[r].push_back(std::move(o));
@@ -231,7 +235,9 @@ ThbHierarchy::Basis ThbHierarchy::build() const {
             for (int b = 0; b <= q; ++b) truncated(a, b) = status[l + 1].at({fu + a, fv + b}).in_level;
           Frame child{l + 1, {ci, cj}, {}};
           for (const Alive& g : f.alive) {
-            Eigen::MatrixXd Y = Ru.transpose() * g.coefficients * Rv;
+            half.noalias() = Ru.transpose() * g.coefficients;
+            Eigen::MatrixXd Y(p + 1, q + 1);
+            Y.noalias() = half * Rv;
             bool any = false;
             for (int a = 0; a <= p; ++a)
               for (int b = 0; b <= q; ++b) {
