@@ -8,6 +8,7 @@
 #include <numeric>
 #include <optional>
 #include <stdexcept>
+#include <vector>
 
 #include "quadrature/bernstein.hpp"
 #include "quadrature/gauss_legendre.hpp"
@@ -25,6 +26,31 @@ void side_point(CellSide side, double t, double& u, double& v) {
   u = side == kSideBottom || side == kSideTop ? t : side == kSideRight ? 1 : 0;
   v = side == kSideLeft || side == kSideRight ? t : side == kSideTop ? 1 : 0;
 }
+
+// The reference derivatives (u_u, u_v) of u_h at (u, v) of a cell, from its Bernstein
+// coefficients (index a + (p+1) b, a along u), kept from the interior pass for the sides.
+class ReferenceGradient {
+ public:
+  void operator()(const double* bernstein, int p, int q, double u, double v, double& su, double& sv) {
+    bu_.resize(p + 1), du_.resize(p + 1), bv_.resize(q + 1), dv_.resize(q + 1);
+    bernstein_values_and_derivatives(p, u, bu_.data(), du_.data());
+    bernstein_values_and_derivatives(q, v, bv_.data(), dv_.data());
+    su = 0, sv = 0;
+    for (int b = 0; b <= q; ++b) {
+      double along = 0, across = 0;
+      for (int a = 0; a <= p; ++a) {
+        const double c = bernstein[a + (p + 1) * b];
+        along += du_[a] * c;
+        across += bu_[a] * c;
+      }
+      su += bv_[b] * along;
+      sv += dv_[b] * across;
+    }
+  }
+
+ private:
+  std::vector<double> bu_, du_, bv_, dv_;
+};
 
 // A and c of -div(A grad u) + c u at points, for one thread: A's entries (none: the identity;
 // one: a I; three: a11, a12, a22) and their x and y derivatives, for div(A grad u_h).
@@ -75,19 +101,15 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
   std::vector<ExactSolution> diffusion;
   for (const Expression& a : problem.coefficients.diffusion) diffusion.push_back(differentiate_exact_solution(a));
   // Physical extent of each cell across its u and v directions (distance between the midpoints
-  // of opposite sides); h_K is the larger.
+  // of opposite sides; h_K is the larger), found in the interior pass.
   Eigen::VectorXd extent_u(mesh.num_cells()), extent_v(mesh.num_cells());
-  {
-    Eigen::VectorXd mu(4), mv(4);
-    mu << 0, 1, 0.5, 0.5;
-    mv << 0.5, 0.5, 0, 1;
-    GeometryAtPoints m;
-    for (int c = 0; c < mesh.num_cells(); ++c) {
-      geometry.evaluate(c, mu, mv, m);
-      extent_u[c] = (m.x.row(1) - m.x.row(0)).norm();
-      extent_v[c] = (m.x.row(3) - m.x.row(2)).norm();
-    }
+  // u_h's Bernstein coefficients on every cell, one block per cell, for the sides.
+  std::vector<long> bernstein_offset(mesh.num_cells() + 1, 0);
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    const BezierCell& cell = mesh.cell(c);
+    bernstein_offset[c + 1] = bernstein_offset[c] + long(cell.degree_u + 1) * (cell.degree_v + 1);
   }
+  std::vector<double> bernstein(bernstein_offset.back());
   // Interior residual h_K^2 ||f + Laplace(u_h)||^2 per cell (summed in cell order below, so
   // that the total does not depend on the threads).
   const ExpressionBatch compiled_source({problem.source});  // compiled once; each thread runs its own copy
@@ -95,7 +117,10 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
   {
     ExpressionBatch f(compiled_source);
     PointCoefficients coefficient(problem, diffusion);
-    GeometryAtPoints g;
+    GeometryAtPoints g, middles;
+    Eigen::VectorXd mu(4), mv(4);
+    mu << 0, 1, 0.5, 0.5;
+    mv << 0.5, 0.5, 0, 1;
     // Reused from cell to cell: an adaptive loop estimates on up to 10^5 cells at every step,
     // and allocating these per cell cost a third of the interior residual's time.
     Eigen::MatrixXd second, B, Bu, Bv, Buu, Buv, Bvv;
@@ -128,6 +153,10 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
       local.resize(static_cast<Eigen::Index>(ids.size()));
       for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
       beta.noalias() = mesh.extraction(c).transpose() * local;  // Bernstein coefficients
+      std::copy(beta.data(), beta.data() + beta.size(), bernstein.begin() + bernstein_offset[c]);
+      geometry.evaluate(c, mu, mv, middles);
+      extent_u[c] = (middles.x.row(1) - middles.x.row(0)).norm();
+      extent_v[c] = (middles.x.row(3) - middles.x.row(2)).norm();
       // u_h's reference derivatives at the points: u_u, u_v, u_uu, u_uv, u_vv.
       U.noalias() = B * beta;
       U_u.noalias() = Bu * beta;
@@ -170,18 +199,21 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
   std::vector<double> side_value(sides.size()), side_max(sides.size());
 #pragma omp parallel
   {
-    // Per thread: the rule (per number of points) and the fields of the two cells; the map's
-    // tangent is read from the first cell's field. (A rule and a third map evaluation per side
-    // made the estimator of an adaptive run to 50 000 dofs 20% slower.)
+    // Per thread: the rule (per number of points), the map at both cells' points, and u_h's
+    // reference gradient from the cells' Bernstein coefficients. (A rule per side made the
+    // estimator of an adaptive run to 50 000 dofs 20% slower; u_h evaluated from the
+    // functions, as elsewhere, twice as slow as from the coefficients kept.)
     int rule_n = -1;
     QuadratureRule1D rule;
     Eigen::VectorXd ua, va, ub, vb;
-    CellField a, b;
+    GeometryAtPoints ga, gb;
+    ReferenceGradient reference_gradient;
     PointCoefficients coefficient(problem, diffusion);
-#pragma omp for schedule(dynamic, 32)
+#pragma omp for schedule(dynamic, 64)
     for (size_t s = 0; s < sides.size(); ++s) {
       const CellInterface& e = sides[s];
       const BezierCell& lo = mesh.cell(e.cell_a);
+      const BezierCell& hi = mesh.cell(e.cell_b);
       const int n = std::max({lo.degree_u, lo.degree_v}) + 2;
       if (n != rule_n) {
         rule = gauss_legendre(n);
@@ -192,18 +224,31 @@ ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& g
         side_point(e.side_a, e.a_from + rule.nodes[k] * (e.a_to - e.a_from), ua[k], va[k]);
         side_point(e.side_b, e.b_from + rule.nodes[k] * (e.b_to - e.b_from), ub[k], vb[k]);
       }
-      evaluate_cell_field_at(mesh, geometry, e.cell_a, ua, va, coefficients, a);
-      evaluate_cell_field_at(mesh, geometry, e.cell_b, ub, vb, coefficients, b);
-      const GeometryAtPoints& g = a.geometry;
+      geometry.evaluate(e.cell_a, ua, va, ga);
+      geometry.evaluate(e.cell_b, ub, vb, gb);
       const int col = e.side_a == kSideBottom || e.side_a == kSideTop ? 0 : 1;  // the tangent's reference direction
       double length = 0, integral = 0, biggest = 0;
       for (int k = 0; k < n; ++k) {
-        const double ds = std::hypot(g.jacobian(k, col), g.jacobian(k, 2 + col)) * std::abs(e.a_to - e.a_from) * rule.weights[k];
+        // Physical gradients J^-T (u_u, u_v) on both sides of the point.
+        double gradient[2][2];
+        for (int side = 0; side < 2; ++side) {
+          const GeometryAtPoints& g = side == 0 ? ga : gb;
+          const BezierCell& cell = side == 0 ? lo : hi;
+          const int c = side == 0 ? e.cell_a : e.cell_b;
+          double su, sv;
+          reference_gradient(bernstein.data() + bernstein_offset[c], cell.degree_u, cell.degree_v,
+                             side == 0 ? ua[k] : ub[k], side == 0 ? va[k] : vb[k], su, sv);
+          const double J0 = g.jacobian(k, 0), J1 = g.jacobian(k, 1), J2 = g.jacobian(k, 2), J3 = g.jacobian(k, 3);
+          const double det = J0 * J3 - J1 * J2;
+          gradient[side][0] = (J3 * su - J2 * sv) / det;
+          gradient[side][1] = (J0 * sv - J1 * su) / det;
+        }
+        const double ds = std::hypot(ga.jacobian(k, col), ga.jacobian(k, 2 + col)) * std::abs(e.a_to - e.a_from) * rule.weights[k];
         // u_h is continuous: the jump of its gradient is normal, and that of the flux A grad u_h
         // is A times it.
-        const Eigen::Vector2d step(a.gradient(k, 0) - b.gradient(k, 0), a.gradient(k, 1) - b.gradient(k, 1));
+        const Eigen::Vector2d step(gradient[0][0] - gradient[1][0], gradient[0][1] - gradient[1][1]);
         const double jump = coefficient.identity() ? std::hypot(step[0], step[1])
-                                                                   : (coefficient.A(g.x(k, 0), g.x(k, 1)) * step).norm();
+                                                   : (coefficient.A(ga.x(k, 0), ga.x(k, 1)) * step).norm();
         length += ds;
         integral += ds * jump * jump;
         biggest = std::max(biggest, jump);

@@ -13,7 +13,9 @@
 #include "studies/pipeline.hpp"
 #include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
+#include "solver/cell_basis.hpp"
 #include "solver/error_norms.hpp"
+#include "quadrature/gauss_legendre.hpp"
 #include "tests/rounding_bounds.hpp"
 
 using namespace knotwork;
@@ -132,6 +134,73 @@ TEST_CASE("The estimator on a tensor space equals the one on the same space buil
     }
     if (c == &k) REQUIRE(static_cast<int>(by_cell.size()) == space->mesh().num_cells());
   }
+}
+
+TEST_CASE("The estimator's gradient jumps equal their definition across hanging sides", "[adaptive]") {
+  // The estimator evaluates u_h on the sides from Bernstein coefficients it keeps per cell; here
+  // each side's term is recomputed from its definition by the generic route (u_h from the
+  // functions and the extraction, the map evaluated anew): sum over sides of |E| times the
+  // Gauss sum (max degree + 2 points) of ds |[grad u_h]|^2. On the L-shape the space is only
+  // C0 across the fold u = 1/2, where the gradient jumps; the THB mesh is refined twice along
+  // it, so that sides there meet two cells along part of a side (a_from, a_to not 0 and 1).
+  // The two routes round differently; each gradient is
+  // exact to a few thousand ulps of its size, so the sums agree to 1e-12 of the sum of
+  // ds (|grad u_a| + |grad u_b|)^2 and the largest jumps to 1e-12 of the largest
+  // |grad u_a| + |grad u_b|, not of the jumps, which cancel.
+  CaseDescription c = shipped("lshape_adaptive_thb.toml");
+  std::unique_ptr<SplineSpace> space = build_space(c);
+  for (int step = 0; step < 2; ++step) {
+    std::vector<int> marked;  // every other cell along the fold, on its left
+    for (int cell = 0; cell < space->mesh().num_cells(); ++cell)
+      if (space->mesh().cell(cell).u1 == 0.5 && cell % 2 == 0) marked.push_back(cell);
+    space = std::move(*space).refine(marked, std::vector<CellSplit>(marked.size(), CellSplit::kAcrossU));
+  }
+  REQUIRE(space);
+  const BezierMesh& mesh = space->mesh();
+  const PoissonSolution s = solve_case(c, *space, Ordering::kAmd, {});
+  const ErrorIndicators ind = residual_indicators(mesh, space->geometry(), s.coefficients, c.problem);
+  double jump_part = 0, scale = 0, largest = 0, largest_gradients = 0;
+  int hanging = 0;
+  for (const CellInterface& e : mesh.interfaces()) {
+    hanging += e.a_from != 0 || e.a_to != 1 || std::min(e.b_from, e.b_to) != 0 || std::max(e.b_from, e.b_to) != 1;
+    const BezierCell& a = mesh.cell(e.cell_a);
+    const QuadratureRule1D rule = gauss_legendre(std::max(a.degree_u, a.degree_v) + 2);
+    const int n = static_cast<int>(rule.nodes.size());
+    Eigen::VectorXd ua(n), va(n), ub(n), vb(n);
+    auto point = [](CellSide side, double t, double& u, double& v) {
+      u = side == kSideBottom || side == kSideTop ? t : side == kSideRight ? 1 : 0;
+      v = side == kSideLeft || side == kSideRight ? t : side == kSideTop ? 1 : 0;
+    };
+    for (int k = 0; k < n; ++k) {
+      point(e.side_a, e.a_from + rule.nodes[k] * (e.a_to - e.a_from), ua[k], va[k]);
+      point(e.side_b, e.b_from + rule.nodes[k] * (e.b_to - e.b_from), ub[k], vb[k]);
+    }
+    CellField fa, fb;
+    evaluate_cell_field_at(mesh, space->geometry(), e.cell_a, ua, va, s.coefficients, fa);
+    evaluate_cell_field_at(mesh, space->geometry(), e.cell_b, ub, vb, s.coefficients, fb);
+    // Both sides of the interface are the same points.
+    REQUIRE((fa.geometry.x - fb.geometry.x).cwiseAbs().maxCoeff() < 1e-13);
+    const int col = e.side_a == kSideBottom || e.side_a == kSideTop ? 0 : 1;
+    double length = 0, integral = 0, bound = 0;
+    for (int k = 0; k < n; ++k) {
+      const double ds = std::hypot(fa.geometry.jacobian(k, col), fa.geometry.jacobian(k, 2 + col)) *
+                        std::abs(e.a_to - e.a_from) * rule.weights[k];
+      const double jump = (fa.gradient.row(k) - fb.gradient.row(k)).norm();
+      length += ds;
+      integral += ds * jump * jump;
+      bound += ds * std::pow(fa.gradient.row(k).norm() + fb.gradient.row(k).norm(), 2);
+      largest = std::max(largest, jump);
+      largest_gradients = std::max(largest_gradients, fa.gradient.row(k).norm() + fb.gradient.row(k).norm());
+    }
+    jump_part += length * integral;
+    scale += length * bound;
+  }
+  INFO(hanging << " hanging sides of " << mesh.interfaces().size() << "; jump part " << ind.jump_part << " against "
+              << jump_part << ", largest jump " << ind.max_gradient_jump << " against " << largest);
+  REQUIRE(hanging >= 4);
+  CHECK(ind.jump_part > 0);
+  CHECK(std::abs(ind.jump_part - jump_part) <= 1e-12 * scale);
+  CHECK(std::abs(ind.max_gradient_jump - largest) <= 1e-12 * largest_gradients);
 }
 
 TEST_CASE("The estimator vanishes when the discrete solution is exact", "[adaptive]") {
