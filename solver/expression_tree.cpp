@@ -362,6 +362,7 @@ int Program::compile(const Node& node) {
       if (node.name == "atan2") {
         in.kind = Instruction::kFunction2;
         in.function2 = atan2_of;
+        in.array2 = array_atan2();
         in.b = compile(*o[1]);
       } else {
         in.kind = Instruction::kFunction1;
@@ -417,7 +418,10 @@ double Program::run_at(double* r, double x, double y, double z, int output) cons
         if (in.array1) in.array1(&a, &t, 1);
         else t = in.function1(a);
         break;
-      case Instruction::kFunction2: t = in.function2(a, b); break;
+      case Instruction::kFunction2:
+        if (in.array2) in.array2(&a, &b, &t, 1);
+        else t = in.function2(a, b);
+        break;
       case Instruction::kExternal: (*in.external)(&x, &y, &z, 1, &t); break;
     }
   }
@@ -461,7 +465,10 @@ void Program::run(std::vector<double>& registers, const double* x, const double*
         if (in.array1) in.array1(a, t, n);
         else for (long k = 0; k < n; ++k) t[k] = in.function1(a[k]);
         break;
-      case Instruction::kFunction2: for (long k = 0; k < n; ++k) t[k] = in.function2(a[k], b[k]); break;
+      case Instruction::kFunction2:
+        if (in.array2) in.array2(a, b, t, n);
+        else for (long k = 0; k < n; ++k) t[k] = in.function2(a[k], b[k]);
+        break;
       case Instruction::kExternal: (*in.external)(x, y, z, n, t); break;
     }
   }

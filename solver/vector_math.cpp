@@ -1,4 +1,5 @@
 // glibc's libmvec called directly, dispatched once on the CPU (why: solver/vector_math.hpp).
+// Every function here has been in libmvec since glibc 2.35 (sin, cos, exp, log, pow since 2.22).
 #include "solver/vector_math.hpp"
 
 #include <cmath>
@@ -15,14 +16,30 @@
 extern "C" {
 __m128d _ZGVbN2v_sin(__m128d);
 __m128d _ZGVbN2v_cos(__m128d);
+__m128d _ZGVbN2v_tan(__m128d);
+__m128d _ZGVbN2v_asin(__m128d);
+__m128d _ZGVbN2v_acos(__m128d);
+__m128d _ZGVbN2v_atan(__m128d);
+__m128d _ZGVbN2v_sinh(__m128d);
+__m128d _ZGVbN2v_cosh(__m128d);
+__m128d _ZGVbN2v_tanh(__m128d);
 __m128d _ZGVbN2v_exp(__m128d);
 __m128d _ZGVbN2v_log(__m128d);
 __m128d _ZGVbN2vv_pow(__m128d, __m128d);
+__m128d _ZGVbN2vv_atan2(__m128d, __m128d);
 KNOTWORK_AVX2 __m256d _ZGVdN4v_sin(__m256d);
 KNOTWORK_AVX2 __m256d _ZGVdN4v_cos(__m256d);
+KNOTWORK_AVX2 __m256d _ZGVdN4v_tan(__m256d);
+KNOTWORK_AVX2 __m256d _ZGVdN4v_asin(__m256d);
+KNOTWORK_AVX2 __m256d _ZGVdN4v_acos(__m256d);
+KNOTWORK_AVX2 __m256d _ZGVdN4v_atan(__m256d);
+KNOTWORK_AVX2 __m256d _ZGVdN4v_sinh(__m256d);
+KNOTWORK_AVX2 __m256d _ZGVdN4v_cosh(__m256d);
+KNOTWORK_AVX2 __m256d _ZGVdN4v_tanh(__m256d);
 KNOTWORK_AVX2 __m256d _ZGVdN4v_exp(__m256d);
 KNOTWORK_AVX2 __m256d _ZGVdN4v_log(__m256d);
 KNOTWORK_AVX2 __m256d _ZGVdN4vv_pow(__m256d, __m256d);
+KNOTWORK_AVX2 __m256d _ZGVdN4vv_atan2(__m256d, __m256d);
 }
 
 namespace knotwork {
@@ -86,14 +103,25 @@ bool wide() {
 
 ArrayFunction1 array_function(const std::string& name) {
   const bool w = wide();
-  if (name == "sin") return w ? lanes4<_ZGVdN4v_sin> : lanes2<_ZGVbN2v_sin>;
-  if (name == "cos") return w ? lanes4<_ZGVdN4v_cos> : lanes2<_ZGVbN2v_cos>;
-  if (name == "exp") return w ? lanes4<_ZGVdN4v_exp> : lanes2<_ZGVbN2v_exp>;
-  if (name == "log") return w ? lanes4<_ZGVdN4v_log> : lanes2<_ZGVbN2v_log>;
+#define KNOTWORK_UNARY(f) \
+  if (name == #f) return w ? lanes4<_ZGVdN4v_##f> : lanes2<_ZGVbN2v_##f>;
+  KNOTWORK_UNARY(sin)
+  KNOTWORK_UNARY(cos)
+  KNOTWORK_UNARY(tan)
+  KNOTWORK_UNARY(asin)
+  KNOTWORK_UNARY(acos)
+  KNOTWORK_UNARY(atan)
+  KNOTWORK_UNARY(sinh)
+  KNOTWORK_UNARY(cosh)
+  KNOTWORK_UNARY(tanh)
+  KNOTWORK_UNARY(exp)
+  KNOTWORK_UNARY(log)
+#undef KNOTWORK_UNARY
   return nullptr;
 }
 
 ArrayFunction2 array_pow() { return wide() ? lanes4<_ZGVdN4vv_pow> : lanes2<_ZGVbN2vv_pow>; }
+ArrayFunction2 array_atan2() { return wide() ? lanes4<_ZGVdN4vv_atan2> : lanes2<_ZGVbN2vv_atan2>; }
 
 const char* vector_math_kind() { return wide() ? "avx2" : "sse2"; }
 
@@ -108,23 +136,47 @@ template <double (*F)(double)>
 void one_by_one(const double* a, double* t, long n) {
   for (long k = 0; k < n; ++k) t[k] = F(a[k]);
 }
-double sin_of(double a) { return std::sin(a); }
-double cos_of(double a) { return std::cos(a); }
-double exp_of(double a) { return std::exp(a); }
-double log_of(double a) { return std::log(a); }
-void pow_of(const double* a, const double* b, double* t, long n) {
-  for (long k = 0; k < n; ++k) t[k] = std::pow(a[k], b[k]);
+template <double (*F)(double, double)>
+void two_by_two(const double* a, const double* b, double* t, long n) {
+  for (long k = 0; k < n; ++k) t[k] = F(a[k], b[k]);
 }
+#define KNOTWORK_SCALAR(f) \
+  double f##_of(double a) { return std::f(a); }
+KNOTWORK_SCALAR(sin)
+KNOTWORK_SCALAR(cos)
+KNOTWORK_SCALAR(tan)
+KNOTWORK_SCALAR(asin)
+KNOTWORK_SCALAR(acos)
+KNOTWORK_SCALAR(atan)
+KNOTWORK_SCALAR(sinh)
+KNOTWORK_SCALAR(cosh)
+KNOTWORK_SCALAR(tanh)
+KNOTWORK_SCALAR(exp)
+KNOTWORK_SCALAR(log)
+#undef KNOTWORK_SCALAR
+double pow_of(double a, double b) { return std::pow(a, b); }
+double atan2_of(double a, double b) { return std::atan2(a, b); }
 }  // namespace
 
 ArrayFunction1 array_function(const std::string& name) {
-  if (name == "sin") return one_by_one<sin_of>;
-  if (name == "cos") return one_by_one<cos_of>;
-  if (name == "exp") return one_by_one<exp_of>;
-  if (name == "log") return one_by_one<log_of>;
+#define KNOTWORK_UNARY(f) \
+  if (name == #f) return one_by_one<f##_of>;
+  KNOTWORK_UNARY(sin)
+  KNOTWORK_UNARY(cos)
+  KNOTWORK_UNARY(tan)
+  KNOTWORK_UNARY(asin)
+  KNOTWORK_UNARY(acos)
+  KNOTWORK_UNARY(atan)
+  KNOTWORK_UNARY(sinh)
+  KNOTWORK_UNARY(cosh)
+  KNOTWORK_UNARY(tanh)
+  KNOTWORK_UNARY(exp)
+  KNOTWORK_UNARY(log)
+#undef KNOTWORK_UNARY
   return nullptr;
 }
-ArrayFunction2 array_pow() { return pow_of; }
+ArrayFunction2 array_pow() { return two_by_two<pow_of>; }
+ArrayFunction2 array_atan2() { return two_by_two<atan2_of>; }
 const char* vector_math_kind() { return "scalar"; }
 
 }  // namespace knotwork

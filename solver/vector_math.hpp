@@ -1,5 +1,6 @@
 #pragma once
-// sin, cos, exp, log and pow over arrays, several values per instruction: glibc's vector math
+// sin, cos, tan, their inverses, the hyperbolic functions, exp, log, pow and atan2 over arrays,
+// several values per instruction: glibc's vector math
 // library (libmvec), which GCC calls by itself only under -ffast-math. Written here because
 // no library on this machine exposes it otherwise (Eigen 3.4 vectorizes exp and log of doubles,
 // not sin, cos or pow). With AVX2 and FMA, 4 lanes (3.3x scalar sin measured here), else 2
@@ -14,10 +15,12 @@ namespace knotwork {
 using ArrayFunction1 = void (*)(const double* a, double* t, long n);                   // t = f(a)
 using ArrayFunction2 = void (*)(const double* a, const double* b, double* t, long n);  // t = f(a, b)
 
-// The array form of a grammar function ("sin", "cos", "exp", "log"); null for the others.
+// The array form of a grammar function (sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, exp,
+// log); null for the others (sqrt and abs: exact in every lane already).
 ArrayFunction1 array_function(const std::string& name);
-// pow(a, b) over arrays.
+// pow(a, b) and atan2(a, b) over arrays.
 ArrayFunction2 array_pow();
+ArrayFunction2 array_atan2();
 // Which lanes ran: "avx2" (4 lanes), "sse2" (2) or "scalar" (not x86-64).
 const char* vector_math_kind();
 
