@@ -2,6 +2,7 @@
 
 #include <Eigen/QR>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <numeric>
@@ -69,11 +70,30 @@ bool DyadicLrMesh::covers(int direction, int64_t at, int64_t from, int64_t to) c
 }
 
 // Knot insertion into one B-spline (bspline_kernel::split_weights), on the dyadic integers.
-void DyadicLrMesh::split_functions() {
+void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
   incidence_.reset();
+  // The added pieces per direction, by position. A B-spline is looked at when one of them lies
+  // strictly inside its support across the line and meets its extent along it (closed): a
+  // line that newly covers an extent meets it. Looking at every B-spline at every step was a
+  // quarter of an adaptive LR loop's refinement; the splits are the same, in the same order.
+  std::array<std::vector<Segment>, 2> pieces;
+  for (const Segment& s : added) pieces[s.direction].push_back(s);
+  for (auto& v : pieces) std::sort(v.begin(), v.end(), [](const Segment& a, const Segment& b) { return a.at < b.at; });
+  const auto met = [&](const Function& f) {
+    for (int d = 0; d < 2; ++d) {
+      const int o = 1 - d;
+      const auto& t = f.knots[d];
+      const int64_t lo = t[0], hi = t[p_[d] + 1], olo = f.knots[o][0], ohi = f.knots[o][p_[o] + 1];
+      auto it = std::upper_bound(pieces[d].begin(), pieces[d].end(), lo,
+                                 [](int64_t x, const Segment& s) { return x < s.at; });
+      for (; it != pieces[d].end() && it->at < hi; ++it)
+        if (it->from <= ohi && olo <= it->to) return true;
+    }
+    return false;
+  };
   std::vector<Function> work;
-  work.reserve(functions_.size());
-  for (const auto& [f, w] : functions_) work.push_back(f);
+  for (const auto& [f, w] : functions_)
+    if (met(f)) work.push_back(f);
   while (!work.empty()) {
     const Function f = work.back();
     work.pop_back();
@@ -185,7 +205,7 @@ int DyadicLrMesh::refine(const std::vector<int>& marked, Strategy strategy) {
       }
   for (const Segment& s : segments) add_line(s);
   inserted_.insert(inserted_.end(), segments.begin(), segments.end());
-  split_functions();
+  split_functions(segments);
   const int before = extended_;
   keep_traces_independent();
   split_elements();
@@ -203,7 +223,7 @@ void DyadicLrMesh::keep_traces_independent() {
     for (const Segment& s : extensions) add_line(s);
     inserted_.insert(inserted_.end(), extensions.begin(), extensions.end());
     extended_ += static_cast<int>(extensions.size());
-    split_functions();
+    split_functions(extensions);
   }
 }
 
@@ -249,7 +269,7 @@ void DyadicLrMesh::insert(const std::vector<Segment>& segments, bool keep_traces
                                   " traverses the support of no B-spline (the mesh would not be an LR mesh)");
     }
     inserted_.push_back(s);
-    split_functions();
+    split_functions({s});
   }
   if (keep_traces) keep_traces_independent();
   split_elements();

@@ -93,7 +93,10 @@ class DyadicLrMesh {
  private:
   void add_line(const Segment& s);
   bool covers(int direction, int64_t at, int64_t from, int64_t to) const;
-  void split_functions();
+  // Splits the B-splines that the meshlines traverse, after `added` joined them: only a
+  // B-spline whose support one of those meets can need it (the others were split against every
+  // older line), so only those are looked at.
+  void split_functions(const std::vector<Segment>& added);
   void split_elements();
   std::vector<Segment> boundary_extensions() const;
   void keep_traces_independent();
