@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 #include <numeric>
+#include <span>
 #include <stdexcept>
 
 #include "basis/core/box_index.hpp"
@@ -59,43 +60,90 @@ void DyadicLrMesh::add_line(const Segment& s) {
   intervals = std::move(merged);
 }
 
-bool DyadicLrMesh::covers(int direction, int64_t at, int64_t from, int64_t to) const {
-  const auto it = lines_[direction].find(at);
-  if (it == lines_[direction].end()) return false;
-  const auto& iv = it->second;
+namespace {
+// Whether one of a line's disjoint sorted pieces covers [from, to].
+bool pieces_cover(const std::vector<std::pair<int64_t, int64_t>>& iv, int64_t from, int64_t to) {
   auto k = std::upper_bound(iv.begin(), iv.end(), std::pair<int64_t, int64_t>{from, INT64_MAX});
   if (k == iv.begin()) return false;
   --k;
   return k->first <= from && to <= k->second;
 }
+}  // namespace
+
+bool DyadicLrMesh::covers(int direction, int64_t at, int64_t from, int64_t to) const {
+  const auto it = lines_[direction].find(at);
+  return it != lines_[direction].end() && pieces_cover(it->second, from, to);
+}
 
 // Knot insertion into one B-spline (bspline_kernel::split_weights), on the dyadic integers.
+namespace {
+
+// Meshline pieces just added, per direction, by position. A box (a support or an element) can
+// be cut by a line only since they came when one of them lies strictly inside it across the
+// line and meets its extent along it (closed): a line that newly covers an extent meets it.
+// Looking at every B-spline and element after every refinement was a quarter of an adaptive
+// LR loop's refinement; looking at these only makes the same splits in the same order.
+class AddedPieces {
+ public:
+  template <class Segments>
+  explicit AddedPieces(const Segments& added) {
+    for (const auto& s : added) by_direction_[s.direction].push_back({s.at, s.from, s.to});
+    for (auto& v : by_direction_) std::sort(v.begin(), v.end());
+  }
+  // The first position lo < at < hi (increasing) of a piece in direction d where cut(at) holds,
+  // or -1. The pieces' positions are the only ones where a line can cut a box made before they
+  // came, or made since by splitting such a box at them (its extent along the line unchanged).
+  template <class Cut>
+  int64_t first_cut(int d, int64_t lo, int64_t hi, Cut cut) const {
+    const auto& v = by_direction_[d];
+    int64_t last = -1;
+    for (auto it = std::upper_bound(v.begin(), v.end(), std::array<int64_t, 3>{lo, INT64_MAX, INT64_MAX});
+         it != v.end() && (*it)[0] < hi; ++it)
+      if ((*it)[0] != last && cut(last = (*it)[0])) return last;
+    return -1;
+  }
+  // Whether a piece on a line of direction d lies at lo < at < hi and meets [from, to].
+  bool meet(int d, int64_t lo, int64_t hi, int64_t from, int64_t to) const {
+    const auto& v = by_direction_[d];
+    for (auto it = std::upper_bound(v.begin(), v.end(), std::array<int64_t, 3>{lo, INT64_MAX, INT64_MAX});
+         it != v.end() && (*it)[0] < hi; ++it)
+      if ((*it)[1] <= to && from <= (*it)[2]) return true;
+    return false;
+  }
+
+ private:
+  std::array<std::vector<std::array<int64_t, 3>>, 2> by_direction_;  // (at, from, to)
+};
+
+}  // namespace
+
+// The first line position lo < at < hi (increasing) where the line covers [from, to] and
+// usable(at) holds, or -1.
+template <class Lines, class Usable>
+int64_t first_line_cut(const Lines& lines, int64_t lo, int64_t hi, int64_t from, int64_t to, Usable usable) {
+  for (auto it = lines.upper_bound(lo); it != lines.end() && it->first < hi; ++it)
+    if (usable(it->first) && pieces_cover(it->second, from, to)) return it->first;
+  return -1;
+}
+
 void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
   incidence_.reset();
-  // The added pieces per direction, by position. A B-spline is looked at when one of them lies
-  // strictly inside its support across the line and meets its extent along it (closed): a
-  // line that newly covers an extent meets it. Looking at every B-spline at every step was a
-  // quarter of an adaptive LR loop's refinement; the splits are the same, in the same order.
-  std::array<std::vector<Segment>, 2> pieces;
-  for (const Segment& s : added) pieces[s.direction].push_back(s);
-  for (auto& v : pieces) std::sort(v.begin(), v.end(), [](const Segment& a, const Segment& b) { return a.at < b.at; });
+  const AddedPieces pieces(added);
   const auto met = [&](const Function& f) {
     for (int d = 0; d < 2; ++d) {
       const int o = 1 - d;
-      const auto& t = f.knots[d];
-      const int64_t lo = t[0], hi = t[p_[d] + 1], olo = f.knots[o][0], ohi = f.knots[o][p_[o] + 1];
-      auto it = std::upper_bound(pieces[d].begin(), pieces[d].end(), lo,
-                                 [](int64_t x, const Segment& s) { return x < s.at; });
-      for (; it != pieces[d].end() && it->at < hi; ++it)
-        if (it->from <= ohi && olo <= it->to) return true;
+      if (pieces.meet(d, f.knots[d][0], f.knots[d][p_[d] + 1], f.knots[o][0], f.knots[o][p_[o] + 1])) return true;
     }
     return false;
   };
-  std::vector<Function> work;
+  // (B-spline, made here): one made here by a split is narrower across the split than the one
+  // it came from, so an older line may cut it along the other direction: all lines are tried.
+  std::vector<std::pair<Function, bool>> work;
   for (const auto& [f, w] : functions_)
-    if (met(f)) work.push_back(f);
+    if (met(f)) work.push_back({f, false});
   while (!work.empty()) {
-    const Function f = work.back();
+    const Function f = work.back().first;
+    const bool made_here = work.back().second;
     work.pop_back();
     const auto found = functions_.find(f);
     if (found == functions_.end()) continue;  // split since it was queued
@@ -103,13 +151,10 @@ void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
       const int p = p_[d], o = 1 - d;
       const auto& t = f.knots[d];
       const int64_t lo = t[0], hi = t[p + 1], olo = f.knots[o][0], ohi = f.knots[o][p_[o] + 1];
-      const auto& lines = lines_[d];
-      auto it = lines.upper_bound(lo);
-      for (; it != lines.end() && it->first < hi; ++it)
-        if (std::find(t.begin(), t.begin() + p + 2, it->first) == t.begin() + p + 2 && covers(d, it->first, olo, ohi))
-          break;
-      if (it == lines.end() || it->first >= hi) continue;
-      const int64_t x = it->first;
+      const auto not_a_knot = [&](int64_t at) { return std::find(t.begin(), t.begin() + p + 2, at) == t.begin() + p + 2; };
+      const int64_t x = made_here ? first_line_cut(lines_[d], lo, hi, olo, ohi, not_a_knot)
+                                  : pieces.first_cut(d, lo, hi, [&](int64_t at) { return not_a_knot(at) && covers(d, at, olo, ohi); });
+      if (x < 0) continue;
       std::vector<double> T(p + 2);
       for (int k = 0; k <= p + 1; ++k) T[k] = parameter(d, t[k]);
       const auto [a, b] = bspline_kernel::split_weights<double>(T, parameter(d, x));
@@ -124,31 +169,39 @@ void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
       functions_.erase(found);
       functions_[left] += weight * a;
       functions_[right] += weight * b;
-      work.push_back(left);
-      work.push_back(right);
+      work.push_back({left, true});
+      work.push_back({right, true});
       break;
     }
   }
 }
 
-void DyadicLrMesh::split_elements() {
-  std::vector<Element> work = std::move(elements_), done;
+void DyadicLrMesh::split_elements(size_t first_inserted) {
+  const AddedPieces pieces(std::span<const Segment>(inserted_).subspan(first_inserted));
+  // (element, made here): as for the B-splines, a half may be cut by an older line.
+  std::vector<std::pair<Element, bool>> work;
+  std::vector<Element> done;
+  for (const Element& e : elements_)
+    if (pieces.meet(0, e.from[0], e.to[0], e.from[1], e.to[1]) || pieces.meet(1, e.from[1], e.to[1], e.from[0], e.to[0]))
+      work.push_back({e, false});
+    else
+      done.push_back(e);
+  elements_.clear();
   while (!work.empty()) {
-    const Element e = work.back();
+    const Element e = work.back().first;  // not a structured binding: clang 14 cannot capture one
+    const bool made_here = work.back().second;
     work.pop_back();
     bool split = false;
     for (int d = 0; d < 2 && !split; ++d) {
       const int o = 1 - d;
-      const auto& lines = lines_[d];
-      for (auto it = lines.upper_bound(e.from[d]); it != lines.end() && it->first < e.to[d]; ++it)
-        if (covers(d, it->first, e.from[o], e.to[o])) {
-          Element a = e, b = e;
-          a.to[d] = b.from[d] = it->first;
-          work.push_back(a);
-          work.push_back(b);
-          split = true;
-          break;
-        }
+      const int64_t x = made_here ? first_line_cut(lines_[d], e.from[d], e.to[d], e.from[o], e.to[o], [](int64_t) { return true; })
+                                  : pieces.first_cut(d, e.from[d], e.to[d], [&](int64_t at) { return covers(d, at, e.from[o], e.to[o]); });
+      if (x < 0) continue;
+      Element a = e, b = e;
+      a.to[d] = b.from[d] = x;
+      work.push_back({a, true});
+      work.push_back({b, true});
+      split = true;
     }
     if (!split) done.push_back(e);
   }
@@ -203,12 +256,13 @@ int DyadicLrMesh::refine(const std::vector<int>& marked, Strategy strategy) {
           if (t[k] < t[k + 1])
             segments.push_back({d, midpoint(d, t[k], t[k + 1]), sorted[f].knots[o][0], sorted[f].knots[o][p_[o] + 1]});
       }
+  const size_t first_inserted = inserted_.size();
   for (const Segment& s : segments) add_line(s);
   inserted_.insert(inserted_.end(), segments.begin(), segments.end());
   split_functions(segments);
   const int before = extended_;
   keep_traces_independent();
-  split_elements();
+  split_elements(first_inserted);
   return static_cast<int>(segments.size()) + extended_ - before;
 }
 
@@ -244,6 +298,7 @@ int64_t DyadicLrMesh::grid(int d, double value) const {
 }
 
 void DyadicLrMesh::insert(const std::vector<Segment>& segments, bool keep_traces) {
+  const size_t first_inserted = inserted_.size();
   for (const Segment& s : segments) {
     const int d = s.direction, o = 1 - d;
     auto describe = [&] {
@@ -272,7 +327,7 @@ void DyadicLrMesh::insert(const std::vector<Segment>& segments, bool keep_traces
     split_functions({s});
   }
   if (keep_traces) keep_traces_independent();
-  split_elements();
+  split_elements(first_inserted);
 }
 
 std::vector<DyadicLrMesh::Segment> DyadicLrMesh::boundary_extensions() const {

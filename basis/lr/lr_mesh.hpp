@@ -97,7 +97,8 @@ class DyadicLrMesh {
   // B-spline whose support one of those meets can need it (the others were split against every
   // older line), so only those are looked at.
   void split_functions(const std::vector<Segment>& added);
-  void split_elements();
+  // Splits the elements that the meshlines inserted from inserted_[first_inserted] on cut.
+  void split_elements(size_t first_inserted);
   std::vector<Segment> boundary_extensions() const;
   void keep_traces_independent();
   // The functions in the order of their knots, and the ones living on each element (indices
