@@ -4,6 +4,9 @@
 
 #include <cmath>
 
+// The one-argument functions with an array form (the grammar's names), for X(name).
+#define KNOTWORK_ARRAY_FUNCTIONS(X) X(sin) X(cos) X(tan) X(asin) X(acos) X(atan) X(sinh) X(cosh) X(tanh) X(exp) X(log)
+
 #if defined(__x86_64__)
 #include <immintrin.h>
 
@@ -14,30 +17,13 @@
 // builds) take the 2-lane functions, whose registers every x86-64 compiler agrees on.
 #define KNOTWORK_AVX2 __attribute__((target("avx2,fma")))
 extern "C" {
-__m128d _ZGVbN2v_sin(__m128d);
-__m128d _ZGVbN2v_cos(__m128d);
-__m128d _ZGVbN2v_tan(__m128d);
-__m128d _ZGVbN2v_asin(__m128d);
-__m128d _ZGVbN2v_acos(__m128d);
-__m128d _ZGVbN2v_atan(__m128d);
-__m128d _ZGVbN2v_sinh(__m128d);
-__m128d _ZGVbN2v_cosh(__m128d);
-__m128d _ZGVbN2v_tanh(__m128d);
-__m128d _ZGVbN2v_exp(__m128d);
-__m128d _ZGVbN2v_log(__m128d);
+#define KNOTWORK_DECLARE(f) \
+  __m128d _ZGVbN2v_##f(__m128d); \
+  KNOTWORK_AVX2 __m256d _ZGVdN4v_##f(__m256d);
+KNOTWORK_ARRAY_FUNCTIONS(KNOTWORK_DECLARE)
+#undef KNOTWORK_DECLARE
 __m128d _ZGVbN2vv_pow(__m128d, __m128d);
 __m128d _ZGVbN2vv_atan2(__m128d, __m128d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_sin(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_cos(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_tan(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_asin(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_acos(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_atan(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_sinh(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_cosh(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_tanh(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_exp(__m256d);
-KNOTWORK_AVX2 __m256d _ZGVdN4v_log(__m256d);
 KNOTWORK_AVX2 __m256d _ZGVdN4vv_pow(__m256d, __m256d);
 KNOTWORK_AVX2 __m256d _ZGVdN4vv_atan2(__m256d, __m256d);
 }
@@ -105,17 +91,7 @@ ArrayFunction1 array_function(const std::string& name) {
   const bool w = wide();
 #define KNOTWORK_UNARY(f) \
   if (name == #f) return w ? lanes4<_ZGVdN4v_##f> : lanes2<_ZGVbN2v_##f>;
-  KNOTWORK_UNARY(sin)
-  KNOTWORK_UNARY(cos)
-  KNOTWORK_UNARY(tan)
-  KNOTWORK_UNARY(asin)
-  KNOTWORK_UNARY(acos)
-  KNOTWORK_UNARY(atan)
-  KNOTWORK_UNARY(sinh)
-  KNOTWORK_UNARY(cosh)
-  KNOTWORK_UNARY(tanh)
-  KNOTWORK_UNARY(exp)
-  KNOTWORK_UNARY(log)
+  KNOTWORK_ARRAY_FUNCTIONS(KNOTWORK_UNARY)
 #undef KNOTWORK_UNARY
   return nullptr;
 }
@@ -142,17 +118,7 @@ void two_by_two(const double* a, const double* b, double* t, long n) {
 }
 #define KNOTWORK_SCALAR(f) \
   double f##_of(double a) { return std::f(a); }
-KNOTWORK_SCALAR(sin)
-KNOTWORK_SCALAR(cos)
-KNOTWORK_SCALAR(tan)
-KNOTWORK_SCALAR(asin)
-KNOTWORK_SCALAR(acos)
-KNOTWORK_SCALAR(atan)
-KNOTWORK_SCALAR(sinh)
-KNOTWORK_SCALAR(cosh)
-KNOTWORK_SCALAR(tanh)
-KNOTWORK_SCALAR(exp)
-KNOTWORK_SCALAR(log)
+KNOTWORK_ARRAY_FUNCTIONS(KNOTWORK_SCALAR)
 #undef KNOTWORK_SCALAR
 double pow_of(double a, double b) { return std::pow(a, b); }
 double atan2_of(double a, double b) { return std::atan2(a, b); }
@@ -161,17 +127,7 @@ double atan2_of(double a, double b) { return std::atan2(a, b); }
 ArrayFunction1 array_function(const std::string& name) {
 #define KNOTWORK_UNARY(f) \
   if (name == #f) return one_by_one<f##_of>;
-  KNOTWORK_UNARY(sin)
-  KNOTWORK_UNARY(cos)
-  KNOTWORK_UNARY(tan)
-  KNOTWORK_UNARY(asin)
-  KNOTWORK_UNARY(acos)
-  KNOTWORK_UNARY(atan)
-  KNOTWORK_UNARY(sinh)
-  KNOTWORK_UNARY(cosh)
-  KNOTWORK_UNARY(tanh)
-  KNOTWORK_UNARY(exp)
-  KNOTWORK_UNARY(log)
+  KNOTWORK_ARRAY_FUNCTIONS(KNOTWORK_UNARY)
 #undef KNOTWORK_UNARY
   return nullptr;
 }

@@ -257,32 +257,26 @@ TEST_CASE("Array functions from libmvec: scalar values within 4 ulp, special val
         REQUIRE(std::memcmp(part.data(), &t[first], 8 * length) == 0);
       }
   }
-  const ArrayFunction2 pow_of = array_pow();
-  REQUIRE(pow_of);
+  // Two arguments: each value against the scalar function, and alone the same bits.
+  const auto check_two = [&](const char* name, ArrayFunction2 f, double (*scalar)(double, double),
+                             const std::vector<double>& x, const std::vector<double>& y) {
+    REQUIRE(f);
+    f(x.data(), y.data(), t.data(), n);
+    for (long k = 0; k < n; ++k) {
+      const double expected = scalar(x[k], y[k]);
+      INFO(name << "(" << x[k] << ", " << y[k] << ") = " << t[k] << ", scalar " << expected);
+      REQUIRE(same_special(t[k], expected));
+      if (std::isfinite(expected)) REQUIRE(ulps_apart(t[k], expected) <= 4);
+      f(&x[k], &y[k], alone.data(), 1);
+      REQUIRE(std::memcmp(&alone[0], &t[k], 8) == 0);
+    }
+  };
   std::vector<double> base(n);
   for (long k = 0; k < n; ++k) base[k] = std::abs(a[k]) < 50 ? a[k] : 1.5;
-  pow_of(base.data(), b.data(), t.data(), n);
-  for (long k = 0; k < n; ++k) {
-    const double expected = std::pow(base[k], b[k]);
-    INFO("pow(" << base[k] << ", " << b[k] << ") = " << t[k] << ", scalar " << expected);
-    REQUIRE(same_special(t[k], expected));
-    if (std::isfinite(expected)) REQUIRE(ulps_apart(t[k], expected) <= 4);
-    pow_of(&base[k], &b[k], alone.data(), 1);
-    REQUIRE(std::memcmp(&alone[0], &t[k], 8) == 0);
-  }
+  check_two("pow", array_pow(), [](double x, double y) { return std::pow(x, y); }, base, b);
   // atan2(y, x) in every quadrant, on the axes (signed zeros) and at infinities.
-  const ArrayFunction2 atan2_of = array_atan2();
-  REQUIRE(atan2_of);
   std::vector<double> across(n);
   for (long k = 0; k < n; ++k) across[k] = k % 5 == 0 ? -0.0 : k % 5 == 1 ? 0.0 : k % 5 == 2 ? a[(k * 7) % n] : b[k] * 3;
-  atan2_of(a.data(), across.data(), t.data(), n);
-  for (long k = 0; k < n; ++k) {
-    const double expected = std::atan2(a[k], across[k]);
-    INFO("atan2(" << a[k] << ", " << across[k] << ") = " << t[k] << ", scalar " << expected);
-    REQUIRE(same_special(t[k], expected));
-    if (std::isfinite(expected)) REQUIRE(ulps_apart(t[k], expected) <= 4);
-    atan2_of(&a[k], &across[k], alone.data(), 1);
-    REQUIRE(std::memcmp(&alone[0], &t[k], 8) == 0);
-  }
+  check_two("atan2", array_atan2(), [](double x, double y) { return std::atan2(x, y); }, a, across);
   REQUIRE(array_function("sqrt") == nullptr);  // exact in every lane already: stays scalar
 }
