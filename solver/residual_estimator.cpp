@@ -29,6 +29,7 @@ void side_point(CellSide side, double t, double& u, double& v) {
 
 // The reference derivatives (u_u, u_v) of u_h at (u, v) of a cell, from its Bernstein
 // coefficients (index a + (p+1) b, a along u), kept from the interior pass for the sides.
+// u_h is a polynomial on the cell: the estimator refuses rational spaces.
 class ReferenceGradient {
  public:
   void operator()(const double* bernstein, int p, int q, double u, double v, double& su, double& sv) {

@@ -9,20 +9,26 @@
 
 namespace knotwork {
 
+void dehomogenize_point(const double h[3], const double hu[3], const double hv[3], GeometryAtPoints& out,
+                        Eigen::Index k) {
+  const double w = h[2], x = h[0] / w, y = h[1] / w;
+  out.x(k, 0) = x;
+  out.x(k, 1) = y;
+  out.jacobian(k, 0) = (hu[0] - x * hu[2]) / w;
+  out.jacobian(k, 1) = (hv[0] - x * hv[2]) / w;
+  out.jacobian(k, 2) = (hu[1] - y * hu[2]) / w;
+  out.jacobian(k, 3) = (hv[1] - y * hv[2]) / w;
+}
+
 void dehomogenize_map(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, const Eigen::MatrixX3d& hv,
                       GeometryAtPoints& out) {
   const Eigen::Index n = h.rows();
   out.x.resize(n, 2);
   out.jacobian.resize(n, 4);
   for (Eigen::Index k = 0; k < n; ++k) {
-    const double w = h(k, 2);
-    const double x = h(k, 0) / w, y = h(k, 1) / w;
-    out.x(k, 0) = x;
-    out.x(k, 1) = y;
-    out.jacobian(k, 0) = (hu(k, 0) - x * hu(k, 2)) / w;
-    out.jacobian(k, 1) = (hv(k, 0) - x * hv(k, 2)) / w;
-    out.jacobian(k, 2) = (hu(k, 1) - y * hu(k, 2)) / w;
-    out.jacobian(k, 3) = (hv(k, 1) - y * hv(k, 2)) / w;
+    const double hk[3] = {h(k, 0), h(k, 1), h(k, 2)}, huk[3] = {hu(k, 0), hu(k, 1), hu(k, 2)},
+                 hvk[3] = {hv(k, 0), hv(k, 1), hv(k, 2)};
+    dehomogenize_point(hk, huk, hvk, out, k);
   }
 }
 

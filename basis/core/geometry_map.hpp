@@ -52,6 +52,9 @@ class GeometryMap {
 // points h = (w x, w y, w) and their derivatives (rational maps).
 void dehomogenize_map(const Eigen::MatrixX3d& h, const Eigen::MatrixX3d& hu, const Eigen::MatrixX3d& hv,
                       GeometryAtPoints& out);
+// The same at one point k of `out` (sized already), from h, h_u, h_v of that point.
+void dehomogenize_point(const double h[3], const double hu[3], const double hv[3], GeometryAtPoints& out,
+                        Eigen::Index k);
 
 // The one NURBS map: a patch as the geometry of a space in its parameter domain (a tensor
 // space's elements, or the cells of a locally refined space). Every cell must lie inside one

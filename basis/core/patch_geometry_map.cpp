@@ -319,8 +319,8 @@ void PatchGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen:
   for (Eigen::Index k = 0; k < u.size(); ++k) {
     const double* du = cu.at(c.u0 + u[k] * (c.u1 - c.u0));
     const double* dv = cv.at(c.v0 + v[k] * (c.v1 - c.v0));
-    // The homogeneous point (w x, w y, w) and its derivatives in the cell's reference u and v
-    // (dehomogenize_map's formulas, point by point: no arrays per call).
+    // The homogeneous point (w x, w y, w) and its derivatives in the cell's reference u and v,
+    // dehomogenized point by point: no arrays per call.
     double h[3] = {0, 0, 0}, hu[3] = {0, 0, 0}, hv[3] = {0, 0, 0};
     for (int b = 0; b <= q; ++b)
       for (int a = 0; a <= p; ++a) {
@@ -334,13 +334,7 @@ void PatchGeometryMap::evaluate(int cell, const Eigen::VectorXd& u, const Eigen:
           hv[d] += n_v * P[d] * (c.v1 - c.v0);
         }
       }
-    const double w = h[2], x = h[0] / w, y = h[1] / w;
-    out.x(k, 0) = x;
-    out.x(k, 1) = y;
-    out.jacobian(k, 0) = (hu[0] - x * hu[2]) / w;
-    out.jacobian(k, 1) = (hv[0] - x * hv[2]) / w;
-    out.jacobian(k, 2) = (hu[1] - y * hu[2]) / w;
-    out.jacobian(k, 3) = (hv[1] - y * hv[2]) / w;
+    dehomogenize_point(h, hu, hv, out, k);
   }
 }
 

@@ -75,12 +75,11 @@ bool DyadicLrMesh::covers(int direction, int64_t at, int64_t from, int64_t to) c
   return it != lines_[direction].end() && pieces_cover(it->second, from, to);
 }
 
-// Knot insertion into one B-spline (bspline_kernel::split_weights), on the dyadic integers.
 namespace {
 
-// Meshline pieces just added, per direction, by position. A box (a support or an element) can
-// be cut by a line only since they came when one of them lies strictly inside it across the
-// line and meets its extent along it (closed): a line that newly covers an extent meets it.
+// Meshline pieces just added, per direction, by position. A box (a support or an element) that
+// no older line cut can be cut now only where one of these pieces lies strictly inside it across
+// its line and meets its extent along it (closed): a line that newly covers an extent meets it.
 // Looking at every B-spline and element after every refinement was a quarter of an adaptive
 // LR loop's refinement; looking at these only makes the same splits in the same order.
 class AddedPieces {
@@ -102,6 +101,12 @@ class AddedPieces {
       if ((*it)[0] != last && cut(last = (*it)[0])) return last;
     return -1;
   }
+  // Whether a piece meets the box [lo[0], hi[0]] x [lo[1], hi[1]] as above, in either direction.
+  bool meet_box(const std::array<int64_t, 2>& lo, const std::array<int64_t, 2>& hi) const {
+    return meet(0, lo[0], hi[0], lo[1], hi[1]) || meet(1, lo[1], hi[1], lo[0], hi[0]);
+  }
+
+ private:
   // Whether a piece on a line of direction d lies at lo < at < hi and meets [from, to].
   bool meet(int d, int64_t lo, int64_t hi, int64_t from, int64_t to) const {
     const auto& v = by_direction_[d];
@@ -111,11 +116,8 @@ class AddedPieces {
     return false;
   }
 
- private:
   std::array<std::vector<std::array<int64_t, 3>>, 2> by_direction_;  // (at, from, to)
 };
-
-}  // namespace
 
 // The first line position lo < at < hi (increasing) where the line covers [from, to] and
 // usable(at) holds, or -1.
@@ -126,21 +128,19 @@ int64_t first_line_cut(const Lines& lines, int64_t lo, int64_t hi, int64_t from,
   return -1;
 }
 
+}  // namespace
+
+// Knot insertion into one B-spline (bspline_kernel::split_weights), on the dyadic integers.
 void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
   incidence_.reset();
   const AddedPieces pieces(added);
-  const auto met = [&](const Function& f) {
-    for (int d = 0; d < 2; ++d) {
-      const int o = 1 - d;
-      if (pieces.meet(d, f.knots[d][0], f.knots[d][p_[d] + 1], f.knots[o][0], f.knots[o][p_[o] + 1])) return true;
-    }
-    return false;
-  };
   // (B-spline, made here): one made here by a split is narrower across the split than the one
   // it came from, so an older line may cut it along the other direction: all lines are tried.
   std::vector<std::pair<Function, bool>> work;
-  for (const auto& [f, w] : functions_)
-    if (met(f)) work.push_back({f, false});
+  for (const auto& [f, w] : functions_) {
+    const std::array<int64_t, 2> lo{f.knots[0][0], f.knots[1][0]}, hi{f.knots[0][p_[0] + 1], f.knots[1][p_[1] + 1]};
+    if (pieces.meet_box(lo, hi)) work.push_back({f, false});
+  }
   while (!work.empty()) {
     const Function f = work.back().first;
     const bool made_here = work.back().second;
@@ -182,10 +182,8 @@ void DyadicLrMesh::split_elements(size_t first_inserted) {
   std::vector<std::pair<Element, bool>> work;
   std::vector<Element> done;
   for (const Element& e : elements_)
-    if (pieces.meet(0, e.from[0], e.to[0], e.from[1], e.to[1]) || pieces.meet(1, e.from[1], e.to[1], e.from[0], e.to[0]))
-      work.push_back({e, false});
-    else
-      done.push_back(e);
+    if (pieces.meet_box(e.from, e.to)) work.push_back({e, false});
+    else done.push_back(e);
   elements_.clear();
   while (!work.empty()) {
     const Element e = work.back().first;  // not a structured binding: clang 14 cannot capture one

@@ -47,8 +47,7 @@ def check(binary, entry, scratch):
     pattern = re.escape(expected)
     for number in entry.get("varies", []):
         if re.escape(number) not in pattern:
-            problems_here = f"`varies` names {number}, which is not in the expected line"
-            return [problems_here]
+            return [f"`varies` names {number}, which is not in the expected line"]
         pattern = pattern.replace(re.escape(number), r"-?[0-9]+(\.[0-9]+)?(e[-+]?[0-9]+)?", 1)
     if not (len(lines) == 1 and re.fullmatch(pattern, lines[0])):
         problems.append("stderr was:\n      " + "\n      ".join(lines or ["(nothing)"]) + "\n    expected:\n      " + expected)
