@@ -648,14 +648,18 @@ PYBIND11_MODULE(_core, m) {
         const BezierCell& b = s.mesh().cell(s.checked_cell(cell));
         py::dict d;
         d["patch"] = b.patch;
-        d["degree"] = py::make_tuple(b.degree_u, b.degree_v);
-        d["parameter_box"] = py::make_tuple(b.u0, b.u1, b.v0, b.v1);
+        // A hexahedron (dimension 3) has a third degree, a third interval and six sides.
+        const bool volume = b.dimension == 3;
+        d["degree"] = volume ? py::make_tuple(b.degree_u, b.degree_v, int{b.degree_w}) : py::make_tuple(b.degree_u, b.degree_v);
+        d["parameter_box"] = volume ? py::make_tuple(b.u0, b.u1, b.v0, b.v1, b.w0, b.w1) : py::make_tuple(b.u0, b.u1, b.v0, b.v1);
         py::list sides;
-        for (int id : b.boundary)
+        for (int side = 0; side < b.num_sides(); ++side) {
+          const int id = b.boundary[side];
           sides.append(id < 0 ? py::object(py::none())
                               : py::object(py::str(id < int(s.mesh().boundary_names().size())
                                                        ? s.mesh().boundary_names()[id]
                                                        : std::to_string(id))));
+        }
         d["boundary"] = sides;
         return d;
       })

@@ -92,6 +92,8 @@ void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, in
   if (geometry.dimension() != 2)
     throw std::invalid_argument("boundary terms on surfaces in R^3 are not supported (closed surfaces only)");
   const BezierCell& c = mesh.cell(cell);
+  if (c.dimension != 2 || side > kSideLeft)
+    throw std::logic_error("evaluate_side_basis: the sides of quadrilateral cells only (volumes are not assembled yet)");
   const int p = c.degree_u, q = c.degree_v;
   const QuadratureRule1D rule = gauss_legendre(n);
   Eigen::VectorXd u(n), v(n), w(n);
@@ -102,7 +104,7 @@ void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, in
       case kSideBottom: u[k] = t; v[k] = 0; break;
       case kSideRight: u[k] = 1; v[k] = t; break;
       case kSideTop: u[k] = t; v[k] = 1; break;
-      case kSideLeft: u[k] = 0; v[k] = t; break;
+      default: u[k] = 0; v[k] = t; break;  // kSideLeft
     }
   }
   Eigen::MatrixXd B, Bu, Bv;

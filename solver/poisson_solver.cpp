@@ -131,6 +131,9 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     if (options.progress) options.progress(s);
   };
   if (problem.reaction < 0) throw std::invalid_argument("reaction must be >= 0");
+  // Hexahedral cells are built (basis/tensor: add_tensor_cells) but not yet assembled.
+  if (mesh.num_cells() > 0 && mesh.cell(0).dimension != 2)
+    throw std::invalid_argument("volumes (hexahedral cells) cannot be solved yet: docs/VOLUMES.md");
   // A gradient given by the caller (a Python exact solution) has as many components as it was given.
   if (problem.exact && problem.exact->on_surface() != (geometry.dimension() == 3))
     throw InputError(problem.exact->u.where() + ": the exact solution's gradient has " +

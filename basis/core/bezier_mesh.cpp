@@ -8,6 +8,9 @@
 
 namespace knotwork {
 
+// The cells are a large share of a big tensor mesh's memory (4096^2 cells: 1.5 GB at 88 bytes).
+static_assert(sizeof(BezierCell) <= 88, "BezierCell grew beyond 88 bytes: pack it or measure the memory it costs");
+
 int BezierMesh::add_extraction(Eigen::MatrixXd matrix) {
   pool_.push_back(std::move(matrix));
   return static_cast<int>(pool_.size()) - 1;
@@ -27,9 +30,12 @@ int PooledExtractions::add(Eigen::MatrixXd matrix) {
 void BezierMesh::add_cell(const BezierCell& cell, std::span<const int> functions,
                           int extraction) {
   const Eigen::MatrixXd& C = pool_.at(extraction);
-  if (C.rows() != static_cast<Eigen::Index>(functions.size()) ||
-      C.cols() != (cell.degree_u + 1) * (cell.degree_v + 1))
+  if (C.rows() != static_cast<Eigen::Index>(functions.size()) || C.cols() != cell.num_bernstein())
     throw std::logic_error("BezierMesh::add_cell: extraction matrix size does not match");
+  if ((cell.dimension == 2) != (cell.degree_w == 0) || (cell.dimension != 2 && cell.dimension != 3))
+    throw std::logic_error("BezierMesh::add_cell: a cell is a quadrilateral (degree_w = 0) or a hexahedron");
+  if (!cells_.empty() && cell.dimension != cells_.front().dimension)
+    throw std::logic_error("BezierMesh::add_cell: quadrilaterals and hexahedra in one mesh");
   cells_.push_back(cell);
   extraction_of_cell_.push_back(extraction);
   // Offsets are ints (half the index memory): refuse, rather than wrap, beyond 2^31 ids.
@@ -38,7 +44,7 @@ void BezierMesh::add_cell(const BezierCell& cell, std::span<const int> functions
   ids_.insert(ids_.end(), functions.begin(), functions.end());
   offsets_.push_back(static_cast<int>(ids_.size()));
   max_active_ = std::max(max_active_, static_cast<int>(functions.size()));
-  max_degree_ = std::max({max_degree_, cell.degree_u, cell.degree_v});
+  max_degree_ = std::max({max_degree_, cell.degree_u, cell.degree_v, int{cell.degree_w}});
 }
 
 void rational_cell_extraction(const BezierMesh& mesh, int c, Eigen::VectorXd& wb,

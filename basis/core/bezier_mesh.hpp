@@ -1,6 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <mutex>
 #include <span>
 #include <string>
@@ -8,15 +9,25 @@
 
 namespace knotwork {
 
-// Side order of a cell, counter-clockwise in its parameter box [u0,u1]x[v0,v1].
-enum CellSide { kSideBottom = 0, kSideRight = 1, kSideTop = 2, kSideLeft = 3 };
+// Side order of a cell, counter-clockwise in its parameter box [u0,u1]x[v0,v1]; a hexahedral
+// cell (dimension 3) also has the sides w = w0 (front) and w = w1 (back).
+enum CellSide { kSideBottom = 0, kSideRight = 1, kSideTop = 2, kSideLeft = 3, kSideFront = 4, kSideBack = 5 };
 
+// One cell: a quadrilateral (dimension 2: planar domains and surfaces) or a hexahedron
+// (dimension 3: volumes). A quadrilateral has degree_w = 0, so (p+1)(q+1)(r+1) counts its
+// Bernstein polynomials in either dimension. The fields are sized so that the third direction
+// costs 16 bytes per cell (88 in all): tensor meshes hold millions of cells.
 struct BezierCell {
   int patch = 0;
-  int index_u = 0, index_v = 0;  // position of the element in its patch (tensor bases)
-  double u0 = 0, u1 = 1, v0 = 0, v1 = 1;  // parameter box (for reporting; maps use [0,1]^2)
+  int index_u = 0, index_v = 0, index_w = 0;  // position of the element in its patch (tensor bases)
+  double u0 = 0, u1 = 1, v0 = 0, v1 = 1, w0 = 0, w1 = 0;  // parameter box (for reporting; maps use [0,1]^d)
   int degree_u = 1, degree_v = 1;
-  std::array<int, 4> boundary{-1, -1, -1, -1};  // boundary id per CellSide, -1 if interior
+  std::int16_t degree_w = 0;
+  std::int8_t dimension = 2;
+  // Boundary id per CellSide, -1 if interior (sides 4 and 5: hexahedra only).
+  std::array<std::int16_t, 6> boundary{-1, -1, -1, -1, -1, -1};
+  int num_sides() const { return 2 * dimension; }
+  int num_bernstein() const { return (degree_u + 1) * (degree_v + 1) * (degree_w + 1); }
 };
 
 // Two cells that meet along part of a side: the piece [a_from, a_to] of cell_a's side (in

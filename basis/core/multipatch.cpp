@@ -3,9 +3,12 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "basis/core/input_error.hpp"
 #include "quadrature/gauss_legendre.hpp"
@@ -28,6 +31,8 @@ int patch_side_of_cell_side(CellSide side) {
     case kSideRight: return 2;
     case kSideBottom: return 3;
     case kSideTop: return 4;
+    case kSideFront: return 5;  // a hexahedron's w = 0 and w = 1, as G+Smo numbers a volume's sides
+    case kSideBack: return 6;
   }
   return 0;
 }
@@ -46,6 +51,10 @@ std::vector<PatchSideRef> exterior_sides(const MultiPatch& domain) {
 
 std::array<int, 4> boundary_ids_of_patch(const std::vector<PatchSideRef>& exterior, int p) {
   std::array<int, 4> id{-1, -1, -1, -1};
+  // A cell keeps its sides' boundary ids in 16 bits (BezierCell).
+  if (exterior.size() > static_cast<size_t>(std::numeric_limits<std::int16_t>::max()))
+    throw InputError("the domain has " + std::to_string(exterior.size()) +
+                     " boundary sides; knotwork takes at most 32767");
   for (size_t k = 0; k < exterior.size(); ++k)
     if (exterior[k].patch == p) id[cell_side_of_patch_side(exterior[k].side)] = static_cast<int>(k);
   return id;

@@ -3,6 +3,8 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -79,13 +81,20 @@ std::vector<int> deduplicate(const std::vector<Eigen::MatrixXd>& ms, std::vector
   return id;
 }
 
-Eigen::MatrixXd kronecker(const Eigen::MatrixXd& cu, const Eigen::MatrixXd& cv) {
-  const int pu = static_cast<int>(cu.rows()), pv = static_cast<int>(cv.rows());
-  Eigen::MatrixXd C(pu * pv, pu * pv);
-  for (int av = 0; av < pv; ++av)
-    for (int au = 0; au < pu; ++au)
-      for (int bv = 0; bv < pv; ++bv)
-        for (int bu = 0; bu < pu; ++bu) C(au + pu * av, bu + pu * bv) = cu(au, bu) * cv(av, bv);
+// The extraction of a tensor-product cell: the Kronecker product of its univariate ones (u
+// fastest), row a + p_u b [+ p_u p_v c], column likewise.
+Eigen::MatrixXd kronecker(std::span<const Eigen::MatrixXd* const> factors) {
+  Eigen::MatrixXd C = *factors[0];
+  for (size_t d = 1; d < factors.size(); ++d) {
+    const Eigen::MatrixXd& f = *factors[d];
+    const Eigen::Index pc = C.rows(), pf = f.rows();
+    Eigen::MatrixXd next(pc * pf, pc * pf);
+    for (Eigen::Index a = 0; a < pf; ++a)
+      for (Eigen::Index i = 0; i < pc; ++i)
+        for (Eigen::Index b = 0; b < pf; ++b)
+          for (Eigen::Index j = 0; j < pc; ++j) next(i + pc * a, j + pc * b) = C(i, j) * f(a, b);
+    C.swap(next);
+  }
   return C;
 }
 
@@ -138,6 +147,82 @@ Eigen::MatrixX3d refined_homogeneous_net(const NurbsPatch& patch, const BSplineB
   return net;
 }
 
+void add_tensor_cells(BezierMesh& mesh, std::span<const BSplineBasis1D> bases, int slab_from, int slab_to,
+                      int offset) {
+  const int dim = static_cast<int>(bases.size());
+  if (dim != 2 && dim != 3) throw std::logic_error("add_tensor_cells: 2 or 3 directions");
+  std::array<std::vector<int>, 3> spans, distinct, representative;
+  std::array<std::vector<Eigen::MatrixXd>, 3> extraction;
+  std::array<int, 3> degree{0, 0, 0}, functions{1, 1, 1}, elements{1, 1, 1};
+  std::array<int, 3> stride{0, 0, 0};  // of the pool index over distinct extractions
+  int pool_size = 1;
+  for (int k = 0; k < dim; ++k) {
+    spans[k] = bases[k].element_spans();
+    extraction[k] = bezier_extraction(bases[k]);
+    distinct[k] = deduplicate(extraction[k], representative[k]);
+    degree[k] = bases[k].degree();
+    functions[k] = bases[k].num_functions();
+    elements[k] = static_cast<int>(spans[k].size());
+    stride[k] = pool_size;
+    pool_size *= static_cast<int>(representative[k].size());
+  }
+  const int last = dim - 1;  // the slabs run along the last direction
+  if (slab_from < 0 || slab_to > elements[last] || slab_from >= slab_to)
+    throw std::logic_error("add_tensor_cells: slabs outside the grid");
+  // The pool's matrix of each tuple of distinct univariate extractions, made on first use.
+  std::vector<int> pool_index(pool_size, -1);
+  const std::array<int, 3> bernstein{degree[0] + 1, degree[1] + 1, degree[2] + 1};
+  std::vector<int> ids(bernstein[0] * bernstein[1] * bernstein[2]);
+  long cells = slab_to - slab_from;
+  for (int k = 0; k < last; ++k) cells *= elements[k];
+  mesh.reserve(static_cast<int>(cells), cells * static_cast<long>(ids.size()));
+  mesh.set_boundary_names(dim == 2 ? std::vector<std::string>{"bottom", "right", "top", "left"}
+                                   : std::vector<std::string>{"1", "2", "3", "4", "5", "6"});
+  // A side's boundary id: 2D bottom, right, top, left; 3D u = 0, u = 1, v = 0, v = 1, w = 0,
+  // w = 1 (the order G+Smo and GeoPDEs number a volume's sides in).
+  constexpr std::array<CellSide, 3> side_low{kSideLeft, kSideBottom, kSideFront}, side_high{kSideRight, kSideTop, kSideBack};
+  const auto boundary_id = [dim](int k, bool high) {
+    if (dim == 3) return 2 * k + (high ? 1 : 0);
+    return k == 0 ? (high ? 1 : 3) : (high ? 2 : 0);
+  };
+  std::array<int, 3> e{0, 0, 0};
+  const Eigen::MatrixXd* factors[3];
+  for (e[2] = dim == 3 ? slab_from : 0; e[2] < (dim == 3 ? slab_to : 1); ++e[2])
+    for (e[1] = dim == 2 ? slab_from : 0; e[1] < (dim == 2 ? slab_to : elements[1]); ++e[1])
+      for (e[0] = 0; e[0] < elements[0]; ++e[0]) {
+        int key = 0;
+        for (int k = 0; k < dim; ++k) key += stride[k] * distinct[k][e[k]];
+        int& pooled = pool_index[key];
+        if (pooled < 0) {
+          for (int k = 0; k < dim; ++k) factors[k] = &extraction[k][representative[k][distinct[k][e[k]]]];
+          pooled = mesh.add_extraction(kronecker({factors, static_cast<size_t>(dim)}));
+        }
+        BezierCell cell;
+        cell.dimension = static_cast<std::int8_t>(dim);
+        double* box[3][2] = {{&cell.u0, &cell.u1}, {&cell.v0, &cell.v1}, {&cell.w0, &cell.w1}};
+        int* index[3] = {&cell.index_u, &cell.index_v, &cell.index_w};
+        for (int k = 0; k < dim; ++k) {
+          const std::vector<double>& knots = bases[k].knots();
+          *index[k] = e[k];
+          *box[k][0] = knots[spans[k][e[k]]];
+          *box[k][1] = knots[spans[k][e[k]] + 1];
+          if (e[k] == 0) cell.boundary[side_low[k]] = static_cast<std::int16_t>(boundary_id(k, false));
+          if (e[k] == elements[k] - 1) cell.boundary[side_high[k]] = static_cast<std::int16_t>(boundary_id(k, true));
+        }
+        cell.degree_u = degree[0];
+        cell.degree_v = degree[1];
+        cell.degree_w = static_cast<std::int16_t>(dim == 3 ? degree[2] : 0);
+        for (int c = 0; c < bernstein[2]; ++c)
+          for (int b = 0; b < bernstein[1]; ++b)
+            for (int a = 0; a < bernstein[0]; ++a)
+              ids[a + bernstein[0] * (b + bernstein[1] * c)] =
+                  (spans[0][e[0]] - degree[0] + a) +
+                  functions[0] * ((spans[1][e[1]] - degree[1] + b) + functions[1] * (spans[2].empty() ? 0 : spans[2][e[2]] - degree[2] + c)) -
+                  offset;
+        mesh.add_cell(cell, ids, pooled);
+      }
+}
+
 TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& o,
                                                  RowShare share) {
   TensorDiscretization d;
@@ -148,7 +233,7 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
   d.geometry_v = pv.geometry;
   d.patch = patch;
 
-  const int p = o.degree[0], q = o.degree[1];
+  const int q = o.degree[1];
   const int su = d.space_u.num_functions(), sv = d.space_v.num_functions();
   const auto spans_u = d.space_u.element_spans(), spans_v = d.space_v.element_spans();
   d.elements_u = static_cast<int>(spans_u.size());
@@ -196,42 +281,11 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
   BezierMesh& mesh = d.mesh;
   const int offset = su * function_row_from;
   mesh.set_num_functions(su * (function_row_to - function_row_from));
-  mesh.set_boundary_names({"bottom", "right", "top", "left"});
   // Geometry and space bases coincide (degree >= the geometry's), so do the net's rows.
   if (o.rational) mesh.set_weights(d.geometry_homogeneous.col(2));
 
-  const auto Cu = bezier_extraction(d.space_u), Cv = bezier_extraction(d.space_v);
-  std::vector<int> rep_u, rep_v;
-  const auto idu = deduplicate(Cu, rep_u), idv = deduplicate(Cv, rep_v);
-  // The pool's matrix of each pair of distinct univariate extractions, made on first use.
-  std::vector<int> pool_index(rep_u.size() * rep_v.size(), -1);
-  const auto& U = d.space_u.knots();
-  const auto& V = d.space_v.knots();
-  std::vector<int> ids((p + 1) * (q + 1));
-  const long cells = static_cast<long>(d.elements_u) * (row_to - row_from);
-  mesh.reserve(static_cast<int>(cells), cells * (p + 1) * (q + 1));
-  for (int iv = row_from; iv < row_to; ++iv)
-    for (int iu = 0; iu < d.elements_u; ++iu) {
-      int& pooled = pool_index[idu[iu] + rep_u.size() * idv[iv]];
-      if (pooled < 0) pooled = mesh.add_extraction(kronecker(Cu[rep_u[idu[iu]]], Cv[rep_v[idv[iv]]]));
-      BezierCell cell;
-      cell.index_u = iu;
-      cell.index_v = iv;
-      cell.u0 = U[spans_u[iu]];
-      cell.u1 = U[spans_u[iu] + 1];
-      cell.v0 = V[spans_v[iv]];
-      cell.v1 = V[spans_v[iv] + 1];
-      cell.degree_u = p;
-      cell.degree_v = q;
-      if (iv == 0) cell.boundary[kSideBottom] = 0;
-      if (iu == d.elements_u - 1) cell.boundary[kSideRight] = 1;
-      if (iv == d.elements_v - 1) cell.boundary[kSideTop] = 2;
-      if (iu == 0) cell.boundary[kSideLeft] = 3;
-      for (int av = 0; av <= q; ++av)
-        for (int au = 0; au <= p; ++au)
-          ids[au + (p + 1) * av] = (spans_u[iu] - p + au) + su * (spans_v[iv] - q + av) - offset;
-      mesh.add_cell(cell, ids, pooled);
-    }
+  const std::array<BSplineBasis1D, 2> bases{d.space_u, d.space_v};
+  add_tensor_cells(mesh, bases, row_from, row_to, offset);
   return d;
 }
 

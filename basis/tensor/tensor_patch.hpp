@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
@@ -45,6 +46,15 @@ struct TensorDiscretization {
 struct RowShare {
   int rank = 0, ranks = 1;
 };
+
+// The cells of a tensor-product space on the grid of its univariate bases' elements, in 2 or 3
+// directions (bases u, v[, w]): the slabs [slab_from, slab_to) of elements along the last
+// direction, element (i, j[, k]) as cell i + n_u (j [+ n_v k]) from the first slab, functions
+// numbered i + n_u j [+ n_u n_v k] less `offset`, extractions pooled per distinct tuple of
+// univariate ones. Boundary ids: in 2D bottom 0, right 1, top 2, left 3; in 3D the sides u = 0,
+// u = 1, v = 0, v = 1, w = 0, w = 1 are 0..5 (named "1".."6", as G+Smo and GeoPDEs number them).
+void add_tensor_cells(BezierMesh& mesh, std::span<const BSplineBasis1D> bases, int slab_from, int slab_to,
+                      int offset = 0);
 
 // k-refinement of the patch: every original span cut into equal parts, plus any extra
 // knots; new knots get
