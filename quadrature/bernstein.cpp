@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <tuple>
 #include <vector>
 
@@ -36,24 +37,57 @@ void bernstein_values_and_derivatives(int p, double t, double* values, double* d
   }
 }
 
+namespace {
+
+// Tensor-product Bernstein polynomials in `dim` (2 or 3) directions of degrees `degree` at the
+// points (coordinate[0][k], coordinate[1][k][, coordinate[2][k]]): values and the reference
+// derivative along each direction, function a + (p+1) b [+ (p+1)(q+1) c]. The products are
+// formed direction by direction from u on, so the 2D values are those of two factors.
+void tensor_bernstein_in(int dim, const int* degree, const Eigen::VectorXd* const* coordinate, Eigen::MatrixXd& B,
+                         Eigen::MatrixXd* const* derivative) {
+  const Eigen::Index n = coordinate[0]->size();
+  const int p = degree[0], q = degree[1], r = dim == 3 ? degree[2] : 0;
+  const int nb = (p + 1) * (q + 1) * (r + 1);
+  B.resize(n, nb);
+  for (int d = 0; d < dim; ++d) derivative[d]->resize(n, nb);
+  std::vector<double> b[3], db[3];
+  for (int d = 0; d < dim; ++d) b[d].resize(degree[d] + 1), db[d].resize(degree[d] + 1);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    for (int d = 0; d < dim; ++d) bernstein_values_and_derivatives(degree[d], (*coordinate[d])[k], b[d].data(), db[d].data());
+    for (int c = 0; c <= r; ++c)
+      for (int e = 0; e <= q; ++e)
+        for (int a = 0; a <= p; ++a) {
+          const int f = a + (p + 1) * (e + (q + 1) * c);
+          if (dim == 2) {
+            B(k, f) = b[0][a] * b[1][e];
+            (*derivative[0])(k, f) = db[0][a] * b[1][e];
+            (*derivative[1])(k, f) = b[0][a] * db[1][e];
+          } else {
+            B(k, f) = b[0][a] * b[1][e] * b[2][c];
+            (*derivative[0])(k, f) = db[0][a] * b[1][e] * b[2][c];
+            (*derivative[1])(k, f) = b[0][a] * db[1][e] * b[2][c];
+            (*derivative[2])(k, f) = b[0][a] * b[1][e] * db[2][c];
+          }
+        }
+  }
+}
+
+}  // namespace
+
 void tensor_bernstein(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                       Eigen::MatrixXd& B, Eigen::MatrixXd& Bu, Eigen::MatrixXd& Bv) {
-  const Eigen::Index n = u.size();
-  const int nb = (p + 1) * (q + 1);
-  B.resize(n, nb);
-  Bu.resize(n, nb);
-  Bv.resize(n, nb);
-  std::vector<double> bu(p + 1), du(p + 1), bv(q + 1), dv(q + 1);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    bernstein_values_and_derivatives(p, u[k], bu.data(), du.data());
-    bernstein_values_and_derivatives(q, v[k], bv.data(), dv.data());
-    for (int c = 0; c <= q; ++c)
-      for (int a = 0; a <= p; ++a) {
-        B(k, a + (p + 1) * c) = bu[a] * bv[c];
-        Bu(k, a + (p + 1) * c) = du[a] * bv[c];
-        Bv(k, a + (p + 1) * c) = bu[a] * dv[c];
-      }
-  }
+  const int degree[2] = {p, q};
+  const Eigen::VectorXd* coordinate[2] = {&u, &v};
+  Eigen::MatrixXd* derivative[2] = {&Bu, &Bv};
+  tensor_bernstein_in(2, degree, coordinate, B, derivative);
+}
+
+void tensor_bernstein(int p, int q, int r, const Eigen::VectorXd& u, const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                      Eigen::MatrixXd& B, Eigen::MatrixXd& Bu, Eigen::MatrixXd& Bv, Eigen::MatrixXd& Bw) {
+  const int degree[3] = {p, q, r};
+  const Eigen::VectorXd* coordinate[3] = {&u, &v, &w};
+  Eigen::MatrixXd* derivative[3] = {&Bu, &Bv, &Bw};
+  tensor_bernstein_in(3, degree, coordinate, B, derivative);
 }
 
 namespace {
@@ -94,43 +128,61 @@ void tensor_bernstein_second(int p, int q, const Eigen::VectorXd& u, const Eigen
 
 namespace {
 
-BernsteinTable make_table(int p, int q, int nu, int nv) {
+// nw = 0: a 2D table (r is then 0).
+BernsteinTable make_table(int p, int q, int r, int nu, int nv, int nw) {
   BernsteinTable t;
   t.p = p;
   t.q = q;
+  t.r = r;
   t.rule_u = gauss_legendre(nu);
   t.rule_v = gauss_legendre(nv);
-  const int np = nu * nv;
+  if (nw > 0) t.rule_w = gauss_legendre(nw);
+  const int layers = std::max(nw, 1);
+  const int np = nu * nv * layers;
   t.point_u.resize(np);
   t.point_v.resize(np);
+  if (nw > 0) t.point_w.resize(np);
   t.weight.resize(np);
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      const int k = i + nu * j;
-      t.point_u[k] = t.rule_u.nodes[i];
-      t.point_v[k] = t.rule_v.nodes[j];
-      t.weight[k] = t.rule_u.weights[i] * t.rule_v.weights[j];
-    }
-  tensor_bernstein(p, q, t.point_u, t.point_v, t.value, t.d_u, t.d_v);
+  for (int l = 0; l < layers; ++l)
+    for (int j = 0; j < nv; ++j)
+      for (int i = 0; i < nu; ++i) {
+        const int k = i + nu * (j + nv * l);
+        t.point_u[k] = t.rule_u.nodes[i];
+        t.point_v[k] = t.rule_v.nodes[j];
+        t.weight[k] = t.rule_u.weights[i] * t.rule_v.weights[j];
+        if (nw > 0) {
+          t.point_w[k] = t.rule_w.nodes[l];
+          t.weight[k] *= t.rule_w.weights[l];
+        }
+      }
+  if (nw > 0) tensor_bernstein(p, q, r, t.point_u, t.point_v, t.point_w, t.value, t.d_u, t.d_v, t.d_w);
+  else tensor_bernstein(p, q, t.point_u, t.point_v, t.value, t.d_u, t.d_v);
   return t;
+}
+
+// Called several times per cell by every thread: a thread's own short list of the tables it
+// has used answers without the lock (the shared map is locked only on a thread's miss).
+const BernsteinTable& cached_table(int p, int q, int r, int nu, int nv, int nw) {
+  thread_local std::vector<std::pair<std::array<int, 6>, const BernsteinTable*>> seen;
+  const std::array<int, 6> key{p, q, r, nu, nv, nw};
+  for (const auto& [k, table] : seen)
+    if (k == key) return *table;
+  static std::mutex mutex;
+  static std::map<std::array<int, 6>, std::unique_ptr<BernsteinTable>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[key];
+  if (!slot) slot = std::make_unique<BernsteinTable>(make_table(p, q, r, nu, nv, nw));
+  seen.emplace_back(key, slot.get());
+  return *slot;
 }
 
 }  // namespace
 
-const BernsteinTable& bernstein_table(int p, int q, int nu, int nv) {
-  // Called several times per cell by every thread: a thread's own short list of the tables
-  // it has used answers without the lock (the shared map is locked only on a thread's miss).
-  thread_local std::vector<std::pair<std::array<int, 4>, const BernsteinTable*>> seen;
-  const std::array<int, 4> key{p, q, nu, nv};
-  for (const auto& [k, table] : seen)
-    if (k == key) return *table;
-  static std::mutex mutex;
-  static std::map<std::tuple<int, int, int, int>, std::unique_ptr<BernsteinTable>> cache;
-  std::lock_guard<std::mutex> lock(mutex);
-  auto& slot = cache[{p, q, nu, nv}];
-  if (!slot) slot = std::make_unique<BernsteinTable>(make_table(p, q, nu, nv));
-  seen.emplace_back(key, slot.get());
-  return *slot;
+const BernsteinTable& bernstein_table(int p, int q, int nu, int nv) { return cached_table(p, q, 0, nu, nv, 0); }
+
+const BernsteinTable& bernstein_table(int p, int q, int r, int nu, int nv, int nw) {
+  if (nw < 1) throw std::invalid_argument("bernstein_table: a trivariate rule needs nw >= 1");
+  return cached_table(p, q, r, nu, nv, nw);
 }
 
 }  // namespace knotwork

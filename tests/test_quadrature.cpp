@@ -1,5 +1,9 @@
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
 
 #include "quadrature/bernstein.hpp"
 #include "quadrature/gauss_legendre.hpp"
@@ -43,6 +47,48 @@ TEST_CASE("Gauss-Legendre matches the known 3-point rule", "[quadrature]") {
   REQUIRE(std::abs(r.weights[0] - 5.0 / 18) < 2e-16);
   REQUIRE(std::abs(r.weights[1] - 8.0 / 18) < 2e-16);
   REQUIRE_THROWS(gauss_legendre(0));
+}
+
+TEST_CASE("Trivariate Bernstein tables: partition of unity, derivatives, exact integrals, the 2D values", "[quadrature]") {
+  const double eps = std::numeric_limits<double>::epsilon();
+  for (int p = 0; p <= 4; ++p) {
+    const int q = p + 1, r = std::max(p - 1, 0);
+    const BernsteinTable& t = bernstein_table(p, q, r, p + 1, q + 1, r + 2);
+    REQUIRE(&t == &bernstein_table(p, q, r, p + 1, q + 1, r + 2));  // cached
+    REQUIRE(t.num_functions() == (p + 1) * (q + 1) * (r + 1));
+    REQUIRE(t.num_points() == (p + 1) * (q + 1) * (r + 2));
+    // The de Casteljau values are sums of products of numbers in [0, 1]: each value and each
+    // sum carries at most a few (p + q + r + 3) roundings.
+    const double tolerance = 4 * (p + q + r + 3) * eps;
+    for (int k = 0; k < t.num_points(); ++k) {
+      CHECK(std::abs(t.value.row(k).sum() - 1.0) <= tolerance * t.num_functions());
+      // Each derivative row sums to 0; its entries are at most the degree in size.
+      CHECK(std::abs(t.d_u.row(k).sum()) <= tolerance * t.num_functions() * (p + 1));
+      CHECK(std::abs(t.d_v.row(k).sum()) <= tolerance * t.num_functions() * (q + 1));
+      CHECK(std::abs(t.d_w.row(k).sum()) <= tolerance * t.num_functions() * (r + 1));
+    }
+    // Every Bernstein polynomial of degrees (p, q, r) integrates to 1/((p+1)(q+1)(r+1)), and
+    // these rules are exact for its degree.
+    const Eigen::VectorXd integrals = t.value.transpose() * t.weight;
+    for (Eigen::Index b = 0; b < integrals.size(); ++b)
+      CHECK(std::abs(integrals[b] - 1.0 / t.num_functions()) <= tolerance * t.num_points() / t.num_functions());
+    // A layer of the trivariate table at w is the bivariate table times the univariate
+    // Bernstein values at w (the same products, formed in the same order).
+    const BernsteinTable& flat = bernstein_table(p, q, p + 1, q + 1);
+    std::vector<double> bw(r + 1), dw(r + 1);
+    for (int l = 0; l < r + 2; ++l) {
+      bernstein_values_and_derivatives(r, t.rule_w.nodes[l], bw.data(), dw.data());
+      for (int k = 0; k < flat.num_points(); ++k)
+        for (int c = 0; c <= r; ++c)
+          for (int b = 0; b < flat.num_functions(); ++b) {
+            const int point = k + flat.num_points() * l, function = b + flat.num_functions() * c;
+            CHECK(t.value(point, function) == flat.value(k, b) * bw[c]);
+            CHECK(t.d_u(point, function) == flat.d_u(k, b) * bw[c]);
+            CHECK(t.d_w(point, function) == flat.value(k, b) * dw[c]);
+          }
+    }
+  }
+  CHECK_THROWS_AS(bernstein_table(1, 1, 1, 2, 2, 0), std::invalid_argument);
 }
 
 TEST_CASE("Bernstein tables: partition of unity, derivatives, exact integrals", "[quadrature]") {
