@@ -33,7 +33,13 @@ namespace {
 
 std::string describe_cell(const BezierMesh& mesh, int c) {
   const BezierCell& cell = mesh.cell(c);
-  return knotwork::describe_cell(c, cell.u0, cell.u1, cell.v0, cell.v1);
+  std::string text = knotwork::describe_cell(c, cell.u0, cell.u1, cell.v0, cell.v1);
+  if (cell.dimension == 3) {  // a hexahedron: its w interval too
+    std::ostringstream w;
+    w << ", w in [" << cell.w0 << ", " << cell.w1 << "])";
+    text.replace(text.size() - 1, 1, w.str());
+  }
+  return text;
 }
 
 // The first point (lowest cell) where A is not positive definite or c is negative.
@@ -195,9 +201,13 @@ template <class Emit, class Integrals>
 void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonForm& form,
                     const DofLayout& layout, const Eigen::VectorXd& fixed_values, const QuadratureOptions& quadrature,
                     CellRange cells, Emit emit, Integrals integrals_of) {
+  // dim: the physical space's, the gradients' components. A surface is dim 3 with quadrilateral
+  // cells, a volume dim 3 with hexahedra (grad = J^{-T} grad_ref: nothing surface-specific).
   const int dim = geometry.dimension();
+  const bool volume = geometry.parametric_dimension() == 3;
+  const bool surface = dim == 3 && !volume;
   const bool derived = form.load && !form.source;
-  if (derived && (!form.exact || form.exact->hessian[0][0].empty() || dim != 3))
+  if (derived && (!form.exact || form.exact->hessian[0][0].empty() || !surface))
     throw std::invalid_argument("assemble_poisson: no source, and no exact solution on a surface to derive it from");
   const int first = cells.first, last = cells.last < 0 ? mesh.num_cells() : cells.last;
   std::optional<ExpressionBatch> compiled_source;  // merged once; each thread runs its own copy
@@ -211,7 +221,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   std::optional<ExpressionBatch> compiled_coefficients;
   if (variable) {
     // A matrix is 2x2 (three entries) in the plane and 3x3 (six) on a surface: the readers see to it.
-    if ((num_diffusion == 3 && dim != 2) || (num_diffusion == 6 && dim != 3))
+    if ((num_diffusion == 3 && dim != 2) || (num_diffusion == 6 && !surface))
       throw std::logic_error("assemble_poisson: a coefficient matrix of the wrong size for the domain");
     std::vector<Expression> all = variable->diffusion;
     if (variable_reaction) all.push_back(variable->reaction);
@@ -265,6 +275,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
       const int nv = rule_points(quadrature.points_v, cell.degree_v, 1);
       const SeparableExtraction* rows = separable ? separable->of_cell(mesh, c) : nullptr;
       if (rows) evaluate_cell_functions(mesh, geometry, *rows, c, nu, nv, cf);
+      else if (volume) evaluate_volume_cell_basis(mesh, geometry, c, nu, nv, rule_points(quadrature.points_w, cell.degree_w, 1), cb);
       else evaluate_cell_basis(mesh, geometry, c, nu, nv, cb);
       const double min_jacobian = rows ? cf.min_jacobian : cb.min_jacobian;
       const Eigen::VectorXd& measure = rows ? cf.measure : cb.measure;
@@ -375,7 +386,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   }
   if (bad_cell != std::numeric_limits<int>::max()) {
     std::ostringstream s;
-    if (dim == 2)
+    if (dim == 2 || volume)
       s << "geometry has a non-positive Jacobian (det J = " << bad_det << ") at a quadrature point of "
         << describe_cell(mesh, bad_cell)
         << (bad_det == 0 ? ": the map is degenerate there (a collapsed edge or corner, or a domain too small for "
@@ -568,9 +579,14 @@ void boundary_data(const PoissonProblem& problem, const BoundaryCondition& bc, c
                    std::optional<ExpressionEvaluator>& uy, DiffusionAtPoints& diffusion, Eigen::VectorXd& out) {
   const Eigen::Index n = cb.measure.size();
   out.resize(n);
+  const bool face = cb.parametric_dimension == 3;
+  if (face && bc.kind == BoundaryKind::kNeumann)
+    throw InputError("Neumann data on the faces of a volume are not supported yet (docs/VOLUMES.md)");
   for (Eigen::Index k = 0; k < n; ++k) {
     const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
-    if (bc.kind == BoundaryKind::kNeumann && (bc.from_exact || !bc.flux.empty())) {
+    if (face) {
+      out[k] = (*value)(x, y, cb.geometry.x(k, 2));
+    } else if (bc.kind == BoundaryKind::kNeumann && (bc.from_exact || !bc.flux.empty())) {
       Eigen::Vector2d flux((*ux)(x, y), (*uy)(x, y));  // grad u, or the given flux vector
       if (bc.from_exact && !diffusion.identity()) flux = diffusion(x, y) * flux;
       out[k] = flux[0] * cb.normal(k, 0) + flux[1] * cb.normal(k, 1);
@@ -579,7 +595,9 @@ void boundary_data(const PoissonProblem& problem, const BoundaryCondition& bc, c
     if (!std::isfinite(out[k])) {
       std::ostringstream s;
       const Expression& e = bc.from_exact ? problem.exact->u : bc.flux.empty() ? bc.value : bc.flux[0];
-      s << e.where() << ": boundary data \"" << e.text() << "\" is not finite at (" << x << ", " << y << ")";
+      s << e.where() << ": boundary data \"" << e.text() << "\" is not finite at (" << x << ", " << y;
+      if (face) s << ", " << cb.geometry.x(k, 2);
+      s << ")";
       throw InputError(s.str());
     }
   }
@@ -603,7 +621,8 @@ void make_evaluators(const PoissonProblem& problem, const BoundaryCondition& bc,
 
 int side_points(const QuadratureOptions& q, const BezierCell& cell) {
   if (q.boundary_points > 0) return q.boundary_points;
-  const int interior = std::max(rule_points(q.points_u, cell.degree_u, 1), rule_points(q.points_v, cell.degree_v, 1));
+  int interior = std::max(rule_points(q.points_u, cell.degree_u, 1), rule_points(q.points_v, cell.degree_v, 1));
+  if (cell.dimension == 3) interior = std::max(interior, rule_points(q.points_w, cell.degree_w, 1));
   return q.boundary_points < 0 ? interior : interior + 1;
 }
 
@@ -623,7 +642,7 @@ void for_each_boundary_side(const BezierMesh& mesh, const GeometryMap& geometry,
     DiffusionAtPoints diffusion(bc.kind == BoundaryKind::kNeumann && bc.from_exact ? problem.coefficients.diffusion
                                                                                    : std::vector<Expression>{});
     for (int c = cells.first; c < last; ++c)
-      for (int s = 0; s < 4; ++s) {
+      for (int s = 0; s < mesh.cell(c).num_sides(); ++s) {
         if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
         evaluate_side_basis(mesh, geometry, c, static_cast<CellSide>(s), side_points(quadrature, mesh.cell(c)), cb);
         boundary_data(problem, bc, cb, value, ux, uy, diffusion, data);
@@ -660,6 +679,8 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
   Eigen::MatrixXd dn;
   // With a coefficient A, dB/dn is the conormal derivative (A grad B).n and the penalty's bound
   // is taken against the A-weighted stiffness (the same coercivity argument in A's energy).
+  if (geometry.parametric_dimension() == 3)
+    throw InputError("Nitsche's method on the faces of a volume is not supported yet (docs/VOLUMES.md)");
   DiffusionAtPoints diffusion(problem.coefficients.diffusion);
   Eigen::VectorXd nx, ny;
   const auto conormal = [&](const CellBasis& cb) {
@@ -743,12 +764,14 @@ DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geom
   std::vector<int> local(mesh.num_functions(), -1);
   for (int c = cells.first; c < last; ++c) {
     const BezierCell& cell = mesh.cell(c);
-    for (int s = 0; s < 4; ++s) {
+    for (int s = 0; s < cell.num_sides(); ++s) {
       if (!is_dirichlet(cell.boundary[s])) continue;
       const Eigen::MatrixXd& C = mesh.extraction(c);
       const auto ids = mesh.functions(c);
       const double scale = C.cwiseAbs().maxCoeff();
-      for (int b : side_bernstein_indices(cell.degree_u, cell.degree_v, static_cast<CellSide>(s)))
+      const CellSide side = static_cast<CellSide>(s);
+      for (int b : cell.dimension == 3 ? side_bernstein_indices(cell.degree_u, cell.degree_v, cell.degree_w, side)
+                                       : side_bernstein_indices(cell.degree_u, cell.degree_v, side))
         for (Eigen::Index a = 0; a < C.rows(); ++a)
           if (std::abs(C(a, b)) > 1e-12 * scale && local[ids[a]] < 0) {
             local[ids[a]] = static_cast<int>(out.functions.size());

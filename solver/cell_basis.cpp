@@ -1,5 +1,7 @@
 #include "solver/cell_basis.hpp"
 
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <cmath>
 #include <stdexcept>
 
@@ -32,6 +34,7 @@ void finish(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Eigen::Ma
   }
   const auto& J = out.geometry.jacobian;
   out.dimension = out.geometry.dimension();
+  out.parametric_dimension = 2;
   if (out.dimension == 2) {
     out.det = J.col(0).array() * J.col(3).array() - J.col(1).array() * J.col(2).array();
     out.min_jacobian = out.det.minCoeff();
@@ -66,11 +69,78 @@ void finish(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Eigen::Ma
   out.measure = (rule_weight.array() * out.det.abs().sqrt()).matrix();
 }
 
+
+// The same on a hexahedron: rational values and reference derivatives along u, v, w, then
+// grad = J^{-T} grad_ref point by point (J = d x / d reference, 3 x 3), measure = weight |det J|.
+void finish_volume(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Eigen::MatrixXd& Bv,
+                   const Eigen::MatrixXd& Bw, const Eigen::VectorXd& rule_weight, bool rational, CellBasis& out) {
+  const Eigen::VectorXd& wb = out.bernstein_weights;
+  const Eigen::MatrixXd* R[3] = {&Bu, &Bv, &Bw};
+  if (rational) {
+    out.w = (B * wb).array().inverse();  // 1 / W
+    out.value.noalias() = out.w.matrix().asDiagonal() * B * wb.asDiagonal();
+    Eigen::MatrixXd* d[3] = {&out.d_u, &out.d_v, &out.d_w};
+    Eigen::ArrayXd* wd[3] = {&out.wu, &out.wv, &out.ww};
+    for (int j = 0; j < 3; ++j) {
+      *wd[j] = (*R[j] * wb).array() * out.w;  // W_j / W
+      d[j]->noalias() = out.w.matrix().asDiagonal() * *R[j] * wb.asDiagonal();
+      d[j]->noalias() -= wd[j]->matrix().asDiagonal() * out.value;
+      R[j] = d[j];
+    }
+  } else {
+    out.value = B;
+  }
+  const Eigen::MatrixXd& J = out.geometry.jacobian;
+  const Eigen::Index n = J.rows(), nb = B.cols();
+  out.dimension = 3;
+  out.parametric_dimension = 3;
+  out.det.resize(n);
+  out.grad_x.resize(n, nb);
+  out.grad_y.resize(n, nb);
+  out.grad_z.resize(n, nb);
+  Eigen::MatrixXd* grad[3] = {&out.grad_x, &out.grad_y, &out.grad_z};
+  for (Eigen::Index k = 0; k < n; ++k) {
+    Eigen::Matrix3d Jk;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) Jk(i, j) = J(k, 3 * i + j);
+    out.det[k] = Jk.determinant();
+    const Eigen::Matrix3d inverse_transpose = Jk.inverse().transpose();
+    for (int i = 0; i < 3; ++i)
+      grad[i]->row(k) = inverse_transpose(i, 0) * R[0]->row(k) + inverse_transpose(i, 1) * R[1]->row(k) +
+                        inverse_transpose(i, 2) * R[2]->row(k);
+  }
+  out.min_jacobian = out.det.minCoeff();
+  out.measure = (rule_weight.array() * out.det.abs()).matrix();
+}
+
 }  // namespace
+
+void evaluate_volume_cell_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu, int nv, int nw,
+                                CellBasis& out) {
+  const BezierCell& c = mesh.cell(cell);
+  if (c.dimension != 3) throw std::logic_error("evaluate_volume_cell_basis: not a hexahedron");
+  const BernsteinTable& t = bernstein_table(c.degree_u, c.degree_v, c.degree_w, nu, nv, nw);
+  rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
+  geometry.evaluate_volume_at_rule(cell, nu, nv, nw, out.geometry);
+  finish_volume(t.value, t.d_u, t.d_v, t.d_w, t.weight, mesh.is_rational(), out);
+}
+
+void evaluate_volume_cell_basis_at(const BezierMesh& mesh, const GeometryMap& geometry, int cell,
+                                   const Eigen::VectorXd& u, const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                                   CellBasis& out) {
+  const BezierCell& c = mesh.cell(cell);
+  if (c.dimension != 3) throw std::logic_error("evaluate_volume_cell_basis_at: not a hexahedron");
+  Eigen::MatrixXd B, Bu, Bv, Bw;
+  tensor_bernstein(c.degree_u, c.degree_v, c.degree_w, u, v, w, B, Bu, Bv, Bw);
+  rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
+  geometry.evaluate_volume(cell, u, v, w, out.geometry);
+  finish_volume(B, Bu, Bv, Bw, Eigen::VectorXd::Ones(u.size()), mesh.is_rational(), out);
+}
 
 void evaluate_cell_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu,
                          int nv, CellBasis& out) {
   const BezierCell& c = mesh.cell(cell);
+  if (c.dimension != 2) throw std::logic_error("evaluate_cell_basis: a hexahedron (use evaluate_volume_cell_basis)");
   const BernsteinTable& t = bernstein_table(c.degree_u, c.degree_v, nu, nv);
   rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
   geometry.evaluate_at_rule(cell, nu, nv, out.geometry);
@@ -80,6 +150,7 @@ void evaluate_cell_basis(const BezierMesh& mesh, const GeometryMap& geometry, in
 void evaluate_cell_basis_at(const BezierMesh& mesh, const GeometryMap& geometry, int cell, const Eigen::VectorXd& u,
                             const Eigen::VectorXd& v, CellBasis& out) {
   const BezierCell& c = mesh.cell(cell);
+  if (c.dimension != 2) throw std::logic_error("evaluate_cell_basis: a hexahedron (use evaluate_volume_cell_basis)");
   Eigen::MatrixXd B, Bu, Bv;
   tensor_bernstein(c.degree_u, c.degree_v, u, v, B, Bu, Bv);
   rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
@@ -87,13 +158,74 @@ void evaluate_cell_basis_at(const BezierMesh& mesh, const GeometryMap& geometry,
   finish(B, Bu, Bv, Eigen::VectorXd::Ones(u.size()), mesh.is_rational(), out);
 }
 
+namespace {
+
+// A face of a hexahedron: the reference direction held fixed and its value.
+struct Face {
+  int fixed = 0;
+  double at = 0;
+};
+Face face_of(CellSide side) {
+  switch (side) {
+    case kSideLeft: return {0, 0.0};
+    case kSideRight: return {0, 1.0};
+    case kSideBottom: return {1, 0.0};
+    case kSideTop: return {1, 1.0};
+    case kSideFront: return {2, 0.0};
+    case kSideBack: return {2, 1.0};
+  }
+  throw std::logic_error("face_of: not a side");
+}
+
+// The basis on one face of a hexahedron at the tensor product of two n-point rules: the
+// volume's values and gradients there (finish_volume), then the face's own measure, the
+// rule's weight times |x_a x x_b| for the two free directions a < b, and the outward normal,
+// along +-grad(xi_fixed) = +-J^{-T} e_fixed (a face at 0 points outward against the direction).
+void evaluate_face_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell, CellSide side, int n,
+                         CellBasis& out) {
+  const BezierCell& c = mesh.cell(cell);
+  const Face face = face_of(side);
+  const QuadratureRule1D rule = gauss_legendre(n);
+  const int a = face.fixed == 0 ? 1 : 0, b = face.fixed == 2 ? 1 : 2;  // the free directions
+  Eigen::VectorXd coordinate[3] = {Eigen::VectorXd(n * n), Eigen::VectorXd(n * n), Eigen::VectorXd(n * n)};
+  Eigen::VectorXd weight(n * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int k = i + n * j;
+      coordinate[a][k] = rule.nodes[i];
+      coordinate[b][k] = rule.nodes[j];
+      coordinate[face.fixed][k] = face.at;
+      weight[k] = rule.weights[i] * rule.weights[j];
+    }
+  Eigen::MatrixXd B, Bu, Bv, Bw;
+  tensor_bernstein(c.degree_u, c.degree_v, c.degree_w, coordinate[0], coordinate[1], coordinate[2], B, Bu, Bv, Bw);
+  rational_cell_extraction(mesh, cell, out.bernstein_weights, out.C);
+  geometry.evaluate_volume(cell, coordinate[0], coordinate[1], coordinate[2], out.geometry);
+  finish_volume(B, Bu, Bv, Bw, weight, mesh.is_rational(), out);
+  const Eigen::MatrixXd& J = out.geometry.jacobian;
+  out.normal.resize(n * n, 3);
+  for (int k = 0; k < n * n; ++k) {
+    Eigen::Matrix3d Jk;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) Jk(i, j) = J(k, 3 * i + j);
+    out.measure[k] = weight[k] * Jk.col(a).cross(Jk.col(b)).norm();
+    const Eigen::Vector3d outward = (face.at == 0 ? -1.0 : 1.0) * Jk.inverse().row(face.fixed).transpose();
+    out.normal.row(k) = outward.normalized().transpose();
+  }
+}
+
+}  // namespace
+
 void evaluate_side_basis(const BezierMesh& mesh, const GeometryMap& geometry, int cell,
                          CellSide side, int n, CellBasis& out) {
+  if (geometry.parametric_dimension() == 3) {
+    evaluate_face_basis(mesh, geometry, cell, side, n, out);
+    return;
+  }
   if (geometry.dimension() != 2)
     throw std::invalid_argument("boundary terms on surfaces in R^3 are not supported (closed surfaces only)");
   const BezierCell& c = mesh.cell(cell);
-  if (c.dimension != 2 || side > kSideLeft)
-    throw std::logic_error("evaluate_side_basis: the sides of quadrilateral cells only (volumes are not assembled yet)");
+  if (c.dimension != 2 || side > kSideLeft) throw std::logic_error("evaluate_side_basis: a quadrilateral has four sides");
   const int p = c.degree_u, q = c.degree_v;
   const QuadratureRule1D rule = gauss_legendre(n);
   Eigen::VectorXd u(n), v(n), w(n);
@@ -202,6 +334,19 @@ void evaluate_cell_field_at(const BezierMesh& mesh, const GeometryMap& geometry,
   tensor_bernstein(c.degree_u, c.degree_v, u, v, B, Bu, Bv);
   geometry.evaluate(cell, u, v, out.geometry);
   finish_field(mesh, cell, B, Bu, Bv, Eigen::VectorXd::Ones(u.size()), coefficients, out);
+}
+
+std::vector<int> side_bernstein_indices(int p, int q, int r, CellSide side) {
+  const Face face = face_of(side);
+  const int degree[3] = {p, q, r}, last = face.at == 0 ? 0 : degree[face.fixed];
+  std::vector<int> idx;
+  for (int c = 0; c <= r; ++c)
+    for (int b = 0; b <= q; ++b)
+      for (int a = 0; a <= p; ++a) {
+        const int index[3] = {a, b, c};
+        if (index[face.fixed] == last) idx.push_back(a + (p + 1) * (b + (q + 1) * c));
+      }
+  return idx;
 }
 
 std::vector<int> side_bernstein_indices(int p, int q, CellSide side) {

@@ -64,8 +64,9 @@ struct PoissonProblem {
 };
 
 struct QuadratureOptions {
-  int points_u = 0, points_v = 0;              // matrix and load; 0 means degree+1
-  int error_points_u = 0, error_points_v = 0;  // error norms; 0 means degree+2
+  int points_u = 0, points_v = 0, points_w = 0;                    // matrix and load; 0 means degree+1
+  int error_points_u = 0, error_points_v = 0, error_points_w = 0;  // error norms; 0 means degree+2
+  // (w: the third direction of a volume's hexahedra)
   // Boundary integrals (the Dirichlet projection, Neumann data, Nitsche's terms): points per
   // side; 0 means one more than the interior rule has, -1 the interior rule's own number (as
   // GeoPDEs and G+Smo integrate: their discretizations to the last digit).

@@ -36,7 +36,8 @@ SeparableMesh::SeparableMesh(const BezierMesh& mesh) {
   std::vector<int> p(n, -1), q(n, -1);
   for (int c = 0; c < mesh.num_cells(); ++c) {
     const int id = mesh.extraction_id(c);
-    if (p[id] < 0) p[id] = mesh.cell(c).degree_u, q[id] = mesh.cell(c).degree_v;
+    // Hexahedra take the dense path (a product of three univariate factors is not written yet).
+    if (p[id] < 0 && mesh.cell(c).dimension == 2) p[id] = mesh.cell(c).degree_u, q[id] = mesh.cell(c).degree_v;
   }
 #pragma omp parallel for schedule(dynamic, 256)
   for (int id = 0; id < n; ++id)

@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
@@ -14,10 +15,14 @@ namespace knotwork {
 // x: points x dimension. jacobian: points x 2 dimension, columns (dx/du, dx/dv, dy/du, dy/dv
 // [, dz/du, dz/dv]), derivatives with respect to the cell's reference coordinates, so a
 // cell's parameter box never enters the solver. The first fundamental form is J^T J.
+// On a volume's hexahedral cells (parametric dimension 3) the jacobian has nine columns,
+// (dx/du, dx/dv, dx/dw, dy/du, ..., dz/dw): column i*d + j is the derivative of coordinate i
+// along reference direction j in every case.
 struct GeometryAtPoints {
   Eigen::MatrixXd x;
   Eigen::MatrixXd jacobian;
   int dimension() const { return static_cast<int>(x.cols()); }
+  int parametric_dimension() const { return x.cols() > 0 ? static_cast<int>(jacobian.cols() / x.cols()) : 2; }
 };
 
 // A cell's geometry as a (rational) Bezier patch, for exact VTK output.
@@ -38,6 +43,17 @@ class GeometryMap {
   virtual void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                         GeometryAtPoints& out) const = 0;
   virtual BezierGeometryCell bezier_cell(int cell) const = 0;
+  // 2 for the quadrilateral cells of planar domains and surfaces, 3 for the hexahedra of a
+  // volume, whose maps evaluate at three reference coordinates (the two calls below; the
+  // two-coordinate calls above then throw std::logic_error).
+  virtual int parametric_dimension() const { return 2; }
+  virtual void evaluate_volume_at_rule(int /*cell*/, int /*nu*/, int /*nv*/, int /*nw*/, GeometryAtPoints& /*out*/) const {
+    throw std::logic_error("evaluate_volume_at_rule: this map is not a volume's");
+  }
+  virtual void evaluate_volume(int /*cell*/, const Eigen::VectorXd& /*u*/, const Eigen::VectorXd& /*v*/,
+                               const Eigen::VectorXd& /*w*/, GeometryAtPoints& /*out*/) const {
+    throw std::logic_error("evaluate_volume: this map is not a volume's");
+  }
   // Second derivatives with respect to the cell's reference coordinates at reference points,
   // columns (x_uu, x_uv, x_vv, y_uu, y_uv, y_vv[, z_uu, z_uv, z_vv]), for operators that need
   // the physical Hessian (the residual error estimator) or the curvature of a surface.

@@ -1,0 +1,145 @@
+#include "basis/core/nurbs_volume.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "basis/core/input_error.hpp"
+#include "quadrature/gauss_legendre.hpp"
+
+namespace knotwork {
+
+void NurbsVolume::validate() const {
+  static const char* names[3] = {"knots_u", "knots_v", "knots_w"};
+  long count = 1;
+  for (int d = 0; d < 3; ++d) {
+    const BSplineBasis1D& b = bases[d];
+    if (!b.is_open())
+      throw std::invalid_argument(std::string(names[d]) + " is not open: the first and last knots must each be repeated degree+1 times");
+    const auto m = b.multiplicities();
+    for (size_t i = 1; i + 1 < m.size(); ++i)
+      if (m[i] > b.degree())
+        throw std::invalid_argument(std::string(names[d]) +
+                                    " has an interior knot of multiplicity degree+1: the volume would be discontinuous");
+    count *= b.num_functions();
+  }
+  if (control_points.rows() != count)
+    throw std::invalid_argument("control_points has " + std::to_string(control_points.rows()) +
+                                " points but the knot vectors need " + std::to_string(bases[0].num_functions()) + " x " +
+                                std::to_string(bases[1].num_functions()) + " x " + std::to_string(bases[2].num_functions()) +
+                                " = " + std::to_string(count));
+  if (weights.size() != control_points.rows())
+    throw std::invalid_argument("weights has " + std::to_string(weights.size()) + " entries but there are " +
+                                std::to_string(control_points.rows()) + " control points");
+  for (Eigen::Index i = 0; i < control_points.rows(); ++i)
+    if (!control_points.row(i).allFinite())
+      throw std::invalid_argument("control point " + std::to_string(i) + " is not finite");
+  for (Eigen::Index i = 0; i < weights.size(); ++i)
+    if (!(std::isfinite(weights[i]) && weights[i] > 0))
+      throw std::invalid_argument("weight " + std::to_string(i) + " must be a positive finite number");
+}
+
+VolumePointDerivatives volume_point_derivatives(const NurbsVolume& volume, const std::array<double, 3>& at,
+                                                std::array<int, 3> span) {
+  int degree[3], n[3];
+  double table[3][2 * 16];  // values, then first derivatives, of at most degree 15
+  for (int d = 0; d < 3; ++d) {
+    const BSplineBasis1D& b = volume.bases[d];
+    degree[d] = b.degree();
+    n[d] = b.num_functions();
+    if (degree[d] > 15) throw std::invalid_argument("volume_point_derivatives: degree above 15");
+    if (span[d] < 0) span[d] = b.find_span(at[d]);
+    b.evaluate_derivatives(span[d], at[d], 1, table[d]);
+  }
+  // Homogeneous (w x, w y, w z, w) and its derivatives, then the quotient rule.
+  Eigen::Vector4d h = Eigen::Vector4d::Zero(), hd[3] = {h, h, h};
+  for (int c = 0; c <= degree[2]; ++c)
+    for (int b = 0; b <= degree[1]; ++b)
+      for (int a = 0; a <= degree[0]; ++a) {
+        const long i = (span[0] - degree[0] + a) + n[0] * ((span[1] - degree[1] + b) + static_cast<long>(n[1]) * (span[2] - degree[2] + c));
+        const double w = volume.weights[i];
+        const Eigen::Vector4d point(w * volume.control_points(i, 0), w * volume.control_points(i, 1),
+                                    w * volume.control_points(i, 2), w);
+        const double nu = table[0][a], nv = table[1][b], nw = table[2][c];
+        const double du = table[0][degree[0] + 1 + a], dv = table[1][degree[1] + 1 + b], dw = table[2][degree[2] + 1 + c];
+        h += point * (nu * nv * nw);
+        hd[0] += point * (du * nv * nw);
+        hd[1] += point * (nu * dv * nw);
+        hd[2] += point * (nu * nv * dw);
+      }
+  VolumePointDerivatives out;
+  out.weight = h[3];
+  out.x = h.head<3>() / h[3];
+  for (int d = 0; d < 3; ++d) out.jacobian.col(d) = (hd[d].head<3>() - out.x * hd[d][3]) / h[3];
+  return out;
+}
+
+VolumeGeometryMap::VolumeGeometryMap(const BezierMesh& mesh, NurbsVolume volume) : mesh_(mesh), volume_(std::move(volume)) {
+  volume_.validate();
+  span_of_cell_.resize(mesh.num_cells());
+  for (int c = 0; c < mesh.num_cells(); ++c) {
+    const BezierCell& cell = mesh.cell(c);
+    if (cell.dimension != 3) throw std::logic_error("VolumeGeometryMap: the mesh's cells are not hexahedra");
+    const double lo[3] = {cell.u0, cell.v0, cell.w0}, hi[3] = {cell.u1, cell.v1, cell.w1};
+    for (int d = 0; d < 3; ++d) {
+      const BSplineBasis1D& b = volume_.bases[d];
+      // The span of the cell's midpoint, so that a cell's faces use the cell's own polynomial.
+      const int s = b.find_span(0.5 * (lo[d] + hi[d]));
+      const auto& knots = b.knots();
+      if (!(lo[d] >= knots[s] && hi[d] <= knots[s + 1]) || lo[d] < b.domain_begin() || hi[d] > b.domain_end()) {
+        std::ostringstream m;
+        m << "cell " << c << " ([" << lo[d] << ", " << hi[d] << "] along " << "uvw"[d]
+          << ") does not lie inside one knot span of the volume";
+        throw GeometryError(m.str());
+      }
+      span_of_cell_[c][d] = s;
+    }
+  }
+}
+
+void VolumeGeometryMap::evaluate_volume(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                        const Eigen::VectorXd& w, GeometryAtPoints& out) const {
+  const BezierCell& c = mesh_.cell(cell);
+  const double lo[3] = {c.u0, c.v0, c.w0}, size[3] = {c.u1 - c.u0, c.v1 - c.v0, c.w1 - c.w0};
+  const Eigen::Index n = u.size();
+  out.x.resize(n, 3);
+  out.jacobian.resize(n, 9);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const std::array<double, 3> at{lo[0] + size[0] * u[k], lo[1] + size[1] * v[k], lo[2] + size[2] * w[k]};
+    const VolumePointDerivatives p = volume_point_derivatives(volume_, at, span_of_cell_[cell]);
+    for (int i = 0; i < 3; ++i) {
+      out.x(k, i) = p.x[i];
+      for (int j = 0; j < 3; ++j) out.jacobian(k, 3 * i + j) = p.jacobian(i, j) * size[j];  // d/d(reference)
+    }
+  }
+}
+
+void VolumeGeometryMap::evaluate_volume_at_rule(int cell, int nu, int nv, int nw, GeometryAtPoints& out) const {
+  const QuadratureRule1D ru = gauss_legendre(nu), rv = gauss_legendre(nv), rw = gauss_legendre(nw);
+  Eigen::VectorXd u(nu * nv * nw), v(u.size()), w(u.size());
+  for (int l = 0; l < nw; ++l)
+    for (int j = 0; j < nv; ++j)
+      for (int i = 0; i < nu; ++i) {
+        const int k = i + nu * (j + nv * l);
+        u[k] = ru.nodes[i];
+        v[k] = rv.nodes[j];
+        w[k] = rw.nodes[l];
+      }
+  evaluate_volume(cell, u, v, w, out);
+}
+
+void VolumeGeometryMap::evaluate_at_rule(int, int, int, GeometryAtPoints&) const {
+  throw std::logic_error("VolumeGeometryMap: a volume's cells take three reference coordinates");
+}
+
+void VolumeGeometryMap::evaluate(int, const Eigen::VectorXd&, const Eigen::VectorXd&, GeometryAtPoints&) const {
+  throw std::logic_error("VolumeGeometryMap: a volume's cells take three reference coordinates");
+}
+
+BezierGeometryCell VolumeGeometryMap::bezier_cell(int) const {
+  throw std::logic_error("VolumeGeometryMap: Bezier hexahedra for output are not built yet (docs/VOLUMES.md)");
+}
+
+}  // namespace knotwork
