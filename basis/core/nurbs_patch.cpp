@@ -54,6 +54,10 @@ void NurbsPatch::validate() const {
     throw std::invalid_argument("weights has " + std::to_string(weights.size()) +
                                 " entries but there are " + std::to_string(control_points.rows()) +
                                 " control points");
+  validate_net(control_points, weights);
+}
+
+void validate_net(const Eigen::Ref<const Eigen::MatrixXd>& control_points, const Eigen::VectorXd& weights) {
   for (Eigen::Index i = 0; i < control_points.rows(); ++i)
     if (!control_points.row(i).allFinite())
       throw std::invalid_argument("control point " + std::to_string(i) + " is not finite");

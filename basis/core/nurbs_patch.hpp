@@ -15,6 +15,10 @@ struct NurbsPatch {
   void validate() const;
 };
 
+// Throws std::invalid_argument naming the first control point that is not finite or weight that
+// is not a positive finite number (a patch's net or a volume's).
+void validate_net(const Eigen::Ref<const Eigen::MatrixXd>& control_points, const Eigen::VectorXd& weights);
+
 // The patch's point at parameters (u, v).
 Eigen::Vector2d patch_point(const NurbsPatch& patch, double u, double v);
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "basis/core/input_error.hpp"
+#include "basis/core/nurbs_patch.hpp"
 #include "quadrature/gauss_legendre.hpp"
 
 namespace knotwork {
@@ -33,12 +34,7 @@ void NurbsVolume::validate() const {
   if (weights.size() != control_points.rows())
     throw std::invalid_argument("weights has " + std::to_string(weights.size()) + " entries but there are " +
                                 std::to_string(control_points.rows()) + " control points");
-  for (Eigen::Index i = 0; i < control_points.rows(); ++i)
-    if (!control_points.row(i).allFinite())
-      throw std::invalid_argument("control point " + std::to_string(i) + " is not finite");
-  for (Eigen::Index i = 0; i < weights.size(); ++i)
-    if (!(std::isfinite(weights[i]) && weights[i] > 0))
-      throw std::invalid_argument("weight " + std::to_string(i) + " must be a positive finite number");
+  validate_net(control_points, weights);
 }
 
 VolumePointDerivatives volume_point_derivatives(const NurbsVolume& volume, const std::array<double, 3>& at,
