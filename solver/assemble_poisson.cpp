@@ -677,10 +677,10 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
   };
   std::map<int, Pieces> of_cell;
   Eigen::MatrixXd dn;
-  // With a coefficient A, dB/dn is the conormal derivative (A grad B).n and the penalty's bound
-  // is taken against the A-weighted stiffness (the same coercivity argument in A's energy).
   if (geometry.parametric_dimension() == 3)
     throw InputError("Nitsche's method on the faces of a volume is not supported yet (docs/VOLUMES.md)");
+  // With a coefficient A, dB/dn is the conormal derivative (A grad B).n and the penalty's bound
+  // is taken against the A-weighted stiffness (the same coercivity argument in A's energy).
   DiffusionAtPoints diffusion(problem.coefficients.diffusion);
   Eigen::VectorXd nx, ny;
   const auto conormal = [&](const CellBasis& cb) {

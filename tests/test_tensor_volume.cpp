@@ -640,3 +640,28 @@ TEST_CASE("Poisson on the thick quarter annulus (NURBS geometry, B-spline space)
     CHECK(h1_rate >= p - 0.2);
   }
 }
+
+TEST_CASE("What volumes do not take yet is refused with one line: Neumann faces, Nitsche, PETSc parts", "[volume]") {
+  BezierMesh mesh;
+  const std::array<BSplineBasis1D, 3> space{uniform_basis(1, 2, 0), uniform_basis(1, 2, 0), uniform_basis(1, 2, 0)};
+  add_tensor_cells(mesh, space, 0, 2);
+  mesh.set_num_functions(27);
+  const VolumeGeometryMap map(mesh, unit_cube());
+  PoissonProblem problem;
+  problem.source = Expression::parse("1", "test: source");
+  problem.exact = differentiate_surface_solution(Expression::parse("x*y*z", "test: exact"));
+  problem.boundary.assign(6, BoundaryCondition{});
+  CHECK(solve_poisson(mesh, map, problem, PoissonSolveOptions{}).errors);  // all Dirichlet: solved
+  PoissonProblem neumann = problem;
+  neumann.boundary[5].kind = BoundaryKind::kNeumann;
+  CHECK_THROWS_WITH(solve_poisson(mesh, map, neumann, PoissonSolveOptions{}),
+                    Catch::Contains("Neumann data on the faces of a volume are not supported yet"));
+  PoissonProblem nitsche = problem;
+  nitsche.dirichlet_method = DirichletMethod::kNitsche;
+  CHECK_THROWS_WITH(solve_poisson(mesh, map, nitsche, PoissonSolveOptions{}),
+                    Catch::Contains("Nitsche's method on the faces of a volume is not supported yet"));
+  PoissonSolveOptions without_matrix;
+  without_matrix.iterative = true;
+  without_matrix.matrix_free = [] { return std::shared_ptr<const MatrixFreePoisson>(); };
+  CHECK_THROWS_WITH(solve_poisson(mesh, map, problem, without_matrix), Catch::Contains("serially with an assembled matrix"));
+}
