@@ -50,7 +50,8 @@ void tensor_bernstein_in(int dim, const int* degree, const Eigen::VectorXd* cons
   const int nb = (p + 1) * (q + 1) * (r + 1);
   B.resize(n, nb);
   for (int d = 0; d < dim; ++d) derivative[d]->resize(n, nb);
-  std::vector<double> b[3], db[3];
+  // In 2D the third factor is the constant 1 (degree 0), and x * 1 is x exactly.
+  std::vector<double> b[3] = {{}, {}, {1.0}}, db[3] = {{}, {}, {0.0}};
   for (int d = 0; d < dim; ++d) b[d].resize(degree[d] + 1), db[d].resize(degree[d] + 1);
   for (Eigen::Index k = 0; k < n; ++k) {
     for (int d = 0; d < dim; ++d) bernstein_values_and_derivatives(degree[d], (*coordinate[d])[k], b[d].data(), db[d].data());
@@ -58,16 +59,10 @@ void tensor_bernstein_in(int dim, const int* degree, const Eigen::VectorXd* cons
       for (int e = 0; e <= q; ++e)
         for (int a = 0; a <= p; ++a) {
           const int f = a + (p + 1) * (e + (q + 1) * c);
-          if (dim == 2) {
-            B(k, f) = b[0][a] * b[1][e];
-            (*derivative[0])(k, f) = db[0][a] * b[1][e];
-            (*derivative[1])(k, f) = b[0][a] * db[1][e];
-          } else {
-            B(k, f) = b[0][a] * b[1][e] * b[2][c];
-            (*derivative[0])(k, f) = db[0][a] * b[1][e] * b[2][c];
-            (*derivative[1])(k, f) = b[0][a] * db[1][e] * b[2][c];
-            (*derivative[2])(k, f) = b[0][a] * b[1][e] * db[2][c];
-          }
+          B(k, f) = b[0][a] * b[1][e] * b[2][c];
+          (*derivative[0])(k, f) = db[0][a] * b[1][e] * b[2][c];
+          (*derivative[1])(k, f) = b[0][a] * db[1][e] * b[2][c];
+          if (dim == 3) (*derivative[2])(k, f) = b[0][a] * b[1][e] * db[2][c];
         }
   }
 }

@@ -579,7 +579,7 @@ void boundary_data(const PoissonProblem& problem, const BoundaryCondition& bc, c
                    std::optional<ExpressionEvaluator>& uy, DiffusionAtPoints& diffusion, Eigen::VectorXd& out) {
   const Eigen::Index n = cb.measure.size();
   out.resize(n);
-  const bool face = cb.parametric_dimension == 3;
+  const bool face = cb.geometry.parametric_dimension() == 3;
   if (face && bc.kind == BoundaryKind::kNeumann)
     throw InputError("Neumann data on the faces of a volume are not supported yet (docs/VOLUMES.md)");
   for (Eigen::Index k = 0; k < n; ++k) {

@@ -34,7 +34,6 @@ void finish(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Eigen::Ma
   }
   const auto& J = out.geometry.jacobian;
   out.dimension = out.geometry.dimension();
-  out.parametric_dimension = 2;
   if (out.dimension == 2) {
     out.det = J.col(0).array() * J.col(3).array() - J.col(1).array() * J.col(2).array();
     out.min_jacobian = out.det.minCoeff();
@@ -93,7 +92,6 @@ void finish_volume(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Ei
   const Eigen::MatrixXd& J = out.geometry.jacobian;
   const Eigen::Index n = J.rows(), nb = B.cols();
   out.dimension = 3;
-  out.parametric_dimension = 3;
   out.det.resize(n);
   out.grad_x.resize(n, nb);
   out.grad_y.resize(n, nb);

@@ -15,8 +15,7 @@ namespace knotwork {
 // in the plane J G^{-1} = J^{-T}.
 // Volume cells (hexahedra, parametric dimension 3): grad = J^{-T} grad_ref, measure = w |det J|.
 struct CellBasis {
-  int dimension = 2;             // of the physical space
-  int parametric_dimension = 2;  // 3 on a volume's hexahedra
+  int dimension = 2;  // of the physical space (the parametric one: geometry.parametric_dimension())
   Eigen::MatrixXd C;                    // alive functions x Bernstein (rational-adjusted)
   Eigen::VectorXd bernstein_weights;    // 1 for polynomial cells
   Eigen::MatrixXd value, grad_x, grad_y, grad_z;  // points x Bernstein (grad_z: surfaces only)

@@ -8,7 +8,7 @@
 
 #include "basis/core/input_error.hpp"
 #include "basis/core/nurbs_patch.hpp"
-#include "quadrature/gauss_legendre.hpp"
+#include "quadrature/bernstein.hpp"
 
 namespace knotwork {
 
@@ -113,17 +113,9 @@ void VolumeGeometryMap::evaluate_volume(int cell, const Eigen::VectorXd& u, cons
 }
 
 void VolumeGeometryMap::evaluate_volume_at_rule(int cell, int nu, int nv, int nw, GeometryAtPoints& out) const {
-  const QuadratureRule1D ru = gauss_legendre(nu), rv = gauss_legendre(nv), rw = gauss_legendre(nw);
-  Eigen::VectorXd u(nu * nv * nw), v(u.size()), w(u.size());
-  for (int l = 0; l < nw; ++l)
-    for (int j = 0; j < nv; ++j)
-      for (int i = 0; i < nu; ++i) {
-        const int k = i + nu * (j + nv * l);
-        u[k] = ru.nodes[i];
-        v[k] = rv.nodes[j];
-        w[k] = rw.nodes[l];
-      }
-  evaluate_volume(cell, u, v, w, out);
+  // The rule's points, as the cell basis tabulates them (kept per rule: no Gauss rule per cell).
+  const BernsteinTable& rule = bernstein_table(0, 0, 0, nu, nv, nw);
+  evaluate_volume(cell, rule.point_u, rule.point_v, rule.point_w, out);
 }
 
 void VolumeGeometryMap::evaluate_at_rule(int, int, int, GeometryAtPoints&) const {

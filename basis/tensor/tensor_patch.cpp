@@ -151,7 +151,9 @@ void add_tensor_cells(BezierMesh& mesh, std::span<const BSplineBasis1D> bases, i
                       int offset) {
   const int dim = static_cast<int>(bases.size());
   if (dim != 2 && dim != 3) throw std::logic_error("add_tensor_cells: 2 or 3 directions");
-  std::array<std::vector<int>, 3> spans, distinct, representative;
+  // A 2D grid is one layer of a 3D one: one element along w, of degree 0, on span 0.
+  std::array<std::vector<int>, 3> spans{std::vector<int>{}, std::vector<int>{}, std::vector<int>{0}}, distinct,
+      representative;
   std::array<std::vector<Eigen::MatrixXd>, 3> extraction;
   std::array<int, 3> degree{0, 0, 0}, functions{1, 1, 1}, elements{1, 1, 1};
   std::array<int, 3> stride{0, 0, 0};  // of the pool index over distinct extractions
@@ -185,11 +187,13 @@ void add_tensor_cells(BezierMesh& mesh, std::span<const BSplineBasis1D> bases, i
     if (dim == 3) return 2 * k + (high ? 1 : 0);
     return k == 0 ? (high ? 1 : 3) : (high ? 2 : 0);
   };
-  std::array<int, 3> e{0, 0, 0};
+  std::array<int, 3> from{0, 0, 0}, to = elements, e{0, 0, 0};
+  from[last] = slab_from;
+  to[last] = slab_to;
   const Eigen::MatrixXd* factors[3];
-  for (e[2] = dim == 3 ? slab_from : 0; e[2] < (dim == 3 ? slab_to : 1); ++e[2])
-    for (e[1] = dim == 2 ? slab_from : 0; e[1] < (dim == 2 ? slab_to : elements[1]); ++e[1])
-      for (e[0] = 0; e[0] < elements[0]; ++e[0]) {
+  for (e[2] = from[2]; e[2] < to[2]; ++e[2])
+    for (e[1] = from[1]; e[1] < to[1]; ++e[1])
+      for (e[0] = from[0]; e[0] < to[0]; ++e[0]) {
         int key = 0;
         for (int k = 0; k < dim; ++k) key += stride[k] * distinct[k][e[k]];
         int& pooled = pool_index[key];
@@ -211,13 +215,13 @@ void add_tensor_cells(BezierMesh& mesh, std::span<const BSplineBasis1D> bases, i
         }
         cell.degree_u = degree[0];
         cell.degree_v = degree[1];
-        cell.degree_w = static_cast<std::int16_t>(dim == 3 ? degree[2] : 0);
+        cell.degree_w = static_cast<std::int16_t>(degree[2]);
         for (int c = 0; c < bernstein[2]; ++c)
           for (int b = 0; b < bernstein[1]; ++b)
             for (int a = 0; a < bernstein[0]; ++a)
               ids[a + bernstein[0] * (b + bernstein[1] * c)] =
                   (spans[0][e[0]] - degree[0] + a) +
-                  functions[0] * ((spans[1][e[1]] - degree[1] + b) + functions[1] * (spans[2].empty() ? 0 : spans[2][e[2]] - degree[2] + c)) -
+                  functions[0] * ((spans[1][e[1]] - degree[1] + b) + functions[1] * (spans[2][e[2]] - degree[2] + c)) -
                   offset;
         mesh.add_cell(cell, ids, pooled);
       }
