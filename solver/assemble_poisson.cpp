@@ -74,10 +74,10 @@ Eigen::LLT<Eigen::Matrix3d> tangential_factor(const Eigen::Matrix3d& A, const Ei
   return Eigen::LLT<Eigen::Matrix3d>(P * A * P + n * n.transpose());
 }
 
-// With six entries (a surface) `tangential` receives L^T of tangential_factor at every point,
-// for apply_diffusion_factor: each is factored once.
+// With six entries `tangential` receives at every point L^T, with L L^T the factor of A on a
+// volume and of tangential_factor on a surface, for apply_diffusion_factor: each is factored once.
 bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch& values, const GeometryAtPoints& at,
-                             int cell, CoefficientFailure& failure, std::vector<Eigen::Matrix3d>& tangential) {
+                             bool volume, int cell, CoefficientFailure& failure, std::vector<Eigen::Matrix3d>& tangential) {
   const Eigen::MatrixXd& x = at.x;
   const Eigen::Index nq = x.rows();
   const int nd = static_cast<int>(k.diffusion.size());
@@ -105,13 +105,14 @@ bool coefficients_admissible(const PoissonCoefficients& k, const ExpressionBatch
       }
     } else if (nd == 6) {
       const Eigen::Matrix3d A = matrix_at(values, q);
-      const Eigen::LLT<Eigen::Matrix3d> factor = tangential_factor(A, unit_normal(at.jacobian, q));
+      const Eigen::LLT<Eigen::Matrix3d> factor =
+          volume ? Eigen::LLT<Eigen::Matrix3d>(A) : tangential_factor(A, unit_normal(at.jacobian, q));
       if (tangential.size() < static_cast<size_t>(nq)) tangential.resize(nq);
       tangential[q] = factor.matrixU();
       if (!A.allFinite() || factor.info() != Eigen::Success) {
         const Eigen::IOFormat row(Eigen::StreamPrecision, Eigen::DontAlignCols, ", ", ", ", "[", "]", "[", "]");
         std::ostringstream m;
-        m << "the coefficient matrix " << A.format(row) << " is not positive definite on the tangent plane";
+        m << "the coefficient matrix " << A.format(row) << " is not positive definite" << (volume ? "" : " on the tangent plane");
         what = m.str();
         field = &k.diffusion[0];
         matrix = true;
@@ -152,7 +153,7 @@ void apply_diffusion_factor(const ExpressionBatch& values, int num_diffusion, in
     for (int d = 0; d < dim; ++d) G.middleRows(d * nq, nq) = root.asDiagonal() * G.middleRows(d * nq, nq);
     return;
   }
-  if (num_diffusion == 6) {  // a surface: L^T of P A P + n n^T, from coefficients_admissible
+  if (num_diffusion == 6) {  // L^T of A (a volume) or of P A P + n n^T (a surface), from coefficients_admissible
     Eigen::Matrix3Xd rows(3, G.cols());
     for (Eigen::Index q = 0; q < nq; ++q) {
       for (int d = 0; d < 3; ++d) rows.row(d) = G.row(d * nq + q);
@@ -220,8 +221,8 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
   const bool variable_reaction = variable && !variable->reaction.empty();
   std::optional<ExpressionBatch> compiled_coefficients;
   if (variable) {
-    // A matrix is 2x2 (three entries) in the plane and 3x3 (six) on a surface: the readers see to it.
-    if ((num_diffusion == 3 && dim != 2) || (num_diffusion == 6 && !surface))
+    // A matrix is 2x2 (three entries) in the plane and 3x3 (six) on a surface or a volume: the readers see to it.
+    if ((num_diffusion == 3 && dim != 2) || (num_diffusion == 6 && dim != 3))
       throw std::logic_error("assemble_poisson: a coefficient matrix of the wrong size for the domain");
     std::vector<Expression> all = variable->diffusion;
     if (variable_reaction) all.push_back(variable->reaction);
@@ -317,7 +318,7 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
       Eigen::MatrixXd& K = rows ? Ke : KB;
       if (coefficient_values) {
         coefficient_values->evaluate(at.x.col(0).data(), at.x.col(1).data(), dim == 3 ? at.x.col(2).data() : nullptr, nq);
-        if (!coefficients_admissible(*variable, *coefficient_values, at, c, bad_coefficient, tangential)) continue;
+        if (!coefficients_admissible(*variable, *coefficient_values, at, volume, c, bad_coefficient, tangential)) continue;
         if (variable_reaction)
           reaction_root = (measure.array() * Eigen::Map<const Eigen::ArrayXd>(coefficient_values->result(num_diffusion), nq)).sqrt();
       }
@@ -572,51 +573,65 @@ void assemble_poisson(const BezierMesh& mesh, const GeometryMap& geometry, const
 
 namespace {
 
+// The evaluators of one condition's data: g or h (value), or grad u (from the exact
+// solution) or a given flux vector F (gradient: x, y, and z on a volume's faces).
+struct BoundaryEvaluators {
+  std::optional<ExpressionEvaluator> value;
+  std::vector<ExpressionEvaluator> gradient;
+};
+
 // Data g (Dirichlet) or h (Neumann) at the side's points.
-// The Neumann data from the exact solution are the flux (A grad u).n.
+// The Neumann data from the exact solution are the flux (A grad u).n, a given flux vector's F.n.
 void boundary_data(const PoissonProblem& problem, const BoundaryCondition& bc, const CellBasis& cb,
-                   std::optional<ExpressionEvaluator>& value, std::optional<ExpressionEvaluator>& ux,
-                   std::optional<ExpressionEvaluator>& uy, DiffusionAtPoints& diffusion, Eigen::VectorXd& out) {
+                   BoundaryEvaluators& data, DiffusionAtPoints& diffusion, Eigen::VectorXd& out) {
   const Eigen::Index n = cb.measure.size();
   out.resize(n);
   const bool face = cb.geometry.parametric_dimension() == 3;
-  if (face && bc.kind == BoundaryKind::kNeumann)
-    throw InputError("Neumann data on the faces of a volume are not supported yet (docs/VOLUMES.md)");
+  const bool flux = bc.kind == BoundaryKind::kNeumann && (bc.from_exact || !bc.flux.empty());
   for (Eigen::Index k = 0; k < n; ++k) {
-    const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
-    if (face) {
-      out[k] = (*value)(x, y, cb.geometry.x(k, 2));
-    } else if (bc.kind == BoundaryKind::kNeumann && (bc.from_exact || !bc.flux.empty())) {
-      Eigen::Vector2d flux((*ux)(x, y), (*uy)(x, y));  // grad u, or the given flux vector
-      if (bc.from_exact && !diffusion.identity()) flux = diffusion(x, y) * flux;
-      out[k] = flux[0] * cb.normal(k, 0) + flux[1] * cb.normal(k, 1);
-    } else
-      out[k] = (*value)(x, y);
+    const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1), z = face ? cb.geometry.x(k, 2) : 0.0;
+    if (flux && face) {
+      Eigen::Vector3d g(data.gradient[0](x, y, z), data.gradient[1](x, y, z), data.gradient[2](x, y, z));
+      if (bc.from_exact && !diffusion.identity()) g = diffusion(x, y, z) * g;
+      out[k] = g.dot(cb.normal.row(k).transpose());
+    } else if (flux) {
+      Eigen::Vector2d g(data.gradient[0](x, y), data.gradient[1](x, y));  // grad u, or the given flux vector
+      if (bc.from_exact && !diffusion.identity()) g = diffusion(x, y) * g;
+      out[k] = g[0] * cb.normal(k, 0) + g[1] * cb.normal(k, 1);
+    } else {
+      out[k] = face ? (*data.value)(x, y, z) : (*data.value)(x, y);
+    }
     if (!std::isfinite(out[k])) {
       std::ostringstream s;
       const Expression& e = bc.from_exact ? problem.exact->u : bc.flux.empty() ? bc.value : bc.flux[0];
       s << e.where() << ": boundary data \"" << e.text() << "\" is not finite at (" << x << ", " << y;
-      if (face) s << ", " << cb.geometry.x(k, 2);
+      if (face) s << ", " << z;
       s << ")";
       throw InputError(s.str());
     }
   }
 }
 
-void make_evaluators(const PoissonProblem& problem, const BoundaryCondition& bc,
-                     std::optional<ExpressionEvaluator>& value, std::optional<ExpressionEvaluator>& ux,
-                     std::optional<ExpressionEvaluator>& uy) {
+BoundaryEvaluators make_evaluators(const PoissonProblem& problem, const BoundaryCondition& bc, int dimension) {
+  BoundaryEvaluators e;
   if (bc.from_exact) {
     if (!problem.exact) throw InputError("boundary data come from the exact solution, but none is given");
-    value.emplace(problem.exact->u);
-    ux.emplace(problem.exact->u_x);
-    uy.emplace(problem.exact->u_y);
+    e.value.emplace(problem.exact->u);
+    if (bc.kind == BoundaryKind::kNeumann) {
+      if (dimension == 3 && problem.exact->u_z.empty())
+        throw std::logic_error("Neumann data on a volume's face: the exact solution has no u_z");
+      for (const Expression* d : {&problem.exact->u_x, &problem.exact->u_y, &problem.exact->u_z})
+        if (static_cast<int>(e.gradient.size()) < dimension) e.gradient.emplace_back(*d);
+    }
   } else if (!bc.flux.empty()) {
-    ux.emplace(bc.flux.at(0));
-    uy.emplace(bc.flux.at(1));
+    if (static_cast<int>(bc.flux.size()) != dimension)
+      throw InputError(bc.flux[0].where() + ": a flux vector has " + std::to_string(dimension) +
+                       " components here, got " + std::to_string(bc.flux.size()));
+    for (const Expression& f : bc.flux) e.gradient.emplace_back(f);
   } else {
-    value.emplace(bc.value);
+    e.value.emplace(bc.value);
   }
+  return e;
 }
 
 int side_points(const QuadratureOptions& q, const BezierCell& cell) {
@@ -637,15 +652,14 @@ void for_each_boundary_side(const BezierMesh& mesh, const GeometryMap& geometry,
   for (size_t id = 0; id < problem.boundary.size(); ++id) {
     const BoundaryCondition& bc = problem.boundary[id];
     if (bc.kind != kind) continue;
-    std::optional<ExpressionEvaluator> value, ux, uy;
-    make_evaluators(problem, bc, value, ux, uy);
+    BoundaryEvaluators evaluators = make_evaluators(problem, bc, geometry.parametric_dimension() == 3 ? 3 : 2);
     DiffusionAtPoints diffusion(bc.kind == BoundaryKind::kNeumann && bc.from_exact ? problem.coefficients.diffusion
                                                                                    : std::vector<Expression>{});
     for (int c = cells.first; c < last; ++c)
       for (int s = 0; s < mesh.cell(c).num_sides(); ++s) {
         if (mesh.cell(c).boundary[s] != static_cast<int>(id)) continue;
         evaluate_side_basis(mesh, geometry, c, static_cast<CellSide>(s), side_points(quadrature, mesh.cell(c)), cb);
-        boundary_data(problem, bc, cb, value, ux, uy, diffusion, data);
+        boundary_data(problem, bc, cb, evaluators, diffusion, data);
         visit(c, cb, data);
       }
   }
@@ -677,17 +691,18 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
   };
   std::map<int, Pieces> of_cell;
   Eigen::MatrixXd dn;
-  if (geometry.parametric_dimension() == 3)
-    throw InputError("Nitsche's method on the faces of a volume is not supported yet (docs/VOLUMES.md)");
+  const bool volume = geometry.parametric_dimension() == 3;
+  const int dims = volume ? 3 : 2;  // the normal's components (a plane's sides, a volume's faces)
   // With a coefficient A, dB/dn is the conormal derivative (A grad B).n and the penalty's bound
   // is taken against the A-weighted stiffness (the same coercivity argument in A's energy).
   DiffusionAtPoints diffusion(problem.coefficients.diffusion);
-  Eigen::VectorXd nx, ny;
+  Eigen::MatrixXd conormal_at;  // points x dims: A n
   const auto conormal = [&](const CellBasis& cb) {
-    nx = cb.normal.col(0), ny = cb.normal.col(1);
-    for (Eigen::Index k = 0; k < nx.size() && !diffusion.identity(); ++k) {
-      const Eigen::Vector2d n = diffusion(cb.geometry.x(k, 0), cb.geometry.x(k, 1)) * Eigen::Vector2d(nx[k], ny[k]);
-      nx[k] = n[0], ny[k] = n[1];
+    conormal_at = cb.normal.leftCols(dims);
+    for (Eigen::Index k = 0; k < conormal_at.rows() && !diffusion.identity(); ++k) {
+      const double x = cb.geometry.x(k, 0), y = cb.geometry.x(k, 1);
+      if (volume) conormal_at.row(k) = (diffusion(x, y, cb.geometry.x(k, 2)) * conormal_at.row(k).transpose()).transpose();
+      else conormal_at.row(k) = (diffusion(x, y) * conormal_at.row(k).transpose()).transpose();
     }
   };
   for_each_boundary_side(mesh, geometry, problem, quadrature, cells, BoundaryKind::kDirichlet,
@@ -700,7 +715,8 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
                              p.load_normal.setZero(nb), p.load_value.setZero(nb);
                            }
                            conormal(cb);
-                           dn = nx.asDiagonal() * cb.grad_x + ny.asDiagonal() * cb.grad_y;
+                           dn = conormal_at.col(0).asDiagonal() * cb.grad_x;
+                           for (int d = 1; d < dims; ++d) dn += conormal_at.col(d).asDiagonal() * cb.grad(d);
                            const Eigen::MatrixXd mdn = cb.measure.asDiagonal() * dn;
                            const Eigen::MatrixXd mixed = cb.value.transpose() * mdn;  // (B_i, dB_j/dn)
                            p.A.noalias() += dn.transpose() * mdn;
@@ -717,8 +733,9 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
     // on the constants (the Bernstein polynomials sum to 1), so the quotient is taken on the span
     // of all but the last Bernstein polynomial, where the stiffness is definite.
     const BezierCell& cell = mesh.cell(c);
-    evaluate_cell_basis(mesh, geometry, c, rule_points(quadrature.points_u, cell.degree_u, 1),
-                        rule_points(quadrature.points_v, cell.degree_v, 1), vb);
+    const int nu = rule_points(quadrature.points_u, cell.degree_u, 1), nv = rule_points(quadrature.points_v, cell.degree_v, 1);
+    if (volume) evaluate_volume_cell_basis(mesh, geometry, c, nu, nv, rule_points(quadrature.points_w, cell.degree_w, 1), vb);
+    else evaluate_cell_basis(mesh, geometry, c, nu, nv, vb);
     // A folded or degenerate cell is left to the element loop, which names it as for any cell.
     if (!(vb.min_jacobian > 0)) continue;
     const Eigen::Index m = vb.value.cols() - 1;
@@ -726,6 +743,18 @@ std::vector<NitscheCellTerms> nitsche_terms(const BezierMesh& mesh, const Geomet
     if (diffusion.identity()) {
       for (int d = 0; d < geometry.dimension(); ++d)
         stiffness.noalias() += vb.grad(d).transpose() * vb.measure.asDiagonal() * vb.grad(d);
+    } else if (volume) {
+      // sum_q m_q (A grad B)^T grad B with A = L L^T: the gradients stacked per point, times L^T.
+      const Eigen::Index nq = vb.measure.size();
+      Eigen::MatrixXd G(3 * nq, vb.value.cols());
+      for (Eigen::Index k = 0; k < nq; ++k) {
+        const Eigen::Matrix3d a = diffusion(vb.geometry.x(k, 0), vb.geometry.x(k, 1), vb.geometry.x(k, 2));
+        const Eigen::Matrix3d lt = Eigen::LLT<Eigen::Matrix3d>(a).matrixL().transpose();
+        Eigen::Matrix<double, 3, Eigen::Dynamic> g(3, vb.value.cols());
+        for (int d = 0; d < 3; ++d) g.row(d) = vb.grad(d).row(k);
+        G.middleRows(3 * k, 3) = std::sqrt(vb.measure[k]) * (lt * g);
+      }
+      stiffness.noalias() += G.transpose() * G;
     } else {
       const Eigen::Index nq = vb.measure.size();
       Eigen::VectorXd w11(nq), w12(nq), w22(nq);

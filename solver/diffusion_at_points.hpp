@@ -11,10 +11,13 @@ namespace knotwork {
 
 class DiffusionAtPoints {
  public:
-  // Entries: none (A = I), one (a I) or three (a11, a12, a22).
+  // Entries: none (A = I), one (a I), three (a11, a12, a22) in the plane, or six (a11, a12, a13,
+  // a22, a23, a33) in space.
   explicit DiffusionAtPoints(const std::vector<Expression>& diffusion);
   bool identity() const { return entries_.empty(); }
   Eigen::Matrix2d operator()(double x, double y);
+  // In space (a volume's faces): A at (x, y, z) from none, one or six entries.
+  Eigen::Matrix3d operator()(double x, double y, double z);
 
  private:
   std::vector<ExpressionEvaluator> entries_;

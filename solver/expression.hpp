@@ -105,10 +105,11 @@ class ExpressionBatch {
 // u and what the solver needs from it, derived symbolically (GiNaC) so that nobody
 // differentiates by hand. In the plane: -(u_xx + u_yy) for the source, u_x and u_y for norms
 // and fluxes. On a surface in R^3: the ambient gradient (u_x, u_y, u_z) and Hessian, from
-// which the surface operators follow on the discrete surface (solver/assemble_poisson).
+// which the surface operators follow on the discrete surface (solver/assemble_poisson). In a
+// volume: the gradient (u_x, u_y, u_z) and -(u_xx + u_yy + u_zz).
 struct ExactSolution {
   Expression u, u_x, u_y, minus_laplacian;
-  Expression u_z;                                    // surfaces only
+  Expression u_z;                                    // surfaces and volumes
   std::array<std::array<Expression, 3>, 3> hessian;  // surfaces only
   bool on_surface() const { return !u_z.empty(); }
 };
@@ -116,13 +117,16 @@ struct ExactSolution {
 // afford, functions whose derivatives leave the grammar) or if a derived expression in double
 // precision differs from GiNaC's exact value at a check point (constants beyond 2^53).
 ExactSolution differentiate_exact_solution(const Expression& u);
-// f = -div(A grad u) + c u in the plane, symbolically: A is the identity (no entries), a I (one)
-// or [[a11, a12], [a12, a22]] (three: a11, a12, a22); c is `reaction` when given, else the
-// constant. Throws InputError naming the field that cannot be read or differentiated.
+// f = -div(A grad u) + c u in the plane (dimension 2) or in space (3), symbolically: A is the
+// identity (no entries), a I (one) or the symmetric matrix of the upper triangle's entries row by
+// row (three: a11, a12, a22; six: a11, a12, a13, a22, a23, a33); c is `reaction` when given, else
+// the constant. Throws InputError naming the field that cannot be read or differentiated.
 Expression derive_general_source(const Expression& u, const std::vector<Expression>& diffusion,
-                                  const Expression& reaction, double constant_reaction);
+                                  const Expression& reaction, double constant_reaction, int dimension = 2);
 // The same for a function of (x, y, z) restricted to a surface (u_z and the Hessian; no
 // minus_laplacian, which depends on the surface).
 ExactSolution differentiate_surface_solution(const Expression& u);
+// In a volume: u_x, u_y, u_z and -(u_xx + u_yy + u_zz) of u(x, y, z).
+ExactSolution differentiate_volume_solution(const Expression& u);
 
 }  // namespace knotwork

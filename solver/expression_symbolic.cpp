@@ -283,6 +283,18 @@ ExactSolution differentiate_planar(const Expression& u) {
   return result;
 }
 
+ExactSolution differentiate_volume(const Expression& u) {
+  const Differentiator d(u);
+  ExactSolution r;
+  r.u = u;
+  r.u_x = d.to_expression(d.f().diff(d.x()), "u_x");
+  r.u_y = d.to_expression(d.f().diff(d.y()), "u_y");
+  r.u_z = d.to_expression(d.f().diff(d.z()), "u_z");
+  r.minus_laplacian =
+      d.to_expression(-(d.f().diff(d.x(), 2) + d.f().diff(d.y(), 2) + d.f().diff(d.z(), 2)), "-laplacian");
+  return r;
+}
+
 ExactSolution differentiate_surface(const Expression& u) {
   const Differentiator d(u);
   ExactSolution r;
@@ -325,17 +337,39 @@ ExactSolution differentiate_surface_solution(const Expression& u) {
   return derive_or_refuse(u, [&] { return differentiate_surface(u); });
 }
 
+ExactSolution differentiate_volume_solution(const Expression& u) {
+  return derive_or_refuse(u, [&] { return differentiate_volume(u); });
+}
+
 Expression derive_general_source(const Expression& u, const std::vector<Expression>& diffusion,
-                                  const Expression& reaction, double constant_reaction) {
+                                  const Expression& reaction, double constant_reaction, int dimension) {
   return derive_or_refuse(u, [&] {
     const Differentiator d(u);
-    const GiNaC::ex ux = d.f().diff(d.x()), uy = d.f().diff(d.y());
-    GiNaC::ex a11 = 1, a12 = 0, a22 = 1;
-    if (diffusion.size() == 1) a11 = a22 = d.read(diffusion[0]);
-    if (diffusion.size() == 3) a11 = d.read(diffusion[0]), a12 = d.read(diffusion[1]), a22 = d.read(diffusion[2]);
+    const GiNaC::symbol* v[3] = {&d.x(), &d.y(), &d.z()};
+    // A as a symmetric dimension x dimension matrix of its entries, row by row of the upper triangle.
+    GiNaC::ex a[3][3];
+    for (int i = 0; i < dimension; ++i)
+      for (int j = 0; j < dimension; ++j) a[i][j] = i == j ? GiNaC::ex(1) : GiNaC::ex(0);
+    if (diffusion.size() == 1) {
+      const GiNaC::ex s = d.read(diffusion[0]);
+      for (int i = 0; i < dimension; ++i) a[i][i] = s;
+    } else if (!diffusion.empty()) {
+      if (diffusion.size() != static_cast<size_t>(dimension * (dimension + 1) / 2))
+        throw std::logic_error("derive_general_source: a coefficient matrix of the wrong size");
+      int e = 0;
+      for (int i = 0; i < dimension; ++i)
+        for (int j = i; j < dimension; ++j) a[i][j] = a[j][i] = d.read(diffusion[e++]);
+    }
+    GiNaC::ex grad[3];
+    for (int i = 0; i < dimension; ++i) grad[i] = d.f().diff(*v[i]);
+    GiNaC::ex divergence = 0;
+    for (int i = 0; i < dimension; ++i) {
+      GiNaC::ex flux = 0;
+      for (int j = 0; j < dimension; ++j) flux += a[i][j] * grad[j];
+      divergence += flux.diff(*v[i]);
+    }
     const GiNaC::ex c = reaction.empty() ? GiNaC::ex(constant_reaction) : d.read(reaction);
-    const GiNaC::ex f = -((a11 * ux + a12 * uy).diff(d.x()) + (a12 * ux + a22 * uy).diff(d.y())) + c * d.f();
-    return d.to_expression(f, "source -div(A grad u) + c u");
+    return d.to_expression(-divergence + c * d.f(), "source -div(A grad u) + c u");
   });
 }
 
