@@ -32,6 +32,13 @@ BoundaryLabels boundary_labels(const CaseDescription& c) {
     }
     return l;
   }
+  if (c.is_volume()) {
+    // A volume's ids 0..5 are its sides u = 0, u = 1, v = 0, v = 1, w = 0, w = 1: named as a
+    // patch's sides (left: u = 0, bottom: v = 0) and front/back along w, and "1".."6".
+    l.names = {"left", "right", "bottom", "top", "front", "back"};
+    for (int s = 1; s <= 6; ++s) l.groups.emplace_back(std::to_string(s), std::vector<int>{s - 1});
+    return l;
+  }
   l.names = {"bottom", "right", "top", "left"};
   // Side s of the files is the mesh's id of that cell side (bottom 0, right 1, top 2, left 3).
   auto id_of_side = [](int side) { return static_cast<int>(cell_side_of_patch_side(side)); };

@@ -9,6 +9,7 @@
 
 #include "basis/core/multipatch.hpp"
 #include "basis/core/nurbs_patch.hpp"
+#include "basis/core/nurbs_volume.hpp"
 #include "basis/tmesh/rectangular_partition.hpp"
 #include "cases/document_node.hpp"
 #include "solver/poisson_problem.hpp"
@@ -61,6 +62,10 @@ struct CaseDescription {
   // (no patch otherwise). A domain of several patches leaves `geometry` empty.
   MultiPatch domain;
   bool multipatch() const { return domain.num_patches() > 1; }
+  // [geometry] type = "box" or "thick_quarter_annulus": the domain is this volume (the tensor
+  // family's trivariate spaces; docs/VOLUMES.md), and `geometry` is empty.
+  NurbsVolume volume;
+  bool is_volume() const { return volume.control_points.rows() > 0; }
   FamilySection section;                // the family's own settings
   bool allow_unverified_space = false;  // --allow-unverified-space: solve although the family's check failed
   QuadratureOptions quadrature;

@@ -191,13 +191,20 @@ long CaseReader::integer(const DocumentNode& n, const std::string& field) const 
   fail(field, "must be an integer");
 }
 
-std::array<long, 2> CaseReader::integer_pair(const DocumentNode& n, const std::string& field) const {
+std::vector<long> CaseReader::integers(const DocumentNode& n, const std::string& field, int count) const {
+  static const char* const lists[] = {"", "", "a pair [u, v]", "a list [u, v, w]"};
   if (auto a = n.as_array()) {
-    if (a->size() != 2) fail(field, "must be an integer or a pair [u, v]");
-    return {integer(*a->get(0), field), integer(*a->get(1), field)};
+    if (a->size() != static_cast<size_t>(count)) fail(field, std::string("must be an integer or ") + lists[count]);
+    std::vector<long> r;
+    for (size_t i = 0; i < a->size(); ++i) r.push_back(integer(*a->get(i), field));
+    return r;
   }
-  const long v = integer(n, field);
-  return {v, v};
+  return std::vector<long>(count, integer(n, field));
+}
+
+std::array<long, 2> CaseReader::integer_pair(const DocumentNode& n, const std::string& field) const {
+  const std::vector<long> v = integers(n, field, 2);
+  return {v[0], v[1]};
 }
 
 std::vector<double> CaseReader::numbers(const DocumentNode& n, const std::string& field) const {
@@ -208,19 +215,21 @@ std::vector<double> CaseReader::numbers(const DocumentNode& n, const std::string
   return r;
 }
 
-Eigen::MatrixX2d CaseReader::points(const DocumentNode& n, const std::string& field) const {
+Eigen::MatrixXd CaseReader::points(const DocumentNode& n, const std::string& field, int dimension) const {
+  const char* point = dimension == 3 ? "[x, y, z]" : "[x, y]";
   const DocumentNode* a = n.as_array();
-  if (!a) fail(field, "must be an array of [x, y] points");
-  Eigen::MatrixX2d p(a->size(), 2);
+  if (!a) fail(field, std::string("must be an array of ") + point + " points");
+  Eigen::MatrixXd p(a->size(), dimension);
   for (size_t i = 0; i < a->size(); ++i) {
     const std::string f = field + "[" + std::to_string(i) + "]";
-    const auto xy = numbers(*a->get(i), f);
-    if (xy.size() != 2) fail(f, "must be a point [x, y]");
-    p(i, 0) = xy[0];
-    p(i, 1) = xy[1];
+    const auto x = numbers(*a->get(i), f);
+    if (x.size() != static_cast<size_t>(dimension)) fail(f, std::string("must be a point ") + point);
+    for (int d = 0; d < dimension; ++d) p(i, d) = x[d];
   }
   return p;
 }
+
+Eigen::MatrixX2d CaseReader::points(const DocumentNode& n, const std::string& field) const { return points(n, field, 2); }
 
 std::string CaseReader::string(const DocumentNode& n, const std::string& field) const {
   if (auto s = n.value_exact<std::string>()) return *s;
@@ -278,6 +287,8 @@ DocumentNode parse_document_text(const std::string& text, const std::string& nam
 }
 
 namespace {
+
+bool is_volume_type(const std::string& type) { return type == "box" || type == "thick_quarter_annulus"; }
 
 NurbsPatch read_nurbs(const CaseReader& r, const DocumentNode& g, const std::string& section) {
   r.check_keys(g, section, {"type", "degrees", "knots_u", "knots_v", "control_points", "weights", "file"});
@@ -386,9 +397,61 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
     c.geometry = lshape_patch();
   } else if (c.geometry_type == "nurbs") {
     c.geometry = read_nurbs(r, g, "geometry");
+  } else if (is_volume_type(c.geometry_type)) {
+    r.fail("[geometry] type", "'" + c.geometry_type + "' is a volume, and [space] family = \"" + c.family +
+                                  "\" works on planar patches; family = \"tensor\" solves on volumes (docs/VOLUMES.md)");
   } else {
     r.fail("[geometry] type", "unknown geometry '" + c.geometry_type + "' (" +
-                                  closest_name(c.geometry_type, {"rectangle", "quarter_annulus", "lshape", "nurbs"}) + ")");
+                                  closest_name(c.geometry_type, {"rectangle", "quarter_annulus", "lshape", "nurbs", "box",
+                                                                 "thick_quarter_annulus"}) + ")");
+  }
+}
+
+bool is_volume_geometry(const CaseDocument& doc) {
+  const DocumentNode* g = doc.root.get("geometry");
+  const DocumentNode* type = g && g->as_table() ? g->get("type") : nullptr;
+  const auto name = type ? type->value_exact<std::string>() : std::nullopt;
+  return name && is_volume_type(*name);
+}
+
+void read_volume_geometry(const CaseDocument& doc, CaseDescription& c) {
+  const CaseReader& r = doc.reader;
+  const DocumentNode& g = r.table(doc.root, "geometry", true);
+  c.geometry_type = r.string(*g.get("type"), "[geometry] type");
+  // Lengths stay where the Jacobian, its inverse and their products are normal doubles.
+  const auto check_length = [&](double length, const std::string& field, const char* what) {
+    if (!(length >= 1e-100 && length <= 1e100)) {
+      char msg[200];
+      std::snprintf(msg, sizeof msg, "%s %g is outside [1e-100, 1e100], where the Jacobian and its inverse are normal "
+                                     "doubles; rescale the problem", what, length);
+      r.fail(field, msg);
+    }
+  };
+  if (c.geometry_type == "box") {
+    r.check_keys(g, "geometry", {"type", "corners"});
+    Eigen::MatrixXd corners(2, 3);
+    corners << 0, 0, 0, 1, 1, 1;
+    if (const DocumentNode* n = g.get("corners")) corners = r.points(*n, "[geometry] corners", 3);
+    if (corners.rows() != 2) r.fail("[geometry] corners", "must be [[x0, y0, z0], [x1, y1, z1]]");
+    for (int d = 0; d < 3; ++d) {
+      if (!(corners(1, d) > corners(0, d))) r.fail("[geometry] corners", "need x1 > x0, y1 > y0 and z1 > z0");
+      check_length(corners(1, d) - corners(0, d), "[geometry] corners", "side length");
+    }
+    c.volume = box_volume(corners.row(0).transpose(), corners.row(1).transpose());
+  } else {
+    r.check_keys(g, "geometry", {"type", "inner_radius", "outer_radius", "height"});
+    const auto value = [&](const char* key, double fallback) {
+      const DocumentNode* n = g.get(key);
+      return n ? r.number(*n, std::string("[geometry] ") + key) : fallback;
+    };
+    const double ri = value("inner_radius", 1), ro = value("outer_radius", 2), h = value("height", 1);
+    if (!(ri > 0)) r.fail("[geometry] inner_radius", "must be > 0");
+    if (!(ro > ri)) r.fail("[geometry] outer_radius", "must be > inner_radius");
+    check_length(ro - ri, "[geometry] outer_radius", "the wall's thickness");
+    check_length(ro, "[geometry] outer_radius", "the radius");
+    if (!(h > 0)) r.fail("[geometry] height", "must be > 0");
+    check_length(h, "[geometry] height", "the height");
+    c.volume = thick_quarter_annulus_volume(ri, ro, h);
   }
 }
 
@@ -404,19 +467,21 @@ void check_elements(const CaseReader& r, const std::array<long, 2>& e, const std
     r.fail(field, "too many elements (more than 2^26 cells)");
 }
 
-void read_quadrature(const CaseReader& r, const DocumentNode& s, CaseDescription& c, bool pair) {
-  auto read_points = [&](const char* key, int& pu, int& pv) {
+void read_quadrature(const CaseReader& r, const DocumentNode& s, CaseDescription& c, int directions) {
+  auto read_points = [&](const char* key, int& pu, int& pv, int& pw) {
     if (const DocumentNode* k = s.get(key)) {
       const std::string field = std::string("[space] ") + key;
-      const auto q = pair ? r.integer_pair(*k, field) : std::array<long, 2>{r.integer(*k, field), r.integer(*k, field)};
+      const std::vector<long> q = directions == 1 ? std::vector<long>(3, r.integer(*k, field)) : r.integers(*k, field, directions);
       for (long v : q)
         if (v < 1 || v > 30) r.fail(field, "must be in [1, 30]");
       pu = static_cast<int>(q[0]);
       pv = static_cast<int>(q[1]);
+      if (directions == 3) pw = static_cast<int>(q[2]);
     }
   };
-  read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v);
-  read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v);
+  read_points("quadrature_points", c.quadrature.points_u, c.quadrature.points_v, c.quadrature.points_w);
+  read_points("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v,
+              c.quadrature.error_points_w);
   if (const DocumentNode* k = s.get("boundary_quadrature_points")) {
     // "interior": the interior rule's number along each side, as GeoPDEs and G+Smo integrate.
     if (k->value_exact<std::string>() == std::optional<std::string>("interior")) {
@@ -540,21 +605,27 @@ void read_coefficient_and_reaction(const CaseReader& r, const DocumentNode& t, i
   }
 }
 
-void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
+void read_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c, int dimension) {
   PoissonProblem& pb = c.problem;
   const std::string& f = r.path();
-  if (const DocumentNode* e = t.get("exact"))
-    pb.exact = differentiate_exact_solution(Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact"));
-  read_coefficient_and_reaction(r, t, 2, pb);
+  if (const DocumentNode* e = t.get("exact")) {
+    const Expression u = Expression::parse(r.string(*e, "[problem] exact"), f + ": [problem] exact");
+    pb.exact = dimension == 3 ? differentiate_volume_solution(u) : differentiate_exact_solution(u);
+  }
+  read_coefficient_and_reaction(r, t, dimension, pb);
   const bool general = !pb.coefficients.constant() || pb.reaction != 0;
   if (const DocumentNode* s = t.get("source"))
     pb.source = Expression::parse(r.string(*s, "[problem] source"), f + ": [problem] source");
   else if (pb.exact && general)
-    pb.source = derive_general_source(pb.exact->u, pb.coefficients.diffusion, pb.coefficients.reaction, pb.reaction);
+    pb.source = derive_general_source(pb.exact->u, pb.coefficients.diffusion, pb.coefficients.reaction, pb.reaction, dimension);
   else if (pb.exact)
     pb.source = pb.exact->minus_laplacian;
   else
     r.fail("[problem] source", "missing: give `source`, or `exact` to derive it from");
+}
+
+void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& t, CaseDescription& c) {
+  read_exact_and_source(r, t, c, 2);
 }
 
 void read_dirichlet_method(const CaseReader& r, const DocumentNode& t, PoissonProblem& pb) {
@@ -583,7 +654,8 @@ void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
                {"exact", "source", "coefficient", "reaction", "dirichlet", "neumann", "dirichlet_method", "nitsche_penalty"});
   PoissonProblem& pb = c.problem;
   const std::string& f = r.path();
-  read_planar_exact_and_source(r, t, c);
+  const int dimension = c.is_volume() ? 3 : 2;
+  read_exact_and_source(r, t, c, dimension);
   read_dirichlet_method(r, t, pb);
 
   // One condition per boundary id; sides are named as boundary_labels says.
@@ -614,13 +686,14 @@ void read_patch_problem(const CaseDocument& doc, CaseDescription& c) {
     } else if (const DocumentNode* nt = n->as_table()) {
       for (const auto& [k, v] : *nt) {
         const std::string field = "[problem] neumann." + k;
-        // A flux h = du/dn ("exact": from the exact solution), or a flux vector [Fx, Fy]: h = F.n.
+        // A flux h = du/dn ("exact": from the exact solution), or a flux vector [Fx, Fy(, Fz)]: h = F.n.
         std::vector<Expression> flux;
         std::string val;
         if (const DocumentNode* a = v.as_array()) {
-          if (a->size() != 2)
-            r.fail(field, "a flux vector is two expressions [Fx, Fy]; or give the flux du/dn as one expression");
-          for (size_t i = 0; i < 2; ++i)
+          if (a->size() != static_cast<size_t>(dimension))
+            r.fail(field, dimension == 3 ? "a flux vector is three expressions [Fx, Fy, Fz]; or give the flux du/dn as one expression"
+                                         : "a flux vector is two expressions [Fx, Fy]; or give the flux du/dn as one expression");
+          for (size_t i = 0; i < a->size(); ++i)
             flux.push_back(Expression::parse(r.string(*a->get(i), field), f + ": " + field + "[" + std::to_string(i) + "]"));
         } else {
           val = r.string(v, field);

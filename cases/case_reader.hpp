@@ -33,8 +33,11 @@ class CaseReader {
   mpq_class rational(const DocumentNode& x, const std::string& field) const;
   long integer(const DocumentNode& n, const std::string& field) const;
   std::array<long, 2> integer_pair(const DocumentNode& n, const std::string& field) const;  // int or [u, v]
+  // An integer for every direction, or a list of `count` (2: [u, v]; 3: [u, v, w]).
+  std::vector<long> integers(const DocumentNode& n, const std::string& field, int count) const;
   std::vector<double> numbers(const DocumentNode& n, const std::string& field) const;
   Eigen::MatrixX2d points(const DocumentNode& n, const std::string& field) const;
+  Eigen::MatrixXd points(const DocumentNode& n, const std::string& field, int dimension) const;  // [x, y(, z)] rows
   std::string string(const DocumentNode& n, const std::string& field) const;
   bool boolean(const DocumentNode& n, const std::string& field) const;
   // A file name relative to the case file's folder.
@@ -85,6 +88,11 @@ std::string checked_name(const std::string& value, const std::vector<std::string
 // (G+Smo .xml or GeoPDEs .txt, relative to the case file; type then optional). A file of
 // several patches is refused unless `multipatch_allowed` (it fills c.domain only).
 void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multipatch_allowed = false);
+// [geometry] type = "box" (corners [[x0, y0, z0], [x1, y1, z1]], default the unit cube) or
+// "thick_quarter_annulus" (inner_radius 1, outer_radius 2, height 1 by default): a volume
+// (c.volume). is_volume_geometry: whether the document's [geometry] names one.
+bool is_volume_geometry(const CaseDocument& doc);
+void read_volume_geometry(const CaseDocument& doc, CaseDescription& c);
 // [problem] coefficient: an expression or number a (one entry: A = a I), or a symmetric
 // size x size matrix of them (size 2: the entries a11, a12, a22; size 3, on surfaces: a11, a12,
 // a13, a22, a23, a33; a_ji must equal a_ij).
@@ -92,14 +100,18 @@ std::vector<Expression> read_coefficient(const CaseReader& r, const DocumentNode
 // [problem] coefficient (read_coefficient with matrix_size 2 in the plane, 3 on surfaces) and
 // reaction (a number >= 0, or an expression c checked >= 0 where it is integrated).
 void read_coefficient_and_reaction(const CaseReader& r, const DocumentNode& problem, int matrix_size, PoissonProblem& pb);
-// [problem] exact and source of a planar problem (source defaults to -div(A grad exact) + c exact).
+// [problem] exact and source of a planar problem (source defaults to -div(A grad exact) + c exact);
+// read_exact_and_source in `dimension` 2 or 3 (a volume: exact is u(x, y, z)).
+void read_exact_and_source(const CaseReader& r, const DocumentNode& problem, CaseDescription& c, int dimension);
 void read_planar_exact_and_source(const CaseReader& r, const DocumentNode& problem, CaseDescription& c);
 // [problem] dirichlet_method ("projection", the default, or "nitsche") and nitsche_penalty.
 void read_dirichlet_method(const CaseReader& r, const DocumentNode& problem, PoissonProblem& pb);
-// [problem] exact/source/dirichlet/neumann on the sides boundary_labels names.
+// [problem] exact/source/dirichlet/neumann on the sides boundary_labels names (of a patch, or
+// of c.volume).
 void read_patch_problem(const CaseDocument& doc, CaseDescription& c);
-// [space] quadrature_points / error_quadrature_points (int or pair; `pair` false: one int).
-void read_quadrature(const CaseReader& r, const DocumentNode& space, CaseDescription& c, bool pair = true);
+// [space] quadrature_points / error_quadrature_points: one int for every direction, or a list of
+// `directions` (2: [u, v]; 3: [u, v, w]; 1: only one int), and boundary_quadrature_points.
+void read_quadrature(const CaseReader& r, const DocumentNode& space, CaseDescription& c, int directions = 2);
 // [space] degree (int or pair) in [1, 10], [space] elements >= 1 with at most 2^26 cells.
 void check_degree(const CaseReader& r, const std::array<long, 2>& d, const std::string& field);
 void check_elements(const CaseReader& r, const std::array<long, 2>& e, const std::string& field);

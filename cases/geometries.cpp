@@ -37,4 +37,28 @@ NurbsPatch lshape_patch() {
   return p;
 }
 
+NurbsVolume box_volume(const Eigen::Vector3d& lower, const Eigen::Vector3d& upper) {
+  NurbsVolume v;
+  v.bases.fill(BSplineBasis1D(1, {0, 0, 1, 1}));
+  v.control_points.resize(8, 3);
+  for (int k = 0; k < 8; ++k)
+    for (int d = 0; d < 3; ++d) v.control_points(k, d) = (k >> d) & 1 ? upper[d] : lower[d];
+  v.weights.setOnes(8);
+  return v;
+}
+
+NurbsVolume thick_quarter_annulus_volume(double inner_radius, double outer_radius, double height) {
+  const NurbsPatch ring = quarter_annulus_patch(inner_radius, outer_radius);
+  NurbsVolume v;
+  v.bases = {ring.basis_u, ring.basis_v, BSplineBasis1D(1, {0, 0, 1, 1})};
+  const Eigen::Index n = ring.control_points.rows();
+  v.control_points.resize(2 * n, 3);
+  v.weights.resize(2 * n);
+  for (int k = 0; k < 2; ++k) {
+    v.control_points.middleRows(k * n, n) << ring.control_points, Eigen::VectorXd::Constant(n, k * height);
+    v.weights.segment(k * n, n) = ring.weights;
+  }
+  return v;
+}
+
 }  // namespace knotwork

@@ -1,5 +1,6 @@
 #pragma once
 #include "basis/core/nurbs_patch.hpp"
+#include "basis/core/nurbs_volume.hpp"
 
 namespace knotwork {
 
@@ -18,5 +19,15 @@ NurbsPatch quarter_annulus_patch(double inner_radius, double outer_radius);
 // (-1,-1) -> (-1,1) -> (1,1); left side is y = -1, right side is x = 1. Bilinear on the two
 // convex quads either side of the diagonal (0,0)-(-1,1). The fold stays C0 under refinement.
 NurbsPatch lshape_patch();
+
+// The built-in volumes, positively oriented (det J > 0), sides u = 0, u = 1, v = 0, v = 1,
+// w = 0, w = 1 numbered "1".."6".
+
+// [x0,x1] x [y0,y1] x [z0,z1], trilinear; u along x, v along y, w along z.
+NurbsVolume box_volume(const Eigen::Vector3d& lower, const Eigen::Vector3d& upper);
+
+// The quarter annulus above extruded along z to [0, height]: u radial (degree 1), v angular
+// (degree 2, the exact arc), w along z (degree 1).
+NurbsVolume thick_quarter_annulus_volume(double inner_radius, double outer_radius, double height);
 
 }  // namespace knotwork

@@ -1,6 +1,7 @@
 #pragma once
 // Refusals before work that could not finish on this machine: every family estimates the
 // memory its space and solve need and calls check_memory before allocating anything.
+#include <array>
 #include <string>
 
 namespace knotwork {
@@ -10,6 +11,13 @@ namespace knotwork {
 // assembly) and the Cholesky factor, estimated as nnz(A) log2(n) entries (measured with AMD
 // on 2D IGA matrices: 0.73-0.75 log2(n), docs/records/performance-2026-11-22-to-12-04.md; the estimate keeps a margin).
 double galerkin_bytes(double cells, double functions, int p, int q);
+
+// The same for `cells` hexahedra of degrees (p, q, r) and a direct solve: the factor of a 3D
+// problem fills in far more than in 2D (measured N^(5/3) with CHOLMOD's ordering, constants in
+// resource_limits.cpp); and for CG with "boomeramg" or "jacobi" on the assembled matrix.
+double volume_galerkin_bytes(double cells, double functions, const std::array<int, 3>& degree);
+double volume_iterative_bytes(double cells, double functions, const std::array<int, 3>& degree,
+                              const std::string& preconditioner);
 
 // Memory of the iterative path (CG): the same cell lists and matrix as galerkin_bytes, no
 // factor, CG's vectors, and `preconditioner` bytes for the preconditioner's own storage

@@ -60,11 +60,20 @@ KnotLines knot_lines_of_cells(const BezierMesh& mesh, const GeometryMap& geometr
 }
 
 double largest_cell_diagonal(const BezierMesh& mesh, const GeometryMap& geometry) {
+  double h = 0;
+  GeometryAtPoints g;
+  if (geometry.parametric_dimension() == 3) {  // a hexahedron's four diagonals, corner k to corner 7 - k
+    Eigen::VectorXd u(8), v(8), w(8);
+    for (int k = 0; k < 8; ++k) u[k] = k & 1, v[k] = (k >> 1) & 1, w[k] = (k >> 2) & 1;
+    for (int c = 0; c < mesh.num_cells(); ++c) {
+      geometry.evaluate_volume(c, u, v, w, g);
+      for (int k = 0; k < 4; ++k) h = std::max(h, (g.x.row(k) - g.x.row(7 - k)).norm());
+    }
+    return h;
+  }
   Eigen::VectorXd u(4), v(4);
   u << 0, 1, 1, 0;
   v << 0, 0, 1, 1;
-  double h = 0;
-  GeometryAtPoints g;
   for (int c = 0; c < mesh.num_cells(); ++c) {
     geometry.evaluate(c, u, v, g);
     h = std::max({h, (g.x.row(0) - g.x.row(2)).norm(), (g.x.row(1) - g.x.row(3)).norm()});

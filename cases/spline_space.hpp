@@ -22,6 +22,12 @@
 
 namespace knotwork {
 
+// An array of degrees (or counts) per direction as the list degree() gives.
+template <size_t n>
+std::vector<int> as_list(const std::array<int, n>& a) {
+  return {a.begin(), a.end()};
+}
+
 // A value a family adds to the reports of run, converge, adapt and basis. The key is the
 // JSON key ("c1_jump"; "counts.vertex" is member `vertex` of object `counts`); monostate is
 // JSON null.
@@ -83,8 +89,9 @@ class SplineSpace {
   virtual ~SplineSpace() = default;
   virtual const BezierMesh& mesh() const = 0;
   virtual const GeometryMap& geometry() const = 0;
-  // The polynomial degree per parameter direction (the reports' `degree`).
-  virtual std::array<int, 2> degree() const = 0;
+  // The polynomial degree per parameter direction (the reports' `degree`: two, or three on a
+  // volume).
+  virtual std::vector<int> degree() const = 0;
   // The family's words about this space (SpaceReport).
   virtual const SpaceReport& presentation() const = 0;
   // Throws InputError when the space must not be solved on (and the case did not allow it).

@@ -623,8 +623,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("description", [](const Space& s) { return s.space->presentation().description(); })
       .def_property_readonly("family", [](const Space& s) { return s.c().family; })
       .def_property_readonly("degree", [](const Space& s) {
-        const std::array<int, 2> d = s.space->degree();
-        return py::make_tuple(d[0], d[1]);
+        return py::tuple(py::cast(s.space->degree()));
       })
       .def_property_readonly("is_rational", [](const Space& s) { return s.mesh().is_rational(); })
       .def_property_readonly("notes", [](const Space& s) { return s.space->presentation().notes(); })

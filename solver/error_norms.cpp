@@ -162,23 +162,47 @@ Eigen::MatrixXd evaluate_solution(const BezierMesh& mesh, const GeometryMap& geo
   return out;
 }
 
+Eigen::MatrixXd evaluate_volume_solution(const BezierMesh& mesh, const GeometryMap& geometry,
+                                         const Eigen::VectorXd& coefficients, int c, const Eigen::VectorXd& u,
+                                         const Eigen::VectorXd& v, const Eigen::VectorXd& w) {
+  CellBasis cb;
+  evaluate_volume_cell_basis_at(mesh, geometry, c, u, v, w, cb);
+  const auto ids = mesh.functions(c);
+  Eigen::VectorXd local(static_cast<Eigen::Index>(ids.size()));
+  for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
+  const Eigen::VectorXd bernstein = cb.C.transpose() * local;
+  Eigen::MatrixXd out(u.size(), 4);
+  out.col(0) = cb.value * bernstein;
+  for (int d = 0; d < 3; ++d) out.col(1 + d) = cb.grad(d) * bernstein;
+  return out;
+}
+
 double exact_at(ExpressionEvaluator& exact, const Eigen::MatrixXd& x, Eigen::Index k, double offset) {
   return (x.cols() == 2 ? exact(x(k, 0), x(k, 1)) : exact(x(k, 0), x(k, 1), x(k, 2))) - offset;
 }
 
 void sample_cell(const BezierMesh& mesh, const GeometryMap& geometry, const Eigen::VectorXd& coefficients, int cell,
                  int n, ExpressionEvaluator* exact, double exact_offset, CellSamples& out) {
-  const int m = n + 1;
-  if (out.n != n) {
+  const int m = n + 1, dimension = geometry.parametric_dimension(), points = dimension == 3 ? m * m * m : m * m;
+  if (out.n != n || out.dimension != dimension) {
     out.n = n;
-    out.u.resize(m * m);
-    out.v.resize(m * m);
-    for (int j = 0; j < m; ++j)
-      for (int i = 0; i < m; ++i) out.u[i + m * j] = double(i) / n, out.v[i + m * j] = double(j) / n;
+    out.dimension = dimension;
+    out.u.resize(points);
+    out.v.resize(points);
+    out.w.setZero(dimension == 3 ? points : 0);
+    for (int k = 0; k < points; ++k) {
+      out.u[k] = double(k % m) / n, out.v[k] = double((k / m) % m) / n;
+      if (dimension == 3) out.w[k] = double(k / (m * m)) / n;
+    }
   }
-  geometry.evaluate(cell, out.u, out.v, out.at);
-  out.uh = evaluate_solution(mesh, geometry, coefficients, cell, out.u, out.v);
-  out.exact.resize(exact ? m * m : 0);
+  if (dimension == 3) {
+    geometry.evaluate_volume(cell, out.u, out.v, out.w, out.at);
+    out.uh = evaluate_volume_solution(mesh, geometry, coefficients, cell, out.u, out.v, out.w);
+  } else {
+    geometry.evaluate(cell, out.u, out.v, out.at);
+    out.uh = evaluate_solution(mesh, geometry, coefficients, cell, out.u, out.v);
+  }
+  out.exact.resize(exact ? points : 0);
   for (Eigen::Index k = 0; k < out.exact.size(); ++k) out.exact[k] = exact_at(*exact, out.at.x, k, exact_offset);
 }
 

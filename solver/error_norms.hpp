@@ -45,16 +45,22 @@ Eigen::MatrixXd evaluate_solution(const BezierMesh& mesh, const GeometryMap& geo
                                   const Eigen::VectorXd& coefficients, int cell,
                                   const Eigen::VectorXd& u, const Eigen::VectorXd& v);
 
+// The same on a volume's hexahedral cell at reference points (u, v, w): rows (value, dx, dy, dz).
+Eigen::MatrixXd evaluate_volume_solution(const BezierMesh& mesh, const GeometryMap& geometry,
+                                         const Eigen::VectorXd& coefficients, int cell, const Eigen::VectorXd& u,
+                                         const Eigen::VectorXd& v, const Eigen::VectorXd& w);
+
 // The exact solution minus `offset` at physical point k of x (rows: points; 2 or 3 columns).
 double exact_at(ExpressionEvaluator& exact, const Eigen::MatrixXd& x, Eigen::Index k, double offset);
 
 // A cell sampled on an (n+1) x (n+1) equispaced grid of its reference square (point
-// i + (n+1) j, i along u): physical points, u_h and its gradient (evaluate_solution's rows),
+// i + (n+1) j, i along u), or a hexahedron on the (n+1)^3 grid of its cube (point
+// i + (n+1) (j + (n+1) k)): physical points, u_h and its gradient (evaluate_solution's rows),
 // and the exact solution minus exact_offset when an evaluator is given. What the sampled
 // ParaView file and the Python module's Result.sample show. Reuse one CellSamples per thread.
 struct CellSamples {
-  int n = 0;
-  Eigen::VectorXd u, v;  // the grid, rebuilt when n changes
+  int n = 0, dimension = 0;
+  Eigen::VectorXd u, v, w;  // the grid, rebuilt when n or the cells' dimension changes
   GeometryAtPoints at;
   Eigen::MatrixXd uh;
   Eigen::VectorXd exact;  // empty without an evaluator

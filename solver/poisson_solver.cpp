@@ -136,7 +136,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   const bool volume = geometry.parametric_dimension() == 3;
   if (volume != (mesh.num_cells() > 0 && mesh.cell(0).dimension == 3))
     throw std::invalid_argument("the geometry's parametric dimension is not the mesh's cells'");
-  if (volume && (distribution || options.matrix_free || options.matrix_from_operator))
+  if (volume && (distribution || options.matrix_free))
     throw std::invalid_argument("volumes are solved serially with an assembled matrix, for now: docs/VOLUMES.md");
   // A gradient given by the caller (a Python exact solution) has as many components as it was given.
   if (problem.exact && problem.exact->on_surface() != (geometry.dimension() == 3))
@@ -217,6 +217,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       given = options.matrix_from_operator();
       if (given && given->num_functions() != mesh.num_functions())
         throw std::logic_error("solve_poisson: matrix_from_operator gave an operator of another space");
+      if (given && volume) throw std::logic_error("solve_poisson: an operator's matrix on a volume (its cells are assembled)");
     });
     const bool writes = given && operator_problem && given->assembles_lower();
     if (distributed) {

@@ -4,6 +4,7 @@
 #include <vtkCellData.h>
 #include <vtkCellType.h>
 #include <vtkDoubleArray.h>
+#include <vtkHigherOrderHexahedron.h>
 #include <vtkHigherOrderQuadrilateral.h>
 #include <vtkIdTypeArray.h>
 #include <vtkIntArray.h>
@@ -23,6 +24,7 @@
 #include <stdexcept>
 
 #include "basis/core/bezier_ops.hpp"
+#include "quadrature/bernstein.hpp"
 #include "solver/error_norms.hpp"
 
 namespace knotwork {
@@ -141,6 +143,36 @@ struct ExactArrays {
 
 }  // namespace
 
+namespace {
+
+// A rational Bezier hexahedron's equispaced nodes (i/p, j/q, k/r), node i + (p+1) (j + (q+1) k),
+// and the collocation of its Bernstein polynomials there: what turns values at the nodes into
+// the Bezier coefficients of the interpolant (as bernstein_interpolation_inverse does for quads).
+struct HexahedronNodes {
+  int p = -1, q = -1, r = -1;
+  Eigen::VectorXd u, v, w;
+  Eigen::MatrixXd collocation;  // nodes x Bernstein polynomials
+  void set(int pu, int pv, int pw) {
+    if (pu == p && pv == q && pw == r) return;
+    p = pu, q = pv, r = pw;
+    const int n[3] = {p + 1, q + 1, r + 1}, nb = n[0] * n[1] * n[2];
+    u.resize(nb), v.resize(nb), w.resize(nb);
+    for (int k = 0; k < nb; ++k) u[k] = double(k % n[0]) / p, v[k] = double((k / n[0]) % n[1]) / q, w[k] = double(k / (n[0] * n[1])) / r;
+    double bu[16], bv[16], bw[16], d[16];
+    collocation.resize(nb, nb);
+    for (int k = 0; k < nb; ++k) {
+      bernstein_values_and_derivatives(p, u[k], bu, d);
+      bernstein_values_and_derivatives(q, v[k], bv, d);
+      bernstein_values_and_derivatives(r, w[k], bw, d);
+      for (int c = 0; c <= r; ++c)
+        for (int b = 0; b <= q; ++b)
+          for (int a = 0; a <= p; ++a) collocation(k, a + n[0] * (b + n[1] * c)) = bu[a] * bv[b] * bw[c];
+    }
+  }
+};
+
+}  // namespace
+
 void write_bezier_vtu(const std::string& path, const BezierMesh& mesh, const GeometryMap& geometry,
                       const Eigen::VectorXd& coeffs, const ExactSolution* exact, const CellFields& cell_fields,
                       double exact_offset, CellRange range, const PieceSummary* summary) {
@@ -191,10 +223,52 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
     Eigen::MatrixXd inverse, collocation;
     Eigen::VectorXd nu, nv;
     GeometryAtPoints at;
+    HexahedronNodes hexahedron;
 #pragma omp for schedule(dynamic, 64)
     for (int c = 0; c < nc; ++c) {
       try {
         const BezierGeometryCell& g = bezier[c];
+        if (g.degree_w > 0) {  // a hexahedron: the same steps in three directions
+          const int p = g.degree_u, q = g.degree_v, r = g.degree_w;
+          hexahedron.set(p, q, r);
+          const BezierCell& cell = mesh.cell(first + c);
+          const bool polynomial = !mesh.is_rational() && cell.degree_u == p && cell.degree_v == q && cell.degree_w == r &&
+                                  (g.weights.array() == 1.0).all();
+          const Eigen::VectorXd W = hexahedron.collocation * g.weights;
+          auto to_bezier = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
+            return bernstein_interpolant(p, q, r, W.cwiseProduct(v)).col(0).cwiseQuotient(g.weights);
+          };
+          Eigen::VectorXd fu, fe;
+          if (polynomial) {
+            const auto ids = mesh.functions(first + c);
+            Eigen::VectorXd local(static_cast<Eigen::Index>(ids.size()));
+            for (size_t a = 0; a < ids.size(); ++a) local[a] = coeffs[ids[a]];
+            fu = mesh.extraction(first + c).transpose() * local;
+          } else {
+            fu = to_bezier(evaluate_volume_solution(mesh, geometry, coeffs, first + c, hexahedron.u, hexahedron.v,
+                                                    hexahedron.w).col(0));
+          }
+          if (exact) {
+            geometry.evaluate_volume(first + c, hexahedron.u, hexahedron.v, hexahedron.w, at);
+            exact_u->evaluate(at.x.col(0).data(), at.x.col(1).data(), at.x.col(2).data(), at.x.rows());
+            fe = to_bezier(Eigen::Map<const Eigen::VectorXd>(exact_u->result(0), at.x.rows()).array() - exact_offset);
+          }
+          const int order[3] = {p, q, r};
+          for (int k = 0; k <= r; ++k)
+            for (int j = 0; j <= q; ++j)
+              for (int i = 0; i <= p; ++i) {
+                const int b = i + (p + 1) * (j + (q + 1) * k);
+                const vtkIdType id = start[c] + vtkHigherOrderHexahedron::PointIndexFromIJK(i, j, k, order);
+                connectivity->SetValue(id, id);
+                points->SetPoint(id, g.points(b, 0), g.points(b, 1), g.points(b, 2));
+                weights->SetValue(id, g.weights[b]);
+                solution->SetValue(id, fu[b]);
+                if (ex) ex.set(id, fe[b], fu[b]);
+              }
+          const double deg[3] = {double(p), double(q), double(r)};
+          degrees->SetTuple(c, deg);
+          continue;
+        }
         const int p = g.degree_u, q = g.degree_v, nb = (p + 1) * (q + 1);
         if (p != last_p || q != last_q) {
           inverse = bernstein_interpolation_inverse(p, q);
@@ -257,7 +331,7 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
   vtkNew<vtkCellArray> cells;
   cells->SetData(offsets, connectivity);
   grid->SetPoints(points);
-  grid->SetCells(VTK_BEZIER_QUADRILATERAL, cells);
+  grid->SetCells(geometry.parametric_dimension() == 3 ? VTK_BEZIER_HEXAHEDRON : VTK_BEZIER_QUADRILATERAL, cells);
   grid->GetPointData()->SetRationalWeights(weights);
   grid->GetCellData()->SetHigherOrderDegrees(degrees);
   grid->GetPointData()->SetScalars(solution);
@@ -324,7 +398,10 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
                        const Eigen::VectorXd& coeffs, const ExactSolution* exact, int samples, double exact_offset,
                        CellRange range, const PieceSummary* summary) {
   const int first = range.first, last = range.last < 0 ? mesh.num_cells() : range.last;
-  const int s = samples, nc = last - first, per_cell = (s + 1) * (s + 1);
+  // Quadrilaterals cut into s^2 linear quads, hexahedra into s^3 linear hexahedra.
+  const bool hexahedra = geometry.parametric_dimension() == 3;
+  const int s = samples, m = s + 1, nc = last - first, per_cell = hexahedra ? m * m * m : m * m;
+  const int pieces = hexahedra ? s * s * s : s * s;
   const vtkIdType total = static_cast<vtkIdType>(nc) * per_cell;
   vtkNew<vtkUnstructuredGrid> grid;
   vtkNew<vtkPoints> points;
@@ -334,7 +411,7 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
   auto gradient = scalar_array("solution_gradient", total, 3);
   ExactArrays ex(exact, total);
   CellSamples cs;
-  grid->Allocate(static_cast<vtkIdType>(nc) * s * s);
+  grid->Allocate(static_cast<vtkIdType>(nc) * pieces);
   for (int c = 0; c < nc; ++c) {
     sample_cell(mesh, geometry, coeffs, first + c, s, ex ? &*ex.u : nullptr, exact_offset, cs);
     const Eigen::MatrixXd& x = cs.at.x;
@@ -347,18 +424,23 @@ void write_sampled_vtu(const std::string& path, const BezierMesh& mesh, const Ge
       gradient->SetTuple(base + k, grad);
       if (ex) ex.set(base + k, cs.exact[k], cs.uh(k, 0));
     }
-    for (int j = 0; j < s; ++j)
-      for (int i = 0; i < s; ++i) {
-        const vtkIdType q[4] = {base + i + (s + 1) * j, base + i + 1 + (s + 1) * j,
-                                base + i + 1 + (s + 1) * (j + 1), base + i + (s + 1) * (j + 1)};
-        grid->InsertNextCell(VTK_QUAD, 4, q);
-      }
+    const auto id = [&](int i, int j, int k) { return base + i + m * (j + m * k); };
+    for (int k = 0; k < (hexahedra ? s : 1); ++k)
+      for (int j = 0; j < s; ++j)
+        for (int i = 0; i < s; ++i) {
+          // VTK's corner order: counterclockwise at the bottom (k), then the same above it.
+          const vtkIdType q[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
+                                  id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
+                                  id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+          if (hexahedra) grid->InsertNextCell(VTK_HEXAHEDRON, 8, q);
+          else grid->InsertNextCell(VTK_QUAD, 4, q);
+        }
   }
   grid->SetPoints(points);
   grid->GetPointData()->SetScalars(solution);
   grid->GetPointData()->AddArray(gradient);
   ex.add_to(grid);
-  add_patch_field(grid, mesh, first, last, s * s);
+  add_patch_field(grid, mesh, first, last, pieces);
   write_piece(path, grid, summary);
 }
 

@@ -102,27 +102,30 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
 // gradient vanishes at every point of the rule, so the matrix can lose definiteness and the
 // solve would then blame the boundary conditions. Refused before any work, naming the key.
 void check_quadrature_points(const CaseDescription& c, const BezierMesh& mesh) {
-  int pu = 0, pv = 0;
+  int pu = 0, pv = 0, pw = 0;  // pw: a volume's hexahedra
   for (int e = 0; e < mesh.num_cells(); ++e) {
     pu = std::max(pu, mesh.cell(e).degree_u);
     pv = std::max(pv, mesh.cell(e).degree_v);
+    pw = std::max<int>(pw, mesh.cell(e).degree_w);
   }
-  auto check = [&](const char* key, int nu, int nv, const std::string& integrand) {
-    for (const auto& [n, p] : {std::pair{nu, pu}, std::pair{nv, pv}})
-      if (n > 0 && n < p + 1)
+  const int p = std::max({pu, pv, pw});
+  auto check = [&](const char* key, int nu, int nv, int nw, const std::string& integrand) {
+    for (const auto& [n, d] : {std::pair{nu, pu}, std::pair{nv, pv}, std::pair{nw, pw}})
+      if (n > 0 && n < d + 1)
         throw InputError(c.path + ": [space] " + key + ": " + std::to_string(n) + " Gauss point" + (n == 1 ? "" : "s") +
-                         " per direction, fewer than degree + 1 = " + std::to_string(p + 1) +
+                         " per direction, fewer than degree + 1 = " + std::to_string(d + 1) +
                          ", the fewest that integrate " + integrand + " (omit the key for the default)");
   };
-  check("quadrature_points", c.quadrature.points_u, c.quadrature.points_v,
-        "the stiffness of a degree-" + std::to_string(std::max(pu, pv)) + " space exactly on straight cells");
-  check("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v,
-        "|grad u_h|^2 of a degree-" + std::to_string(std::max(pu, pv)) + " solution exactly on straight cells");
+  check("quadrature_points", c.quadrature.points_u, c.quadrature.points_v, c.quadrature.points_w,
+        "the stiffness of a degree-" + std::to_string(p) + " space exactly on straight cells");
+  check("error_quadrature_points", c.quadrature.error_points_u, c.quadrature.error_points_v, c.quadrature.error_points_w,
+        "|grad u_h|^2 of a degree-" + std::to_string(p) + " solution exactly on straight cells");
 }
 
 // Why the space's operator (SplineSpace::matrix_free_operator, K of the constant-coefficient
 // planar form) cannot stand for this case's K ("" when it can, and then `op` is it).
 std::string operator_obstacle(const CaseDescription& c, const SplineSpace& space, std::shared_ptr<const MatrixFreePoisson>& op) {
+  if (space.geometry().parametric_dimension() == 3) return "serves planar problems only (not volumes, for now: docs/VOLUMES.md)";
   if (space.geometry().dimension() != 2) return "serves planar problems only (not surfaces)";
   if (!c.problem.coefficients.constant()) return "serves constant coefficients only (this case's [problem] coefficient or reaction varies)";
   if (c.problem.dirichlet_method == DirichletMethod::kNitsche) return "does not add Nitsche's boundary terms";

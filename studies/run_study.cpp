@@ -157,6 +157,12 @@ RunOutcome run_study(const CaseDescription& c, Ordering ordering, const std::str
   return r;
 }
 
+static Json degree_json(const SplineSpace& space) {
+  Json degrees = Json::array();
+  for (int d : space.degree()) degrees.push(double(d));
+  return degrees;
+}
+
 Json run_json(const CaseDescription& c, const RunOutcome& r) {
   const PoissonSolution& s = r.solution;
   const PoissonTimings& tm = s.timings;
@@ -167,7 +173,7 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
       .set("checks", r.seconds_checks).set("output", r.seconds_output).set("total_without_output", r.total_without_output());
   Json j = Json::object();
   j.set("case", c.path).set("family", c.family).set("space", r.description)
-      .set("degree", Json::array().push(double(r.space->degree()[0])).push(double(r.space->degree()[1])))
+      .set("degree", degree_json(*r.space))
       .set("cells", global_num_cells(*r.space)).set("dofs", s.num_functions).set("free_dofs", s.num_free)
       .set("matrix_nonzeros", s.matrix_nonzeros).set("factor_nonzeros", s.cholesky.factor_nonzeros)
       .set("refinement_correction", s.cholesky.refinement_correction);

@@ -24,6 +24,8 @@
 #include "solver/error_norms.hpp"
 #include "solver/poisson_solver.hpp"
 #include "solver/vtk_output.hpp"
+#include "basis/core/bezier_ops.hpp"
+#include <Eigen/Geometry>
 
 using namespace knotwork;
 namespace fs = std::filesystem;
@@ -240,4 +242,110 @@ TEST_CASE("Multipatch output: each cell's patch as cell data, the interfaces as 
   CHECK(read(one + "/solution.vtu")->GetCellData()->GetArray("patch") == nullptr);
   CHECK(!fs::exists(one + "/interfaces.vtp"));
   fs::remove_all(one);
+}
+
+namespace {
+
+// A volume case solved through the pipeline (cases/README.md: [geometry] type = "box" or
+// "thick_quarter_annulus").
+Solved solve_volume(const std::string& geometry, int p, int n, bool rational) {
+  Solved r;
+  r.c = load_case_text("[geometry]\ntype = \"" + geometry + "\"\n[space]\ndegree = " + std::to_string(p) +
+                           "\nelements = " + std::to_string(n) + "\nrational = " + (rational ? "true" : "false") +
+                           "\n[problem]\nexact = \"sin(x) * exp(y / 2) * (1 + z * z / 3)\"\n",
+                       "volume.toml");
+  r.d = build_space(r.c);
+  r.s = solve_poisson(r.d->mesh(), r.d->geometry(), r.c.problem, PoissonSolveOptions{});
+  return r;
+}
+
+// The inf-norm of the univariate Bernstein interpolation inverse at p + 1 equispaced nodes.
+double interpolation_norm(int p) {
+  return bernstein_interpolation_inverse(p, 0).cwiseAbs().rowwise().sum().maxCoeff();
+}
+
+}  // namespace
+
+TEST_CASE("Bezier hexahedra (VTK type 79) read back by VTK evaluate to the geometry and the solution", "[vtk][volume]") {
+  // Through VTK's own rational Bezier hexahedron (its node order, its weights): the box and a
+  // B-spline solution (the solution's own Bezier coefficients), the thick quarter annulus with
+  // the isoparametric NURBS space (the solution is a rational Bezier function of the cell's
+  // weights: exact everywhere) and with B-splines on it (an interpolant: exact at the nodes).
+  // Rounding: the interpolation multiplies the values' rounding by at most the product of the
+  // univariate inverses' norms, and VTK's sum over the (p+1)^3 nodes adds one rounding per term.
+  const std::string dir = temp_dir();
+  constexpr double eps = std::numeric_limits<double>::epsilon();
+  struct Variant {
+    const char* geometry;
+    bool rational, exact_inside;
+  };
+  for (const Variant& variant : {Variant{"box", false, true}, Variant{"thick_quarter_annulus", true, true},
+                                 Variant{"thick_quarter_annulus", false, false}}) {
+    const int p = 2;
+    INFO(variant.geometry << ", rational = " << variant.rational);
+    Solved r = solve_volume(variant.geometry, p, 2, variant.rational);
+    const std::string path = dir + "/hexahedra.vtu";
+    write_bezier_vtu(path, r.d->mesh(), r.d->geometry(), r.s.coefficients, &*r.c.problem.exact);
+    auto grid = read(path);
+    REQUIRE(grid->GetNumberOfCells() == r.d->mesh().num_cells());
+    vtkDataArray* deg = grid->GetCellData()->GetHigherOrderDegrees();
+    vtkDataArray* sol = grid->GetPointData()->GetArray("solution");
+    REQUIRE(deg != nullptr);
+    REQUIRE(sol != nullptr);
+    REQUIRE(grid->GetPointData()->GetRationalWeights() != nullptr);
+    vtkNew<vtkGenericCell> cell;
+    // Nodes of the degree-2 cells (corners, an edge's middle, the centre) and points between.
+    Eigen::VectorXd u(6), v(6), w(6);
+    u << 0, 1, 0.5, 0.5, 0.13, 0.71;
+    v << 0, 1, 0, 0.5, 0.62, 0.29;
+    w << 0, 1, 1, 0.5, 0.35, 0.93;
+    const int points = variant.exact_inside ? 6 : 4;
+    const double bound = 4 * 27 * std::pow(interpolation_norm(p), 3) * eps;
+    for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+      REQUIRE(grid->GetCellType(c) == VTK_BEZIER_HEXAHEDRON);
+      for (int d = 0; d < 3; ++d) REQUIRE(deg->GetComponent(c, d) == p);
+      grid->GetCell(c, cell);
+      GeometryAtPoints at;
+      r.d->geometry().evaluate_volume(static_cast<int>(c), u, v, w, at);
+      const Eigen::MatrixXd uh = evaluate_volume_solution(r.d->mesh(), r.d->geometry(), r.s.coefficients, static_cast<int>(c), u, v, w);
+      const double scale_x = at.x.cwiseAbs().maxCoeff(), scale_u = std::max(1.0, uh.col(0).cwiseAbs().maxCoeff());
+      for (int k = 0; k < points; ++k) {
+        double pc[3] = {u[k], v[k], w[k]}, x[3], weights[64];
+        int sub = 0;
+        cell->EvaluateLocation(sub, pc, x, weights);
+        for (int d = 0; d < 3; ++d) REQUIRE(std::abs(x[d] - at.x(k, d)) <= bound * scale_x);
+        double value = 0;
+        for (vtkIdType i = 0; i < cell->GetNumberOfPoints(); ++i) value += weights[i] * sol->GetTuple1(cell->GetPointId(i));
+        REQUIRE(std::abs(value - uh(k, 0)) <= bound * scale_u);
+      }
+    }
+  }
+  // The sampled fallback: s^3 linear hexahedra per cell, with the exact solution at each point.
+  Solved r = solve_volume("thick_quarter_annulus", 2, 2, true);
+  write_sampled_vtu(dir + "/sampled.vtu", r.d->mesh(), r.d->geometry(), r.s.coefficients, &*r.c.problem.exact, 3);
+  auto grid = read(dir + "/sampled.vtu");
+  REQUIRE(grid->GetNumberOfCells() == r.d->mesh().num_cells() * 27);
+  REQUIRE(grid->GetCellType(0) == VTK_HEXAHEDRON);
+  vtkDataArray* ex = grid->GetPointData()->GetArray("exact");
+  REQUIRE(ex != nullptr);
+  // (The file's values come from the vectorized evaluator, libmvec's sin and exp within 4 ulp
+  // each: a few dozen ulps of the value apart from the scalar one's at most.)
+  ExpressionEvaluator exact(r.c.problem.exact->u);
+  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); i += 7) {
+    double x[3];
+    grid->GetPoint(i, x);
+    const double value = exact(x[0], x[1], x[2]);
+    REQUIRE(std::abs(ex->GetTuple1(i) - value) <= 64 * eps * std::abs(value));
+  }
+  // Every linear hexahedron is positively oriented (VTK's corner order): its volume is > 0.
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); c += 5) {
+    double corner[8][3];
+    vtkCell* hexahedron = grid->GetCell(c);
+    for (int k = 0; k < 8; ++k) grid->GetPoint(hexahedron->GetPointId(k), corner[k]);
+    const Eigen::Vector3d a(corner[1][0] - corner[0][0], corner[1][1] - corner[0][1], corner[1][2] - corner[0][2]);
+    const Eigen::Vector3d b(corner[3][0] - corner[0][0], corner[3][1] - corner[0][1], corner[3][2] - corner[0][2]);
+    const Eigen::Vector3d h(corner[4][0] - corner[0][0], corner[4][1] - corner[0][1], corner[4][2] - corner[0][2]);
+    REQUIRE(a.cross(b).dot(h) > 0);
+  }
+  fs::remove_all(dir);
 }

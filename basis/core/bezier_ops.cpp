@@ -1,5 +1,7 @@
 #include "basis/core/bezier_ops.hpp"
 
+#include <stdexcept>
+
 #include <algorithm>
 #include <cmath>
 
@@ -56,4 +58,24 @@ Eigen::MatrixXd bernstein_interpolation_inverse(int p, int q) {
     }
   return A.fullPivLu().inverse();
 }
+Eigen::MatrixXd bernstein_interpolant(int p, int q, int r, const Eigen::MatrixXd& values) {
+  const int degree[3] = {p, q, r};
+  const Eigen::Index n[3] = {p + 1, q + 1, r + 1};
+  if (values.rows() != n[0] * n[1] * n[2]) throw std::invalid_argument("bernstein_interpolant: one value per node");
+  Eigen::MatrixXd out = values;
+  for (int d = 0; d < 3; ++d) {
+    const Eigen::MatrixXd inverse = bernstein_interpolation_inverse(degree[d], 0);  // univariate, n[d] x n[d]
+    const Eigen::Index stride = d == 0 ? 1 : d == 1 ? n[0] : n[0] * n[1];
+    Eigen::VectorXd line(n[d]);
+    for (Eigen::Index col = 0; col < out.cols(); ++col)
+      for (Eigen::Index start = 0; start < out.rows(); ++start) {
+        if ((start / stride) % n[d] != 0) continue;  // the first node of each line along d
+        for (Eigen::Index i = 0; i < n[d]; ++i) line[i] = out(start + i * stride, col);
+        const Eigen::VectorXd coefficients = inverse * line;
+        for (Eigen::Index i = 0; i < n[d]; ++i) out(start + i * stride, col) = coefficients[i];
+      }
+  }
+  return out;
+}
+
 }  // namespace knotwork

@@ -17,4 +17,9 @@ namespace knotwork {
 // at the equispaced nodes (i/p, j/q), node index i + (p+1) j. Multiplying it with
 // values at those nodes gives the Bernstein coefficients of the interpolant.
 Eigen::MatrixXd bernstein_interpolation_inverse(int p, int q);
+// The same in three directions, applied direction by direction (the univariate inverses, not a
+// dense ((p+1)(q+1)(r+1))^2 one): the Bernstein coefficients of the interpolant of degrees
+// (p, q, r) of the values at the nodes (i/p, j/q, k/r), node i + (p+1) (j + (q+1) k), column
+// by column of `values`.
+Eigen::MatrixXd bernstein_interpolant(int p, int q, int r, const Eigen::MatrixXd& values);
 }  // namespace knotwork

@@ -28,7 +28,9 @@ struct GeometryAtPoints {
 // A cell's geometry as a (rational) Bezier patch, for exact VTK output.
 struct BezierGeometryCell {
   int degree_u = 1, degree_v = 1;
-  Eigen::MatrixXd points;   // (p+1)(q+1) control points x dimension, index a + (p+1) c
+  int degree_w = 0;         // a hexahedron's (0: a quadrilateral)
+  // (p+1)(q+1)(r+1) control points x dimension, index a + (p+1) b + (p+1)(q+1) c
+  Eigen::MatrixXd points;
   Eigen::VectorXd weights;  // all 1 for polynomial cells
 };
 

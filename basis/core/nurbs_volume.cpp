@@ -1,11 +1,13 @@
 #include "basis/core/nurbs_volume.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "basis/core/bezier_ops.hpp"
 #include "basis/core/input_error.hpp"
 #include "basis/core/nurbs_patch.hpp"
 #include "quadrature/bernstein.hpp"
@@ -126,8 +128,31 @@ void VolumeGeometryMap::evaluate(int, const Eigen::VectorXd&, const Eigen::Vecto
   throw std::logic_error("VolumeGeometryMap: a volume's cells take three reference coordinates");
 }
 
-BezierGeometryCell VolumeGeometryMap::bezier_cell(int) const {
-  throw std::logic_error("VolumeGeometryMap: Bezier hexahedra for output are not built yet (docs/VOLUMES.md)");
+BezierGeometryCell VolumeGeometryMap::bezier_cell(int cell) const {
+  // On the cell (inside one knot span in each direction) the volume is a rational Bezier
+  // hexahedron of its degrees, or of the cell's where those are higher (the same map, elevated):
+  // its homogeneous form (w x, w y, w z, w) is polynomial, so interpolating it at the nodes of
+  // that degree gives its Bernstein coefficients exactly.
+  const BezierCell& c = mesh_.cell(cell);
+  BezierGeometryCell g;
+  g.degree_u = std::max<int>(c.degree_u, volume_.bases[0].degree());
+  g.degree_v = std::max<int>(c.degree_v, volume_.bases[1].degree());
+  g.degree_w = std::max<int>(c.degree_w, volume_.bases[2].degree());
+  const int nu = g.degree_u + 1, nv = g.degree_v + 1, nw = g.degree_w + 1;
+  Eigen::MatrixXd homogeneous(nu * nv * nw, 4);
+  const double lo[3] = {c.u0, c.v0, c.w0}, size[3] = {c.u1 - c.u0, c.v1 - c.v0, c.w1 - c.w0};
+  for (int k = 0; k < nw; ++k)
+    for (int j = 0; j < nv; ++j)
+      for (int i = 0; i < nu; ++i) {
+        const std::array<double, 3> at{lo[0] + size[0] * i / g.degree_u, lo[1] + size[1] * j / g.degree_v,
+                                       lo[2] + size[2] * k / g.degree_w};
+        const VolumePointDerivatives p = volume_point_derivatives(volume_, at, span_of_cell_[cell]);
+        homogeneous.row(i + nu * (j + nv * k)) << p.weight * p.x.transpose(), p.weight;
+      }
+  const Eigen::MatrixXd coefficients = bernstein_interpolant(g.degree_u, g.degree_v, g.degree_w, homogeneous);
+  g.weights = coefficients.col(3);
+  g.points = coefficients.leftCols(3).array().colwise() / g.weights.array();
+  return g;
 }
 
 }  // namespace knotwork

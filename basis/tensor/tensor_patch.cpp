@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -290,6 +291,46 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
 
   const std::array<BSplineBasis1D, 2> bases{d.space_u, d.space_v};
   add_tensor_cells(mesh, bases, row_from, row_to, offset);
+  return d;
+}
+
+TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const TensorVolumeOptions& o) {
+  volume.validate();
+  static const char* const names[3] = {"u", "v", "w"};
+  TensorVolumeDiscretization d;
+  d.volume = volume;
+  std::array<BSplineBasis1D, 3> geometry;
+  for (int k = 0; k < 3; ++k) {
+    if (o.elements_per_span[k] < 1) throw std::invalid_argument(std::string("elements in ") + names[k] + " must be >= 1");
+    const int r = o.continuity[k] < 0 ? o.degree[k] - 1 : o.continuity[k];
+    DirectionPlan plan = plan_direction(volume.bases[k], o.degree[k], r, o.elements_per_span[k], o.rational, {}, names[k]);
+    d.space[k] = std::move(plan.space);
+    geometry[k] = std::move(plan.geometry);
+  }
+  const long functions = long(d.space[0].num_functions()) * d.space[1].num_functions() * d.space[2].num_functions();
+  if (functions > std::numeric_limits<int>::max()) throw std::invalid_argument("more than 2^31 functions");
+  d.mesh.set_num_functions(static_cast<int>(functions));
+  // The isoparametric space's weights: the volume's refined onto the geometry's bases (the
+  // space's, since its degree is at least the volume's), one direction at a time. Equal weights
+  // stay equal (the refinement is a partition of unity) and are left out: B-splines.
+  const bool equal_weights = (volume.weights.array() == volume.weights[0]).all();
+  if (o.rational && !equal_weights) {
+    Eigen::MatrixXd w = volume.weights;  // n_u x (n_v n_w), then refined along u, v and w
+    std::array<int, 3> n;
+    for (int k = 0; k < 3; ++k) n[k] = volume.bases[k].num_functions();
+    w.resize(n[0], n[1] * n[2]);
+    Eigen::MatrixXd along_u = refinement_matrix(volume.bases[0], geometry[0]) * w;  // g_u x (n_v n_w)
+    const Eigen::SparseMatrix<double> tv = refinement_matrix(volume.bases[1], geometry[1]);
+    const int gu = geometry[0].num_functions(), gv = geometry[1].num_functions(), gw = geometry[2].num_functions();
+    Eigen::MatrixXd along_v(static_cast<Eigen::Index>(gu) * gv, n[2]);
+    for (int k = 0; k < n[2]; ++k) {
+      const Eigen::MatrixXd slab = along_u.middleCols(static_cast<Eigen::Index>(k) * n[1], n[1]);  // g_u x n_v
+      Eigen::Map<Eigen::MatrixXd>(along_v.col(k).data(), gu, gv) = slab * Eigen::MatrixXd(tv).transpose();
+    }
+    const Eigen::MatrixXd along_w = along_v * Eigen::MatrixXd(refinement_matrix(volume.bases[2], geometry[2])).transpose();
+    d.mesh.set_weights(Eigen::Map<const Eigen::VectorXd>(along_w.data(), static_cast<Eigen::Index>(gu) * gv * gw));
+  }
+  add_tensor_cells(d.mesh, d.space, 0, static_cast<int>(d.space[2].element_spans().size()));
   return d;
 }
 

@@ -8,6 +8,7 @@
 #include "basis/core/bezier_mesh.hpp"
 #include "basis/core/bspline_basis.hpp"
 #include "basis/core/nurbs_patch.hpp"
+#include "basis/core/nurbs_volume.hpp"
 #include "basis/core/mesh_part.hpp"
 
 namespace knotwork {
@@ -77,5 +78,27 @@ Eigen::MatrixX3d refined_homogeneous_net(const NurbsPatch& patch, const BSplineB
 // The analysis space's univariate bases alone (what build_tensor_discretization refines the
 // patch into, without building any cell): cheap, for counting and numbering functions.
 std::array<BSplineBasis1D, 2> tensor_space_bases(const NurbsPatch& patch, const TensorSpaceOptions& options);
+
+// A trivariate tensor-product space on a NURBS volume (docs/VOLUMES.md): per direction u, v, w
+// the degree, the equal elements each knot span of the volume is cut into, and C^r at the new
+// knots (-1: p - 1; the volume's knots keep min(their continuity, r)), as for a patch.
+// rational: the isoparametric NURBS space (degree >= the volume's in every direction).
+struct TensorVolumeOptions {
+  std::array<int, 3> degree{2, 2, 2};
+  std::array<int, 3> elements_per_span{1, 1, 1};
+  std::array<int, 3> continuity{-1, -1, -1};
+  bool rational = true;
+};
+
+struct TensorVolumeDiscretization {
+  BezierMesh mesh;                        // hexahedra, functions i + n_u j + n_u n_v k
+  std::array<BSplineBasis1D, 3> space;    // the univariate bases
+  NurbsVolume volume;                     // the geometry as given, which the map evaluates
+};
+
+// The space's cells, and with `rational` its weights: the volume's refined onto the space's
+// knots (all equal for a polynomial volume: then it is the B-spline space). Throws
+// std::invalid_argument for impossible requests, naming the direction.
+TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const TensorVolumeOptions& options);
 
 }  // namespace knotwork

@@ -78,7 +78,7 @@ void read_g1_case(const CaseDocument& doc, CaseDescription& c) {
     g.c0 = v == "c0";
   }
   if (g.refine < 0 || g.refine > 6) r.fail("[space] refine", "must be in [0, 6]");
-  read_quadrature(r, s, c, false);
+  read_quadrature(r, s, c, 1);
 
   r.check_keys(geo, "geometry", {"shape", "center", "radius", "major_radius", "minor_radius", "file"});
   if (const DocumentNode* n = geo.get("shape")) g.shape = r.string(*n, "[geometry] shape");

@@ -58,7 +58,7 @@ class G1Space final : public SplineSpace, public SpaceReport {
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *d_.geometry; }
   std::string description() const override { return describe_g1(*case_); }
-  std::array<int, 2> degree() const override { return {g1_section(*case_).degree, g1_section(*case_).degree}; }
+  std::vector<int> degree() const override { return {g1_section(*case_).degree, g1_section(*case_).degree}; }
   std::vector<ReportField> report() const override {
     const auto& n = d_.basis.counts;
     const CaseDescription& c = *case_;

@@ -59,7 +59,7 @@ class KnotSegmentSpace final : public SplineSpace, public SpaceReport {
     return "knot segments (Weller), degree " + degree_text(c) + ", " + std::to_string(k.segments.size()) +
            " segments, " + KnotSegmentsSection::kExtensionNames[static_cast<int>(k.extension)] + " extension";
   }
-  std::array<int, 2> degree() const override { return patch_space(*case_).degree; }
+  std::vector<int> degree() const override { return as_list(patch_space(*case_).degree); }
   std::vector<ReportField> report() const override {
     if (elements_ == 0) return {};
     return {{.key = "elements", .value = long(elements_), .column = true, .width = 9}};

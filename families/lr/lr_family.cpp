@@ -106,7 +106,7 @@ class LrSpace final : public SplineSpace, public SpaceReport {
     return "LR B-splines, degree " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + ", " +
            strategy_name(lr_section(*case_).strategy) + " refinement";
   }
-  std::array<int, 2> degree() const override { return lr_section(*case_).space.degree; }
+  std::vector<int> degree() const override { return as_list(lr_section(*case_).space.degree); }
   std::vector<ReportField> report() const override {
     return {{.key = "overloaded", .value = long(dependence_.overloaded), .column = true, .width = 10}};
   }

@@ -183,7 +183,7 @@ class PtSpace final : public SplineSpace, public SpaceReport {
     return "PT-splines, degree " + std::to_string(pt.space.degree[0]) + "x" + std::to_string(pt.space.degree[1]) + ", " +
            start + ", extension " + pt_extension_name(pt.extension);
   }
-  std::array<int, 2> degree() const override { return {m_, n_}; }
+  std::vector<int> degree() const override { return {m_, n_}; }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(elements_), .column = true, .width = 9},
             {.key = "extension_used", .value = std::string(pt_extension_name(extension_))}};

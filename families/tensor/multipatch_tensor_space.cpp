@@ -61,7 +61,7 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
   const SpaceReport& presentation() const override { return *this; }
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
-  std::array<int, 2> degree() const override { return options_.degree; }
+  std::vector<int> degree() const override { return as_list(options_.degree); }
   std::string description() const override { return describe_multipatch(options_, static_cast<int>(d_.patches.size())); }
   std::vector<std::string> structured_preconditioners() const override { return {kPatchFastDiagonalization}; }
   // Measured (docs/SOLVERS.md, "Several patches"): without a coarse space its CG count grows
@@ -157,7 +157,7 @@ class MultiPatchTensorPartSpace final : public SplineSpace, public SpaceReport {
   const SpaceReport& presentation() const override { return *this; }
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
-  std::array<int, 2> degree() const override { return options_.degree; }
+  std::vector<int> degree() const override { return as_list(options_.degree); }
   const MeshPart* part() const override { return &d_.part; }
   std::string description() const override { return describe_multipatch(options_, patches_); }
   std::vector<ReportField> report() const override { return multipatch_report(options_, patches_); }

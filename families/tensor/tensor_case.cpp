@@ -2,6 +2,7 @@
 #include "families/tensor/tensor_case.hpp"
 
 #include <cstdio>
+#include <optional>
 #include <sstream>
 
 #include "cases/case_reader.hpp"
@@ -48,8 +49,68 @@ const std::vector<std::string>& tensor_space_keys() {
   return keys;
 }
 
+namespace {
+
+// [space] of a volume: degree, elements and continuity as one integer or a list [u, v, w].
+void read_tensor_volume_case(const CaseDocument& doc, CaseDescription& c) {
+  const CaseReader& r = doc.reader;
+  read_volume_geometry(doc, c);
+  const DocumentNode& s = r.table(doc.root, "space", true);
+  std::vector<std::string> keys = tensor_space_keys();
+  r.check_keys(s, "space", keys);
+  for (const char* key : {"insert_knots_u", "insert_knots_v"})
+    if (s.get(key)) r.fail(std::string("[space] ") + key, "not used on a volume (uniform elements per direction only, for now)");
+  TensorVolumeOptions& o = c.section.emplace<VolumeSpaceSection>().space;
+  const auto triple = [&](const char* key, bool required) -> std::optional<std::vector<long>> {
+    const DocumentNode* n = s.get(key);
+    if (!n) {
+      if (required) r.fail(std::string("[space] ") + key, "missing required key");
+      return std::nullopt;
+    }
+    return r.integers(*n, std::string("[space] ") + key, 3);
+  };
+  const std::vector<long> degree = *triple("degree", true);
+  for (long d : degree)
+    if (d < 1 || d > kMaxCaseDegree) r.fail("[space] degree", "must be in [1, 10], got " + std::to_string(d));
+  const std::vector<long> elements = *triple("elements", true);
+  double cells = 1;
+  for (int k = 0; k < 3; ++k) {
+    if (elements[k] < 1) r.fail("[space] elements", "must be >= 1, got " + std::to_string(elements[k]));
+    cells *= double(elements[k]) * c.volume.bases[k].num_elements();
+  }
+  if (cells > double(kMaxCaseCells)) r.fail("[space] elements", "too many elements (more than 2^26 cells)");
+  for (int k = 0; k < 3; ++k) o.degree[k] = static_cast<int>(degree[k]), o.elements_per_span[k] = static_cast<int>(elements[k]);
+  if (const auto continuity = triple("continuity", false))
+    for (int k = 0; k < 3; ++k) {
+      if ((*continuity)[k] < 0 || (*continuity)[k] > o.degree[k] - 1)
+        r.fail("[space] continuity", "must be in [0, degree-1], got " + std::to_string((*continuity)[k]));
+      o.continuity[k] = static_cast<int>((*continuity)[k]);
+    }
+  if (const DocumentNode* k = s.get("rational")) o.rational = r.boolean(*k, "[space] rational");
+  read_quadrature(r, s, c, 3);
+  read_patch_problem(doc, c);
+}
+
+}  // namespace
+
+void override_volume_space(TensorVolumeOptions& s, int degree, int elements) {
+  if (degree) {
+    if (degree < 1 || degree > kMaxCaseDegree) throw InputError("--degree: must be in [1, 10], got " + std::to_string(degree));
+    s.degree.fill(degree);
+    for (int& r : s.continuity)
+      if (r > degree - 1) r = degree - 1;
+  }
+  if (elements) {
+    if (elements < 1) throw InputError("--elements: must be >= 1, got " + std::to_string(elements));
+    if (double(elements) * elements * elements > double(kMaxCaseCells))
+      throw InputError("--elements: too many elements (more than 2^26 cells)");
+    s.elements_per_span.fill(elements);
+  }
+}
+
 void read_tensor_case(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
+  if (is_volume_geometry(doc)) return read_tensor_volume_case(doc, c);
   read_patch_geometry(doc, c, true);
   const DocumentNode& s = r.table(doc.root, "space", true);
   r.check_keys(s, "space", tensor_space_keys());

@@ -22,6 +22,12 @@ struct PatchSpaceSection : CaseSection {
   std::unique_ptr<CaseSection> clone() const override { return std::make_unique<PatchSpaceSection>(*this); }
 };
 
+// A volume's [space] (docs/VOLUMES.md): degrees, elements and continuity per direction u, v, w.
+struct VolumeSpaceSection : CaseSection {
+  TensorVolumeOptions space;
+  std::unique_ptr<CaseSection> clone() const override { return std::make_unique<VolumeSpaceSection>(*this); }
+};
+
 // The patch space options of a case of any family whose section derives from
 // PatchSpaceSection; std::logic_error for other families.
 TensorSpaceOptions& patch_space(CaseDescription& c);
@@ -31,7 +37,11 @@ const TensorSpaceOptions& patch_space(const CaseDescription& c);
 // The keys [space] takes.
 const std::vector<std::string>& tensor_space_keys();
 
+// A [geometry] that is a volume is read with its [space] as a VolumeSpaceSection.
 void read_tensor_case(const CaseDocument& doc, CaseDescription& c);
+
+// --degree / --elements on a volume case: the same in every direction.
+void override_volume_space(TensorVolumeOptions& s, int degree, int elements);
 
 // [space] degree (required) and elements (required unless `elements_optional`).
 void read_patch_degree_elements(const CaseDocument& doc, TensorSpaceOptions& s, bool elements_optional);

@@ -10,6 +10,7 @@
 #include "basis/core/geometry_map.hpp"
 #include "families/tensor/multipatch_tensor_space.hpp"
 #include "families/tensor/tensor_case.hpp"
+#include "families/tensor/tensor_volume_space.hpp"
 #include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
 #include "basis/core/input_error.hpp"
@@ -82,6 +83,13 @@ std::string describe(const TensorSpaceOptions& s) {
   return r + " at new knots";
 }
 
+// A volume case's space options refined `level` times (elements doubled in every direction).
+TensorVolumeOptions refined_volume(const CaseDescription& c, int level) {
+  TensorVolumeOptions s = family_section<VolumeSpaceSection>(c).space;
+  for (int& e : s.elements_per_span) e <<= level;
+  return s;
+}
+
 class TensorSpace final : public SplineSpace, public SpaceReport {
  public:
   const SpaceReport& presentation() const override { return *this; }
@@ -100,7 +108,7 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
   std::string description() const override { return describe(options_); }
-  std::array<int, 2> degree() const override { return options_.degree; }
+  std::vector<int> degree() const override { return as_list(options_.degree); }
   std::vector<std::string> structured_preconditioners() const override { return {kFastDiagonalization, kMultigrid}; }
   bool structured_preconditioner_needs_only_diagonal(const std::string& name) const override { return name != kMultigrid; }
   std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& name, const DofLayout& layout,
@@ -179,6 +187,7 @@ SpaceFamily tensor_family() {
   f.structured_preconditioners = {kFastDiagonalization, kMultigrid};
   f.space_keys = tensor_space_keys();
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
+    if (c.is_volume()) return make_tensor_volume_space(c, refined_volume(c, level));
     TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
     if (c.multipatch()) {
@@ -189,6 +198,8 @@ SpaceFamily tensor_family() {
   };
   f.build_part = [](const CaseDescription& c, int level, int rank, int ranks,
                     const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
+    if (c.is_volume())
+      throw InputError(c.path + ": a volume is solved on one process for now (docs/VOLUMES.md): run it without mpirun");
     TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
     if (c.multipatch()) {
@@ -201,9 +212,18 @@ SpaceFamily tensor_family() {
     return std::make_unique<TensorSpace>(c, s, RowShare{rank, ranks});
   };
   f.override_options = [](CaseDescription& c, int degree, int elements) {
-    override_patch_space(patch_space(c), degree, elements);
+    if (c.is_volume()) override_volume_space(family_section<VolumeSpaceSection>(c).space, degree, elements);
+    else override_patch_space(patch_space(c), degree, elements);
   };
   f.check_converge = [](const CaseDescription& c, int levels) {
+    if (c.is_volume()) {
+      const TensorVolumeOptions finest = refined_volume(c, levels - 1);
+      double cells = 1;
+      for (int k = 0; k < 3; ++k) cells *= double(finest.elements_per_span[k]) * c.volume.bases[k].num_elements();
+      if (cells > double(1L << 26)) throw InputError("--levels: the finest level would have more than 2^26 cells");
+      check_tensor_volume_memory(c, finest);  // the finest level, before the first is solved
+      return;
+    }
     check_uniform_levels(patch_space(c), levels);
     TensorSpaceOptions finest = patch_space(c);
     finest.elements_per_span = {finest.elements_per_span[0] << (levels - 1), finest.elements_per_span[1] << (levels - 1)};

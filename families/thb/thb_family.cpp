@@ -74,7 +74,7 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
     return "THB-splines, degree " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + ", " +
            (m == 0 ? std::string("no grading") : "T-admissible of class " + std::to_string(m));
   }
-  std::array<int, 2> degree() const override { return thb_section(*case_).space.degree; }
+  std::vector<int> degree() const override { return as_list(thb_section(*case_).space.degree); }
   std::vector<ReportField> report() const override {
     return {{.key = "levels", .value = long(per_level_.size()), .column = true, .width = 7}};
   }

@@ -38,7 +38,7 @@ class ThbMultiPatchSpace final : public SplineSpace, public SpaceReport {
   const SpaceReport& presentation() const override { return *this; }
   const BezierMesh& mesh() const override { return basis_.glued.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
-  std::array<int, 2> degree() const override { return space_.degree; }
+  std::vector<int> degree() const override { return as_list(space_.degree); }
   std::string description() const override {
     const int m = hierarchy_.patches().front().admissibility();
     return "THB-splines, degree " + std::to_string(space_.degree[0]) + "x" + std::to_string(space_.degree[1]) + ", " +

@@ -1,0 +1,17 @@
+#pragma once
+// The tensor family on a volume ([geometry] type = "box" or "thick_quarter_annulus"):
+// trivariate B-splines or NURBS on hexahedra (docs/VOLUMES.md).
+#include <memory>
+
+#include "basis/tensor/tensor_patch.hpp"
+#include "cases/spline_space.hpp"
+
+namespace knotwork {
+
+// Throws InputError naming [space] when the space cannot be built or would not fit in memory.
+std::unique_ptr<SplineSpace> make_tensor_volume_space(const CaseDescription& c, const TensorVolumeOptions& options);
+
+// Refuses, before anything is allocated, a volume space and solve that would not fit in memory.
+void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOptions& options);
+
+}  // namespace knotwork
