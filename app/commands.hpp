@@ -13,7 +13,7 @@ struct CommonOptions {
   std::string out;             // overrides [output] directory
   int degree = 0;              // 0: as in the case
   int elements = 0;            // 0: as in the case
-  std::string ordering = "amd";
+  std::string ordering = "auto";
   std::string solver;    // "": [solver] method of the case
   double tolerance = 0;  // 0: [solver] tolerance of the case
   std::string preconditioner;  // "": [solver] preconditioner of the case
@@ -51,7 +51,7 @@ struct BenchOptions {
   std::vector<std::string> configs;  // "P:N" (degree P, N x N elements)
   bool quick = false;
   bool json = false;
-  std::string ordering = "amd";
+  std::string ordering = "auto";
   bool with_errors = true;
   bool floor = false;  // also time bare CHOLMOD (default settings) on the same matrix
   std::string solver = "direct";  // direct | iterative (CG + the space's preconditioner)

@@ -23,6 +23,7 @@ int converge_command(const ConvergeOptions& o) {
   override_case(c, o.degree, o.elements, o.solver, o.tolerance, o.petsc_options_given ? &o.petsc_options : nullptr,
                 o.preconditioner, o.matrix);
   c.solver.estimate_condition = o.condition;
+  c.solver.ordering = o.ordering;
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string directory = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);

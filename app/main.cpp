@@ -33,7 +33,7 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
   cmd->add_option("--degree", o.degree, "Polynomial degree in both directions (overrides [space] degree)");
   cmd->add_option("--elements", o.elements, "Elements per geometry knot span and direction (overrides [space] elements)");
   cmd->add_option("--out", o.out, "Output directory (overrides [output] directory; default results/<case name>)");
-  cmd->add_option("--ordering", o.ordering, "Fill-reducing ordering for CHOLMOD: amd (fastest measured), metis, nesdis, or default (CHOLMOD's own choice)")
+  cmd->add_option("--ordering", o.ordering, "Fill-reducing ordering for CHOLMOD: auto (amd on planar domains and surfaces, metis on volumes: fastest measured), amd, metis, nesdis, or default (CHOLMOD's own choice)")
       ->capture_default_str();
   cmd->add_option("--solver", o.solver,
                   "Linear solve: direct (CHOLMOD), iterative (preconditioned CG), auto, or petsc (PETSc's KSP, "
@@ -188,7 +188,7 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("--config", bench.configs,
                         "DEGREE:ELEMENTS, repeatable (default 2:128 2:512 2:1024 4:64 4:256 4:512)");
   bench_cmd->add_flag("--quick", bench.quick, "Small configurations only (2:64 2:128 4:32 4:64)");
-  bench_cmd->add_option("--ordering", bench.ordering, "amd, metis, nesdis, or default (CHOLMOD's own choice)")->capture_default_str();
+  bench_cmd->add_option("--ordering", bench.ordering, "auto (amd on planar domains and surfaces, metis on volumes), amd, metis, nesdis, or default (CHOLMOD's own choice)")->capture_default_str();
   bench_cmd->add_flag("--json", bench.json, "Print JSON instead of the table");
   bench_cmd->add_option("--solver", bench.solver, "direct (CHOLMOD) or iterative (CG with the space's preconditioner)")
       ->capture_default_str();

@@ -31,6 +31,7 @@ int run_command(const RunOptions& o) {
                 o.preconditioner, o.matrix);
   c.allow_unverified_space = o.allow_unverified_space;
   c.solver.estimate_condition = o.condition;
+  c.solver.ordering = o.ordering;
   const Ordering ordering = parse_ordering(o.ordering);
   const std::string out = o.out.empty() ? c.output_directory : o.out;
   Progress progress(o.quiet);

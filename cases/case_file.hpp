@@ -99,6 +99,9 @@ struct CaseDescription {
     // --condition: estimate the Jacobi-scaled condition numbers of the stiffness and mass
     // matrices (solver/condition_estimate.hpp); a command-line request, not a case key.
     bool estimate_condition = false;
+    // --ordering, when a command names one ("amd", "metis", ...): the memory guard of a volume's
+    // direct solve follows it (METIS fills in 0.6x as much as AMD there); "auto" otherwise.
+    std::string ordering = "auto";
   } solver;
   // [adapt]: the estimate-mark-refine loop of `knotwork adapt` (command-line flags override).
   struct Adapt {

@@ -14,10 +14,11 @@ namespace knotwork {
 namespace {
 
 // CHOLMOD's factor of a volume's stiffness (docs/VOLUMES.md, measured on cubes of 5 000 to
-// 118 000 unknowns): nnz(L) = a N^(5/3) with a = 0.39, 1.14, 1.82 and 2.5 for p = 1..4, below
-// 0.8 p; and the run's peak memory 12.6-14.7 bytes per factor entry (values, indices,
-// supernodal workspace).
-constexpr double kVolumeFill = 0.8;
+// 195 000 unknowns): nnz(L) = a N^(5/3), with AMD a = 0.39, 1.14, 1.82 and 2.5 for p = 1..4
+// (below 0.8 p), with METIS a = 0.17, 0.54-0.57, 1.31 and 2.0 (below 0.55 p); the run's peak
+// memory 11.4-14.7 bytes per factor entry (values, indices, supernodal workspace).
+constexpr double kVolumeFillAmd = 0.8;
+constexpr double kVolumeFillMetis = 0.55;
 constexpr double kVolumeFactorEntryBytes = 16;
 
 }  // namespace
@@ -30,11 +31,11 @@ double galerkin_bytes(double cells, double functions, int p, int q) {
   return cells * per_cell * 4 + nnz * 12 * 3 + factor * 8;
 }
 
-double volume_galerkin_bytes(double cells, double functions, const std::array<int, 3>& degree) {
+double volume_galerkin_bytes(double cells, double functions, const std::array<int, 3>& degree, bool metis) {
   double per_cell = 1, coupling = 0.5, mean_degree = 0;
   for (int p : degree) per_cell *= p + 1, coupling *= 2 * p + 1, mean_degree += p / 3.0;
   const double nnz = functions * coupling;
-  const double factor = kVolumeFill * mean_degree * std::pow(std::max(functions, 2.0), 5.0 / 3.0);
+  const double factor = (metis ? kVolumeFillMetis : kVolumeFillAmd) * mean_degree * std::pow(std::max(functions, 2.0), 5.0 / 3.0);
   return cells * per_cell * 4 + nnz * 12 * 3 + std::max(factor, nnz) * kVolumeFactorEntryBytes;
 }
 
@@ -43,9 +44,11 @@ double volume_iterative_bytes(double cells, double functions, const std::array<i
   double per_cell = 1, coupling = 0.5;
   for (int p : degree) per_cell *= p + 1, coupling *= 2 * p + 1;
   const double nnz = functions * coupling;
-  // BoomerAMG: hypre's copy of the matrix and a hierarchy of about twice its size.
-  const double pc = preconditioner == "jacobi" ? functions * 8 : nnz * 2 * 12 * 3;
-  return cells * per_cell * 4 + nnz * 12 * 3 + functions * 8 * 8 + pc;
+  // BoomerAMG in 3D: the whole run's peak was 172, 174, 188 and 231 bytes per stored matrix
+  // entry on cubes of 39 000, 125 000, 287 000 and 941 000 unknowns (p = 2; docs/VOLUMES.md),
+  // growing with the size; 260 keeps a margin over the largest that fits here.
+  if (preconditioner != "jacobi") return cells * per_cell * 4 + nnz * 260;
+  return cells * per_cell * 4 + nnz * 12 * 3 + functions * 8 * 8;
 }
 
 double iterative_bytes(double cells, double functions, int p, int q, double preconditioner, bool with_matrix) {

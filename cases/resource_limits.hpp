@@ -12,10 +12,11 @@ namespace knotwork {
 // on 2D IGA matrices: 0.73-0.75 log2(n), docs/records/performance-2026-11-22-to-12-04.md; the estimate keeps a margin).
 double galerkin_bytes(double cells, double functions, int p, int q);
 
-// The same for `cells` hexahedra of degrees (p, q, r) and a direct solve: the factor of a 3D
-// problem fills in far more than in 2D (measured N^(5/3) with CHOLMOD's ordering, constants in
-// resource_limits.cpp); and for CG with "boomeramg" or "jacobi" on the assembled matrix.
-double volume_galerkin_bytes(double cells, double functions, const std::array<int, 3>& degree);
+// The same for `cells` hexahedra of degrees (p, q, r) and a direct solve ordered by METIS or
+// (`metis` false) AMD: the factor of a 3D problem fills in far more than in 2D (measured
+// N^(5/3), constants in resource_limits.cpp); and for CG with "boomeramg" or "jacobi" on the
+// assembled matrix.
+double volume_galerkin_bytes(double cells, double functions, const std::array<int, 3>& degree, bool metis);
 double volume_iterative_bytes(double cells, double functions, const std::array<int, 3>& degree,
                               const std::string& preconditioner);
 

@@ -307,7 +307,7 @@ class PythonHooks {
 
 struct Overrides {
   int degree = 0, elements = 0;
-  std::string solver, ordering = "amd", preconditioner, matrix;
+  std::string solver, ordering = "auto", preconditioner, matrix;
   double tolerance = 0;
   bool allow_unverified_space = false;
   std::string marking;  // adapt: "" (the case's), "cells" or "functions"
@@ -378,6 +378,7 @@ CaseDescription prepared_case(py::handle case_, const std::string& name, const p
   if (!o.strategy.empty()) c.adapt.maximum_strategy = o.strategy == "maximum";
   if (o.min_fraction >= 0) c.adapt.min_fraction = o.min_fraction;
   if (ordering) *ordering = parse_ordering(o.ordering);
+  c.solver.ordering = o.ordering;
   return c;
 }
 
@@ -588,7 +589,7 @@ py::object json_to_python(const Json& j) { return py::module_::import("json").at
 struct System {
   SharedCase case_;
   SharedErrors errors;
-  Ordering ordering = Ordering::kAmd;
+  Ordering ordering = Ordering::kAuto;
   std::shared_ptr<const SplineSpace> space;
   AssembledSystem system;
   const CaseDescription& c() const { return *case_; }

@@ -11,11 +11,12 @@
 namespace knotwork {
 
 Ordering parse_ordering(const std::string& name) {
+  if (name == "auto") return Ordering::kAuto;
   if (name == "amd") return Ordering::kAmd;
   if (name == "metis") return Ordering::kMetis;
   if (name == "nesdis") return Ordering::kNesdis;
   if (name == "default") return Ordering::kCholmodDefault;
-  throw InputError("--ordering: unknown value '" + name + "' (expected amd, metis, nesdis or default)");
+  throw InputError("--ordering: unknown value '" + name + "' (expected auto, amd, metis, nesdis or default)");
 }
 
 std::string to_string(Ordering o) {
@@ -23,6 +24,7 @@ std::string to_string(Ordering o) {
     case Ordering::kAmd: return "amd";
     case Ordering::kMetis: return "metis";
     case Ordering::kNesdis: return "nesdis";
+    case Ordering::kAuto: return "auto";
     default: return "default";
   }
 }
@@ -37,7 +39,7 @@ SparseCholesky::SparseCholesky(Ordering ordering) : impl_(std::make_unique<Impl>
   cholmod_common& cm = impl_->llt.cholmod();
   if (ordering == Ordering::kCholmodDefault) return;
   cm.nmethods = 1;  // one ordering, chosen by measurement (docs/PERFORMANCE.md), not CHOLMOD's try-several default
-  cm.method[0].ordering = ordering == Ordering::kAmd     ? CHOLMOD_AMD
+  cm.method[0].ordering = ordering == Ordering::kAmd || ordering == Ordering::kAuto ? CHOLMOD_AMD
                           : ordering == Ordering::kMetis ? CHOLMOD_METIS
                                                          : CHOLMOD_NESDIS;
   cm.postorder = 1;

@@ -355,7 +355,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   } else if (n > 0) {
     say("factorization");
     const std::shared_ptr<SparseCholesky> cholesky =
-        options.solver ? options.solver : std::make_shared<SparseCholesky>(options.ordering);
+        options.solver ? options.solver : std::make_shared<SparseCholesky>(resolve_ordering(options.ordering, volume));
     cholesky->factorize(K);
     say("solve");
     const Eigen::VectorXd x = cholesky->solve(rhs);

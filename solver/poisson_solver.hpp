@@ -30,7 +30,9 @@ struct PoissonTimings {
 
 struct PoissonSolveOptions {
   QuadratureOptions quadrature;
-  Ordering ordering = Ordering::kAmd;  // measured fastest on IGA matrices: docs/PERFORMANCE.md
+  // AMD on planar domains and surfaces, METIS on volumes: measured fastest (docs/PERFORMANCE.md,
+  // docs/VOLUMES.md).
+  Ordering ordering = Ordering::kAuto;
   bool compute_errors = true;  // when the problem has an exact solution
   bool cell_errors = false;    // also |u - u_h|^2_H1 per cell (PoissonSolution::cell_h1_squared)
   std::function<void(const std::string&)> progress;  // called at the start of each phase

@@ -241,7 +241,7 @@ class Study(list):
         return f"<knotwork.Study {self.info.get('family')}: {self.info.get('space')}, {len(self)} entries>"
 
 
-def run(case, *, degree=None, elements=None, solver=None, tolerance=None, ordering="amd",
+def run(case, *, degree=None, elements=None, solver=None, tolerance=None, ordering="auto",
         allow_unverified_space=False, output=None, progress=None, name=None, preconditioner=None, matrix=None):
     """Solves a case once, like ``knotwork run``; returns a :class:`Result`.
 
@@ -265,7 +265,7 @@ def run(case, *, degree=None, elements=None, solver=None, tolerance=None, orderi
                             output, progress))
 
 
-def converge(case, levels=4, *, degree=None, elements=None, solver=None, tolerance=None, ordering="amd",
+def converge(case, levels=4, *, degree=None, elements=None, solver=None, tolerance=None, ordering="auto",
              output=None, progress=None, name=None, preconditioner=None, matrix=None):
     """A convergence study under uniform refinement, like ``knotwork converge``.
 
@@ -284,7 +284,7 @@ def converge(case, levels=4, *, degree=None, elements=None, solver=None, toleran
 
 
 def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, strategy=None, min_fraction=None, degree=None, elements=None, solver=None,
-          tolerance=None, ordering="amd", allow_dependent=False, output=None, output_every=1, progress=None,
+          tolerance=None, ordering="auto", allow_dependent=False, output=None, output_every=1, progress=None,
           name=None, preconditioner=None, matrix=None):
     """The adaptive loop (estimate, mark, refine locally, solve), like ``knotwork adapt``.
 
@@ -390,7 +390,7 @@ class System:
                 f"{len(self.dirichlet)} Dirichlet>")
 
 
-def system(case, *, degree=None, elements=None, solver=None, tolerance=None, ordering="amd", progress=None,
+def system(case, *, degree=None, elements=None, solver=None, tolerance=None, ordering="auto", progress=None,
            name=None, preconditioner=None):
     """The assembled system of a case: a :class:`System` (stiffness, mass, load, Dirichlet data).
 
