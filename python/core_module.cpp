@@ -420,6 +420,10 @@ py::dict sample(const CaseDescription& c, const SplineSpace& space, const Poisso
   const BezierMesh& mesh = space.mesh();
   const GeometryMap& geometry = space.geometry();
   if (n < 1 || n > 256) throw InputError("sample: n must be in [1, 256], got " + std::to_string(n));
+  // Its arrays are grids over quadrilaterals (cells x (n+1) x (n+1)), with triangles for plots.
+  if (geometry.parametric_dimension() == 3)
+    throw InputError("sample: a volume's hexahedra are not sampled into arrays yet (docs/VOLUMES.md); "
+                     "its .vtu output (solution.vtu, solution_sampled.vtu) has them");
   const py::ssize_t cells = mesh.num_cells(), m = n + 1, dim = geometry.dimension();
   if (double(cells) * m * m * (2 * dim + 3) > 2.5e8)
     throw InputError("sample: " + std::to_string(cells) + " cells x " + std::to_string(m * m) +

@@ -273,25 +273,19 @@ class Differentiator {
   GiNaC::ex f_;
 };
 
-ExactSolution differentiate_planar(const Expression& u) {
-  const Differentiator d(u);
-  ExactSolution result;
-  result.u = u;
-  result.u_x = d.to_expression(d.f().diff(d.x()), "u_x");
-  result.u_y = d.to_expression(d.f().diff(d.y()), "u_y");
-  result.minus_laplacian = d.to_expression(-(d.f().diff(d.x(), 2) + d.f().diff(d.y(), 2)), "-laplacian");
-  return result;
-}
-
-ExactSolution differentiate_volume(const Expression& u) {
+// u_x, u_y (and u_z in a volume) and -Laplace u in `dimension` Cartesian coordinates.
+ExactSolution differentiate_cartesian(const Expression& u, int dimension) {
   const Differentiator d(u);
   ExactSolution r;
   r.u = u;
-  r.u_x = d.to_expression(d.f().diff(d.x()), "u_x");
-  r.u_y = d.to_expression(d.f().diff(d.y()), "u_y");
-  r.u_z = d.to_expression(d.f().diff(d.z()), "u_z");
-  r.minus_laplacian =
-      d.to_expression(-(d.f().diff(d.x(), 2) + d.f().diff(d.y(), 2) + d.f().diff(d.z(), 2)), "-laplacian");
+  const GiNaC::symbol* v[3] = {&d.x(), &d.y(), &d.z()};
+  Expression* gradient[3] = {&r.u_x, &r.u_y, &r.u_z};
+  GiNaC::ex laplacian = 0;
+  for (int i = 0; i < dimension; ++i) {
+    *gradient[i] = d.to_expression(d.f().diff(*v[i]), std::string("u_") + "xyz"[i]);
+    laplacian += d.f().diff(*v[i], 2);
+  }
+  r.minus_laplacian = d.to_expression(-laplacian, "-laplacian");
   return r;
 }
 
@@ -330,7 +324,7 @@ auto derive_or_refuse(const Expression& u, Derive derive) -> decltype(derive()) 
 }  // namespace
 
 ExactSolution differentiate_exact_solution(const Expression& u) {
-  return derive_or_refuse(u, [&] { return differentiate_planar(u); });
+  return derive_or_refuse(u, [&] { return differentiate_cartesian(u, 2); });
 }
 
 ExactSolution differentiate_surface_solution(const Expression& u) {
@@ -338,7 +332,7 @@ ExactSolution differentiate_surface_solution(const Expression& u) {
 }
 
 ExactSolution differentiate_volume_solution(const Expression& u) {
-  return derive_or_refuse(u, [&] { return differentiate_volume(u); });
+  return derive_or_refuse(u, [&] { return differentiate_cartesian(u, 3); });
 }
 
 Expression derive_general_source(const Expression& u, const std::vector<Expression>& diffusion,

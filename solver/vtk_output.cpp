@@ -145,6 +145,14 @@ struct ExactArrays {
 
 namespace {
 
+// A polynomial cell's field in its Bernstein basis: C^T times the coefficients of its functions.
+Eigen::VectorXd bernstein_coefficients(const BezierMesh& mesh, const Eigen::VectorXd& coeffs, int cell) {
+  const auto ids = mesh.functions(cell);
+  Eigen::VectorXd local(static_cast<Eigen::Index>(ids.size()));
+  for (size_t a = 0; a < ids.size(); ++a) local[a] = coeffs[ids[a]];
+  return mesh.extraction(cell).transpose() * local;
+}
+
 // A rational Bezier hexahedron's equispaced nodes (i/p, j/q, k/r), node i + (p+1) (j + (q+1) k),
 // and the collocation of its Bernstein polynomials there: what turns values at the nodes into
 // the Bezier coefficients of the interpolant (as bernstein_interpolation_inverse does for quads).
@@ -240,10 +248,7 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
           };
           Eigen::VectorXd fu, fe;
           if (polynomial) {
-            const auto ids = mesh.functions(first + c);
-            Eigen::VectorXd local(static_cast<Eigen::Index>(ids.size()));
-            for (size_t a = 0; a < ids.size(); ++a) local[a] = coeffs[ids[a]];
-            fu = mesh.extraction(first + c).transpose() * local;
+            fu = bernstein_coefficients(mesh, coeffs, first + c);
           } else {
             fu = to_bezier(evaluate_volume_solution(mesh, geometry, coeffs, first + c, hexahedron.u, hexahedron.v,
                                                     hexahedron.w).col(0));
@@ -294,12 +299,7 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
           return (inverse * W.cwiseProduct(v)).cwiseQuotient(g.weights);
         };
         Eigen::VectorXd fu, fe;
-        if (polynomial) {
-          const auto ids = mesh.functions(first + c);
-          Eigen::VectorXd local(static_cast<Eigen::Index>(ids.size()));
-          for (size_t a = 0; a < ids.size(); ++a) local[a] = coeffs[ids[a]];
-          fu = mesh.extraction(first + c).transpose() * local;
-        }
+        if (polynomial) fu = bernstein_coefficients(mesh, coeffs, first + c);
         if (!polynomial || exact) geometry.evaluate(first + c, nu, nv, at);
         if (!polynomial) fu = to_bezier(evaluate_solution(mesh, geometry, coeffs, first + c, nu, nv).col(0));
         if (exact) {

@@ -113,3 +113,21 @@ def test_dimension_of_a_dict_tmesh():
     assert r["dimension_bruteforce"] == 16
     with pytest.raises(knotwork.InputError, match="degree"):
         knotwork.dimension({"cells": [[0, 0, 1, 1]]})
+
+
+def test_a_volume_from_python():
+    # The cube: three degrees, hexahedral cells with a box along w, the errors as the command
+    # line prints them; sampling into quadrilateral grids is refused with a pointer to the .vtu.
+    r = knotwork.run(str(CASES / "cube.toml"), degree=2, elements=3)
+    space = r.space
+    assert space.degree == (2, 2, 2)
+    assert space.num_functions == r.dofs == 5 ** 3 and space.num_cells == 27
+    cell = space.cell(0)
+    assert cell["degree"] == (2, 2, 2) and len(cell["parameter_box"]) == 6
+    # Partition of unity from the extraction: the functions' Bernstein coefficients sum to 1.
+    extraction = space.extraction(13)
+    assert extraction.shape == (27, 27)
+    assert np.allclose(extraction.sum(axis=0), 1.0, atol=1e-14)
+    assert 0 < r.l2_error < 1e-2
+    with pytest.raises(ValueError, match="not sampled into arrays yet"):
+        r.sample(2)
