@@ -411,8 +411,53 @@ bool is_volume_geometry(const CaseDocument& doc) {
   const DocumentNode* g = doc.root.get("geometry");
   const DocumentNode* type = g && g->as_table() ? g->get("type") : nullptr;
   const auto name = type ? type->value_exact<std::string>() : std::nullopt;
-  return name && is_volume_type(*name);
+  // An inline NURBS is a volume when it has a third knot vector.
+  return name && (is_volume_type(*name) || (*name == "nurbs" && g->get("knots_w")));
 }
+
+namespace {
+
+// [geometry] type = "nurbs" with knots_w: degrees (one int or [p, q, r]), knots_u/v/w, control
+// points [x, y, z] numbered u fastest, then v, then w, and weights (default all 1).
+NurbsVolume read_nurbs_volume(const CaseReader& r, const DocumentNode& g) {
+  r.check_keys(g, "geometry", {"type", "degrees", "knots_u", "knots_v", "knots_w", "control_points", "weights"});
+  auto need = [&](const char* key) -> const DocumentNode& {
+    const DocumentNode* n = g.get(key);
+    if (!n) r.fail(std::string("[geometry] ") + key, "missing required key for a nurbs volume");
+    return *n;
+  };
+  const std::vector<long> degrees = r.integers(need("degrees"), "[geometry] degrees", 3);
+  for (long d : degrees)
+    if (d < 1 || d > kMaxCaseDegree) r.fail("[geometry] degrees", "must be in [1, 10]");
+  NurbsVolume v;
+  static const char* const knots[3] = {"knots_u", "knots_v", "knots_w"};
+  for (int k = 0; k < 3; ++k) {
+    const std::string field = std::string("[geometry] ") + knots[k];
+    try {
+      v.bases[k] = BSplineBasis1D(static_cast<int>(degrees[k]), r.numbers(need(knots[k]), field));
+    } catch (const std::invalid_argument& e) { r.fail(field, e.what()); }
+  }
+  v.control_points = r.points(need("control_points"), "[geometry] control_points", 3);
+  if (const DocumentNode* w = g.get("weights")) {
+    const auto ws = r.numbers(*w, "[geometry] weights");
+    v.weights = Eigen::Map<const Eigen::VectorXd>(ws.data(), static_cast<Eigen::Index>(ws.size()));
+  } else {
+    v.weights.setOnes(v.control_points.rows());
+  }
+  try {
+    v.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    std::string field = "control_points";
+    for (const char* key : {"weights", "knots_u", "knots_v", "knots_w"})
+      if (what.rfind(key, 0) == 0) field = key;
+    if (what.rfind("weight", 0) == 0) field = "weights";
+    r.fail("[geometry] " + field, what);
+  }
+  return v;
+}
+
+}  // namespace
 
 void read_volume_geometry(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
@@ -427,7 +472,9 @@ void read_volume_geometry(const CaseDocument& doc, CaseDescription& c) {
       r.fail(field, msg);
     }
   };
-  if (c.geometry_type == "box") {
+  if (c.geometry_type == "nurbs") {
+    c.volume = read_nurbs_volume(r, g);
+  } else if (c.geometry_type == "box") {
     r.check_keys(g, "geometry", {"type", "corners"});
     Eigen::MatrixXd corners(2, 3);
     corners << 0, 0, 0, 1, 1, 1;

@@ -392,7 +392,8 @@ void assemble_cells(const BezierMesh& mesh, const GeometryMap& geometry, const P
         << describe_cell(mesh, bad_cell)
         << (bad_det == 0 ? ": the map is degenerate there (a collapsed edge or corner, or a domain too small for "
                            "double precision)"
-                         : ": the map folds over or is oriented clockwise");
+                         : volume ? ": the map folds over or is left-handed (u, v, w must be a right-handed frame)"
+                                  : ": the map folds over or is oriented clockwise");
     else
       s << "the surface degenerates (area element " << bad_det << ") at a quadrature point of "
         << describe_cell(mesh, bad_cell);

@@ -9,9 +9,11 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <string>
 
 #include "cases/case_file.hpp"
+#include "cases/geometries.hpp"
 #include "families/tensor/tensor_case.hpp"
 #include "studies/pipeline.hpp"
 #include "studies/studies.hpp"
@@ -128,4 +130,43 @@ TEST_CASE("The NURBS space's weight function is the volume's", "[volume]") {
       CHECK(std::abs(value - p.weight) <= 256 * std::numeric_limits<double>::epsilon());
     }
   }
+}
+
+TEST_CASE("An inline NURBS volume is the built-in one written out", "[volume]") {
+  // The thick quarter annulus's knots, control points (to 17 digits) and weights as
+  // [geometry] type = "nurbs": the same space, the same solve, the same errors bit for bit.
+  const NurbsVolume v = thick_quarter_annulus_volume(1, 2, 2);
+  std::ostringstream text;
+  text.precision(17);
+  text << "[geometry]\ntype = \"nurbs\"\ndegrees = [" << v.bases[0].degree() << ", " << v.bases[1].degree() << ", "
+       << v.bases[2].degree() << "]\n";
+  for (int k = 0; k < 3; ++k) {
+    text << "knots_" << "uvw"[k] << " = [";
+    for (size_t i = 0; i < v.bases[k].knots().size(); ++i) text << (i ? ", " : "") << v.bases[k].knots()[i];
+    text << "]\n";
+  }
+  text << "control_points = [";
+  for (Eigen::Index i = 0; i < v.control_points.rows(); ++i)
+    text << (i ? ", " : "") << "[" << v.control_points(i, 0) << ", " << v.control_points(i, 1) << ", " << v.control_points(i, 2) << "]";
+  text << "]\nweights = [";
+  for (Eigen::Index i = 0; i < v.weights.size(); ++i) text << (i ? ", " : "") << v.weights[i];
+  const std::string rest = "]\n[space]\ndegree = 2\nelements = 2\n[problem]\nexact = \"sin(x) * exp(y / 2) * (1 + z * z / 3)\"\n"
+                           "neumann = [\"back\"]\n";
+  const CaseDescription inline_case = load_case_text(text.str() + rest, "inline.toml");
+  const CaseDescription built_in = thick_annulus("degree = 2\nelements = 2\n", "exact = \"sin(x) * exp(y / 2) * (1 + z * z / 3)\"\nneumann = [\"back\"]\n");
+  REQUIRE(inline_case.is_volume());
+  const auto a = build_space(inline_case), b = build_space(built_in);
+  const PoissonSolution sa = solve_poisson(a->mesh(), a->geometry(), inline_case.problem, PoissonSolveOptions{});
+  const PoissonSolution sb = solve_poisson(b->mesh(), b->geometry(), built_in.problem, PoissonSolveOptions{});
+  CHECK(sa.errors->l2 == sb.errors->l2);
+  CHECK(sa.errors->h1_semi == sb.errors->h1_semi);
+  // Bad inline volumes: too few control points, a third knot vector that is not open.
+  CHECK_THROWS_WITH(load_case_text("[geometry]\ntype = \"nurbs\"\ndegrees = 1\nknots_u = [0, 0, 1, 1]\nknots_v = [0, 0, 1, 1]\n"
+                                   "knots_w = [0, 0, 1, 1]\ncontrol_points = [[0, 0, 0]]\n" + rest.substr(2),
+                                   "few.toml"),
+                    Catch::Contains("[geometry] control_points: control_points has 1 points but the knot vectors need 2 x 2 x 2 = 8"));
+  CHECK_THROWS_WITH(load_case_text("[geometry]\ntype = \"nurbs\"\ndegrees = 1\nknots_u = [0, 0, 1, 1]\nknots_v = [0, 0, 1, 1]\n"
+                                   "knots_w = [0, 1, 1]\ncontrol_points = [[0, 0, 0]]\n" + rest.substr(2),
+                                   "open.toml"),
+                    Catch::Contains("[geometry] knots_w"));
 }
