@@ -315,7 +315,7 @@ def adapt(case, steps=None, *, theta=None, max_dofs=None, marking=None, strategy
 
 def space(case, *, degree=None, elements=None, progress=None, name=None):
     """The spline space of a case (its [space], refined as the overrides say): a :class:`Space`."""
-    return _core.space(case, _name(case, name), _overrides(degree, elements, None, None, "amd", False), progress)
+    return _core.space(case, _name(case, name), _overrides(degree, elements, None, None, "auto", False), progress)
 
 
 class System:
