@@ -433,6 +433,14 @@ NurbsVolume unit_cube() {
   return volume;
 }
 
+// The cells and functions of the C^(p-1) space of degree p on n^3 equal elements of [0, 1]^3.
+void add_cube_cells(BezierMesh& mesh, int p, int n) {
+  const std::array<BSplineBasis1D, 3> space{uniform_basis(p, n, p - 1), uniform_basis(p, n, p - 1), uniform_basis(p, n, p - 1)};
+  add_tensor_cells(mesh, space, 0, n);
+  const int m = space[0].num_functions();
+  mesh.set_num_functions(m * m * m);
+}
+
 // -Laplace u = 3 pi^2 u on the unit cube with u = sin(pi x) sin(pi y) sin(pi z) = 0 on its
 // boundary: degree p, n^3 elements, C^(p-1). The boundary functions (first or last in some
 // direction: open knots) are fixed at 0; the system is solved by a sparse Cholesky factorization,
@@ -596,9 +604,7 @@ TEST_CASE("The patch test on the unit cube: a trilinear u is reproduced to round
   // Through the driver, with the suite's bound from the solve's own condition estimates
   // (rounding_bounds.hpp: Lanczos on the Jacobi-scaled stiffness and mass matrices).
   BezierMesh mesh;
-  const std::array<BSplineBasis1D, 3> space{uniform_basis(2, 3, 1), uniform_basis(2, 3, 1), uniform_basis(2, 3, 1)};
-  add_tensor_cells(mesh, space, 0, 3);
-  mesh.set_num_functions(125);
+  add_cube_cells(mesh, 2, 3);
   const VolumeGeometryMap map(mesh, unit_cube());
   const PoissonProblem problem = dirichlet_problem("1 + x + 2*y - z + x*y*z", "0");
   const rounding_test::Reproduction r = rounding_test::solve_reproducing(mesh, map, problem);
@@ -676,9 +682,7 @@ TEST_CASE("Nitsche's method on a volume's faces: optimal rates, and the patch te
   // A trilinear harmonic u is in the space: Nitsche's consistent form reproduces it, to the
   // suite's rounding bound (the solve's own condition estimates).
   BezierMesh mesh;
-  const std::array<BSplineBasis1D, 3> space{uniform_basis(2, 3, 1), uniform_basis(2, 3, 1), uniform_basis(2, 3, 1)};
-  add_tensor_cells(mesh, space, 0, 3);
-  mesh.set_num_functions(125);
+  add_cube_cells(mesh, 2, 3);
   const VolumeGeometryMap map(mesh, unit_cube());
   PoissonProblem trilinear = dirichlet_problem("1 + x + 2*y - z + x*y*z", "0");
   trilinear.dirichlet_method = DirichletMethod::kNitsche;
@@ -721,9 +725,7 @@ TEST_CASE("The general form on a volume, A a symmetric 3x3 matrix of functions a
 
 TEST_CASE("What volumes do not take yet is refused with one line: PETSc parts, no matrix", "[volume]") {
   BezierMesh mesh;
-  const std::array<BSplineBasis1D, 3> space{uniform_basis(1, 2, 0), uniform_basis(1, 2, 0), uniform_basis(1, 2, 0)};
-  add_tensor_cells(mesh, space, 0, 2);
-  mesh.set_num_functions(27);
+  add_cube_cells(mesh, 1, 2);
   const VolumeGeometryMap map(mesh, unit_cube());
   const PoissonProblem problem = dirichlet_problem("x*y*z", "1");
   CHECK(solve_poisson(mesh, map, problem, PoissonSolveOptions{}).errors);  // solved
