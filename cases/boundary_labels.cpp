@@ -35,8 +35,15 @@ BoundaryLabels boundary_labels(const CaseDescription& c) {
   if (c.is_volume()) {
     // A volume's ids 0..5 are its sides u = 0, u = 1, v = 0, v = 1, w = 0, w = 1: named as a
     // patch's sides (left: u = 0, bottom: v = 0) and front/back along w, and "1".."6".
+    // A file's own labels win over "1".."6", as on a patch.
     l.names = {"left", "right", "bottom", "top", "front", "back"};
-    for (int s = 1; s <= 6; ++s) l.groups.emplace_back(std::to_string(s), std::vector<int>{s - 1});
+    for (const NamedBoundary& b : c.volume_boundaries) {
+      std::vector<int> ids;
+      for (const PatchSideRef& s : b.sides) ids.push_back(s.side - 1);
+      l.groups.emplace_back(b.name, ids);
+    }
+    for (int s = 1; s <= 6; ++s)
+      if (l.resolve(std::to_string(s)).empty()) l.groups.emplace_back(std::to_string(s), std::vector<int>{s - 1});
     return l;
   }
   l.names = {"bottom", "right", "top", "left"};

@@ -62,9 +62,11 @@ struct CaseDescription {
   // (no patch otherwise). A domain of several patches leaves `geometry` empty.
   MultiPatch domain;
   bool multipatch() const { return domain.num_patches() > 1; }
-  // [geometry] type = "box" or "thick_quarter_annulus": the domain is this volume (the tensor
-  // family's trivariate spaces; docs/VOLUMES.md), and `geometry` is empty.
+  // [geometry] type = "box", "thick_quarter_annulus", a nurbs with knots_w, or a file of a
+  // volume: the domain is this volume (the tensor family's trivariate spaces; docs/VOLUMES.md),
+  // and `geometry` is empty; a file's named boundaries (sides 1..6) in `volume_boundaries`.
   NurbsVolume volume;
+  std::vector<NamedBoundary> volume_boundaries;
   bool is_volume() const { return volume.control_points.rows() > 0; }
   FamilySection section;                // the family's own settings
   bool allow_unverified_space = false;  // --allow-unverified-space: solve although the family's check failed

@@ -351,6 +351,9 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
       r.fail("[geometry] type", "the geometry is read from [geometry] file: leave type out (or set it to \"nurbs\")");
     const std::string path = r.readable_file(*file, "[geometry] file");  // relative to the case file
     try {
+      if (geometry_file_dimension(path) == 3)
+        throw InputError(path + ": is a volume, and [space] family = \"" + c.family +
+                         "\" works on planar patches; family = \"tensor\" solves on volumes (docs/VOLUMES.md)");
       c.domain = read_geometry_file(path);
     } catch (const InputError& e) {
       throw InputError(c.path + ": [geometry] file: " + e.what());
@@ -407,9 +410,28 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
   }
 }
 
+namespace {
+
+// [geometry] file when it names a peer's file (.xml, .txt; a .toml holds an inline patch).
+std::optional<std::string> peer_geometry_file(const CaseReader& r, const DocumentNode& g) {
+  const DocumentNode* file = g.get("file");
+  if (!file || std::filesystem::path(r.string(*file, "[geometry] file")).extension() == ".toml") return std::nullopt;
+  return r.readable_file(*file, "[geometry] file");  // relative to the case file
+}
+
+}  // namespace
+
 bool is_volume_geometry(const CaseDocument& doc) {
   const DocumentNode* g = doc.root.get("geometry");
-  const DocumentNode* type = g && g->as_table() ? g->get("type") : nullptr;
+  if (!g || !g->as_table()) return false;
+  if (const auto path = peer_geometry_file(doc.reader, *g)) {
+    try {
+      return geometry_file_dimension(*path) == 3;
+    } catch (const InputError& e) {
+      throw InputError(doc.reader.path() + ": [geometry] file: " + e.what());
+    }
+  }
+  const DocumentNode* type = g->get("type");
   const auto name = type ? type->value_exact<std::string>() : std::nullopt;
   // An inline NURBS is a volume when it has a third knot vector.
   return name && (is_volume_type(*name) || (*name == "nurbs" && g->get("knots_w")));
@@ -462,6 +484,20 @@ NurbsVolume read_nurbs_volume(const CaseReader& r, const DocumentNode& g) {
 void read_volume_geometry(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
   const DocumentNode& g = r.table(doc.root, "geometry", true);
+  if (const auto path = peer_geometry_file(r, g)) {
+    r.check_keys(g, "geometry", {"type", "file"});
+    if (const DocumentNode* type = g.get("type"); type && r.string(*type, "[geometry] type") != "nurbs")
+      r.fail("[geometry] type", "the geometry is read from [geometry] file: leave type out (or set it to \"nurbs\")");
+    try {
+      VolumeFile v = read_volume_file(*path);
+      c.volume = std::move(v.volume);
+      c.volume_boundaries = std::move(v.boundaries);
+    } catch (const InputError& e) {
+      throw InputError(c.path + ": [geometry] file: " + e.what());
+    }
+    c.geometry_type = "file";
+    return;
+  }
   c.geometry_type = r.string(*g.get("type"), "[geometry] type");
   // Lengths stay where the Jacobian, its inverse and their products are normal doubles.
   const auto check_length = [&](double length, const std::string& field, const char* what) {

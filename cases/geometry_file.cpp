@@ -20,16 +20,35 @@ std::string read_geometry_text(const std::string& path) {
   return s.str();
 }
 
-MultiPatch read_geometry_file(const std::string& path) {
+namespace {
+
+// The file's format from its extension: true for G+Smo XML, false for GeoPDEs text.
+bool is_gismo_file(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
-  MultiPatch d;
-  if (ext == ".xml")
-    d = read_gismo_xml(path);
-  else if (ext == ".txt")
-    d = read_geopdes_text(path);
-  else
+  if (ext != ".xml" && ext != ".txt")
     throw InputError(path + ": unknown geometry format '" + ext +
                      "' (.xml is read as G+Smo XML, .txt as GeoPDEs' geometry text v2.1)");
+  return ext == ".xml";
+}
+
+}  // namespace
+
+int geometry_file_dimension(const std::string& path) {
+  return is_gismo_file(path) ? gismo_xml_dimension(path) : geopdes_text_dimension(path);
+}
+
+VolumeFile read_volume_file(const std::string& path) {
+  VolumeFile v = is_gismo_file(path) ? read_gismo_volume(path) : read_geopdes_volume(path);
+  try {
+    v.volume.validate();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(v.where + ": " + e.what());
+  }
+  return v;
+}
+
+MultiPatch read_geometry_file(const std::string& path) {
+  MultiPatch d = is_gismo_file(path) ? read_gismo_xml(path) : read_geopdes_text(path);
   try {
     check_multipatch(d);
   } catch (const GeometryError& e) {

@@ -6,10 +6,33 @@
 #include <string>
 
 #include "basis/core/multipatch.hpp"
+#include "basis/core/nurbs_volume.hpp"
 
 namespace knotwork {
 
 MultiPatch read_geometry_file(const std::string& path);
+
+// A volume read from a file: one trivariate patch (several are refused for now: multipatch
+// volumes are to come, docs/VOLUMES.md), the file's label of it, and its named boundaries,
+// whose sides are faces 1..6 (u = 0, u = 1, v = 0, v = 1, w = 0, w = 1).
+struct VolumeFile {
+  NurbsVolume volume;
+  std::string label, where;
+  std::vector<NamedBoundary> boundaries;
+};
+
+// The parametric dimension of the file's domain, 2 or 3: GeoPDEs' ndim, or for G+Smo the
+// MultiPatch's parDim, else whether a geometry is a TensorBSpline3/TensorNurbs3. InputError
+// as the readers (an unknown extension, a malformed file).
+int geometry_file_dimension(const std::string& path);
+
+// The volume of a .xml or .txt file, validated (NurbsVolume::validate); InputError naming the
+// file, the line and what is wrong, e.g. a planar patch where a volume is read.
+VolumeFile read_volume_file(const std::string& path);
+int geopdes_text_dimension(const std::string& path);
+VolumeFile read_geopdes_volume(const std::string& path);
+int gismo_xml_dimension(const std::string& path);
+VolumeFile read_gismo_volume(const std::string& path);
 
 // The whole text of a geometry file; InputError when it is missing, a directory, unreadable
 // or larger than 256 MB (both readers hold it in memory).

@@ -4,7 +4,8 @@
 // direction, one line per coordinate of the weighted control points (w x, w y), numbered u
 // fastest, and the weights; per interface a name, "patch side" twice and the orientation flag;
 // per subdomain a name and its patches; then, to the end, boundaries: a name, the number of
-// sides and "patch side" per side. No library reads it: written here.
+// sides and "patch side" per side. Volumes (ndim = rdim = 3) have three of each and faces 1..6
+// (u = 0, u = 1, v = 0, v = 1, w = 0, w = 1). No library reads it: written here.
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -95,23 +96,99 @@ bool starts_with_number(const std::string& s) {
   return end != s.c_str();
 }
 
-PatchSideRef read_side(LineReader& in, const std::string& what, long patches) {
+PatchSideRef read_side(LineReader& in, const std::string& what, long patches, int sides = 4) {
   const auto v = in.integers(what, 2, 2);
   if (v[0] < 1 || v[0] > patches)
     in.fail(what + ": patch " + std::to_string(v[0]) + " does not exist (patches are 1 to " + std::to_string(patches) + ")");
-  if (v[1] < 1 || v[1] > 4) in.fail(what + ": side " + std::to_string(v[1]) + " does not exist (sides are 1 to 4)");
+  if (v[1] < 1 || v[1] > sides)
+    in.fail(what + ": side " + std::to_string(v[1]) + " does not exist (sides are 1 to " + std::to_string(sides) + ")");
   return {static_cast<int>(v[0] - 1), static_cast<int>(v[1])};
+}
+
+// One patch of `dim` parametric directions in R^dim: its degrees, numbers of control points,
+// knot vectors, weighted coordinates and weights (the caller has read its name).
+struct FilePatch {
+  std::vector<BSplineBasis1D> bases;
+  Eigen::MatrixXd points;  // Euclidean, u fastest
+  Eigen::VectorXd weights;
+  std::string where;
+};
+
+FilePatch read_patch(LineReader& in, const std::string& name, int dim, long& total_points) {
+  static const char* const directions[3] = {"u", "v", "w"};
+  FilePatch patch;
+  const auto degree = in.integers(name + " degrees", dim, dim);
+  patch.where = in.where();
+  for (long g : degree)
+    if (g < 1 || g > 10) in.fail(name + " degrees: must be in [1, 10], got " + std::to_string(g));
+  const auto count = in.integers(name + " numbers of control points", dim, dim);
+  long n = 1;
+  for (int k = 0; k < dim; ++k) {
+    if (count[k] < degree[k] + 1 || count[k] > kMaxControlPoints)
+      in.fail(name + " numbers of control points: must be in [degree + 1, 2^24], got " + std::to_string(count[k]));
+    n *= count[k];
+    if (n > kMaxControlPoints) in.fail(name + ": more than 2^24 control points");
+  }
+  total_points += n;
+  if (total_points > kMaxControlPoints) in.fail(name + ": more than 2^24 control points");
+  for (int k = 0; k < dim; ++k) {
+    const std::string what = name + " knots_" + directions[k];
+    std::vector<double> knots = in.numbers(what, count[k] + degree[k] + 1);
+    try {
+      patch.bases.emplace_back(static_cast<int>(degree[k]), std::move(knots));
+    } catch (const std::invalid_argument& e) {
+      in.fail(what + ": " + e.what());
+    }
+  }
+  std::vector<std::vector<double>> weighted;
+  for (int k = 0; k < dim; ++k)
+    weighted.push_back(in.numbers(name + " weighted " + "xyz"[k] + " coordinates", n));
+  const std::vector<double> w = in.numbers(name + " weights", n);
+  patch.points.resize(n, dim);
+  patch.weights.resize(n);
+  for (long i = 0; i < n; ++i) {
+    if (!(w[i] > 0)) in.fail(name + " weights: weight " + std::to_string(i + 1) + " must be positive");
+    for (int k = 0; k < dim; ++k) patch.points(i, k) = weighted[k][i] / w[i];
+    patch.weights[i] = w[i];
+  }
+  return patch;
+}
+
+// The boundaries to the end of the file: a name, the number of sides, "patch side" per side.
+std::vector<NamedBoundary> read_boundaries(LineReader& in, long np, int sides) {
+  std::vector<NamedBoundary> out;
+  while (!in.done()) {
+    NamedBoundary b;
+    b.name = in.next("a boundary name");
+    if (b.name.rfind("BOUNDARY ", 0) == 0) b.name = b.name.substr(9);
+    while (!b.name.empty() && (b.name.back() == ' ' || b.name.back() == '\t')) b.name.pop_back();
+    b.where = in.where();
+    const auto count = in.integers("boundary " + b.name + " number of sides", 1, 1);
+    if (count[0] < 1 || count[0] > sides * np)
+      in.fail("boundary " + b.name + ": the number of sides must be in [1, " + std::to_string(sides) +
+              " x patches], got " + std::to_string(count[0]));
+    for (long k = 0; k < count[0]; ++k) b.sides.push_back(read_side(in, "boundary " + b.name + " (patch side)", np, sides));
+    for (const NamedBoundary& other : out)
+      if (other.name == b.name) in.fail("boundary " + b.name + " is given twice");
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
+// The header "ndim rdim [Np [Ni [Ns]]]" (Np optional for one patch, as the format allows).
+std::vector<long> read_header(LineReader& in) {
+  return in.integers("the header (ndim rdim [patches [interfaces [subdomains]]])", 2, 5);
 }
 
 }  // namespace
 
 MultiPatch read_geopdes_text(const std::string& path) {
   LineReader in(path);
-  const auto header = in.integers("the header (ndim rdim patches [interfaces [subdomains]])", 3, 5);
-  if (header[0] == 3) in.fail("a 3D (volume) geometry: knotwork reads planar geometries (ndim = 2) from GeoPDEs files");
+  const auto header = read_header(in);
+  if (header[0] == 3) in.fail("a 3D (volume) geometry where a planar one (ndim = 2) is read");
   if (header[0] != 2) in.fail("ndim must be 2, got " + std::to_string(header[0]));
   if (header[1] != 2) in.fail("rdim must be 2 (a planar domain), got " + std::to_string(header[1]));
-  const long np = header[2], ni = header.size() > 3 ? header[3] : 0, ns = header.size() > 4 ? header[4] : 0;
+  const long np = header.size() > 2 ? header[2] : 1, ni = header.size() > 3 ? header[3] : 0, ns = header.size() > 4 ? header[4] : 0;
   if (np < 1 || np > 100000) in.fail("the number of patches must be in [1, 100000], got " + std::to_string(np));
   if (ni < 0 || ni > 4 * np) in.fail("the number of interfaces must be in [0, 4 x patches], got " + std::to_string(ni));
   if (ns < 0 || ns > np) in.fail("the number of subdomains must be in [0, patches], got " + std::to_string(ns));
@@ -120,42 +197,15 @@ MultiPatch read_geopdes_text(const std::string& path) {
   for (long p = 1; p <= np; ++p) {
     const std::string name = "patch " + std::to_string(p);
     if (!in.done() && !starts_with_number(in.peek())) in.next(name);  // its name
-    const auto degree = in.integers(name + " degrees", 2, 2);
-    const std::string where = in.where();
-    for (long g : degree)
-      if (g < 1 || g > 10) in.fail(name + " degrees: must be in [1, 10], got " + std::to_string(g));
-    const auto count = in.integers(name + " numbers of control points", 2, 2);
-    for (int k = 0; k < 2; ++k)
-      if (count[k] < degree[k] + 1 || count[k] > kMaxControlPoints)
-        in.fail(name + " numbers of control points: must be in [degree + 1, 2^24], got " + std::to_string(count[k]));
-    total_points += count[0] * count[1];
-    if (count[0] * count[1] > kMaxControlPoints || total_points > kMaxControlPoints)
-      in.fail(name + ": more than 2^24 control points");
+    FilePatch f = read_patch(in, name, 2, total_points);
     NurbsPatch patch;
-    for (int k = 0; k < 2; ++k) {
-      const std::string what = name + (k == 0 ? " knots_u" : " knots_v");
-      std::vector<double> knots = in.numbers(what, count[k] + degree[k] + 1);
-      try {
-        (k == 0 ? patch.basis_u : patch.basis_v) = BSplineBasis1D(static_cast<int>(degree[k]), std::move(knots));
-      } catch (const std::invalid_argument& e) {
-        in.fail(what + ": " + e.what());
-      }
-    }
-    const long n = count[0] * count[1];
-    const std::vector<double> wx = in.numbers(name + " weighted x coordinates", n);
-    const std::vector<double> wy = in.numbers(name + " weighted y coordinates", n);
-    const std::vector<double> w = in.numbers(name + " weights", n);
-    patch.control_points.resize(n, 2);
-    patch.weights.resize(n);
-    for (long i = 0; i < n; ++i) {
-      if (!(w[i] > 0)) in.fail(name + " weights: weight " + std::to_string(i + 1) + " must be positive");
-      patch.control_points(i, 0) = wx[i] / w[i];
-      patch.control_points(i, 1) = wy[i] / w[i];
-      patch.weights[i] = w[i];
-    }
+    patch.basis_u = std::move(f.bases[0]);
+    patch.basis_v = std::move(f.bases[1]);
+    patch.control_points = f.points;
+    patch.weights = std::move(f.weights);
     d.patches.push_back(std::move(patch));
     d.patch_labels.push_back(std::to_string(p));
-    d.patch_where.push_back(where);
+    d.patch_where.push_back(f.where);
   }
   for (long i = 1; i <= ni; ++i) {
     const std::string name = "interface " + std::to_string(i);
@@ -176,21 +226,42 @@ MultiPatch read_geopdes_text(const std::string& path) {
     for (long p : in.integers(name + " patches", 1, np))
       if (p < 1 || p > np) in.fail(name + ": patch " + std::to_string(p) + " does not exist");
   }
-  while (!in.done()) {
-    NamedBoundary b;
-    b.name = in.next("a boundary name");
-    if (b.name.rfind("BOUNDARY ", 0) == 0) b.name = b.name.substr(9);
-    while (!b.name.empty() && (b.name.back() == ' ' || b.name.back() == '\t')) b.name.pop_back();
-    b.where = in.where();
-    const auto count = in.integers("boundary " + b.name + " number of sides", 1, 1);
-    if (count[0] < 1 || count[0] > 4 * np)
-      in.fail("boundary " + b.name + ": the number of sides must be in [1, 4 x patches], got " + std::to_string(count[0]));
-    for (long k = 0; k < count[0]; ++k) b.sides.push_back(read_side(in, "boundary " + b.name + " (patch side)", np));
-    for (const NamedBoundary& other : d.boundaries)
-      if (other.name == b.name) in.fail("boundary " + b.name + " is given twice");
-    d.boundaries.push_back(std::move(b));
-  }
+  d.boundaries = read_boundaries(in, np, 4);
   return d;
+}
+
+int geopdes_text_dimension(const std::string& path) {
+  LineReader in(path);
+  const long ndim = read_header(in)[0];
+  return ndim == 3 ? 3 : 2;  // anything else is refused by the planar reader, naming ndim
+}
+
+VolumeFile read_geopdes_volume(const std::string& path) {
+  LineReader in(path);
+  const auto header = read_header(in);
+  if (header[0] != 3) in.fail("ndim must be 3 (a volume), got " + std::to_string(header[0]));
+  if (header[1] != 3) in.fail("rdim must be 3 (a volume in space), got " + std::to_string(header[1]));
+  const long np = header.size() > 2 ? header[2] : 1;
+  if (np != 1)
+    in.fail("a volume of " + std::to_string(np) + " patches: knotwork solves on one volume patch for now (docs/VOLUMES.md)");
+  if (header.size() > 3 && header[3] != 0) in.fail("interfaces on a volume of one patch (the header gives " + std::to_string(header[3]) + ")");
+  const long ns = header.size() > 4 ? header[4] : 0;
+  if (ns < 0 || ns > 1) in.fail("the number of subdomains must be 0 or 1 on one patch, got " + std::to_string(ns));
+  VolumeFile v;
+  if (!in.done() && !starts_with_number(in.peek())) v.label = in.next("patch 1");
+  long total_points = 0;
+  FilePatch f = read_patch(in, "patch 1", 3, total_points);
+  v.where = f.where;
+  for (int k = 0; k < 3; ++k) v.volume.bases[k] = std::move(f.bases[k]);
+  v.volume.control_points = f.points;
+  v.volume.weights = std::move(f.weights);
+  if (ns == 1) {
+    in.next("subdomain 1");
+    for (long p : in.integers("subdomain 1 patches", 1, 1))
+      if (p != 1) in.fail("subdomain 1: patch " + std::to_string(p) + " does not exist");
+  }
+  v.boundaries = read_boundaries(in, 1, 6);
+  return v;
 }
 
 }  // namespace knotwork

@@ -1,7 +1,8 @@
 // G+Smo's XML geometry files, read with pugixml: <Geometry type="TensorBSpline2|TensorNurbs2"
 // id="..."> with its <Basis> (a TensorBSplineBasis2 of two BSplineBasis <KnotVector
 // degree="p">, inside a TensorNurbsBasis2 with <weights> for NURBS) and <coefs geoDim="2">
-// (Euclidean control points, u fastest); <MultiPatch parDim="2"> with <patches type="id_range"
+// (Euclidean control points, u fastest); volumes the same with 3 (TensorBSpline3, three
+// BSplineBasis, geoDim="3", sides 1..6); <MultiPatch parDim="2"> with <patches type="id_range"
 // or "id_index">, <interfaces> (rows "patch side patch side", the direction map and the
 // orientation flags) and <boundary [name="..."]> ("patch side" pairs). Patches in interfaces
 // and boundaries are referred to by their id; a file whose references are not ids but all
@@ -33,15 +34,25 @@ pugi::xml_node child_of_type(const pugi::xml_node& n, const char* element, const
   return {};
 }
 
-NurbsPatch read_patch(const XmlFile& f, const pugi::xml_node& g, const std::string& name) {
-  const std::string type = g.attribute("type").value();
-  const bool rational = type == "TensorNurbs2";
-  pugi::xml_node basis = child_of_type(g, "Basis", rational ? "TensorNurbsBasis2" : "TensorBSplineBasis2");
-  if (!basis) f.fail(g, name + ": no <Basis type=\"" + std::string(rational ? "TensorNurbsBasis2" : "TensorBSplineBasis2") + "\">");
-  pugi::xml_node tensor = rational ? child_of_type(basis, "Basis", "TensorBSplineBasis2") : basis;
-  if (!tensor) f.fail(basis, name + ": no <Basis type=\"TensorBSplineBasis2\"> inside the NURBS basis");
-  NurbsPatch p;
-  for (int k = 0; k < 2; ++k) {
+// One TensorBSpline<dim> or TensorNurbs<dim> geometry in R^dim: its knot vectors, Euclidean
+// control points (u fastest) and weights.
+struct FileTensor {
+  std::vector<BSplineBasis1D> bases;
+  Eigen::MatrixXd points;
+  Eigen::VectorXd weights;
+};
+
+FileTensor read_tensor(const XmlFile& f, const pugi::xml_node& g, const std::string& name, int dim) {
+  const std::string type = g.attribute("type").value(), d = std::to_string(dim);
+  const bool rational = type == "TensorNurbs" + d;
+  const std::string nurbs_basis = "TensorNurbsBasis" + d, spline_basis = "TensorBSplineBasis" + d;
+  pugi::xml_node basis = child_of_type(g, "Basis", (rational ? nurbs_basis : spline_basis).c_str());
+  if (!basis) f.fail(g, name + ": no <Basis type=\"" + (rational ? nurbs_basis : spline_basis) + "\">");
+  pugi::xml_node tensor = rational ? child_of_type(basis, "Basis", spline_basis.c_str()) : basis;
+  if (!tensor) f.fail(basis, name + ": no <Basis type=\"" + spline_basis + "\"> inside the NURBS basis");
+  FileTensor p;
+  long n = 1;
+  for (int k = 0; k < dim; ++k) {
     pugi::xml_node b;
     for (pugi::xml_node c : tensor.children("Basis"))
       if (std::string(c.attribute("type").value()) == "BSplineBasis" && c.attribute("index").as_int(-1) == k) b = c;
@@ -52,27 +63,30 @@ NurbsPatch read_patch(const XmlFile& f, const pugi::xml_node& g, const std::stri
     if (degree < 1 || degree > 10) f.fail(kv, name + " KnotVector: degree must be in [1, 10], got " + std::to_string(degree));
     std::vector<double> knots = f.numbers(kv, name + " KnotVector");
     try {
-      (k == 0 ? p.basis_u : p.basis_v) = BSplineBasis1D(static_cast<int>(degree), std::move(knots));
+      p.bases.emplace_back(static_cast<int>(degree), std::move(knots));
     } catch (const std::invalid_argument& e) {
       f.fail(kv, name + " KnotVector: " + e.what());
     }
+    n *= p.bases.back().num_functions();
+    if (n > kMaxControlPoints) f.fail(g, name + ": more than 2^24 control points");
   }
-  const long n = static_cast<long>(p.basis_u.num_functions()) * p.basis_v.num_functions();
-  if (n > kMaxControlPoints) f.fail(g, name + ": more than 2^24 control points");
   pugi::xml_node coefs = g.child("coefs");
   if (!coefs) f.fail(g, name + ": no <coefs>");
-  const long dim = coefs.attribute("geoDim") ? f.integer_attribute(coefs, "geoDim", name + " coefs") : 2;
-  if (dim != 2) f.fail(coefs, name + " coefs: geoDim must be 2 (a planar domain), got " + std::to_string(dim));
+  const long geo = coefs.attribute("geoDim") ? f.integer_attribute(coefs, "geoDim", name + " coefs") : dim;
+  if (geo != dim)
+    f.fail(coefs, name + " coefs: geoDim must be " + d + (dim == 2 ? " (a planar domain)" : " (a volume in space)") +
+                      ", got " + std::to_string(geo));
   const std::vector<double> c = f.numbers(coefs, name + " coefs");
-  if (static_cast<long>(c.size()) != 2 * n)
-    f.fail(coefs, name + " coefs: the knot vectors need " + std::to_string(n) + " points (" + std::to_string(2 * n) +
+  if (static_cast<long>(c.size()) != dim * n)
+    f.fail(coefs, name + " coefs: the knot vectors need " + std::to_string(n) + " points (" + std::to_string(dim * n) +
                       " numbers), found " + std::to_string(c.size()) + " numbers");
-  p.control_points.resize(n, 2);
-  for (long i = 0; i < n; ++i) p.control_points(i, 0) = c[2 * i], p.control_points(i, 1) = c[2 * i + 1];
+  p.points.resize(n, dim);
+  for (long i = 0; i < n; ++i)
+    for (int k = 0; k < dim; ++k) p.points(i, k) = c[dim * i + k];
   p.weights = Eigen::VectorXd::Ones(n);
   if (rational) {
     pugi::xml_node w = basis.child("weights");
-    if (!w) f.fail(basis, name + ": a TensorNurbsBasis2 without <weights>");
+    if (!w) f.fail(basis, name + ": a " + nurbs_basis + " without <weights>");
     const std::vector<double> ws = f.numbers(w, name + " weights");
     if (static_cast<long>(ws.size()) != n)
       f.fail(w, name + " weights: expected " + std::to_string(n) + ", found " + std::to_string(ws.size()));
@@ -84,34 +98,37 @@ NurbsPatch read_patch(const XmlFile& f, const pugi::xml_node& g, const std::stri
   return p;
 }
 
-}  // namespace
+NurbsPatch read_patch(const XmlFile& f, const pugi::xml_node& g, const std::string& name) {
+  FileTensor t = read_tensor(f, g, name, 2);
+  NurbsPatch p;
+  p.basis_u = std::move(t.bases[0]);
+  p.basis_v = std::move(t.bases[1]);
+  p.control_points = t.points;
+  p.weights = std::move(t.weights);
+  return p;
+}
 
-MultiPatch read_gismo_xml(const std::string& path) {
-  XmlFile f(path);
+// The geometries of the file by id, the ids of its patches (the MultiPatch's, else every
+// geometry's) and the MultiPatch (null without one), checked for `dim` parametric directions.
+struct FileLayout {
+  std::map<long, pugi::xml_node> geometry;
+  std::vector<long> ids;
+  pugi::xml_node multipatch;
+};
+
+FileLayout read_layout(const XmlFile& f, const std::string& path) {
   pugi::xml_node root = f.doc().child("xml");
   if (!root) throw InputError(path + ": the root element must be <xml> (a G+Smo file)");
-  // Every planar tensor geometry, by id.
-  std::map<long, pugi::xml_node> geometry;
+  FileLayout l;
   for (pugi::xml_node g : root.children("Geometry")) {
     const long id = f.integer_attribute(g, "id", "Geometry");
-    if (geometry.count(id)) f.fail(g, "Geometry id " + std::to_string(id) + " is given twice");
-    geometry[id] = g;
+    if (l.geometry.count(id)) f.fail(g, "Geometry id " + std::to_string(id) + " is given twice");
+    l.geometry[id] = g;
   }
-  auto check_type = [&](const pugi::xml_node& g, long id) {
-    const std::string type = g.attribute("type").value();
-    if (type == "TensorBSpline3" || type == "TensorNurbs3")
-      f.fail(g, "Geometry id " + std::to_string(id) + " is a volume (" + type + "): knotwork reads planar patches");
-    if (type != "TensorBSpline2" && type != "TensorNurbs2")
-      f.fail(g, "Geometry id " + std::to_string(id) + " has type \"" + type +
-                    "\": knotwork reads TensorBSpline2 and TensorNurbs2 patches");
-  };
-  MultiPatch d;
-  std::vector<long> ids;
   pugi::xml_node mp = root.child("MultiPatch");
   if (mp && mp.next_sibling("MultiPatch")) f.fail(mp.next_sibling("MultiPatch"), "more than one <MultiPatch>");
+  l.multipatch = mp;
   if (mp) {
-    if (mp.attribute("parDim") && mp.attribute("parDim").as_int() != 2)
-      f.fail(mp, std::string("MultiPatch parDim must be 2, got ") + mp.attribute("parDim").value());
     pugi::xml_node patches = mp.child("patches");
     if (!patches) f.fail(mp, "MultiPatch: no <patches>");
     const std::string type = patches.attribute("type").value();
@@ -119,27 +136,53 @@ MultiPatch read_gismo_xml(const std::string& path) {
     if (type == "id_range") {
       if (v.size() != 2 || v[1] < v[0] || v[1] - v[0] >= 100000)
         f.fail(patches, "patches type=\"id_range\" must be \"first last\" with first <= last (at most 100000 patches)");
-      for (long id = v[0]; id <= v[1]; ++id) ids.push_back(id);
+      for (long id = v[0]; id <= v[1]; ++id) l.ids.push_back(id);
     } else if (type == "id_index") {
       if (v.empty() || v.size() > 100000) f.fail(patches, "patches type=\"id_index\" must list 1 to 100000 ids");
-      ids = v;
+      l.ids = v;
     } else {
       f.fail(patches, "patches type must be \"id_range\" or \"id_index\", got \"" + type + "\"");
     }
+    for (long id : l.ids)
+      if (!l.geometry.count(id))
+        f.fail(patches, "patch id " + std::to_string(id) + " has no <Geometry id=\"" + std::to_string(id) + "\">");
   } else {
-    for (const auto& [id, g] : geometry) ids.push_back(id);
-    if (ids.empty()) throw InputError(path + ": no <Geometry> and no <MultiPatch>");
+    for (const auto& [id, g] : l.geometry) l.ids.push_back(id);
+    if (l.ids.empty()) throw InputError(path + ": no <Geometry> and no <MultiPatch>");
   }
+  return l;
+}
+
+// Whether a Geometry's type is a volume's.
+bool is_volume_type(const pugi::xml_node& g) {
+  const std::string type = g.attribute("type").value();
+  return type == "TensorBSpline3" || type == "TensorNurbs3";
+}
+
+}  // namespace
+
+MultiPatch read_gismo_xml(const std::string& path) {
+  XmlFile f(path);
+  const FileLayout l = read_layout(f, path);
+  const pugi::xml_node mp = l.multipatch;
+  if (mp && mp.attribute("parDim") && mp.attribute("parDim").as_int() != 2)
+    f.fail(mp, std::string("MultiPatch parDim must be 2 (planar patches), got ") + mp.attribute("parDim").value());
+  const std::vector<long>& ids = l.ids;
+  MultiPatch d;
   long total = 0;
   for (long id : ids) {
-    const auto it = geometry.find(id);
-    if (it == geometry.end()) f.fail(mp.child("patches"), "patch id " + std::to_string(id) + " has no <Geometry id=\"" + std::to_string(id) + "\">");
-    check_type(it->second, id);
-    d.patches.push_back(read_patch(f, it->second, "Geometry id " + std::to_string(id)));
+    const pugi::xml_node g = l.geometry.at(id);
+    const std::string type = g.attribute("type").value();
+    if (is_volume_type(g))
+      f.fail(g, "Geometry id " + std::to_string(id) + " is a volume (" + type + ") where planar patches are read");
+    if (type != "TensorBSpline2" && type != "TensorNurbs2")
+      f.fail(g, "Geometry id " + std::to_string(id) + " has type \"" + type +
+                    "\": knotwork reads TensorBSpline2 and TensorNurbs2 patches (TensorBSpline3 and TensorNurbs3 volumes)");
+    d.patches.push_back(read_patch(f, g, "Geometry id " + std::to_string(id)));
     total += d.patches.back().control_points.rows();
-    if (total > kMaxControlPoints) f.fail(it->second, "more than 2^24 control points in all");
+    if (total > kMaxControlPoints) f.fail(g, "more than 2^24 control points in all");
     d.patch_labels.push_back(std::to_string(id));
-    d.patch_where.push_back(f.at(it->second));
+    d.patch_where.push_back(f.at(g));
   }
   if (!mp) return d;
 
@@ -203,6 +246,62 @@ MultiPatch read_gismo_xml(const std::string& path) {
     d.boundaries.push_back(std::move(nb));
   }
   return d;
+}
+
+int gismo_xml_dimension(const std::string& path) {
+  XmlFile f(path);
+  const FileLayout l = read_layout(f, path);
+  if (l.multipatch && l.multipatch.attribute("parDim")) return l.multipatch.attribute("parDim").as_int() == 3 ? 3 : 2;
+  for (long id : l.ids)
+    if (is_volume_type(l.geometry.at(id))) return 3;
+  return 2;
+}
+
+VolumeFile read_gismo_volume(const std::string& path) {
+  XmlFile f(path);
+  const FileLayout l = read_layout(f, path);
+  const pugi::xml_node mp = l.multipatch;
+  if (mp && mp.attribute("parDim") && mp.attribute("parDim").as_int() != 3)
+    f.fail(mp, std::string("MultiPatch parDim must be 3 (a volume), got ") + mp.attribute("parDim").value());
+  if (l.ids.size() != 1)
+    f.fail(mp ? mp : f.doc().child("xml"), "a volume of " + std::to_string(l.ids.size()) +
+                                              " patches: knotwork solves on one volume patch for now (docs/VOLUMES.md)");
+  const long id = l.ids.front();
+  const pugi::xml_node g = l.geometry.at(id);
+  const std::string type = g.attribute("type").value(), name = "Geometry id " + std::to_string(id);
+  if (!is_volume_type(g))
+    f.fail(g, name + " has type \"" + type + "\" where a volume (TensorBSpline3 or TensorNurbs3) is read" +
+                  (type == "TensorBSpline2" || type == "TensorNurbs2" ? ": a planar patch" : ""));
+  FileTensor t = read_tensor(f, g, name, 3);
+  VolumeFile v;
+  for (int k = 0; k < 3; ++k) v.volume.bases[k] = std::move(t.bases[k]);
+  v.volume.control_points = t.points;
+  v.volume.weights = std::move(t.weights);
+  v.label = std::to_string(id);
+  v.where = f.at(g);
+  if (!mp) return v;
+  if (pugi::xml_node in = mp.child("interfaces"); in && !f.integers(in, "interfaces").empty())
+    f.fail(in, "interfaces on a volume of one patch");
+  for (pugi::xml_node b : mp.children("boundary")) {
+    const std::vector<long> pairs = f.integers(b, "boundary");
+    if (pairs.size() % 2 != 0) f.fail(b, "boundary: expected \"patch side\" pairs, found an odd number of integers");
+    NamedBoundary nb;
+    nb.name = b.attribute("name").value();
+    nb.where = f.at(b);
+    for (size_t k = 0; k < pairs.size(); k += 2) {
+      // The patch by its id, or by its position 0 (both occur in the wild).
+      if (pairs[k] != id && pairs[k] != 0)
+        f.fail(b, "patch " + std::to_string(pairs[k]) + " is neither the patch id " + std::to_string(id) + " nor its position 0");
+      if (pairs[k + 1] < 1 || pairs[k + 1] > 6)
+        f.fail(b, "side " + std::to_string(pairs[k + 1]) + " does not exist (a volume's sides are 1 to 6)");
+      nb.sides.push_back({0, static_cast<int>(pairs[k + 1])});
+    }
+    if (nb.name.empty()) continue;  // an unnamed list only says which sides are boundary
+    for (const NamedBoundary& other : v.boundaries)
+      if (other.name == nb.name) f.fail(b, "boundary \"" + nb.name + "\" is given twice");
+    v.boundaries.push_back(std::move(nb));
+  }
+  return v;
 }
 
 namespace {
