@@ -20,6 +20,9 @@ namespace {
 constexpr double kVolumeFillAmd = 0.8;
 constexpr double kVolumeFillMetis = 0.55;
 constexpr double kVolumeFactorEntryBytes = 16;
+// Measured (docs/VOLUMES.md): 89-105 bytes per entry at p = 2 from 39 000 to 2.2M unknowns,
+// 78-81 at p = 3 and 70-74 at p = 4; with a margin.
+constexpr double kVolumeAmgEntryBytes = 130;
 
 }  // namespace
 
@@ -40,14 +43,15 @@ double volume_galerkin_bytes(double cells, double functions, const std::array<in
 }
 
 double volume_iterative_bytes(double cells, double functions, const std::array<int, 3>& degree,
-                              const std::string& preconditioner) {
+                              const std::string& preconditioner, bool user_amg_options) {
   double per_cell = 1, coupling = 0.5;
   for (int p : degree) per_cell *= p + 1, coupling *= 2 * p + 1;
   const double nnz = functions * coupling;
-  // BoomerAMG in 3D: the whole run's peak was 172, 174, 188 and 231 bytes per stored matrix
-  // entry on cubes of 39 000, 125 000, 287 000 and 941 000 unknowns (p = 2; docs/VOLUMES.md),
-  // growing with the size; 260 keeps a margin over the largest that fits here.
-  if (preconditioner != "jacobi") return cells * per_cell * 4 + nnz * 260;
+  // BoomerAMG in 3D, the whole run's peak per stored matrix entry (lower triangle; cubes,
+  // docs/VOLUMES.md): with the options a volume starts from (kBoomerAmgVolumeOptions) at most
+  // kVolumeAmgEntryBytes; with hypre's defaults, which a user's petsc_options may bring back,
+  // 172, 174, 188 and 231 at 39 000 to 941 000 unknowns (p = 2), growing: 260 covers them.
+  if (preconditioner != "jacobi") return cells * per_cell * 4 + nnz * (user_amg_options ? 260 : kVolumeAmgEntryBytes);
   return cells * per_cell * 4 + nnz * 12 * 3 + functions * 8 * 8;
 }
 

@@ -15,10 +15,11 @@ double galerkin_bytes(double cells, double functions, int p, int q);
 // The same for `cells` hexahedra of degrees (p, q, r) and a direct solve ordered by METIS or
 // (`metis` false) AMD: the factor of a 3D problem fills in far more than in 2D (measured
 // N^(5/3), constants in resource_limits.cpp); and for CG with "boomeramg" or "jacobi" on the
-// assembled matrix.
+// assembled matrix (`user_amg_options`: the user's petsc_options may undo the 3D options, so
+// BoomerAMG is counted as with hypre's defaults).
 double volume_galerkin_bytes(double cells, double functions, const std::array<int, 3>& degree, bool metis);
 double volume_iterative_bytes(double cells, double functions, const std::array<int, 3>& degree,
-                              const std::string& preconditioner);
+                              const std::string& preconditioner, bool user_amg_options);
 
 // Memory of the iterative path (CG): the same cell lists and matrix as galerkin_bytes, no
 // factor, CG's vectors, and `preconditioner` bytes for the preconditioner's own storage

@@ -94,6 +94,11 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) 
                      "\"" + (c.multipatch() ? " on several patches" : "") + " (" + (structured.empty() ? std::string("use \"auto\", \"boomeramg\" or \"jacobi\"")
                                                    : "it has " + names + "; or use \"boomeramg\" or \"jacobi\"") + ")");
   }
+  if (r.method == "iterative" && r.preconditioner == kBoomerAmgName) {
+    r.petsc_options = c.solver.petsc_options;
+    if (space.geometry().parametric_dimension() == 3)
+      r.petsc_options = std::string(kBoomerAmgVolumeOptions) + (r.petsc_options.empty() ? "" : " " + r.petsc_options);
+  }
   return r;
 }
 
@@ -178,7 +183,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     so.max_iterations = c.solver.max_iterations;
     // (Under petsc, BoomerAMG and Jacobi are PETSc's own PCs; a structured one is a PCShell.)
     if (chosen.preconditioner == kBoomerAmgName && chosen.method == "iterative") {
-      const std::string options = c.solver.petsc_options, path = c.path;
+      const std::string options = chosen.petsc_options, path = c.path;
       so.preconditioner = [options, path](const DofLayout&, const Eigen::SparseMatrix<double>& lower) {
         try {
           return boomeramg_preconditioner(lower, options);

@@ -33,6 +33,9 @@ struct SolverReport {
   // Under PETSc, what knotwork's PCShell was built from: "diagonal" (K's diagonal),
   // "operator" (the space's operator, no matrix) or "whole_matrix" (gathered on every process).
   std::string shell_built_from;
+  // The PETSc options BoomerAMG runs with in knotwork's CG: on a volume the options for 3D
+  // (kBoomerAmgVolumeOptions) followed by the user's, which win; elsewhere the user's.
+  std::string petsc_options;
 };
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
                            const ProgressFunction& progress = {}, SolverReport* report = nullptr);

@@ -188,7 +188,7 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
   sj.set("method", r.solver.method).set("assembly_method", s.assembly);
   if (r.solver.method == "iterative")
     sj.set("preconditioner", r.solver.preconditioner).set("matrix", r.solver.matrix_free ? "matrix_free" : "assembled")
-        .set("iterations", s.iterative.iterations)
+        .set("petsc_options", r.solver.petsc_options).set("iterations", s.iterative.iterations)
         .set("relative_residual", s.iterative.relative_residual).set("backward_error", s.iterative.backward_error)
         .set("tolerance", c.solver.tolerance);
   if (r.solver.method == "petsc") {

@@ -72,7 +72,7 @@ void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOpti
   // The ordering "auto" takes on volumes is METIS; "default" (CHOLMOD's own choice) counted as AMD's fill.
   const bool metis = c.solver.ordering == "auto" || c.solver.ordering == "metis" || c.solver.ordering == "nesdis";
   check_memory(c.path + ": [space] elements",
-               iterative ? volume_iterative_bytes(cells, functions, o.degree, preconditioner)
+               iterative ? volume_iterative_bytes(cells, functions, o.degree, preconditioner, !c.solver.petsc_options.empty())
                          : volume_galerkin_bytes(cells, functions, o.degree, metis),
                what);
 }
