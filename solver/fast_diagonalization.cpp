@@ -115,22 +115,26 @@ bool tensor_free_indices(int nu, int nv, const DofLayout& layout, std::vector<in
   return true;
 }
 
-namespace {
-
 // C = op(A) op(B) through the BLAS (OpenBLAS here: threaded, and about 3x Eigen's own kernel
-// on these sizes). The four products per application are the whole cost of the
-// preconditioner, so they go to the library that does them best.
+// on these sizes). The products are the whole cost of the preconditioner's application, so
+// they go to the library that does them best.
 extern "C" void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
                        const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,
                        const double* beta, double* c, const int* ldc);
+
+void blas_gemm(bool ta, bool tb, int m, int n, int k, const double* A, int lda, const double* B, int ldb, double* C,
+               int ldc) {
+  const double one = 1, zero = 0;
+  dgemm_(ta ? "T" : "N", tb ? "T" : "N", &m, &n, &k, &one, A, &lda, B, &ldb, &zero, C, &ldc);
+}
+
+namespace {
 
 void gemm(bool ta, bool tb, const Eigen::MatrixXd& A, const Eigen::MatrixXd& B, Eigen::MatrixXd& C) {
   const int m = static_cast<int>(ta ? A.cols() : A.rows()), k = static_cast<int>(ta ? A.rows() : A.cols());
   const int n = static_cast<int>(tb ? B.rows() : B.cols());
   C.resize(m, n);
-  const double one = 1, zero = 0;
-  const int lda = static_cast<int>(A.rows()), ldb = static_cast<int>(B.rows()), ldc = m;
-  dgemm_(ta ? "T" : "N", tb ? "T" : "N", &m, &n, &k, &one, A.data(), &lda, B.data(), &ldb, &zero, C.data(), &ldc);
+  blas_gemm(ta, tb, m, n, k, A.data(), static_cast<int>(A.rows()), B.data(), static_cast<int>(B.rows()), C.data(), m);
 }
 
 class FastDiagonalization final : public Preconditioner {
@@ -169,6 +173,8 @@ extern "C" void dsygvd_(const int* itype, const char* jobz, const char* uplo, co
                         double* b, const int* ldb, double* w, double* work, const int* lwork, int* iwork,
                         const int* liwork, int* info);
 
+}  // namespace
+
 // K restricted to the free indices, and its generalized eigenvectors (U^T M U = I).
 void diagonalize(const UnivariatePair& pair, const std::vector<int>& keep, Eigen::MatrixXd& U, Eigen::VectorXd& lambda) {
   const int n = static_cast<int>(keep.size());
@@ -197,8 +203,6 @@ void diagonalize(const UnivariatePair& pair, const std::vector<int>& keep, Eigen
     throw std::runtime_error("fast diagonalization: LAPACK dsygvd failed (info " + std::to_string(info) +
                              "): the univariate mass matrix is not positive definite");
 }
-
-}  // namespace
 
 std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v,
                                                      const DofLayout& layout, const Eigen::VectorXd& diag,

@@ -59,6 +59,14 @@ struct NitscheEnds {
 // functions i + nu j) are their tensor product, numbered a + |iu| b; false otherwise.
 bool tensor_free_indices(int nu, int nv, const DofLayout& layout, std::vector<int>& iu, std::vector<int>& iv);
 
+// What the 2D and 3D preconditioners share. diagonalize: K of `pair` restricted to the indices
+// `keep`, and its generalized eigenvectors U (U^T M U = I, U^T K U = diag(lambda)), by LAPACK's
+// dsygvd; std::runtime_error if M is not positive definite there. blas_gemm: C = op(A) op(B),
+// column-major with leading dimensions, through the BLAS's dgemm.
+void diagonalize(const UnivariatePair& pair, const std::vector<int>& keep, Eigen::MatrixXd& U, Eigen::VectorXd& lambda);
+void blas_gemm(bool transpose_a, bool transpose_b, int m, int n, int k, const double* A, int lda, const double* B, int ldb,
+               double* C, int ldc);
+
 // Its storage for n_u x n_v functions: the eigenvectors and a product's workspace, four dense
 // n x n arrays per direction (for memory guards).
 inline double fast_diagonalization_bytes(double n_u, double n_v) { return 4 * (n_u * n_u + n_v * n_v) * 8; }

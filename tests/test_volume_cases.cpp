@@ -179,6 +179,7 @@ TEST_CASE("BoomerAMG on a volume runs with the options for 3D, the user's after 
   space_family(c).override_options(c, 2, 6);
   const RunOutcome direct = run_study(c, Ordering::kAuto, nullptr, {});
   c.solver.method = "iterative";
+  c.solver.preconditioner = kBoomerAmgName;
   const RunOutcome amg = run_study(c, Ordering::kAuto, nullptr, {});
   CHECK(amg.solver.preconditioner == kBoomerAmgName);
   CHECK(amg.solver.petsc_options == kBoomerAmgVolumeOptions);
@@ -187,7 +188,6 @@ TEST_CASE("BoomerAMG on a volume runs with the options for 3D, the user's after 
   CHECK(amg.solution.iterative.iterations <= 25);
   CHECK(std::abs(amg.solution.errors->h1_semi - direct.solution.errors->h1_semi) <= 1e-8 * direct.solution.errors->h1_semi);
   // The user's options follow (PETSc keeps the last value of an option given twice).
-  c.solver.preconditioner = kBoomerAmgName;
   c.solver.petsc_options = "-pc_hypre_boomeramg_coarsen_type Falgout -pc_hypre_boomeramg_agg_nl 0";
   const RunOutcome theirs = run_study(c, Ordering::kAuto, nullptr, {});
   CHECK(theirs.solver.petsc_options == std::string(kBoomerAmgVolumeOptions) + " " + c.solver.petsc_options);
