@@ -34,7 +34,8 @@ BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool
     BenchResult r;
     int code = 0;
     try {
-      r = bench_configuration(p, n, ordering, with_errors, floor, o.solver, o.tolerance, o.preconditioner, o.matrix);
+      r = bench_configuration(p, n, ordering, with_errors, floor, o.solver, o.tolerance, o.preconditioner, o.matrix,
+                              o.domain == "cube");
     } catch (const std::exception& e) {
       std::fprintf(stderr, "knotwork bench: p=%d n=%d failed: %s\n", p, n, e.what());
       code = 1;
@@ -61,14 +62,21 @@ BenchResult run_isolated(int p, int n, Ordering ordering, bool with_errors, bool
 int bench_command(const BenchOptions& o) {
   std::vector<std::pair<int, int>> configs;
   std::vector<std::string> specs = o.configs;
-  if (specs.empty())
+  const bool cube = o.domain == "cube";
+  if (specs.empty() && cube)
+    specs = o.quick ? std::vector<std::string>{"2:8", "2:16", "3:8", "4:8"}
+                    : std::vector<std::string>{"2:16", "2:32", "2:48", "3:24", "3:32", "4:16"};
+  else if (specs.empty())
     specs = o.quick ? std::vector<std::string>{"2:64", "2:128", "4:32", "4:64"}
                     : std::vector<std::string>{"2:128", "2:512", "2:1024", "4:64", "4:256", "4:512"};
+  // At most 2^26 cells, as a case file allows: 8192^2 on the square, 406^3 on the cube.
+  const int most = cube ? 406 : 4096;
   for (const auto& s : specs) {
     int p = 0, n = 0;
     char extra;
-    if (std::sscanf(s.c_str(), "%d:%d%c", &p, &n, &extra) != 2 || p < 1 || p > 10 || n < 1 || n > 4096)
-      throw InputError("--config: '" + s + "' is not DEGREE:ELEMENTS (degree 1..10, elements 1..4096), e.g. 2:512");
+    if (std::sscanf(s.c_str(), "%d:%d%c", &p, &n, &extra) != 2 || p < 1 || p > 10 || n < 1 || n > most)
+      throw InputError("--config: '" + s + "' is not DEGREE:ELEMENTS (degree 1..10, elements 1.." + std::to_string(most) +
+                       (cube ? " per direction on the cube" : "") + "), e.g. " + (cube ? "2:32" : "2:512"));
     configs.emplace_back(p, n);
   }
   const Ordering ordering = parse_ordering(o.ordering);
@@ -86,16 +94,17 @@ int bench_command(const BenchOptions& o) {
   // The BLAS kernel belongs with the figures: on generic kernels the same CPU factorized 2-2.5x slower.
   const std::string kernel = blas_kernel();
   const std::string kernel_text = kernel.empty() ? "not OpenBLAS" : "OpenBLAS kernel " + kernel;
+  const char* problem = cube ? "unit cube, u = sin(pi x) sin(pi y) sin(pi z)" : "unit square, u = sin(pi x) sin(pi y)";
   if (!o.json && cg)
-    std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, %s, CG + %s "
+    std::printf("knotwork bench: %s, %u hardware threads, %s, CG + %s "
                 "to backward error %.0e\n%3s %6s %9s %10s %6s %8s %8s %8s %8s %7s %8s %9s\n",
-                std::thread::hardware_concurrency(), kernel_text.c_str(),
+                problem, std::thread::hardware_concurrency(), kernel_text.c_str(),
                 o.preconditioner == "auto" ? "the space's preconditioner" : o.preconditioner.c_str(), o.tolerance, "p", "n", "dofs", "nnz(A)", "iters", "setup", "assemb",
                 "precond", "CG", "errors", "total", "peak RSS");
   else if (!o.json)
-    std::printf("knotwork bench: unit square, u = sin(pi x) sin(pi y), %u hardware threads, %s, ordering %s\n"
+    std::printf("knotwork bench: %s, %u hardware threads, %s, ordering %s\n"
                 "%3s %6s %9s %10s %11s %8s %8s %8s %8s %7s %7s %8s %9s %9s%s\n",
-                std::thread::hardware_concurrency(), kernel_text.c_str(), o.ordering.c_str(), "p", "n", "dofs", "nnz(A)", "nnz(L)",
+                problem, std::thread::hardware_concurrency(), kernel_text.c_str(), o.ordering.c_str(), "p", "n", "dofs", "nnz(A)", "nnz(L)",
                 "setup", "assemb", "analyze", "factor", "solve", "errors", "total", "CHOLMOD", "peak RSS", o.floor ? "    floor" : "");
   for (const auto& [p, n] : configs) {
     const BenchResult r = run_isolated(p, n, ordering, o.with_errors, o.floor, o);
@@ -147,7 +156,7 @@ int bench_command(const BenchOptions& o) {
       arr.push(j);
     }
     Json root = Json::object();
-    root.set("ordering", o.ordering).set("threads", static_cast<int>(std::thread::hardware_concurrency()))
+    root.set("domain", o.domain).set("ordering", o.ordering).set("threads", static_cast<int>(std::thread::hardware_concurrency()))
         .set("blas_kernel", kernel)
         .set("results", arr);
     std::printf("%s\n", root.dump().c_str());

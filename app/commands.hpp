@@ -48,7 +48,8 @@ struct AdaptOptions : CommonOptions {
 };
 
 struct BenchOptions {
-  std::vector<std::string> configs;  // "P:N" (degree P, N x N elements)
+  std::vector<std::string> configs;  // "P:N" (degree P, N x N elements; N^3 on the cube)
+  std::string domain = "square";     // square (u = sin sin) | cube (u = sin sin sin)
   bool quick = false;
   bool json = false;
   std::string ordering = "auto";

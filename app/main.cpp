@@ -184,10 +184,15 @@ int main(int argc, char** argv) {
   add_common(adapt_cmd, adapt);
 
   knotwork::BenchOptions bench;
-  CLI::App* bench_cmd = app.add_subcommand("bench", "Benchmark setup, assembly, CHOLMOD and error norms (unit square, sin*sin)");
+  CLI::App* bench_cmd = app.add_subcommand(
+      "bench", "Benchmark setup, assembly, the solve and error norms (unit square, sin*sin; or unit cube, sin*sin*sin)");
   bench_cmd->add_option("--config", bench.configs,
-                        "DEGREE:ELEMENTS, repeatable (default 2:128 2:512 2:1024 4:64 4:256 4:512)");
-  bench_cmd->add_flag("--quick", bench.quick, "Small configurations only (2:64 2:128 4:32 4:64)");
+                        "DEGREE:ELEMENTS, repeatable (default 2:128 2:512 2:1024 4:64 4:256 4:512; on the cube "
+                        "2:16 2:32 2:48 3:24 3:32 4:16, ELEMENTS per direction)");
+  bench_cmd->add_flag("--quick", bench.quick, "Small configurations only (2:64 2:128 4:32 4:64; on the cube 2:8 2:16 3:8 4:8)");
+  bench_cmd->add_option("--domain", bench.domain, "square (the unit square) or cube (the unit cube, hexahedra)")
+      ->check(CLI::IsMember({"square", "cube"}))
+      ->capture_default_str();
   bench_cmd->add_option("--ordering", bench.ordering, "auto (amd on planar domains and surfaces, metis on volumes), amd, metis, nesdis, or default (CHOLMOD's own choice)")->capture_default_str();
   bench_cmd->add_flag("--json", bench.json, "Print JSON instead of the table");
   bench_cmd->add_option("--solver", bench.solver, "direct (CHOLMOD) or iterative (CG with the space's preconditioner)")

@@ -131,13 +131,13 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     if (options.progress) options.progress(s);
   };
   if (problem.reaction < 0) throw std::invalid_argument("reaction must be >= 0");
-  // A volume (hexahedral cells) is solved serially with the assembled matrix, for now
-  // (docs/VOLUMES.md); the paths below that are written for quadrilaterals refuse it.
+  // A volume (hexahedral cells) is solved with an assembled matrix, for now (docs/VOLUMES.md):
+  // the operators applied without one are written for quadrilaterals.
   const bool volume = geometry.parametric_dimension() == 3;
   if (volume != (mesh.num_cells() > 0 && mesh.cell(0).dimension == 3))
     throw std::invalid_argument("the geometry's parametric dimension is not the mesh's cells'");
-  if (volume && (distribution || options.matrix_free))
-    throw std::invalid_argument("volumes are solved serially with an assembled matrix, for now: docs/VOLUMES.md");
+  if (volume && options.matrix_free)
+    throw std::invalid_argument("volumes are solved with an assembled matrix, for now: docs/VOLUMES.md");
   // A gradient given by the caller (a Python exact solution) has as many components as it was given.
   if (problem.exact && problem.exact->on_surface() != (geometry.dimension() == 3))
     throw InputError(problem.exact->u.where() + ": the exact solution's gradient has " +

@@ -8,10 +8,11 @@
 
 namespace knotwork {
 
-// The benchmark problem: unit square, u = sin(pi x) sin(pi y), homogeneous Dirichlet.
+// The benchmark problem: unit square, u = sin(pi x) sin(pi y), or the unit cube, u = sin(pi x)
+// sin(pi y) sin(pi z); homogeneous Dirichlet.
 BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_errors, bool floor, const std::string& solver,
-                                double tolerance, const std::string& preconditioner, const std::string& matrix) {
-  CaseDescription c = unit_square_benchmark_case(p, n);
+                                double tolerance, const std::string& preconditioner, const std::string& matrix, bool cube) {
+  CaseDescription c = cube ? unit_cube_benchmark_case(p, n) : unit_square_benchmark_case(p, n);
   const auto t0 = std::chrono::steady_clock::now();
   const std::unique_ptr<SplineSpace> d = build_space(c);
   const double t_space = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -1,6 +1,7 @@
 #pragma once
 // The benchmark study: one configuration of `knotwork bench` (the unit square,
-// u = sin(pi x) sin(pi y), degree p, n x n elements), timed phase by phase.
+// u = sin(pi x) sin(pi y), degree p, n x n elements; or the unit cube, u = sin(pi x) sin(pi y)
+// sin(pi z), n^3 hexahedra), timed phase by phase.
 #include <cmath>
 #include <string>
 
@@ -29,6 +30,6 @@ struct BenchResult {
 // (as [solver] preconditioner) and K as `matrix` says (as [solver] matrix).
 BenchResult bench_configuration(int p, int n, Ordering ordering, bool with_errors, bool floor, const std::string& solver,
                                 double tolerance, const std::string& preconditioner = "auto",
-                                const std::string& matrix = "auto");
+                                const std::string& matrix = "auto", bool cube = false);
 
 }  // namespace knotwork

@@ -14,12 +14,14 @@ namespace knotwork {
 std::unique_ptr<SplineSpace> build_space(const CaseDescription& c, int level, const ProgressFunction& progress) {
   const SpaceFamily& family = space_family(c);
   const ParallelWorld launched = launched_world();
+  std::unique_ptr<SplineSpace> space;
   if (launched.size > 1 && c.solver.method == "petsc" && family.build_part) {
-    std::unique_ptr<SplineSpace> part;
-    on_all_ranks([&] { part = family.build_part(c, level, launched.rank, launched.size, progress); });
-    return part;
+    on_all_ranks([&] { space = family.build_part(c, level, launched.rank, launched.size, progress); });
+    if (space->part()) return space;  // a part of the space: the family checked its share
+  } else {
+    space = family.build(c, level, progress);
   }
-  std::unique_ptr<SplineSpace> space = family.build(c, level, progress);
+  // The whole space on every process, which assembles its range of the cells.
   if (launched.size > 1 && c.solver.method == "petsc" && space->mesh().num_cells() < launched.size)
     throw InputError(c.path + ": [space]: the space has " + std::to_string(space->mesh().num_cells()) +
                      " cells, fewer than the " + std::to_string(launched.size) + " processes that share them: use at most " +
@@ -348,6 +350,12 @@ void rethrow_as_case_error(const CaseDescription& c) {
 CaseDescription unit_square_benchmark_case(int p, int n) {
   const std::string text = "[geometry]\ntype = \"rectangle\"\n[space]\ndegree = " + std::to_string(p) +
                            "\nelements = " + std::to_string(n) + "\n[problem]\nexact = \"sin(pi*x)*sin(pi*y)\"\n";
+  return load_case_text(text, "bench");
+}
+
+CaseDescription unit_cube_benchmark_case(int p, int n) {
+  const std::string text = "[geometry]\ntype = \"box\"\n[space]\ndegree = " + std::to_string(p) + "\nelements = " +
+                           std::to_string(n) + "\n[problem]\nexact = \"sin(pi*x)*sin(pi*y)*sin(pi*z)\"\n";
   return load_case_text(text, "bench");
 }
 

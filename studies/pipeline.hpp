@@ -57,5 +57,6 @@ void assemble_by_operator_where_possible(const CaseDescription& c, const SplineS
 
 // The benchmark problem: unit square, u = sin(pi x) sin(pi y), degree p, n x n elements.
 CaseDescription unit_square_benchmark_case(int p, int n);
+CaseDescription unit_cube_benchmark_case(int p, int n);
 
 }  // namespace knotwork

@@ -184,6 +184,24 @@ TEST_CASE("bench runs both solvers with and without the error norms", "[cli][ben
   REQUIRE(direct.err.find("--matrix: used with --solver iterative only") != std::string::npos);
 }
 
+TEST_CASE("bench on the unit cube: both solvers, the configurations' limit", "[cli][bench]") {
+  Sandbox box;
+  for (const char* solver : {"direct", "iterative"}) {
+    const Result r = box.run(std::string("bench --json --domain cube --config 2:6 --solver ") + solver);
+    INFO(solver << ": " << r.err);
+    REQUIRE(r.code == 0);
+    REQUIRE(r.out.find("\"domain\": \"cube\"") != std::string::npos);
+    REQUIRE(r.out.find("\"free_dofs\": 216") != std::string::npos);  // 6^3 interior functions of 8^3
+    if (std::string(solver) == "iterative")
+      REQUIRE(r.out.find("\"preconditioner\": \"fast_diagonalization\"") != std::string::npos);
+  }
+  const Result big = box.run("bench --domain cube --config 2:407");
+  REQUIRE(big.code != 0);
+  REQUIRE(big.err.find("elements 1..406 per direction on the cube") != std::string::npos);
+  const Result unknown = box.run("bench --domain sphere");
+  REQUIRE(unknown.code != 0);
+}
+
 TEST_CASE("every subcommand has --help", "[cli]") {
   Sandbox box;
   for (const char* c : {"--help", "run --help", "converge --help", "bench --help", "adapt --help", "basis --help",

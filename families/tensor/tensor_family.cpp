@@ -198,8 +198,9 @@ SpaceFamily tensor_family() {
   };
   f.build_part = [](const CaseDescription& c, int level, int rank, int ranks,
                     const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
-    if (c.is_volume())
-      throw InputError(c.path + ": a volume is solved on one process for now (docs/VOLUMES.md): run it without mpirun");
+    // A volume: every process builds the whole space and assembles its range of cells; PETSc
+    // holds each process's rows (docs/VOLUMES.md: parts of the space along w are to come).
+    if (c.is_volume()) return make_tensor_volume_space(c, refined_volume(c, level));
     TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
     if (c.multipatch()) {

@@ -101,8 +101,8 @@ def main():
         refusals = [
             (["--solver", "petsc", "--petsc-options", "-ksp_typo cg"], "-ksp_typo: not an option of PETSc"),
             (["--solver", "direct"], "under mpirun with 2 processes"),
-            # One row of cells cannot be split by rows between two processes.
-            (["--solver", "petsc", "--elements", "1"], "fewer than the 2 processes that share them by rows"),
+            # One cell (one row of cells) cannot be shared by two processes.
+            (["--solver", "petsc", "--elements", "1"], "fewer than the 2 processes that share them"),
         ]
         for extra, expected_text in refusals:
             done = subprocess.run([MPIRUN, "-n", "2", binary, "run", case, "-q", "--no-output"] + extra, env=env,
