@@ -55,6 +55,16 @@ double volume_iterative_bytes(double cells, double functions, const std::array<i
   return cells * per_cell * 4 + nnz * 12 * 3 + functions * 8 * 8;
 }
 
+double volume_structured_bytes(double functions, const std::array<int, 3>& degree, double preconditioner) {
+  double coupling = 0.5;
+  for (int p : degree) coupling *= 2 * p + 1;
+  // Measured (docs/PERFORMANCE.md, "Volumes"): the whole run's peak was 20-28 bytes per stored
+  // matrix entry with CG and the fast diagonalization, from 80 000 to 8.2M unknowns (p = 2, 3),
+  // the most at the smallest sizes, where the program's own 0.05-0.1 GB weighs; 30 per entry
+  // and 0.1 GB cover them.
+  return 1e8 + functions * coupling * 30 + preconditioner;
+}
+
 double iterative_bytes(double cells, double functions, int p, int q, double preconditioner, bool with_matrix) {
   const double per_cell = double(p + 1) * (q + 1);
   const double coupling = double(2 * p + 1) * (2 * q + 1) / 2;

@@ -21,6 +21,10 @@ double volume_galerkin_bytes(double cells, double functions, const std::array<in
 double volume_iterative_bytes(double cells, double functions, const std::array<int, 3>& degree,
                               const std::string& preconditioner, bool user_amg_options);
 
+// The same for CG with a structured preconditioner on a volume's assembled matrix (the fast
+// diagonalization), whose own storage is `preconditioner` bytes.
+double volume_structured_bytes(double functions, const std::array<int, 3>& degree, double preconditioner);
+
 // Memory of the iterative path (CG): the same cell lists and matrix as galerkin_bytes, no
 // factor, CG's vectors, and `preconditioner` bytes for the preconditioner's own storage
 // (preconditioner_bytes); with_matrix false: K applied without one ([solver] matrix).

@@ -723,7 +723,7 @@ TEST_CASE("The general form on a volume, A a symmetric 3x3 matrix of functions a
   CHECK_THROWS_WITH(annulus_errors(1, 2, problem), Catch::Contains("is not positive definite at ("));
 }
 
-TEST_CASE("What volumes do not take yet is refused with one line: PETSc parts, no matrix", "[volume]") {
+TEST_CASE("What volumes do not take yet is refused with one line: no matrix", "[volume]") {
   BezierMesh mesh;
   add_cube_cells(mesh, 1, 2);
   const VolumeGeometryMap map(mesh, unit_cube());
@@ -732,5 +732,5 @@ TEST_CASE("What volumes do not take yet is refused with one line: PETSc parts, n
   PoissonSolveOptions without_matrix;
   without_matrix.iterative = true;
   without_matrix.matrix_free = [] { return std::shared_ptr<const MatrixFreePoisson>(); };
-  CHECK_THROWS_WITH(solve_poisson(mesh, map, problem, without_matrix), Catch::Contains("serially with an assembled matrix"));
+  CHECK_THROWS_WITH(solve_poisson(mesh, map, problem, without_matrix), Catch::Contains("volumes are solved with an assembled matrix"));
 }

@@ -113,12 +113,11 @@ void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOpti
   double bytes = iterative ? volume_iterative_bytes(cells, functions, o.degree, preconditioner, !c.solver.petsc_options.empty())
                            : volume_galerkin_bytes(cells, functions, o.degree, metis);
   if (iterative && preconditioner == kFastDiagonalization) {
-    // The matrix and CG's vectors (counted as for Jacobi) and the preconditioner's own storage.
     std::array<double, 3> n;
     for (int k = 0; k < 3; ++k)
       n[k] = double(c.volume.bases[k].num_elements()) * o.elements_per_span[k] * (o.degree[k] - continuity_of(o, k)) +
              continuity_of(o, k) + 1;
-    bytes = volume_iterative_bytes(cells, functions, o.degree, "jacobi", false) + fast_diagonalization_3d_bytes(n);
+    bytes = volume_structured_bytes(functions, o.degree, fast_diagonalization_3d_bytes(n));
   }
   check_memory(c.path + ": [space] elements", bytes, what);
 }
