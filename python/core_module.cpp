@@ -415,22 +415,24 @@ struct Space {
 };
 
 // Solution, exact solution and gradient on an (n+1) x (n+1) grid of each cell's reference
-// square, in physical space: arrays [cell, j, i] with i along u, j along v.
+// square, in physical space: arrays [cell, j, i] with i along u, j along v; on a volume's
+// hexahedra the (n+1)^3 grid of each cell's cube, [cell, k, j, i] with k along w.
 py::dict sample(const CaseDescription& c, const SplineSpace& space, const PoissonSolution& s, int n) {
   const BezierMesh& mesh = space.mesh();
   const GeometryMap& geometry = space.geometry();
   if (n < 1 || n > 256) throw InputError("sample: n must be in [1, 256], got " + std::to_string(n));
-  // Its arrays are grids over quadrilaterals (cells x (n+1) x (n+1)), with triangles for plots.
-  if (geometry.parametric_dimension() == 3)
-    throw InputError("sample: a volume's hexahedra are not sampled into arrays yet (docs/VOLUMES.md); "
-                     "its .vtu output (solution.vtu, solution_sampled.vtu) has them");
-  const py::ssize_t cells = mesh.num_cells(), m = n + 1, dim = geometry.dimension();
-  if (double(cells) * m * m * (2 * dim + 3) > 2.5e8)
-    throw InputError("sample: " + std::to_string(cells) + " cells x " + std::to_string(m * m) +
+  const bool volume = geometry.parametric_dimension() == 3;
+  const py::ssize_t cells = mesh.num_cells(), m = n + 1, dim = geometry.dimension(), per_cell = volume ? m * m * m : m * m;
+  if (double(cells) * per_cell * (2 * dim + 3) > 2.5e8)
+    throw InputError("sample: " + std::to_string(cells) + " cells x " + std::to_string(per_cell) +
                      " points would need more than 2 GB; use a smaller n");
-  py::array_t<double> points({cells, m, m, dim}), values({cells, m, m}), gradient({cells, m, m, dim});
+  std::vector<py::ssize_t> grid{cells};
+  for (int d = 0; d < (volume ? 3 : 2); ++d) grid.push_back(m);
+  std::vector<py::ssize_t> vectors = grid;
+  vectors.push_back(dim);
+  py::array_t<double> points(vectors), values(grid), gradient(vectors);
   std::optional<py::array_t<double>> exact;
-  if (c.problem.exact) exact.emplace(std::vector<py::ssize_t>{cells, m, m});
+  if (c.problem.exact) exact.emplace(grid);
   double *px = points.mutable_data(), *pu = values.mutable_data(), *pg = gradient.mutable_data();
   double* pe = exact ? exact->mutable_data() : nullptr;
   {
@@ -440,24 +442,14 @@ py::dict sample(const CaseDescription& c, const SplineSpace& space, const Poisso
     CellSamples cs;
     for (int cell = 0; cell < cells; ++cell) {
       sample_cell(mesh, geometry, s.coefficients, cell, n, ev ? &*ev : nullptr, s.exact_mean, cs);
-      for (py::ssize_t k = 0; k < m * m; ++k) {
-        const py::ssize_t at_k = cell * m * m + k;
+      for (py::ssize_t k = 0; k < per_cell; ++k) {
+        const py::ssize_t at_k = cell * per_cell + k;
         pu[at_k] = cs.uh(k, 0);
         for (int d = 0; d < dim; ++d) px[at_k * dim + d] = cs.at.x(k, d), pg[at_k * dim + d] = cs.uh(k, 1 + d);
         if (pe) pe[at_k] = cs.exact[k];
       }
     }
   }
-  // Two triangles per little square, indices into the flattened points (for tripcolor).
-  py::array_t<long> triangles({cells * n * n * 2, py::ssize_t(3)});
-  long* t = triangles.mutable_data();
-  for (py::ssize_t cell = 0; cell < cells; ++cell)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const long a = cell * m * m + i + m * j, b = a + 1, d = a + m, e = d + 1;
-        *t++ = a, *t++ = b, *t++ = e;
-        *t++ = a, *t++ = e, *t++ = d;
-      }
   py::dict r;
   r["points"] = points;
   r["solution"] = values;
@@ -469,6 +461,20 @@ py::dict sample(const CaseDescription& c, const SplineSpace& space, const Poisso
     r["exact"] = py::none();
     r["error"] = py::none();
   }
+  if (volume) {  // no triangles for a plot: the sampled .vtu shows a volume
+    r["triangles"] = py::none();
+    return r;
+  }
+  // Two triangles per little square, indices into the flattened points (for tripcolor).
+  py::array_t<long> triangles({cells * n * n * 2, py::ssize_t(3)});
+  long* t = triangles.mutable_data();
+  for (py::ssize_t cell = 0; cell < cells; ++cell)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const long a = cell * m * m + i + m * j, b = a + 1, d = a + m, e = d + 1;
+        *t++ = a, *t++ = b, *t++ = e;
+        *t++ = a, *t++ = e, *t++ = d;
+      }
   r["triangles"] = triangles;
   return r;
 }
