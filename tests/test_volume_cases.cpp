@@ -6,6 +6,7 @@
 // every direction.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -224,4 +225,30 @@ TEST_CASE("The volume memory guard covers the measured CG runs without refusing 
     CHECK(estimate >= measured);
     CHECK(estimate <= 2 * measured);
   }
+}
+
+TEST_CASE("Extra knots on a volume: the cells they cut, the dimension, the patch test", "[volume]") {
+  // insert_knots_w = [0.1, 0.25] on the unit cube, degree 2, 2 elements per direction: the
+  // breakpoints along w become 0, 0.1, 0.25, 0.5, 1 (4 elements, 4 + 2 = 6 functions at C^1),
+  // so 4 x 4 x 6 functions and 2 x 2 x 4 cells; u = 1 + x - 2y + 3z (harmonic, in the space)
+  // is reproduced to the suite's rounding bound. A knot outside (0, 1) is refused.
+  const CaseDescription c = load_case_text(
+      "[geometry]\ntype = \"box\"\n[space]\ndegree = 2\nelements = 2\ninsert_knots_w = [0.1, 0.25]\n"
+      "[problem]\nexact = \"1 + x - 2*y + 3*z\"\n",
+      "graded.toml");
+  const auto space = build_space(c);
+  CHECK(space->mesh().num_functions() == 4 * 4 * 6);
+  REQUIRE(space->mesh().num_cells() == 16);
+  std::vector<double> w_breaks;
+  for (int e = 0; e < space->mesh().num_cells(); ++e) w_breaks.push_back(space->mesh().cell(e).w0);
+  std::sort(w_breaks.begin(), w_breaks.end());
+  w_breaks.erase(std::unique(w_breaks.begin(), w_breaks.end()), w_breaks.end());
+  CHECK(w_breaks == std::vector<double>{0, 0.1, 0.25, 0.5});
+  const rounding_test::Reproduction r = rounding_test::solve_reproducing(space->mesh(), space->geometry(), c.problem);
+  INFO("L2 " << r.errors.l2 << " (bound " << r.l2_bound() << ")");
+  CHECK(r.reproduced());
+  CHECK_THROWS_WITH(load_case_text("[geometry]\ntype = \"box\"\n[space]\ndegree = 2\nelements = 2\ninsert_knots_u = [1.5]\n"
+                                   "[problem]\nexact = \"x\"\n",
+                                   "outside.toml"),
+                    Catch::Contains("[space] insert_knots_u: knot 1.5 is not inside the parameter domain (0, 1)"));
 }

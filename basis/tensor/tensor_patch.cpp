@@ -303,7 +303,8 @@ TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const 
   for (int k = 0; k < 3; ++k) {
     if (o.elements_per_span[k] < 1) throw std::invalid_argument(std::string("elements in ") + names[k] + " must be >= 1");
     const int r = o.continuity[k] < 0 ? o.degree[k] - 1 : o.continuity[k];
-    DirectionPlan plan = plan_direction(volume.bases[k], o.degree[k], r, o.elements_per_span[k], o.rational, {}, names[k]);
+    DirectionPlan plan =
+        plan_direction(volume.bases[k], o.degree[k], r, o.elements_per_span[k], o.rational, o.extra_knots[k], names[k]);
     d.space[k] = std::move(plan.space);
     geometry[k] = std::move(plan.geometry);
   }

@@ -88,6 +88,7 @@ struct TensorVolumeOptions {
   std::array<int, 3> elements_per_span{1, 1, 1};
   std::array<int, 3> continuity{-1, -1, -1};
   bool rational = true;
+  std::array<std::vector<double>, 3> extra_knots;  // per direction, inserted with continuity r (as on a patch)
 };
 
 struct TensorVolumeDiscretization {

@@ -57,10 +57,21 @@ void read_tensor_volume_case(const CaseDocument& doc, CaseDescription& c) {
   read_volume_geometry(doc, c);
   const DocumentNode& s = r.table(doc.root, "space", true);
   std::vector<std::string> keys = tensor_space_keys();
+  keys.push_back("insert_knots_w");
   r.check_keys(s, "space", keys);
-  for (const char* key : {"insert_knots_u", "insert_knots_v"})
-    if (s.get(key)) r.fail(std::string("[space] ") + key, "not used on a volume (uniform elements per direction only, for now)");
   TensorVolumeOptions& o = c.section.emplace<VolumeSpaceSection>().space;
+  static const char* const insert_keys[3] = {"insert_knots_u", "insert_knots_v", "insert_knots_w"};
+  for (int d = 0; d < 3; ++d)
+    if (const DocumentNode* k = s.get(insert_keys[d])) {
+      const std::string field = std::string("[space] ") + insert_keys[d];
+      o.extra_knots[d] = r.numbers(*k, field);
+      const BSplineBasis1D& g = c.volume.bases[d];
+      if (o.extra_knots[d].size() > size_t(kMaxCaseCells)) r.fail(field, "too many knots");
+      for (double t : o.extra_knots[d])
+        if (!(t > g.domain_begin() && t < g.domain_end()))
+          r.fail(field, "knot " + shortest(t) + " is not inside the parameter domain (" + shortest(g.domain_begin()) + ", " +
+                            shortest(g.domain_end()) + ")");
+    }
   const auto triple = [&](const char* key, bool required) -> std::optional<std::vector<long>> {
     const DocumentNode* n = s.get(key);
     if (!n) {
@@ -76,7 +87,7 @@ void read_tensor_volume_case(const CaseDocument& doc, CaseDescription& c) {
   double cells = 1;
   for (int k = 0; k < 3; ++k) {
     if (elements[k] < 1) r.fail("[space] elements", "must be >= 1, got " + std::to_string(elements[k]));
-    cells *= double(elements[k]) * c.volume.bases[k].num_elements();
+    cells *= double(elements[k]) * c.volume.bases[k].num_elements() + double(o.extra_knots[k].size());
   }
   if (cells > double(kMaxCaseCells)) r.fail("[space] elements", "too many elements (more than 2^26 cells)");
   for (int k = 0; k < 3; ++k) o.degree[k] = static_cast<int>(degree[k]), o.elements_per_span[k] = static_cast<int>(elements[k]);

@@ -94,10 +94,13 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
 
 void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOptions& o) {
   double cells = 1, functions = 1;
+  std::array<double, 3> n;  // functions per direction
   for (int k = 0; k < 3; ++k) {
-    const double elements = double(c.volume.bases[k].num_elements()) * o.elements_per_span[k];
+    // An extra knot adds an element (or nothing, where it is a knot already: counted anyway).
+    const double elements = double(c.volume.bases[k].num_elements()) * o.elements_per_span[k] + double(o.extra_knots[k].size());
     cells *= elements;
-    functions *= elements * (o.degree[k] - continuity_of(o, k)) + continuity_of(o, k) + 1;
+    n[k] = elements * (o.degree[k] - continuity_of(o, k)) + continuity_of(o, k) + 1;
+    functions *= n[k];
   }
   // The path the solve takes (resolve_solver): "auto" is CG with the fast diagonalization from
   // kAutoIterativeFunctions functions, the direct solve below; "iterative" is CG with the named
@@ -113,10 +116,6 @@ void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOpti
   double bytes = iterative ? volume_iterative_bytes(cells, functions, o.degree, preconditioner, !c.solver.petsc_options.empty())
                            : volume_galerkin_bytes(cells, functions, o.degree, metis);
   if (iterative && preconditioner == kFastDiagonalization) {
-    std::array<double, 3> n;
-    for (int k = 0; k < 3; ++k)
-      n[k] = double(c.volume.bases[k].num_elements()) * o.elements_per_span[k] * (o.degree[k] - continuity_of(o, k)) +
-             continuity_of(o, k) + 1;
     bytes = volume_structured_bytes(functions, o.degree, fast_diagonalization_3d_bytes(n));
   }
   check_memory(c.path + ": [space] elements", bytes, what);
