@@ -19,7 +19,6 @@ namespace knotwork {
 
 namespace {
 
-const std::string kFastDiagonalization = "fast_diagonalization";
 const std::string kMultigrid = "multigrid";
 
 // Refuses discretizations that cannot fit in memory before allocating anything (a rank's part:

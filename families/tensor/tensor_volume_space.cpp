@@ -16,7 +16,6 @@ namespace knotwork {
 
 namespace {
 
-const std::string kFastDiagonalization = "fast_diagonalization";
 
 // The volume's stiffness coefficients c_dd = |x_e x x_f|^2 / det J (parameter derivatives) at
 // the midpoints of the space's elements, fitted for the fast diagonalization.

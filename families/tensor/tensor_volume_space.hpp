@@ -2,11 +2,16 @@
 // The tensor family on a volume ([geometry] type = "box" or "thick_quarter_annulus"):
 // trivariate B-splines or NURBS on hexahedra (docs/VOLUMES.md).
 #include <memory>
+#include <string>
 
 #include "basis/tensor/tensor_patch.hpp"
 #include "cases/spline_space.hpp"
 
 namespace knotwork {
+
+// The name [solver] preconditioner gives the tensor family's fast diagonalization, on patches
+// and on volumes.
+inline const std::string kFastDiagonalization = "fast_diagonalization";
 
 // Throws InputError naming [space] when the space cannot be built or would not fit in memory.
 std::unique_ptr<SplineSpace> make_tensor_volume_space(const CaseDescription& c, const TensorVolumeOptions& options);
