@@ -121,6 +121,34 @@ void tensor_bernstein_second(int p, int q, const Eigen::VectorXd& u, const Eigen
   }
 }
 
+void tensor_bernstein_second(int p, int q, int r, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                             const Eigen::VectorXd& w, Eigen::MatrixXd (&second)[6]) {
+  const Eigen::Index n = u.size();
+  const int nb = (p + 1) * (q + 1) * (r + 1);
+  for (Eigen::MatrixXd& m : second) m.resize(n, nb);
+  const int m = std::max({p, q, r}) + 1;
+  std::vector<double> lower(m), lower_d(m);
+  std::vector<double> b[3], d[3], dd[3];
+  for (int k = 0; k < 3; ++k) b[k].resize(m), d[k].resize(m), dd[k].resize(m);
+  const int degree[3] = {p, q, r};
+  const Eigen::VectorXd* at[3] = {&u, &v, &w};
+  for (Eigen::Index k = 0; k < n; ++k) {
+    for (int x = 0; x < 3; ++x)
+      bernstein_up_to_second(degree[x], (*at[x])[k], b[x].data(), d[x].data(), dd[x].data(), lower.data(), lower_d.data());
+    for (int c = 0; c <= r; ++c)
+      for (int e = 0; e <= q; ++e)
+        for (int a = 0; a <= p; ++a) {
+          const int f = a + (p + 1) * (e + (q + 1) * c);
+          second[0](k, f) = dd[0][a] * b[1][e] * b[2][c];
+          second[1](k, f) = d[0][a] * d[1][e] * b[2][c];
+          second[2](k, f) = d[0][a] * b[1][e] * d[2][c];
+          second[3](k, f) = b[0][a] * dd[1][e] * b[2][c];
+          second[4](k, f) = b[0][a] * d[1][e] * d[2][c];
+          second[5](k, f) = b[0][a] * b[1][e] * dd[2][c];
+        }
+  }
+}
+
 namespace {
 
 // nw = 0: a 2D table (r is then 0).

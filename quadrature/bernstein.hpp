@@ -22,6 +22,9 @@ void tensor_bernstein(int p, int q, int r, const Eigen::VectorXd& u, const Eigen
 // for the curvature of surfaces and the Hessian of maps.
 void tensor_bernstein_second(int p, int q, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                              Eigen::MatrixXd& d_uu, Eigen::MatrixXd& d_uv, Eigen::MatrixXd& d_vv);
+// Trivariate: second[0..5] = d_uu, d_uv, d_uw, d_vv, d_vw, d_ww (the residual estimator on hexahedra).
+void tensor_bernstein_second(int p, int q, int r, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                             const Eigen::VectorXd& w, Eigen::MatrixXd (&second)[6]);
 
 // Tabulated tensor-product Bernstein basis of bi-degree (p, q) at the tensor Gauss points of a
 // (nu x nv)-point rule on [0,1]^2, or of degrees (p, q, r) at those of a (nu x nv x nw) rule on

@@ -86,6 +86,7 @@ class PointCoefficients {
 
 ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
                                     const Eigen::VectorXd& coefficients, const PoissonProblem& problem) {
+  if (geometry.parametric_dimension() == 3) return volume_residual_indicators(mesh, geometry, coefficients, problem);
   if (geometry.dimension() != 2) throw std::invalid_argument("the residual estimator is written for planar domains, not surfaces");
   if (mesh.is_rational()) throw std::invalid_argument("the residual estimator needs a polynomial (non-rational) space");
   if (!mesh.has_interfaces())

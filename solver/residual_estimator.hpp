@@ -26,11 +26,15 @@ struct ErrorIndicators {
   double total() const { return eta_squared.sum(); }
 };
 
-// Needs a planar, polynomial BezierMesh with its cell interfaces (BezierMesh::interfaces, built
-// by the family: one patch or many, planar multi-patch meshes included) and a geometry with second derivatives;
-// throws std::invalid_argument otherwise.
+// Needs a planar or volume, polynomial BezierMesh with its cell interfaces (BezierMesh::interfaces,
+// built by the family: one patch or many, planar multi-patch meshes included; on hexahedra the
+// face pieces) and a geometry with second derivatives; throws std::invalid_argument otherwise.
+// On hexahedra, edges read faces: h_E is a face piece's diameter (residual_estimator_volume.cpp).
 ErrorIndicators residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
                                     const Eigen::VectorXd& coefficients, const PoissonProblem& problem);
+// The same on hexahedra (residual_indicators calls it for volumes).
+ErrorIndicators volume_residual_indicators(const BezierMesh& mesh, const GeometryMap& geometry,
+                                           const Eigen::VectorXd& coefficients, const PoissonProblem& problem);
 
 // How the loop chooses what to refine from the indicators eta^2 (of cells, or of functions).
 // - Doerfler (bulk): the fewest items, largest first, whose eta^2 add up to at least theta

@@ -64,6 +64,7 @@ void rational_cell_extraction(const BezierMesh& mesh, int c, Eigen::VectorXd& wb
 }
 
 std::vector<CellInterface> interfaces_from_parameter_boxes(const BezierMesh& mesh) {
+  if (mesh.num_cells() > 0 && mesh.cell(0).dimension == 3) return face_interfaces_from_parameter_boxes(mesh);
   struct End {
     double from, to;
     int cell;

@@ -35,6 +35,11 @@ struct BezierCell {
 // same curve as [b_from, b_to] of cell_b's side, point for point (b_from > b_to when the
 // two run opposite ways). Built once by the family, which knows its topology (multi-patch
 // and G1 meshes included); the residual estimator walks them.
+// Hexahedra meet on faces. A face's two reference coordinates (s, t) are the cell's own
+// except the normal one, in the order u, v, w (front/back: u, v; bottom/top: u, w; left/right:
+// v, w); the piece is [a_from, a_to] x [a_from_t, a_to_t] of cell_a's face, and its point of
+// relative position (alpha, beta) is the point (b_from + alpha (b_to - b_from), b_from_t +
+// beta (b_to_t - b_from_t)) of cell_b's face, with alpha and beta exchanged when `transposed`.
 struct CellInterface {
   int cell_a = -1;
   CellSide side_a = kSideBottom;
@@ -42,6 +47,8 @@ struct CellInterface {
   int cell_b = -1;
   CellSide side_b = kSideBottom;
   double b_from = 0, b_to = 1;
+  double a_from_t = 0, a_to_t = 1, b_from_t = 0, b_to_t = 1;  // hexahedra only
+  bool transposed = false;                                    // hexahedra only
 };
 
 // The contract between every spline construction and the solver: cell by cell, which
@@ -158,6 +165,9 @@ void rational_cell_extraction(const BezierMesh& mesh, int cell, Eigen::VectorXd&
 // The interfaces of a mesh whose cells tile one patch's parameter domain (tensor, knot-segment
 // and T-mesh spaces), from the cells' parameter boxes: a right side meets the left sides
 // that overlap it on the same line, a top side the bottom sides (hanging nodes included).
+// On hexahedra (a volume) the same for faces: a high face meets the low faces that overlap it
+// in the same plane, each piece their common rectangle (face_interfaces.cpp).
 std::vector<CellInterface> interfaces_from_parameter_boxes(const BezierMesh& mesh);
+std::vector<CellInterface> face_interfaces_from_parameter_boxes(const BezierMesh& mesh);
 
 }  // namespace knotwork

@@ -64,6 +64,12 @@ class GeometryMap {
                                   Eigen::MatrixXd& /*out*/) const {
     return false;
   }
+  // A volume's: columns (x_uu, x_uv, x_uw, x_vv, x_vw, x_ww, then y's, then z's). False when
+  // the map cannot give them.
+  virtual bool volume_second_derivatives(int /*cell*/, const Eigen::VectorXd& /*u*/, const Eigen::VectorXd& /*v*/,
+                                         const Eigen::VectorXd& /*w*/, Eigen::MatrixXd& /*out*/) const {
+    return false;
+  }
 };
 
 // x = (w x, w y) / w and its reference derivatives by the quotient rule, from homogeneous

@@ -40,19 +40,20 @@ void NurbsVolume::validate() const {
 }
 
 VolumePointDerivatives volume_point_derivatives(const NurbsVolume& volume, const std::array<double, 3>& at,
-                                                std::array<int, 3> span) {
+                                                std::array<int, 3> span, bool second) {
   int degree[3], n[3];
-  double table[3][2 * 16];  // values, then first derivatives, of at most degree 15
+  double table[3][3 * 16];  // values, first and second derivatives, of at most degree 15
   for (int d = 0; d < 3; ++d) {
     const BSplineBasis1D& b = volume.bases[d];
     degree[d] = b.degree();
     n[d] = b.num_functions();
     if (degree[d] > 15) throw std::invalid_argument("volume_point_derivatives: degree above 15");
     if (span[d] < 0) span[d] = b.find_span(at[d]);
-    b.evaluate_derivatives(span[d], at[d], 1, table[d]);
+    b.evaluate_derivatives(span[d], at[d], second ? 2 : 1, table[d]);
   }
   // Homogeneous (w x, w y, w z, w) and its derivatives, then the quotient rule.
   Eigen::Vector4d h = Eigen::Vector4d::Zero(), hd[3] = {h, h, h};
+  Eigen::Vector4d hdd[3][3] = {{h, h, h}, {h, h, h}, {h, h, h}};  // with `second`: d^2 / (d a d b), a <= b
   for (int c = 0; c <= degree[2]; ++c)
     for (int b = 0; b <= degree[1]; ++b)
       for (int a = 0; a <= degree[0]; ++a) {
@@ -66,11 +67,28 @@ VolumePointDerivatives volume_point_derivatives(const NurbsVolume& volume, const
         hd[0] += point * (du * nv * nw);
         hd[1] += point * (nu * dv * nw);
         hd[2] += point * (nu * nv * dw);
+        if (second) {
+          const double d2[3] = {table[0][2 * (degree[0] + 1) + a], table[1][2 * (degree[1] + 1) + b],
+                                table[2][2 * (degree[2] + 1) + c]};
+          hdd[0][0] += point * (d2[0] * nv * nw);
+          hdd[0][1] += point * (du * dv * nw);
+          hdd[0][2] += point * (du * nv * dw);
+          hdd[1][1] += point * (nu * d2[1] * nw);
+          hdd[1][2] += point * (nu * dv * dw);
+          hdd[2][2] += point * (nu * nv * d2[2]);
+        }
       }
   VolumePointDerivatives out;
   out.weight = h[3];
   out.x = h.head<3>() / h[3];
   for (int d = 0; d < 3; ++d) out.jacobian.col(d) = (hd[d].head<3>() - out.x * hd[d][3]) / h[3];
+  if (second)  // x = H / W: x_ab = (H_ab - x_a W_b - x_b W_a - x W_ab) / W
+    for (int a = 0; a < 3; ++a)
+      for (int b = a; b < 3; ++b) {
+        const Eigen::Vector3d x_ab = (hdd[a][b].head<3>() - out.jacobian.col(a) * hd[b][3] - out.jacobian.col(b) * hd[a][3] -
+                                      out.x * hdd[a][b][3]) / h[3];
+        for (int i = 0; i < 3; ++i) out.hessian[i](a, b) = out.hessian[i](b, a) = x_ab[i];
+      }
   return out;
 }
 
@@ -112,6 +130,23 @@ void VolumeGeometryMap::evaluate_volume(int cell, const Eigen::VectorXd& u, cons
       for (int j = 0; j < 3; ++j) out.jacobian(k, 3 * i + j) = p.jacobian(i, j) * size[j];  // d/d(reference)
     }
   }
+}
+
+bool VolumeGeometryMap::volume_second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                                  const Eigen::VectorXd& w, Eigen::MatrixXd& out) const {
+  const BezierCell& c = mesh_.cell(cell);
+  const double lo[3] = {c.u0, c.v0, c.w0}, size[3] = {c.u1 - c.u0, c.v1 - c.v0, c.w1 - c.w0};
+  out.resize(u.size(), 18);
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    const std::array<double, 3> at{lo[0] + size[0] * u[k], lo[1] + size[1] * v[k], lo[2] + size[2] * w[k]};
+    const VolumePointDerivatives p = volume_point_derivatives(volume_, at, span_of_cell_[cell], true);
+    for (int i = 0; i < 3; ++i) {
+      int column = 6 * i;
+      for (int a = 0; a < 3; ++a)
+        for (int b = a; b < 3; ++b) out(k, column++) = p.hessian[i](a, b) * size[a] * size[b];  // d^2/d(reference)^2
+    }
+  }
+  return true;
 }
 
 void VolumeGeometryMap::evaluate_volume_at_rule(int cell, int nu, int nv, int nw, GeometryAtPoints& out) const {

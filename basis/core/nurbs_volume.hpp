@@ -24,13 +24,15 @@ struct NurbsVolume {
 
 // The volume's point and its derivatives (columns x_u, x_v, x_w) at the parameters (u, v, w),
 // in the knot spans `span` (one per direction; -1: the span holding the parameter).
+// With `second`, also the Hessians: hessian[i](a, b) = d^2 x_i / (d a d b), a, b in (u, v, w).
 struct VolumePointDerivatives {
   Eigen::Vector3d x;
   Eigen::Matrix3d jacobian;
   double weight = 1;
+  std::array<Eigen::Matrix3d, 3> hessian;
 };
 VolumePointDerivatives volume_point_derivatives(const NurbsVolume& volume, const std::array<double, 3>& at,
-                                                std::array<int, 3> span = {-1, -1, -1});
+                                                std::array<int, 3> span = {-1, -1, -1}, bool second = false);
 
 // The volume as the geometry of a mesh of hexahedra in its parameter domain. Every cell must
 // lie inside one knot span of the volume in each direction: the constructor throws
@@ -47,6 +49,8 @@ class VolumeGeometryMap final : public GeometryMap {
   void evaluate_at_rule(int cell, int nu, int nv, GeometryAtPoints& out) const override;
   void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, GeometryAtPoints& out) const override;
   BezierGeometryCell bezier_cell(int cell) const override;
+  bool volume_second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                                 Eigen::MatrixXd& out) const override;
 
  private:
   const BezierMesh& mesh_;

@@ -52,6 +52,7 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
     check_tensor_volume_memory(c, options);
     try {
       d_ = build_tensor_volume(c.volume, options);
+      d_.mesh.set_interface_rule(&interfaces_from_parameter_boxes);  // for the estimator, built when it asks
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
     }
