@@ -57,8 +57,8 @@ int adapt_command(const AdaptOptions& o) {
                 rate_text(v.h1_rate).c_str());
   }
   if (steps.size() >= 4 && !std::isnan(steps.back().h1_semi))
-    std::printf("  H1 rate against dofs, least squares over the last %zu steps: %.2f (optimal: N^(-p/2))\n",
-                steps.size() - steps.size() / 2, fitted_h1_rate(steps, steps.size() / 2));
+    std::printf("  H1 rate against dofs, least squares over the last %zu steps: %.2f (optimal: N^(-p/%d))\n",
+                steps.size() - steps.size() / 2, fitted_h1_rate(steps, steps.size() / 2), c.is_volume() ? 3 : 2);
   std::printf("  (rate: of the H1-seminorm error against dofs, -log(e1/e0)/log(N1/N0))\n");
   for (const auto& p : outputs)
     if (p.find("adapt.") != std::string::npos) std::printf("  output   %s\n", p.c_str());

@@ -44,6 +44,7 @@ BoundaryLabels boundary_labels(const CaseDescription& c) {
     }
     for (int s = 1; s <= 6; ++s)
       if (l.resolve(std::to_string(s)).empty()) l.groups.emplace_back(std::to_string(s), std::vector<int>{s - 1});
+    if (!c.volume_removed_boxes.empty()) l.names.push_back("hole");  // id 6: the faces of the removed parts
     return l;
   }
   l.names = {"bottom", "right", "top", "left"};

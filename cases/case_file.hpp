@@ -67,6 +67,10 @@ struct CaseDescription {
   // and `geometry` is empty; a file's named boundaries (sides 1..6) in `volume_boundaries`.
   NurbsVolume volume;
   std::vector<NamedBoundary> volume_boundaries;
+  // Parts of the volume's parameter box that are not in the domain (type = "fichera": the
+  // octant), each (u0, u1, v0, v1, w0, w1) on knots of the volume; their faces are the
+  // boundary "hole". Only family "thb" removes cells (the others refuse such a geometry).
+  std::vector<std::array<double, 6>> volume_removed_boxes;
   bool is_volume() const { return volume.control_points.rows() > 0; }
   FamilySection section;                // the family's own settings
   bool allow_unverified_space = false;  // --allow-unverified-space: solve although the family's check failed

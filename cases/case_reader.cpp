@@ -288,7 +288,7 @@ DocumentNode parse_document_text(const std::string& text, const std::string& nam
 
 namespace {
 
-bool is_volume_type(const std::string& type) { return type == "box" || type == "thick_quarter_annulus"; }
+bool is_volume_type(const std::string& type) { return type == "box" || type == "thick_quarter_annulus" || type == "fichera"; }
 
 NurbsPatch read_nurbs(const CaseReader& r, const DocumentNode& g, const std::string& section) {
   r.check_keys(g, section, {"type", "degrees", "knots_u", "knots_v", "control_points", "weights", "file"});
@@ -353,7 +353,7 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
     try {
       if (geometry_file_dimension(path) == 3)
         throw InputError(path + ": is a volume, and [space] family = \"" + c.family +
-                         "\" works on planar patches; family = \"tensor\" solves on volumes (docs/VOLUMES.md)");
+                         "\" works on planar patches; families \"tensor\" and \"thb\" solve on volumes (docs/VOLUMES.md)");
       c.domain = read_geometry_file(path);
     } catch (const InputError& e) {
       throw InputError(c.path + ": [geometry] file: " + e.what());
@@ -402,11 +402,11 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
     c.geometry = read_nurbs(r, g, "geometry");
   } else if (is_volume_type(c.geometry_type)) {
     r.fail("[geometry] type", "'" + c.geometry_type + "' is a volume, and [space] family = \"" + c.family +
-                                  "\" works on planar patches; family = \"tensor\" solves on volumes (docs/VOLUMES.md)");
+                                  "\" works on planar patches; families \"tensor\" and \"thb\" solve on volumes (docs/VOLUMES.md)");
   } else {
     r.fail("[geometry] type", "unknown geometry '" + c.geometry_type + "' (" +
                                   closest_name(c.geometry_type, {"rectangle", "quarter_annulus", "lshape", "nurbs", "box",
-                                                                 "thick_quarter_annulus"}) + ")");
+                                                                 "thick_quarter_annulus", "fichera"}) + ")");
   }
 }
 
@@ -521,6 +521,10 @@ void read_volume_geometry(const CaseDocument& doc, CaseDescription& c) {
       check_length(corners(1, d) - corners(0, d), "[geometry] corners", "side length");
     }
     c.volume = box_volume(corners.row(0).transpose(), corners.row(1).transpose());
+  } else if (c.geometry_type == "fichera") {
+    r.check_keys(g, "geometry", {"type"});
+    c.volume = fichera_box_volume();
+    c.volume_removed_boxes = {kFicheraRemovedBox};
   } else {
     r.check_keys(g, "geometry", {"type", "inner_radius", "outer_radius", "height"});
     const auto value = [&](const char* key, double fallback) {

@@ -47,6 +47,15 @@ NurbsVolume box_volume(const Eigen::Vector3d& lower, const Eigen::Vector3d& uppe
   return v;
 }
 
+NurbsVolume fichera_box_volume() {
+  NurbsVolume v;
+  v.bases.fill(BSplineBasis1D(1, {0, 0, 0.5, 1, 1}));
+  v.control_points.resize(27, 3);
+  for (int k = 0; k < 27; ++k) v.control_points.row(k) << (k % 3) - 1.0, (k / 3 % 3) - 1.0, (k / 9) - 1.0;
+  v.weights.setOnes(27);
+  return v;
+}
+
 NurbsVolume thick_quarter_annulus_volume(double inner_radius, double outer_radius, double height) {
   const NurbsPatch ring = quarter_annulus_patch(inner_radius, outer_radius);
   NurbsVolume v;

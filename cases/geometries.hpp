@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 #include "basis/core/nurbs_patch.hpp"
 #include "basis/core/nurbs_volume.hpp"
 
@@ -25,6 +26,12 @@ NurbsPatch lshape_patch();
 
 // [x0,x1] x [y0,y1] x [z0,z1], trilinear; u along x, v along y, w along z.
 NurbsVolume box_volume(const Eigen::Vector3d& lower, const Eigen::Vector3d& upper);
+
+// The Fichera corner (-1,1)^3 less the octant [0,1]^3: the box (-1,1)^3, trilinear with a C0
+// knot at the middle of each direction (x, y, z = 0 at u, v, w = 1/2), and the octant's part
+// of the parameter box, [1/2, 1]^3, to remove from it (CaseDescription::volume_removed_boxes).
+NurbsVolume fichera_box_volume();
+constexpr std::array<double, 6> kFicheraRemovedBox{0.5, 1, 0.5, 1, 0.5, 1};
 
 // The quarter annulus above extruded along z to [0, height]: u radial (degree 1), v angular
 // (degree 2, the exact arc), w along z (degree 1).

@@ -79,6 +79,8 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
       mu << 0, 1, 0.5, 0.5;
       mv << 0.5, 0.5, 0, 1;
       GeometryAtPoints g;
+      // Hexahedra are halved in every direction (THB's octants): no direction to choose.
+      if (space->geometry().parametric_dimension() == 2)
       for (int m : marked) {
         space->geometry().evaluate(m, mu, mv, g);
         const double eu = (g.x.row(1) - g.x.row(0)).norm(), ev = (g.x.row(3) - g.x.row(2)).norm();

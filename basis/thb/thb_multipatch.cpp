@@ -87,9 +87,9 @@ int ThbMultiPatch::close_across_interfaces() {
           const int64_t n = elements_along(src, level, from.side);
           if (elements_along(dst, level, to.side) != n) break;  // build() names the mismatch
           // A copy: src and dst may be one patch (an interface between two of its sides).
-          const std::vector<std::pair<int64_t, int64_t>> cells(src.refined(level).begin(), src.refined(level).end());
+          const std::vector<ThbHierarchy::Key> cells(src.refined(level).begin(), src.refined(level).end());
           std::vector<ThbCell> halve;
-          for (const auto& [i, j] : cells) {
+          for (const auto& [i, j, k] : cells) {
             SidePosition s = side_position(src, level, from.side, i, j);
             if (s.depth >= band) continue;
             if (f.reversed) s.along = n - 1 - s.along;

@@ -55,6 +55,9 @@ namespace {
 void read_tensor_volume_case(const CaseDocument& doc, CaseDescription& c) {
   const CaseReader& r = doc.reader;
   read_volume_geometry(doc, c);
+  if (!c.volume_removed_boxes.empty())
+    r.fail("[geometry] type", "'" + c.geometry_type + "' removes part of the volume's cells, which family \"tensor\" cannot; "
+                              "family \"thb\" can (docs/VOLUMES.md)");
   const DocumentNode& s = r.table(doc.root, "space", true);
   std::vector<std::string> keys = tensor_space_keys();
   keys.push_back("insert_knots_w");
@@ -72,18 +75,32 @@ void read_tensor_volume_case(const CaseDocument& doc, CaseDescription& c) {
           r.fail(field, "knot " + shortest(t) + " is not inside the parameter domain (" + shortest(g.domain_begin()) + ", " +
                             shortest(g.domain_end()) + ")");
     }
-  const auto triple = [&](const char* key, bool required) -> std::optional<std::vector<long>> {
-    const DocumentNode* n = s.get(key);
-    if (!n) {
-      if (required) r.fail(std::string("[space] ") + key, "missing required key");
-      return std::nullopt;
+  read_volume_degree_elements(r, s, c, o);
+  if (const DocumentNode* n = s.get("continuity")) {
+    const std::vector<long> continuity = r.integers(*n, "[space] continuity", 3);
+    for (int k = 0; k < 3; ++k) {
+      if (continuity[k] < 0 || continuity[k] > o.degree[k] - 1)
+        r.fail("[space] continuity", "must be in [0, degree-1], got " + std::to_string(continuity[k]));
+      o.continuity[k] = static_cast<int>(continuity[k]);
     }
+  }
+  if (const DocumentNode* k = s.get("rational")) o.rational = r.boolean(*k, "[space] rational");
+  read_quadrature(r, s, c, 3);
+  read_patch_problem(doc, c);
+}
+
+}  // namespace
+
+void read_volume_degree_elements(const CaseReader& r, const DocumentNode& s, const CaseDescription& c, TensorVolumeOptions& o) {
+  const auto triple = [&](const char* key) {
+    const DocumentNode* n = s.get(key);
+    if (!n) r.fail(std::string("[space] ") + key, "missing required key");
     return r.integers(*n, std::string("[space] ") + key, 3);
   };
-  const std::vector<long> degree = *triple("degree", true);
+  const std::vector<long> degree = triple("degree");
   for (long d : degree)
     if (d < 1 || d > kMaxCaseDegree) r.fail("[space] degree", "must be in [1, 10], got " + std::to_string(d));
-  const std::vector<long> elements = *triple("elements", true);
+  const std::vector<long> elements = triple("elements");
   double cells = 1;
   for (int k = 0; k < 3; ++k) {
     if (elements[k] < 1) r.fail("[space] elements", "must be >= 1, got " + std::to_string(elements[k]));
@@ -91,18 +108,7 @@ void read_tensor_volume_case(const CaseDocument& doc, CaseDescription& c) {
   }
   if (cells > double(kMaxCaseCells)) r.fail("[space] elements", "too many elements (more than 2^26 cells)");
   for (int k = 0; k < 3; ++k) o.degree[k] = static_cast<int>(degree[k]), o.elements_per_span[k] = static_cast<int>(elements[k]);
-  if (const auto continuity = triple("continuity", false))
-    for (int k = 0; k < 3; ++k) {
-      if ((*continuity)[k] < 0 || (*continuity)[k] > o.degree[k] - 1)
-        r.fail("[space] continuity", "must be in [0, degree-1], got " + std::to_string((*continuity)[k]));
-      o.continuity[k] = static_cast<int>((*continuity)[k]);
-    }
-  if (const DocumentNode* k = s.get("rational")) o.rational = r.boolean(*k, "[space] rational");
-  read_quadrature(r, s, c, 3);
-  read_patch_problem(doc, c);
 }
-
-}  // namespace
 
 void override_volume_space(TensorVolumeOptions& s, int degree, int elements) {
   if (degree) {
@@ -171,9 +177,12 @@ void override_patch_space(TensorSpaceOptions& s, int degree, int elements, const
 }
 
 PatchBreaks patch_breaks(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level) {
-  const BSplineBasis1D& g = direction == 0 ? geometry.basis_u : geometry.basis_v;
-  const int deg = s.degree[direction];
-  const int per_span = s.elements_per_span[direction] << level;
+  return span_breaks(direction == 0 ? geometry.basis_u : geometry.basis_v, s.degree[direction],
+                     s.elements_per_span[direction], level);
+}
+
+PatchBreaks span_breaks(const BSplineBasis1D& g, int deg, int elements_per_span, int level) {
+  const int per_span = elements_per_span << level;
   const auto bp = g.breakpoints();
   const auto mult = g.multiplicities();
   PatchBreaks out;
@@ -190,6 +199,11 @@ PatchBreaks patch_breaks(const NurbsPatch& geometry, const TensorSpaceOptions& s
 
 DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level) {
   PatchBreaks b = patch_breaks(geometry, s, direction, level);
+  return DyadicKnots(s.degree[direction], std::move(b.breaks), std::move(b.interior_multiplicity));
+}
+
+DyadicKnots volume_dyadic_knots(const NurbsVolume& volume, const TensorVolumeOptions& s, int direction, int level) {
+  PatchBreaks b = span_breaks(volume.bases[direction], s.degree[direction], s.elements_per_span[direction], level);
   return DyadicKnots(s.degree[direction], std::move(b.breaks), std::move(b.interior_multiplicity));
 }
 
@@ -229,6 +243,18 @@ void check_dyadic_start_memory(const CaseDescription& c, const DyadicKnots& u, c
 }
 
 void check_refined_memory(const CaseDescription& c, double cells, const char* what) {
+  if (c.is_volume()) {
+    const std::array<int, 3>& degree = family_section<VolumeSpaceSection>(c).space.degree;
+    char text[120];
+    std::snprintf(text, sizeof text, "a refined space of %.3g %s hexahedra of degree %dx%dx%d", cells, what, degree[0],
+                  degree[1], degree[2]);
+    // About one function per cell, as on patches; the direct solve's fill as the tensor volume's (METIS).
+    check_memory(c.path + ": [adapt]",
+                 volume_galerkin_bytes(cells, cells + (degree[0] + 1) * (degree[1] + 1) * (degree[2] + 1), degree, true) +
+                     4096 * cells,
+                 text);
+    return;
+  }
   const auto [p, q] = patch_space(c).degree;
   char text[120];
   std::snprintf(text, sizeof text, "a refined space of %.3g %s cells of degree %dx%d", cells, what, p, q);

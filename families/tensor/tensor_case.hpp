@@ -15,6 +15,7 @@
 namespace knotwork {
 
 struct CaseDocument;
+class CaseReader;
 class DocumentNode;
 
 struct PatchSpaceSection : CaseSection {
@@ -43,6 +44,9 @@ void read_tensor_case(const CaseDocument& doc, CaseDescription& c);
 // --degree / --elements on a volume case: the same in every direction.
 void override_volume_space(TensorVolumeOptions& s, int degree, int elements);
 
+// A volume's [space] degree and elements (both required): one integer or a list [u, v, w].
+void read_volume_degree_elements(const CaseReader& r, const DocumentNode& s, const CaseDescription& c, TensorVolumeOptions& o);
+
 // [space] degree (required) and elements (required unless `elements_optional`).
 void read_patch_degree_elements(const CaseDocument& doc, TensorSpaceOptions& s, bool elements_optional);
 
@@ -60,6 +64,11 @@ struct PatchBreaks {
 PatchBreaks patch_breaks(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level);
 // The same as the level-0 knots of a dyadic family.
 DyadicKnots patch_dyadic_knots(const NurbsPatch& geometry, const TensorSpaceOptions& s, int direction, int level);
+// The breaks of one direction whose geometry knots are `g`, of degree `degree`, each span cut
+// into elements_per_span << level parts (patch_breaks's rule).
+PatchBreaks span_breaks(const BSplineBasis1D& g, int degree, int elements_per_span, int level);
+// The level-0 knots of a dyadic family on a volume, along `direction` (0, 1, 2).
+DyadicKnots volume_dyadic_knots(const NurbsVolume& volume, const TensorVolumeOptions& s, int direction, int level);
 
 // A one-patch family's mesh made ready: its interfaces from the cells' parameter boxes, and its
 // geometry (GeometryError becomes InputError naming [geometry]).

@@ -2,7 +2,8 @@
 // patch of a multipatch domain, glued C0: thb_multipatch_space), starting
 // from the tensor mesh of [space] degree and elements on the geometry's knot spans (its C0
 // lines kept), refined by halving marked cells in both directions; graded to stay
-// T-admissible of class [space] admissibility (2 by default, 0: no grading).
+// T-admissible of class [space] admissibility (2 by default, 0: no grading). On a volume the
+// same with hexahedra halved in all three directions (thb_volume_space).
 #include <cstdio>
 #include <memory>
 
@@ -10,6 +11,7 @@
 #include "families/tensor/tensor_case.hpp"
 #include "families/thb/thb_multipatch_space.hpp"
 #include "families/thb/thb_refine.hpp"
+#include "families/thb/thb_volume_space.hpp"
 #include "basis/thb/thb_hierarchy.hpp"
 #include "cases/case_reader.hpp"
 #include "cases/resource_limits.hpp"
@@ -33,6 +35,7 @@ const std::vector<std::string>& thb_space_keys() {
 }
 
 void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
+  if (is_volume_geometry(doc)) return read_thb_volume_case(doc, c, thb_space_keys());
   const CaseReader& r = doc.reader;
   const DocumentNode& s = read_dyadic_patch_start(doc, c, "thb", thb_space_keys(), "new knots are C^(d-1)", true);
   ThbSection& t = c.section.emplace<ThbSection>();
@@ -102,6 +105,7 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
 };
 
 std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
+  if (c.is_volume()) return make_thb_volume_space(c, level);
   const ThbSection& t = thb_section(c);
   if (c.multipatch()) return make_thb_multipatch_space(c, t.space, t.admissibility, level);
   DyadicKnots u = patch_dyadic_knots(c.geometry, t.space, 0, level), v = patch_dyadic_knots(c.geometry, t.space, 1, level);
@@ -119,9 +123,13 @@ SpaceFamily thb_family() {
   f.build = [](const CaseDescription& c, int level, const ProgressFunction&) { return build_thb(c, level); };
   f.local_refinement = true;
   f.override_options = [](CaseDescription& c, int degree, int elements) {
+    if (c.is_volume()) return override_thb_volume_space(c, degree, elements);
     override_patch_space(family_section<ThbSection>(c).space, degree, elements);
   };
-  f.check_converge = [](const CaseDescription& c, int levels) { check_uniform_levels(thb_section(c).space, levels); };
+  f.check_converge = [](const CaseDescription& c, int levels) {
+    if (c.is_volume()) return check_thb_volume_levels(c, levels);
+    check_uniform_levels(thb_section(c).space, levels);
+  };
   return f;
 }
 
