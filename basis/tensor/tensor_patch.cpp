@@ -294,7 +294,7 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
   return d;
 }
 
-TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const TensorVolumeOptions& o) {
+TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const TensorVolumeOptions& o, RowShare share) {
   volume.validate();
   static const char* const names[3] = {"u", "v", "w"};
   TensorVolumeDiscretization d;
@@ -310,7 +310,37 @@ TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const 
   }
   const long functions = long(d.space[0].num_functions()) * d.space[1].num_functions() * d.space[2].num_functions();
   if (functions > std::numeric_limits<int>::max()) throw std::invalid_argument("more than 2^31 functions");
-  d.mesh.set_num_functions(static_cast<int>(functions));
+  // The slabs of elements along w this mesh holds, [slab_from, slab_to), and its function
+  // slabs [function_from, function_to): the rows along v of a patch's parts, one direction up.
+  const std::vector<int> spans_w = d.space[2].element_spans();
+  const int nw = static_cast<int>(spans_w.size()), r = d.space[2].degree(), sw = d.space[2].num_functions();
+  const long layer = long(d.space[0].num_functions()) * d.space[1].num_functions();  // functions per slab
+  const long cells_per_slab = long(d.space[0].num_elements()) * d.space[1].num_elements();
+  int slab_from = 0, slab_to = nw, function_from = 0, function_to = sw;
+  if (share.ranks > 1) {
+    if (nw < share.ranks)
+      throw std::invalid_argument("the mesh has " + std::to_string(nw) + (nw == 1 ? " slab" : " slabs") + " of cells along w, fewer than the " +
+                                  std::to_string(share.ranks) + " processes that share them by slabs: use at most " +
+                                  std::to_string(nw) + " processes or more elements along w");
+    const int own_from = static_cast<int>(long(nw) * share.rank / share.ranks);
+    const int own_to = static_cast<int>(long(nw) * (share.rank + 1) / share.ranks);
+    const auto first_function = [&](int slab) { return slab == 0 ? 0 : spans_w[slab] - r; };
+    const int owned_from = first_function(own_from), owned_to = own_to == nw ? sw : first_function(own_to);
+    slab_from = own_from;
+    while (slab_from > 0 && spans_w[slab_from - 1] >= owned_from) --slab_from;
+    slab_to = own_to;
+    function_from = spans_w[slab_from] - r;
+    function_to = spans_w[slab_to - 1] + 1;
+    MeshPart part;
+    part.owned = CellRange{static_cast<int>((own_from - slab_from) * cells_per_slab), static_cast<int>((own_to - slab_from) * cells_per_slab)};
+    part.function_offset = static_cast<int>(layer * function_from);
+    part.first_owned_function = static_cast<int>(layer * owned_from);
+    part.last_owned_function = static_cast<int>(layer * owned_to);
+    part.global_functions = static_cast<int>(functions);
+    part.global_cells = static_cast<int>(cells_per_slab * nw);
+    d.part = part;
+  }
+  d.mesh.set_num_functions(static_cast<int>(layer * (function_to - function_from)));
   // The isoparametric space's weights: the volume's refined onto the geometry's bases (the
   // space's, since its degree is at least the volume's), one direction at a time. Equal weights
   // stay equal (the refinement is a partition of unity) and are left out: B-splines.
@@ -329,9 +359,11 @@ TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const 
       Eigen::Map<Eigen::MatrixXd>(along_v.col(k).data(), gu, gv) = slab * Eigen::MatrixXd(tv).transpose();
     }
     const Eigen::MatrixXd along_w = along_v * Eigen::MatrixXd(refinement_matrix(volume.bases[2], geometry[2])).transpose();
-    d.mesh.set_weights(Eigen::Map<const Eigen::VectorXd>(along_w.data(), static_cast<Eigen::Index>(gu) * gv * gw));
+    // A part keeps its function slabs' weights.
+    d.mesh.set_weights(Eigen::Map<const Eigen::VectorXd>(along_w.data(), static_cast<Eigen::Index>(gu) * gv * gw)
+                           .segment(layer * function_from, layer * (function_to - function_from)));
   }
-  add_tensor_cells(d.mesh, d.space, 0, static_cast<int>(d.space[2].element_spans().size()));
+  add_tensor_cells(d.mesh, d.space, slab_from, slab_to, static_cast<int>(layer * function_from));
   return d;
 }
 

@@ -93,13 +93,19 @@ struct TensorVolumeOptions {
 
 struct TensorVolumeDiscretization {
   BezierMesh mesh;                        // hexahedra, functions i + n_u j + n_u n_v k
-  std::array<BSplineBasis1D, 3> space;    // the univariate bases
+  std::array<BSplineBasis1D, 3> space;    // the univariate bases (of the whole space, also in a part)
   NurbsVolume volume;                     // the geometry as given, which the map evaluates
+  // A rank's part (a RowShare of several ranks): the mesh holds the slabs of elements along w
+  // that carry the rank's functions, numbered from part->function_offset; the rank owns the
+  // functions that start on its own slabs (as rows along v on a patch).
+  std::optional<MeshPart> part;
 };
 
 // The space's cells, and with `rational` its weights: the volume's refined onto the space's
 // knots (all equal for a polynomial volume: then it is the B-spline space). Throws
-// std::invalid_argument for impossible requests, naming the direction.
-TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const TensorVolumeOptions& options);
+// std::invalid_argument for impossible requests, naming the direction, and when there are fewer
+// slabs of elements along w than ranks sharing them.
+TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const TensorVolumeOptions& options,
+                                               RowShare share = {});
 
 }  // namespace knotwork

@@ -197,9 +197,8 @@ SpaceFamily tensor_family() {
   };
   f.build_part = [](const CaseDescription& c, int level, int rank, int ranks,
                     const ProgressFunction&) -> std::unique_ptr<SplineSpace> {
-    // A volume: every process builds the whole space and assembles its range of cells; PETSc
-    // holds each process's rows (docs/VOLUMES.md: parts of the space along w are to come).
-    if (c.is_volume()) return make_tensor_volume_space(c, refined_volume(c, level));
+    // A volume: each process its slabs of hexahedra along w, as rows along v on a patch.
+    if (c.is_volume()) return make_tensor_volume_space(c, refined_volume(c, level), RowShare{rank, ranks});
     TensorSpaceOptions s = patch_space(c);
     s.elements_per_span = {s.elements_per_span[0] << level, s.elements_per_span[1] << level};
     if (c.multipatch()) {

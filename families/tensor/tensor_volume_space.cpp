@@ -48,10 +48,10 @@ std::string describe(const TensorVolumeOptions& o, bool rational) {
 
 class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
  public:
-  TensorVolumeSpace(const CaseDescription& c, const TensorVolumeOptions& options) : options_(options) {
+  TensorVolumeSpace(const CaseDescription& c, const TensorVolumeOptions& options, RowShare share) : options_(options) {
     check_tensor_volume_memory(c, options);
     try {
-      d_ = build_tensor_volume(c.volume, options);
+      d_ = build_tensor_volume(c.volume, options, share);
       d_.mesh.set_interface_rule(&interfaces_from_parameter_boxes);  // for the estimator, built when it asks
     } catch (const std::invalid_argument& e) {
       throw InputError(c.path + ": [space]: " + e.what());
@@ -63,6 +63,7 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
     }
   }
   const SpaceReport& presentation() const override { return *this; }
+  const MeshPart* part() const override { return d_.part ? &*d_.part : nullptr; }
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
   std::vector<int> degree() const override { return as_list(options_.degree); }
@@ -121,8 +122,9 @@ void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOpti
   check_memory(c.path + ": [space] elements", bytes, what);
 }
 
-std::unique_ptr<SplineSpace> make_tensor_volume_space(const CaseDescription& c, const TensorVolumeOptions& options) {
-  return std::make_unique<TensorVolumeSpace>(c, options);
+std::unique_ptr<SplineSpace> make_tensor_volume_space(const CaseDescription& c, const TensorVolumeOptions& options,
+                                                     RowShare share) {
+  return std::make_unique<TensorVolumeSpace>(c, options, share);
 }
 
 }  // namespace knotwork

@@ -14,7 +14,10 @@ namespace knotwork {
 inline const std::string kFastDiagonalization = "fast_diagonalization";
 
 // Throws InputError naming [space] when the space cannot be built or would not fit in memory.
-std::unique_ptr<SplineSpace> make_tensor_volume_space(const CaseDescription& c, const TensorVolumeOptions& options);
+// With a RowShare of several ranks, that rank's part: the slabs of hexahedra along w it owns
+// and those below where its functions live (SplineSpace::part()).
+std::unique_ptr<SplineSpace> make_tensor_volume_space(const CaseDescription& c, const TensorVolumeOptions& options,
+                                                     RowShare share = {});
 
 // Refuses, before anything is allocated, a volume space and solve that would not fit in memory.
 void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOptions& options);

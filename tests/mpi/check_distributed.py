@@ -9,10 +9,11 @@ to 1e-10 (and for tensor cases, whose default is their own preconditioner, Boome
 options to 1e-6). Partition-dependent bugs (a cell on a rank boundary, a Dirichlet dof owned elsewhere)
 change the errors far beyond that.
 
-With --rows N (a tensor case with N rows of cells along v), each process must hold only its
-part of the space on 2 and 3 ranks: at most its ceil(N / ranks) rows and the q rows below them
-(q the degree along v) where the functions of its matrix rows also live, of every row's
-cells/N cells. With --patches (a multipatch case with at least 3 patches), each process must
+With --rows N (a tensor case with N rows of cells along v, or a volume with N slabs of cells
+along w), each process must hold only its part of the space on 2 and 3 ranks: at most its
+ceil(N / ranks) rows and the q rows below them (q the degree along v, or along w) where the
+functions of its matrix rows also live, of every row's cells/N cells. With --elements N, every
+run (serial and distributed) takes `--elements N`. With --patches (a multipatch case with at least 3 patches), each process must
 hold a part of whole patches and their halo: fewer cells than the whole space. Without either,
 the whole space (built on every rank).
 
@@ -21,7 +22,7 @@ that it made its matrix that way (`solver.assembly_method`): a patch with one af
 each process write its owned rows from the Kronecker form; where only some processes' rows are
 affine, none may.
 
-Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE [--rows N | --patches] [--assembly METHOD]
+Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE [--rows N | --patches] [--assembly METHOD] [--elements N]
 Everything runs on this machine (OpenMPI's shared-memory transport only) and stops by itself.
 """
 import json
@@ -69,6 +70,8 @@ def main():
     assembly = value_of("--assembly")
     env = mpi_environment()
     base = [binary, "run", case, "--json", "-q", "--no-output"]
+    if "--elements" in options:
+        base += ["--elements", value_of("--elements")]
     reference = run(base + ["--solver", "direct"], env)
     failures = []
     runs = [(n, "", 1e-6) for n in (1, 2, 3)] + [(n, MUMPS, 1e-10) for n in (2, 3)]
@@ -90,7 +93,7 @@ def main():
         held = got["largest_part_cells"]
         if rows is not None and ranks > 1:
             per_row = reference["cells"] // rows
-            limit = (-(-rows // ranks) + reference["degree"][1]) * per_row
+            limit = (-(-rows // ranks) + reference["degree"][-1]) * per_row
             if not (got["space_parts"] and held <= limit and held < reference["cells"]):
                 failures.append(f"{what}: a process held {held} of {reference['cells']} cells "
                                 f"(parts: {got['space_parts']}; at most {limit})")
