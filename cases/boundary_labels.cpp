@@ -32,6 +32,19 @@ BoundaryLabels boundary_labels(const CaseDescription& c) {
     }
     return l;
   }
+  if (c.multivolume()) {
+    // One id per exterior face (exterior_faces), named "P:F"; the file's labels name groups.
+    const MultiVolume& d = c.volume_domain;
+    const std::vector<PatchSideRef> exterior = exterior_faces(d);
+    l.names = exterior_face_names(d, exterior);
+    for (const NamedBoundary& b : d.boundaries) {
+      std::vector<int> ids;
+      for (const PatchSideRef& s : b.sides)
+        ids.push_back(static_cast<int>(std::find(exterior.begin(), exterior.end(), s) - exterior.begin()));
+      l.groups.emplace_back(b.name, ids);
+    }
+    return l;
+  }
   if (c.is_volume()) {
     // A volume's ids 0..5 are its sides u = 0, u = 1, v = 0, v = 1, w = 0, w = 1: named as a
     // patch's sides (left: u = 0, bottom: v = 0) and front/back along w, and "1".."6".

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "basis/core/multipatch.hpp"
+#include "basis/core/multivolume.hpp"
 #include "basis/core/nurbs_patch.hpp"
 #include "basis/core/nurbs_volume.hpp"
 #include "basis/tmesh/rectangular_partition.hpp"
@@ -71,6 +72,9 @@ struct CaseDescription {
   // octant), each (u0, u1, v0, v1, w0, w1) on knots of the volume; their faces are the
   // boundary "hole". Only family "thb" removes cells (the others refuse such a geometry).
   std::vector<std::array<double, 6>> volume_removed_boxes;
+  // A file of several volumes glued face to face (`volume` is then its first): family tensor.
+  MultiVolume volume_domain;
+  bool multivolume() const { return volume_domain.num_patches() > 1; }
   bool is_volume() const { return volume.control_points.rows() > 0; }
   FamilySection section;                // the family's own settings
   bool allow_unverified_space = false;  // --allow-unverified-space: solve although the family's check failed

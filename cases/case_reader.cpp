@@ -492,6 +492,7 @@ void read_volume_geometry(const CaseDocument& doc, CaseDescription& c) {
       VolumeFile v = read_volume_file(*path);
       c.volume = std::move(v.volume);
       c.volume_boundaries = std::move(v.boundaries);
+      c.volume_domain = std::move(v.domain);
     } catch (const InputError& e) {
       throw InputError(c.path + ": [geometry] file: " + e.what());
     }

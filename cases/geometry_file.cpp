@@ -39,6 +39,15 @@ int geometry_file_dimension(const std::string& path) {
 
 VolumeFile read_volume_file(const std::string& path) {
   VolumeFile v = is_gismo_file(path) ? read_gismo_volume(path) : read_geopdes_volume(path);
+  if (v.domain.num_patches() > 1) {
+    try {
+      check_multivolume(v.domain);
+    } catch (const GeometryError& e) {
+      const std::string m = e.what();
+      throw InputError(m.rfind(path, 0) == 0 ? m : path + ": " + m);
+    }
+    return v;
+  }
   try {
     v.volume.validate();
   } catch (const std::invalid_argument& e) {

@@ -6,19 +6,22 @@
 #include <string>
 
 #include "basis/core/multipatch.hpp"
+#include "basis/core/multivolume.hpp"
 #include "basis/core/nurbs_volume.hpp"
 
 namespace knotwork {
 
 MultiPatch read_geometry_file(const std::string& path);
 
-// A volume read from a file: one trivariate patch (several are refused for now: multipatch
-// volumes are to come, docs/VOLUMES.md), the file's label of it, and its named boundaries,
-// whose sides are faces 1..6 (u = 0, u = 1, v = 0, v = 1, w = 0, w = 1).
+// A volume read from a file: one trivariate patch, the file's label of it, and its named
+// boundaries, whose sides are faces 1..6 (u = 0, u = 1, v = 0, v = 1, w = 0, w = 1). A file of
+// several volumes fills `domain` (its volumes, interfaces and labels: multivolume.hpp) and
+// `volume` with the first.
 struct VolumeFile {
   NurbsVolume volume;
   std::string label, where;
   std::vector<NamedBoundary> boundaries;
+  MultiVolume domain;
 };
 
 // The parametric dimension of the file's domain, 2 or 3: GeoPDEs' ndim, or for G+Smo the

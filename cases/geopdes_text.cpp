@@ -236,14 +236,69 @@ int geopdes_text_dimension(const std::string& path) {
   return ndim == 3 ? 3 : 2;  // anything else is refused by the planar reader, naming ndim
 }
 
+namespace {
+
+// A file of several volumes: the patches, then per interface "patch face", "patch face" and
+// "flag ornt1 ornt2" (flag 1: the faces' first coordinates correspond, else the first to the
+// second; ornt1, ornt2: 1 when a's first, second coordinate runs as its counterpart, -1 when
+// against), the subdomains and the boundaries (faces 1..6).
+VolumeFile read_geopdes_volumes(LineReader& in, const std::vector<long>& header) {
+  const long np = header[2], ni = header.size() > 3 ? header[3] : 0, ns = header.size() > 4 ? header[4] : 0;
+  if (np > 100000) in.fail("the number of patches must be in [1, 100000], got " + std::to_string(np));
+  if (ni < 0 || ni > 6 * np) in.fail("the number of interfaces must be in [0, 6 x patches], got " + std::to_string(ni));
+  if (ns < 0 || ns > np) in.fail("the number of subdomains must be in [0, patches], got " + std::to_string(ns));
+  VolumeFile v;
+  MultiVolume& d = v.domain;
+  long total_points = 0;
+  for (long p = 1; p <= np; ++p) {
+    const std::string name = "patch " + std::to_string(p);
+    if (!in.done() && !starts_with_number(in.peek())) in.next(name);
+    FilePatch f = read_patch(in, name, 3, total_points);
+    NurbsVolume volume;
+    for (int k = 0; k < 3; ++k) volume.bases[k] = std::move(f.bases[k]);
+    volume.control_points = f.points;
+    volume.weights = std::move(f.weights);
+    d.patches.push_back(std::move(volume));
+    d.patch_labels.push_back(std::to_string(p));
+    d.patch_where.push_back(f.where);
+  }
+  for (long i = 1; i <= ni; ++i) {
+    const std::string name = "interface " + std::to_string(i);
+    in.next(name);
+    VolumeInterface f;
+    f.a = read_side(in, name + " (patch face)", np, 6);
+    f.b = read_side(in, name + " (patch face)", np, 6);
+    const auto o = in.integers(name + " (flag ornt1 ornt2)", 3, 3);
+    f.where = in.where();  // the orientation's line: what the geometry is checked against
+    for (long x : o)
+      if (x != 1 && x != -1 && x != 0) in.fail(name + " (flag ornt1 ornt2): each must be 1 or -1, got " + std::to_string(x));
+    f.same_order = o[0] == 1;
+    f.reverse_first = o[1] != 1;
+    f.reverse_second = o[2] != 1;
+    d.interfaces.push_back(f);
+  }
+  for (long s = 1; s <= ns; ++s) {
+    const std::string name = "subdomain " + std::to_string(s);
+    in.next(name);
+    for (long p : in.integers(name + " patches", 1, np))
+      if (p < 1 || p > np) in.fail(name + ": patch " + std::to_string(p) + " does not exist");
+  }
+  d.boundaries = read_boundaries(in, np, 6);
+  v.volume = d.patches.front();
+  v.where = d.patch_where.front();
+  return v;
+}
+
+}  // namespace
+
 VolumeFile read_geopdes_volume(const std::string& path) {
   LineReader in(path);
   const auto header = read_header(in);
   if (header[0] != 3) in.fail("ndim must be 3 (a volume), got " + std::to_string(header[0]));
   if (header[1] != 3) in.fail("rdim must be 3 (a volume in space), got " + std::to_string(header[1]));
   const long np = header.size() > 2 ? header[2] : 1;
-  if (np != 1)
-    in.fail("a volume of " + std::to_string(np) + " patches: knotwork solves on one volume patch for now (docs/VOLUMES.md)");
+  if (np > 1) return read_geopdes_volumes(in, header);
+  if (np != 1) in.fail("the number of patches must be at least 1, got " + std::to_string(np));
   if (header.size() > 3 && header[3] != 0) in.fail("interfaces on a volume of one patch (the header gives " + std::to_string(header[3]) + ")");
   const long ns = header.size() > 4 ? header[4] : 0;
   if (ns < 0 || ns > 1) in.fail("the number of subdomains must be 0 or 1 on one patch, got " + std::to_string(ns));

@@ -257,15 +257,116 @@ int gismo_xml_dimension(const std::string& path) {
   return 2;
 }
 
+namespace {
+
+// A MultiPatch of several volumes: every TensorBSpline3/TensorNurbs3, the <interfaces> rows of
+// 10 integers (patch face patch face, the direction map d0 d1 d2: direction k of the first
+// volume is direction d_k of the second, and the orientation flags o0 o1 o2: 1 when direction
+// k runs the same way on both), and the <boundary> lists of "patch face" pairs. Patches are
+// referred to by id, or by position when not every reference is an id.
+VolumeFile read_gismo_volumes(const XmlFile& f, const FileLayout& l) {
+  VolumeFile v;
+  MultiVolume& d = v.domain;
+  long total = 0;
+  for (long id : l.ids) {
+    const pugi::xml_node g = l.geometry.at(id);
+    const std::string type = g.attribute("type").value(), name = "Geometry id " + std::to_string(id);
+    if (!is_volume_type(g))
+      f.fail(g, name + " has type \"" + type + "\" where a volume (TensorBSpline3 or TensorNurbs3) is read" +
+                    (type == "TensorBSpline2" || type == "TensorNurbs2" ? ": a planar patch" : ""));
+    FileTensor t = read_tensor(f, g, name, 3);
+    NurbsVolume volume;
+    for (int k = 0; k < 3; ++k) volume.bases[k] = std::move(t.bases[k]);
+    volume.control_points = t.points;
+    volume.weights = std::move(t.weights);
+    total += volume.control_points.rows();
+    if (total > kMaxControlPoints) f.fail(g, "more than 2^24 control points in all");
+    d.patches.push_back(std::move(volume));
+    d.patch_labels.push_back(std::to_string(id));
+    d.patch_where.push_back(f.at(g));
+  }
+  const pugi::xml_node mp = l.multipatch;
+  std::vector<std::pair<pugi::xml_node, std::vector<long>>> interface_lists, boundary_lists;
+  if (mp) {
+    for (pugi::xml_node in : mp.children("interfaces")) {
+      interface_lists.emplace_back(in, f.integers(in, "interfaces"));
+      if (interface_lists.back().second.size() % 10 != 0)
+        f.fail(in, "interfaces: each row of a volume's must have 10 integers (patch face patch face, 3 of the direction "
+                   "map, 3 orientation flags), found " + std::to_string(interface_lists.back().second.size()) + " integers");
+    }
+    for (pugi::xml_node b : mp.children("boundary")) {
+      boundary_lists.emplace_back(b, f.integers(b, "boundary"));
+      if (boundary_lists.back().second.size() % 2 != 0)
+        f.fail(b, "boundary: expected \"patch face\" pairs, found an odd number of integers");
+    }
+  }
+  std::map<long, int> index_of_id;
+  for (size_t k = 0; k < l.ids.size(); ++k) index_of_id[l.ids[k]] = static_cast<int>(k);
+  bool by_id = true, by_position = true;
+  const auto note = [&](long patch) {
+    by_id = by_id && index_of_id.count(patch);
+    by_position = by_position && patch >= 0 && patch < static_cast<long>(l.ids.size());
+  };
+  for (const auto& [node, list] : interface_lists)
+    for (size_t k = 0; k < list.size(); k += 10) note(list[k]), note(list[k + 2]);
+  for (const auto& [node, list] : boundary_lists)
+    for (size_t k = 0; k < list.size(); k += 2) note(list[k]);
+  const auto resolve = [&](const pugi::xml_node& node, long patch, long face) {
+    if (!by_id && !by_position) f.fail(node, "patch " + std::to_string(patch) + " is neither a patch id nor a position in <patches>");
+    if (face < 1 || face > 6) f.fail(node, "side " + std::to_string(face) + " does not exist (a volume's sides are 1 to 6)");
+    return PatchSideRef{by_id ? index_of_id[patch] : static_cast<int>(patch), static_cast<int>(face)};
+  };
+  for (const auto& [in, list] : interface_lists)
+    for (size_t k = 0; k < list.size(); k += 10) {
+      VolumeInterface i;
+      i.a = resolve(in, list[k], list[k + 1]);
+      i.b = resolve(in, list[k + 2], list[k + 3]);
+      const std::string row = "interface " + std::to_string(k / 10 + 1);
+      i.where = f.at(in) + ": " + row;
+      const long* map = &list[k + 4];
+      const long* orientation = &list[k + 7];
+      for (int x = 0; x < 3; ++x) {
+        if (map[x] < 0 || map[x] > 2) f.fail(in, row + ": a direction map's entries are 0, 1 or 2, got " + std::to_string(map[x]));
+        if (orientation[x] != 0 && orientation[x] != 1)
+          f.fail(in, row + ": orientation flags must be 0 or 1, got " + std::to_string(orientation[x]));
+      }
+      // The faces' free directions, in the order u, v, w; the map must take a's to b's.
+      const int na = (i.a.side - 1) / 2, nb = (i.b.side - 1) / 2;
+      const int a1 = na == 0 ? 1 : 0, a2 = na == 2 ? 1 : 2, b1 = nb == 0 ? 1 : 0, b2 = nb == 2 ? 1 : 2;
+      if (map[na] != nb)
+        f.fail(in, row + ": the direction map takes the normal direction " + std::to_string(na) + " of the first face to " +
+                       std::to_string(map[na]) + ", not to the normal " + std::to_string(nb) + " of the second");
+      if (!((map[a1] == b1 && map[a2] == b2) || (map[a1] == b2 && map[a2] == b1)))
+        f.fail(in, row + ": the direction map does not take the first face's directions to the second's");
+      i.same_order = map[a1] == b1;
+      i.reverse_first = orientation[a1] == 0;
+      i.reverse_second = orientation[a2] == 0;
+      d.interfaces.push_back(i);
+    }
+  for (const auto& [b, list] : boundary_lists) {
+    NamedBoundary nb;
+    nb.name = b.attribute("name").value();
+    nb.where = f.at(b);
+    for (size_t k = 0; k < list.size(); k += 2) nb.sides.push_back(resolve(b, list[k], list[k + 1]));
+    if (nb.name.empty()) continue;
+    for (const NamedBoundary& other : d.boundaries)
+      if (other.name == nb.name) f.fail(b, "boundary \"" + nb.name + "\" is given twice");
+    d.boundaries.push_back(std::move(nb));
+  }
+  v.volume = d.patches.front();
+  v.where = d.patch_where.front();
+  return v;
+}
+
+}  // namespace
+
 VolumeFile read_gismo_volume(const std::string& path) {
   XmlFile f(path);
   const FileLayout l = read_layout(f, path);
   const pugi::xml_node mp = l.multipatch;
   if (mp && mp.attribute("parDim") && mp.attribute("parDim").as_int() != 3)
     f.fail(mp, std::string("MultiPatch parDim must be 3 (a volume), got ") + mp.attribute("parDim").value());
-  if (l.ids.size() != 1)
-    f.fail(mp ? mp : f.doc().child("xml"), "a volume of " + std::to_string(l.ids.size()) +
-                                              " patches: knotwork solves on one volume patch for now (docs/VOLUMES.md)");
+  if (l.ids.size() > 1) return read_gismo_volumes(f, l);
   const long id = l.ids.front();
   const pugi::xml_node g = l.geometry.at(id);
   const std::string type = g.attribute("type").value(), name = "Geometry id " + std::to_string(id);

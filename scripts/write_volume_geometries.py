@@ -15,6 +15,13 @@ ndim = rdim = 3) and G+Smo's XML (cases/geometries/NAME.xml, TensorBSpline3/Tens
   control points are the blossoms of F (polar forms) at the knots: exact, so a reader's numbering
   can be checked against F itself. The XML is a bare TensorBSpline3 (no MultiPatch).
 
+- fichera_7patches: the Fichera corner (-1,1)^3 less the octant [0,1]^3 as seven unit cubes,
+  trilinear, glued face to face. Three of them have their parameter directions permuted or
+  reversed against x, y, z, so that the interfaces exercise every kind of orientation the
+  formats carry (GeoPDEs' "flag ornt1 ornt2", G+Smo's direction map and orientation flags). The
+  interfaces are found here by matching the cubes' faces point for point; the faces that bound
+  the removed octant are labelled "reentrant", the others "outer".
+
 Usage: scripts/write_volume_geometries.py [OUTPUT_DIRECTORY]   (default cases/geometries)
 """
 import math
@@ -130,6 +137,151 @@ def write_gismo(path, v):
         f.write("</xml>\n")
 
 
+class Cube:
+    """The unit cube at `origin` (its lowest corner), parameter direction d along the physical
+    axis axis[d], increasing when sign[d] = 1 and decreasing when -1."""
+
+    def __init__(self, origin, axis, sign):
+        self.origin, self.axis, self.sign = origin, axis, sign
+
+    def point(self, t):
+        x = list(self.origin)
+        for d in range(3):
+            a = self.axis[d]
+            x[a] += t[d] if self.sign[d] == 1 else 1 - t[d]
+        return tuple(float(c) for c in x)
+
+    def volume(self):
+        cp = [[[self.point((i, j, k)) for i in (0, 1)] for j in (0, 1)] for k in (0, 1)]
+        w = [[[1.0, 1.0] for _ in (0, 1)] for _ in (0, 1)]
+        return Volume("", [1, 1, 1], [[0, 0, 1, 1]] * 3, cp, w, {})
+
+
+def face_frame(face):
+    """Face 1..6: its normal direction, its value (0 or 1), and its two free directions in the
+    order u, v, w."""
+    normal = (face - 1) // 2
+    free = [d for d in range(3) if d != normal]
+    return normal, (face - 1) % 2, free
+
+
+def face_point(cube, face, s, t):
+    normal, value, (first, second) = face_frame(face)
+    x = [0.0, 0.0, 0.0]
+    x[normal], x[first], x[second] = value, s, t
+    return cube.point(x)
+
+
+def match(a, fa, b, fb):
+    """How face fa of cube a is face fb of cube b: (same_order, reverse_first, reverse_second),
+    or None. The corners decide (the cubes are trilinear)."""
+    for same in (True, False):
+        for r1 in (False, True):
+            for r2 in (False, True):
+                def on_b(s, t):
+                    first, second = (1 - s if r1 else s), (1 - t if r2 else t)
+                    return (first, second) if same else (second, first)
+                if all(face_point(a, fa, s, t) == face_point(b, fb, *on_b(s, t)) for s in (0, 1) for t in (0, 1)):
+                    return same, r1, r2
+    return None
+
+
+def fichera_cubes():
+    cubes = []
+    for z in (-1, 0):
+        for y in (-1, 0):
+            for x in (-1, 0):
+                if (x, y, z) != (0, 0, 0):
+                    cubes.append(Cube((x, y, z), [0, 1, 2], [1, 1, 1]))
+    # Turned cubes: parameters permuted and reversed against x, y, z, each still a right-handed
+    # frame (det J > 0, which knotwork requires).
+    cubes[1] = Cube(cubes[1].origin, [1, 0, 2], [1, -1, 1])    # u along y, v against x
+    cubes[4] = Cube(cubes[4].origin, [2, 1, 0], [-1, 1, 1])    # u against z, w along x
+    cubes[6] = Cube(cubes[6].origin, [1, 2, 0], [1, -1, -1])   # u along y, v against z, w against x
+    interfaces, boundary = [], {"reentrant": [], "outer": []}
+    for p, a in enumerate(cubes):
+        for fa in range(1, 7):
+            glued = False
+            for q, b in enumerate(cubes):
+                if q == p:
+                    continue
+                for fb in range(1, 7):
+                    m = match(a, fa, b, fb)
+                    if m:
+                        glued = True
+                        if p < q:
+                            interfaces.append((p, fa, q, fb, m))
+            if not glued:
+                centre = face_point(a, fa, 0.5, 0.5)
+                on_octant = sum(1 for c in centre if c == 0) == 1 and all(c >= 0 for c in centre)
+                boundary["reentrant" if on_octant else "outer"].append((p, fa))
+    return cubes, interfaces, boundary
+
+
+def gismo_direction_map(a, fa, b, fb, m):
+    """G+Smo's direction map and orientation flags of an interface: direction k of cube a goes
+    to direction map[k] of cube b, running the same way when flag[k] = 1."""
+    direction = [0, 0, 0]
+    flags = [1, 1, 1]
+    for k in range(3):
+        axis = a.axis[k]
+        direction[k] = b.axis.index(axis)
+        flags[k] = 1 if a.sign[k] == b.sign[direction[k]] else 0
+    return direction, flags
+
+
+def write_fichera(out):
+    cubes, interfaces, boundary = fichera_cubes()
+    title = "the Fichera corner (-1,1)^3 less the octant [0,1]^3 as seven unit cubes, three of them turned"
+    path = os.path.join(out, "fichera_7patches.txt")
+    with open(path, "w") as f:
+        f.write("# %s\n# nurbs geometry v.2.1, written by knotwork's scripts/write_volume_geometries.py\n" % title)
+        f.write("3 3 %d %d 0\n" % (len(cubes), len(interfaces)))
+        for n, c in enumerate(cubes):
+            v = c.volume()
+            f.write("PATCH %d\n1 1 1\n2 2 2\n" % (n + 1))
+            for k in v.knots:
+                f.write(" ".join(number(t) for t in k) + "\n")
+            points = v.flat()
+            for d in range(3):
+                f.write(" ".join(number(w * x[d]) for x, w in points) + "\n")
+            f.write(" ".join(number(w) for _, w in points) + "\n")
+        for n, (p, fa, q, fb, (same, r1, r2)) in enumerate(interfaces):
+            f.write("INTERFACE %d\n%d %d\n%d %d\n%d %d %d\n" % (n + 1, p + 1, fa, q + 1, fb, 1 if same else -1,
+                                                               -1 if r1 else 1, -1 if r2 else 1))
+        for name in ("reentrant", "outer"):
+            f.write("BOUNDARY %s\n%d\n" % (name, len(boundary[name])))
+            for p, face in boundary[name]:
+                f.write("%d %d\n" % (p + 1, face))
+    path = os.path.join(out, "fichera_7patches.xml")
+    with open(path, "w") as f:
+        f.write('<?xml version="1.0" encoding="UTF-8"?>\n<!-- %s; written by knotwork\'s '
+                'scripts/write_volume_geometries.py -->\n<xml>\n' % title)
+        for n, c in enumerate(cubes):
+            v = c.volume()
+            f.write(' <Geometry type="TensorBSpline3" id="%d">\n  <Basis type="TensorBSplineBasis3">\n' % n)
+            for index in range(3):
+                f.write('   <Basis type="BSplineBasis" index="%d">\n    <KnotVector degree="1">0 0 1 1</KnotVector>\n'
+                        '   </Basis>\n' % index)
+            f.write('  </Basis>\n  <coefs geoDim="3">\n')
+            for x, _ in v.flat():
+                f.write("%s %s %s\n" % tuple(number(c) for c in x))
+            f.write("  </coefs>\n </Geometry>\n")
+        f.write(' <MultiPatch parDim="3" id="100">\n  <patches type="id_range">0 %d</patches>\n  <interfaces>\n' % (len(cubes) - 1))
+        for p, fa, q, fb, m in interfaces:
+            direction, flags = gismo_direction_map(cubes[p], fa, cubes[q], fb, m)
+            f.write("   %d %d %d %d %s %s\n" % (p, fa, q, fb, " ".join(map(str, direction)), " ".join(map(str, flags))))
+        f.write("  </interfaces>\n")
+        for name in ("reentrant", "outer"):
+            f.write('  <boundary name="%s">\n' % name)
+            for p, face in boundary[name]:
+                f.write("   %d %d\n" % (p, face))
+            f.write("  </boundary>\n")
+        f.write(" </MultiPatch>\n</xml>\n")
+    print("fichera_7patches: %d cubes, %d interfaces, %d re-entrant and %d outer faces" %
+          (len(cubes), len(interfaces), len(boundary["reentrant"]), len(boundary["outer"])))
+
+
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "cases", "geometries")
     os.makedirs(out, exist_ok=True)
@@ -138,6 +290,7 @@ def main():
         write_geopdes(os.path.join(out, name + ".txt"), v)
         write_gismo(os.path.join(out, name + ".xml"), v)
         print("%s: degrees %s, %s control points, labels %s" % (name, v.p, v.counts(), sorted(v.labels)))
+    write_fichera(out)
 
 
 if __name__ == "__main__":

@@ -146,11 +146,10 @@ TEST_CASE("Volume files: what is refused, in one line", "[volume][files]") {
       CHECK(std::string(e.what()).find(what) != std::string::npos);
     }
   };
-  // A side beyond the six faces; two patches; a planar patch where a volume is read.
+  // A side beyond the six faces; a second patch announced and missing; a planar patch where a volume is read.
   refused(write("side.txt", "3 3 1\nPATCH 1\n1 1 1\n" + cube + "BOUNDARY walls\n1\n1 7\n"),
           "side.txt: line 14: boundary walls (patch side): side 7 does not exist (sides are 1 to 6)");
-  refused(write("two.txt", "3 3 2 1 0\nPATCH 1\n1 1 1\n" + cube),
-          "two.txt: line 1: a volume of 2 patches: knotwork solves on one volume patch for now");
+  refused(write("two.txt", "3 3 2 1 0\nPATCH 1\n1 1 1\n" + cube), "two.txt: the file ends where patch 2 degrees should be");
   refused(write("planar.txt", "3 3 1\nPATCH 1\n1 1\n2 2\n"), "planar.txt: line 3: patch 1 degrees: expected 3 integers, found 2");
   refused(write("planar.xml", "<xml>\n<Geometry type=\"TensorBSpline2\" id=\"0\"/>\n<MultiPatch parDim=\"3\">"
                               "<patches type=\"id_range\">0 0</patches></MultiPatch>\n</xml>\n"),

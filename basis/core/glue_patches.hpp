@@ -9,6 +9,7 @@
 
 #include "basis/core/bezier_mesh.hpp"
 #include "basis/core/multipatch.hpp"
+#include "basis/core/multivolume.hpp"
 
 namespace knotwork {
 
@@ -25,5 +26,12 @@ struct GluedPatches {
 // Throws GeometryError naming the interface (its `where`) when the two sides are cut
 // differently, their degrees differ, a trace has no partner, or partners' weights differ.
 GluedPatches glue_patches(const MultiPatch& domain, const std::vector<const BezierMesh*>& patches);
+
+// The same for volumes glued face to face (`patches[k]` hexahedra on domain.patches[k], boundary
+// ids 0..5 on its faces 1..6): a face's cells are pieces of it, matched as rectangles in the
+// frame of the interface's first face, their traces the Bernstein coefficients on the face.
+// Boundary ids: exterior_faces(domain), named "P:F"; the interfaces across carry the faces'
+// orientation (CellInterface::transposed and reversed ranges).
+GluedPatches glue_volumes(const MultiVolume& domain, const std::vector<const BezierMesh*>& patches);
 
 }  // namespace knotwork

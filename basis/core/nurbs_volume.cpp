@@ -92,15 +92,22 @@ VolumePointDerivatives volume_point_derivatives(const NurbsVolume& volume, const
   return out;
 }
 
-VolumeGeometryMap::VolumeGeometryMap(const BezierMesh& mesh, NurbsVolume volume) : mesh_(mesh), volume_(std::move(volume)) {
-  volume_.validate();
+VolumeGeometryMap::VolumeGeometryMap(const BezierMesh& mesh, NurbsVolume volume)
+    : VolumeGeometryMap(mesh, std::vector<NurbsVolume>{std::move(volume)}) {}
+
+VolumeGeometryMap::VolumeGeometryMap(const BezierMesh& mesh, std::vector<NurbsVolume> volumes)
+    : mesh_(mesh), volumes_(std::move(volumes)) {
+  if (volumes_.empty()) throw std::logic_error("VolumeGeometryMap: no volume");
+  for (const NurbsVolume& v : volumes_) v.validate();
   span_of_cell_.resize(mesh.num_cells());
   for (int c = 0; c < mesh.num_cells(); ++c) {
     const BezierCell& cell = mesh.cell(c);
     if (cell.dimension != 3) throw std::logic_error("VolumeGeometryMap: the mesh's cells are not hexahedra");
+    if (volumes_.size() > 1 && (cell.patch < 0 || cell.patch >= static_cast<int>(volumes_.size())))
+      throw std::logic_error("VolumeGeometryMap: a cell of a volume that is not given");
     const double lo[3] = {cell.u0, cell.v0, cell.w0}, hi[3] = {cell.u1, cell.v1, cell.w1};
     for (int d = 0; d < 3; ++d) {
-      const BSplineBasis1D& b = volume_.bases[d];
+      const BSplineBasis1D& b = volume_of(c).bases[d];
       // The span of the cell's midpoint, so that a cell's faces use the cell's own polynomial.
       const int s = b.find_span(0.5 * (lo[d] + hi[d]));
       const auto& knots = b.knots();
@@ -124,7 +131,7 @@ void VolumeGeometryMap::evaluate_volume(int cell, const Eigen::VectorXd& u, cons
   out.jacobian.resize(n, 9);
   for (Eigen::Index k = 0; k < n; ++k) {
     const std::array<double, 3> at{lo[0] + size[0] * u[k], lo[1] + size[1] * v[k], lo[2] + size[2] * w[k]};
-    const VolumePointDerivatives p = volume_point_derivatives(volume_, at, span_of_cell_[cell]);
+    const VolumePointDerivatives p = volume_point_derivatives(volume_of(cell), at, span_of_cell_[cell]);
     for (int i = 0; i < 3; ++i) {
       out.x(k, i) = p.x[i];
       for (int j = 0; j < 3; ++j) out.jacobian(k, 3 * i + j) = p.jacobian(i, j) * size[j];  // d/d(reference)
@@ -139,7 +146,7 @@ bool VolumeGeometryMap::volume_second_derivatives(int cell, const Eigen::VectorX
   out.resize(u.size(), 18);
   for (Eigen::Index k = 0; k < u.size(); ++k) {
     const std::array<double, 3> at{lo[0] + size[0] * u[k], lo[1] + size[1] * v[k], lo[2] + size[2] * w[k]};
-    const VolumePointDerivatives p = volume_point_derivatives(volume_, at, span_of_cell_[cell], true);
+    const VolumePointDerivatives p = volume_point_derivatives(volume_of(cell), at, span_of_cell_[cell], true);
     for (int i = 0; i < 3; ++i) {
       int column = 6 * i;
       for (int a = 0; a < 3; ++a)
@@ -170,9 +177,10 @@ BezierGeometryCell VolumeGeometryMap::bezier_cell(int cell) const {
   // that degree gives its Bernstein coefficients exactly.
   const BezierCell& c = mesh_.cell(cell);
   BezierGeometryCell g;
-  g.degree_u = std::max<int>(c.degree_u, volume_.bases[0].degree());
-  g.degree_v = std::max<int>(c.degree_v, volume_.bases[1].degree());
-  g.degree_w = std::max<int>(c.degree_w, volume_.bases[2].degree());
+  const NurbsVolume& volume = volume_of(cell);
+  g.degree_u = std::max<int>(c.degree_u, volume.bases[0].degree());
+  g.degree_v = std::max<int>(c.degree_v, volume.bases[1].degree());
+  g.degree_w = std::max<int>(c.degree_w, volume.bases[2].degree());
   const int nu = g.degree_u + 1, nv = g.degree_v + 1, nw = g.degree_w + 1;
   Eigen::MatrixXd homogeneous(nu * nv * nw, 4);
   const double lo[3] = {c.u0, c.v0, c.w0}, size[3] = {c.u1 - c.u0, c.v1 - c.v0, c.w1 - c.w0};
@@ -181,7 +189,7 @@ BezierGeometryCell VolumeGeometryMap::bezier_cell(int cell) const {
       for (int i = 0; i < nu; ++i) {
         const std::array<double, 3> at{lo[0] + size[0] * i / g.degree_u, lo[1] + size[1] * j / g.degree_v,
                                        lo[2] + size[2] * k / g.degree_w};
-        const VolumePointDerivatives p = volume_point_derivatives(volume_, at, span_of_cell_[cell]);
+        const VolumePointDerivatives p = volume_point_derivatives(volume_of(cell), at, span_of_cell_[cell]);
         homogeneous.row(i + nu * (j + nv * k)) << p.weight * p.x.transpose(), p.weight;
       }
   const Eigen::MatrixXd coefficients = bernstein_interpolant(g.degree_u, g.degree_v, g.degree_w, homogeneous);

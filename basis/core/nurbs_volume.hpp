@@ -5,6 +5,7 @@
 // follow once volumes are assembled.
 #include <Eigen/Core>
 #include <array>
+#include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
 #include "basis/core/bspline_basis.hpp"
@@ -40,6 +41,8 @@ VolumePointDerivatives volume_point_derivatives(const NurbsVolume& volume, const
 class VolumeGeometryMap final : public GeometryMap {
  public:
   VolumeGeometryMap(const BezierMesh& mesh, NurbsVolume volume);
+  // Several volumes (a multipatch domain): cell c lies in volumes[cell(c).patch].
+  VolumeGeometryMap(const BezierMesh& mesh, std::vector<NurbsVolume> volumes);
   int dimension() const override { return 3; }
   int parametric_dimension() const override { return 3; }
   void evaluate_volume_at_rule(int cell, int nu, int nv, int nw, GeometryAtPoints& out) const override;
@@ -53,8 +56,10 @@ class VolumeGeometryMap final : public GeometryMap {
                                  Eigen::MatrixXd& out) const override;
 
  private:
+  const NurbsVolume& volume_of(int cell) const { return volumes_[volumes_.size() == 1 ? 0 : mesh_.cell(cell).patch]; }
+
   const BezierMesh& mesh_;
-  NurbsVolume volume_;
+  std::vector<NurbsVolume> volumes_;
   std::vector<std::array<int, 3>> span_of_cell_;
 };
 

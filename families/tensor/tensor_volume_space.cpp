@@ -8,8 +8,10 @@
 #include <stdexcept>
 
 #include "basis/core/input_error.hpp"
+#include "basis/core/glue_patches.hpp"
 #include "basis/core/nurbs_volume.hpp"
 #include "cases/resource_limits.hpp"
+#include "solver/amg_preconditioner.hpp"
 #include "solver/fast_diagonalization_3d.hpp"
 
 namespace knotwork {
@@ -93,7 +95,10 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
 
 }  // namespace
 
+void check_multivolume_memory(const CaseDescription& c, const TensorVolumeOptions& o);
+
 void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOptions& o) {
+  if (c.multivolume()) return check_multivolume_memory(c, o);
   double cells = 1, functions = 1;
   std::array<double, 3> n;  // functions per direction
   for (int k = 0; k < 3; ++k) {
@@ -122,8 +127,80 @@ void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOpti
   check_memory(c.path + ": [space] elements", bytes, what);
 }
 
+// The direct solve's (or CG with --solver iterative's) memory of all the volumes' cells, their
+// functions counted per volume (the shared ones twice: an upper bound).
+void check_multivolume_memory(const CaseDescription& c, const TensorVolumeOptions& o) {
+  double cells = 0, functions = 0;
+  for (const NurbsVolume& v : c.volume_domain.patches) {
+    double patch_cells = 1, patch_functions = 1;
+    for (int k = 0; k < 3; ++k) {
+      const double elements = double(v.bases[k].num_elements()) * o.elements_per_span[k] + double(o.extra_knots[k].size());
+      patch_cells *= elements;
+      patch_functions *= elements * (o.degree[k] - continuity_of(o, k)) + continuity_of(o, k) + 1;
+    }
+    cells += patch_cells;
+    functions += patch_functions;
+  }
+  const bool iterative = c.solver.method == "iterative";
+  const std::string preconditioner = c.solver.preconditioner == "auto" ? std::string(kBoomerAmgName) : c.solver.preconditioner;
+  const bool metis = c.solver.ordering == "auto" || c.solver.ordering == "metis" || c.solver.ordering == "nesdis";
+  char what[200];
+  std::snprintf(what, sizeof what, "%.3g hexahedra of degree %dx%dx%d on %d volumes (%.3g unknowns, %s)", cells, o.degree[0],
+                o.degree[1], o.degree[2], c.volume_domain.num_patches(), functions, iterative ? "CG" : "direct solve");
+  check_memory(c.path + ": [space] elements",
+               iterative ? volume_iterative_bytes(cells, functions, o.degree, preconditioner, !c.solver.petsc_options.empty())
+                         : volume_galerkin_bytes(cells, functions, o.degree, metis),
+               what);
+}
+
+
+namespace {
+
+// The tensor family on several volumes glued face to face: each volume's trivariate space of
+// the same options, glued C0 by their traces (basis/core/glue_patches: refused, naming the
+// interface, where the faces' knots or degrees differ), on the volumes' one map.
+class MultiVolumeTensorSpace final : public SplineSpace, public SpaceReport {
+ public:
+  MultiVolumeTensorSpace(const CaseDescription& c, const TensorVolumeOptions& options) : options_(options) {
+    const MultiVolume& domain = c.volume_domain;
+    check_multivolume_memory(c, options);
+    std::vector<const BezierMesh*> meshes;
+    try {
+      for (const NurbsVolume& v : domain.patches) patches_.push_back(build_tensor_volume(v, options));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(c.path + ": [space]: " + e.what());
+    }
+    for (const TensorVolumeDiscretization& d : patches_) meshes.push_back(&d.mesh);
+    try {
+      glued_ = glue_volumes(domain, meshes);
+      geometry_ = std::make_unique<VolumeGeometryMap>(glued_.mesh, domain.patches);
+    } catch (const GeometryError& e) {
+      throw InputError(c.path + ": [geometry] file: " + e.what());
+    }
+  }
+  const SpaceReport& presentation() const override { return *this; }
+  const BezierMesh& mesh() const override { return glued_.mesh; }
+  const GeometryMap& geometry() const override { return *geometry_; }
+  std::vector<int> degree() const override { return as_list(options_.degree); }
+  std::string description() const override {
+    return describe(options_, glued_.mesh.is_rational()) + ", " + std::to_string(patches_.size()) + " volumes glued C0";
+  }
+  std::vector<ReportField> report() const override {
+    return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
+  }
+
+ private:
+  TensorVolumeOptions options_;
+  std::vector<TensorVolumeDiscretization> patches_;
+  GluedPatches glued_;
+  std::unique_ptr<VolumeGeometryMap> geometry_;
+};
+
+}  // namespace
+
 std::unique_ptr<SplineSpace> make_tensor_volume_space(const CaseDescription& c, const TensorVolumeOptions& options,
                                                      RowShare share) {
+  if (c.multivolume()) return std::make_unique<MultiVolumeTensorSpace>(c, options);  // whole on every process
   return std::make_unique<TensorVolumeSpace>(c, options, share);
 }
 

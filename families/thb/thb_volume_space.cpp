@@ -105,6 +105,10 @@ class ThbVolumeSpace final : public SplineSpace, public SpaceReport {
 void read_thb_volume_case(const CaseDocument& doc, CaseDescription& c, const std::vector<std::string>& keys) {
   const CaseReader& r = doc.reader;
   read_volume_geometry(doc, c);
+  if (c.multivolume())
+    r.fail("[geometry] file", "holds " + std::to_string(c.volume_domain.num_patches()) +
+                                  " volumes: family \"thb\" works on one volume for now; family \"tensor\" glues several "
+                                  "(docs/VOLUMES.md)");
   const DocumentNode& s = r.table(doc.root, "space", true);
   std::vector<std::string> valid = keys;
   valid.insert(valid.end(), {"continuity", "insert_knots_u", "insert_knots_v", "insert_knots_w", "rational"});
