@@ -18,18 +18,26 @@ std::vector<std::string> BoundaryLabels::all_names() const {
   return out;
 }
 
+namespace {
+
+// A file's labels as groups of the exterior sides' ids (their positions in `exterior`).
+void add_groups(BoundaryLabels& l, const std::vector<NamedBoundary>& boundaries, const std::vector<PatchSideRef>& exterior) {
+  for (const NamedBoundary& b : boundaries) {
+    std::vector<int> ids;
+    for (const PatchSideRef& s : b.sides) ids.push_back(static_cast<int>(std::find(exterior.begin(), exterior.end(), s) - exterior.begin()));
+    l.groups.emplace_back(b.name, ids);
+  }
+}
+
+}  // namespace
+
 BoundaryLabels boundary_labels(const CaseDescription& c) {
   BoundaryLabels l;
   const MultiPatch& d = c.domain;
   if (c.multipatch()) {
     const std::vector<PatchSideRef> exterior = exterior_sides(d);
     for (const PatchSideRef& s : exterior) l.names.push_back(side_name(d, s));
-    for (const NamedBoundary& b : d.boundaries) {
-      std::vector<int> ids;
-      for (const PatchSideRef& s : b.sides)
-        ids.push_back(static_cast<int>(std::find(exterior.begin(), exterior.end(), s) - exterior.begin()));
-      l.groups.emplace_back(b.name, ids);
-    }
+    add_groups(l, d.boundaries, exterior);
     return l;
   }
   if (c.multivolume()) {
@@ -37,12 +45,7 @@ BoundaryLabels boundary_labels(const CaseDescription& c) {
     const MultiVolume& d = c.volume_domain;
     const std::vector<PatchSideRef> exterior = exterior_faces(d);
     l.names = exterior_face_names(d, exterior);
-    for (const NamedBoundary& b : d.boundaries) {
-      std::vector<int> ids;
-      for (const PatchSideRef& s : b.sides)
-        ids.push_back(static_cast<int>(std::find(exterior.begin(), exterior.end(), s) - exterior.begin()));
-      l.groups.emplace_back(b.name, ids);
-    }
+    add_groups(l, d.boundaries, exterior);
     return l;
   }
   if (c.is_volume()) {

@@ -180,6 +180,40 @@ std::vector<long> read_header(LineReader& in) {
   return in.integers("the header (ndim rdim [patches [interfaces [subdomains]]])", 2, 5);
 }
 
+// The `np` patches of `dim` directions after the header, each with its optional name line,
+// into the domain's patches (as `convert` makes them), labels "1".."np" and places.
+template <class Domain, class Convert>
+void read_patches(LineReader& in, long np, int dim, Domain& d, Convert convert) {
+  long total_points = 0;
+  for (long p = 1; p <= np; ++p) {
+    const std::string name = "patch " + std::to_string(p);
+    if (!in.done() && !starts_with_number(in.peek())) in.next(name);  // its name
+    FilePatch f = read_patch(in, name, dim, total_points);
+    d.patches.push_back(convert(f));
+    d.patch_labels.push_back(std::to_string(p));
+    d.patch_where.push_back(f.where);
+  }
+}
+
+NurbsVolume volume_of(FilePatch& f) {
+  NurbsVolume volume;
+  for (int k = 0; k < 3; ++k) volume.bases[k] = std::move(f.bases[k]);
+  volume.control_points = f.points;
+  volume.weights = std::move(f.weights);
+  return volume;
+}
+
+// The subdomain records (names and patch lists), checked and not kept: knotwork solves one
+// problem on the whole domain.
+void skip_subdomains(LineReader& in, long ns, long np) {
+  for (long s = 1; s <= ns; ++s) {
+    const std::string name = "subdomain " + std::to_string(s);
+    in.next(name);
+    for (long p : in.integers(name + " patches", 1, np))
+      if (p < 1 || p > np) in.fail(name + ": patch " + std::to_string(p) + " does not exist");
+  }
+}
+
 }  // namespace
 
 MultiPatch read_geopdes_text(const std::string& path) {
@@ -193,20 +227,14 @@ MultiPatch read_geopdes_text(const std::string& path) {
   if (ni < 0 || ni > 4 * np) in.fail("the number of interfaces must be in [0, 4 x patches], got " + std::to_string(ni));
   if (ns < 0 || ns > np) in.fail("the number of subdomains must be in [0, patches], got " + std::to_string(ns));
   MultiPatch d;
-  long total_points = 0;
-  for (long p = 1; p <= np; ++p) {
-    const std::string name = "patch " + std::to_string(p);
-    if (!in.done() && !starts_with_number(in.peek())) in.next(name);  // its name
-    FilePatch f = read_patch(in, name, 2, total_points);
+  read_patches(in, np, 2, d, [](FilePatch& f) {
     NurbsPatch patch;
     patch.basis_u = std::move(f.bases[0]);
     patch.basis_v = std::move(f.bases[1]);
     patch.control_points = f.points;
     patch.weights = std::move(f.weights);
-    d.patches.push_back(std::move(patch));
-    d.patch_labels.push_back(std::to_string(p));
-    d.patch_where.push_back(f.where);
-  }
+    return patch;
+  });
   for (long i = 1; i <= ni; ++i) {
     const std::string name = "interface " + std::to_string(i);
     in.next(name);  // its name
@@ -220,12 +248,7 @@ MultiPatch read_geopdes_text(const std::string& path) {
     f.reversed = o[0] != 1;
     d.interfaces.push_back(f);
   }
-  for (long s = 1; s <= ns; ++s) {
-    const std::string name = "subdomain " + std::to_string(s);
-    in.next(name);
-    for (long p : in.integers(name + " patches", 1, np))
-      if (p < 1 || p > np) in.fail(name + ": patch " + std::to_string(p) + " does not exist");
-  }
+  skip_subdomains(in, ns, np);
   d.boundaries = read_boundaries(in, np, 4);
   return d;
 }
@@ -249,19 +272,7 @@ VolumeFile read_geopdes_volumes(LineReader& in, const std::vector<long>& header)
   if (ns < 0 || ns > np) in.fail("the number of subdomains must be in [0, patches], got " + std::to_string(ns));
   VolumeFile v;
   MultiVolume& d = v.domain;
-  long total_points = 0;
-  for (long p = 1; p <= np; ++p) {
-    const std::string name = "patch " + std::to_string(p);
-    if (!in.done() && !starts_with_number(in.peek())) in.next(name);
-    FilePatch f = read_patch(in, name, 3, total_points);
-    NurbsVolume volume;
-    for (int k = 0; k < 3; ++k) volume.bases[k] = std::move(f.bases[k]);
-    volume.control_points = f.points;
-    volume.weights = std::move(f.weights);
-    d.patches.push_back(std::move(volume));
-    d.patch_labels.push_back(std::to_string(p));
-    d.patch_where.push_back(f.where);
-  }
+  read_patches(in, np, 3, d, volume_of);
   for (long i = 1; i <= ni; ++i) {
     const std::string name = "interface " + std::to_string(i);
     in.next(name);
@@ -277,12 +288,7 @@ VolumeFile read_geopdes_volumes(LineReader& in, const std::vector<long>& header)
     f.reverse_second = o[2] != 1;
     d.interfaces.push_back(f);
   }
-  for (long s = 1; s <= ns; ++s) {
-    const std::string name = "subdomain " + std::to_string(s);
-    in.next(name);
-    for (long p : in.integers(name + " patches", 1, np))
-      if (p < 1 || p > np) in.fail(name + ": patch " + std::to_string(p) + " does not exist");
-  }
+  skip_subdomains(in, ns, np);
   d.boundaries = read_boundaries(in, np, 6);
   v.volume = d.patches.front();
   v.where = d.patch_where.front();
@@ -307,14 +313,8 @@ VolumeFile read_geopdes_volume(const std::string& path) {
   long total_points = 0;
   FilePatch f = read_patch(in, "patch 1", 3, total_points);
   v.where = f.where;
-  for (int k = 0; k < 3; ++k) v.volume.bases[k] = std::move(f.bases[k]);
-  v.volume.control_points = f.points;
-  v.volume.weights = std::move(f.weights);
-  if (ns == 1) {
-    in.next("subdomain 1");
-    for (long p : in.integers("subdomain 1 patches", 1, 1))
-      if (p != 1) in.fail("subdomain 1: patch " + std::to_string(p) + " does not exist");
-  }
+  v.volume = volume_of(f);
+  skip_subdomains(in, ns, 1);
   v.boundaries = read_boundaries(in, 1, 6);
   return v;
 }

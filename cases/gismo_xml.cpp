@@ -159,6 +159,63 @@ bool is_volume_type(const pugi::xml_node& g) {
   return type == "TensorBSpline3" || type == "TensorNurbs3";
 }
 
+// A MultiPatch's <interfaces> rows and <boundary> lists, each parsed once, and how its patch
+// references resolve: by id if every one is an id, else by position if every one is one.
+struct PatchReferences {
+  std::vector<std::pair<pugi::xml_node, std::vector<long>>> interfaces, boundaries;
+  std::map<long, int> index_of_id;
+  bool by_id = true, by_position = true;
+  PatchSideRef resolve(const XmlFile& f, const pugi::xml_node& node, long patch, long side, int sides, const std::string& range) const {
+    if (!by_id && !by_position) f.fail(node, "patch " + std::to_string(patch) + " is neither a patch id nor a position in <patches>");
+    if (side < 1 || side > sides) f.fail(node, "side " + std::to_string(side) + " does not exist (" + range + ")");
+    return PatchSideRef{by_id ? index_of_id.at(patch) : static_cast<int>(patch), static_cast<int>(side)};
+  }
+  // The named <boundary> lists (an unnamed one only says which sides are boundary).
+  std::vector<NamedBoundary> named_boundaries(const XmlFile& f, int sides, const std::string& range) const {
+    std::vector<NamedBoundary> out;
+    for (const auto& [b, v] : boundaries) {
+      NamedBoundary nb;
+      nb.name = b.attribute("name").value();
+      nb.where = f.at(b);
+      for (size_t k = 0; k < v.size(); k += 2) nb.sides.push_back(resolve(f, b, v[k], v[k + 1], sides, range));
+      if (nb.name.empty()) continue;
+      for (const NamedBoundary& other : out)
+        if (other.name == nb.name) f.fail(b, "boundary \"" + nb.name + "\" is given twice");
+      out.push_back(std::move(nb));
+    }
+    return out;
+  }
+};
+
+// `row`: the integers of one interface row; `row_fault`: what a list of another length breaks;
+// `side`: what a boundary list pairs with patches ("side", "face").
+PatchReferences read_references(const XmlFile& f, const FileLayout& l, size_t row, const std::string& row_fault,
+                                const std::string& side) {
+  PatchReferences r;
+  if (const pugi::xml_node mp = l.multipatch) {
+    for (pugi::xml_node in : mp.children("interfaces")) {
+      r.interfaces.emplace_back(in, f.integers(in, "interfaces"));
+      if (r.interfaces.back().second.size() % row != 0)
+        f.fail(in, row_fault + ", found " + std::to_string(r.interfaces.back().second.size()) + " integers");
+    }
+    for (pugi::xml_node b : mp.children("boundary")) {
+      r.boundaries.emplace_back(b, f.integers(b, "boundary"));
+      if (r.boundaries.back().second.size() % 2 != 0)
+        f.fail(b, "boundary: expected \"patch " + side + "\" pairs, found an odd number of integers");
+    }
+  }
+  for (size_t k = 0; k < l.ids.size(); ++k) r.index_of_id[l.ids[k]] = static_cast<int>(k);
+  const auto note = [&](long patch) {
+    r.by_id = r.by_id && r.index_of_id.count(patch);
+    r.by_position = r.by_position && patch >= 0 && patch < static_cast<long>(l.ids.size());
+  };
+  for (const auto& [node, v] : r.interfaces)
+    for (size_t k = 0; k < v.size(); k += row) note(v[k]), note(v[k + 2]);
+  for (const auto& [node, v] : r.boundaries)
+    for (size_t k = 0; k < v.size(); k += 2) note(v[k]);
+  return r;
+}
+
 }  // namespace
 
 MultiPatch read_gismo_xml(const std::string& path) {
@@ -186,37 +243,10 @@ MultiPatch read_gismo_xml(const std::string& path) {
   }
   if (!mp) return d;
 
-  // Each <interfaces> and <boundary> parsed once; patch references are ids if every one is an
-  // id, else positions if every one is one.
-  std::vector<std::pair<pugi::xml_node, std::vector<long>>> interface_lists, boundary_lists;
-  for (pugi::xml_node in : mp.children("interfaces")) {
-    interface_lists.emplace_back(in, f.integers(in, "interfaces"));
-    if (interface_lists.back().second.size() % 8 != 0)
-      f.fail(in, "interfaces: each row must have 8 integers (patch side patch side, 2 of the direction map, 2 orientation "
-                 "flags), found " + std::to_string(interface_lists.back().second.size()) + " integers");
-  }
-  for (pugi::xml_node b : mp.children("boundary")) {
-    boundary_lists.emplace_back(b, f.integers(b, "boundary"));
-    if (boundary_lists.back().second.size() % 2 != 0)
-      f.fail(b, "boundary: expected \"patch side\" pairs, found an odd number of integers");
-  }
-  std::map<long, int> index_of_id;
-  for (size_t k = 0; k < ids.size(); ++k) index_of_id[ids[k]] = static_cast<int>(k);
-  bool by_id = true, by_position = true;
-  auto note = [&](long patch) {
-    by_id = by_id && index_of_id.count(patch);
-    by_position = by_position && patch >= 0 && patch < static_cast<long>(ids.size());
-  };
-  for (const auto& [node, v] : interface_lists)
-    for (size_t k = 0; k < v.size(); k += 8) note(v[k]), note(v[k + 2]);
-  for (const auto& [node, v] : boundary_lists)
-    for (size_t k = 0; k < v.size(); k += 2) note(v[k]);
-  auto resolve = [&](const pugi::xml_node& node, long patch, long side) {
-    if (!by_id && !by_position)
-      f.fail(node, "patch " + std::to_string(patch) + " is neither a patch id nor a position in <patches>");
-    if (side < 1 || side > 4) f.fail(node, "side " + std::to_string(side) + " does not exist (sides are 1 to 4)");
-    return PatchSideRef{by_id ? index_of_id[patch] : static_cast<int>(patch), static_cast<int>(side)};
-  };
+  const PatchReferences refs = read_references(f, l, 8, "interfaces: each row must have 8 integers (patch side patch side, 2 of the "
+                                                        "direction map, 2 orientation flags)", "side");
+  const auto& interface_lists = refs.interfaces;
+  auto resolve = [&](const pugi::xml_node& node, long patch, long side) { return refs.resolve(f, node, patch, side, 4, "sides are 1 to 4"); };
   for (const auto& [in, v] : interface_lists)
     for (size_t k = 0; k < v.size(); k += 8) {
       PatchInterface i;
@@ -235,16 +265,7 @@ MultiPatch read_gismo_xml(const std::string& path) {
       i.reversed = o == 0;
       d.interfaces.push_back(i);
     }
-  for (const auto& [b, v] : boundary_lists) {
-    NamedBoundary nb;
-    nb.name = b.attribute("name").value();
-    nb.where = f.at(b);
-    for (size_t k = 0; k < v.size(); k += 2) nb.sides.push_back(resolve(b, v[k], v[k + 1]));
-    if (nb.name.empty()) continue;  // an unnamed list only says which sides are boundary
-    for (const NamedBoundary& other : d.boundaries)
-      if (other.name == nb.name) f.fail(b, "boundary \"" + nb.name + "\" is given twice");
-    d.boundaries.push_back(std::move(nb));
-  }
+  d.boundaries = refs.named_boundaries(f, 4, "sides are 1 to 4");
   return d;
 }
 
@@ -285,36 +306,11 @@ VolumeFile read_gismo_volumes(const XmlFile& f, const FileLayout& l) {
     d.patch_labels.push_back(std::to_string(id));
     d.patch_where.push_back(f.at(g));
   }
-  const pugi::xml_node mp = l.multipatch;
-  std::vector<std::pair<pugi::xml_node, std::vector<long>>> interface_lists, boundary_lists;
-  if (mp) {
-    for (pugi::xml_node in : mp.children("interfaces")) {
-      interface_lists.emplace_back(in, f.integers(in, "interfaces"));
-      if (interface_lists.back().second.size() % 10 != 0)
-        f.fail(in, "interfaces: each row of a volume's must have 10 integers (patch face patch face, 3 of the direction "
-                   "map, 3 orientation flags), found " + std::to_string(interface_lists.back().second.size()) + " integers");
-    }
-    for (pugi::xml_node b : mp.children("boundary")) {
-      boundary_lists.emplace_back(b, f.integers(b, "boundary"));
-      if (boundary_lists.back().second.size() % 2 != 0)
-        f.fail(b, "boundary: expected \"patch face\" pairs, found an odd number of integers");
-    }
-  }
-  std::map<long, int> index_of_id;
-  for (size_t k = 0; k < l.ids.size(); ++k) index_of_id[l.ids[k]] = static_cast<int>(k);
-  bool by_id = true, by_position = true;
-  const auto note = [&](long patch) {
-    by_id = by_id && index_of_id.count(patch);
-    by_position = by_position && patch >= 0 && patch < static_cast<long>(l.ids.size());
-  };
-  for (const auto& [node, list] : interface_lists)
-    for (size_t k = 0; k < list.size(); k += 10) note(list[k]), note(list[k + 2]);
-  for (const auto& [node, list] : boundary_lists)
-    for (size_t k = 0; k < list.size(); k += 2) note(list[k]);
+  const PatchReferences refs = read_references(f, l, 10, "interfaces: each row of a volume's must have 10 integers (patch face "
+                                                         "patch face, 3 of the direction map, 3 orientation flags)", "face");
+  const auto& interface_lists = refs.interfaces;
   const auto resolve = [&](const pugi::xml_node& node, long patch, long face) {
-    if (!by_id && !by_position) f.fail(node, "patch " + std::to_string(patch) + " is neither a patch id nor a position in <patches>");
-    if (face < 1 || face > 6) f.fail(node, "side " + std::to_string(face) + " does not exist (a volume's sides are 1 to 6)");
-    return PatchSideRef{by_id ? index_of_id[patch] : static_cast<int>(patch), static_cast<int>(face)};
+    return refs.resolve(f, node, patch, face, 6, "a volume's sides are 1 to 6");
   };
   for (const auto& [in, list] : interface_lists)
     for (size_t k = 0; k < list.size(); k += 10) {
@@ -343,16 +339,7 @@ VolumeFile read_gismo_volumes(const XmlFile& f, const FileLayout& l) {
       i.reverse_second = orientation[a2] == 0;
       d.interfaces.push_back(i);
     }
-  for (const auto& [b, list] : boundary_lists) {
-    NamedBoundary nb;
-    nb.name = b.attribute("name").value();
-    nb.where = f.at(b);
-    for (size_t k = 0; k < list.size(); k += 2) nb.sides.push_back(resolve(b, list[k], list[k + 1]));
-    if (nb.name.empty()) continue;
-    for (const NamedBoundary& other : d.boundaries)
-      if (other.name == nb.name) f.fail(b, "boundary \"" + nb.name + "\" is given twice");
-    d.boundaries.push_back(std::move(nb));
-  }
+  d.boundaries = refs.named_boundaries(f, 6, "a volume's sides are 1 to 6");
   v.volume = d.patches.front();
   v.where = d.patch_where.front();
   return v;

@@ -165,6 +165,59 @@ void match_traces(const std::vector<SidePiece>& A, const std::vector<SidePiece>&
       refuse("a function of patch " + label_b + " has a trace on the side that no function of patch " + label_a + " has");
 }
 
+// The glued mesh: one number per class of `copies` (in the order the patches' functions come),
+// the patches' cells in patch order as `domain_cell_of` renumbers their boundary sides, their
+// weights, and the estimator's neighbours inside every patch and then across the interfaces.
+template <class DomainCell>
+GluedPatches assemble_glued(const std::vector<const BezierMesh*>& patches, const std::vector<int>& first_function,
+                            DisjointSets& copies, bool rational, std::vector<std::string> boundary_names,
+                            const std::vector<std::pair<CellInterface, std::array<int, 2>>>& across, DomainCell domain_cell_of) {
+  const int np = static_cast<int>(patches.size());
+  GluedPatches out;
+  int count = 0;
+  const std::vector<int> number = copies.numbering(&count);
+  for (int p = 0; p < np; ++p)
+    out.global_function.emplace_back(number.begin() + first_function[p], number.begin() + first_function[p + 1]);
+  BezierMesh& mesh = out.mesh;
+  mesh.set_num_functions(count);
+  mesh.set_boundary_names(std::move(boundary_names));
+  if (rational) {
+    Eigen::VectorXd w(count);
+    for (int p = 0; p < np; ++p)
+      for (int i = 0; i < patches[p]->num_functions(); ++i) w[out.global_function[p][i]] = patches[p]->weights()[i];
+    mesh.set_weights(std::move(w));
+  }
+  out.first_cell.push_back(0);
+  std::vector<int> ids;
+  for (int p = 0; p < np; ++p) {
+    const BezierMesh& local = *patches[p];
+    std::vector<int> extraction(local.num_distinct_extractions());
+    for (int e = 0; e < local.num_distinct_extractions(); ++e) extraction[e] = mesh.add_extraction(local.pooled_extraction(e));
+    for (int c = 0; c < local.num_cells(); ++c) {
+      ids.clear();
+      for (int f : local.functions(c)) ids.push_back(out.global_function[p][f]);
+      mesh.add_cell(domain_cell_of(local.cell(c), p), ids, extraction[local.extraction_id(c)]);
+    }
+    out.first_cell.push_back(mesh.num_cells());
+  }
+  std::vector<CellInterface> interfaces;
+  for (int p = 0; p < np; ++p) {
+    const std::vector<CellInterface> own =
+        patches[p]->has_interfaces() ? patches[p]->interfaces() : interfaces_from_parameter_boxes(*patches[p]);
+    for (CellInterface ci : own) {
+      ci.cell_a += out.first_cell[p], ci.cell_b += out.first_cell[p];
+      interfaces.push_back(ci);
+    }
+  }
+  for (auto [ci, pair] : across) {
+    ci.cell_a += out.first_cell[pair[0]];
+    ci.cell_b += out.first_cell[pair[1]];
+    interfaces.push_back(ci);
+  }
+  mesh.set_interfaces(std::move(interfaces));
+  return out;
+}
+
 }  // namespace
 
 GluedPatches glue_patches(const MultiPatch& domain, const std::vector<const BezierMesh*>& patches) {
@@ -213,55 +266,11 @@ GluedPatches glue_patches(const MultiPatch& domain, const std::vector<const Bezi
     }
   }
 
-  // One number per class, in the order the patches' functions come.
-  GluedPatches out;
-  int count = 0;
-  const std::vector<int> number = copies.numbering(&count);
-  for (int p = 0; p < np; ++p)
-    out.global_function.emplace_back(number.begin() + first_function[p], number.begin() + first_function[p + 1]);
-
   const std::vector<PatchSideRef> exterior = exterior_sides(domain);
-  BezierMesh& mesh = out.mesh;
-  mesh.set_num_functions(count);
-  mesh.set_boundary_names(exterior_side_names(domain, exterior));
-  if (rational) {
-    Eigen::VectorXd w(count);
-    for (int p = 0; p < np; ++p)
-      for (int i = 0; i < patches[p]->num_functions(); ++i) w[out.global_function[p][i]] = patches[p]->weights()[i];
-    mesh.set_weights(std::move(w));
-  }
-  out.first_cell.push_back(0);
-  std::vector<int> ids;
-  for (int p = 0; p < np; ++p) {
-    const BezierMesh& local = *patches[p];
-    std::vector<int> extraction(local.num_distinct_extractions());
-    for (int e = 0; e < local.num_distinct_extractions(); ++e) extraction[e] = mesh.add_extraction(local.pooled_extraction(e));
-    const std::array<int, 4> boundary_id = boundary_ids_of_patch(exterior, p);
-    for (int c = 0; c < local.num_cells(); ++c) {
-      ids.clear();
-      for (int f : local.functions(c)) ids.push_back(out.global_function[p][f]);
-      mesh.add_cell(domain_cell(local.cell(c), p, boundary_id), ids, extraction[local.extraction_id(c)]);
-    }
-    out.first_cell.push_back(mesh.num_cells());
-  }
-
-  // The estimator's neighbours: inside every patch, then across its interfaces.
-  std::vector<CellInterface> interfaces;
-  for (int p = 0; p < np; ++p) {
-    const std::vector<CellInterface> own =
-        patches[p]->has_interfaces() ? patches[p]->interfaces() : interfaces_from_parameter_boxes(*patches[p]);
-    for (CellInterface ci : own) {
-      ci.cell_a += out.first_cell[p], ci.cell_b += out.first_cell[p];
-      interfaces.push_back(ci);
-    }
-  }
-  for (auto [ci, pair] : across) {
-    ci.cell_a += out.first_cell[pair[0]];
-    ci.cell_b += out.first_cell[pair[1]];
-    interfaces.push_back(ci);
-  }
-  mesh.set_interfaces(std::move(interfaces));
-  return out;
+  std::vector<std::array<int, 4>> boundary_id;
+  for (int p = 0; p < np; ++p) boundary_id.push_back(boundary_ids_of_patch(exterior, p));
+  return assemble_glued(patches, first_function, copies, rational, exterior_side_names(domain, exterior), across,
+                        [&](const BezierCell& cell, int p) { return domain_cell(cell, p, boundary_id[p]); });
 }
 
 
@@ -386,59 +395,18 @@ GluedPatches glue_volumes(const MultiVolume& domain, const std::vector<const Bez
       across.push_back({ci, {pa, pb}});
     }
   }
-  GluedPatches out;
-  int count = 0;
-  const std::vector<int> number = copies.numbering(&count);
-  for (int p = 0; p < np; ++p)
-    out.global_function.emplace_back(number.begin() + first_function[p], number.begin() + first_function[p + 1]);
   const std::vector<PatchSideRef> exterior = exterior_faces(domain);
   if (exterior.size() > static_cast<size_t>(std::numeric_limits<std::int16_t>::max()))
     throw InputError("the domain has " + std::to_string(exterior.size()) + " boundary faces; knotwork takes at most 32767");
-  BezierMesh& mesh = out.mesh;
-  mesh.set_num_functions(count);
-  mesh.set_boundary_names(exterior_face_names(domain, exterior));
-  if (rational) {
-    Eigen::VectorXd w(count);
-    for (int p = 0; p < np; ++p)
-      for (int i = 0; i < patches[p]->num_functions(); ++i) w[out.global_function[p][i]] = patches[p]->weights()[i];
-    mesh.set_weights(std::move(w));
-  }
-  out.first_cell.push_back(0);
-  std::vector<int> ids;
-  for (int p = 0; p < np; ++p) {
-    const BezierMesh& local = *patches[p];
-    std::array<int, 6> boundary_id{-1, -1, -1, -1, -1, -1};  // per CellSide
-    for (size_t k = 0; k < exterior.size(); ++k)
-      if (exterior[k].patch == p) boundary_id[cell_side_of_face(exterior[k].side)] = static_cast<int>(k);
-    std::vector<int> extraction(local.num_distinct_extractions());
-    for (int e = 0; e < local.num_distinct_extractions(); ++e) extraction[e] = mesh.add_extraction(local.pooled_extraction(e));
-    for (int c = 0; c < local.num_cells(); ++c) {
-      ids.clear();
-      for (int f : local.functions(c)) ids.push_back(out.global_function[p][f]);
-      BezierCell cell = local.cell(c);
-      cell.patch = p;
-      for (int s = 0; s < 6; ++s)
-        if (cell.boundary[s] >= 0) cell.boundary[s] = static_cast<std::int16_t>(boundary_id[s]);
-      mesh.add_cell(cell, ids, extraction[local.extraction_id(c)]);
-    }
-    out.first_cell.push_back(mesh.num_cells());
-  }
-  std::vector<CellInterface> interfaces;
-  for (int p = 0; p < np; ++p) {
-    const std::vector<CellInterface> own =
-        patches[p]->has_interfaces() ? patches[p]->interfaces() : interfaces_from_parameter_boxes(*patches[p]);
-    for (CellInterface ci : own) {
-      ci.cell_a += out.first_cell[p], ci.cell_b += out.first_cell[p];
-      interfaces.push_back(ci);
-    }
-  }
-  for (auto [ci, pair] : across) {
-    ci.cell_a += out.first_cell[pair[0]];
-    ci.cell_b += out.first_cell[pair[1]];
-    interfaces.push_back(ci);
-  }
-  mesh.set_interfaces(std::move(interfaces));
-  return out;
+  std::vector<std::array<int, 6>> boundary_id(np, {-1, -1, -1, -1, -1, -1});  // per patch and CellSide
+  for (size_t k = 0; k < exterior.size(); ++k) boundary_id[exterior[k].patch][cell_side_of_face(exterior[k].side)] = static_cast<int>(k);
+  return assemble_glued(patches, first_function, copies, rational, exterior_face_names(domain, exterior), across,
+                        [&](BezierCell cell, int p) {
+                          cell.patch = p;
+                          for (int s = 0; s < 6; ++s)
+                            if (cell.boundary[s] >= 0) cell.boundary[s] = static_cast<std::int16_t>(boundary_id[p][s]);
+                          return cell;
+                        });
 }
 
 }  // namespace knotwork

@@ -228,6 +228,55 @@ void add_tensor_cells(BezierMesh& mesh, std::span<const BSplineBasis1D> bases, i
       }
 }
 
+namespace {
+
+// One rank's share of the layers of elements along the last direction (rows along v on a patch,
+// slabs along w on a volume), whose univariate basis has element spans `spans`, degree `q` and
+// `functions` functions. Function layer j lives on the elements whose span s has s - q <= j <= s:
+// a rank owns the function layers that start on its own element layers, and holds the layers
+// below its own where they also live. `what`, `how` and `more` word the refusal of fewer layers
+// than ranks.
+struct LayerShare {
+  int from = 0, to = 0, function_from = 0, function_to = 0;  // held
+  int own_from = 0, own_to = 0, owned_from = 0, owned_to = 0;  // owned
+  int layers = 0, functions = 0;
+  // The MeshPart of the share: `per_layer` functions and `cells_per_layer` cells in each layer.
+  MeshPart part(int per_layer, int cells_per_layer, int element_layers) const {
+    MeshPart p;
+    p.owned = CellRange{(own_from - from) * cells_per_layer, (own_to - from) * cells_per_layer};
+    p.function_offset = per_layer * function_from;
+    p.first_owned_function = per_layer * owned_from;
+    p.last_owned_function = per_layer * owned_to;
+    p.global_functions = per_layer * functions;
+    p.global_cells = cells_per_layer * element_layers;
+    return p;
+  }
+};
+
+LayerShare share_layers(const std::vector<int>& spans, int q, int functions, RowShare share, const std::string& what,
+                        const std::string& how, const std::string& more) {
+  const long n = static_cast<long>(spans.size());
+  if (n < share.ranks)
+    throw std::invalid_argument("the mesh has " + std::to_string(n) + " " + what + ", fewer than the " + std::to_string(share.ranks) +
+                                " processes that share them " + how + std::to_string(n) + more);
+  LayerShare l;
+  l.layers = static_cast<int>(n);
+  l.functions = functions;
+  l.own_from = static_cast<int>(n * share.rank / share.ranks);
+  l.own_to = static_cast<int>(n * (share.rank + 1) / share.ranks);
+  const auto first_function = [&](int layer) { return layer == 0 ? 0 : spans[layer] - q; };
+  l.owned_from = first_function(l.own_from);
+  l.owned_to = l.own_to == n ? functions : first_function(l.own_to);
+  l.from = l.own_from;
+  while (l.from > 0 && spans[l.from - 1] >= l.owned_from) --l.from;
+  l.to = l.own_to;
+  l.function_from = spans[l.from] - q;
+  l.function_to = spans[l.to - 1] + 1;
+  return l;
+}
+
+}  // namespace
+
 TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const TensorSpaceOptions& o,
                                                  RowShare share) {
   TensorDiscretization d;
@@ -247,32 +296,9 @@ TensorDiscretization build_tensor_discretization(const NurbsPatch& patch, const 
   // The element rows this mesh holds, [row_from, row_to), and its function rows.
   int row_from = 0, row_to = d.elements_v, function_row_from = 0, function_row_to = sv;
   if (share.ranks > 1) {
-    const long nv = d.elements_v;
-    if (nv < share.ranks)
-      throw std::invalid_argument("the mesh has " + std::to_string(nv) + " rows of cells along v, fewer than the " +
-                                  std::to_string(share.ranks) + " processes that share them by rows: use at most " +
-                                  std::to_string(nv) + " processes or more elements");
-    const int own_from = static_cast<int>(nv * share.rank / share.ranks);
-    const int own_to = static_cast<int>(nv * (share.rank + 1) / share.ranks);
-    // Function row j lives on the elements whose span s has s - q <= j <= s: a rank owns the
-    // function rows that start on its element rows, and holds the rows below its own where
-    // they also live.
-    const auto first_function_row = [&](int row) { return row == 0 ? 0 : spans_v[row] - q; };
-    const int owned_functions_from = first_function_row(own_from);
-    const int owned_functions_to = own_to == d.elements_v ? sv : first_function_row(own_to);
-    row_from = own_from;
-    while (row_from > 0 && spans_v[row_from - 1] >= owned_functions_from) --row_from;
-    row_to = own_to;
-    function_row_from = spans_v[row_from] - q;
-    function_row_to = spans_v[row_to - 1] + 1;
-    MeshPart part;
-    part.owned = CellRange{(own_from - row_from) * d.elements_u, (own_to - row_from) * d.elements_u};
-    part.function_offset = su * function_row_from;
-    part.first_owned_function = su * owned_functions_from;
-    part.last_owned_function = su * owned_functions_to;
-    part.global_functions = su * sv;
-    part.global_cells = d.elements_u * d.elements_v;
-    d.part = part;
+    const LayerShare l = share_layers(spans_v, q, sv, share, "rows of cells along v", "by rows: use at most ", " processes or more elements");
+    row_from = l.from, row_to = l.to, function_row_from = l.function_from, function_row_to = l.function_to;
+    d.part = l.part(su, d.elements_u, d.elements_v);
   }
   d.first_row = row_from;
 
@@ -318,27 +344,10 @@ TensorVolumeDiscretization build_tensor_volume(const NurbsVolume& volume, const 
   const long cells_per_slab = long(d.space[0].num_elements()) * d.space[1].num_elements();
   int slab_from = 0, slab_to = nw, function_from = 0, function_to = sw;
   if (share.ranks > 1) {
-    if (nw < share.ranks)
-      throw std::invalid_argument("the mesh has " + std::to_string(nw) + (nw == 1 ? " slab" : " slabs") + " of cells along w, fewer than the " +
-                                  std::to_string(share.ranks) + " processes that share them by slabs: use at most " +
-                                  std::to_string(nw) + " processes or more elements along w");
-    const int own_from = static_cast<int>(long(nw) * share.rank / share.ranks);
-    const int own_to = static_cast<int>(long(nw) * (share.rank + 1) / share.ranks);
-    const auto first_function = [&](int slab) { return slab == 0 ? 0 : spans_w[slab] - r; };
-    const int owned_from = first_function(own_from), owned_to = own_to == nw ? sw : first_function(own_to);
-    slab_from = own_from;
-    while (slab_from > 0 && spans_w[slab_from - 1] >= owned_from) --slab_from;
-    slab_to = own_to;
-    function_from = spans_w[slab_from] - r;
-    function_to = spans_w[slab_to - 1] + 1;
-    MeshPart part;
-    part.owned = CellRange{static_cast<int>((own_from - slab_from) * cells_per_slab), static_cast<int>((own_to - slab_from) * cells_per_slab)};
-    part.function_offset = static_cast<int>(layer * function_from);
-    part.first_owned_function = static_cast<int>(layer * owned_from);
-    part.last_owned_function = static_cast<int>(layer * owned_to);
-    part.global_functions = static_cast<int>(functions);
-    part.global_cells = static_cast<int>(cells_per_slab * nw);
-    d.part = part;
+    const LayerShare l = share_layers(spans_w, r, sw, share, nw == 1 ? "slab of cells along w" : "slabs of cells along w",
+                                      "by slabs: use at most ", " processes or more elements along w");
+    slab_from = l.from, slab_to = l.to, function_from = l.function_from, function_to = l.function_to;
+    d.part = l.part(static_cast<int>(layer), static_cast<int>(cells_per_slab), nw);
   }
   d.mesh.set_num_functions(static_cast<int>(layer * (function_to - function_from)));
   // The isoparametric space's weights: the volume's refined onto the geometry's bases (the

@@ -81,13 +81,7 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
   std::vector<ReportField> report() const override {
     return {{.key = "levels", .value = long(per_level_.size()), .column = true, .width = 7}};
   }
-  std::vector<ReportField> basis_report() const override {
-    std::string text;
-    for (size_t l = 0; l < per_level_.size(); ++l) text += (l ? ", " : "") + std::to_string(per_level_[l]);
-    std::vector<std::string> counts;
-    for (int n : per_level_) counts.push_back(std::to_string(n));
-    return {{.key = "functions_per_level", .value = counts, .text = text, .label = "per level"}};
-  }
+  std::vector<ReportField> basis_report() const override { return {functions_per_level_field(per_level_)}; }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
                                       int* extended, const ProgressFunction& /*progress*/) && override {
     ThbHierarchy next = refined_hierarchy(*case_, hierarchy_, leaves_, marked, extended);

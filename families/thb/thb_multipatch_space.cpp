@@ -50,15 +50,7 @@ class ThbMultiPatchSpace final : public SplineSpace, public SpaceReport {
     return {{.key = "levels", .value = long(basis_.functions_per_level.size()), .column = true, .width = 7},
             {.key = "patches", .value = patches, .text = std::to_string(patches)}};
   }
-  std::vector<ReportField> basis_report() const override {
-    std::string text;
-    std::vector<std::string> counts;
-    for (size_t l = 0; l < basis_.functions_per_level.size(); ++l) {
-      text += (l ? ", " : "") + std::to_string(basis_.functions_per_level[l]);
-      counts.push_back(std::to_string(basis_.functions_per_level[l]));
-    }
-    return {{.key = "functions_per_level", .value = counts, .text = text, .label = "per level"}};
-  }
+  std::vector<ReportField> basis_report() const override { return {functions_per_level_field(basis_.functions_per_level)}; }
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
                                       int* extended, const ProgressFunction& /*progress*/) && override {
     ThbMultiPatch next = refined_hierarchy(*case_, hierarchy_, basis_.leaves, marked, extended);

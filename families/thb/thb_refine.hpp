@@ -3,13 +3,26 @@
 // (ThbMultiPatch, ThbPatchCell): the marked mesh cells' leaves halved, with what grading and
 // the interfaces add; bad requests and sizes refused as the case's errors.
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "basis/core/input_error.hpp"
 #include "cases/case_file.hpp"
+#include "cases/spline_space.hpp"
 #include "families/tensor/tensor_case.hpp"
 
 namespace knotwork {
+
+// `knotwork basis`'s line of a THB space: its functions per level.
+inline ReportField functions_per_level_field(const std::vector<int>& per_level) {
+  std::string text;
+  std::vector<std::string> counts;
+  for (size_t l = 0; l < per_level.size(); ++l) {
+    text += (l ? ", " : "") + std::to_string(per_level[l]);
+    counts.push_back(std::to_string(per_level[l]));
+  }
+  return {.key = "functions_per_level", .value = counts, .text = text, .label = "per level"};
+}
 
 template <class Hierarchy, class Leaf>
 Hierarchy refined_hierarchy(const CaseDescription& c, const Hierarchy& hierarchy, const std::vector<Leaf>& leaves,
