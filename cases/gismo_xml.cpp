@@ -159,6 +159,20 @@ bool is_volume_type(const pugi::xml_node& g) {
   return type == "TensorBSpline3" || type == "TensorNurbs3";
 }
 
+// A <Geometry> that must be a volume (TensorBSpline3 or TensorNurbs3), as a NurbsVolume.
+NurbsVolume read_volume_patch(const XmlFile& f, const pugi::xml_node& g, long id) {
+  const std::string type = g.attribute("type").value(), name = "Geometry id " + std::to_string(id);
+  if (!is_volume_type(g))
+    f.fail(g, name + " has type \"" + type + "\" where a volume (TensorBSpline3 or TensorNurbs3) is read" +
+                  (type == "TensorBSpline2" || type == "TensorNurbs2" ? ": a planar patch" : ""));
+  FileTensor t = read_tensor(f, g, name, 3);
+  NurbsVolume volume;
+  for (int k = 0; k < 3; ++k) volume.bases[k] = std::move(t.bases[k]);
+  volume.control_points = t.points;
+  volume.weights = std::move(t.weights);
+  return volume;
+}
+
 // A MultiPatch's <interfaces> rows and <boundary> lists, each parsed once, and how its patch
 // references resolve: by id if every one is an id, else by position if every one is one.
 struct PatchReferences {
@@ -291,15 +305,7 @@ VolumeFile read_gismo_volumes(const XmlFile& f, const FileLayout& l) {
   long total = 0;
   for (long id : l.ids) {
     const pugi::xml_node g = l.geometry.at(id);
-    const std::string type = g.attribute("type").value(), name = "Geometry id " + std::to_string(id);
-    if (!is_volume_type(g))
-      f.fail(g, name + " has type \"" + type + "\" where a volume (TensorBSpline3 or TensorNurbs3) is read" +
-                    (type == "TensorBSpline2" || type == "TensorNurbs2" ? ": a planar patch" : ""));
-    FileTensor t = read_tensor(f, g, name, 3);
-    NurbsVolume volume;
-    for (int k = 0; k < 3; ++k) volume.bases[k] = std::move(t.bases[k]);
-    volume.control_points = t.points;
-    volume.weights = std::move(t.weights);
+    NurbsVolume volume = read_volume_patch(f, g, id);
     total += volume.control_points.rows();
     if (total > kMaxControlPoints) f.fail(g, "more than 2^24 control points in all");
     d.patches.push_back(std::move(volume));
@@ -356,15 +362,8 @@ VolumeFile read_gismo_volume(const std::string& path) {
   if (l.ids.size() > 1) return read_gismo_volumes(f, l);
   const long id = l.ids.front();
   const pugi::xml_node g = l.geometry.at(id);
-  const std::string type = g.attribute("type").value(), name = "Geometry id " + std::to_string(id);
-  if (!is_volume_type(g))
-    f.fail(g, name + " has type \"" + type + "\" where a volume (TensorBSpline3 or TensorNurbs3) is read" +
-                  (type == "TensorBSpline2" || type == "TensorNurbs2" ? ": a planar patch" : ""));
-  FileTensor t = read_tensor(f, g, name, 3);
   VolumeFile v;
-  for (int k = 0; k < 3; ++k) v.volume.bases[k] = std::move(t.bases[k]);
-  v.volume.control_points = t.points;
-  v.volume.weights = std::move(t.weights);
+  v.volume = read_volume_patch(f, g, id);
   v.label = std::to_string(id);
   v.where = f.at(g);
   if (!mp) return v;

@@ -57,12 +57,7 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
  public:
   const SpaceReport& presentation() const override { return *this; }
   ThbSpace(const CaseDescription& c, ThbHierarchy hierarchy) : case_(std::make_shared<const CaseDescription>(c)), hierarchy_(std::move(hierarchy)) {
-    ThbHierarchy::Basis b;
-    try {
-      b = hierarchy_.build();
-    } catch (const std::runtime_error& e) {
-      throw InputError(c.path + ": [space]: " + e.what());
-    }
+    ThbHierarchy::Basis b = built_basis(c, hierarchy_);
     mesh_ = std::move(b.mesh);
     leaves_ = std::move(b.leaves);
     per_level_ = std::move(b.functions_per_level);

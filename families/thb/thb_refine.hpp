@@ -8,10 +8,20 @@
 
 #include "basis/core/input_error.hpp"
 #include "cases/case_file.hpp"
+#include "basis/thb/thb_hierarchy.hpp"
 #include "cases/spline_space.hpp"
 #include "families/tensor/tensor_case.hpp"
 
 namespace knotwork {
+
+// The hierarchy's basis; its failure as the case's [space] error.
+inline ThbHierarchy::Basis built_basis(const CaseDescription& c, const ThbHierarchy& h) {
+  try {
+    return h.build();
+  } catch (const std::runtime_error& e) {
+    throw InputError(c.path + ": [space]: " + e.what());
+  }
+}
 
 // `knotwork basis`'s line of a THB space: its functions per level.
 inline ReportField functions_per_level_field(const std::vector<int>& per_level) {
