@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -98,7 +99,8 @@ TEST_CASE("Hexahedra meet on face pieces: whole faces on a tensor grid, one piec
     small.u0 = 1, small.u1 = 2;
     small.v0 = 0.5 * (k % 2), small.v1 = small.v0 + 0.5;
     small.w0 = 0.5 * (k / 2), small.w1 = small.w0 + 0.5;
-    small.boundary = {k % 2 ? -1 : 0, 0, k % 2 ? 0 : -1, -1, k / 2 ? -1 : 0, k / 2 ? 0 : -1};
+    const int sides[6] = {k % 2 ? -1 : 0, 0, k % 2 ? 0 : -1, -1, k / 2 ? -1 : 0, k / 2 ? 0 : -1};
+    for (int s = 0; s < 6; ++s) small.boundary[s] = static_cast<std::int16_t>(sides[s]);
     mesh.add_cell(small, ids, x);
   }
   const std::vector<CellInterface> pieces = interfaces_from_parameter_boxes(mesh);
