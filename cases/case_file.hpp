@@ -70,9 +70,9 @@ struct CaseDescription {
   std::vector<NamedBoundary> volume_boundaries;
   // Parts of the volume's parameter box that are not in the domain (type = "fichera": the
   // octant), each (u0, u1, v0, v1, w0, w1) on knots of the volume; their faces are the
-  // boundary "hole". Only family "thb" removes cells (the others refuse such a geometry).
+  // boundary "hole". A family that cannot remove cells refuses such a geometry.
   std::vector<std::array<double, 6>> volume_removed_boxes;
-  // A file of several volumes glued face to face (`volume` is then its first): family tensor.
+  // A file of several volumes glued face to face (`volume` is then its first).
   MultiVolume volume_domain;
   bool multivolume() const { return volume_domain.num_patches() > 1; }
   bool is_volume() const { return volume.control_points.rows() > 0; }

@@ -353,7 +353,7 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
     try {
       if (geometry_file_dimension(path) == 3)
         throw InputError(path + ": is a volume, and [space] family = \"" + c.family +
-                         "\" works on planar patches; families \"tensor\" and \"thb\" solve on volumes (docs/VOLUMES.md)");
+                         "\" works on planar patches (docs/VOLUMES.md names the families that solve on volumes)");
       c.domain = read_geometry_file(path);
     } catch (const InputError& e) {
       throw InputError(c.path + ": [geometry] file: " + e.what());
@@ -402,7 +402,7 @@ void read_patch_geometry(const CaseDocument& doc, CaseDescription& c, bool multi
     c.geometry = read_nurbs(r, g, "geometry");
   } else if (is_volume_type(c.geometry_type)) {
     r.fail("[geometry] type", "'" + c.geometry_type + "' is a volume, and [space] family = \"" + c.family +
-                                  "\" works on planar patches; families \"tensor\" and \"thb\" solve on volumes (docs/VOLUMES.md)");
+                                  "\" works on planar patches (docs/VOLUMES.md names the families that solve on volumes)");
   } else {
     r.fail("[geometry] type", "unknown geometry '" + c.geometry_type + "' (" +
                                   closest_name(c.geometry_type, {"rectangle", "quarter_annulus", "lshape", "nurbs", "box",

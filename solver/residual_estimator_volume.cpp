@@ -105,8 +105,7 @@ double interior_residual(const BezierMesh& mesh, const GeometryMap& geometry, co
                             second_ref);
     kept[0] = cell.degree_u, kept[1] = cell.degree_v, kept[2] = cell.degree_w;
   }
-  geometry.evaluate_volume_at_rule(c, nu, nv, nw, g);
-  geometry.volume_second_derivatives(c, table.point_u, table.point_v, table.point_w, second_map);
+  geometry.volume_second_derivatives(c, table.point_u, table.point_v, table.point_w, second_map, &g);  // and x, J
   bernstein_of(mesh, c, mesh.extraction(c), coefficients, local, beta);
   U.noalias() = table.value * beta;
   grad_ref[0].noalias() = table.d_u * beta;
@@ -212,12 +211,13 @@ ErrorIndicators volume_residual_indicators(const BezierMesh& mesh, const Geometr
     CellBasis ca, cb;
     Eigen::VectorXd at_a[3], at_b[3], local, beta_a, beta_b;
     VolumeCoefficients coefficient(problem, diffusion);
+    QuadratureRule1D rule;  // made again only when the number of points changes
 #pragma omp for schedule(dynamic, 64)
     for (size_t s = 0; s < pieces.size(); ++s) {
       const CellInterface& e = pieces[s];
       const BezierCell& a = mesh.cell(e.cell_a);
       const int n = std::max({a.degree_u, a.degree_v, int(a.degree_w)}) + 2;
-      const QuadratureRule1D rule = gauss_legendre(n);
+      if (static_cast<int>(rule.nodes.size()) != n) rule = gauss_legendre(n);
       face_points(e.side_a, e.a_from, e.a_to, e.a_from_t, e.a_to_t, false, rule, at_a);
       face_points(e.side_b, e.b_from, e.b_to, e.b_from_t, e.b_to_t, e.transposed, rule, at_b);
       evaluate_volume_cell_basis_at(mesh, geometry, e.cell_a, at_a[0], at_a[1], at_a[2], ca);
@@ -252,6 +252,9 @@ ErrorIndicators volume_residual_indicators(const BezierMesh& mesh, const Geometr
   VolumeCoefficients coefficient(problem, diffusion);
   CellBasis fb;
   Eigen::VectorXd local, beta;
+  // Per boundary condition, its data's evaluators, made on its first face: g, or h, or a flux
+  // vector F (h = F.n), or grad u of the exact solution.
+  std::vector<std::optional<std::vector<ExpressionEvaluator>>> evaluators(problem.boundary.size());
   for (int c = 0; c < mesh.num_cells(); ++c) {
     const BezierCell& cell = mesh.cell(c);
     for (int side = 0; side < 6; ++side) {
@@ -264,15 +267,17 @@ ErrorIndicators volume_residual_indicators(const BezierMesh& mesh, const Geometr
       const int n = std::max({cell.degree_u, cell.degree_v, int(cell.degree_w)}) + 2;
       evaluate_side_basis(mesh, geometry, c, CellSide(side), n, fb);
       bernstein_of(mesh, c, fb.C, coefficients, local, beta);
-      // The data: g, or h, or a flux vector F (h = F.n), or grad u of the exact solution.
       const bool flux_data = !weak_dirichlet && !bc.from_exact && !bc.flux.empty();
-      std::vector<ExpressionEvaluator> data;
-      if (weak_dirichlet) data.emplace_back(bc.from_exact ? problem.exact->u : bc.value);
-      else if (bc.from_exact) for (const Expression* d : {&problem.exact->u_x, &problem.exact->u_y, &problem.exact->u_z}) data.emplace_back(*d);
-      else if (flux_data) for (const Expression& d : bc.flux) data.emplace_back(d);
-      else data.emplace_back(bc.value);
-      if (!weak_dirichlet && (bc.from_exact || flux_data) && data.size() != 3)
-        throw std::invalid_argument("Neumann data on a volume's face need three flux components");
+      if (!evaluators[id]) {
+        std::vector<ExpressionEvaluator>& made = evaluators[id].emplace();
+        if (weak_dirichlet) made.emplace_back(bc.from_exact ? problem.exact->u : bc.value);
+        else if (bc.from_exact) for (const Expression* d : {&problem.exact->u_x, &problem.exact->u_y, &problem.exact->u_z}) made.emplace_back(*d);
+        else if (flux_data) for (const Expression& d : bc.flux) made.emplace_back(d);
+        else made.emplace_back(bc.value);
+        if (!weak_dirichlet && (bc.from_exact || flux_data) && made.size() != 3)
+          throw std::invalid_argument("Neumann data on a volume's face need three flux components");
+      }
+      std::vector<ExpressionEvaluator>& data = *evaluators[id];
       double integral = 0;
       for (int k = 0; k < fb.measure.size(); ++k) {
         const Eigen::Vector3d x = fb.geometry.x.row(k).transpose();

@@ -79,15 +79,16 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
       mu << 0, 1, 0.5, 0.5;
       mv << 0.5, 0.5, 0, 1;
       GeometryAtPoints g;
-      // Hexahedra are halved in every direction (THB's octants): no direction to choose.
-      if (space->geometry().parametric_dimension() == 2)
-      for (int m : marked) {
-        space->geometry().evaluate(m, mu, mv, g);
-        const double eu = (g.x.row(1) - g.x.row(0)).norm(), ev = (g.x.row(3) - g.x.row(2)).norm();
-        split.push_back(eu > kAspect * ev   ? CellSplit::kAcrossU
-                        : ev > kAspect * eu ? CellSplit::kAcrossV
-                        : s % 2 == 0        ? CellSplit::kAcrossU
-                                            : CellSplit::kAcrossV);
+      // A volume's refinement halves hexahedra in every direction: no direction to choose.
+      if (space->geometry().parametric_dimension() == 2) {
+        for (int m : marked) {
+          space->geometry().evaluate(m, mu, mv, g);
+          const double eu = (g.x.row(1) - g.x.row(0)).norm(), ev = (g.x.row(3) - g.x.row(2)).norm();
+          split.push_back(eu > kAspect * ev   ? CellSplit::kAcrossU
+                          : ev > kAspect * eu ? CellSplit::kAcrossV
+                          : s % 2 == 0        ? CellSplit::kAcrossU
+                                              : CellSplit::kAcrossV);
+        }
       }
       t1 = clock::now();
       std::unique_ptr<SplineSpace> next =

@@ -64,10 +64,12 @@ class GeometryMap {
                                   Eigen::MatrixXd& /*out*/) const {
     return false;
   }
-  // A volume's: columns (x_uu, x_uv, x_uw, x_vv, x_vw, x_ww, then y's, then z's). False when
-  // the map cannot give them.
+  // A volume's: columns (x_uu, x_uv, x_uw, x_vv, x_vw, x_ww, then y's, then z's), and with
+  // `first` the points and Jacobians there too (one evaluation of the map for both). False
+  // when the map cannot give them.
   virtual bool volume_second_derivatives(int /*cell*/, const Eigen::VectorXd& /*u*/, const Eigen::VectorXd& /*v*/,
-                                         const Eigen::VectorXd& /*w*/, Eigen::MatrixXd& /*out*/) const {
+                                         const Eigen::VectorXd& /*w*/, Eigen::MatrixXd& /*out*/,
+                                         GeometryAtPoints* /*first*/ = nullptr) const {
     return false;
   }
 };

@@ -34,7 +34,7 @@ struct MultiVolume {
   int num_patches() const { return static_cast<int>(patches.size()); }
 };
 
-// Face f (1..6) as the side of a hexahedron, and the reverse.
+// Face f (1..6) as the side of a hexahedron.
 CellSide cell_side_of_face(int face);
 // The volume's parameters (u, v, w) at the point (s, t) of face f.
 std::array<double, 3> face_parameters(const NurbsVolume& volume, int face, double s, double t);

@@ -140,13 +140,22 @@ void VolumeGeometryMap::evaluate_volume(int cell, const Eigen::VectorXd& u, cons
 }
 
 bool VolumeGeometryMap::volume_second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v,
-                                                  const Eigen::VectorXd& w, Eigen::MatrixXd& out) const {
+                                                  const Eigen::VectorXd& w, Eigen::MatrixXd& out, GeometryAtPoints* first) const {
   const BezierCell& c = mesh_.cell(cell);
   const double lo[3] = {c.u0, c.v0, c.w0}, size[3] = {c.u1 - c.u0, c.v1 - c.v0, c.w1 - c.w0};
   out.resize(u.size(), 18);
+  if (first) {
+    first->x.resize(u.size(), 3);
+    first->jacobian.resize(u.size(), 9);
+  }
   for (Eigen::Index k = 0; k < u.size(); ++k) {
     const std::array<double, 3> at{lo[0] + size[0] * u[k], lo[1] + size[1] * v[k], lo[2] + size[2] * w[k]};
     const VolumePointDerivatives p = volume_point_derivatives(volume_of(cell), at, span_of_cell_[cell], true);
+    if (first)
+      for (int i = 0; i < 3; ++i) {
+        first->x(k, i) = p.x[i];
+        for (int j = 0; j < 3; ++j) first->jacobian(k, 3 * i + j) = p.jacobian(i, j) * size[j];
+      }
     for (int i = 0; i < 3; ++i) {
       int column = 6 * i;
       for (int a = 0; a < 3; ++a)

@@ -53,7 +53,7 @@ class VolumeGeometryMap final : public GeometryMap {
   void evaluate(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, GeometryAtPoints& out) const override;
   BezierGeometryCell bezier_cell(int cell) const override;
   bool volume_second_derivatives(int cell, const Eigen::VectorXd& u, const Eigen::VectorXd& v, const Eigen::VectorXd& w,
-                                 Eigen::MatrixXd& out) const override;
+                                 Eigen::MatrixXd& out, GeometryAtPoints* first = nullptr) const override;
 
  private:
   const NurbsVolume& volume_of(int cell) const { return volumes_[volumes_.size() == 1 ? 0 : mesh_.cell(cell).patch]; }

@@ -239,7 +239,7 @@ namespace {
 struct LayerShare {
   int from = 0, to = 0, function_from = 0, function_to = 0;  // held
   int own_from = 0, own_to = 0, owned_from = 0, owned_to = 0;  // owned
-  int layers = 0, functions = 0;
+  int functions = 0;
   // The MeshPart of the share: `per_layer` functions and `cells_per_layer` cells in each layer.
   MeshPart part(int per_layer, int cells_per_layer, int element_layers) const {
     MeshPart p;
@@ -260,7 +260,6 @@ LayerShare share_layers(const std::vector<int>& spans, int q, int functions, Row
     throw std::invalid_argument("the mesh has " + std::to_string(n) + " " + what + ", fewer than the " + std::to_string(share.ranks) +
                                 " processes that share them " + how + std::to_string(n) + more);
   LayerShare l;
-  l.layers = static_cast<int>(n);
   l.functions = functions;
   l.own_from = static_cast<int>(n * share.rank / share.ranks);
   l.own_to = static_cast<int>(n * (share.rank + 1) / share.ranks);

@@ -1,5 +1,6 @@
 // Reading the [space] of one-patch families (see tensor_case.hpp).
 #include "families/tensor/tensor_case.hpp"
+#include "families/tensor/tensor_volume_space.hpp"
 
 #include <cstdio>
 #include <optional>
@@ -248,10 +249,9 @@ void check_refined_memory(const CaseDescription& c, double cells, const char* wh
     char text[120];
     std::snprintf(text, sizeof text, "a refined space of %.3g %s hexahedra of degree %dx%dx%d", cells, what, degree[0],
                   degree[1], degree[2]);
-    // About one function per cell, as on patches; the direct solve's fill as the tensor volume's (METIS).
+    // About one function per cell, as on patches, and 4 KB per cell of the family's own tables.
     check_memory(c.path + ": [adapt]",
-                 volume_galerkin_bytes(cells, cells + (degree[0] + 1) * (degree[1] + 1) * (degree[2] + 1), degree, true) +
-                     4096 * cells,
+                 volume_solve_bytes(c, cells, cells + (degree[0] + 1) * (degree[1] + 1) * (degree[2] + 1), degree) + 4096 * cells,
                  text);
     return;
   }

@@ -141,16 +141,22 @@ void check_multivolume_memory(const CaseDescription& c, const TensorVolumeOption
     cells += patch_cells;
     functions += patch_functions;
   }
-  const bool iterative = c.solver.method == "iterative";
-  const std::string preconditioner = c.solver.preconditioner == "auto" ? std::string(kBoomerAmgName) : c.solver.preconditioner;
-  const bool metis = c.solver.ordering == "auto" || c.solver.ordering == "metis" || c.solver.ordering == "nesdis";
+  std::string method;
+  const double bytes = volume_solve_bytes(c, cells, functions, o.degree, &method);
   char what[200];
   std::snprintf(what, sizeof what, "%.3g hexahedra of degree %dx%dx%d on %d volumes (%.3g unknowns, %s)", cells, o.degree[0],
-                o.degree[1], o.degree[2], c.volume_domain.num_patches(), functions, iterative ? "CG" : "direct solve");
-  check_memory(c.path + ": [space] elements",
-               iterative ? volume_iterative_bytes(cells, functions, o.degree, preconditioner, !c.solver.petsc_options.empty())
-                         : volume_galerkin_bytes(cells, functions, o.degree, metis),
-               what);
+                o.degree[1], o.degree[2], c.volume_domain.num_patches(), functions, method.c_str());
+  check_memory(c.path + ": [space] elements", bytes, what);
+}
+
+double volume_solve_bytes(const CaseDescription& c, double cells, double functions, const std::array<int, 3>& degree,
+                          std::string* method) {
+  const bool iterative = c.solver.method == "iterative";
+  if (method) *method = iterative ? "CG" : "direct solve";
+  const std::string preconditioner = c.solver.preconditioner == "auto" ? std::string(kBoomerAmgName) : c.solver.preconditioner;
+  const bool metis = c.solver.ordering == "auto" || c.solver.ordering == "metis" || c.solver.ordering == "nesdis";
+  return iterative ? volume_iterative_bytes(cells, functions, degree, preconditioner, !c.solver.petsc_options.empty())
+                   : volume_galerkin_bytes(cells, functions, degree, metis);
 }
 
 

@@ -1,6 +1,7 @@
 #pragma once
 // The tensor family on a volume ([geometry] type = "box" or "thick_quarter_annulus"):
 // trivariate B-splines or NURBS on hexahedra (docs/VOLUMES.md).
+#include <array>
 #include <memory>
 #include <string>
 
@@ -21,5 +22,11 @@ std::unique_ptr<SplineSpace> make_tensor_volume_space(const CaseDescription& c, 
 
 // Refuses, before anything is allocated, a volume space and solve that would not fit in memory.
 void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOptions& options);
+
+// The memory of a solve on `cells` hexahedra and `functions` unknowns of a space without a
+// structured preconditioner (glued volumes, THB): CG with --solver iterative ("auto": BoomerAMG),
+// else the direct solve with the case's ordering ("auto": METIS). `method` names the path taken.
+double volume_solve_bytes(const CaseDescription& c, double cells, double functions, const std::array<int, 3>& degree,
+                          std::string* method = nullptr);
 
 }  // namespace knotwork

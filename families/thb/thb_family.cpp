@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "basis/core/bezier_mesh.hpp"
+#include "basis/core/nurbs_volume.hpp"
 #include "families/tensor/tensor_case.hpp"
 #include "families/thb/thb_multipatch_space.hpp"
 #include "families/thb/thb_refine.hpp"
@@ -53,6 +54,8 @@ void read_thb_case(const CaseDocument& doc, CaseDescription& c) {
 
 const ThbSection& thb_section(const CaseDescription& c) { return family_section<ThbSection>(c); }
 
+// One patch's or one volume's THB space: the hierarchy's basis on the case's NURBS patch or
+// volume (whose removed parts the hierarchy already left out).
 class ThbSpace final : public SplineSpace, public SpaceReport {
  public:
   const SpaceReport& presentation() const override { return *this; }
@@ -61,18 +64,32 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
     mesh_ = std::move(b.mesh);
     leaves_ = std::move(b.leaves);
     per_level_ = std::move(b.functions_per_level);
-    geometry_ = finish_patch_mesh(c, mesh_);
+    if (hierarchy_.dimension() == 2) {
+      geometry_ = finish_patch_mesh(c, mesh_);
+      return;
+    }
+    mesh_.set_interface_rule(&interfaces_from_parameter_boxes);  // for the estimator, built when it asks
+    try {
+      geometry_ = std::make_unique<VolumeGeometryMap>(mesh_, c.volume);
+    } catch (const GeometryError& e) {
+      throw InputError(c.path + ": [geometry]: " + e.what());
+    }
   }
 
   const BezierMesh& mesh() const override { return mesh_; }
   const GeometryMap& geometry() const override { return *geometry_; }
   std::string description() const override {
-    const auto d = degree();
+    std::string degrees;
+    for (int d : degree()) degrees += (degrees.empty() ? "" : "x") + std::to_string(d);
     const int m = hierarchy_.admissibility();
-    return "THB-splines, degree " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + ", " +
+    return "THB-splines, degree " + degrees + (hierarchy_.dimension() == 3 ? " on hexahedra" : "") + ", " +
            (m == 0 ? std::string("no grading") : "T-admissible of class " + std::to_string(m));
   }
-  std::vector<int> degree() const override { return as_list(thb_section(*case_).space.degree); }
+  std::vector<int> degree() const override {
+    std::vector<int> d;
+    for (int k = 0; k < hierarchy_.dimension(); ++k) d.push_back(hierarchy_.knots(k).degree());
+    return d;
+  }
   std::vector<ReportField> report() const override {
     return {{.key = "levels", .value = long(per_level_.size()), .column = true, .width = 7}};
   }
@@ -82,7 +99,8 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
     ThbHierarchy next = refined_hierarchy(*case_, hierarchy_, leaves_, marked, extended);
     return std::make_unique<ThbSpace>(*case_, std::move(next));
   }
-  KnotLines knot_lines() const override { return knot_lines_of_cells(mesh_, *geometry_); }
+  // A volume's hexahedra show their sides in ParaView themselves: no lines drawn.
+  KnotLines knot_lines() const override { return hierarchy_.dimension() == 2 ? knot_lines_of_cells(mesh_, *geometry_) : KnotLines{}; }
 
  private:
   std::shared_ptr<const CaseDescription> case_;  // a copy: the space does not need the caller's case to live on
@@ -90,7 +108,7 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
   BezierMesh mesh_;
   std::vector<ThbCell> leaves_;
   std::vector<int> per_level_;
-  std::unique_ptr<PatchGeometryMap> geometry_;
+  std::unique_ptr<GeometryMap> geometry_;
 };
 
 std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
@@ -99,10 +117,14 @@ std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
   if (c.multipatch()) return make_thb_multipatch_space(c, t.space, t.admissibility, level);
   DyadicKnots u = patch_dyadic_knots(c.geometry, t.space, 0, level), v = patch_dyadic_knots(c.geometry, t.space, 1, level);
   check_dyadic_start_memory(c, u, v, "THB");
-  return std::make_unique<ThbSpace>(c, ThbHierarchy(std::move(u), std::move(v), t.admissibility));
+  return make_thb_space(c, ThbHierarchy(std::move(u), std::move(v), t.admissibility));
 }
 
 }  // namespace
+
+std::unique_ptr<SplineSpace> make_thb_space(const CaseDescription& c, ThbHierarchy hierarchy) {
+  return std::make_unique<ThbSpace>(c, std::move(hierarchy));
+}
 
 SpaceFamily thb_family() {
   SpaceFamily f;

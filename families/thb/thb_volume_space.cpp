@@ -12,7 +12,7 @@
 #include "cases/resource_limits.hpp"
 #include "families/tensor/tensor_case.hpp"
 #include "families/thb/thb_refine.hpp"
-#include "solver/amg_preconditioner.hpp"
+#include "families/tensor/tensor_volume_space.hpp"
 
 namespace knotwork {
 
@@ -32,60 +32,13 @@ void check_start_memory(const CaseDescription& c, const std::array<const DyadicK
   double cells = 1, functions = 1;
   for (const DyadicKnots* k : knots) cells *= k->base_elements(), functions *= double(k->num_functions(0));
   const std::array<int, 3>& degree = section(c).space.degree;
-  const bool iterative = c.solver.method == "iterative";
-  const std::string preconditioner = c.solver.preconditioner == "auto" ? std::string(kBoomerAmgName) : c.solver.preconditioner;
-  const bool metis = c.solver.ordering == "auto" || c.solver.ordering == "metis" || c.solver.ordering == "nesdis";
-  const double bytes = iterative ? volume_iterative_bytes(cells, functions, degree, preconditioner, !c.solver.petsc_options.empty())
-                                 : volume_galerkin_bytes(cells, functions, degree, metis);
+  std::string method;
+  const double bytes = volume_solve_bytes(c, cells, functions, degree, &method);
   char what[200];
   std::snprintf(what, sizeof what, "%.3g THB hexahedra of degree %dx%dx%d (%.3g unknowns, %s)", cells, degree[0], degree[1],
-                degree[2], functions, iterative ? "CG" : "direct solve");
+                degree[2], functions, method.c_str());
   check_memory(c.path + ": [space] elements", bytes, what);
 }
-
-class ThbVolumeSpace final : public SplineSpace, public SpaceReport {
- public:
-  ThbVolumeSpace(const CaseDescription& c, ThbHierarchy hierarchy)
-      : case_(std::make_shared<const CaseDescription>(c)), hierarchy_(std::move(hierarchy)) {
-    ThbHierarchy::Basis b = built_basis(c, hierarchy_);
-    mesh_ = std::move(b.mesh);
-    leaves_ = std::move(b.leaves);
-    per_level_ = std::move(b.functions_per_level);
-    mesh_.set_interface_rule(&interfaces_from_parameter_boxes);  // for the estimator, built when it asks
-    try {
-      geometry_ = std::make_unique<VolumeGeometryMap>(mesh_, c.volume);
-    } catch (const GeometryError& e) {
-      throw InputError(c.path + ": [geometry]: " + e.what());
-    }
-  }
-  const SpaceReport& presentation() const override { return *this; }
-  const BezierMesh& mesh() const override { return mesh_; }
-  const GeometryMap& geometry() const override { return *geometry_; }
-  std::vector<int> degree() const override { return as_list(section(*case_).space.degree); }
-  std::string description() const override {
-    const auto d = degree();
-    const int m = hierarchy_.admissibility();
-    return "THB-splines, degree " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]) +
-           " on hexahedra, " + (m == 0 ? std::string("no grading") : "T-admissible of class " + std::to_string(m));
-  }
-  std::vector<ReportField> report() const override {
-    return {{.key = "levels", .value = long(per_level_.size()), .column = true, .width = 7}};
-  }
-  std::vector<ReportField> basis_report() const override { return {functions_per_level_field(per_level_)}; }
-  std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
-                                      int* extended, const ProgressFunction& /*progress*/) && override {
-    ThbHierarchy next = refined_hierarchy(*case_, hierarchy_, leaves_, marked, extended);
-    return std::make_unique<ThbVolumeSpace>(*case_, std::move(next));
-  }
-
- private:
-  std::shared_ptr<const CaseDescription> case_;
-  ThbHierarchy hierarchy_;
-  BezierMesh mesh_;
-  std::vector<ThbCell> leaves_;
-  std::vector<int> per_level_;
-  std::unique_ptr<VolumeGeometryMap> geometry_;
-};
 
 }  // namespace
 
@@ -142,7 +95,7 @@ std::unique_ptr<SplineSpace> make_thb_volume_space(const CaseDescription& c, int
         }
     h.remove_base_cells(removed);
   }
-  return std::make_unique<ThbVolumeSpace>(c, std::move(h));
+  return make_thb_space(c, std::move(h));
 }
 
 void override_thb_volume_space(CaseDescription& c, int degree, int elements) {

@@ -2,10 +2,15 @@
 // The THB family on a volume: the octree of basis/thb's hierarchy over the volume's knot spans.
 #include <memory>
 
+#include "basis/thb/thb_hierarchy.hpp"
 #include "cases/case_reader.hpp"
 #include "cases/spline_space.hpp"
 
 namespace knotwork {
+
+// The THB space of a hierarchy on the case's patch or volume (thb_family.cpp): its refine()
+// halves marked cells (quadrants or octants) with the hierarchy's grading.
+std::unique_ptr<SplineSpace> make_thb_space(const CaseDescription& c, ThbHierarchy hierarchy);
 
 // [space] of a THB volume case (degree, elements, admissibility, quadrature), after [geometry]
 // was found to be a volume.
