@@ -97,16 +97,21 @@ void finish_volume(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Ei
   out.grad_y.resize(n, nb);
   out.grad_z.resize(n, nb);
   Eigen::MatrixXd* grad[3] = {&out.grad_x, &out.grad_y, &out.grad_z};
+  // J^{-T} per point first, then each gradient a column at a time (the tables are column-major:
+  // a row per point would be read with a stride).
+  Eigen::Matrix<double, Eigen::Dynamic, 9> inverse_transpose(n, 9);
   for (Eigen::Index k = 0; k < n; ++k) {
     Eigen::Matrix3d Jk;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) Jk(i, j) = J(k, 3 * i + j);
     out.det[k] = Jk.determinant();
-    const Eigen::Matrix3d inverse_transpose = Jk.inverse().transpose();
+    const Eigen::Matrix3d it = Jk.inverse().transpose();
     for (int i = 0; i < 3; ++i)
-      grad[i]->row(k) = inverse_transpose(i, 0) * R[0]->row(k) + inverse_transpose(i, 1) * R[1]->row(k) +
-                        inverse_transpose(i, 2) * R[2]->row(k);
+      for (int j = 0; j < 3; ++j) inverse_transpose(k, 3 * i + j) = it(i, j);
   }
+  for (int i = 0; i < 3; ++i)
+    grad[i]->noalias() = inverse_transpose.col(3 * i).asDiagonal() * *R[0] + inverse_transpose.col(3 * i + 1).asDiagonal() * *R[1] +
+                         inverse_transpose.col(3 * i + 2).asDiagonal() * *R[2];
   out.min_jacobian = out.det.minCoeff();
   out.measure = (rule_weight.array() * out.det.abs()).matrix();
 }
@@ -264,9 +269,10 @@ namespace {
 
 // u_h and its reference derivatives from the Bernstein tables, then the physical gradient
 // point by point (the formulas of finish, on one function).
+// Bw: the derivatives along w on a hexahedron (null on quadrilaterals).
 void finish_field(const BezierMesh& mesh, int cell, const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu,
-                  const Eigen::MatrixXd& Bv, const Eigen::VectorXd& rule_weight, const Eigen::VectorXd& coefficients,
-                  CellField& out) {
+                  const Eigen::MatrixXd& Bv, const Eigen::MatrixXd* Bw, const Eigen::VectorXd& rule_weight,
+                  const Eigen::VectorXd& coefficients, CellField& out) {
   const Eigen::MatrixXd& C = mesh.extraction(cell);
   const auto ids = mesh.functions(cell);
   out.local.resize(static_cast<Eigen::Index>(ids.size()));
@@ -281,21 +287,36 @@ void finish_field(const BezierMesh& mesh, int cell, const Eigen::MatrixXd& B, co
     out.w.noalias() = B * out.bernstein;
     out.w_u.noalias() = Bu * out.bernstein;
     out.w_v.noalias() = Bv * out.bernstein;
+    if (Bw) out.w_w.noalias() = *Bw * out.bernstein;
   }
   out.bernstein.noalias() = C.transpose() * out.local;
   out.s.noalias() = B * out.bernstein;
   out.s_u.noalias() = Bu * out.bernstein;
   out.s_v.noalias() = Bv * out.bernstein;
+  if (Bw) out.s_w.noalias() = *Bw * out.bernstein;
   if (mesh.is_rational()) {
     out.s.array() /= out.w.array();
     out.s_u.array() = (out.s_u.array() - out.s.array() * out.w_u.array()) / out.w.array();
     out.s_v.array() = (out.s_v.array() - out.s.array() * out.w_v.array()) / out.w.array();
+    if (Bw) out.s_w.array() = (out.s_w.array() - out.s.array() * out.w_w.array()) / out.w.array();
   }
   out.value = out.s;
   const auto& J = out.geometry.jacobian;
   out.dimension = out.geometry.dimension();
   out.gradient.resize(n, out.dimension);
   out.measure.resize(n);
+  if (Bw) {  // grad = J^{-T} (f_u, f_v, f_w), J = d x / d reference (3 x 3)
+    for (Eigen::Index k = 0; k < n; ++k) {
+      Eigen::Matrix3d Jk;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) Jk(i, j) = J(k, 3 * i + j);
+      const double det = Jk.determinant();
+      const Eigen::Matrix3d it = Jk.inverse().transpose();
+      for (int i = 0; i < 3; ++i) out.gradient(k, i) = it(i, 0) * out.s_u[k] + it(i, 1) * out.s_v[k] + it(i, 2) * out.s_w[k];
+      out.measure[k] = rule_weight[k] * std::abs(det);
+    }
+    return;
+  }
   for (Eigen::Index k = 0; k < n; ++k) {
     const double fu = out.s_u[k], fv = out.s_v[k];
     if (out.dimension == 2) {
@@ -322,7 +343,16 @@ void evaluate_cell_field(const BezierMesh& mesh, const GeometryMap& geometry, in
   const BezierCell& c = mesh.cell(cell);
   const BernsteinTable& t = bernstein_table(c.degree_u, c.degree_v, nu, nv);
   geometry.evaluate_at_rule(cell, nu, nv, out.geometry);
-  finish_field(mesh, cell, t.value, t.d_u, t.d_v, t.weight, coefficients, out);
+  finish_field(mesh, cell, t.value, t.d_u, t.d_v, nullptr, t.weight, coefficients, out);
+}
+
+void evaluate_volume_cell_field(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu, int nv, int nw,
+                                const Eigen::VectorXd& coefficients, CellField& out) {
+  const BezierCell& c = mesh.cell(cell);
+  if (c.dimension != 3) throw std::logic_error("evaluate_volume_cell_field: not a hexahedron");
+  const BernsteinTable& t = bernstein_table(c.degree_u, c.degree_v, c.degree_w, nu, nv, nw);
+  geometry.evaluate_volume_at_rule(cell, nu, nv, nw, out.geometry);
+  finish_field(mesh, cell, t.value, t.d_u, t.d_v, &t.d_w, t.weight, coefficients, out);
 }
 
 void evaluate_cell_field_at(const BezierMesh& mesh, const GeometryMap& geometry, int cell, const Eigen::VectorXd& u,
@@ -331,7 +361,7 @@ void evaluate_cell_field_at(const BezierMesh& mesh, const GeometryMap& geometry,
   Eigen::MatrixXd B, Bu, Bv;
   tensor_bernstein(c.degree_u, c.degree_v, u, v, B, Bu, Bv);
   geometry.evaluate(cell, u, v, out.geometry);
-  finish_field(mesh, cell, B, Bu, Bv, Eigen::VectorXd::Ones(u.size()), coefficients, out);
+  finish_field(mesh, cell, B, Bu, Bv, nullptr, Eigen::VectorXd::Ones(u.size()), coefficients, out);
 }
 
 std::vector<int> side_bernstein_indices(int p, int q, int r, CellSide side) {

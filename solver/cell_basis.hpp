@@ -65,12 +65,16 @@ struct CellField {
   Eigen::MatrixXd gradient;  // points x dimension
   Eigen::VectorXd measure;   // as in CellBasis
   GeometryAtPoints geometry;
-  Eigen::VectorXd local, bernstein, weights, s, s_u, s_v, w, w_u, w_v;  // scratch
+  Eigen::VectorXd local, bernstein, weights, s, s_u, s_v, s_w, w, w_u, w_v, w_w;  // scratch
 };
 
 // At the tensor Gauss points of an (nu x nv) rule, for the global coefficient vector.
 void evaluate_cell_field(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu, int nv,
                          const Eigen::VectorXd& coefficients, CellField& out);
+// On a hexahedron, at the tensor Gauss points of an (nu x nv x nw) rule: u_h and its gradient
+// from the cell's Bernstein coefficients of u_h (the functions' values are never formed).
+void evaluate_volume_cell_field(const BezierMesh& mesh, const GeometryMap& geometry, int cell, int nu, int nv, int nw,
+                                const Eigen::VectorXd& coefficients, CellField& out);
 // At arbitrary reference points (measure = the area element alone).
 void evaluate_cell_field_at(const BezierMesh& mesh, const GeometryMap& geometry, int cell, const Eigen::VectorXd& u,
                             const Eigen::VectorXd& v, const Eigen::VectorXd& coefficients, CellField& out);

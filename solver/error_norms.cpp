@@ -30,29 +30,23 @@ void cell_squared_errors(const BezierMesh& mesh, const GeometryMap& geometry, co
   {
     ExpressionBatch ex(compiled);
     CellField field;
-    CellBasis cb;  // a volume's hexahedra: through the cell basis, for now
-    Eigen::VectorXd local, bernstein;
 #pragma omp for schedule(dynamic, 64)
     for (int c = first; c < last; ++c) {
       const BezierCell& cell = mesh.cell(c);
       if (volume) {
-        evaluate_volume_cell_basis(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
+        evaluate_volume_cell_field(mesh, geometry, c, rule_points(quadrature.error_points_u, cell.degree_u, 2),
                                    rule_points(quadrature.error_points_v, cell.degree_v, 2),
-                                   rule_points(quadrature.error_points_w, cell.degree_w, 2), cb);
-        const auto ids = mesh.functions(c);
-        local.resize(static_cast<Eigen::Index>(ids.size()));
-        for (size_t a = 0; a < ids.size(); ++a) local[a] = coefficients[ids[a]];
-        bernstein.noalias() = cb.C.transpose() * local;
-        const Eigen::MatrixXd& x = cb.geometry.x;
+                                   rule_points(quadrature.error_points_w, cell.degree_w, 2), coefficients, field);
+        const Eigen::MatrixXd& x = field.geometry.x;
         ex.evaluate(x.col(0).data(), x.col(1).data(), x.col(2).data(), x.rows());
+        const Eigen::MatrixXd& grad_h = field.gradient;
         double l2 = 0, semi = 0;
-        for (Eigen::Index k = 0; k < cb.measure.size(); ++k) {
-          const double e = ex.result(0)[k] - exact_offset - cb.value.row(k).dot(bernstein);
-          const double gx = ex.result(1)[k] - cb.grad_x.row(k).dot(bernstein);
-          const double gy = ex.result(2)[k] - cb.grad_y.row(k).dot(bernstein);
-          const double gz = ex.result(3)[k] - cb.grad_z.row(k).dot(bernstein);
-          l2 += cb.measure[k] * e * e;
-          semi += cb.measure[k] * (gx * gx + gy * gy + gz * gz);
+        for (Eigen::Index k = 0; k < field.measure.size(); ++k) {
+          const double e = ex.result(0)[k] - exact_offset - field.value[k];
+          const double gx = ex.result(1)[k] - grad_h(k, 0), gy = ex.result(2)[k] - grad_h(k, 1),
+                       gz = ex.result(3)[k] - grad_h(k, 2);
+          l2 += field.measure[k] * e * e;
+          semi += field.measure[k] * (gx * gx + gy * gy + gz * gz);
         }
         cell_l2[c] = l2;
         cell_semi_all[c] = semi;

@@ -29,8 +29,15 @@ std::string to_string(Ordering o) {
   }
 }
 
+namespace {
+// Eigen's supernodal LL^T with its CHOLMOD factor in view, for the pivots.
+struct SupernodalLlt : Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+  const cholmod_factor* factor() const { return m_cholmodFactor; }
+};
+}  // namespace
+
 struct SparseCholesky::Impl {
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+  SupernodalLlt llt;
   std::vector<int> outer, inner;  // pattern of the last analysis
   Eigen::SparseMatrix<double> lower;  // the last matrix factored, for the residual
 };
@@ -79,6 +86,27 @@ void SparseCholesky::factorize(const Eigen::SparseMatrix<double>& A) {
   stats_.factor_nonzeros = cm.lnz;
   stats_.flops = cm.fl;
   stats_.peak_bytes = static_cast<double>(cm.memory_usage);
+}
+
+Eigen::VectorXd SparseCholesky::pivots() const {
+  const cholmod_factor* L = impl_->llt.factor();
+  if (!L || !L->is_super || !L->is_ll) throw std::logic_error("SparseCholesky::pivots: no supernodal LL^T factor");
+  const auto* super = static_cast<const int*>(L->super);
+  const auto* pi = static_cast<const int*>(L->pi);
+  const auto* px = static_cast<const int*>(L->px);
+  const auto* perm = static_cast<const int*>(L->Perm);
+  const auto* x = static_cast<const double*>(L->x);
+  Eigen::VectorXd d(static_cast<Eigen::Index>(L->n));
+  // Supernode s holds columns super[s] .. super[s + 1] - 1 as one dense column-major block of
+  // pi[s + 1] - pi[s] rows at x + px[s], its diagonal first.
+  for (size_t s = 0; s < L->nsuper; ++s) {
+    const int columns = super[s + 1] - super[s], rows = pi[s + 1] - pi[s];
+    for (int j = 0; j < columns; ++j) {
+      const double l = x[px[s] + static_cast<long>(j) * (rows + 1)];
+      d[perm ? perm[super[s] + j] : super[s] + j] = l * l;
+    }
+  }
+  return d;
 }
 
 Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) {

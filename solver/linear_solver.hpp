@@ -49,6 +49,9 @@ class SparseCholesky {
   // solution; the refinement step exposes it: throws std::runtime_error when its relative
   // correction exceeds kNumericallySingularCorrection.
   Eigen::VectorXd solve(const Eigen::VectorXd& b);
+  // The pivots of the last factorization, L_kk^2 (= D_k of LDL^T), at the matrix's own row
+  // numbering (the fill-reducing permutation undone).
+  Eigen::VectorXd pivots() const;
   const CholeskyStats& stats() const { return stats_; }
 
  private:

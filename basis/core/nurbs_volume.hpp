@@ -1,8 +1,7 @@
 #pragma once
 // A trivariate NURBS (a volume) and the map it gives the hexahedral cells of a space in its
-// parameter domain: the first volume pieces (docs/VOLUMES.md). Evaluated point by point from
-// the univariate B-splines; the fast per-rule tables of the 2D map (PatchGeometryMap) are to
-// follow once volumes are assembled.
+// parameter domain (docs/VOLUMES.md). At a cell's Gauss rule the map is evaluated one direction
+// at a time from univariate tables; at other points, point by point.
 #include <Eigen/Core>
 #include <array>
 #include <vector>
