@@ -116,8 +116,9 @@ ZeroMeanData zero_mean_data(const BezierMesh& mesh, const GeometryMap& geometry,
   return z;
 }
 
-bool operator_serves(const PoissonProblem& problem, int dimension) {
-  return dimension == 2 && problem.coefficients.constant() && !problem.source.empty() &&
+bool operator_serves(const PoissonProblem& problem, const GeometryMap& geometry) {
+  const bool planar_or_volume = geometry.dimension() == 2 || geometry.parametric_dimension() == 3;
+  return planar_or_volume && problem.coefficients.constant() && !problem.source.empty() &&
          problem.dirichlet_method != DirichletMethod::kNitsche;
 }
 
@@ -201,7 +202,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   const bool matrix_free = options.matrix_free != nullptr;
   // What an operator's load and lifting serve: the problems without a matrix and, where one
   // is assembled, those whose operator writes it from its Kronecker form.
-  const bool operator_problem = !sol.zero_mean && operator_serves(problem, geometry.dimension());
+  const bool operator_problem = !sol.zero_mean && operator_serves(problem, geometry);
   if (matrix_free && (distributed || !operator_problem || !options.iterative || options.on_system || options.estimate_condition))
     throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
                            "coefficients, a given source and no Nitsche terms");
@@ -217,7 +218,6 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
       given = options.matrix_from_operator();
       if (given && given->num_functions() != mesh.num_functions())
         throw std::logic_error("solve_poisson: matrix_from_operator gave an operator of another space");
-      if (given && volume) throw std::logic_error("solve_poisson: an operator's matrix on a volume (its cells are assembled)");
     });
     const bool writes = given && operator_problem && given->assembles_lower();
     if (distributed) {

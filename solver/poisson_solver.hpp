@@ -112,9 +112,9 @@ struct NotConverged : std::runtime_error {
 bool has_boundary(const BezierMesh& mesh);
 
 // Whether a space's operator (MatrixFreePoisson) can stand for the element loop on this problem:
-// planar, constant coefficients, a given source, Dirichlet data by projection; the driver also
-// asks for a boundary (no zero-mean solve) and a serial run.
-bool operator_serves(const PoissonProblem& problem, int dimension);
+// planar or a volume (not a surface), constant coefficients, a given source, Dirichlet data by
+// projection; the driver also asks for a boundary (no zero-mean solve).
+bool operator_serves(const PoissonProblem& problem, const GeometryMap& geometry);
 
 // Closed surface, reaction 0: the mass matrix gives the constant 1 in the basis (M one = the
 // integrals of the functions), hence the area and the mean of f; the stiffness matrix with

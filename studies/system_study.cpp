@@ -55,7 +55,7 @@ AssembledSystem assemble_system(const CaseDescription& c, const SplineSpace& spa
     // affine map writes the matrices themselves (docs/SOLVERS.md).
     const std::shared_ptr<const MatrixFreePoisson> op = space_operator(space, 1.0, problem.reaction, c.quadrature);
     if (op && op->num_functions() != n) throw std::logic_error("assemble_system: an operator of another space");
-    if (op && op->assembles_lower() && !s.zero_mean && operator_serves(problem, geometry.dimension())) {
+    if (op && op->assembles_lower() && !s.zero_mean && operator_serves(problem, geometry)) {
       s.stiffness = whole(op->lower_matrix(all));
       s.load = op->load(problem.source);
       add_neumann_terms(mesh, geometry, problem, all, c.quadrature, s.load);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -122,6 +123,34 @@ VolumePointDerivatives volume_point_derivatives(const NurbsVolume& volume, const
   block.resize(size_t(4) * (degree[0] + 1) * (degree[1] + 1) * (degree[2] + 1));
   gather_block(volume, span, degree, block.data());
   return combine_tables(block.data(), degree, tables, second);
+}
+
+std::optional<AffineVolumeMap> affine_map(const NurbsVolume& volume) {
+  const Eigen::VectorXd& w = volume.weights;
+  if (w.size() == 0 || (w.array() - w[0]).abs().maxCoeff() > 64 * std::numeric_limits<double>::epsilon() * std::abs(w[0]))
+    return std::nullopt;
+  std::array<std::vector<double>, 3> g;
+  std::array<long, 3> n;
+  for (int d = 0; d < 3; ++d) {
+    if (volume.bases[d].degree() < 1) return std::nullopt;
+    g[d] = greville_abscissae(volume.bases[d]);
+    n[d] = volume.bases[d].num_functions();
+  }
+  const Eigen::MatrixX3d& P = volume.control_points;
+  const auto at = [&](long i, long j, long k) -> Eigen::Vector3d { return P.row(i + n[0] * (j + n[1] * k)).transpose(); };
+  AffineVolumeMap m;
+  m.jacobian.col(0) = (at(n[0] - 1, 0, 0) - at(0, 0, 0)) / (g[0].back() - g[0].front());
+  m.jacobian.col(1) = (at(0, n[1] - 1, 0) - at(0, 0, 0)) / (g[1].back() - g[1].front());
+  m.jacobian.col(2) = (at(0, 0, n[2] - 1) - at(0, 0, 0)) / (g[2].back() - g[2].front());
+  m.origin = at(0, 0, 0) - m.jacobian * Eigen::Vector3d(g[0].front(), g[1].front(), g[2].front());
+  const double size = P.cwiseAbs().maxCoeff() + m.jacobian.cwiseAbs().maxCoeff();
+  const double tolerance = 64 * std::numeric_limits<double>::epsilon() * size;
+  for (long k = 0; k < n[2]; ++k)
+    for (long j = 0; j < n[1]; ++j)
+      for (long i = 0; i < n[0]; ++i)
+        if ((at(i, j, k) - m.origin - m.jacobian * Eigen::Vector3d(g[0][i], g[1][j], g[2][k])).cwiseAbs().maxCoeff() > tolerance)
+          return std::nullopt;
+  return m;
 }
 
 VolumeGeometryMap::VolumeGeometryMap(const BezierMesh& mesh, NurbsVolume volume)

@@ -4,6 +4,7 @@
 // at a time from univariate tables; at other points, point by point.
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <vector>
 
 #include "basis/core/bezier_mesh.hpp"
@@ -21,6 +22,16 @@ struct NurbsVolume {
   // Throws std::invalid_argument naming what is wrong (counts, weights, open knots).
   void validate() const;
 };
+
+// x = origin + jacobian (u, v, w) in the volume's parameters.
+struct AffineVolumeMap {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d jacobian = Eigen::Matrix3d::Identity();
+};
+// The volume's map when it is one affine map (equal weights, and every control point the affine
+// map of its Greville abscissae, to 64 eps of the net's size: linear precision makes those its
+// only coefficients); none otherwise.
+std::optional<AffineVolumeMap> affine_map(const NurbsVolume& volume);
 
 // The volume's point and its derivatives (columns x_u, x_v, x_w) at the parameters (u, v, w),
 // in the knot spans `span` (one per direction; -1: the span holding the parameter).

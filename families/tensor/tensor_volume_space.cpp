@@ -11,6 +11,7 @@
 #include "basis/core/glue_patches.hpp"
 #include "basis/core/nurbs_volume.hpp"
 #include "cases/resource_limits.hpp"
+#include "solver/affine_volume_operator.hpp"
 #include "solver/amg_preconditioner.hpp"
 #include "solver/fast_diagonalization_3d.hpp"
 
@@ -85,6 +86,19 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
       for (int s = 0; s < 6; ++s) nitsche[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
     return fast_diagonalization_3d(d_.space, layout, lower.diagonal(), volume_separable_coefficients(d_), nitsche,
                                    problem.nitsche_penalty);
+  }
+  // Where the map is one affine map and the functions are B-splines, the operator that writes
+  // the matrix from its Kronecker form (solver/affine_volume_operator.hpp); elsewhere, and on a
+  // process's part (its slabs are assembled by the element loop), none: std::invalid_argument,
+  // which the pipeline reads as "assemble element by element".
+  std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double stiffness, double reaction,
+                                                          const QuadratureOptions& quadrature) const override {
+    if (d_.part) throw std::invalid_argument("a process's part of a volume is assembled element by element");
+    if (d_.mesh.is_rational()) throw std::invalid_argument("NURBS functions are not products of univariate ones");
+    const std::optional<AffineVolumeMap> map = affine_map(d_.volume);
+    if (!map) throw std::invalid_argument("the volume's map is not one affine map");
+    return std::make_unique<AffineVolumeOperator>(d_.space, *map, stiffness, reaction,
+                                                  std::array<int, 3>{quadrature.points_u, quadrature.points_v, quadrature.points_w});
   }
 
  private:

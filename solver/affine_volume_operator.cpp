@@ -1,0 +1,325 @@
+#include "solver/affine_volume_operator.hpp"
+
+#include <omp.h>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "basis/core/input_error.hpp"
+#include "quadrature/gauss_legendre.hpp"
+#include "solver/sparsity.hpp"
+
+namespace knotwork {
+
+namespace {
+
+constexpr int kMaxDegree = 15, kMaxPoints = 16;
+
+// y = B x along direction `along` of an n[0] x n[1] x n[2] array (index i + n0 j + n0 n1 k), B a
+// band matrix of half-width p (entry (a, c) at a (2p + 1) + c - a + p); B^T with `transposed`.
+void mode_product(const std::vector<double>& band, int p, bool transposed, int along, const std::array<int, 3>& n,
+                  const double* x, double* y) {
+  const long stride = along == 0 ? 1 : along == 1 ? n[0] : long(n[0]) * n[1];
+  const int m = n[along], width = 2 * p + 1;
+  const long lines = long(n[0]) * n[1] * n[2] / m;
+#pragma omp parallel for schedule(static)
+  for (long line = 0; line < lines; ++line) {
+    // The line's first entry: along u, line = j + n1 k; along v, i + n0 k; along w, i + n0 j.
+    const long start = along == 0 ? line * n[0] : along == 1 ? (line % n[0]) + long(n[0]) * n[1] * (line / n[0]) : line;
+    for (int a = 0; a < m; ++a) {
+      double s = 0;
+      for (int c = std::max(0, a - p); c <= std::min(m - 1, a + p); ++c)
+        s += (transposed ? band[size_t(c) * width + (a - c + p)] : band[size_t(a) * width + (c - a + p)]) * x[start + stride * c];
+      y[start + stride * a] = s;
+    }
+  }
+}
+
+}  // namespace
+
+AffineVolumeOperator::Direction AffineVolumeOperator::direction(const BSplineBasis1D& space, int points) {
+  Direction d;
+  d.degree = space.degree();
+  if (d.degree > kMaxDegree) throw std::invalid_argument("AffineVolumeOperator: degree above 15");
+  d.points = points > 0 ? points : d.degree + 1;
+  if (d.points > kMaxPoints) throw std::invalid_argument("AffineVolumeOperator: more than 16 Gauss points per direction");
+  const QuadratureRule1D rule = gauss_legendre(d.points);
+  const std::vector<int> spans = space.element_spans();
+  const auto& t = space.knots();
+  const int p = d.degree, P = p + 1, Q = d.points, n = space.num_functions(), width = 2 * p + 1;
+  d.elements = static_cast<int>(spans.size());
+  d.first.resize(spans.size());
+  d.value.resize(spans.size() * Q * P);
+  d.derivative.resize(d.value.size());
+  d.node.resize(spans.size() * Q);
+  d.weight.resize(d.node.size());
+  d.K.assign(size_t(n) * width, 0.0);
+  d.M.assign(d.K.size(), 0.0);
+  d.D.assign(d.K.size(), 0.0);
+  double table[2 * (kMaxDegree + 1)];
+  for (int e = 0; e < d.elements; ++e) {
+    const int s = spans[e];
+    const double a = t[s], h = t[s + 1] - t[s];
+    d.first[e] = s - p;
+    for (int q = 0; q < Q; ++q) {
+      const double x = a + h * rule.nodes[q];
+      d.node[e * Q + q] = x;
+      d.weight[e * Q + q] = h * rule.weights[q];
+      space.evaluate_derivatives(s, x, 1, table);
+      for (int b = 0; b < P; ++b) {
+        d.value[(size_t(e) * Q + q) * P + b] = table[b];
+        d.derivative[(size_t(e) * Q + q) * P + b] = table[P + b];
+      }
+    }
+    // K and M summed for c >= r and mirrored, so that entry(row, column) and entry(column, row)
+    // are the same bits (a distributed solve's rows agree with the serial lower triangle).
+    for (int r = 0; r < P; ++r)
+      for (int c = 0; c < P; ++c) {
+        double k = 0, m = 0, mixed = 0;
+        const int lo = std::min(r, c), hi = std::max(r, c);
+        for (int q = 0; q < Q; ++q) {
+          const double* v = &d.value[(size_t(e) * Q + q) * P];
+          const double* dv = &d.derivative[(size_t(e) * Q + q) * P];
+          const double w = d.weight[e * Q + q];
+          k += w * dv[lo] * dv[hi];
+          m += w * v[lo] * v[hi];
+          mixed += w * dv[r] * v[c];
+        }
+        const size_t at = size_t(d.first[e] + r) * width + (c - r + p);
+        d.K[at] += k;
+        d.M[at] += m;
+        d.D[at] += mixed;
+      }
+  }
+  d.low.assign(n, n);
+  d.high.assign(n, -1);
+  for (int f : d.first)  // elements in order: their first functions do not decrease
+    for (int a = f; a <= f + p; ++a) d.low[a] = std::min(d.low[a], f), d.high[a] = std::max(d.high[a], f + p);
+  return d;
+}
+
+AffineVolumeOperator::AffineVolumeOperator(const std::array<BSplineBasis1D, 3>& space, const AffineVolumeMap& map,
+                                           double stiffness, double reaction, std::array<int, 3> points)
+    : map_(map) {
+  det_ = map.jacobian.determinant();
+  if (!(det_ > 0)) throw std::invalid_argument("AffineVolumeOperator: the map's Jacobian determinant is not positive");
+  for (int k = 0; k < 3; ++k) {
+    d_[k] = direction(space[k], points[k]);
+    n_[k] = space[k].num_functions();
+    ends_[k] = space[k].breakpoints();
+  }
+  const Eigen::Matrix3d G = stiffness * det_ * (map.jacobian.transpose() * map.jacobian).inverse();
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) g_[a][b] = G(a, b);
+  r_ = reaction * det_;
+}
+
+int AffineVolumeOperator::max_row_nonzeros() const {
+  return (2 * d_[0].degree + 1) * (2 * d_[1].degree + 1) * (2 * d_[2].degree + 1);
+}
+
+double AffineVolumeOperator::entry(int i, int j, int k, int i0, int j0, int k0) const {
+  const Direction &U = d_[0], &V = d_[1], &W = d_[2];
+  const size_t wu = 2 * U.degree + 1, wv = 2 * V.degree + 1, ww = 2 * W.degree + 1;
+  const size_t u = i * wu + (i0 - i + U.degree), ut = i0 * wu + (i - i0 + U.degree);
+  const size_t v = j * wv + (j0 - j + V.degree), vt = j0 * wv + (j - j0 + V.degree);
+  const size_t w = k * ww + (k0 - k + W.degree), wt = k0 * ww + (k - k0 + W.degree);
+  double e = g_[0][0] * U.K[u] * V.M[v] * W.M[w] + g_[1][1] * U.M[u] * V.K[v] * W.M[w] + g_[2][2] * U.M[u] * V.M[v] * W.K[w] +
+             r_ * U.M[u] * V.M[v] * W.M[w];
+  // The mixed terms, G_ab (d_a on the row's function, d_b on the column's) + G_ba (the other way).
+  if (g_[0][1] != 0) e += g_[0][1] * (U.D[u] * V.D[vt] + U.D[ut] * V.D[v]) * W.M[w];
+  if (g_[0][2] != 0) e += g_[0][2] * (U.D[u] * W.D[wt] + U.D[ut] * W.D[w]) * V.M[v];
+  if (g_[1][2] != 0) e += g_[1][2] * (V.D[v] * W.D[wt] + V.D[vt] * W.D[w]) * U.M[u];
+  return e;
+}
+
+void AffineVolumeOperator::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  if (x.size() != num_functions()) throw std::invalid_argument("AffineVolumeOperator::apply: wrong vector size");
+  const Direction &U = d_[0], &V = d_[1], &W = d_[2];
+  y.setZero(x.size());
+  Eigen::VectorXd a(x.size()), b(x.size()), c(x.size());
+  // y += coefficient (B_w (x) B_v (x) B_u) x, each factor a band (transposed or not).
+  struct Factor {
+    const std::vector<double>* band;
+    bool transposed;
+  };
+  const auto add = [&](double coefficient, Factor fu, Factor fv, Factor fw) {
+    if (coefficient == 0) return;
+    mode_product(*fu.band, U.degree, fu.transposed, 0, n_, x.data(), a.data());
+    mode_product(*fv.band, V.degree, fv.transposed, 1, n_, a.data(), b.data());
+    mode_product(*fw.band, W.degree, fw.transposed, 2, n_, b.data(), c.data());
+    y += coefficient * c;
+  };
+  const Factor Mu{&U.M, false}, Mv{&V.M, false}, Mw{&W.M, false};
+  add(g_[0][0], {&U.K, false}, Mv, Mw);
+  add(g_[1][1], Mu, {&V.K, false}, Mw);
+  add(g_[2][2], Mu, Mv, {&W.K, false});
+  add(r_, Mu, Mv, Mw);
+  // entry(): G01 (D_u(i, i0) D_v(j0, j) + D_u(i0, i) D_v(j, j0)) M_w(k, k0), and likewise.
+  add(g_[0][1], {&U.D, false}, {&V.D, true}, Mw);
+  add(g_[0][1], {&U.D, true}, {&V.D, false}, Mw);
+  add(g_[0][2], {&U.D, false}, Mv, {&W.D, true});
+  add(g_[0][2], {&U.D, true}, Mv, {&W.D, false});
+  add(g_[1][2], Mu, {&V.D, false}, {&W.D, true});
+  add(g_[1][2], Mu, {&V.D, true}, {&W.D, false});
+}
+
+Eigen::VectorXd AffineVolumeOperator::diagonal() const {
+  Eigen::VectorXd out(num_functions());
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < n_[2]; ++k)
+    for (int j = 0; j < n_[1]; ++j)
+      for (int i = 0; i < n_[0]; ++i) out[i + n_[0] * (j + long(n_[1]) * k)] = entry(i, j, k, i, j, k);
+  return out;
+}
+
+Eigen::VectorXd AffineVolumeOperator::load(const Expression& source) const {
+  const Direction &U = d_[0], &V = d_[1], &W = d_[2];
+  const int Pu = U.degree + 1, Pv = V.degree + 1, Pw = W.degree + 1, Qu = U.points, Qv = V.points, Qw = W.points;
+  const int threads = omp_get_max_threads();
+  // Each thread sums its slabs of elements into its own copy (neighbouring slabs share functions).
+  std::vector<Eigen::VectorXd> partial(threads);
+  const ExpressionBatch compiled(std::vector<Expression>{source});
+  // The first cell (in the mesh's order, eu + n_eu (ev + n_ev ew)) where f is not finite.
+  long bad_cell = std::numeric_limits<long>::max();
+  double bad[3] = {0, 0, 0};
+#pragma omp parallel
+  {
+    Eigen::VectorXd& out = partial[omp_get_thread_num()];
+    out.setZero(num_functions());
+    ExpressionBatch f(compiled);
+    const int points = Qu * Qv * Qw;
+    std::vector<double> x(points), y(points), z(points), h(points), t1(size_t(Qu) * Qv * Pw), t2(size_t(Qu) * Pv * Pw);
+#pragma omp for schedule(static)
+    for (int ew = 0; ew < W.elements; ++ew)
+      for (int ev = 0; ev < V.elements; ++ev)
+        for (int eu = 0; eu < U.elements; ++eu) {
+          for (int c = 0; c < Qw; ++c)
+            for (int b = 0; b < Qv; ++b)
+              for (int a = 0; a < Qu; ++a) {
+                const Eigen::Vector3d p =
+                    map_.origin + map_.jacobian * Eigen::Vector3d(U.node[eu * Qu + a], V.node[ev * Qv + b], W.node[ew * Qw + c]);
+                const int q = a + Qu * (b + Qv * c);
+                x[q] = p[0], y[q] = p[1], z[q] = p[2];
+              }
+          f.evaluate(x.data(), y.data(), z.data(), points);
+          const double* value = f.result(0);
+          for (int c = 0; c < Qw; ++c)
+            for (int b = 0; b < Qv; ++b)
+              for (int a = 0; a < Qu; ++a) {
+                const int q = a + Qu * (b + Qv * c);
+                if (!std::isfinite(value[q])) {
+                  const long cell = eu + long(U.elements) * (ev + long(V.elements) * ew);
+#pragma omp critical(knotwork_affine_volume_bad_source)
+                  if (cell < bad_cell) bad_cell = cell, bad[0] = x[q], bad[1] = y[q], bad[2] = z[q];
+                }
+                h[q] = value[q] * U.weight[eu * Qu + a] * V.weight[ev * Qv + b] * W.weight[ew * Qw + c] * det_;
+              }
+          // Sum over the points one direction at a time: w, then v, then u.
+          for (int cw = 0; cw < Pw; ++cw)
+            for (int b = 0; b < Qv; ++b)
+              for (int a = 0; a < Qu; ++a) {
+                double s = 0;
+                for (int c = 0; c < Qw; ++c) s += W.value[(size_t(ew) * Qw + c) * Pw + cw] * h[a + Qu * (b + Qv * c)];
+                t1[a + Qu * (b + size_t(Qv) * cw)] = s;
+              }
+          for (int cw = 0; cw < Pw; ++cw)
+            for (int bv = 0; bv < Pv; ++bv)
+              for (int a = 0; a < Qu; ++a) {
+                double s = 0;
+                for (int b = 0; b < Qv; ++b) s += V.value[(size_t(ev) * Qv + b) * Pv + bv] * t1[a + Qu * (b + size_t(Qv) * cw)];
+                t2[a + Qu * (bv + size_t(Pv) * cw)] = s;
+              }
+          for (int cw = 0; cw < Pw; ++cw)
+            for (int bv = 0; bv < Pv; ++bv)
+              for (int au = 0; au < Pu; ++au) {
+                double s = 0;
+                for (int a = 0; a < Qu; ++a) s += U.value[(size_t(eu) * Qu + a) * Pu + au] * t2[a + Qu * (bv + size_t(Pv) * cw)];
+                out[(U.first[eu] + au) + n_[0] * ((V.first[ev] + bv) + long(n_[1]) * (W.first[ew] + cw))] += s;
+              }
+        }
+  }
+  if (bad_cell != std::numeric_limits<long>::max()) {
+    // Worded as the element loop words it (solver/assemble_poisson.cpp).
+    const long eu = bad_cell % U.elements, ev = (bad_cell / U.elements) % V.elements, ew = bad_cell / (long(U.elements) * V.elements);
+    std::ostringstream m;
+    m << source.where() << ": source \"" << source.text() << "\" is not a finite number at (" << bad[0] << ", " << bad[1]
+      << ", " << bad[2] << ") in cell " << bad_cell << " (u in [" << ends_[0][eu] << ", " << ends_[0][eu + 1]
+      << "], v in [" << ends_[1][ev] << ", " << ends_[1][ev + 1] << "], w in [" << ends_[2][ew] << ", "
+      << ends_[2][ew + 1] << "])";
+    throw InputError(m.str());
+  }
+  Eigen::VectorXd out = std::move(partial[0]);
+  for (int t = 1; t < threads; ++t) out += partial[t];
+  return out;
+}
+
+void AffineVolumeOperator::coupled_functions(int function, std::vector<int>& out) const {
+  const int i0 = function % n_[0], j0 = (function / n_[0]) % n_[1], k0 = function / (n_[0] * n_[1]);
+  for (int k = d_[2].low[k0]; k <= d_[2].high[k0]; ++k)
+    for (int j = d_[1].low[j0]; j <= d_[1].high[j0]; ++j)
+      for (int i = d_[0].low[i0]; i <= d_[0].high[i0]; ++i) out.push_back(i + n_[0] * (j + n_[1] * k));
+}
+
+void AffineVolumeOperator::row_entries(int row, int count, const int* columns, double* values) const {
+  const int i = row % n_[0], j = (row / n_[0]) % n_[1], k = row / (n_[0] * n_[1]);
+  for (int e = 0; e < count; ++e) {
+    const int c = columns[e], i0 = c % n_[0], j0 = (c / n_[0]) % n_[1], k0 = c / (n_[0] * n_[1]);
+    values[e] = std::abs(i - i0) <= d_[0].degree && std::abs(j - j0) <= d_[1].degree && std::abs(k - k0) <= d_[2].degree
+                    ? entry(i, j, k, i0, j0, k0)
+                    : 0.0;
+  }
+}
+
+Eigen::SparseMatrix<double> AffineVolumeOperator::lower_matrix(const DofLayout& layout) const { return write_lower(layout, true); }
+
+Eigen::SparseMatrix<double> AffineVolumeOperator::lower_pattern(const DofLayout& layout) const {
+  return write_lower(layout, false);
+}
+
+Eigen::SparseMatrix<double> AffineVolumeOperator::write_lower(const DofLayout& layout, bool with_values) const {
+  if (static_cast<long>(layout.dof.size()) != long(num_functions()))
+    throw std::logic_error("AffineVolumeOperator::write_lower: a layout of another space");
+  const Direction &U = d_[0], &V = d_[1], &W = d_[2];
+  const int n = layout.num_free(), nu = n_[0], nv = n_[1];
+  Eigen::SparseMatrix<double> K(n, n);
+  int* outer = K.outerIndexPtr();
+  outer[0] = 0;
+  // Column d is function (i0, j0, k0); its rows are the free functions at or after it (function
+  // order = dof order) that share an element with it: k from k0, then j from j0 on k0's layer,
+  // then i from i0 on the column's own line of functions.
+  const auto for_rows = [&](int d, auto row) {
+    const int g = layout.function_of_dof[d], i0 = g % nu, j0 = (g / nu) % nv, k0 = g / (nu * nv);
+    for (int k = k0; k <= W.high[k0]; ++k)
+      for (int j = k == k0 ? j0 : V.low[j0]; j <= V.high[j0]; ++j)
+        for (int i = k == k0 && j == j0 ? i0 : U.low[i0]; i <= U.high[i0]; ++i) {
+          const int dof = layout.dof[i + nu * (j + long(nv) * k)];
+          if (dof >= 0) row(dof, i0, j0, k0, i, j, k);
+        }
+  };
+#pragma omp parallel for schedule(static)
+  for (int d = 0; d < n; ++d) {
+    int count = 0;
+    for_rows(d, [&](int, int, int, int, int, int, int) { ++count; });
+    outer[d + 1] = count;
+  }
+  for (int d = 0; d < n; ++d) outer[d + 1] += outer[d];
+  K.resizeNonZeros(outer[n]);
+  int* inner = K.innerIndexPtr();
+  double* values = K.valuePtr();
+#pragma omp parallel for schedule(static)
+  for (int d = 0; d < n; ++d) {
+    long at = outer[d];
+    for_rows(d, [&](int dof, int i0, int j0, int k0, int i, int j, int k) {
+      inner[at] = dof;
+      values[at] = with_values ? entry(i, j, k, i0, j0, k0) : 0.0;
+      ++at;
+    });
+  }
+  return K;
+}
+
+}  // namespace knotwork

@@ -1,0 +1,229 @@
+// The operator of a trivariate B-spline space on one affine map (solver/affine_volume_operator),
+// checked against the element loop (solver/assemble_poisson: Bezier extraction, the map evaluated
+// at every Gauss point, J inverted there), an independent computation of the same integrals:
+// - affine_map finds one affine map, and refuses a curved map, a trilinear non-parallelepiped and
+//   unequal weights;
+// - the matrix over the free dofs has the element loop's pattern and, entry by entry, its values
+//   within the rounding bound below, on a sheared parallelepiped with unequal degrees, non-uniform
+//   knots, a C0 knot and a reaction term;
+// - the load, the diagonal and the product K x agree with the element loop's load and matrix;
+// - a source that is not finite is refused with the element loop's words;
+// - knotwork run on the cube writes the matrix this way, and on the curved annulus does not.
+//
+// The bound: both sides sum the same products of basis values, weights and the metric in other
+// orders, so an entry differs by at most a few times m eps sum |terms|, m the number of summands
+// (at most 8 cells x 64 points here, and the terms of the metric). For the stiffness,
+// |grad phi_i . G grad phi_j| <= (grad phi_i . G grad phi_i + grad phi_j . G grad phi_j) / 2 at every
+// point (G positive definite), so sum |terms| <= (K_ii + K_jj) / 2; the element loop's G comes from
+// J inverted at each point, off by about cond(J) eps.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "basis/core/input_error.hpp"
+#include "basis/core/nurbs_volume.hpp"
+#include "basis/tensor/tensor_patch.hpp"
+#include "cli_sandbox.hpp"
+#include "solver/affine_volume_operator.hpp"
+#include "solver/assemble_poisson.hpp"
+#include "solver/expression.hpp"
+#include "solver/sparsity.hpp"
+
+using namespace knotwork;
+
+namespace {
+
+constexpr double eps = std::numeric_limits<double>::epsilon();
+
+Eigen::Matrix3d shear() {
+  Eigen::Matrix3d J;
+  J << 2.0, 0.3, 0.1, 0.2, 1.5, -0.4, 0.1, 0.2, 0.8;
+  return J;
+}
+
+// The map x = origin + J (u, v, w) as a volume of degrees (2, 1, 1) with a non-uniform knot in u:
+// its control points are the map at the Greville abscissae (linear precision).
+NurbsVolume affine_volume(const Eigen::Vector3d& origin, const Eigen::Matrix3d& J) {
+  NurbsVolume volume;
+  volume.bases = {BSplineBasis1D(2, {0, 0, 0, 0.3, 1, 1, 1}), BSplineBasis1D(1, {0, 0, 1, 1}), BSplineBasis1D(1, {0, 0, 1, 1})};
+  const std::vector<double> gu = greville_abscissae(volume.bases[0]);
+  const int nu = static_cast<int>(gu.size());
+  volume.control_points.resize(nu * 4, 3);
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < nu; ++i)
+        volume.control_points.row(i + nu * (j + 2 * k)) = (origin + J * Eigen::Vector3d(gu[i], j, k)).transpose();
+  volume.weights.setConstant(nu * 4, 1.0);
+  return volume;
+}
+
+// The space: degree 2 in u with a C0 knot, 3 in v, 1 in w, non-uniform knots.
+std::array<BSplineBasis1D, 3> test_space() {
+  return {BSplineBasis1D(2, {0, 0, 0, 0.3, 0.5, 0.5, 1, 1, 1}), BSplineBasis1D(3, {0, 0, 0, 0, 0.6, 1, 1, 1, 1}),
+          BSplineBasis1D(1, {0, 0, 0.2, 0.45, 0.7, 1, 1})};
+}
+
+struct Setup {
+  std::array<BSplineBasis1D, 3> space = test_space();
+  BezierMesh mesh;
+  NurbsVolume volume = affine_volume(Eigen::Vector3d(0.5, -1, 2), shear());
+  std::vector<bool> fixed;
+  DofLayout layout;
+  int n[3];
+  Setup() {
+    add_tensor_cells(mesh, space, 0, space[2].num_elements());
+    for (int d = 0; d < 3; ++d) n[d] = space[d].num_functions();
+    const int functions = n[0] * n[1] * n[2];
+    mesh.set_num_functions(functions);
+    fixed.assign(functions, false);
+    // The functions on the faces u = 0, v = 1 and w = 1 fixed: a layout with holes.
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i) fixed[i + n[0] * (j + n[1] * k)] = i == 0 || j == n[1] - 1 || k == n[2] - 1;
+    layout = make_dof_layout(functions, fixed);
+  }
+};
+
+// The element loop's lower matrix and load over `layout` (Dirichlet values zero).
+void element_loop(const Setup& s, const Expression& source, double stiffness, double reaction,
+                  Eigen::SparseMatrix<double>& K, Eigen::VectorXd& load) {
+  const VolumeGeometryMap map(s.mesh, s.volume);
+  PoissonForm form;
+  form.stiffness = stiffness;
+  form.reaction = reaction;
+  form.source = &source;
+  K = lower_pattern_matrix(s.mesh, s.layout);
+  assemble_poisson(s.mesh, map, form, s.layout, Eigen::VectorXd::Zero(s.mesh.num_functions()), QuadratureOptions{}, K, load);
+}
+
+}  // namespace
+
+TEST_CASE("affine_map finds one affine map, and only that", "[affine_volume]") {
+  const Eigen::Vector3d origin(0.5, -1, 2);
+  const std::optional<AffineVolumeMap> m = affine_map(affine_volume(origin, shear()));
+  REQUIRE(m);
+  CHECK((m->jacobian - shear()).cwiseAbs().maxCoeff() <= 16 * eps * shear().cwiseAbs().maxCoeff());
+  CHECK((m->origin - origin).cwiseAbs().maxCoeff() <= 16 * eps * 4);
+
+  NurbsVolume moved = affine_volume(origin, shear());  // one corner moved: trilinear, not affine
+  moved.control_points(moved.control_points.rows() - 1, 2) += 1e-3;
+  CHECK_FALSE(affine_map(moved));
+  NurbsVolume middle = affine_volume(origin, shear());  // an inner control point of the quadratic moved
+  middle.control_points(1, 0) += 1e-3;
+  CHECK_FALSE(affine_map(middle));
+  NurbsVolume weighted = affine_volume(origin, shear());  // unequal weights: a rational map
+  weighted.weights[1] = 0.9;
+  CHECK_FALSE(affine_map(weighted));
+}
+
+TEST_CASE("The Kronecker-form matrix is the element loop's, entry by entry", "[affine_volume]") {
+  const Setup s;
+  const Expression source = Expression::parse("1", "test");
+  for (const auto& [stiffness, reaction] : {std::pair{1.0, 0.0}, std::pair{1.3, 0.7}}) {
+    Eigen::SparseMatrix<double> loop;
+    Eigen::VectorXd unused;
+    element_loop(s, source, stiffness, reaction, loop, unused);
+    const AffineVolumeOperator op(s.space, *affine_map(s.volume), stiffness, reaction);
+    const Eigen::SparseMatrix<double> written = op.lower_matrix(s.layout);
+    REQUIRE(written.nonZeros() == loop.nonZeros());
+    REQUIRE(std::equal(written.outerIndexPtr(), written.outerIndexPtr() + written.cols() + 1, loop.outerIndexPtr()));
+    REQUIRE(std::equal(written.innerIndexPtr(), written.innerIndexPtr() + written.nonZeros(), loop.innerIndexPtr()));
+    const Eigen::VectorXd diagonal = Eigen::VectorXd(loop.diagonal());
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(shear());
+    const double condition = svd.singularValues()[0] / svd.singularValues()[2];
+    const double m = 8 * 64 + 20;  // summands per entry: cells x points, and the metric's terms
+    double worst = 0;
+    for (int c = 0; c < loop.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(loop, c); it; ++it) {
+        const double bound = 4 * (m + 10 * condition) * eps * (diagonal[it.row()] + diagonal[c]) / 2;
+        const double difference = std::abs(written.coeff(it.row(), c) - it.value());
+        worst = std::max(worst, difference / bound);
+      }
+    INFO("stiffness " << stiffness << ", reaction " << reaction << ": worst difference / bound " << worst);
+    CHECK(worst <= 1);
+    // Not vacuous: the matrix has mixed-metric entries of both signs.
+    CHECK(loop.coeffs().minCoeff() < 0);
+  }
+}
+
+TEST_CASE("The operator's load, diagonal and product agree with the assembled ones", "[affine_volume]") {
+  const Setup s;
+  // A positive source: every term of F_a is positive, so sum |terms| = F_a.
+  const Expression source = Expression::parse("2 + sin(x)*cos(y)*z/10", "test");
+  Eigen::SparseMatrix<double> loop;
+  Eigen::VectorXd loop_load;
+  element_loop(s, source, 1.0, 0.5, loop, loop_load);
+  const AffineVolumeOperator op(s.space, *affine_map(s.volume), 1.0, 0.5);
+  const Eigen::VectorXd load = op.load(source);
+  const double m = 8 * 64 + 20;
+  for (int d = 0; d < s.layout.num_free(); ++d) {
+    const int f = s.layout.function_of_dof[d];
+    REQUIRE(loop_load[d] > 0);
+    CHECK(std::abs(load[f] - loop_load[d]) <= 4 * m * eps * loop_load[d]);
+  }
+  // Over all functions (nothing fixed) the operator's K, its diagonal and K x.
+  const int functions = s.mesh.num_functions();
+  const DofLayout all = make_dof_layout(functions, std::vector<bool>(functions, false));
+  const Eigen::SparseMatrix<double> lower = op.lower_matrix(all);
+  const Eigen::SparseMatrix<double> K = Eigen::SparseMatrix<double>(lower.selfadjointView<Eigen::Lower>());
+  CHECK((op.diagonal() - Eigen::VectorXd(K.diagonal())).cwiseAbs().maxCoeff() == 0);  // the same sums
+  Eigen::VectorXd x(functions);
+  for (int f = 0; f < functions; ++f) x[f] = std::sin(0.37 * f + 0.1);
+  Eigen::VectorXd y;
+  op.apply(x, y);
+  const Eigen::VectorXd expected = K * x;
+  // Each y_i sums the same products in another order: within m eps sum_j |K_ij| |x_j|, m the
+  // terms of an entry (10) times the couplings of a row.
+  const Eigen::VectorXd size = Eigen::SparseMatrix<double>(K.cwiseAbs()) * x.cwiseAbs();
+  const double couplings = op.max_row_nonzeros();
+  for (int f = 0; f < functions; ++f) CHECK(std::abs(y[f] - expected[f]) <= 4 * 10 * couplings * eps * size[f]);
+  // The rows a distributed solve writes: row_entries gives K's entries, coupled_functions its pattern.
+  std::vector<int> columns;
+  op.coupled_functions(17, columns);
+  std::vector<double> values(columns.size());
+  op.row_entries(17, static_cast<int>(columns.size()), columns.data(), values.data());
+  int stored = 0;
+  for (Eigen::SparseMatrix<double>::InnerIterator it(Eigen::SparseMatrix<double>(K.transpose()), 17); it; ++it) ++stored;
+  CHECK(static_cast<int>(columns.size()) == stored);
+  for (size_t k = 0; k < columns.size(); ++k) CHECK(values[k] == K.coeff(17, columns[k]));
+}
+
+TEST_CASE("A source that is not finite is refused in the element loop's words", "[affine_volume]") {
+  const Setup s;
+  const Expression source = Expression::parse("sqrt(2-x)", "case.toml: [problem] source");
+  std::string loop_message, operator_message;
+  try {
+    Eigen::SparseMatrix<double> K;
+    Eigen::VectorXd load;
+    element_loop(s, source, 1.0, 0.0, K, load);
+  } catch (const InputError& e) {
+    loop_message = e.what();
+  }
+  try {
+    AffineVolumeOperator(s.space, *affine_map(s.volume), 1.0, 0.0).load(source);
+  } catch (const InputError& e) {
+    operator_message = e.what();
+  }
+  INFO(loop_message);
+  REQUIRE(!loop_message.empty());
+  CHECK(operator_message == loop_message);
+}
+
+TEST_CASE("knotwork run writes the cube's matrix from the Kronecker form, not the annulus's", "[affine_volume]") {
+  const cli_test::Sandbox box;
+  const std::string cases = std::string(KNOTWORK_SOURCE_DIR) + "/cases/";
+  const cli_test::Result cube = box.run("run " + cases + "cube.toml --elements 8 --json -q --no-output");
+  INFO(cube.err);
+  REQUIRE(cube.code == 0);
+  CHECK(cube.out.find("\"assembly_method\": \"kronecker_form\"") != std::string::npos);
+  const cli_test::Result annulus = box.run("run " + cases + "thick_quarter_annulus.toml --elements 2 --json -q --no-output");
+  INFO(annulus.err);
+  REQUIRE(annulus.code == 0);
+  CHECK(annulus.out.find("\"assembly_method\": \"element_loop\"") != std::string::npos);
+}
