@@ -65,6 +65,17 @@ double volume_structured_bytes(double functions, const std::array<int, 3>& degre
   return 1e8 + functions * coupling * 30 + preconditioner;
 }
 
+double volume_matrix_free_bytes(double functions, double boundary_faces, const std::array<int, 3>& degree,
+                                double preconditioner) {
+  double per_cell = 1;
+  for (int p : degree) per_cell *= p + 1;
+  // The mesh (a cell and its functions' numbers per hexahedron), the vectors and the error
+  // pass per function; the Dirichlet projection's triplets, boundary matrix and factor per
+  // boundary face, a transient of the set-up. Calibrated on the cube (docs/PERFORMANCE.md,
+  // "Volumes: CG without a matrix"), with a margin.
+  return 1e8 + functions * (200 + 8 * per_cell) + boundary_faces * 150 * per_cell * per_cell / double(degree[2] + 1) / double(degree[2] + 1) + preconditioner;
+}
+
 double iterative_bytes(double cells, double functions, int p, int q, double preconditioner, bool with_matrix) {
   const double per_cell = double(p + 1) * (q + 1);
   const double coupling = double(2 * p + 1) * (2 * q + 1) / 2;

@@ -24,6 +24,10 @@ double volume_iterative_bytes(double cells, double functions, const std::array<i
 // The same for CG with a structured preconditioner on a volume's assembled matrix (the fast
 // diagonalization), whose own storage is `preconditioner` bytes.
 double volume_structured_bytes(double functions, const std::array<int, 3>& degree, double preconditioner);
+// CG without a matrix on a volume that is one affine map (its operator applied by mode
+// products), `boundary_faces` faces of hexahedra on the boundary.
+double volume_matrix_free_bytes(double functions, double boundary_faces, const std::array<int, 3>& degree,
+                                double preconditioner);
 
 // Memory of the iterative path (CG): the same cell lists and matrix as galerkin_bytes, no
 // factor, CG's vectors, and `preconditioner` bytes for the preconditioner's own storage

@@ -132,13 +132,9 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     if (options.progress) options.progress(s);
   };
   if (problem.reaction < 0) throw std::invalid_argument("reaction must be >= 0");
-  // A volume (hexahedral cells) is solved with an assembled matrix, for now (docs/VOLUMES.md):
-  // the operators applied without one are written for quadrilaterals.
   const bool volume = geometry.parametric_dimension() == 3;
   if (volume != (mesh.num_cells() > 0 && mesh.cell(0).dimension == 3))
     throw std::invalid_argument("the geometry's parametric dimension is not the mesh's cells'");
-  if (volume && options.matrix_free)
-    throw std::invalid_argument("volumes are solved with an assembled matrix, for now: docs/VOLUMES.md");
   // A gradient given by the caller (a Python exact solution) has as many components as it was given.
   if (problem.exact && problem.exact->on_surface() != (geometry.dimension() == 3))
     throw InputError(problem.exact->u.where() + ": the exact solution's gradient has " +
@@ -273,7 +269,11 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     // F over the free dofs, less K g for the Dirichlet values g; Neumann terms as assembled.
     // Distributed, the owned rows of F and K g (whole: the operator covers their elements).
     sol.assembly = matrix_free ? "none" : "kronecker_form";
-    if (matrix_free) op = options.matrix_free();
+    if (matrix_free) {
+      op = options.matrix_free();
+      if (!op || op->num_functions() != mesh.num_functions())
+        throw std::logic_error("solve_poisson: matrix_free gave no operator, or one of another space");
+    }
     else if (distributed) write_owned_rows(*op, layout, rows);
     else {
       Eigen::SparseMatrix<double> written = op->lower_matrix(layout);

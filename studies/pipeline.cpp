@@ -132,11 +132,14 @@ void check_quadrature_points(const CaseDescription& c, const BezierMesh& mesh) {
 // Why the space's operator (SplineSpace::matrix_free_operator, K of the constant-coefficient
 // planar form) cannot stand for this case's K ("" when it can, and then `op` is it).
 std::string operator_obstacle(const CaseDescription& c, const SplineSpace& space, std::shared_ptr<const MatrixFreePoisson>& op) {
-  if (space.geometry().parametric_dimension() == 3) return "serves planar problems only (not volumes, for now: docs/VOLUMES.md)";
-  if (space.geometry().dimension() != 2) return "serves planar problems only (not surfaces)";
+  if (space.geometry().parametric_dimension() != 3 && space.geometry().dimension() != 2) return "serves planar problems and volumes only (not surfaces)";
   if (!c.problem.coefficients.constant()) return "serves constant coefficients only (this case's [problem] coefficient or reaction varies)";
   if (c.problem.dirichlet_method == DirichletMethod::kNitsche) return "does not add Nitsche's boundary terms";
-  op = space.matrix_free_operator(1.0, c.problem.reaction, c.quadrature);
+  try {
+    op = space.matrix_free_operator(1.0, c.problem.reaction, c.quadrature);
+  } catch (const std::invalid_argument& e) {  // the space has none here, and says why
+    return std::string("is not available here (") + e.what() + ")";
+  }
   if (!op) return "is not available for this space (family \"" + c.family + "\"" + (c.multipatch() ? ", several patches" : "") + ")";
   return "";
 }
@@ -149,7 +152,8 @@ std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& sp
   if (chosen.preconditioner == kBoomerAmgName ||
       (chosen.preconditioner != "jacobi" && !space.structured_preconditioner_without_matrix(chosen.preconditioner)))
     return "needs a preconditioner that does without the matrix (not \"" + chosen.preconditioner + "\")";
-  if (space.geometry().dimension() == 2 && c.problem.source.empty()) return "serves problems with a given source";
+  const bool surface = space.geometry().dimension() == 3 && space.geometry().parametric_dimension() == 2;
+  if (!surface && c.problem.source.empty()) return "serves problems with a given source";
   if (c.solver.estimate_condition) return "has no matrix for --condition to estimate";
   return operator_obstacle(c, space, op);
 }

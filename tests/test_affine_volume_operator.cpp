@@ -227,3 +227,43 @@ TEST_CASE("knotwork run writes the cube's matrix from the Kronecker form, not th
   REQUIRE(annulus.code == 0);
   CHECK(annulus.out.find("\"assembly_method\": \"element_loop\"") != std::string::npos);
 }
+
+namespace {
+
+double json_number(const std::string& text, const std::string& key) {
+  const size_t at = text.find("\"" + key + "\": ");
+  REQUIRE(at != std::string::npos);
+  return std::stod(text.substr(at + key.size() + 4));
+}
+
+}  // namespace
+
+TEST_CASE("CG without a matrix on the cube: the assembled solve's errors, and a clear refusal on a curved volume",
+          "[affine_volume]") {
+  const cli_test::Sandbox box;
+  const std::string cube = std::string(KNOTWORK_SOURCE_DIR) + "/cases/cube.toml --elements 24 --json -q --no-output";
+  const cli_test::Result free = box.run("run " + cube);  // "auto": CG without a matrix on an affine volume (26^3 functions)
+  INFO(free.err);
+  REQUIRE(free.code == 0);
+  CHECK(free.out.find("\"assembly_method\": \"none\"") != std::string::npos);
+  CHECK(free.out.find("\"matrix\": \"matrix_free\"") != std::string::npos);
+  const cli_test::Result direct = box.run("run " + cube + " --solver direct --condition");
+  REQUIRE(direct.code == 0);
+  // Both solve K c = F (K's entries equal to rounding: the test cases above): CG to a backward
+  // error of 1e-15, CHOLMOD backward stably. The coefficients then differ by about
+  // kappa (1e-15 + eps) relative, kappa the Jacobi-scaled condition number; the L2 error by at
+  // most that times |u_h|_L2 <= 1 (u = sin sin sin: 0.35), the H1-seminorm error times
+  // |u_h|_H1 (2 here) times sqrt(kappa) for the scaling between the norms.
+  const double kappa = json_number(direct.out, "stiffness");
+  REQUIRE(kappa > 1);
+  const double relative = 10 * kappa * (1e-15 + eps);
+  CHECK(std::abs(json_number(free.out, "l2_error") - json_number(direct.out, "l2_error")) <= relative);
+  CHECK(std::abs(json_number(free.out, "h1_seminorm_error") - json_number(direct.out, "h1_seminorm_error")) <=
+        2 * std::sqrt(kappa) * relative);
+  // Asked for on a curved volume, the refusal names why.
+  const cli_test::Result curved = box.run("run " + std::string(KNOTWORK_SOURCE_DIR) +
+                                          "/cases/thick_quarter_annulus.toml --elements 2 --solver iterative --matrix matrix_free -q --no-output");
+  CHECK(curved.code != 0);
+  CHECK(curved.err.find("[solver] matrix: \"matrix_free\" is not available here (NURBS functions are not products of "
+                        "univariate ones); use \"assembled\" or \"auto\"") != std::string::npos);
+}

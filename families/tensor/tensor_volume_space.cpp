@@ -111,6 +111,15 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
 
 void check_multivolume_memory(const CaseDescription& c, const TensorVolumeOptions& o);
 
+namespace {
+// Whether the pipeline will run CG without a matrix on this case (studies/pipeline.cpp,
+// matrix_free_obstacle: the volume's operator, AffineVolumeOperator, serves it).
+bool without_matrix(const CaseDescription& c) {
+  return c.solver.matrix != "assembled" && !c.solver.estimate_condition && c.problem.coefficients.constant() &&
+         !c.problem.source.empty() && c.problem.dirichlet_method != DirichletMethod::kNitsche && affine_map(c.volume);
+}
+}  // namespace
+
 void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOptions& o) {
   if (c.multivolume()) return check_multivolume_memory(c, o);
   double cells = 1, functions = 1;
@@ -137,6 +146,15 @@ void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOpti
                            : volume_galerkin_bytes(cells, functions, o.degree, metis);
   if (iterative && preconditioner == kFastDiagonalization) {
     bytes = volume_structured_bytes(functions, o.degree, fast_diagonalization_3d_bytes(n));
+    if (without_matrix(c)) {
+      std::array<double, 3> elements;
+      for (int k = 0; k < 3; ++k)
+        elements[k] = double(c.volume.bases[k].num_elements()) * o.elements_per_span[k] + double(o.extra_knots[k].size());
+      const double faces = 2 * (elements[0] * elements[1] + elements[1] * elements[2] + elements[0] * elements[2]);
+      bytes = volume_matrix_free_bytes(functions, faces, o.degree, fast_diagonalization_3d_bytes(n));
+      std::snprintf(what, sizeof what, "%.3g hexahedra of degree %dx%dx%d (%.3g unknowns, CG + %s without a matrix)", cells,
+                    o.degree[0], o.degree[1], o.degree[2], functions, preconditioner.c_str());
+    }
   }
   check_memory(c.path + ": [space] elements", bytes, what);
 }
