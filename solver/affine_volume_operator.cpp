@@ -102,8 +102,8 @@ AffineVolumeOperator::Direction AffineVolumeOperator::direction(const BSplineBas
 }
 
 AffineVolumeOperator::AffineVolumeOperator(const std::array<BSplineBasis1D, 3>& space, const AffineVolumeMap& map,
-                                           double stiffness, double reaction, std::array<int, 3> points)
-    : map_(map) {
+                                           double stiffness, double reaction, std::array<int, 3> points, int error_points_w)
+    : space_(space), error_points_w_(error_points_w), map_(map) {
   det_ = map.jacobian.determinant();
   if (!(det_ > 0)) throw std::invalid_argument("AffineVolumeOperator: the map's Jacobian determinant is not positive");
   for (int k = 0; k < 3; ++k) {
@@ -255,6 +255,104 @@ Eigen::VectorXd AffineVolumeOperator::load(const Expression& source) const {
   Eigen::VectorXd out = std::move(partial[0]);
   for (int t = 1; t < threads; ++t) out += partial[t];
   return out;
+}
+
+bool AffineVolumeOperator::squared_errors(const Eigen::VectorXd& coefficients, const ExactSolution& exact, int points_u,
+                                          int points_v, std::array<double, 2>& squares, Eigen::VectorXd* h1_per_cell,
+                                          CellRange cells) const {
+  if (coefficients.size() != num_functions()) throw std::invalid_argument("AffineVolumeOperator::squared_errors: wrong vector size");
+  if (exact.u_z.empty()) throw std::invalid_argument("error norms on a volume need the exact solution as a function of (x, y, z)");
+  const int requested[3] = {points_u, points_v, error_points_w_};
+  std::array<Direction, 3> e;
+  for (int k = 0; k < 3; ++k) e[k] = direction(space_[k], requested[k] > 0 ? requested[k] : space_[k].degree() + 2);
+  const Direction &U = e[0], &V = e[1], &W = e[2];
+  const int Pu = U.degree + 1, Pv = V.degree + 1, Pw = W.degree + 1, Qu = U.points, Qv = V.points, Qw = W.points;
+  const Eigen::Matrix3d inverse_transpose = map_.jacobian.inverse().transpose();
+  const long all = long(U.elements) * V.elements * W.elements;
+  const long first = cells.first, last = cells.last < 0 ? all : cells.last;
+  if (h1_per_cell) h1_per_cell->setZero(all);
+  // Per slab of elements along w (one thread sums a slab), then the slabs in order: the totals do
+  // not depend on the threads.
+  std::vector<double> l2_slabs(W.elements, 0.0), h1_slabs(W.elements, 0.0);
+  const ExpressionBatch compiled(std::vector<Expression>{exact.u, exact.u_x, exact.u_y, exact.u_z});
+#pragma omp parallel
+  {
+    ExpressionBatch f(compiled);
+    const int points = Qu * Qv * Qw;
+    std::vector<double> x(points), y(points), z(points), c(size_t(Pu) * Pv * Pw);
+    // Along u: (value, d/du) at (qa, b, cw); along v: (value, d/du, d/dv) at (qa, qb, cw); then w.
+    std::vector<double> t1(size_t(2) * Qu * Pv * Pw), t2(size_t(3) * Qu * Qv * Pw);
+#pragma omp for schedule(static)
+    for (int ew = 0; ew < W.elements; ++ew)
+      for (int ev = 0; ev < V.elements; ++ev)
+        for (int eu = 0; eu < U.elements; ++eu) {
+          const long cell = eu + long(U.elements) * (ev + long(V.elements) * ew);
+          if (cell < first || cell >= last) continue;
+          for (int cw = 0; cw < Pw; ++cw)
+            for (int bv = 0; bv < Pv; ++bv)
+              for (int au = 0; au < Pu; ++au)
+                c[au + Pu * (bv + size_t(Pv) * cw)] =
+                    coefficients[(U.first[eu] + au) + n_[0] * ((V.first[ev] + bv) + long(n_[1]) * (W.first[ew] + cw))];
+          for (int bc = 0; bc < Pv * Pw; ++bc)
+            for (int a = 0; a < Qu; ++a) {
+              const double* value = &U.value[(size_t(eu) * Qu + a) * Pu];
+              const double* derivative = &U.derivative[(size_t(eu) * Qu + a) * Pu];
+              double s0 = 0, s1 = 0;
+              for (int au = 0; au < Pu; ++au) s0 += value[au] * c[au + size_t(Pu) * bc], s1 += derivative[au] * c[au + size_t(Pu) * bc];
+              t1[2 * (a + size_t(Qu) * bc)] = s0;
+              t1[2 * (a + size_t(Qu) * bc) + 1] = s1;
+            }
+          for (int cw = 0; cw < Pw; ++cw)
+            for (int b = 0; b < Qv; ++b) {
+              const double* value = &V.value[(size_t(ev) * Qv + b) * Pv];
+              const double* derivative = &V.derivative[(size_t(ev) * Qv + b) * Pv];
+              for (int a = 0; a < Qu; ++a) {
+                double s0 = 0, s1 = 0, s2 = 0;
+                for (int bv = 0; bv < Pv; ++bv) {
+                  const double* t = &t1[2 * (a + size_t(Qu) * (bv + size_t(Pv) * cw))];
+                  s0 += value[bv] * t[0], s1 += value[bv] * t[1], s2 += derivative[bv] * t[0];
+                }
+                double* o = &t2[3 * (a + size_t(Qu) * (b + size_t(Qv) * cw))];
+                o[0] = s0, o[1] = s1, o[2] = s2;
+              }
+            }
+          for (int l = 0; l < Qw; ++l)
+            for (int b = 0; b < Qv; ++b)
+              for (int a = 0; a < Qu; ++a) {
+                const Eigen::Vector3d p =
+                    map_.origin + map_.jacobian * Eigen::Vector3d(U.node[eu * Qu + a], V.node[ev * Qv + b], W.node[ew * Qw + l]);
+                const int q = a + Qu * (b + Qv * l);
+                x[q] = p[0], y[q] = p[1], z[q] = p[2];
+              }
+          f.evaluate(x.data(), y.data(), z.data(), points);
+          const double *u = f.result(0), *ux = f.result(1), *uy = f.result(2), *uz = f.result(3);
+          double e0 = 0, e1 = 0;
+          for (int l = 0; l < Qw; ++l) {
+            const double* value = &W.value[(size_t(ew) * Qw + l) * Pw];
+            const double* derivative = &W.derivative[(size_t(ew) * Qw + l) * Pw];
+            for (int b = 0; b < Qv; ++b)
+              for (int a = 0; a < Qu; ++a) {
+                double uh = 0, gu = 0, gv = 0, gw = 0;
+                for (int cw = 0; cw < Pw; ++cw) {
+                  const double* t = &t2[3 * (a + size_t(Qu) * (b + size_t(Qv) * cw))];
+                  uh += value[cw] * t[0], gu += value[cw] * t[1], gv += value[cw] * t[2], gw += derivative[cw] * t[0];
+                }
+                const Eigen::Vector3d g = inverse_transpose * Eigen::Vector3d(gu, gv, gw);
+                const int q = a + Qu * (b + Qv * l);
+                const double measure = U.weight[eu * Qu + a] * V.weight[ev * Qv + b] * W.weight[ew * Qw + l] * det_;
+                const double d = u[q] - uh, dx = ux[q] - g[0], dy = uy[q] - g[1], dz = uz[q] - g[2];
+                e0 += measure * d * d;
+                e1 += measure * (dx * dx + dy * dy + dz * dz);
+              }
+          }
+          l2_slabs[ew] += e0;
+          h1_slabs[ew] += e1;
+          if (h1_per_cell) (*h1_per_cell)[cell] = e1;
+        }
+  }
+  squares = {0, 0};
+  for (int ew = 0; ew < W.elements; ++ew) squares[0] += l2_slabs[ew], squares[1] += h1_slabs[ew];
+  return true;
 }
 
 void AffineVolumeOperator::coupled_functions(int function, std::vector<int>& out) const {

@@ -26,8 +26,10 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
   // Functions i + n_u j + n_u n_v k of space[0] x space[1] x space[2]. points[d]: Gauss points per
   // element along d (0: degree + 1, the assembly's default). Throws std::invalid_argument where
   // det J <= 0, a degree is above 15 or a rule has more than 16 points.
+  // error_points_w: the error rule's points along w (0: degree + 2), which squared_errors, whose
+  // interface names u and v only, takes from here.
   AffineVolumeOperator(const std::array<BSplineBasis1D, 3>& space, const AffineVolumeMap& map, double stiffness,
-                       double reaction, std::array<int, 3> points = {0, 0, 0});
+                       double reaction, std::array<int, 3> points = {0, 0, 0}, int error_points_w = 0);
 
   int num_functions() const override { return n_[0] * n_[1] * n_[2]; }
   void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override;
@@ -36,6 +38,13 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
   // order) where f is not finite, as the element loop does.
   Eigen::VectorXd load(const Expression& source) const override;
   int max_row_nonzeros() const override;
+  // The squared L2 and H1-seminorm errors of u_h against the exact solution (of x, y, z) by
+  // points_u x points_v x error_points_w Gauss points per hexahedron (0: degree + 2, as
+  // error_norms), u_h and its gradient summed one direction at a time from the coefficients (no
+  // mesh), J^-T constant; per cell (eu + n_eu (ev + n_ev ew), the mesh's order) when asked; over
+  // `cells` only.
+  bool squared_errors(const Eigen::VectorXd& coefficients, const ExactSolution& exact, int points_u, int points_v,
+                      std::array<double, 2>& squares, Eigen::VectorXd* h1_per_cell, CellRange cells = {}) const override;
   bool all_elements_affine() const override { return true; }
   bool assembles_lower() const override { return true; }
   Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const override;
@@ -61,6 +70,8 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
   Eigen::SparseMatrix<double> write_lower(const DofLayout& layout, bool values) const;
 
   std::array<Direction, 3> d_;
+  std::array<BSplineBasis1D, 3> space_;  // for the error rule's tables
+  int error_points_w_ = 0;
   std::array<int, 3> n_{};
   std::array<std::vector<double>, 3> ends_;  // per direction, the elements' ends (breakpoints)
   AffineVolumeMap map_;

@@ -200,8 +200,8 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   // is assembled, those whose operator writes it from its Kronecker form.
   const bool operator_problem = !sol.zero_mean && operator_serves(problem, geometry);
   if (matrix_free && (distributed || !operator_problem || !options.iterative || options.on_system || options.estimate_condition))
-    throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems with constant "
-                           "coefficients, a given source and no Nitsche terms");
+    throw std::logic_error("solve_poisson: the matrix-free path serves serial CG on planar problems and volumes with "
+                           "constant coefficients, a given source and no Nitsche terms");
   // An operator that writes the matrix (then its load, lifting and errors are used too), or
   // one that gives only its pattern, for the element loop to fill. Distributed, each process
   // writes its owned rows whole from its operator, or none does (a process that adds its

@@ -47,11 +47,12 @@ struct PoissonSolveOptions {
   std::function<std::unique_ptr<Preconditioner>(const DofLayout&, const Eigen::SparseMatrix<double>&)> preconditioner;
   // With `iterative`: K applied without a matrix (nothing assembled: the load and the Dirichlet
   // lifting come from the operator, and `preconditioner` gets a matrix holding only K's
-  // diagonal). Planar problems with constant coefficients, a given source and no Nitsche terms,
-  // solved serially, without on_system or estimate_condition: solve_poisson refuses others.
+  // diagonal). Planar problems and volumes with constant coefficients, a given source and no
+  // Nitsche terms, solved serially, without on_system or estimate_condition: solve_poisson
+  // refuses others.
   std::function<std::shared_ptr<const MatrixFreePoisson>()> matrix_free;
   // Where the matrix is assembled, an operator that may write it itself
-  // (MatrixFreePoisson::assembles_lower: a tensor patch with one affine map) instead of the
+  // (MatrixFreePoisson::assembles_lower: a tensor patch or volume with one affine map) instead of the
   // element loop; its load, Dirichlet lifting and error norms are then used too. Taken only for
   // the problems `matrix_free` serves (and on_system, estimate_condition). For the others, or
   // where it cannot write the matrix, its pattern (gives_pattern) replaces the mesh's.

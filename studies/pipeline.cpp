@@ -130,7 +130,7 @@ void check_quadrature_points(const CaseDescription& c, const BezierMesh& mesh) {
 }
 
 // Why the space's operator (SplineSpace::matrix_free_operator, K of the constant-coefficient
-// planar form) cannot stand for this case's K ("" when it can, and then `op` is it).
+// form on a patch or volume) cannot stand for this case's K ("" when it can, and then `op` is it).
 std::string operator_obstacle(const CaseDescription& c, const SplineSpace& space, std::shared_ptr<const MatrixFreePoisson>& op) {
   if (space.geometry().parametric_dimension() != 3 && space.geometry().dimension() != 2) return "serves planar problems and volumes only (not surfaces)";
   if (!c.problem.coefficients.constant()) return "serves constant coefficients only (this case's [problem] coefficient or reaction varies)";

@@ -8,6 +8,7 @@
 //   knots, a C0 knot and a reaction term;
 // - the load, the diagonal and the product K x agree with the element loop's load and matrix;
 // - a source that is not finite is refused with the element loop's words;
+// - its error norms (sums one direction at a time, no mesh) are the mesh's error_norms';
 // - knotwork run on the cube writes the matrix this way, and on the curved annulus does not.
 //
 // The bound: both sides sum the same products of basis values, weights and the metric in other
@@ -32,6 +33,7 @@
 #include "cli_sandbox.hpp"
 #include "solver/affine_volume_operator.hpp"
 #include "solver/assemble_poisson.hpp"
+#include "solver/error_norms.hpp"
 #include "solver/expression.hpp"
 #include "solver/sparsity.hpp"
 
@@ -135,8 +137,8 @@ TEST_CASE("The Kronecker-form matrix is the element loop's, entry by entry", "[a
     REQUIRE(std::equal(written.outerIndexPtr(), written.outerIndexPtr() + written.cols() + 1, loop.outerIndexPtr()));
     REQUIRE(std::equal(written.innerIndexPtr(), written.innerIndexPtr() + written.nonZeros(), loop.innerIndexPtr()));
     const Eigen::VectorXd diagonal = Eigen::VectorXd(loop.diagonal());
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(shear());
-    const double condition = svd.singularValues()[0] / svd.singularValues()[2];
+    const Eigen::Vector3d lambda = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(shear().transpose() * shear()).eigenvalues();
+    const double condition = std::sqrt(lambda[2] / lambda[0]);  // of J
     const double m = 8 * 64 + 20;  // summands per entry: cells x points, and the metric's terms
     double worst = 0;
     for (int c = 0; c < loop.outerSize(); ++c)
@@ -266,4 +268,54 @@ TEST_CASE("CG without a matrix on the cube: the assembled solve's errors, and a 
   CHECK(curved.code != 0);
   CHECK(curved.err.find("[solver] matrix: \"matrix_free\" is not available here (NURBS functions are not products of "
                         "univariate ones); use \"assembled\" or \"auto\"") != std::string::npos);
+}
+
+TEST_CASE("The operator's error norms are the mesh's, without the mesh", "[affine_volume]") {
+  const Setup s;
+  const VolumeGeometryMap map(s.mesh, s.volume);
+  const AffineVolumeOperator op(s.space, *affine_map(s.volume), 1.0, 0.0);
+  const int functions = s.mesh.num_functions();
+  const QuadratureOptions rule;  // degree + 2 points per direction, on both sides
+  // (1) Coefficients far from u: every term of the sums is a square of size 1, summed in
+  // another order (and u_h, grad u_h formed in another order): within m eps of the totals,
+  // m the terms (8 cells x 125 points here, times the few products of a term).
+  const ExactSolution smooth = differentiate_volume_solution(Expression::parse("sin(x)*cos(y)*z", "test"));
+  Eigen::VectorXd c(functions);
+  for (int f = 0; f < functions; ++f) c[f] = std::cos(0.7 * f);
+  std::array<double, 2> by_operator{};
+  Eigen::VectorXd per_cell;
+  REQUIRE(op.squared_errors(c, smooth, 0, 0, by_operator, &per_cell));
+  Eigen::VectorXd mesh_per_cell;
+  const std::array<double, 2> by_mesh = squared_errors(s.mesh, map, c, smooth, rule, CellRange{}, &mesh_per_cell);
+  const double m = 8 * 125 * 20;
+  CHECK(by_mesh[0] > 0.01);
+  CHECK(std::abs(by_operator[0] - by_mesh[0]) <= m * eps * by_mesh[0]);
+  CHECK(std::abs(by_operator[1] - by_mesh[1]) <= m * eps * by_mesh[1]);
+  REQUIRE(per_cell.size() == s.mesh.num_cells());
+  for (int cell = 0; cell < s.mesh.num_cells(); ++cell)
+    CHECK(std::abs(per_cell[cell] - mesh_per_cell[cell]) <= m * eps * mesh_per_cell[cell]);
+  // Over a range of cells only (a process's own), 0 elsewhere.
+  std::array<double, 2> part{};
+  REQUIRE(op.squared_errors(c, smooth, 0, 0, part, &per_cell, CellRange{3, 9}));
+  double expected = 0;
+  for (int cell = 3; cell < 9; ++cell) expected += mesh_per_cell[cell];
+  CHECK(std::abs(part[1] - expected) <= m * eps * expected);
+  CHECK(per_cell[2] == 0);
+  // (2) u linear, in the space: its coefficients are its values at the Greville points (linear
+  // precision, the map being affine), so both errors are rounding, below c eps |u| (c: the
+  // terms of u_h at a point, 3^3 products of a few factors each).
+  const ExactSolution linear = differentiate_volume_solution(Expression::parse("2*x - y + 3*z + 1", "test"));
+  const std::vector<double> gu = greville_abscissae(s.space[0]), gv = greville_abscissae(s.space[1]), gw = greville_abscissae(s.space[2]);
+  const AffineVolumeMap affine = *affine_map(s.volume);
+  for (int k = 0; k < s.n[2]; ++k)
+    for (int j = 0; j < s.n[1]; ++j)
+      for (int i = 0; i < s.n[0]; ++i) {
+        const Eigen::Vector3d x = affine.origin + affine.jacobian * Eigen::Vector3d(gu[i], gv[j], gw[k]);
+        c[i + s.n[0] * (j + s.n[1] * k)] = 2 * x[0] - x[1] + 3 * x[2] + 1;
+      }
+  REQUIRE(op.squared_errors(c, linear, 0, 0, by_operator, nullptr));
+  const std::array<double, 2> size = squared_errors(s.mesh, map, Eigen::VectorXd::Zero(functions), linear, rule, CellRange{});
+  INFO("L2 " << std::sqrt(by_operator[0]) << " of |u| " << std::sqrt(size[0]));
+  CHECK(std::sqrt(by_operator[0]) <= 1e3 * eps * std::sqrt(size[0]));
+  CHECK(std::sqrt(by_operator[1]) <= 1e3 * eps * std::sqrt(size[1]));
 }

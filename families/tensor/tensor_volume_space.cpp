@@ -98,7 +98,8 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
     const std::optional<AffineVolumeMap> map = affine_map(d_.volume);
     if (!map) throw std::invalid_argument("the volume's map is not one affine map");
     return std::make_unique<AffineVolumeOperator>(d_.space, *map, stiffness, reaction,
-                                                  std::array<int, 3>{quadrature.points_u, quadrature.points_v, quadrature.points_w});
+                                                  std::array<int, 3>{quadrature.points_u, quadrature.points_v, quadrature.points_w},
+                                                  quadrature.error_points_w);
   }
 
  private:
