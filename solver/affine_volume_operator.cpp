@@ -16,7 +16,7 @@ namespace knotwork {
 
 namespace {
 
-constexpr int kMaxDegree = 15, kMaxPoints = 16;
+constexpr int kMaxDegree = 15;
 
 // y = B x along direction `along` of an n[0] x n[1] x n[2] array (index i + n0 j + n0 n1 k), B a
 // band matrix of half-width p (entry (a, c) at a (2p + 1) + c - a + p); B^T with `transposed`.
@@ -40,12 +40,11 @@ void mode_product(const std::vector<double>& band, int p, bool transposed, int a
 
 }  // namespace
 
-AffineVolumeOperator::Direction AffineVolumeOperator::direction(const BSplineBasis1D& space, int points) {
+AffineVolumeOperator::Direction AffineVolumeOperator::direction(const BSplineBasis1D& space, int points, bool matrices) {
   Direction d;
   d.degree = space.degree();
   if (d.degree > kMaxDegree) throw std::invalid_argument("AffineVolumeOperator: degree above 15");
   d.points = points > 0 ? points : d.degree + 1;
-  if (d.points > kMaxPoints) throw std::invalid_argument("AffineVolumeOperator: more than 16 Gauss points per direction");
   const QuadratureRule1D rule = gauss_legendre(d.points);
   const std::vector<int> spans = space.element_spans();
   const auto& t = space.knots();
@@ -56,9 +55,11 @@ AffineVolumeOperator::Direction AffineVolumeOperator::direction(const BSplineBas
   d.derivative.resize(d.value.size());
   d.node.resize(spans.size() * Q);
   d.weight.resize(d.node.size());
-  d.K.assign(size_t(n) * width, 0.0);
-  d.M.assign(d.K.size(), 0.0);
-  d.D.assign(d.K.size(), 0.0);
+  if (matrices) {
+    d.K.assign(size_t(n) * width, 0.0);
+    d.M.assign(d.K.size(), 0.0);
+    d.D.assign(d.K.size(), 0.0);
+  }
   double table[2 * (kMaxDegree + 1)];
   for (int e = 0; e < d.elements; ++e) {
     const int s = spans[e];
@@ -74,6 +75,7 @@ AffineVolumeOperator::Direction AffineVolumeOperator::direction(const BSplineBas
         d.derivative[(size_t(e) * Q + q) * P + b] = table[P + b];
       }
     }
+    if (!matrices) continue;
     // K and M summed for c >= r and mirrored, so that entry(row, column) and entry(column, row)
     // are the same bits (a distributed solve's rows agree with the serial lower triangle).
     for (int r = 0; r < P; ++r)
@@ -115,6 +117,19 @@ AffineVolumeOperator::AffineVolumeOperator(const std::array<BSplineBasis1D, 3>& 
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) g_[a][b] = G(a, b);
   r_ = reaction * det_;
+}
+
+void AffineVolumeOperator::element_points(const Direction& U, const Direction& V, const Direction& W, int eu, int ev, int ew,
+                                          double* x, double* y, double* z) const {
+  const int Qu = U.points, Qv = V.points, Qw = W.points;
+  for (int c = 0; c < Qw; ++c)
+    for (int b = 0; b < Qv; ++b)
+      for (int a = 0; a < Qu; ++a) {
+        const Eigen::Vector3d p =
+            map_.origin + map_.jacobian * Eigen::Vector3d(U.node[eu * Qu + a], V.node[ev * Qv + b], W.node[ew * Qw + c]);
+        const int q = a + Qu * (b + Qv * c);
+        x[q] = p[0], y[q] = p[1], z[q] = p[2];
+      }
 }
 
 int AffineVolumeOperator::max_row_nonzeros() const {
@@ -197,14 +212,7 @@ Eigen::VectorXd AffineVolumeOperator::load(const Expression& source) const {
     for (int ew = 0; ew < W.elements; ++ew)
       for (int ev = 0; ev < V.elements; ++ev)
         for (int eu = 0; eu < U.elements; ++eu) {
-          for (int c = 0; c < Qw; ++c)
-            for (int b = 0; b < Qv; ++b)
-              for (int a = 0; a < Qu; ++a) {
-                const Eigen::Vector3d p =
-                    map_.origin + map_.jacobian * Eigen::Vector3d(U.node[eu * Qu + a], V.node[ev * Qv + b], W.node[ew * Qw + c]);
-                const int q = a + Qu * (b + Qv * c);
-                x[q] = p[0], y[q] = p[1], z[q] = p[2];
-              }
+          element_points(U, V, W, eu, ev, ew, x.data(), y.data(), z.data());
           f.evaluate(x.data(), y.data(), z.data(), points);
           const double* value = f.result(0);
           for (int c = 0; c < Qw; ++c)
@@ -264,7 +272,7 @@ bool AffineVolumeOperator::squared_errors(const Eigen::VectorXd& coefficients, c
   if (exact.u_z.empty()) throw std::invalid_argument("error norms on a volume need the exact solution as a function of (x, y, z)");
   const int requested[3] = {points_u, points_v, error_points_w_};
   std::array<Direction, 3> e;
-  for (int k = 0; k < 3; ++k) e[k] = direction(space_[k], requested[k] > 0 ? requested[k] : space_[k].degree() + 2);
+  for (int k = 0; k < 3; ++k) e[k] = direction(space_[k], requested[k] > 0 ? requested[k] : space_[k].degree() + 2, false);
   const Direction &U = e[0], &V = e[1], &W = e[2];
   const int Pu = U.degree + 1, Pv = V.degree + 1, Pw = W.degree + 1, Qu = U.points, Qv = V.points, Qw = W.points;
   const Eigen::Matrix3d inverse_transpose = map_.jacobian.inverse().transpose();
@@ -316,14 +324,7 @@ bool AffineVolumeOperator::squared_errors(const Eigen::VectorXd& coefficients, c
                 o[0] = s0, o[1] = s1, o[2] = s2;
               }
             }
-          for (int l = 0; l < Qw; ++l)
-            for (int b = 0; b < Qv; ++b)
-              for (int a = 0; a < Qu; ++a) {
-                const Eigen::Vector3d p =
-                    map_.origin + map_.jacobian * Eigen::Vector3d(U.node[eu * Qu + a], V.node[ev * Qv + b], W.node[ew * Qw + l]);
-                const int q = a + Qu * (b + Qv * l);
-                x[q] = p[0], y[q] = p[1], z[q] = p[2];
-              }
+          element_points(U, V, W, eu, ev, ew, x.data(), y.data(), z.data());
           f.evaluate(x.data(), y.data(), z.data(), points);
           const double *u = f.result(0), *ux = f.result(1), *uy = f.result(2), *uz = f.result(3);
           double e0 = 0, e1 = 0;

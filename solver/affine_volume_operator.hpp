@@ -25,7 +25,7 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
  public:
   // Functions i + n_u j + n_u n_v k of space[0] x space[1] x space[2]. points[d]: Gauss points per
   // element along d (0: degree + 1, the assembly's default). Throws std::invalid_argument where
-  // det J <= 0, a degree is above 15 or a rule has more than 16 points.
+  // det J <= 0 or a degree is above 15.
   // error_points_w: the error rule's points along w (0: degree + 2), which squared_errors, whose
   // interface names u and v only, takes from here.
   AffineVolumeOperator(const std::array<BSplineBasis1D, 3>& space, const AffineVolumeMap& map, double stiffness,
@@ -65,7 +65,11 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
     std::vector<double> K, M, D;                // bands: stiffness, mass, mixed (derivative on the row's function)
     std::vector<int> low, high;                 // reach
   };
-  static Direction direction(const BSplineBasis1D& space, int points);
+  // `matrices` false: the rule's tables and the reach only (an error rule's).
+  static Direction direction(const BSplineBasis1D& space, int points, bool matrices = true);
+  // The physical points of element (eu, ev, ew) under the rules of U, V, W (point a + Qu (b + Qv c)).
+  void element_points(const Direction& U, const Direction& V, const Direction& W, int eu, int ev, int ew, double* x,
+                      double* y, double* z) const;
   double entry(int i, int j, int k, int i0, int j0, int k0) const;
   Eigen::SparseMatrix<double> write_lower(const DofLayout& layout, bool values) const;
 

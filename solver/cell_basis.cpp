@@ -99,7 +99,8 @@ void finish_volume(const Eigen::MatrixXd& B, const Eigen::MatrixXd& Bu, const Ei
   Eigen::MatrixXd* grad[3] = {&out.grad_x, &out.grad_y, &out.grad_z};
   // J^{-T} per point first, then each gradient a column at a time (the tables are column-major:
   // a row per point would be read with a stride).
-  Eigen::Matrix<double, Eigen::Dynamic, 9> inverse_transpose(n, 9);
+  thread_local Eigen::Matrix<double, Eigen::Dynamic, 9> inverse_transpose;  // kept: this runs once per cell
+  inverse_transpose.resize(n, 9);
   for (Eigen::Index k = 0; k < n; ++k) {
     Eigen::Matrix3d Jk;
     for (int i = 0; i < 3; ++i)

@@ -301,6 +301,16 @@ TEST_CASE("The operator's error norms are the mesh's, without the mesh", "[affin
   for (int cell = 3; cell < 9; ++cell) expected += mesh_per_cell[cell];
   CHECK(std::abs(part[1] - expected) <= m * eps * expected);
   CHECK(per_cell[2] == 0);
+  // A rule of more than 16 points, as [space] error_quadrature_points allows (up to 30): the
+  // same sums (this once was refused).
+  const AffineVolumeOperator fine(s.space, *affine_map(s.volume), 1.0, 0.0, {0, 0, 0}, 20);
+  QuadratureOptions rule20;
+  rule20.error_points_u = rule20.error_points_v = rule20.error_points_w = 20;
+  REQUIRE(fine.squared_errors(c, smooth, 20, 20, by_operator, nullptr));
+  const std::array<double, 2> by_mesh20 = squared_errors(s.mesh, map, c, smooth, rule20, CellRange{});
+  const double m20 = 8 * 8000 * 20;
+  CHECK(std::abs(by_operator[0] - by_mesh20[0]) <= m20 * eps * by_mesh20[0]);
+  CHECK(std::abs(by_operator[1] - by_mesh20[1]) <= m20 * eps * by_mesh20[1]);
   // (2) u linear, in the space: its coefficients are its values at the Greville points (linear
   // precision, the map being affine), so both errors are rounding, below c eps |u| (c: the
   // terms of u_h at a point, 3^3 products of a few factors each).
