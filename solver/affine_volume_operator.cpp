@@ -105,7 +105,7 @@ AffineVolumeOperator::Direction AffineVolumeOperator::direction(const BSplineBas
 
 AffineVolumeOperator::AffineVolumeOperator(const std::array<BSplineBasis1D, 3>& space, const AffineVolumeMap& map,
                                            double stiffness, double reaction, std::array<int, 3> points, int error_points_w)
-    : space_(space), error_points_w_(error_points_w), map_(map) {
+    : space_(space), stiffness_(stiffness), reaction_(reaction), points_(points), error_points_w_(error_points_w), map_(map) {
   det_ = map.jacobian.determinant();
   if (!(det_ > 0)) throw std::invalid_argument("AffineVolumeOperator: the map's Jacobian determinant is not positive");
   for (int k = 0; k < 3; ++k) {
@@ -130,6 +130,105 @@ void AffineVolumeOperator::element_points(const Direction& U, const Direction& V
         const int q = a + Qu * (b + Qv * c);
         x[q] = p[0], y[q] = p[1], z[q] = p[2];
       }
+}
+
+std::shared_ptr<const AffineVolumeOperator> AffineVolumeOperator::on_spaces(const std::array<BSplineBasis1D, 3>& space) const {
+  return std::make_shared<AffineVolumeOperator>(space, map_, stiffness_, reaction_, points_, error_points_w_);
+}
+
+namespace {
+
+// y = B x along mode `along` of an array x of dimensions `in` (first index fastest) whose
+// entries along that mode are the functions in_first, in_first + 1, ...; y has the same
+// dimensions but out_count entries along the mode, the functions out_first, ... (rows of B, a
+// band of half-width p: entry (a, c) at a (2p + 1) + c - a + p; B^T with `transposed`).
+void band_rows(const std::vector<double>& band, int p, bool transposed, int along, const std::array<int, 3>& in, int in_first,
+               int out_first, int out_count, const double* x, double* y) {
+  long inner = 1, outer = 1;
+  for (int k = 0; k < along; ++k) inner *= in[k];
+  for (int k = along + 1; k < 3; ++k) outer *= in[k];
+  const int width = 2 * p + 1, m = in[along];
+  for (long o = 0; o < outer; ++o) {
+    const double* xo = x + o * m * inner;
+    double* yo = y + o * out_count * inner;
+    for (int a = 0; a < out_count; ++a) {
+      const int row = out_first + a;
+      double* ya = yo + a * inner;
+      std::fill(ya, ya + inner, 0.0);
+      for (int c = std::max(0, row - p - in_first); c <= std::min(m - 1, row + p - in_first); ++c) {
+        const int column = in_first + c;
+        const double b = transposed ? band[size_t(column) * width + (row - column + p)] : band[size_t(row) * width + (column - row + p)];
+        const double* xc = xo + c * inner;
+        for (long i = 0; i < inner; ++i) ya[i] += b * xc[i];
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void AffineVolumeOperator::apply_box(const double* x, const FunctionBox& free, const FunctionBox& rows, double* out) const {
+  // The rows' reach within the free box: the columns they couple to.
+  FunctionBox reach;
+  for (int d = 0; d < 3; ++d) {
+    const int p = d_[d].degree;
+    reach.first[d] = std::max(free.first[d], rows.first[d] - p);
+    reach.count[d] = std::min(free.first[d] + free.count[d], rows.first[d] + rows.count[d] + p) - reach.first[d];
+  }
+  thread_local std::vector<double> xr, a, b, c;
+  xr.resize(reach.size());
+  long at = 0;
+  for (int k = 0; k < reach.count[2]; ++k)
+    for (int j = 0; j < reach.count[1]; ++j) {
+      const double* line = x + (reach.first[0] - free.first[0]) +
+                           long(free.count[0]) * ((reach.first[1] - free.first[1] + j) + long(free.count[1]) * (reach.first[2] - free.first[2] + k));
+      std::copy(line, line + reach.count[0], xr.data() + at);
+      at += reach.count[0];
+    }
+  const Direction &U = d_[0], &V = d_[1], &W = d_[2];
+  const std::array<int, 3> r0 = reach.count;
+  const std::array<int, 3> r1{rows.count[0], reach.count[1], reach.count[2]}, r2{rows.count[0], rows.count[1], reach.count[2]};
+  a.resize(long(r1[0]) * r1[1] * r1[2]);
+  b.resize(long(r2[0]) * r2[1] * r2[2]);
+  c.resize(rows.size());
+  std::fill(out, out + rows.size(), 0.0);
+  struct Factor {
+    const std::vector<double>* band;
+    bool transposed;
+  };
+  // out += coefficient (B_w (x) B_v (x) B_u) x over the rows, the terms of apply().
+  const auto add = [&](double coefficient, Factor fu, Factor fv, Factor fw) {
+    if (coefficient == 0) return;
+    band_rows(*fu.band, U.degree, fu.transposed, 0, r0, reach.first[0], rows.first[0], rows.count[0], xr.data(), a.data());
+    band_rows(*fv.band, V.degree, fv.transposed, 1, r1, reach.first[1], rows.first[1], rows.count[1], a.data(), b.data());
+    band_rows(*fw.band, W.degree, fw.transposed, 2, r2, reach.first[2], rows.first[2], rows.count[2], b.data(), c.data());
+    for (long i = 0; i < rows.size(); ++i) out[i] += coefficient * c[i];
+  };
+  const Factor Mu{&U.M, false}, Mv{&V.M, false}, Mw{&W.M, false};
+  add(g_[0][0], {&U.K, false}, Mv, Mw);
+  add(g_[1][1], Mu, {&V.K, false}, Mw);
+  add(g_[2][2], Mu, Mv, {&W.K, false});
+  add(r_, Mu, Mv, Mw);
+  add(g_[0][1], {&U.D, false}, {&V.D, true}, Mw);
+  add(g_[0][1], {&U.D, true}, {&V.D, false}, Mw);
+  add(g_[0][2], {&U.D, false}, Mv, {&W.D, true});
+  add(g_[0][2], {&U.D, true}, Mv, {&W.D, false});
+  add(g_[1][2], Mu, {&V.D, false}, {&W.D, true});
+  add(g_[1][2], Mu, {&V.D, true}, {&W.D, false});
+}
+
+void AffineVolumeOperator::apply_within(const double* x, const FunctionBox& free, double* out) const {
+  // Slabs of 16 layers along w (their reach adds 2p layers: a quarter more work at p = 2).
+  constexpr int kSlab = 16;
+  const int slabs = (free.count[2] + kSlab - 1) / kSlab;
+  const long layer = long(free.count[0]) * free.count[1];
+#pragma omp parallel for schedule(dynamic)
+  for (int s = 0; s < slabs; ++s) {
+    FunctionBox rows = free;
+    rows.first[2] = free.first[2] + s * kSlab;
+    rows.count[2] = std::min(kSlab, free.count[2] - s * kSlab);
+    apply_box(x, free, rows, out + layer * s * kSlab);
+  }
 }
 
 int AffineVolumeOperator::max_row_nonzeros() const {

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "basis/core/bspline_basis.hpp"
@@ -53,6 +54,24 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
   Eigen::SparseMatrix<double> lower_pattern(const DofLayout& layout) const override;
   void coupled_functions(int function, std::vector<int>& out) const override;
 
+  // For the volume multigrid without a matrix (solver/tensor_multigrid_3d.hpp).
+  // A box of functions: first[d] .. first[d] + count[d] - 1 per direction, numbered
+  // a + count[0] (b + count[1] c) from its corner.
+  struct FunctionBox {
+    std::array<int, 3> first{}, count{};
+    long size() const { return long(count[0]) * count[1] * count[2]; }
+  };
+  // The same form on other (coarser) spaces: on an affine map the rediscretized operator is the
+  // Galerkin one of nested spaces, both integrated exactly.
+  std::shared_ptr<const AffineVolumeOperator> on_spaces(const std::array<BSplineBasis1D, 3>& space) const;
+  // out = (K x) over the functions of `rows`, in its numbering, for x over the box `free` (zero
+  // outside it) with rows inside free: by mode products over the rows' reach, serially (for a
+  // smoother's block).
+  void apply_box(const double* x, const FunctionBox& free, const FunctionBox& rows, double* out) const;
+  // out = (K x) over all of `free`, threaded over slabs along w.
+  void apply_within(const double* x, const FunctionBox& free, double* out) const;
+  const std::array<BSplineBasis1D, 3>& spaces() const { return space_; }
+
  private:
   // One direction: its rule's tables per element and its univariate matrices as bands (entry
   // (a, c) at a (2p + 1) + c - a + p), and per function the range of functions it shares an
@@ -74,7 +93,9 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
   Eigen::SparseMatrix<double> write_lower(const DofLayout& layout, bool values) const;
 
   std::array<Direction, 3> d_;
-  std::array<BSplineBasis1D, 3> space_;  // for the error rule's tables
+  std::array<BSplineBasis1D, 3> space_;  // for the error rule's tables and on_spaces
+  double stiffness_ = 1, reaction_ = 0;  // as given, for on_spaces
+  std::array<int, 3> points_{};
   int error_points_w_ = 0;
   std::array<int, 3> n_{};
   std::array<std::vector<double>, 3> ends_;  // per direction, the elements' ends (breakpoints)

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "solver/tensor_multigrid_levels.hpp"
 #include "solver/tensor_rediscretize.hpp"
 
 namespace knotwork {
@@ -32,97 +33,7 @@ bool halved_basis(const BSplineBasis1D& fine, BSplineBasis1D& coarse) {
 
 namespace {
 
-using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
-
-// A run of free univariate indices and the generalized eigenbasis of its principal block of
-// the direction's (K, M): U^T M U = I, U^T K U = diag(lambda).
-struct Window {
-  int begin = 0, size = 0;
-  Eigen::MatrixXd U;
-  Eigen::VectorXd lambda;
-};
-
-// One direction of one level: its basis, free range, element weights of the separable
-// operator, and the windows of each tiling.
-struct Direction {
-  BSplineBasis1D basis;
-  int first = 0, count = 0;  // free functions first..first + count - 1
-  int fixed_at_end = 0;      // 1 when the last function is not free
-  std::vector<double> mass_weight, stiffness_weight;
-  bool nitsche_start = false, nitsche_end = false;
-  double nitsche_factor = 2;
-  Eigen::VectorXd mass_diagonal, stiffness_diagonal;  // over the free functions
-  std::vector<std::vector<Window>> tilings;
-};
-
-// Windows of `block` indices covering 0..n-1, the first one `offset` long when offset > 0; a
-// last window shorter than block / 2 joins the one before (every window stays longer than p,
-// so windows two apart never couple).
-std::vector<std::pair<int, int>> tile(int n, int block, int offset) {
-  std::vector<std::pair<int, int>> w;
-  int s = 0;
-  if (offset > 0 && offset < n) w.emplace_back(0, s = offset);
-  while (s < n) {
-    const int e = std::min(n, s + block);
-    w.emplace_back(s, e - s);
-    s = e;
-  }
-  if (w.size() > 1 && w.back().second < block / 2) {
-    w[w.size() - 2].second += w.back().second;
-    w.pop_back();
-  }
-  return w;
-}
-
-void build_windows(Direction& d, int block, int tilings) {
-  const UnivariatePair pair =
-      univariate_pair(d.basis, d.mass_weight, d.stiffness_weight, d.nitsche_start, d.nitsche_end, d.nitsche_factor);
-  const Eigen::VectorXd m = pair.mass.diagonal(), k = pair.stiffness.diagonal();
-  d.mass_diagonal = m.segment(d.first, d.count);
-  d.stiffness_diagonal = k.segment(d.first, d.count);
-  d.tilings.assign(tilings, {});
-  for (int t = 0; t < tilings; ++t)
-    for (const auto& [begin, size] : tile(d.count, block, t == 0 ? 0 : block / 2)) {
-      Window w;
-      w.begin = begin;
-      w.size = size;
-      const int f = d.first + begin;
-      const Eigen::MatrixXd K = pair.stiffness.block(f, f, size, size), M = pair.mass.block(f, f, size, size);
-      Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K, M);
-      if (es.info() != Eigen::Success)
-        throw std::runtime_error("multigrid: a univariate mass block is not positive definite");
-      w.U = es.eigenvectors();
-      w.lambda = es.eigenvalues();
-      d.tilings[t].push_back(std::move(w));
-    }
-}
-
-// The coarser direction (halved when it can be: `halved` says) and its prolongation over the
-// free functions (fine count x coarse count).
-Direction coarser(const Direction& fine, bool& halved, RowMatrix& prolongation) {
-  Direction c = fine;
-  c.tilings.clear();
-  halved = halved_basis(fine.basis, c.basis);
-  if (!halved) {
-    prolongation.resize(fine.count, fine.count);
-    prolongation.setIdentity();
-    return c;
-  }
-  c.count = c.basis.num_functions() - c.first - c.fixed_at_end;
-  // Coarse element e is fine elements 2e and 2e + 1: the fit's weights are log-linear, so their
-  // geometric mean.
-  auto merge = [](const std::vector<double>& w) {
-    std::vector<double> out;
-    for (size_t e = 0; e + 1 < w.size(); e += 2) out.push_back(std::sqrt(w[e] * w[e + 1]));
-    return out;
-  };
-  if (!fine.mass_weight.empty()) c.mass_weight = merge(fine.mass_weight);
-  if (!fine.stiffness_weight.empty()) c.stiffness_weight = merge(fine.stiffness_weight);
-  const RowMatrix T = refinement_matrix(c.basis, fine.basis);
-  prolongation = T.block(fine.first, c.first, fine.count, c.count);
-  prolongation.makeCompressed();
-  return c;
-}
+using namespace multigrid_levels;
 
 struct Level {
   Direction u, v;
@@ -217,14 +128,6 @@ class TensorMultigrid final : public Preconditioner {
       for (int c = 3; c >= 0; --c) sweep(L, t, c, b, x);
   }
 
-  static double row_dot(const RowMatrix& A, int row, const double* x) {
-    const int* col = A.innerIndexPtr();
-    const double* val = A.valuePtr();
-    double s = 0;
-    for (int k = A.outerIndexPtr()[row]; k < A.outerIndexPtr()[row + 1]; ++k) s += val[k] * x[col[k]];
-    return s;
-  }
-
   // One colour of one tiling: every block (a, c) with a = cu, c = cv mod 2 gets
   // x_B += D^{-1/2} P_B^{-1} D^{-1/2} (b - A x)_B. Such blocks do not couple, so they are done
   // at once, each reading only its own rows.
@@ -282,24 +185,6 @@ class TensorMultigrid final : public Preconditioner {
   mutable std::vector<Work> work_;
 };
 
-// The block side: as given (at least 2p + 2), else 16 functions at p = 2 up to 32 at p = 6. At
-// 2048^2, p = 2, the V-cycles took 17% less time with 16 than with 32, in the same iterations;
-// at p = 6 (256^2, square) 16 took 9 iterations where 32 took 7 (docs/SOLVERS.md).
-int block_side(const TensorMultigridOptions& options, int p) {
-  return options.block > 0 ? std::max(options.block, 2 * p + 2) : std::max(16, 5 * p + 2);
-}
-
-// The free range of one direction, from its free indices (contiguous, missing at most the first
-// and the last function); false otherwise.
-bool free_range(const std::vector<int>& free, int n, Direction& d) {
-  if (free.empty() || free.back() - free.front() + 1 != static_cast<int>(free.size())) return false;
-  if (free.front() > 1 || free.back() < n - 2) return false;
-  d.first = free.front();
-  d.count = static_cast<int>(free.size());
-  d.fixed_at_end = n - 1 - free.back();
-  return true;
-}
-
 void set_scale(Level& L, const Eigen::VectorXd& diagonal) {
   L.scale.resize(L.size());
   for (int j = 0; j < L.v.count; ++j)
@@ -310,62 +195,14 @@ void set_scale(Level& L, const Eigen::VectorXd& diagonal) {
     }
 }
 
-// The whole symmetric matrix, row-major, from its lower triangle (column-major), for functions
-// a + nu b that couple only within pu and pv indices per direction: row d is its strictly lower
-// part, entry (d, j) read from column j of the triangle by binary search, j running over the
-// tensor neighbours below d in ascending order, followed by column d of the triangle. Gathered
-// row by row and threaded: a scatter of the triangle into rows (Eigen's selfadjointView
-// conversion, or by hand) took 4-13 s at 4.2M dofs, p = 2, against 0.19 s at 1M (page-table
-// misses over a 1.3 GB array).
-// Filled in place: assigning the returned matrix cost 7.5 s at 4.2M dofs (Eigen 3.4's
-// SparseMatrix copies where it could move).
-void whole_from_lower(const Eigen::SparseMatrix<double>& L, int nu, int pu, int pv, RowMatrix& A) {
-  const int n = static_cast<int>(L.rows());
-  const int* start = L.outerIndexPtr();
-  const int* row = L.innerIndexPtr();
-  const double* value = L.valuePtr();
-  // Visits the strictly lower entries of row d, ascending: f(column, value).
-  auto lower_row = [&](int d, auto&& f) {
-    const int a = d % nu, b = d / nu;
-    for (int b2 = std::max(0, b - pv); b2 <= b; ++b2)
-      for (int a2 = std::max(0, a - pu); a2 <= std::min(nu - 1, a + pu); ++a2) {
-        const int j = a2 + nu * b2;
-        if (j >= d) break;
-        const int* at = std::lower_bound(row + start[j], row + start[j + 1], d);
-        if (at != row + start[j + 1] && *at == d) f(j, value[at - row]);
-      }
-  };
-  std::vector<int> count(n + 1, 0);
-#pragma omp parallel for schedule(static)
-  for (int d = 0; d < n; ++d) {
-    int c = start[d + 1] - start[d];
-    lower_row(d, [&](int, double) { ++c; });
-    count[d + 1] = c;
-  }
-  for (int d = 0; d < n; ++d) count[d + 1] += count[d];
-  // Every strictly lower entry found from its row: the pattern stays within the tensor
-  // neighbourhood (functions more than a degree apart never share a cell).
-  if (count[n] != 2 * static_cast<long>(L.nonZeros()) - n)
-    throw std::logic_error("multigrid: the matrix couples functions more than a degree apart, or lacks a diagonal entry");
-  A.resize(n, n);
-  A.resizeNonZeros(count[n]);
-  std::copy(count.begin(), count.end(), A.outerIndexPtr());
-  int* col = A.innerIndexPtr();
-  double* val = A.valuePtr();
-#pragma omp parallel for schedule(static)
-  for (int d = 0; d < n; ++d) {
-    int at = count[d];
-    lower_row(d, [&](int j, double v) { col[at] = j, val[at++] = v; });
-    for (int k = start[d]; k < start[d + 1]; ++k, ++at) col[at] = row[k], val[at] = value[k];
-  }
-}
-
 // Q^T A Q for Q the prolongation P (fine x coarse) along direction `dir` of a grid of n0 x n1
+// (the bivariate case of multigrid_levels::galerkin_direction, kept apart: the general one took
+// 1.3-1.4 times as long here at 1M dofs, p = 2, same result, one sitting)
 // functions (index a + n0 b) and the identity along the other, row by row of the result,
 // threaded: coarse row r sums P(i, I) A(fine row, (a2, b2)) P(x2, K) over the fine rows of
 // column I of P (along dir) and their entries, x2 the entry's index along dir, into a dense
 // accumulator over the coarse columns.
-void galerkin_direction(const RowMatrix& A, int n0, int n1, const RowMatrix& P, int dir, RowMatrix& B) {
+void galerkin_direction_2d(const RowMatrix& A, int n0, int n1, const RowMatrix& P, int dir, RowMatrix& B) {
   const Eigen::SparseMatrix<double> columns = P;
   const int nc = static_cast<int>(P.cols());
   const int m0 = dir == 0 ? nc : n0, m1 = dir == 1 ? nc : n1;
@@ -423,12 +260,12 @@ void galerkin(const RowMatrix& A, int nu, int nv, const RowMatrix& Pu, const Row
               RowMatrix& Ac) {
   if (halved_u && halved_v) {
     RowMatrix B;
-    galerkin_direction(A, nu, nv, Pu, 0, B);
-    galerkin_direction(B, static_cast<int>(Pu.cols()), nv, Pv, 1, Ac);
+    galerkin_direction_2d(A, nu, nv, Pu, 0, B);
+    galerkin_direction_2d(B, static_cast<int>(Pu.cols()), nv, Pv, 1, Ac);
   } else if (halved_u) {
-    galerkin_direction(A, nu, nv, Pu, 0, Ac);
+    galerkin_direction_2d(A, nu, nv, Pu, 0, Ac);
   } else {
-    galerkin_direction(A, nu, nv, Pv, 1, Ac);
+    galerkin_direction_2d(A, nu, nv, Pv, 1, Ac);
   }
 }
 
@@ -470,7 +307,7 @@ std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, 
   Level& fine = levels.back();
   if (!free_range(iu, nu, fine.u) || !free_range(iv, nv, fine.v)) return nullptr;
   const int p = std::max(space_u.degree(), space_v.degree());
-  const int block = block_side(options, p);
+  const int block = block_side(options.block, p);
   const auto& side = nitsche.sides;  // bottom, right, top, left
   fine.u.basis = space_u;
   fine.u.mass_weight = geometry.a2;
@@ -483,7 +320,7 @@ std::unique_ptr<Preconditioner> tensor_multigrid(const BSplineBasis1D& space_u, 
   fine.v.nitsche_start = side[0];
   fine.v.nitsche_end = side[2];
   fine.u.nitsche_factor = fine.v.nitsche_factor = nitsche.factor;
-  whole_from_lower(lower, fine.u.count, space_u.degree(), space_v.degree(), fine.A);
+  whole_from_lower(lower, fine.u.count, fine.v.count, {space_u.degree(), space_v.degree(), 0}, fine.A);
   while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity()) {
     Level& f = levels.back();
     bool hu = false, hv = false;
@@ -514,7 +351,7 @@ std::unique_ptr<Preconditioner> tensor_multigrid(std::shared_ptr<const TensorPoi
   Level& fine = levels.back();
   if (!free_range(iu, nu, fine.u) || !free_range(iv, nv, fine.v)) return nullptr;
   const int p = std::max(space_u.degree(), space_v.degree());
-  const int block = block_side(options, p);
+  const int block = block_side(options.block, p);
   fine.u.basis = space_u;
   fine.u.mass_weight = geometry.a2;
   fine.u.stiffness_weight = geometry.a1;

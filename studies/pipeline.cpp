@@ -208,7 +208,11 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
         std::unique_ptr<Preconditioner> p;
         if (*without_matrix && !space.structured_preconditioner_needs_only_diagonal(name)) {
           // Without a matrix (serially, or a PCShell made so), `lower` holds K's diagonal alone.
-          p = space.make_structured_preconditioner_without_matrix(name, layout, *without_matrix, lower.diagonal());
+          try {
+            p = space.make_structured_preconditioner_without_matrix(name, layout, *without_matrix, lower.diagonal());
+          } catch (const std::invalid_argument& e) {  // it applies to these unknowns, not to this hierarchy
+            throw InputError(path + ": [solver] preconditioner: " + e.what());
+          }
           if (!p)
             throw InputError(path + ": [solver] preconditioner: \"" + name + "\" without a matrix needs the unknowns to be a "
                              "tensor product and the geometry to live on the elements of the first coarser level (every "
@@ -217,7 +221,11 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
                                           : "use [solver] matrix = \"assembled\" (--matrix assembled)"));
           return p;
         }
-        p = space.make_structured_preconditioner(name, layout, lower, *problem);
+        try {
+          p = space.make_structured_preconditioner(name, layout, lower, *problem);
+        } catch (const std::invalid_argument& e) {  // it applies to these unknowns, not to this hierarchy
+          throw InputError(path + ": [solver] preconditioner: " + e.what());
+        }
         if (!p)
           throw InputError(path + ": [solver] preconditioner: \"" + name +
                            "\" does not apply to this problem's unknowns (they are not a tensor product: use \"boomeramg\", \"jacobi\" "

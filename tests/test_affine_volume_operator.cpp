@@ -240,6 +240,39 @@ double json_number(const std::string& text, const std::string& key) {
 
 }  // namespace
 
+TEST_CASE("Rows of a box of functions by mode products: the matrix's rows", "[affine_volume]") {
+  // The Setup's free functions (all but the faces u = 0, v = 1, w = 1) are a box; its layout
+  // numbers them as the box does. K x over the whole box and over a block inside it, against
+  // the matrix the operator writes entry by entry (entry(): products of band entries), within
+  // the bound of the product test above.
+  const Setup s;
+  const AffineVolumeOperator op(s.space, *affine_map(s.volume), 1.0, 0.5);
+  const AffineVolumeOperator::FunctionBox free{{1, 0, 0}, {s.n[0] - 1, s.n[1] - 1, s.n[2] - 1}};
+  REQUIRE(free.size() == s.layout.num_free());
+  const Eigen::SparseMatrix<double> lower = op.lower_matrix(s.layout);
+  const Eigen::SparseMatrix<double> K = Eigen::SparseMatrix<double>(lower.selfadjointView<Eigen::Lower>());
+  Eigen::VectorXd x(free.size());
+  for (long d = 0; d < x.size(); ++d) x[d] = std::cos(0.53 * d + 0.2);
+  const Eigen::VectorXd expected = K * x;
+  const Eigen::VectorXd size = Eigen::SparseMatrix<double>(K.cwiseAbs()) * x.cwiseAbs();
+  const double bound = 4 * 10 * op.max_row_nonzeros() * eps;
+  Eigen::VectorXd y(free.size());
+  op.apply_within(x.data(), free, y.data());
+  for (long d = 0; d < y.size(); ++d) CHECK(std::abs(y[d] - expected[d]) <= bound * size[d]);
+  // A block touching the box's last face in v (rows whose reach is cut there) and inside in u, w.
+  const AffineVolumeOperator::FunctionBox rows{{2, free.count[1] - 3, 1}, {3, 3, 2}};
+  Eigen::VectorXd block(rows.size());
+  op.apply_box(x.data(), free, rows, block.data());
+  long at = 0;
+  for (int k = 0; k < rows.count[2]; ++k)
+    for (int j = 0; j < rows.count[1]; ++j)
+      for (int i = 0; i < rows.count[0]; ++i, ++at) {
+        const long d = (rows.first[0] - free.first[0] + i) +
+                       long(free.count[0]) * ((rows.first[1] - free.first[1] + j) + long(free.count[1]) * (rows.first[2] - free.first[2] + k));
+        CHECK(std::abs(block[at] - expected[d]) <= bound * size[d]);
+      }
+}
+
 TEST_CASE("CG without a matrix on the cube: the assembled solve's errors, and a clear refusal on a curved volume",
           "[affine_volume]") {
   const cli_test::Sandbox box;

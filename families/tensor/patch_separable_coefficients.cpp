@@ -1,6 +1,10 @@
 // The geometry's stiffness coefficients of one patch, fitted as products (fast_diagonalization).
 #include "families/tensor/patch_separable_coefficients.hpp"
 
+#include <Eigen/Geometry>
+
+#include "basis/core/nurbs_volume.hpp"
+
 #include <algorithm>
 
 namespace knotwork {
@@ -45,6 +49,23 @@ SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& p
     for (int i : rows) measure(i, j);
   if (!ok) return {};
   return SeparableCoefficients::fit(nu, nv, c11, c22, rows, columns);
+}
+
+SeparableVolumeCoefficients volume_separable_coefficients(const TensorVolumeDiscretization& d) {
+  std::array<std::vector<double>, 3> middle;
+  std::array<int, 3> n;
+  for (int k = 0; k < 3; ++k) {
+    const auto& t = d.space[k].knots();
+    for (int s : d.space[k].element_spans()) middle[k].push_back((t[s] + t[s + 1]) / 2);
+    n[k] = static_cast<int>(middle[k].size());
+  }
+  return SeparableVolumeCoefficients::fit(n, [&](int i, int j, int k) {
+    const Eigen::Matrix3d J = volume_point_derivatives(d.volume, {middle[0][i], middle[1][j], middle[2][k]}).jacobian;
+    const double det = J.determinant();
+    if (!(det > 0)) return std::array<double, 3>{1, 1, 1};
+    return std::array<double, 3>{J.col(1).cross(J.col(2)).squaredNorm() / det, J.col(2).cross(J.col(0)).squaredNorm() / det,
+                                 J.col(0).cross(J.col(1)).squaredNorm() / det};
+  });
 }
 
 }  // namespace knotwork

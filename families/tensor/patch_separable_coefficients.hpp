@@ -1,15 +1,21 @@
 #pragma once
-// The stiffness coefficients of a tensor patch's geometry, fitted as products of univariate
-// factors for its fast diagonalization: the tensor family's one patch, and each patch of a
-// multipatch space.
+// The stiffness coefficients of a tensor patch's or volume's geometry, fitted as products of
+// univariate factors for its fast diagonalization and its multigrid's blocks: the tensor
+// family's one patch, each patch of a multipatch space, and a volume.
 #include "basis/core/geometry_map.hpp"
 #include "basis/tensor/tensor_patch.hpp"
 #include "solver/fast_diagonalization.hpp"
+#include "solver/fast_diagonalization_3d.hpp"
 
 namespace knotwork {
 
 // `geometry` is the patch's grid map (PatchGeometryMap with an ElementGrid of the whole
 // patch). Empty (weights 1) when a midpoint Jacobian is not positive.
 SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& patch, const PatchGeometryMap& geometry);
+
+// The volume's c_dd = |x_e x x_f|^2 / det J (parameter derivatives) at the midpoints of the
+// space's elements, fitted (weights 1 where a Jacobian is not positive: the assembly refuses
+// such maps first).
+SeparableVolumeCoefficients volume_separable_coefficients(const TensorVolumeDiscretization& d);
 
 }  // namespace knotwork

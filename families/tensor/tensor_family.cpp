@@ -19,8 +19,6 @@ namespace knotwork {
 
 namespace {
 
-const std::string kMultigrid = "multigrid";
-
 // Refuses discretizations that cannot fit in memory before allocating anything (a rank's part:
 // its share of the cells).
 void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, int ranks = 1) {

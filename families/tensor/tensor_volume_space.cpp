@@ -14,30 +14,13 @@
 #include "solver/affine_volume_operator.hpp"
 #include "solver/amg_preconditioner.hpp"
 #include "solver/fast_diagonalization_3d.hpp"
+#include "solver/tensor_multigrid_3d.hpp"
+#include "families/tensor/patch_separable_coefficients.hpp"
 
 namespace knotwork {
 
 namespace {
 
-
-// The volume's stiffness coefficients c_dd = |x_e x x_f|^2 / det J (parameter derivatives) at
-// the midpoints of the space's elements, fitted for the fast diagonalization.
-SeparableVolumeCoefficients volume_separable_coefficients(const TensorVolumeDiscretization& d) {
-  std::array<std::vector<double>, 3> middle;
-  std::array<int, 3> n;
-  for (int k = 0; k < 3; ++k) {
-    const auto& t = d.space[k].knots();
-    for (int s : d.space[k].element_spans()) middle[k].push_back((t[s] + t[s + 1]) / 2);
-    n[k] = static_cast<int>(middle[k].size());
-  }
-  return SeparableVolumeCoefficients::fit(n, [&](int i, int j, int k) {
-    const Eigen::Matrix3d J = volume_point_derivatives(d.volume, {middle[0][i], middle[1][j], middle[2][k]}).jacobian;
-    const double det = J.determinant();
-    if (!(det > 0)) return std::array<double, 3>{1, 1, 1};  // the assembly refuses such maps first
-    return std::array<double, 3>{J.col(1).cross(J.col(2)).squaredNorm() / det, J.col(2).cross(J.col(0)).squaredNorm() / det,
-                                 J.col(0).cross(J.col(1)).squaredNorm() / det};
-  });
-}
 
 int continuity_of(const TensorVolumeOptions& o, int k) { return o.continuity[k] < 0 ? o.degree[k] - 1 : o.continuity[k]; }
 
@@ -77,13 +60,26 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
   // The fast diagonalization, also what "auto" takes (docs/SOLVERS.md: 14-25 iterations on
   // the curved volumes for p = 2..4, against CHOLMOD 4.4x faster in 1/11 of the memory at 48^3,
   // and bounded in p where BoomerAMG's iterations are not).
-  std::vector<std::string> structured_preconditioners() const override { return {kFastDiagonalization}; }
-  std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string&, const DofLayout& layout,
+  // Multigrid by name (it reads the assembled matrix: its Galerkin levels).
+  std::vector<std::string> structured_preconditioners() const override { return {kFastDiagonalization, kMultigrid}; }
+  bool structured_preconditioner_needs_only_diagonal(const std::string& name) const override { return name != kMultigrid; }
+  // Without a matrix: multigrid from the operator where it is the Kronecker one (one affine map).
+  bool structured_preconditioner_without_matrix(const std::string&) const override { return true; }
+  std::unique_ptr<Preconditioner> make_structured_preconditioner_without_matrix(
+      const std::string& name, const DofLayout& layout, std::shared_ptr<const MatrixFreePoisson> op,
+      const Eigen::VectorXd& free_diagonal) const override {
+    auto affine = std::dynamic_pointer_cast<const AffineVolumeOperator>(op);
+    if (name != kMultigrid || !affine) return nullptr;
+    return tensor_multigrid_3d(std::move(affine), layout, free_diagonal, volume_separable_coefficients(d_));
+  }
+  std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& name, const DofLayout& layout,
                                                                  const Eigen::SparseMatrix<double>& lower,
                                                                  const PoissonProblem& problem) const override {
     std::array<bool, 6> nitsche{};
     if (problem.dirichlet_method == DirichletMethod::kNitsche && problem.boundary.size() == 6)
       for (int s = 0; s < 6; ++s) nitsche[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
+    if (name == kMultigrid)
+      return tensor_multigrid_3d(d_.space, layout, lower, volume_separable_coefficients(d_), nitsche, problem.nitsche_penalty);
     return fast_diagonalization_3d(d_.space, layout, lower.diagonal(), volume_separable_coefficients(d_), nitsche,
                                    problem.nitsche_penalty);
   }
@@ -145,14 +141,17 @@ void check_tensor_volume_memory(const CaseDescription& c, const TensorVolumeOpti
   const bool metis = c.solver.ordering == "auto" || c.solver.ordering == "metis" || c.solver.ordering == "nesdis";
   double bytes = iterative ? volume_iterative_bytes(cells, functions, o.degree, preconditioner, !c.solver.petsc_options.empty())
                            : volume_galerkin_bytes(cells, functions, o.degree, metis);
-  if (iterative && preconditioner == kFastDiagonalization) {
-    bytes = volume_structured_bytes(functions, o.degree, fast_diagonalization_3d_bytes(n));
+  if (iterative && (preconditioner == kFastDiagonalization || preconditioner == kMultigrid)) {
+    const bool multigrid = preconditioner == kMultigrid;
+    bytes = volume_structured_bytes(functions, o.degree,
+                                    multigrid ? tensor_multigrid_3d_bytes(functions, o.degree, true) : fast_diagonalization_3d_bytes(n));
     if (without_matrix(c)) {
       std::array<double, 3> elements;
       for (int k = 0; k < 3; ++k)
         elements[k] = double(c.volume.bases[k].num_elements()) * o.elements_per_span[k] + double(o.extra_knots[k].size());
       const double faces = 2 * (elements[0] * elements[1] + elements[1] * elements[2] + elements[0] * elements[2]);
-      bytes = volume_matrix_free_bytes(functions, faces, o.degree, fast_diagonalization_3d_bytes(n));
+      bytes = volume_matrix_free_bytes(functions, faces, o.degree,
+                                       multigrid ? tensor_multigrid_3d_bytes(functions, o.degree, false) : fast_diagonalization_3d_bytes(n));
       std::snprintf(what, sizeof what, "%.3g hexahedra of degree %dx%dx%d (%.3g unknowns, CG + %s without a matrix)", cells,
                     o.degree[0], o.degree[1], o.degree[2], functions, preconditioner.c_str());
     }

@@ -10,9 +10,10 @@
 
 namespace knotwork {
 
-// The name [solver] preconditioner gives the tensor family's fast diagonalization, on patches
-// and on volumes.
+// The names [solver] preconditioner gives the tensor family's fast diagonalization and
+// geometric multigrid, on patches and on volumes.
 inline const std::string kFastDiagonalization = "fast_diagonalization";
+inline const std::string kMultigrid = "multigrid";
 
 // Throws InputError naming [space] when the space cannot be built or would not fit in memory.
 // With a RowShare of several ranks, that rank's part: the slabs of hexahedra along w it owns

@@ -1,0 +1,244 @@
+#include "solver/tensor_multigrid_levels.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <omp.h>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "solver/fast_diagonalization.hpp"
+#include "solver/tensor_multigrid.hpp"
+
+namespace knotwork {
+namespace multigrid_levels {
+
+namespace {
+
+// Windows of `block` indices covering 0..n-1, the first one `offset` long when offset > 0; a
+// last window shorter than block / 2 joins the one before (every window stays longer than p,
+// so windows two apart never couple).
+std::vector<std::pair<int, int>> tile(int n, int block, int offset) {
+  std::vector<std::pair<int, int>> w;
+  int s = 0;
+  if (offset > 0 && offset < n) w.emplace_back(0, s = offset);
+  while (s < n) {
+    const int e = std::min(n, s + block);
+    w.emplace_back(s, e - s);
+    s = e;
+  }
+  if (w.size() > 1 && w.back().second < block / 2) {
+    w[w.size() - 2].second += w.back().second;
+    w.pop_back();
+  }
+  return w;
+}
+
+}  // namespace
+
+void build_windows(Direction& d, int block, int tilings) {
+  const UnivariatePair pair =
+      univariate_pair(d.basis, d.mass_weight, d.stiffness_weight, d.nitsche_start, d.nitsche_end, d.nitsche_factor);
+  const Eigen::VectorXd m = pair.mass.diagonal(), k = pair.stiffness.diagonal();
+  d.mass_diagonal = m.segment(d.first, d.count);
+  d.stiffness_diagonal = k.segment(d.first, d.count);
+  d.tilings.assign(tilings, {});
+  for (int t = 0; t < tilings; ++t)
+    for (const auto& [begin, size] : tile(d.count, block, t == 0 ? 0 : block / 2)) {
+      Window w;
+      w.begin = begin;
+      w.size = size;
+      const int f = d.first + begin;
+      const Eigen::MatrixXd K = pair.stiffness.block(f, f, size, size), M = pair.mass.block(f, f, size, size);
+      Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K, M);
+      if (es.info() != Eigen::Success)
+        throw std::runtime_error("multigrid: a univariate mass block is not positive definite");
+      w.U = es.eigenvectors();
+      w.lambda = es.eigenvalues();
+      d.tilings[t].push_back(std::move(w));
+    }
+}
+
+Direction coarser(const Direction& fine, bool& halved, RowMatrix& prolongation) {
+  Direction c = fine;
+  c.tilings.clear();
+  halved = halved_basis(fine.basis, c.basis);
+  if (!halved) {
+    prolongation.resize(fine.count, fine.count);
+    prolongation.setIdentity();
+    return c;
+  }
+  c.count = c.basis.num_functions() - c.first - c.fixed_at_end;
+  // Coarse element e is fine elements 2e and 2e + 1: the fit's weights are log-linear, so their
+  // geometric mean.
+  auto merge = [](const std::vector<double>& w) {
+    std::vector<double> out;
+    for (size_t e = 0; e + 1 < w.size(); e += 2) out.push_back(std::sqrt(w[e] * w[e + 1]));
+    return out;
+  };
+  if (!fine.mass_weight.empty()) c.mass_weight = merge(fine.mass_weight);
+  if (!fine.stiffness_weight.empty()) c.stiffness_weight = merge(fine.stiffness_weight);
+  const RowMatrix T = refinement_matrix(c.basis, fine.basis);
+  prolongation = T.block(fine.first, c.first, fine.count, c.count);
+  prolongation.makeCompressed();
+  return c;
+}
+
+bool free_range(const std::vector<int>& free, int n, Direction& d) {
+  if (free.empty() || free.back() - free.front() + 1 != static_cast<int>(free.size())) return false;
+  if (free.front() > 1 || free.back() < n - 2) return false;
+  d.first = free.front();
+  d.count = static_cast<int>(free.size());
+  d.fixed_at_end = n - 1 - free.back();
+  return true;
+}
+
+// At 2048^2, p = 2, the V-cycles took 17% less time with 16 than with 32, in the same
+// iterations; at p = 6 (256^2, square) 16 took 9 iterations where 32 took 7 (docs/SOLVERS.md).
+int block_side(int asked, int p) { return asked > 0 ? std::max(asked, 2 * p + 2) : std::max(16, 5 * p + 2); }
+
+// Row d is its strictly lower part, entry (d, j) read from column j of the triangle by binary
+// search, j running over the tensor neighbours below d in ascending order, followed by column d
+// of the triangle. Gathered row by row and threaded: a scatter of the triangle into rows
+// (Eigen's selfadjointView conversion, or by hand) took 4-13 s at 4.2M dofs, p = 2, against
+// 0.19 s at 1M (page-table misses over a 1.3 GB array).
+// Filled in place: assigning the returned matrix cost 7.5 s at 4.2M dofs (Eigen 3.4's
+// SparseMatrix copies where it could move).
+void whole_from_lower(const Eigen::SparseMatrix<double>& L, int n0, int n1, const std::array<int, 3>& degree, RowMatrix& A) {
+  const int n = static_cast<int>(L.rows());
+  const long layer = static_cast<long>(n0) * n1;
+  const int* start = L.outerIndexPtr();
+  const int* row = L.innerIndexPtr();
+  const double* value = L.valuePtr();
+  const int pu = degree[0], pv = degree[1], pw = degree[2];
+  // Visits the strictly lower entries of row d, ascending: f(column, value).
+  auto lower_row = [&](int d, auto&& f) {
+    const int a = d % n0, b = static_cast<int>((d / n0) % n1), c = static_cast<int>(d / layer);
+    for (int c2 = std::max(0, c - pw); c2 <= c; ++c2)
+      for (int b2 = std::max(0, b - pv); b2 <= std::min(n1 - 1, b + pv); ++b2) {
+        if (c2 == c && b2 > b) break;
+        for (int a2 = std::max(0, a - pu); a2 <= std::min(n0 - 1, a + pu); ++a2) {
+          const int j = static_cast<int>(a2 + n0 * (b2 + static_cast<long>(n1) * c2));
+          if (j >= d) break;
+          const int* at = std::lower_bound(row + start[j], row + start[j + 1], d);
+          if (at != row + start[j + 1] && *at == d) f(j, value[at - row]);
+        }
+      }
+  };
+  std::vector<int> count(n + 1, 0);
+#pragma omp parallel for schedule(static)
+  for (int d = 0; d < n; ++d) {
+    int c = start[d + 1] - start[d];
+    lower_row(d, [&](int, double) { ++c; });
+    count[d + 1] = c;
+  }
+  for (int d = 0; d < n; ++d) count[d + 1] += count[d];
+  // Every strictly lower entry found from its row: the pattern stays within the tensor
+  // neighbourhood (functions more than a degree apart never share a cell).
+  if (count[n] != 2 * static_cast<long>(L.nonZeros()) - n)
+    throw std::logic_error("multigrid: the matrix couples functions more than a degree apart, or lacks a diagonal entry");
+  A.resize(n, n);
+  A.resizeNonZeros(count[n]);
+  std::copy(count.begin(), count.end(), A.outerIndexPtr());
+  int* col = A.innerIndexPtr();
+  double* val = A.valuePtr();
+#pragma omp parallel for schedule(static)
+  for (int d = 0; d < n; ++d) {
+    int at = count[d];
+    lower_row(d, [&](int j, double v) { col[at] = j, val[at++] = v; });
+    for (int k = start[d]; k < start[d + 1]; ++k, ++at) col[at] = row[k], val[at] = value[k];
+  }
+}
+
+namespace {
+
+// Row by row of the result, threaded: coarse row r sums P(i, I) A(fine row, x2) P(x2_dir, K)
+// over the fine rows of column I of P (along dir) and their entries, x2_dir the entry's index
+// along dir, into a dense accumulator over the coarse columns. `Dims`: 2 or 3 (with 2, n[2] is
+// 1 and an index splits by one division), and `dir` a constant: the runtime version took 1.7-1.9
+// times as long at 1M dofs, p = 2 (its index arrays stayed in memory).
+template <int Dims, int dir>
+void galerkin_grid(const RowMatrix& A, const std::array<int, 3>& n, const RowMatrix& P, RowMatrix& B) {
+  const Eigen::SparseMatrix<double> columns = P;
+  std::array<int, 3> m = n;
+  m[dir] = static_cast<int>(P.cols());
+  const long nn = long(m[0]) * m[1] * m[2];
+  // (Scalars, not the arrays: a store to `seen`, a char, may alias any array the loop reads.)
+  const int f0 = n[0], f1 = n[1], m0 = m[0], m1 = m[1];
+  const long fine_stride = dir == 0 ? 1 : dir == 1 ? f0 : long(f0) * f1;
+  const long coarse_stride = dir == 0 ? 1 : dir == 1 ? m0 : long(m0) * m1;
+  auto split = [](long i, int d0, int d1) -> std::array<int, 3> {
+    if constexpr (Dims == 2) {
+      (void)d1;
+      return {static_cast<int>(i % d0), static_cast<int>(i / d0), 0};
+    } else {
+      const long q = i / d0;
+      return {static_cast<int>(i - q * d0), static_cast<int>(q % d1), static_cast<int>(q / d1)};
+    }
+  };
+  auto join = [](const std::array<int, 3>& at, int d0, int d1) -> long {
+    if constexpr (Dims == 2) return at[0] + long(d0) * at[1];
+    else return at[0] + long(d0) * (at[1] + long(d1) * at[2]);
+  };
+  // Each thread a contiguous range of rows into its own buffers, then copied into B at its
+  // offset (one small vector per row cost more in allocation than the products).
+  B.resize(nn, nn);
+  std::vector<long> row_start(nn + 1, 0);
+#pragma omp parallel
+  {
+    const int threads = omp_get_num_threads(), t = omp_get_thread_num();
+    const long first = nn * t / threads, last = nn * (t + 1) / threads;
+    std::vector<double> sum(nn, 0.0), my_vals;
+    std::vector<char> seen(nn, 0);
+    std::vector<int> touched, my_cols;
+    my_cols.reserve(static_cast<size_t>(last - first) * 30);
+    my_vals.reserve(my_cols.capacity());
+    for (long r = first; r < last; ++r) {
+      // Row r's fine rows and an entry's coarse columns differ from a base index only along
+      // dir: base + stride * index.
+      std::array<int, 3> at = split(r, m0, m1);
+      const int own = at[dir];
+      at[dir] = 0;
+      const long fine_base = join(at, f0, f1);
+      for (Eigen::SparseMatrix<double>::InnerIterator p(columns, own); p; ++p) {
+        for (RowMatrix::InnerIterator a(A, fine_base + fine_stride * p.row()); a; ++a) {
+          std::array<int, 3> to = split(a.col(), f0, f1);
+          const int along = to[dir];
+          to[dir] = 0;
+          const long base = join(to, m0, m1);
+          const double w = p.value() * a.value();
+          for (RowMatrix::InnerIterator q(P, along); q; ++q) {
+            const long k = base + coarse_stride * q.col();
+            if (!seen[k]) seen[k] = 1, touched.push_back(static_cast<int>(k));
+            sum[k] += w * q.value();
+          }
+        }
+      }
+      std::sort(touched.begin(), touched.end());
+      for (int c : touched) my_cols.push_back(c), my_vals.push_back(sum[c]), sum[c] = 0.0, seen[c] = 0;
+      row_start[r + 1] = static_cast<long>(touched.size());
+      touched.clear();
+    }
+#pragma omp barrier
+#pragma omp single
+    {
+      for (long r = 0; r < nn; ++r) row_start[r + 1] += row_start[r];
+      B.resizeNonZeros(row_start[nn]);
+      for (long r = 0; r <= nn; ++r) B.outerIndexPtr()[r] = static_cast<int>(row_start[r]);
+    }
+    std::copy(my_cols.begin(), my_cols.end(), B.innerIndexPtr() + row_start[first]);
+    std::copy(my_vals.begin(), my_vals.end(), B.valuePtr() + row_start[first]);
+  }
+}
+
+}  // namespace
+
+void galerkin_direction(const RowMatrix& A, const std::array<int, 3>& n, const RowMatrix& P, int dir, RowMatrix& B) {
+  if (n[2] == 1 && dir == 0) galerkin_grid<2, 0>(A, n, P, B);
+  else if (n[2] == 1 && dir == 1) galerkin_grid<2, 1>(A, n, P, B);
+  else if (dir == 0) galerkin_grid<3, 0>(A, n, P, B);
+  else if (dir == 1) galerkin_grid<3, 1>(A, n, P, B);
+  else galerkin_grid<3, 2>(A, n, P, B);
+}
+
+}  // namespace multigrid_levels
+}  // namespace knotwork

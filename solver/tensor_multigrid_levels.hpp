@@ -1,0 +1,75 @@
+#pragma once
+// What the geometric multigrids of tensor-product spaces share, bivariate (tensor_multigrid)
+// and trivariate (tensor_multigrid_3d): one direction of one level (its basis, free range,
+// separable weights and the smoother's windows with their eigenbases), its coarsening by
+// dropping every other breakpoint, and the sparse steps on a grid of functions numbered
+// a + n0 (b + n1 c): the whole matrix from its lower triangle, and the Galerkin product with a
+// prolongation along one direction. Internal to those two files (and their tests).
+#include <Eigen/SparseCore>
+#include <array>
+#include <utility>
+#include <vector>
+
+#include "basis/core/bspline_basis.hpp"
+
+namespace knotwork {
+namespace multigrid_levels {
+
+using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+// A run of free univariate indices and the generalized eigenbasis of its principal block of
+// the direction's (K, M): U^T M U = I, U^T K U = diag(lambda).
+struct Window {
+  int begin = 0, size = 0;
+  Eigen::MatrixXd U;
+  Eigen::VectorXd lambda;
+};
+
+// One direction of one level: its basis, free range, element weights of the separable
+// operator, and the windows of each tiling.
+struct Direction {
+  BSplineBasis1D basis;
+  int first = 0, count = 0;  // free functions first..first + count - 1
+  int fixed_at_end = 0;      // 1 when the last function is not free
+  std::vector<double> mass_weight, stiffness_weight;
+  bool nitsche_start = false, nitsche_end = false;
+  double nitsche_factor = 2;
+  Eigen::VectorXd mass_diagonal, stiffness_diagonal;  // over the free functions
+  std::vector<std::vector<Window>> tilings;
+};
+
+// The windows of `tilings` tilings (the second shifted by block / 2) and the direction's
+// diagonals over its free functions.
+void build_windows(Direction& d, int block, int tilings);
+
+// The coarser direction (halved when it can be: `halved` says) and its prolongation over the
+// free functions (fine count x coarse count; the identity when not halved).
+Direction coarser(const Direction& fine, bool& halved, RowMatrix& prolongation);
+
+// The free range of one direction, from its free indices (contiguous, missing at most the first
+// and the last function); false otherwise.
+bool free_range(const std::vector<int>& free, int n, Direction& d);
+
+// The block side: as given (at least 2p + 2), else max(16, 5p + 2).
+int block_side(int asked, int p);
+
+inline double row_dot(const RowMatrix& A, long row, const double* x) {
+  const int* col = A.innerIndexPtr();
+  const double* val = A.valuePtr();
+  double s = 0;
+  for (int k = A.outerIndexPtr()[row]; k < A.outerIndexPtr()[row + 1]; ++k) s += val[k] * x[col[k]];
+  return s;
+}
+
+// The whole symmetric matrix, row-major, from its lower triangle (column-major), for functions
+// a + n0 (b + n1 c) that couple only within degree[d] indices per direction (a bivariate grid:
+// n1 = rows / n0 and degree[2] = 0).
+void whole_from_lower(const Eigen::SparseMatrix<double>& L, int n0, int n1, const std::array<int, 3>& degree, RowMatrix& A);
+
+// Q^T A Q for Q the prolongation P (fine x coarse) along direction `dir` of a grid of
+// n[0] x n[1] x n[2] functions and the identity along the others (the bivariate multigrid
+// keeps a version of its own, faster for two directions).
+void galerkin_direction(const RowMatrix& A, const std::array<int, 3>& n, const RowMatrix& P, int dir, RowMatrix& B);
+
+}  // namespace multigrid_levels
+}  // namespace knotwork
