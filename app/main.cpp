@@ -39,11 +39,11 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
                   "Linear solve: direct (CHOLMOD), iterative (preconditioned CG), auto, or petsc (PETSc's KSP, "
                   "distributed over the processes of mpirun -n N; overrides [solver] method)");
   cmd->add_option("--preconditioner", o.preconditioner,
-                  "Iterative solve: auto (the family's first; multigrid without a matrix from 2M functions), jacobi, "
+                  "Iterative solve: auto (the family's first; on planar patches multigrid without a matrix from 2M functions), jacobi, "
                   "boomeramg, or the family's own (" + family_preconditioners() + ") (overrides [solver] preconditioner)");
   cmd->add_option("--matrix", o.matrix,
                   "Iterative solve: how CG gets K: assembled, matrix_free (applied by sum factorization, no matrix: "
-                  "one-patch tensor spaces, constant coefficients, no Nitsche), or auto (the default: without a matrix "
+                  "one-patch tensor spaces and volumes that are one affine map, constant coefficients, no Nitsche), or auto (the default: without a matrix "
                   "where that applies and every element is affine, assembled otherwise) (overrides [solver] matrix)");
   cmd->add_option("--tolerance", o.tolerance,
                   "Iterative solve: backward error to reach (default 1e-15), or with --solver petsc the relative "

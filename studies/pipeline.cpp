@@ -252,11 +252,13 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
       if (report) report->matrix_free = true;
       // "auto" on affine elements from kAutoMultigridFunctions unknowns: multigrid, whose cost
       // grows like N where the fast diagonalization's grows like N^1.5 (measured: docs/SOLVERS.md).
+      // Not on volumes: there the fast diagonalization's application is O(N^(4/3)) and it was
+      // faster at every size measured, up to 17.2M unknowns ("multigrid on volumes").
       const std::vector<std::string> structured = space.structured_preconditioners();
       if (c.solver.preconditioner == "auto" && !structured.empty() && chosen.preconditioner == structured.front() &&
           std::find(structured.begin(), structured.end(), kMultigridName) != structured.end() &&
           space.structured_preconditioner_without_matrix(kMultigridName) && op->all_elements_affine() &&
-          op->num_functions() >= kAutoMultigridFunctions) {
+          op->num_functions() >= kAutoMultigridFunctions && space.geometry().parametric_dimension() == 2) {
         chosen.preconditioner = kMultigridName;
         if (report) {
           report->preconditioner = kMultigridName;

@@ -175,6 +175,21 @@ TEST_CASE("Volume multigrid without a matrix: the assembled one's iterations, th
   }
 }
 
+// Where "auto" takes multigrid on planar patches (CG without a matrix from 2M functions), a
+// volume keeps the fast diagonalization, measured faster there (docs/SOLVERS.md).
+TEST_CASE("auto on a volume of 2M functions without a matrix: the fast diagonalization", "[multigrid][volume][solver]") {
+  CaseDescription c = shipped("cube");
+  space_family(c).override_options(c, 2, 128);  // 130^3 = 2 197 000 functions
+  const auto space = build_space(c);
+  SolverReport report;
+  const PoissonSolution s = solve_case(c, *space, Ordering::kAmd, {}, &report);
+  INFO(report.preconditioner << ", " << s.iterative.iterations << " iterations; " << report.note);
+  REQUIRE(report.method == "iterative");
+  REQUIRE(report.matrix_free);
+  REQUIRE(report.preconditioner == "fast_diagonalization");
+  REQUIRE(s.iterative.converged);
+}
+
 TEST_CASE("Volume multigrid refuses what it cannot do, naming the key", "[multigrid][volume]") {
   SECTION("an odd element count that stops the hierarchy above what a factorization should take") {
     CaseDescription c = shipped("cube");
