@@ -72,8 +72,9 @@ double volume_matrix_free_bytes(double functions, double boundary_faces, const s
   // The mesh (a cell and its functions' numbers per hexahedron), the vectors and the error
   // pass per function; the Dirichlet projection's triplets, boundary matrix and factor per
   // boundary face, a transient of the set-up. Calibrated on the cube (docs/PERFORMANCE.md,
-  // "Volumes: CG without a matrix"), with a margin.
-  return 1e8 + functions * (200 + 8 * per_cell) + boundary_faces * 150 * per_cell * per_cell / double(degree[2] + 1) / double(degree[2] + 1) + preconditioner;
+  // "Volumes: CG without a matrix", peaks remeasured 2026-12-07 after the projection stopped
+  // copying its entries: 1.36-1.58 times them), with a margin.
+  return 1e8 + functions * (120 + 8 * per_cell) + boundary_faces * 50 * per_cell * per_cell / double(degree[2] + 1) / double(degree[2] + 1) + preconditioner;
 }
 
 double iterative_bytes(double cells, double functions, int p, int q, double preconditioner, bool with_matrix) {

@@ -18,26 +18,6 @@ namespace {
 
 constexpr int kMaxDegree = 15;
 
-// y = B x along direction `along` of an n[0] x n[1] x n[2] array (index i + n0 j + n0 n1 k), B a
-// band matrix of half-width p (entry (a, c) at a (2p + 1) + c - a + p); B^T with `transposed`.
-void mode_product(const std::vector<double>& band, int p, bool transposed, int along, const std::array<int, 3>& n,
-                  const double* x, double* y) {
-  const long stride = along == 0 ? 1 : along == 1 ? n[0] : long(n[0]) * n[1];
-  const int m = n[along], width = 2 * p + 1;
-  const long lines = long(n[0]) * n[1] * n[2] / m;
-#pragma omp parallel for schedule(static)
-  for (long line = 0; line < lines; ++line) {
-    // The line's first entry: along u, line = j + n1 k; along v, i + n0 k; along w, i + n0 j.
-    const long start = along == 0 ? line * n[0] : along == 1 ? (line % n[0]) + long(n[0]) * n[1] * (line / n[0]) : line;
-    for (int a = 0; a < m; ++a) {
-      double s = 0;
-      for (int c = std::max(0, a - p); c <= std::min(m - 1, a + p); ++c)
-        s += (transposed ? band[size_t(c) * width + (a - c + p)] : band[size_t(a) * width + (c - a + p)]) * x[start + stride * c];
-      y[start + stride * a] = s;
-    }
-  }
-}
-
 }  // namespace
 
 AffineVolumeOperator::Direction AffineVolumeOperator::direction(const BSplineBasis1D& space, int points, bool matrices) {
@@ -252,33 +232,41 @@ double AffineVolumeOperator::entry(int i, int j, int k, int i0, int j0, int k0) 
 
 void AffineVolumeOperator::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   if (x.size() != num_functions()) throw std::invalid_argument("AffineVolumeOperator::apply: wrong vector size");
-  const Direction &U = d_[0], &V = d_[1], &W = d_[2];
-  y.setZero(x.size());
-  Eigen::VectorXd a(x.size()), b(x.size()), c(x.size());
-  // y += coefficient (B_w (x) B_v (x) B_u) x, each factor a band (transposed or not).
-  struct Factor {
-    const std::vector<double>* band;
-    bool transposed;
+  y.resize(x.size());
+  // Slab by slab (apply_within): its work arrays are a slab's, where whole-array mode products
+  // took three more vectors of the problem's size (0.4 GB at 256^3 hexahedra).
+  apply_within(x.data(), FunctionBox{{0, 0, 0}, n_}, y.data());
+}
+
+AffineVolumeOperator::FunctionBox AffineVolumeOperator::free_box(const DofLayout& layout) const {
+  FunctionBox box;
+  if (layout.num_free() == 0) return box;
+  const auto at = [&](int f) {
+    return std::array<int, 3>{f % n_[0], (f / n_[0]) % n_[1], f / (n_[0] * n_[1])};
   };
-  const auto add = [&](double coefficient, Factor fu, Factor fv, Factor fw) {
-    if (coefficient == 0) return;
-    mode_product(*fu.band, U.degree, fu.transposed, 0, n_, x.data(), a.data());
-    mode_product(*fv.band, V.degree, fv.transposed, 1, n_, a.data(), b.data());
-    mode_product(*fw.band, W.degree, fw.transposed, 2, n_, b.data(), c.data());
-    y += coefficient * c;
-  };
-  const Factor Mu{&U.M, false}, Mv{&V.M, false}, Mw{&W.M, false};
-  add(g_[0][0], {&U.K, false}, Mv, Mw);
-  add(g_[1][1], Mu, {&V.K, false}, Mw);
-  add(g_[2][2], Mu, Mv, {&W.K, false});
-  add(r_, Mu, Mv, Mw);
-  // entry(): G01 (D_u(i, i0) D_v(j0, j) + D_u(i0, i) D_v(j, j0)) M_w(k, k0), and likewise.
-  add(g_[0][1], {&U.D, false}, {&V.D, true}, Mw);
-  add(g_[0][1], {&U.D, true}, {&V.D, false}, Mw);
-  add(g_[0][2], {&U.D, false}, Mv, {&W.D, true});
-  add(g_[0][2], {&U.D, true}, Mv, {&W.D, false});
-  add(g_[1][2], Mu, {&V.D, false}, {&W.D, true});
-  add(g_[1][2], Mu, {&V.D, true}, {&W.D, false});
+  const std::array<int, 3> first = at(layout.function_of_dof.front()), last = at(layout.function_of_dof.back());
+  for (int d = 0; d < 3; ++d) box.first[d] = first[d], box.count[d] = last[d] - first[d] + 1;
+  return box;
+}
+
+bool AffineVolumeOperator::applies_free(const DofLayout& layout) const {
+  if (static_cast<long>(layout.dof.size()) != num_functions() || layout.num_free() == 0) return false;
+  const FunctionBox box = free_box(layout);
+  for (int d = 0; d < 3; ++d)
+    if (box.count[d] <= 0) return false;
+  if (box.size() != layout.num_free()) return false;
+  long at = 0;
+  for (int k = 0; k < box.count[2]; ++k)
+    for (int j = 0; j < box.count[1]; ++j)
+      for (int i = 0; i < box.count[0]; ++i, ++at)
+        if (layout.function_of_dof[at] != (box.first[0] + i) + n_[0] * ((box.first[1] + j) + n_[1] * (box.first[2] + k)))
+          return false;
+  return true;
+}
+
+void AffineVolumeOperator::apply_free(const DofLayout& layout, const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  y.resize(x.size());
+  apply_within(x.data(), free_box(layout), y.data());
 }
 
 Eigen::VectorXd AffineVolumeOperator::diagonal() const {

@@ -34,6 +34,10 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
 
   int num_functions() const override { return n_[0] * n_[1] * n_[2]; }
   void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override;
+  // Where the free functions are a box numbered as one (a + count0 (b + count1 c)): the
+  // Dirichlet faces' functions fixed, as on a box with Dirichlet and Neumann faces.
+  bool applies_free(const DofLayout& layout) const override;
+  void apply_free(const DofLayout& layout, const Eigen::VectorXd& x, Eigen::VectorXd& y) const override;
   Eigen::VectorXd diagonal() const override;
   // F_a = int f R_a by the same rules; throws InputError naming the first cell (in the mesh's
   // order) where f is not finite, as the element loop does.
@@ -90,6 +94,8 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
   void element_points(const Direction& U, const Direction& V, const Direction& W, int eu, int ev, int ew, double* x,
                       double* y, double* z) const;
   double entry(int i, int j, int k, int i0, int j0, int k0) const;
+  // The box from its first and last free functions (what applies_free checked).
+  FunctionBox free_box(const DofLayout& layout) const;
   Eigen::SparseMatrix<double> write_lower(const DofLayout& layout, bool values) const;
 
   std::array<Direction, 3> d_;

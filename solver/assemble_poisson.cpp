@@ -828,7 +828,7 @@ DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geom
   return out;
 }
 
-std::vector<std::pair<int, double>> solve_dirichlet_projection(const DirichletPieces& pieces) {
+std::vector<std::pair<int, double>> solve_dirichlet_projection(DirichletPieces pieces) {
   // Sorted ids: the unknowns of the boundary system (a function may come from several pieces).
   std::vector<int> ids = pieces.functions;
   std::sort(ids.begin(), ids.end());
@@ -851,6 +851,7 @@ std::vector<std::pair<int, double>> solve_dirichlet_projection(const DirichletPi
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(pieces.mass.size());
   for (const auto& t : pieces.mass) triplets.emplace_back(index(t.row()), index(t.col()), t.value());
+  std::vector<Eigen::Triplet<double>>().swap(pieces.mass);
   Eigen::VectorXd r = Eigen::VectorXd::Zero(nd);
   for (size_t k = 0; k < pieces.functions.size(); ++k) r[index(pieces.functions[k])] += pieces.load[k];
   Eigen::SparseMatrix<double> M(nd, nd);

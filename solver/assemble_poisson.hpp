@@ -113,8 +113,9 @@ struct DirichletPieces {
 DirichletPieces dirichlet_pieces(const BezierMesh& mesh, const GeometryMap& geometry, const PoissonProblem& problem,
                                  const QuadratureOptions& quadrature, CellRange cells, const MeshPart& part);
 // The projected value of every function of the pieces (sorted by function number). Throws
-// std::runtime_error when the traces are linearly dependent.
-std::vector<std::pair<int, double>> solve_dirichlet_projection(const DirichletPieces& pieces);
+// std::runtime_error when the traces are linearly dependent. The pieces are taken (their
+// entries freed once the matrix's are made: on a volume they are most of the set-up's peak).
+std::vector<std::pair<int, double>> solve_dirichlet_projection(DirichletPieces pieces);
 
 // Number of quadrature points along u and v for a cell (0 in options means degree + extra).
 inline int rule_points(int requested, int degree, int extra) {

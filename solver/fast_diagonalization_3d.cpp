@@ -112,13 +112,15 @@ class FastDiagonalization3d final : public Preconditioner {
   // z = D^{-1/2} (U_w (x) U_v (x) U_u) Lambda^{-1} (U_w (x) U_v (x) U_u)^T D^{-1/2} r, the vector
   // as an n_u x n_v x n_w array (u fastest): each factor acts as one product along its mode.
   void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override {
-    thread_local Eigen::VectorXd a, b;
-    a = r.cwiseProduct(scale_);
-    b.resize(a.size());
-    modes(a, b, true);  // a <- U^T a (b is workspace)
-    a.array() *= inverse_.array();
-    modes(a, b, false);  // a <- U a
-    z = a.cwiseProduct(scale_);
+    // z itself is the first work array (each pass of modes swaps it with b and back), so that
+    // one vector of the problem's size is kept, not two.
+    thread_local Eigen::VectorXd b;
+    z = r.cwiseProduct(scale_);
+    b.resize(z.size());
+    modes(z, b, true);  // z <- U^T z (b is workspace)
+    z.array() *= inverse_.array();
+    modes(z, b, false);  // z <- U z
+    z.array() *= scale_.array();
   }
 
  private:

@@ -21,6 +21,11 @@ class MatrixFreePoisson {
   // y = K x (y overwritten).
   virtual void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const = 0;
   virtual Eigen::VectorXd diagonal() const = 0;
+  // Whether apply_free serves `layout`: K applied to vectors over its free dofs alone, without
+  // embedding them in vectors over all the functions (checked once by the caller).
+  virtual bool applies_free(const DofLayout& /*layout*/) const { return false; }
+  // y = K x over the free dofs of a layout that applies_free accepted (x and y by dof).
+  virtual void apply_free(const DofLayout& /*layout*/, const Eigen::VectorXd& /*x*/, Eigen::VectorXd& /*y*/) const {}
   // F_a = int f R_a, f a planar source f(x, y).
   virtual Eigen::VectorXd load(const Expression& source) const = 0;
   // The most functions one function couples with (itself included): the attainable accuracy.

@@ -25,7 +25,8 @@ namespace {
 class FreeDofsOperator final : public SymmetricOperator {
  public:
   FreeDofsOperator(const MatrixFreePoisson& op, const DofLayout& layout, const Eigen::VectorXd& diagonal)
-      : op_(op), layout_(layout), x_(Eigen::VectorXd::Zero(op.num_functions())) {
+      : op_(op), layout_(layout), direct_(op.applies_free(layout)) {
+    if (!direct_) x_ = Eigen::VectorXd::Zero(op.num_functions());
     norm_ = diagonal.size() > 0 ? diagonal.maxCoeff() : 0;
     Eigen::VectorXd s(diagonal.size()), y;
     for (Eigen::Index d = 0; d < s.size(); ++d) s[d] = d % 2 ? -1.0 : 1.0;
@@ -33,6 +34,7 @@ class FreeDofsOperator final : public SymmetricOperator {
     if (y.size() > 0) norm_ = std::max(norm_, y.lpNorm<Eigen::Infinity>());
   }
   void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override {
+    if (direct_) return op_.apply_free(layout_, x, y);
     const int n = layout_.num_free();
     for (int d = 0; d < n; ++d) x_[layout_.function_of_dof[d]] = x[d];
     op_.apply(x_, all_);
@@ -45,6 +47,7 @@ class FreeDofsOperator final : public SymmetricOperator {
  private:
   const MatrixFreePoisson& op_;
   const DofLayout& layout_;
+  const bool direct_;                // the operator applies itself to the free dofs (no x_, all_)
   mutable Eigen::VectorXd x_, all_;  // fixed entries of x_ stay zero
   double norm_ = 0;
 };
