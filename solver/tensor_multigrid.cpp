@@ -196,59 +196,27 @@ void set_scale(Level& L, const Eigen::VectorXd& diagonal) {
 }
 
 // Q^T A Q for Q the prolongation P (fine x coarse) along direction `dir` of a grid of n0 x n1
-// (the bivariate case of multigrid_levels::galerkin_direction, kept apart: the general one took
-// 1.3-1.4 times as long here at 1M dofs, p = 2, same result, one sitting)
-// functions (index a + n0 b) and the identity along the other, row by row of the result,
-// threaded: coarse row r sums P(i, I) A(fine row, (a2, b2)) P(x2, K) over the fine rows of
-// column I of P (along dir) and their entries, x2 the entry's index along dir, into a dense
-// accumulator over the coarse columns.
+// functions (index a + n0 b) and the identity along the other, row by row of the result:
+// coarse row r sums P(i, I) A(fine row, (a2, b2)) P(x2, K) over the fine rows of column I of P
+// (along dir) and their entries, x2 the entry's index along dir. (The bivariate case of
+// multigrid_levels::galerkin_direction, kept apart: the general one took 1.3-1.4 times as long
+// here at 1M dofs, p = 2, the same result, one sitting.)
 void galerkin_direction_2d(const RowMatrix& A, int n0, int n1, const RowMatrix& P, int dir, RowMatrix& B) {
   const Eigen::SparseMatrix<double> columns = P;
   const int nc = static_cast<int>(P.cols());
   const int m0 = dir == 0 ? nc : n0, m1 = dir == 1 ? nc : n1;
-  const long n = static_cast<long>(m0) * m1;
-  // Each thread a contiguous range of rows into its own buffers, then copied into B at its
-  // offset (one small vector per row cost more in allocation than the products).
-  B.resize(n, n);
-  std::vector<long> row_start(n + 1, 0);
-#pragma omp parallel
-  {
-    const int threads = omp_get_num_threads(), t = omp_get_thread_num();
-    const long first = n * t / threads, last = n * (t + 1) / threads;
-    std::vector<double> sum(n, 0.0), my_vals;
-    std::vector<char> seen(n, 0);
-    std::vector<int> touched, my_cols;
-    my_cols.reserve(static_cast<size_t>(last - first) * 30);
-    my_vals.reserve(my_cols.capacity());
-    for (long r = first; r < last; ++r) {
-      const int I = static_cast<int>(r % m0), J = static_cast<int>(r / m0);
-      for (Eigen::SparseMatrix<double>::InnerIterator p(columns, dir == 0 ? I : J); p; ++p) {
-        const int fine_row = dir == 0 ? static_cast<int>(p.row()) + n0 * J : I + n0 * static_cast<int>(p.row());
-        for (RowMatrix::InnerIterator a(A, fine_row); a; ++a) {
-          const int a2 = static_cast<int>(a.col() % n0), b2 = static_cast<int>(a.col() / n0);
-          const double w = p.value() * a.value();
-          for (RowMatrix::InnerIterator q(P, dir == 0 ? a2 : b2); q; ++q) {
-            const long to = dir == 0 ? q.col() + static_cast<long>(m0) * b2 : a2 + static_cast<long>(m0) * q.col();
-            if (!seen[to]) seen[to] = 1, touched.push_back(static_cast<int>(to));
-            sum[to] += w * q.value();
-          }
-        }
+  rows_by_accumulation(static_cast<long>(m0) * m1, B, [&](long r, auto&& add) {
+    const int I = static_cast<int>(r % m0), J = static_cast<int>(r / m0);
+    for (Eigen::SparseMatrix<double>::InnerIterator p(columns, dir == 0 ? I : J); p; ++p) {
+      const int fine_row = dir == 0 ? static_cast<int>(p.row()) + n0 * J : I + n0 * static_cast<int>(p.row());
+      for (RowMatrix::InnerIterator a(A, fine_row); a; ++a) {
+        const int a2 = static_cast<int>(a.col() % n0), b2 = static_cast<int>(a.col() / n0);
+        const double w = p.value() * a.value();
+        for (RowMatrix::InnerIterator q(P, dir == 0 ? a2 : b2); q; ++q)
+          add(dir == 0 ? q.col() + static_cast<long>(m0) * b2 : a2 + static_cast<long>(m0) * q.col(), w * q.value());
       }
-      std::sort(touched.begin(), touched.end());
-      for (int c : touched) my_cols.push_back(c), my_vals.push_back(sum[c]), sum[c] = 0.0, seen[c] = 0;
-      row_start[r + 1] = static_cast<long>(touched.size());
-      touched.clear();
     }
-#pragma omp barrier
-#pragma omp single
-    {
-      for (long r = 0; r < n; ++r) row_start[r + 1] += row_start[r];
-      B.resizeNonZeros(row_start[n]);
-      for (long r = 0; r <= n; ++r) B.outerIndexPtr()[r] = static_cast<int>(row_start[r]);
-    }
-    std::copy(my_cols.begin(), my_cols.end(), B.innerIndexPtr() + row_start[first]);
-    std::copy(my_vals.begin(), my_vals.end(), B.valuePtr() + row_start[first]);
-  }
+  });
 }
 
 // P^T A P with P = P_v (x) P_u = (P_v (x) I)(I (x) P_u): one direction at a time (a direction

@@ -206,6 +206,21 @@ void refuse_large_coarsest(long size, const TensorMultigridOptions& options) {
                                 "\"fast_diagonalization\"");
 }
 
+// The next coarser level's directions, and the finest level's prolongations to it; false (and
+// no prolongations) when no direction halves. `levels` has room (reserved: no reallocation).
+bool add_coarser_level(std::vector<Level>& levels, std::array<bool, 3>& halved) {
+  Level& f = levels.back();
+  std::array<Direction, 3> d;
+  for (int k = 0; k < 3; ++k) d[k] = coarser(f.d[k], halved[k], f.P[k]);
+  if (!halved[0] && !halved[1] && !halved[2]) {
+    f.P = {};
+    return false;
+  }
+  levels.emplace_back();
+  levels.back().d = std::move(d);
+  return true;
+}
+
 // The finest level's directions (bases, free ranges, the geometry's weights, Nitsche's ends);
 // false when the free dofs are not a tensor product of free ranges or a knot vector is not open.
 bool fine_level(const std::array<BSplineBasis1D, 3>& spaces, const DofLayout& layout, const SeparableVolumeCoefficients& geometry,
@@ -263,19 +278,11 @@ std::unique_ptr<Preconditioner> tensor_multigrid_3d(const std::array<BSplineBasi
   const int block = block_side(options.block, p);
   whole_from_lower(lower, levels[0].d[0].count, levels[0].d[1].count,
                    {spaces[0].degree(), spaces[1].degree(), spaces[2].degree()}, levels[0].A);
-  while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity()) {
-    Level& f = levels.back();
-    std::array<Direction, 3> d;
-    std::array<bool, 3> halved{};
-    for (int k = 0; k < 3; ++k) d[k] = coarser(f.d[k], halved[k], f.P[k]);
-    if (!halved[0] && !halved[1] && !halved[2]) {
-      f.P = {};
-      break;
-    }
-    levels.emplace_back();
+  std::array<bool, 3> halved{};
+  while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity() &&
+         add_coarser_level(levels, halved)) {
     Level& c = levels.back();
     const Level& fine = levels[levels.size() - 2];
-    c.d = std::move(d);
     // P^T A P one direction at a time (not halved: the identity, skipped), through two buffers.
     std::array<RowMatrix, 2> buffer;
     const RowMatrix* in = &fine.A;
@@ -318,19 +325,11 @@ std::unique_ptr<Preconditioner> tensor_multigrid_3d(std::shared_ptr<const Affine
   levels[0].free = box(levels[0]);
   std::vector<Eigen::VectorXd> diagonals{free_diagonal};
   // Each coarser level: the operator on the halved spaces (on an affine map, the Galerkin one).
-  while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity()) {
-    Level& f = levels.back();
-    std::array<Direction, 3> d;
-    std::array<bool, 3> halved{};
-    for (int k = 0; k < 3; ++k) d[k] = coarser(f.d[k], halved[k], f.P[k]);
-    if (!halved[0] && !halved[1] && !halved[2]) {
-      f.P = {};
-      break;
-    }
-    levels.emplace_back();
+  std::array<bool, 3> halved{};
+  while (levels.back().size() > options.coarsest_functions && levels.size() < levels.capacity() &&
+         add_coarser_level(levels, halved)) {
     Level& c = levels.back();
     const Level& fine = levels[levels.size() - 2];
-    c.d = std::move(d);
     c.op = fine.op->on_spaces({c.d[0].basis, c.d[1].basis, c.d[2].basis});
     c.free = box(c);
     const Eigen::VectorXd all = c.op->diagonal();

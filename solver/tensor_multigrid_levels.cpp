@@ -151,12 +151,11 @@ void whole_from_lower(const Eigen::SparseMatrix<double>& L, int n0, int n1, cons
 
 namespace {
 
-// Row by row of the result, threaded: coarse row r sums P(i, I) A(fine row, x2) P(x2_dir, K)
-// over the fine rows of column I of P (along dir) and their entries, x2_dir the entry's index
-// along dir, into a dense accumulator over the coarse columns. `Dims`: 2 or 3 (with 2, n[2] is
-// 1 and an index splits by one division), and `dir` a constant: the runtime version took 1.7-1.9
-// times as long at 1M dofs, p = 2 (its index arrays stayed in memory).
-template <int Dims, int dir>
+// Row by row of the result (rows_by_accumulation): coarse row r sums P(i, I) A(fine row, x2)
+// P(x2_dir, K) over the fine rows of column I of P (along dir) and their entries, x2_dir the
+// entry's index along dir. `dir` a constant: with it at run time the loop took 1.7-1.9 times as
+// long at 1M dofs, p = 2 (its index arrays stayed in memory).
+template <int dir>
 void galerkin_grid(const RowMatrix& A, const std::array<int, 3>& n, const RowMatrix& P, RowMatrix& B) {
   const Eigen::SparseMatrix<double> columns = P;
   std::array<int, 3> m = n;
@@ -166,78 +165,39 @@ void galerkin_grid(const RowMatrix& A, const std::array<int, 3>& n, const RowMat
   const int f0 = n[0], f1 = n[1], m0 = m[0], m1 = m[1];
   const long fine_stride = dir == 0 ? 1 : dir == 1 ? f0 : long(f0) * f1;
   const long coarse_stride = dir == 0 ? 1 : dir == 1 ? m0 : long(m0) * m1;
-  auto split = [](long i, int d0, int d1) -> std::array<int, 3> {
-    if constexpr (Dims == 2) {
-      (void)d1;
-      return {static_cast<int>(i % d0), static_cast<int>(i / d0), 0};
-    } else {
-      const long q = i / d0;
-      return {static_cast<int>(i - q * d0), static_cast<int>(q % d1), static_cast<int>(q / d1)};
-    }
+  const auto split = [](long i, int d0, int d1) -> std::array<int, 3> {
+    const long q = i / d0;
+    return {static_cast<int>(i - q * d0), static_cast<int>(q % d1), static_cast<int>(q / d1)};
   };
-  auto join = [](const std::array<int, 3>& at, int d0, int d1) -> long {
-    if constexpr (Dims == 2) return at[0] + long(d0) * at[1];
-    else return at[0] + long(d0) * (at[1] + long(d1) * at[2]);
+  const auto join = [](const std::array<int, 3>& at, int d0, int d1) -> long {
+    return at[0] + long(d0) * (at[1] + long(d1) * at[2]);
   };
-  // Each thread a contiguous range of rows into its own buffers, then copied into B at its
-  // offset (one small vector per row cost more in allocation than the products).
-  B.resize(nn, nn);
-  std::vector<long> row_start(nn + 1, 0);
-#pragma omp parallel
-  {
-    const int threads = omp_get_num_threads(), t = omp_get_thread_num();
-    const long first = nn * t / threads, last = nn * (t + 1) / threads;
-    std::vector<double> sum(nn, 0.0), my_vals;
-    std::vector<char> seen(nn, 0);
-    std::vector<int> touched, my_cols;
-    my_cols.reserve(static_cast<size_t>(last - first) * 30);
-    my_vals.reserve(my_cols.capacity());
-    for (long r = first; r < last; ++r) {
-      // Row r's fine rows and an entry's coarse columns differ from a base index only along
-      // dir: base + stride * index.
-      std::array<int, 3> at = split(r, m0, m1);
-      const int own = at[dir];
-      at[dir] = 0;
-      const long fine_base = join(at, f0, f1);
-      for (Eigen::SparseMatrix<double>::InnerIterator p(columns, own); p; ++p) {
-        for (RowMatrix::InnerIterator a(A, fine_base + fine_stride * p.row()); a; ++a) {
-          std::array<int, 3> to = split(a.col(), f0, f1);
-          const int along = to[dir];
-          to[dir] = 0;
-          const long base = join(to, m0, m1);
-          const double w = p.value() * a.value();
-          for (RowMatrix::InnerIterator q(P, along); q; ++q) {
-            const long k = base + coarse_stride * q.col();
-            if (!seen[k]) seen[k] = 1, touched.push_back(static_cast<int>(k));
-            sum[k] += w * q.value();
-          }
-        }
+  rows_by_accumulation(nn, B, [&](long r, auto&& add) {
+    // Row r's fine rows and an entry's coarse columns differ from a base index only along dir:
+    // base + stride * index.
+    std::array<int, 3> at = split(r, m0, m1);
+    const int own = at[dir];
+    at[dir] = 0;
+    const long fine_base = join(at, f0, f1);
+    for (Eigen::SparseMatrix<double>::InnerIterator p(columns, own); p; ++p) {
+      for (RowMatrix::InnerIterator a(A, fine_base + fine_stride * p.row()); a; ++a) {
+        std::array<int, 3> to = split(a.col(), f0, f1);
+        const int along = to[dir];
+        to[dir] = 0;
+        const long base = join(to, m0, m1);
+        const double w = p.value() * a.value();
+        for (RowMatrix::InnerIterator q(P, along); q; ++q) add(base + coarse_stride * q.col(), w * q.value());
       }
-      std::sort(touched.begin(), touched.end());
-      for (int c : touched) my_cols.push_back(c), my_vals.push_back(sum[c]), sum[c] = 0.0, seen[c] = 0;
-      row_start[r + 1] = static_cast<long>(touched.size());
-      touched.clear();
     }
-#pragma omp barrier
-#pragma omp single
-    {
-      for (long r = 0; r < nn; ++r) row_start[r + 1] += row_start[r];
-      B.resizeNonZeros(row_start[nn]);
-      for (long r = 0; r <= nn; ++r) B.outerIndexPtr()[r] = static_cast<int>(row_start[r]);
-    }
-    std::copy(my_cols.begin(), my_cols.end(), B.innerIndexPtr() + row_start[first]);
-    std::copy(my_vals.begin(), my_vals.end(), B.valuePtr() + row_start[first]);
-  }
+  });
 }
 
 }  // namespace
 
 void galerkin_direction(const RowMatrix& A, const std::array<int, 3>& n, const RowMatrix& P, int dir, RowMatrix& B) {
-  if (n[2] == 1 && dir == 0) galerkin_grid<2, 0>(A, n, P, B);
-  else if (n[2] == 1 && dir == 1) galerkin_grid<2, 1>(A, n, P, B);
-  else if (dir == 0) galerkin_grid<3, 0>(A, n, P, B);
-  else if (dir == 1) galerkin_grid<3, 1>(A, n, P, B);
-  else galerkin_grid<3, 2>(A, n, P, B);
+  if (dir == 0) galerkin_grid<0>(A, n, P, B);
+  else if (dir == 1) galerkin_grid<1>(A, n, P, B);
+  else galerkin_grid<2>(A, n, P, B);
 }
 
 }  // namespace multigrid_levels

@@ -6,6 +6,8 @@
 // a + n0 (b + n1 c): the whole matrix from its lower triangle, and the Galerkin product with a
 // prolongation along one direction. Internal to those two files (and their tests).
 #include <Eigen/SparseCore>
+#include <omp.h>
+#include <algorithm>
 #include <array>
 #include <utility>
 #include <vector>
@@ -65,6 +67,47 @@ inline double row_dot(const RowMatrix& A, long row, const double* x) {
 // a + n0 (b + n1 c) that couple only within degree[d] indices per direction (a bivariate grid:
 // n1 = rows / n0 and degree[2] = 0).
 void whole_from_lower(const Eigen::SparseMatrix<double>& L, int n0, int n1, const std::array<int, 3>& degree, RowMatrix& A);
+
+// B (nn x nn, row-major) filled row by row, threaded: fill(r, add) calls add(column, value) for
+// the terms of row r (a column may come many times: the terms add up, into a dense
+// accumulator over the columns). Each thread keeps a contiguous range of rows in its own
+// buffers, copied into B at its offset (one small vector per row cost more in allocation than
+// the products).
+template <class Fill>
+void rows_by_accumulation(long nn, RowMatrix& B, Fill&& fill) {
+  B.resize(nn, nn);
+  std::vector<long> row_start(nn + 1, 0);
+#pragma omp parallel
+  {
+    const int threads = omp_get_num_threads(), t = omp_get_thread_num();
+    const long first = nn * t / threads, last = nn * (t + 1) / threads;
+    std::vector<double> sum(nn, 0.0), my_vals;
+    std::vector<char> seen(nn, 0);
+    std::vector<int> touched, my_cols;
+    my_cols.reserve(static_cast<size_t>(last - first) * 30);
+    my_vals.reserve(my_cols.capacity());
+    const auto add = [&](long k, double v) {
+      if (!seen[k]) seen[k] = 1, touched.push_back(static_cast<int>(k));
+      sum[k] += v;
+    };
+    for (long r = first; r < last; ++r) {
+      fill(r, add);
+      std::sort(touched.begin(), touched.end());
+      for (int c : touched) my_cols.push_back(c), my_vals.push_back(sum[c]), sum[c] = 0.0, seen[c] = 0;
+      row_start[r + 1] = static_cast<long>(touched.size());
+      touched.clear();
+    }
+#pragma omp barrier
+#pragma omp single
+    {
+      for (long r = 0; r < nn; ++r) row_start[r + 1] += row_start[r];
+      B.resizeNonZeros(row_start[nn]);
+      for (long r = 0; r <= nn; ++r) B.outerIndexPtr()[r] = static_cast<int>(row_start[r]);
+    }
+    std::copy(my_cols.begin(), my_cols.end(), B.innerIndexPtr() + row_start[first]);
+    std::copy(my_vals.begin(), my_vals.end(), B.valuePtr() + row_start[first]);
+  }
+}
 
 // Q^T A Q for Q the prolongation P (fine x coarse) along direction `dir` of a grid of
 // n[0] x n[1] x n[2] functions and the identity along the others (the bivariate multigrid
