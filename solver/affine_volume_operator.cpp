@@ -10,6 +10,7 @@
 
 #include "basis/core/input_error.hpp"
 #include "quadrature/gauss_legendre.hpp"
+#include "solver/fast_diagonalization_3d.hpp"
 #include "solver/sparsity.hpp"
 
 namespace knotwork {
@@ -266,17 +267,11 @@ AffineVolumeOperator::FunctionBox AffineVolumeOperator::free_box(const DofLayout
 }
 
 bool AffineVolumeOperator::applies_free(const DofLayout& layout) const {
-  if (static_cast<long>(layout.dof.size()) != num_functions() || layout.num_free() == 0) return false;
-  const FunctionBox box = free_box(layout);
-  for (int d = 0; d < 3; ++d)
-    if (box.count[d] <= 0) return false;
-  if (box.size() != layout.num_free()) return false;
-  long at = 0;
-  for (int k = 0; k < box.count[2]; ++k)
-    for (int j = 0; j < box.count[1]; ++j)
-      for (int i = 0; i < box.count[0]; ++i, ++at)
-        if (layout.function_of_dof[at] != (box.first[0] + i) + n_[0] * ((box.first[1] + j) + n_[1] * (box.first[2] + k)))
-          return false;
+  // A tensor product of free univariate indices (numbered as the box numbers them), each a run.
+  std::array<std::vector<int>, 3> free;
+  if (!tensor_free_indices_3d(n_, layout, free)) return false;
+  for (const std::vector<int>& f : free)
+    if (f.empty() || f.back() - f.front() + 1 != static_cast<int>(f.size())) return false;
   return true;
 }
 
