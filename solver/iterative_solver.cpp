@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 namespace knotwork {
 
@@ -65,12 +66,13 @@ class LowerTriangle final : public SymmetricOperator {
 
 Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& b,
                                   const Preconditioner& preconditioner, double tolerance, int max_iterations,
-                                  IterativeStats& stats) {
-  return preconditioned_cg(LowerTriangle(lower), b, preconditioner, tolerance, max_iterations, stats);
+                                  IterativeStats& stats, const Eigen::VectorXd* initial, double energy_tolerance) {
+  return preconditioned_cg(LowerTriangle(lower), b, preconditioner, tolerance, max_iterations, stats, initial, energy_tolerance);
 }
 
 Eigen::VectorXd preconditioned_cg(const SymmetricOperator& K, const Eigen::VectorXd& b, const Preconditioner& preconditioner,
-                                  double tolerance, int max_iterations, IterativeStats& stats) {
+                                  double tolerance, int max_iterations, IterativeStats& stats, const Eigen::VectorXd* initial,
+                                  double energy_tolerance) {
   const Eigen::Index n = b.size();
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n), r = b, z(n), p(n), q(n);
   const double b_norm = b.norm();
@@ -78,6 +80,12 @@ Eigen::VectorXd preconditioned_cg(const SymmetricOperator& K, const Eigen::Vecto
   if (b_norm == 0) {
     stats.converged = true;
     return x;
+  }
+  if (initial && initial->size() > 0) {
+    if (initial->size() != n) throw std::invalid_argument("CG: an initial guess of the wrong size");
+    x = *initial;
+    K.apply(x, q);
+    r = b - q;
   }
   const double k_norm = K.inf_norm(), b_inf = b.lpNorm<Eigen::Infinity>();
   const double m_eps = (K.max_row_nonzeros() + 1) * std::numeric_limits<double>::epsilon();
@@ -89,15 +97,31 @@ Eigen::VectorXd preconditioned_cg(const SymmetricOperator& K, const Eigen::Vecto
   // and the true residual does not, CG restarts from x with the true one.
   // Stagnation (kStagnationFactor): no 10% improvement over a window that grows with the
   // iteration count, and only near the attainable accuracy.
+  if (initial && initial->size() > 0 && backward_error(r) <= tolerance) {  // already solved
+    stats.relative_residual = r.norm() / b_norm;
+    stats.backward_error = backward_error(r);
+    stats.converged = true;
+    return x;
+  }
   double best = INFINITY;
   int best_at = 0;
-  bool stagnated = false;
-  while (stats.iterations < max_iterations && !stagnated) {
+  bool stagnated = false, energy_small = false;
+  // The algebraic error's energy (Hestenes-Stiefel; Strakos, Tichy 2002): an iteration lowers
+  // ||x* - x||_K^2 by alpha r^T z exactly (in exact arithmetic), so the last kEnergyDelay
+  // decreases sum to a lower bound of the error's energy kEnergyDelay iterations back, which
+  // bounds the present iterate's once CG contracts (measured: docs/ADAPTIVITY.md).
+  constexpr int kEnergyDelay = 2;
+  double decrease[kEnergyDelay] = {INFINITY, INFINITY};
+  const auto energy_reached = [&]() {
+    stats.energy_estimate = std::sqrt(decrease[0] + decrease[1]);
+    return energy_small = energy_tolerance > 0 && stats.energy_estimate <= energy_tolerance;
+  };
+  while (stats.iterations < max_iterations && !stagnated && !energy_small) {
     preconditioner.apply(r, z);
     p = z;
     double rz = r.dot(z);
     bool breakdown = false;
-    while (stats.iterations < max_iterations) {
+    while (stats.iterations < max_iterations && !energy_reached()) {
       K.apply(p, q);
       const double pq = p.dot(q);
       if (!(pq > 0)) {  // not positive definite along p, or a NaN
@@ -105,6 +129,7 @@ Eigen::VectorXd preconditioned_cg(const SymmetricOperator& K, const Eigen::Vecto
         break;
       }
       const double alpha = rz / pq;
+      decrease[stats.iterations % kEnergyDelay] = alpha * rz;
       x.noalias() += alpha * p;
       r.noalias() -= alpha * q;
       ++stats.iterations;
@@ -126,11 +151,13 @@ Eigen::VectorXd preconditioned_cg(const SymmetricOperator& K, const Eigen::Vecto
     r = b - q;
     stats.relative_residual = r.norm() / b_norm;
     stats.backward_error = backward_error(r);
-    stats.converged = stats.backward_error <= tolerance;
-    stats.stop = stats.converged ? IterativeStats::Stop::kConverged
-                 : breakdown     ? IterativeStats::Stop::kBreakdown
-                 : stagnated     ? IterativeStats::Stop::kStagnated
-                                 : IterativeStats::Stop::kMaxIterations;
+    const bool accurate = stats.backward_error <= tolerance;
+    stats.converged = accurate || energy_small;
+    stats.stop = accurate       ? IterativeStats::Stop::kConverged
+                 : energy_small ? IterativeStats::Stop::kEnergy
+                 : breakdown    ? IterativeStats::Stop::kBreakdown
+                 : stagnated    ? IterativeStats::Stop::kStagnated
+                                : IterativeStats::Stop::kMaxIterations;
     if (stats.converged || breakdown) break;
   }
   return x;
@@ -141,6 +168,8 @@ std::string IterativeStats::stop_reason() const {
   switch (stop) {
     case Stop::kConverged:
       return "converged";
+    case Stop::kEnergy:
+      return "converged: the algebraic error's energy estimate below its tolerance";
     case Stop::kStagnated:
       std::snprintf(b, sizeof b, "stagnated: no 10%% progress over the last %d iterations within %.0e of the attainable "
                                  "backward error %.1e", stagnation_window, kStagnationFactor, attainable);

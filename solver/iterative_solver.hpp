@@ -29,10 +29,13 @@ struct IterativeStats {
   // 1e-16) whatever the condition number, and a backward-stable direct solver reaches the
   // same, so at a small tolerance the errors are the direct solve's (docs/SOLVERS.md).
   double backward_error = 0;
+  // The algebraic error's energy norm as CG estimates it at the end (energy_tolerance).
+  double energy_estimate = 0;
   bool converged = false;
   // Why the iteration ended: converged, stagnated at the attainable accuracy, the iteration
   // limit, or a breakdown (p^T K p <= 0: K or the preconditioner is not positive definite).
-  enum class Stop { kConverged, kStagnated, kMaxIterations, kBreakdown } stop = Stop::kConverged;
+  // kEnergy: converged by energy_tolerance, before the backward error reached `tolerance`.
+  enum class Stop { kConverged, kEnergy, kStagnated, kMaxIterations, kBreakdown } stop = Stop::kConverged;
   // The backward error that rounding alone leaves in a computed residual: gamma_m = m eps /
   // (1 - m eps), m the most nonzeros in a row of K. Stagnation is declared only within
   // kStagnationFactor of it.
@@ -59,13 +62,19 @@ class SymmetricOperator {
   virtual int max_row_nonzeros() const = 0;
 };
 
-// CG on K (symmetric positive definite) from x = 0 until the backward error of x is at most
-// `tolerance` (measured with the true residual b - K x) or max_iterations.
+// CG on K (symmetric positive definite) from x = `initial` (null or empty: 0) until the
+// backward error of x is at most `tolerance` (measured with the true residual b - K x) or
+// max_iterations. With energy_tolerance > 0 it also stops (converged) once its estimate of the
+// algebraic error's energy norm ||x* - x||_K is at most energy_tolerance: the square root of
+// the last two iterations' decreases of that energy (alpha r^T z each), what an adaptive loop
+// compares with its error estimator.
 Eigen::VectorXd preconditioned_cg(const SymmetricOperator& K, const Eigen::VectorXd& b, const Preconditioner& preconditioner,
-                                  double tolerance, int max_iterations, IterativeStats& stats);
+                                  double tolerance, int max_iterations, IterativeStats& stats,
+                                  const Eigen::VectorXd* initial = nullptr, double energy_tolerance = 0);
 // The same on a matrix of which the lower triangle is stored.
 Eigen::VectorXd preconditioned_cg(const Eigen::SparseMatrix<double>& lower, const Eigen::VectorXd& b,
                                   const Preconditioner& preconditioner, double tolerance, int max_iterations,
-                                  IterativeStats& stats);
+                                  IterativeStats& stats, const Eigen::VectorXd* initial = nullptr,
+                                  double energy_tolerance = 0);
 
 }  // namespace knotwork

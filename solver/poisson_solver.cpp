@@ -342,10 +342,19 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     sol.timings.preconditioner = seconds_since(t);
     say("iterations");
     t = clock::now();
+    Eigen::VectorXd initial;
+    if (options.initial.size() > 0) {
+      if (options.initial.size() != mesh.num_functions())
+        throw std::invalid_argument("an initial guess of " + std::to_string(options.initial.size()) + " coefficients for " +
+                                    std::to_string(mesh.num_functions()) + " functions");
+      initial.resize(layout.num_free());
+      for (int d = 0; d < layout.num_free(); ++d) initial[d] = options.initial[layout.function_of_dof[d]];
+    }
     const Eigen::VectorXd x =
         matrix_free ? preconditioned_cg(FreeDofsOperator(*op, layout, free_diagonal), rhs, *pc, options.tolerance,
-                                        options.max_iterations, sol.iterative)
-                    : preconditioned_cg(K, rhs, *pc, options.tolerance, options.max_iterations, sol.iterative);
+                                        options.max_iterations, sol.iterative, &initial, options.energy_tolerance)
+                    : preconditioned_cg(K, rhs, *pc, options.tolerance, options.max_iterations, sol.iterative, &initial,
+                                        options.energy_tolerance);
     sol.timings.iterations = seconds_since(t);
     if (!sol.iterative.converged) {
       char b[400];

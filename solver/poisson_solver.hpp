@@ -45,6 +45,13 @@ struct PoissonSolveOptions {
   double tolerance = 1e-15;  // on the backward error (IterativeStats)
   int max_iterations = 1000;
   std::function<std::unique_ptr<Preconditioner>(const DofLayout&, const Eigen::SparseMatrix<double>&)> preconditioner;
+  // With `iterative` (serial): CG starts from these coefficients (one per function, their free
+  // ones taken; an adaptive step's previous solution prolonged). Empty: from 0.
+  Eigen::VectorXd initial;
+  // With `iterative` (serial), > 0: CG also stops once its estimate of the algebraic error's
+  // energy norm is at most this (preconditioned_cg's energy_tolerance; an adaptive step's
+  // fraction of its error estimator). 0: the backward error `tolerance` alone.
+  double energy_tolerance = 0;
   // With `iterative`: K applied without a matrix (nothing assembled: the load and the Dirichlet
   // lifting come from the operator, and `preconditioner` gets a matrix holding only K's
   // diagonal). Planar problems and volumes with constant coefficients, a given source and no
