@@ -108,6 +108,14 @@ class SplineSpace {
                                               int* /*extended*/ = nullptr, const ProgressFunction& /*progress*/ = {}) && {
     return nullptr;
   }
+  // Adaptive refinement as nested spaces, for a multigrid over the steps (studies/adaptive.cpp):
+  // keep_prolongations() asks this space, and every space refine() makes from it, to keep the
+  // prolongation from the space it was refined from; false when the family cannot (the default).
+  virtual bool keep_prolongations() { return false; }
+  // That prolongation P (this space's functions x its predecessor's): the predecessor's function
+  // j is sum_i P(i, j) times function i of this space. Null when not kept (not asked, or the
+  // starting space).
+  virtual const Eigen::SparseMatrix<double>* prolongation_from_predecessor() const { return nullptr; }
   // Preconditioners that know the space's structure, for the iterative solve: their names
   // ([solver] preconditioner; none when the family has none), the first the one "auto" takes,
   // and the one named for the free dofs of `layout` of `problem`'s operator (null when it

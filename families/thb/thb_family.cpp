@@ -6,6 +6,7 @@
 // same with hexahedra halved in all three directions (thb_volume_space).
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "basis/core/bezier_mesh.hpp"
 #include "basis/core/nurbs_volume.hpp"
@@ -14,6 +15,7 @@
 #include "families/thb/thb_refine.hpp"
 #include "families/thb/thb_volume_space.hpp"
 #include "basis/thb/thb_hierarchy.hpp"
+#include "basis/thb/thb_prolongation.hpp"
 #include "cases/case_reader.hpp"
 #include "cases/resource_limits.hpp"
 #include "cases/spline_space.hpp"
@@ -97,7 +99,16 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
                                       int* extended, const ProgressFunction& /*progress*/) && override {
     ThbHierarchy next = refined_hierarchy(*case_, hierarchy_, leaves_, marked, extended);
-    return std::make_unique<ThbSpace>(*case_, std::move(next));
+    auto fine = std::make_unique<ThbSpace>(*case_, std::move(next));
+    if (keep_prolongations_) {
+      fine->keep_prolongations_ = true;
+      fine->prolongation_ = thb_prolongation(fine->hierarchy_, mesh_, leaves_, fine->mesh_, fine->leaves_, fine->per_level_);
+    }
+    return fine;
+  }
+  bool keep_prolongations() override { return keep_prolongations_ = true; }
+  const Eigen::SparseMatrix<double>* prolongation_from_predecessor() const override {
+    return prolongation_ ? &*prolongation_ : nullptr;
   }
   // A volume's hexahedra show their sides in ParaView themselves: no lines drawn.
   KnotLines knot_lines() const override { return hierarchy_.dimension() == 2 ? knot_lines_of_cells(mesh_, *geometry_) : KnotLines{}; }
@@ -109,6 +120,8 @@ class ThbSpace final : public SplineSpace, public SpaceReport {
   std::vector<ThbCell> leaves_;
   std::vector<int> per_level_;
   std::unique_ptr<GeometryMap> geometry_;
+  bool keep_prolongations_ = false;
+  std::optional<Eigen::SparseMatrix<double>> prolongation_;
 };
 
 std::unique_ptr<SplineSpace> build_thb(const CaseDescription& c, int level) {
