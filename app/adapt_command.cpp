@@ -47,6 +47,10 @@ int adapt_command(const AdaptOptions& o) {
               c.adapt.maximum_strategy ? "maximum strategy" : "Doerfler", c.adapt.theta, c.adapt.mark_functions ? " on functions" : "");
   if (c.adapt.min_fraction > 0) std::printf(", at least %g of them", c.adapt.min_fraction);
   std::printf("\n");
+  if (!steps.empty()) {
+    std::printf("  solver   %s\n", steps.front().solver.c_str());
+    if (!steps.front().solver_note.empty()) std::printf("  note     %s\n", steps.front().solver_note.c_str());
+  }
   for (size_t s = 0; s < steps.size(); ++s)
     for (const auto& n : steps[s].notes) std::printf("  note     step %zu: %s\n", s, n.c_str());
   std::printf("%4s %8s %8s %7s %13s %13s %13s %7s\n", "step", "dofs", "cells", "marked", "estimator", "L2 error",

@@ -7,7 +7,10 @@ the wall time of `knotwork run` on a uniform tensor-product space of the same ge
 exact solution with about the loop's final dofs (the default solver: fast diagonalization).
 Each pair runs back to back, so that ratios are of one sitting. Prints Markdown on stdout.
 
-    scripts/adaptive_cost.py [KNOTWORK] [--quick] > table.md   # ~15 minutes here (PT: several)
+    scripts/adaptive_cost.py [KNOTWORK] [--quick] [--family=SUFFIX] > table.md   # ~15 minutes here (PT: several)
+
+--quick leaves PT-splines out; --family=thb (the case files' suffix, "" for knot segments) runs
+one family only.
 """
 import json
 import os
@@ -20,6 +23,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
 KNOTWORK = ARGS[0] if ARGS else os.path.join(ROOT, "build", "app", "knotwork")
 QUICK = "--quick" in sys.argv
+ONLY = next((a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--family=")), None)
 LSHAPE_U = "(x^2+y^2)^(1/3)*sin(2/3*(atan2(-y,-x)+pi))"
 LAYER_U = "atan(60*(sqrt((x+0.1)^2+(y+0.1)^2)-0.7))"
 # (problem, degree, max dofs, {family: case}, uniform geometry, exact solution)
@@ -57,6 +61,8 @@ def main():
         for problem, p, max_dofs, stem, geometry, exact in RUNS:
             for family, suffix in FAMILIES.items():
                 if QUICK and family == "PT-splines":
+                    continue
+                if ONLY is not None and suffix != ("_" + ONLY if ONLY else ""):
                     continue
                 case = os.path.join(ROOT, "cases", stem + suffix + ".toml")
                 common = [case, "--degree", str(p), "--steps", "200", "--max-dofs", str(max_dofs), "-q"]

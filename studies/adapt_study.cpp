@@ -92,7 +92,7 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
         .set("h1_seminorm_error", v.h1_semi).set("h1_rate_vs_dofs", v.h1_rate).set("seconds", v.seconds)
         .set("seconds_space", v.seconds_space).set("seconds_solve", v.seconds_solve)
         .set("seconds_estimate", v.seconds_estimate).set("seconds_refine", v.seconds_refine)
-        .set("seconds_output", output_seconds.at(s))
+        .set("seconds_output", output_seconds.at(s)).set("solver", v.solver).set("iterations", v.iterations)
         .set("notes", Json::strings(v.notes));
     const PoissonTimings& t = v.solve_phases;
     Json phases = Json::object();
@@ -115,6 +115,8 @@ AdaptOutcome adapt_study(const CaseDescription& c, Ordering ordering, const std:
   Json& root = out.json;
   root.set("case", c.path).set("family", c.family).set("space", description).set("theta", c.adapt.theta).set("marking", c.adapt.mark_functions ? "functions" : "cells")
       .set("strategy", c.adapt.maximum_strategy ? "maximum" : "dorfler").set("min_fraction", c.adapt.min_fraction)
+      .set("solver", steps.empty() ? std::string() : steps.front().solver)
+      .set("solver_note", steps.empty() ? std::string() : steps.front().solver_note)
       .set("steps", js);
   if (steps.size() >= 4 && !std::isnan(steps.back().h1_semi))
     root.set("h1_rate_last_half", fitted_h1_rate(steps, steps.size() / 2));

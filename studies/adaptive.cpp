@@ -1,8 +1,12 @@
 #include "studies/adaptive.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <stdexcept>
+
+#include "solver/nested_multigrid.hpp"
 
 #include "basis/core/input_error.hpp"
 
@@ -17,6 +21,10 @@ namespace {
 // followed over-marked, and the H1 rate fell below 0.5 beyond ~2000 dofs.
 constexpr double kAspect = 1.2;
 
+// Multigrid over the steps stops CG once its estimate of the algebraic error's energy norm is
+// below this fraction of the previous step's error estimate (docs/ADAPTIVITY.md: measured).
+constexpr double kAlgebraicFraction = 0.02;
+
 }  // namespace
 
 std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering, const ProgressFunction& progress,
@@ -26,11 +34,34 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
   auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };
+  const std::string& method = c.solver.method;
+  if (c.solver.preconditioner == "multigrid" && method != "auto" && method != "iterative")
+    throw InputError(c.path + ": [solver] preconditioner: \"multigrid\" in adapt is multigrid over the steps, in "
+                     "knotwork's CG: method = \"" + method + "\" does not run it (use \"auto\" or \"iterative\")");
   say("building the starting space ([space] family = \"" + c.family + "\")");
   using clock = std::chrono::steady_clock;
   auto since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
   auto t_start = clock::now();
   std::unique_ptr<SplineSpace> space = family.build(c, 0, say);
+  // Multigrid over the steps (docs/ADAPTIVITY.md): the family keeps each refinement's
+  // prolongation, every step's matrix becomes a level, and CG starts from the last solution.
+  // Asked for by name, or "auto" (measured faster than CHOLMOD and BoomerAMG on every THB loop
+  // of docs/ADAPTIVITY.md) where the family keeps prolongations and CG is allowed.
+  std::optional<AdaptiveSolve> over_steps;
+  const std::vector<std::string> own = space->structured_preconditioners();
+  if (std::find(own.begin(), own.end(), "multigrid") == own.end()) {
+    const bool asked = c.solver.preconditioner == "multigrid";
+    const bool automatic = c.solver.preconditioner == "auto" && (method == "auto" || method == "iterative");
+    if ((asked || automatic) && space->keep_prolongations()) {
+      over_steps.emplace();
+      over_steps->multigrid = std::make_shared<NestedMultigrid>();
+    } else if (asked) {
+      throw InputError(c.path + ": [solver] preconditioner: \"multigrid\" in adapt is multigrid over the steps, which needs "
+                       "a family whose refinement gives its prolongation (\"thb\" on one patch or volume); family \"" +
+                       c.family + "\"" + (c.multipatch() ? " on several patches" : "") +
+                       " does not: use \"boomeramg\" or \"auto\"");
+    }
+  }
   double t_space = since(t_start);
   const Marking marking{c.adapt.maximum_strategy ? Marking::Strategy::kMaximum : Marking::Strategy::kDorfler,
                         c.adapt.theta, c.adapt.min_fraction};
@@ -41,8 +72,18 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     AdaptiveStep st;
     st.notes = space->presentation().notes();
     for (const auto& n : st.notes) say(prefix + "note: " + n);
+    if (over_steps) {
+      // Below a fraction of the last step's estimate, the algebraic error is lost in the
+      // discretization's; the last step is solved to the backward error [solver] tolerance.
+      const bool last_step = s + 1 == c.adapt.steps || space->mesh().num_functions() >= c.adapt.max_dofs;
+      over_steps->energy_tolerance = steps.empty() || last_step ? 0 : kAlgebraicFraction * steps.back().estimator;
+    }
     auto t1 = clock::now();
-    const PoissonSolution sol = solve_case(c, *space, ordering, [&](const std::string& what) { say(prefix + what); });
+    SolverReport solver;
+    const PoissonSolution sol = solve_case(c, *space, ordering, [&](const std::string& what) { say(prefix + what); }, &solver,
+                                           over_steps ? &*over_steps : nullptr);
+    st.solver = solver.method == "direct" ? solver.method : solver.method + ", " + solver.preconditioner;
+    st.solver_note = solver.note;
     const double t_solve = since(t1);
     say(prefix + "error estimator");
     t1 = clock::now();
@@ -56,6 +97,7 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
     st.seconds_solve = t_solve;
     st.solve_phases = sol.timings;
     st.seconds_estimate = since(t1);
+    st.iterations = sol.iterative.iterations;
     st.dofs = sol.num_functions;
     st.cells = space->mesh().num_cells();
     st.estimator = std::sqrt(ind.total());
@@ -99,6 +141,12 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
       st.seconds_refine = since(t1);
       t_space = 0;
       space = std::move(next);
+      if (over_steps) {
+        const Eigen::SparseMatrix<double>* P = space->prolongation_from_predecessor();
+        if (!P || P->cols() != sol.coefficients.size())
+          throw std::logic_error("multigrid over adaptive steps: the refined space kept no prolongation");
+        over_steps->initial = *P * sol.coefficients;
+      }
     }
     st.seconds = std::chrono::duration<double>(clock::now() - t0).count();
     steps.push_back(st);

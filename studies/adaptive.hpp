@@ -20,6 +20,10 @@ struct AdaptiveStep {
   // space (the family's refinement and the construction of the refined space).
   double seconds_space = 0, seconds_solve = 0, seconds_estimate = 0, seconds_refine = 0;
   PoissonTimings solve_phases;  // the solve's own phases (assembly, the linear solve, errors)
+  int iterations = 0;           // CG's iterations (0: a direct solve)
+  // How its linear system was solved ("direct", "iterative, multigrid": SolverReport's method
+  // and preconditioner) and why, when "auto" decided.
+  std::string solver, solver_note;
   std::vector<std::string> notes;  // the family's notes on this step's space
 };
 

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "solver/amg_preconditioner.hpp"
+#include "solver/nested_multigrid.hpp"
 #include "solver/petsc_backend.hpp"
 #include "basis/core/input_error.hpp"
 
@@ -56,8 +57,18 @@ constexpr int kManyStructuredIterations = 15;
 constexpr int kAutoMultigridFunctions = 2000000;
 const std::string kMultigridName = "multigrid";
 
-SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space) {
+// `over_steps`: an adaptive loop solves with multigrid over its steps (AdaptiveSolve; it
+// decided so, and checked the case's [solver] for it).
+SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space, bool over_steps) {
   SolverReport r;
+  if (over_steps) {
+    r.method = "iterative";
+    r.preconditioner = kMultigridName;
+    if (c.solver.preconditioner == "auto")
+      r.note = "[solver] preconditioner = \"auto\" in adapt: multigrid over the steps, measured faster than CHOLMOD and "
+               "BoomerAMG on THB loops (docs/ADAPTIVITY.md)";
+    return r;
+  }
   const std::vector<std::string> structured = space.structured_preconditioners();
   const std::string automatic =
       !structured.empty() && space.structured_preconditioner_is_automatic() ? structured.front() : "";
@@ -161,7 +172,7 @@ std::string matrix_free_obstacle(const CaseDescription& c, const SplineSpace& sp
 }  // namespace
 
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
-                           const ProgressFunction& progress, SolverReport* report) {
+                           const ProgressFunction& progress, SolverReport* report, AdaptiveSolve* adaptive) {
   space.check_solvable();
   check_quadrature_points(c, space.mesh());
   PoissonSolveOptions so;
@@ -170,7 +181,8 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
   so.progress = progress;
   so.cell_errors = true;
   so.estimate_condition = c.solver.estimate_condition;
-  SolverReport chosen = resolve_solver(c, space);
+  SolverReport chosen = resolve_solver(c, space, adaptive != nullptr);
+  const bool steps_multigrid = adaptive != nullptr;
   if (report) *report = chosen;
   const ParallelWorld launched = launched_world();
   if (launched.size > 1 && chosen.method != "petsc")
@@ -188,7 +200,19 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     so.tolerance = c.solver.tolerance;
     so.max_iterations = c.solver.max_iterations;
     // (Under petsc, BoomerAMG and Jacobi are PETSc's own PCs; a structured one is a PCShell.)
-    if (chosen.preconditioner == kBoomerAmgName && chosen.method == "iterative") {
+    if (steps_multigrid) {
+      // This step's matrix becomes the finest level; the family's prolongation links it to the last.
+      const std::shared_ptr<NestedMultigrid> levels = adaptive->multigrid;
+      const Eigen::SparseMatrix<double>* prolongation = space.prolongation_from_predecessor();
+      if (levels->levels() > 0 && !prolongation)
+        throw std::logic_error("multigrid over adaptive steps: the refined space kept no prolongation");
+      so.preconditioner = [levels, prolongation](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
+        levels->add_level(layout, lower, levels->levels() > 0 ? prolongation : nullptr);
+        return levels->preconditioner();
+      };
+      so.initial = adaptive->initial;
+      so.energy_tolerance = adaptive->energy_tolerance;
+    } else if (chosen.preconditioner == kBoomerAmgName && chosen.method == "iterative") {
       const std::string options = chosen.petsc_options, path = c.path;
       so.preconditioner = [options, path](const DofLayout&, const Eigen::SparseMatrix<double>& lower) {
         try {

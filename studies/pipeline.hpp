@@ -37,8 +37,18 @@ struct SolverReport {
   // (kBoomerAmgVolumeOptions) followed by the user's, which win; elsewhere the user's.
   std::string petsc_options;
 };
+// An adaptive loop's solves (studies/adaptive.cpp) with [solver] preconditioner = "multigrid"
+// on a family that keeps prolongations (SplineSpace::keep_prolongations): multigrid over the
+// steps, each step's matrix a level (NestedMultigrid), and CG from the previous solution prolonged.
+class NestedMultigrid;
+struct AdaptiveSolve {
+  std::shared_ptr<NestedMultigrid> multigrid;  // the earlier steps' levels; the solve adds its own
+  Eigen::VectorXd initial;                     // the previous step's solution prolonged (empty: 0)
+  double energy_tolerance = 0;                 // PoissonSolveOptions::energy_tolerance (0: none)
+};
 PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, Ordering ordering,
-                           const ProgressFunction& progress = {}, SolverReport* report = nullptr);
+                           const ProgressFunction& progress = {}, SolverReport* report = nullptr,
+                           AdaptiveSolve* adaptive = nullptr);
 
 // The space's operator (SplineSpace::matrix_free_operator), or null where it has none or refuses
 // this rule (its documented refusals: a degree or rule beyond its tables).
