@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <array>
+#include <map>
 #include <unordered_map>
 
 #include "basis/core/bezier_ops.hpp"
@@ -17,6 +19,10 @@
 namespace knotwork {
 
 namespace {
+
+// The coefficients are in [0, 1] (THB-splines are a nonnegative partition of unity, and so are
+// their refinement coefficients): smaller ones are rounding of exact zeros.
+constexpr double kDropped = 1e-13;
 
 // B (p+1) x nb (columns b + (q+1) c) -> Su B (Sw (x) Sv)^T: a tensor coefficient block mapped
 // along u by Su and along (v, w) by the Kronecker product (w outer, as the extraction's layout).
@@ -65,6 +71,13 @@ Eigen::SparseMatrix<double> thb_prolongation(const ThbHierarchy& hierarchy, cons
   }
   using Triplets = std::vector<Eigen::Triplet<double>>;
   std::vector<Triplets> per_thread(omp_get_max_threads());
+  // Per thread and direction, the tables leaves share: E^-T by (level, element), restrictions
+  // by their sub-interval.
+  struct Tables {
+    std::map<std::pair<int, int64_t>, Eigen::MatrixXd> inverse;
+    std::map<std::pair<double, double>, Eigen::MatrixXd> restriction;
+  };
+  std::vector<std::array<Tables, 3>> tables(omp_get_max_threads());
   std::vector<std::string> failure(omp_get_max_threads());
 #pragma omp parallel for schedule(dynamic, 16)
   for (size_t n = 0; n < leaves_used.size(); ++n) {
@@ -83,20 +96,29 @@ Eigen::SparseMatrix<double> thb_prolongation(const ThbHierarchy& hierarchy, cons
       const ThbCell& ct = coarse_leaves[coarse];
       // Restriction of Bernstein coefficients from the coarse leaf to this one, per direction.
       const int64_t index[3] = {t.i, t.j, t.k}, coarse_index[3] = {ct.i, ct.j, ct.k};
-      Eigen::MatrixXd S[3];
+      std::array<Tables, 3>& mine = tables[omp_get_thread_num()];
+      const Eigen::MatrixXd* S[3];
       for (int x = 0; x < d; ++x) {
         const DyadicKnots& K = hierarchy.knots(x);
         const double a = K.breakpoint(ct.level, coarse_index[x]), b = K.breakpoint(ct.level, coarse_index[x] + 1);
         const double s = (K.breakpoint(t.level, index[x]) - a) / (b - a), e = (K.breakpoint(t.level, index[x] + 1) - a) / (b - a);
-        S[x] = subdivision_matrix(K.degree(), s, e);
+        auto [it, fresh] = mine[x].restriction.try_emplace({s, e});
+        if (fresh) it->second = subdivision_matrix(K.degree(), s, e);
+        S[x] = &it->second;
       }
       // The inverse of the level's local extraction along each direction, transposed.
-      Eigen::MatrixXd Einv[3];
-      for (int x = 0; x < d; ++x) Einv[x] = hierarchy.knots(x).extraction(t.level, index[x]).inverse().transpose();
+      const Eigen::MatrixXd* Einv_of[3];
+      for (int x = 0; x < d; ++x) {
+        auto [it, fresh] = mine[x].inverse.try_emplace({t.level, index[x]});
+        if (fresh) it->second = hierarchy.knots(x).extraction(t.level, index[x]).inverse().transpose();
+        Einv_of[x] = &it->second;
+      }
+      const Eigen::MatrixXd& E0 = *Einv_of[0];
+      const Eigen::MatrixXd& E1 = *Einv_of[1];
       // X = Eu^-T beta (Ew (x) Ev)^-1 = Eu^-T beta (Ew^-T (x) Ev^-T)^T: the level's B-spline
       // coefficients of a Bernstein block.
       const auto bspline_coefficients = [&](const Eigen::MatrixXd& beta) {
-        return across_directions(Einv[0], Einv[1], d == 3 ? &Einv[2] : nullptr, beta);
+        return across_directions(E0, E1, d == 3 ? Einv_of[2] : nullptr, beta);
       };
       const auto block = [&](const Eigen::MatrixXd& extraction, int row) {
         return Eigen::Map<const Eigen::MatrixXd>(extraction.row(row).eval().data(), p + 1, nb).eval();
@@ -115,17 +137,28 @@ Eigen::SparseMatrix<double> thb_prolongation(const ThbHierarchy& hierarchy, cons
           throw std::logic_error("THB prolongation: a function of a leaf's own level is not one of the level's B-splines there");
         represented.emplace_back(f, at);
       }
-      const Eigen::MatrixXd& coarse_extraction = coarse_mesh.extraction(coarse);
-      const auto coarse_functions = coarse_mesh.functions(coarse);
-      for (size_t j = 0; j < coarse_functions.size(); ++j) {
-        const Eigen::MatrixXd restricted = across_directions(S[0], S[1], d == 3 ? &S[2] : nullptr, block(coarse_extraction, static_cast<int>(j)));
-        const Eigen::MatrixXd X = bspline_coefficients(restricted);
-        const double largest = X.cwiseAbs().maxCoeff();
-        for (const auto& [f, at] : represented) {
-          const double v = X.reshaped()(at);
-          if (std::abs(v) > 1e-13 * largest) per_thread[omp_get_thread_num()].emplace_back(f, coarse_functions[j], v);
-        }
+      // A represented function, B-spline (a, col) of the level (at = a + (p+1) col, col = b + (q+1) c),
+      // reads of a coarse function with Bernstein block beta the entry (a, col) of
+      // Mu beta Mvw^T, M = E^-T S per direction (Mvw = Mw (x) Mv): one weight per Bernstein
+      // entry, so that one product gives every coarse function's coefficients at once.
+      Eigen::MatrixXd M[3];
+      for (int x = 0; x < d; ++x) M[x] = *Einv_of[x] * *S[x];
+      Eigen::MatrixXd weights((p + 1) * nb, static_cast<Eigen::Index>(represented.size()));
+      for (size_t k = 0; k < represented.size(); ++k) {
+        const Eigen::Index at = represented[k].second, a = at % (p + 1), col = at / (p + 1);
+        const Eigen::Index b = col % (q + 1), c3 = col / (q + 1);
+        for (int m3 = 0; m3 <= r; ++m3)
+          for (int m2 = 0; m2 <= q; ++m2) {
+            const double along_vw = M[1](b, m2) * (d == 3 ? M[2](c3, m3) : 1.0);
+            for (int m1 = 0; m1 <= p; ++m1) weights(m1 + (p + 1) * (m2 + (q + 1) * m3), k) = M[0](a, m1) * along_vw;
+          }
       }
+      const Eigen::MatrixXd values = coarse_mesh.extraction(coarse) * weights;
+      const auto coarse_functions = coarse_mesh.functions(coarse);
+      for (size_t j = 0; j < coarse_functions.size(); ++j)
+        for (size_t k = 0; k < represented.size(); ++k)
+          if (std::abs(values(j, k)) > kDropped)
+            per_thread[omp_get_thread_num()].emplace_back(represented[k].first, coarse_functions[j], values(j, k));
     } catch (const std::exception& e) {
       failure[omp_get_thread_num()] = e.what();
     }

@@ -16,9 +16,9 @@ namespace knotwork {
 // P with coarse function j = sum_i P(i, j) fine function i: rows the fine space's functions,
 // columns the coarse space's. The fine mesh, leaves and functions per level are what
 // ThbHierarchy::build gave for `hierarchy`, which refined the hierarchy the coarse mesh and
-// leaves were built from. Entries below 1e-13 of their coarse function's largest coefficient
-// on a leaf are rounding of exact zeros and dropped. std::logic_error when the two are not
-// nested so (a fine leaf in no coarse leaf).
+// leaves were built from. Entries below 1e-13 are rounding of exact zeros and dropped (the
+// true ones lie in [0, 1]). std::logic_error when the two are not nested so (a fine leaf in
+// no coarse leaf).
 Eigen::SparseMatrix<double> thb_prolongation(const ThbHierarchy& hierarchy, const BezierMesh& coarse_mesh,
                                              const std::vector<ThbCell>& coarse_leaves, const BezierMesh& fine_mesh,
                                              const std::vector<ThbCell>& fine_leaves,
