@@ -57,9 +57,8 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
       over_steps->multigrid = std::make_shared<NestedMultigrid>();
     } else if (asked) {
       throw InputError(c.path + ": [solver] preconditioner: \"multigrid\" in adapt is multigrid over the steps, which needs "
-                       "a family whose refinement gives its prolongation (\"thb\" on one patch or volume); family \"" +
-                       c.family + "\"" + (c.multipatch() ? " on several patches" : "") +
-                       " does not: use \"boomeramg\" or \"auto\"");
+                       "a family whose refinement gives its prolongation (\"thb\"); family \"" + c.family +
+                       "\" does not: use \"boomeramg\" or \"auto\"");
     }
   }
   double t_space = since(t_start);

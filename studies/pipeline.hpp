@@ -37,9 +37,10 @@ struct SolverReport {
   // (kBoomerAmgVolumeOptions) followed by the user's, which win; elsewhere the user's.
   std::string petsc_options;
 };
-// An adaptive loop's solves (studies/adaptive.cpp) with [solver] preconditioner = "multigrid"
-// on a family that keeps prolongations (SplineSpace::keep_prolongations): multigrid over the
-// steps, each step's matrix a level (NestedMultigrid), and CG from the previous solution prolonged.
+// An adaptive loop's solves (studies/adaptive.cpp) on a family that keeps prolongations
+// (SplineSpace::keep_prolongations), with [solver] preconditioner = "multigrid" or "auto":
+// multigrid over the steps, each step's matrix a level (NestedMultigrid), and CG from the
+// previous solution prolonged. solve_case then takes CG with it whatever the space offers.
 class NestedMultigrid;
 struct AdaptiveSolve {
   std::shared_ptr<NestedMultigrid> multigrid;  // the earlier steps' levels; the solve adds its own

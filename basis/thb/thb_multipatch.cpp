@@ -1,5 +1,7 @@
 #include "basis/thb/thb_multipatch.hpp"
 
+#include "basis/thb/thb_prolongation.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -129,6 +131,7 @@ ThbMultiPatch::Basis ThbMultiPatch::build() const {
   out.glued = glue_patches(domain_, meshes);
   for (size_t p = 0; p < leaves.size(); ++p)
     for (const ThbCell& c : leaves[p]) out.leaves.push_back({static_cast<int>(p), c});
+  out.patch_leaves = std::move(leaves);
   // A patch numbers its functions level by level; a glued function has one level (its
   // mirror images are of the same level).
   std::vector<int> level_of(out.glued.mesh.num_functions(), -1);
@@ -142,7 +145,29 @@ ThbMultiPatch::Basis ThbMultiPatch::build() const {
         g = static_cast<int>(l);
       }
   }
+  out.patch_functions_per_level = std::move(per_level);
   return out;
+}
+
+Eigen::SparseMatrix<double> ThbMultiPatch::prolongation(const Basis& coarse, const Basis& fine) const {
+  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<bool> done(fine.glued.mesh.num_functions(), false);
+  for (size_t p = 0; p < patches_.size(); ++p) {
+    const Eigen::SparseMatrix<double> local =
+        thb_prolongation(patches_[p], coarse.patch_meshes[p], coarse.patch_leaves[p], fine.patch_meshes[p],
+                         fine.patch_leaves[p], fine.patch_functions_per_level[p]);
+    const Eigen::SparseMatrix<double, Eigen::RowMajor> rows = local;
+    for (int f = 0; f < rows.outerSize(); ++f) {
+      const int g = fine.glued.global_function[p][f];
+      if (done[g]) continue;  // taken from an earlier patch
+      done[g] = true;
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(rows, f); it; ++it)
+        entries.emplace_back(g, coarse.glued.global_function[p][it.col()], it.value());
+    }
+  }
+  Eigen::SparseMatrix<double> P(fine.glued.mesh.num_functions(), coarse.glued.mesh.num_functions());
+  P.setFromTriplets(entries.begin(), entries.end());
+  return P;
 }
 
 }  // namespace knotwork

@@ -34,11 +34,17 @@ class ThbMultiPatch {
     GluedPatches glued;                            // the conforming space; its cells in patch order
     std::vector<ThbPatchCell> leaves;              // the glued mesh's cells as leaves
     std::vector<int> functions_per_level;          // of the glued space
+    std::vector<std::vector<ThbCell>> patch_leaves;         // per patch, its mesh's cells as leaves
+    std::vector<std::vector<int>> patch_functions_per_level;  // per patch, of its own space
   };
   // GeometryError naming the interface when the two sides' spaces do not glue.
   Basis build() const;
 
   int levels() const;
+  // The prolongation from `coarse` (this object's basis before its last refine) to `fine` (its
+  // basis now): thb_prolongation on each patch, read in the glued numbering. A glued function is
+  // the same on every patch it reaches, so its row is taken from any one of them.
+  Eigen::SparseMatrix<double> prolongation(const Basis& coarse, const Basis& fine) const;
   size_t num_leaves() const;
   const std::vector<ThbHierarchy>& patches() const { return patches_; }
 

@@ -2,6 +2,8 @@
 // one PatchGeometryMap per patch side by side.
 #include "families/thb/thb_multipatch_space.hpp"
 
+#include <optional>
+
 #include <cstdio>
 
 #include "basis/core/geometry_map.hpp"
@@ -54,7 +56,16 @@ class ThbMultiPatchSpace final : public SplineSpace, public SpaceReport {
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
                                       int* extended, const ProgressFunction& /*progress*/) && override {
     ThbMultiPatch next = refined_hierarchy(*case_, hierarchy_, basis_.leaves, marked, extended);
-    return std::make_unique<ThbMultiPatchSpace>(*case_, space_, std::move(next));
+    auto fine = std::make_unique<ThbMultiPatchSpace>(*case_, space_, std::move(next));
+    if (keep_prolongations_) {
+      fine->keep_prolongations_ = true;
+      fine->prolongation_ = fine->hierarchy_.prolongation(basis_, fine->basis_);
+    }
+    return fine;
+  }
+  bool keep_prolongations() override { return keep_prolongations_ = true; }
+  const Eigen::SparseMatrix<double>* prolongation_from_predecessor() const override {
+    return prolongation_ ? &*prolongation_ : nullptr;
   }
   KnotLines knot_lines() const override { return knot_lines_of_cells(basis_.glued.mesh, *geometry_); }
 
@@ -64,6 +75,8 @@ class ThbMultiPatchSpace final : public SplineSpace, public SpaceReport {
   ThbMultiPatch hierarchy_;
   ThbMultiPatch::Basis basis_;  // its patch meshes are what the geometry maps read
   std::unique_ptr<GeometryMap> geometry_;
+  bool keep_prolongations_ = false;
+  std::optional<Eigen::SparseMatrix<double>> prolongation_;
 };
 
 }  // namespace
