@@ -12,8 +12,11 @@ namespace knotwork {
 using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
 struct NestedMultigrid::Level {
-  RowMatrix A;                       // the whole symmetric matrix over the level's free dofs
-  Eigen::VectorXd inverse_diagonal;  // 1 / A_ii
+  // The rows of the symmetric matrix over the level's free dofs that the cycle reads: those of
+  // the smoothed dofs (row k is dof smoothed[k]'s), whole. The others are never read: a level
+  // keeps about 40% of its matrix (docs/ADAPTIVITY.md).
+  RowMatrix A;
+  Eigen::VectorXd inverse_diagonal;  // 1 / A_ii of the smoothed dofs
   RowMatrix P;                       // free dofs of this level x free dofs of the coarser one
   std::vector<int> smoothed;         // the dofs the step changed, in increasing order
   std::shared_ptr<const Level> coarser;
@@ -32,26 +35,30 @@ void v_cycle(const NestedMultigrid::Level& L, const Eigen::VectorXd& r, Eigen::V
   const int* outer = A.outerIndexPtr();
   const int* inner = A.innerIndexPtr();
   const double* value = A.valuePtr();
+  const int m = static_cast<int>(L.smoothed.size());
   e.setZero(r.size());
   // Forward Gauss-Seidel over the changed dofs, from e = 0.
-  for (int i : L.smoothed) {
+  for (int row = 0; row < m; ++row) {
+    const int i = L.smoothed[row];
     double s = r[i];
-    for (int k = outer[i]; k < outer[i + 1]; ++k) s -= value[k] * e[inner[k]];
-    e[i] += s * L.inverse_diagonal[i];
+    for (int k = outer[row]; k < outer[row + 1]; ++k) s -= value[k] * e[inner[k]];
+    e[i] += s * L.inverse_diagonal[row];
   }
   // The residual r - A e, where e lives on the smoothed dofs only (A symmetric: their rows).
   Eigen::VectorXd rest = r;
-  for (int i : L.smoothed)
-    for (int k = outer[i]; k < outer[i + 1]; ++k) rest[inner[k]] -= value[k] * e[i];
+  for (int row = 0; row < m; ++row) {
+    const double ei = e[L.smoothed[row]];
+    for (int k = outer[row]; k < outer[row + 1]; ++k) rest[inner[k]] -= value[k] * ei;
+  }
   Eigen::VectorXd coarse_e;
   v_cycle(*L.coarser, L.P.transpose() * rest, coarse_e);
   e.noalias() += L.P * coarse_e;
   // Backward Gauss-Seidel over the same dofs, in reverse order: the cycle is symmetric.
-  for (auto it = L.smoothed.rbegin(); it != L.smoothed.rend(); ++it) {
-    const int i = *it;
+  for (int row = m - 1; row >= 0; --row) {
+    const int i = L.smoothed[row];
     double s = r[i];
-    for (int k = outer[i]; k < outer[i + 1]; ++k) s -= value[k] * e[inner[k]];
-    e[i] += s * L.inverse_diagonal[i];
+    for (int k = outer[row]; k < outer[row + 1]; ++k) s -= value[k] * e[inner[k]];
+    e[i] += s * L.inverse_diagonal[row];
   }
 }
 
@@ -92,8 +99,6 @@ void NestedMultigrid::add_level(const DofLayout& layout, const Eigen::SparseMatr
       throw std::invalid_argument("nested multigrid: a prolongation of " + std::to_string(Pall.rows()) + " x " +
                                   std::to_string(Pall.cols()) + " between spaces of " + std::to_string(layout.dof.size()) +
                                   " and " + std::to_string(last_layout_.dof.size()) + " functions");
-    level->A = lower.selfadjointView<Eigen::Lower>();
-    level->inverse_diagonal = level->A.diagonal().cwiseInverse();
     // P over the free dofs, and which dofs the step changed: a dof is unchanged when its row is a
     // single 1 in a column that has no other entry (the same function before and after).
     std::vector<Eigen::Triplet<double>> entries;
@@ -119,6 +124,29 @@ void NestedMultigrid::add_level(const DofLayout& layout, const Eigen::SparseMatr
     for (int r = 0; r < n; ++r) {
       const bool unchanged = row_count[r] == 1 && column_count[row_column[r]] == 1 && std::abs(row_value[r] - 1) <= 1e-12;
       if (!unchanged) level->smoothed.push_back(r);
+    }
+    // The smoothed rows of the whole matrix: row i's entries are lower's column i (k >= i) and
+    // lower's row i (k < i).
+    {
+      const RowMatrix whole = lower.selfadjointView<Eigen::Lower>();
+      const int m = static_cast<int>(level->smoothed.size());
+      Eigen::Index entries_kept = 0;
+      for (int i : level->smoothed) entries_kept += whole.outerIndexPtr()[i + 1] - whole.outerIndexPtr()[i];
+      level->A.resize(m, n);
+      level->A.reserve(entries_kept);
+      level->inverse_diagonal.resize(m);
+      for (int row = 0; row < m; ++row) {
+        const int i = level->smoothed[row];
+        level->A.startVec(row);
+        double diagonal = 0;
+        for (RowMatrix::InnerIterator it(whole, i); it; ++it) {
+          level->A.insertBack(row, it.col()) = it.value();
+          if (it.col() == i) diagonal = it.value();
+        }
+        if (!(diagonal > 0)) throw std::runtime_error("nested multigrid: a matrix with a diagonal entry that is not positive");
+        level->inverse_diagonal[row] = 1 / diagonal;
+      }
+      level->A.finalize();
     }
     level->coarser = levels_.back();
   }
