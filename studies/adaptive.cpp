@@ -51,13 +51,14 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
   const std::vector<std::string> own = space->structured_preconditioners();
   if (std::find(own.begin(), own.end(), "multigrid") == own.end()) {
     const bool asked = c.solver.preconditioner == "multigrid";
-    const bool automatic = c.solver.preconditioner == "auto" && (method == "auto" || method == "iterative");
+    const bool automatic = c.solver.preconditioner == "auto" && (method == "auto" || method == "iterative") &&
+                           space->multigrid_over_steps_is_automatic();
     if ((asked || automatic) && space->keep_prolongations()) {
       over_steps.emplace();
       over_steps->multigrid = std::make_shared<NestedMultigrid>();
     } else if (asked) {
       throw InputError(c.path + ": [solver] preconditioner: \"multigrid\" in adapt is multigrid over the steps, which needs "
-                       "a family whose refinement gives its prolongation (\"thb\"); family \"" + c.family +
+                       "a family whose refinement gives its prolongation (\"thb\", \"lr\"); family \"" + c.family +
                        "\" does not: use \"boomeramg\" or \"auto\"");
     }
   }

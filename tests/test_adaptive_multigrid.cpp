@@ -1,5 +1,5 @@
-// Multigrid over adaptive steps (docs/ADAPTIVITY.md, "Multigrid over the steps"): the THB
-// family's prolongation between refined spaces, checked by what it must do independently of
+// Multigrid over adaptive steps (docs/ADAPTIVITY.md, "Multigrid over the steps"): the THB and
+// LR families' prolongations between refined spaces, checked by what it must do independently of
 // how it is computed (each coarse function equals its prolongation at random points, partition
 // of unity, nonnegative coefficients); and the loop that uses it, against the direct loop.
 #include <catch2/catch.hpp>
@@ -120,7 +120,7 @@ CaseDescription lshape_thb(int p) {
 
 }  // namespace
 
-TEST_CASE("THB prolongation: each coarse function equals its prolongation on the refined space", "[thb][multigrid]") {
+TEST_CASE("THB and LR prolongations: each coarse function equals its prolongation on the refined space", "[thb][lr][multigrid]") {
   for (int p : {2, 3}) {
     INFO("L-shape, p = " << p);
     refine_and_check(build_space(lshape_thb(p)), p, 2, 4);
@@ -133,6 +133,11 @@ TEST_CASE("THB prolongation: each coarse function equals its prolongation on the
     CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/multipatch_lshape_adaptive_thb.toml");
     refine_and_check(build_space(c), 2, 2, 4);
   }
+  SECTION("LR B-splines (structured mesh refinement), from the splits the refinement made") {
+    CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/lshape_adaptive_lr.toml");
+    space_family(c).override_options(c, 3, 0);
+    refine_and_check(build_space(c), 3, 2, 4);
+  }
   SECTION("without grading") {
     const CaseDescription c = load_case_text("[geometry]\ntype = \"rectangle\"\n[space]\nfamily = \"thb\"\ndegree = 3\nelements = 3\nadmissibility = 0\n"
                        "[problem]\nexact = \"x*y\"\n",
@@ -141,10 +146,15 @@ TEST_CASE("THB prolongation: each coarse function equals its prolongation on the
   }
 }
 
-TEST_CASE("Multigrid over adaptive THB steps: the direct loop's accuracy per dof, bounded iterations", "[thb][multigrid][adaptive]") {
-  for (int p : {2, 3}) {
-    INFO("L-shape, p = " << p);
+TEST_CASE("Multigrid over adaptive THB and LR steps: the direct loop's accuracy per dof, bounded iterations",
+          "[thb][lr][multigrid][adaptive]") {
+  for (const auto& [family, p] : {std::pair{"thb", 2}, std::pair{"thb", 3}, std::pair{"lr", 2}}) {
+    INFO("L-shape, " << family << ", p = " << p);
     CaseDescription direct = lshape_thb(p);
+    if (std::string(family) == "lr") {
+      direct = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/lshape_adaptive_lr.toml");
+      space_family(direct).override_options(direct, p, 0);
+    }
     direct.adapt.steps = 40;
     direct.adapt.max_dofs = 6000;
     direct.solver.method = "direct";
@@ -198,8 +208,8 @@ TEST_CASE("Multigrid over adaptive THB steps: the direct loop's accuracy per dof
 }
 
 TEST_CASE("Multigrid over adaptive steps is refused where the family keeps no prolongation", "[multigrid][adaptive]") {
-  // LR B-splines: nested too, but the family keeps no prolongation (yet).
-  CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/lshape_adaptive_lr.toml");
+  // Knot segments: nested too, but the family keeps no prolongation (yet).
+  CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/lshape_adaptive.toml");
   c.solver.preconditioner = "multigrid";
   c.adapt.steps = 2;
   try {
@@ -221,6 +231,7 @@ TEST_CASE("CG from a guess: none needed from the solution, the same answer from 
     A.insert(i, i) = 2.5;
     if (i + 1 < n) A.insert(i + 1, i) = -1;
   }
+  A.makeCompressed();  // the solvers read the compressed arrays, as every matrix they get has them
   const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, 1, 2);
   const Eigen::MatrixXd dense = Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>()));
   const Eigen::VectorXd exact = dense.llt().solve(b);

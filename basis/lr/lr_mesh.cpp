@@ -166,6 +166,7 @@ void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
         right.knots[d][k] = w[k + 1];
       }
       const double weight = found->second;
+      if (recording_) splits_.try_emplace(f, std::array<std::pair<Function, double>, 2>{{{left, a}, {right, b}}});
       functions_.erase(found);
       functions_[left] += weight * a;
       functions_[right] += weight * b;
@@ -174,6 +175,42 @@ void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
       break;
     }
   }
+}
+
+void DyadicLrMesh::record_splits(bool on) {
+  recording_ = on;
+  splits_.clear();
+}
+
+Eigen::SparseMatrix<double> DyadicLrMesh::prolongation_from(const DyadicLrMesh& coarse) const {
+  if (!recording_) throw std::logic_error("LR prolongation: the refinement's splits were not recorded");
+  std::unordered_map<Function, int, FunctionHash> index;
+  const std::vector<Function>& fine_sorted = incidence().sorted;
+  for (int i = 0; i < static_cast<int>(fine_sorted.size()); ++i) index.emplace(fine_sorted[i], i);
+  const std::vector<Function>& coarse_sorted = coarse.incidence().sorted;
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(coarse_sorted.size());
+  std::vector<std::pair<Function, double>> work;
+  for (int j = 0; j < static_cast<int>(coarse_sorted.size()); ++j) {
+    const double coarse_weight = coarse.functions_.at(coarse_sorted[j]);
+    // (piece, its coefficient in the unweighted coarse B-spline), split as the refinement split it
+    work.assign(1, {coarse_sorted[j], 1.0});
+    while (!work.empty()) {
+      const auto [f, c] = work.back();
+      work.pop_back();
+      if (const auto split = splits_.find(f); split != splits_.end()) {
+        for (const auto& [piece, a] : split->second) work.push_back({piece, c * a});
+        continue;
+      }
+      const auto it = index.find(f);
+      if (it == index.end()) throw std::logic_error("LR prolongation: a B-spline of the coarse mesh is neither split nor kept");
+      // coarse function = w_c B[coarse] = sum w_c c B[piece] = sum (w_c c / w_piece) (w_piece B[piece])
+      entries.emplace_back(it->second, j, coarse_weight * c / functions_.at(f));
+    }
+  }
+  Eigen::SparseMatrix<double> P(static_cast<Eigen::Index>(fine_sorted.size()), static_cast<Eigen::Index>(coarse_sorted.size()));
+  P.setFromTriplets(entries.begin(), entries.end());  // pieces reached twice are summed
+  return P;
 }
 
 void DyadicLrMesh::split_elements(size_t first_inserted) {

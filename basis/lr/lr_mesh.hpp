@@ -6,6 +6,7 @@
 // can have). Coordinates are integers on a dyadic grid 2^40 finer than level 0, so knots are
 // exact, hashable and cheap; basis/tmesh/lr_spline is the exact-rational LR mesh of the
 // PT-spline studies, far too slow for 10^5 functions.
+#include <Eigen/SparseCore>
 #include <array>
 #include <cstdint>
 #include <map>
@@ -83,6 +84,15 @@ class DyadicLrMesh {
   // `mesh` is this mesh's bezier_mesh().
   static Dependence dependence(const BezierMesh& mesh, int max_checked = 2000);
 
+  // Keep (on) or not the splits refine() and insert() make from now on, for prolongation_from.
+  void record_splits(bool on = true);
+  // The prolongation from `coarse` (this mesh when record_splits was called) to this mesh: P
+  // (this bezier_mesh()'s functions x coarse's) with coarse function j = sum_i P(i, j) function
+  // i. Each coarse B-spline is expanded by the knot insertions the refinement made (B = a B_left
+  // + b B_right per split, the weights aside) until its pieces are this mesh's B-splines.
+  // std::logic_error when the splits were not recorded, or a piece is not one of them.
+  Eigen::SparseMatrix<double> prolongation_from(const DyadicLrMesh& coarse) const;
+
   // Meshlines added beyond those of the strategy, to keep the boundary traces independent.
   int extended() const { return extended_; }
   // The meshlines inserted so far, in order (grid coordinates).
@@ -118,6 +128,8 @@ class DyadicLrMesh {
   std::vector<Segment> inserted_;
   int extended_ = 0;
   mutable std::shared_ptr<const Incidence> incidence_;  // null after a change
+  bool recording_ = false;  // record_splits
+  std::unordered_map<Function, std::array<std::pair<Function, double>, 2>, FunctionHash> splits_;
 };
 
 }  // namespace knotwork

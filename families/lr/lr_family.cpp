@@ -5,6 +5,7 @@
 // command was given --allow-dependent.
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "basis/lr/lr_mesh.hpp"
 #include "families/tensor/tensor_case.hpp"
@@ -135,6 +136,7 @@ class LrSpace final : public SplineSpace, public SpaceReport {
   std::unique_ptr<SplineSpace> refine(const std::vector<int>& marked, const std::vector<CellSplit>& /*split*/,
                                       int* extended, const ProgressFunction& /*progress*/) && override {
     DyadicLrMesh next = lr_;
+    next.record_splits(keep_prolongations_);
     try {
       next.refine(marked, lr_section(*case_).strategy);
     } catch (const std::invalid_argument& e) {
@@ -142,9 +144,21 @@ class LrSpace final : public SplineSpace, public SpaceReport {
     }
     if (extended) *extended = next.extended() - lr_.extended();
     check_refined_memory(*case_, double(next.elements().size()), "LR");
+    std::optional<Eigen::SparseMatrix<double>> prolongation;
+    if (keep_prolongations_) prolongation = next.prolongation_from(lr_);
+    next.record_splits(false);
     auto out = std::make_unique<LrSpace>(*case_, std::move(next));
     out->refined_ = true;
+    out->keep_prolongations_ = keep_prolongations_;
+    out->prolongation_ = std::move(prolongation);
     return out;
+  }
+  bool keep_prolongations() override { return keep_prolongations_ = true; }
+  // By name only: on the L-shape at p = 3 the prolongation (the refinement's splits recorded and
+  // replayed) cost about what CG saved against CHOLMOD (docs/ADAPTIVITY.md).
+  bool multigrid_over_steps_is_automatic() const override { return false; }
+  const Eigen::SparseMatrix<double>* prolongation_from_predecessor() const override {
+    return prolongation_ ? &*prolongation_ : nullptr;
   }
 
   KnotLines knot_lines() const override { return knot_lines_of_cells(mesh_, *geometry_); }
@@ -169,6 +183,8 @@ class LrSpace final : public SplineSpace, public SpaceReport {
   DyadicLrMesh::Dependence dependence_;
   std::unique_ptr<PatchGeometryMap> geometry_;
   bool refined_ = false;  // made by adaptive refinement (a dependence is the refinement's)
+  bool keep_prolongations_ = false;
+  std::optional<Eigen::SparseMatrix<double>> prolongation_;
 };
 
 std::unique_ptr<SplineSpace> build_lr(const CaseDescription& c, int level) {
