@@ -78,8 +78,6 @@ NestedMultigrid::~NestedMultigrid() = default;
 
 int NestedMultigrid::levels() const { return static_cast<int>(levels_.size()); }
 
-int NestedMultigrid::smoothed(int level) const { return static_cast<int>(levels_.at(level)->smoothed.size()); }
-
 void NestedMultigrid::add_level(const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
                                 const Eigen::SparseMatrix<double>* prolongation) {
   const int n = layout.num_free();
@@ -87,8 +85,8 @@ void NestedMultigrid::add_level(const DofLayout& layout, const Eigen::SparseMatr
     throw std::invalid_argument("nested multigrid: a matrix of " + std::to_string(lower.rows()) + " rows for " + std::to_string(n) +
                                 " free dofs");
   auto level = std::make_shared<Level>();
-  if (levels_.empty() || !prolongation) {
-    if (!levels_.empty()) throw std::invalid_argument("nested multigrid: a finer level needs its prolongation");
+  if (!levels_.empty() && !prolongation) throw std::invalid_argument("nested multigrid: a finer level needs its prolongation");
+  if (levels_.empty()) {
     level->coarsest.compute(lower.selfadjointView<Eigen::Lower>());
     if (level->coarsest.info() != Eigen::Success)
       throw std::runtime_error("nested multigrid: the starting space's matrix is not positive definite");
@@ -125,8 +123,7 @@ void NestedMultigrid::add_level(const DofLayout& layout, const Eigen::SparseMatr
       const bool unchanged = row_count[r] == 1 && column_count[row_column[r]] == 1 && std::abs(row_value[r] - 1) <= 1e-12;
       if (!unchanged) level->smoothed.push_back(r);
     }
-    // The smoothed rows of the whole matrix: row i's entries are lower's column i (k >= i) and
-    // lower's row i (k < i).
+    // The smoothed rows of the whole matrix, copied from it made once.
     {
       const RowMatrix whole = lower.selfadjointView<Eigen::Lower>();
       const int m = static_cast<int>(level->smoothed.size());

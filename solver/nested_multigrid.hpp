@@ -27,8 +27,6 @@ class NestedMultigrid {
   // part in this step's fixed functions. std::invalid_argument when its size does not match.
   void add_level(const DofLayout& layout, const Eigen::SparseMatrix<double>& lower, const Eigen::SparseMatrix<double>* prolongation);
   int levels() const;
-  // How many functions the finest level smooths (changed by its step), for reports and tests.
-  int smoothed(int level) const;
   // The V-cycle from the finest level added so far. It shares the levels: adding one later does
   // not change what it applies.
   std::unique_ptr<Preconditioner> preconditioner() const;

@@ -45,8 +45,8 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
   std::unique_ptr<SplineSpace> space = family.build(c, 0, say);
   // Multigrid over the steps (docs/ADAPTIVITY.md): the family keeps each refinement's
   // prolongation, every step's matrix becomes a level, and CG starts from the last solution.
-  // Asked for by name, or "auto" (measured faster than CHOLMOD and BoomerAMG on every THB loop
-  // of docs/ADAPTIVITY.md) where the family keeps prolongations and CG is allowed.
+  // Asked for by name, or "auto" (measured faster than CHOLMOD and BoomerAMG on the loops of
+  // docs/ADAPTIVITY.md, where the family says so) where the family keeps prolongations and CG is allowed.
   std::optional<AdaptiveSolve> over_steps;
   const std::vector<std::string> own = space->structured_preconditioners();
   if (std::find(own.begin(), own.end(), "multigrid") == own.end()) {
@@ -58,7 +58,7 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
       over_steps->multigrid = std::make_shared<NestedMultigrid>();
     } else if (asked) {
       throw InputError(c.path + ": [solver] preconditioner: \"multigrid\" in adapt is multigrid over the steps, which needs "
-                       "a family whose refinement gives its prolongation (\"thb\", \"lr\"); family \"" + c.family +
+                       "a family whose refinement gives its prolongation (docs/ADAPTIVITY.md names them); family \"" + c.family +
                        "\" does not: use \"boomeramg\" or \"auto\"");
     }
   }

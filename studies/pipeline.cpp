@@ -66,7 +66,7 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space, 
     r.preconditioner = kMultigridName;
     if (c.solver.preconditioner == "auto")
       r.note = "[solver] preconditioner = \"auto\" in adapt: multigrid over the steps, measured faster than CHOLMOD and "
-               "BoomerAMG on THB loops (docs/ADAPTIVITY.md)";
+               "BoomerAMG on the adaptive loops measured (docs/ADAPTIVITY.md)";
     return r;
   }
   const std::vector<std::string> structured = space.structured_preconditioners();
@@ -204,8 +204,6 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
       // This step's matrix becomes the finest level; the family's prolongation links it to the last.
       const std::shared_ptr<NestedMultigrid> levels = adaptive->multigrid;
       const Eigen::SparseMatrix<double>* prolongation = space.prolongation_from_predecessor();
-      if (levels->levels() > 0 && !prolongation)
-        throw std::logic_error("multigrid over adaptive steps: the refined space kept no prolongation");
       so.preconditioner = [levels, prolongation](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
         levels->add_level(layout, lower, levels->levels() > 0 ? prolongation : nullptr);
         return levels->preconditioner();

@@ -219,7 +219,7 @@ TEST_CASE("Multigrid over adaptive steps is refused where the family keeps no pr
     const std::string m = e.what();
     INFO(m);
     CHECK(m.find("[solver] preconditioner") != std::string::npos);
-    CHECK(m.find("\"thb\"") != std::string::npos);
+    CHECK(m.find("\"knot_segments\" does not") != std::string::npos);
     CHECK(m.find('\n') == std::string::npos);
   }
 }
@@ -251,6 +251,9 @@ TEST_CASE("CG from a guess: none needed from the solution, the same answer from 
   CHECK(stats.stop == IterativeStats::Stop::kEnergy);
   CHECK(stats.energy_estimate <= 1e-3);
   const Eigen::VectorXd difference = early - exact;
-  // (A contracts fast under Jacobi here: the estimate is within a factor 2 of the true energy error.)
-  CHECK(std::sqrt(difference.dot(dense * difference)) <= 2e-3);
+  // The estimate is the energy lost over the last two iterations, ||e_(k-2)||^2 - ||e_k||^2. With
+  // Jacobi here cond <= 9 (Gershgorin), CG's contraction rho <= (3 - 1) / (3 + 1) = 1/2 per
+  // iteration gives ||e_k||^2 <= rho^4 / (1 - rho^4) times the estimate: ||e_k|| <= 0.26e-3.
+  // Checked against the tolerance itself, which the bound leaves a factor 4 of room.
+  CHECK(std::sqrt(difference.dot(dense * difference)) <= 1e-3);
 }
