@@ -156,6 +156,15 @@ Eigen::VectorXd bernstein_coefficients(const BezierMesh& mesh, const Eigen::Vect
 // A rational Bezier hexahedron's equispaced nodes (i/p, j/q, k/r), node i + (p+1) (j + (q+1) k),
 // and the collocation of its Bernstein polynomials there: what turns values at the nodes into
 // the Bezier coefficients of the interpolant (as bernstein_interpolation_inverse does for quads).
+// The physical points at the nodes, from the cell's own (rational) Bezier form: the nodes'
+// Bernstein values (collocation) times the weighted control points, over W = collocation * w.
+// The form is exact, so this is the map at the nodes without evaluating the patch's B-splines
+// and their derivatives again.
+Eigen::MatrixXd nodes_of(const Eigen::MatrixXd& collocation, const BezierGeometryCell& g, const Eigen::VectorXd& W) {
+  const Eigen::MatrixXd weighted = g.points.array().colwise() * g.weights.array();
+  return (collocation * weighted).array().colwise() / W.array();
+}
+
 struct HexahedronNodes {
   int p = -1, q = -1, r = -1;
   Eigen::VectorXd u, v, w;
@@ -230,7 +239,6 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
     int last_p = -1, last_q = -1;
     Eigen::MatrixXd inverse, collocation;
     Eigen::VectorXd nu, nv;
-    GeometryAtPoints at;
     HexahedronNodes hexahedron;
 #pragma omp for schedule(dynamic, 64)
     for (int c = 0; c < nc; ++c) {
@@ -254,9 +262,9 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
                                                     hexahedron.w).col(0));
           }
           if (exact) {
-            geometry.evaluate_volume(first + c, hexahedron.u, hexahedron.v, hexahedron.w, at);
-            exact_u->evaluate(at.x.col(0).data(), at.x.col(1).data(), at.x.col(2).data(), at.x.rows());
-            fe = to_bezier(Eigen::Map<const Eigen::VectorXd>(exact_u->result(0), at.x.rows()).array() - exact_offset);
+            const Eigen::MatrixXd x = nodes_of(hexahedron.collocation, g, W);
+            exact_u->evaluate(x.col(0).data(), x.col(1).data(), x.col(2).data(), x.rows());
+            fe = to_bezier(Eigen::Map<const Eigen::VectorXd>(exact_u->result(0), x.rows()).array() - exact_offset);
           }
           const int order[3] = {p, q, r};
           for (int k = 0; k <= r; ++k)
@@ -300,12 +308,11 @@ PreparedWrite prepare_bezier_vtu(const std::string& path, const BezierMesh& mesh
         };
         Eigen::VectorXd fu, fe;
         if (polynomial) fu = bernstein_coefficients(mesh, coeffs, first + c);
-        if (!polynomial || exact) geometry.evaluate(first + c, nu, nv, at);
-        if (!polynomial) fu = to_bezier(evaluate_solution(mesh, geometry, coeffs, first + c, nu, nv).col(0));
+        else fu = to_bezier(evaluate_solution(mesh, geometry, coeffs, first + c, nu, nv).col(0));
         if (exact) {
-          exact_u->evaluate(at.x.col(0).data(), at.x.col(1).data(), at.x.cols() == 3 ? at.x.col(2).data() : nullptr,
-                            at.x.rows());
-          fe = to_bezier(Eigen::Map<const Eigen::VectorXd>(exact_u->result(0), at.x.rows()).array() - exact_offset);
+          const Eigen::MatrixXd x = nodes_of(collocation, g, W);
+          exact_u->evaluate(x.col(0).data(), x.col(1).data(), x.cols() == 3 ? x.col(2).data() : nullptr, x.rows());
+          fe = to_bezier(Eigen::Map<const Eigen::VectorXd>(exact_u->result(0), x.rows()).array() - exact_offset);
         }
         const int order[2] = {p, q};
         for (int j = 0; j <= q; ++j)

@@ -233,9 +233,35 @@ TEST_CASE("THB and LR spaces draw their cells' sides as knot lines, each side on
     // 4 x 2 cells: bottom and left sides of all 8, the top sides of 4 and the right sides of 2.
     const KnotLines k = space->presentation().knot_lines();
     CHECK(k.lines.size() == 8 * 2 + 4 + 2);
-    // Their ends are cell corners of the physical L-shape: inside [-1, 1]^2.
-    for (const auto& line : k.lines) CHECK(line.cwiseAbs().maxCoeff() <= 1 + 1e-12);
+    // Their ends are cell corners of the physical L-shape: inside [-1, 1]^2. The L-shape is
+    // bilinear, so every side is a segment, drawn by its two ends.
+    for (const auto& line : k.lines) {
+      CHECK(line.cwiseAbs().maxCoeff() <= 1 + 1e-12);
+      CHECK(line.rows() == 2);
+    }
   }
+  // On the exact quarter annulus 1 <= r <= 2 (u radial, v angular) the radial sides are
+  // segments and the angular ones arcs of circles: sampled, each point at the arc's radius.
+  CaseDescription c = load_case_text(
+      "[geometry]\ntype = \"quarter_annulus\"\ninner_radius = 1.0\nouter_radius = 2.0\n"
+      "[space]\nfamily = \"thb\"\ndegree = 2\nelements = 3\n[problem]\nexact = \"x*y\"\n", "annulus_thb");
+  const auto space = build_space(c);
+  const KnotLines k = space->presentation().knot_lines();
+  REQUIRE(k.lines.size() == 3 * 3 * 2 + 3 + 3);
+  int arcs = 0, segments = 0;
+  for (const auto& line : k.lines) {
+    const Eigen::VectorXd r = line.rowwise().norm();
+    if (line.rows() == 2) {  // a radial segment: its ends at one angle
+      ++segments;
+      CHECK(std::abs(line(0, 0) * line(1, 1) - line(0, 1) * line(1, 0)) < 1e-14 * r.maxCoeff() * r.maxCoeff());
+    } else {
+      ++arcs;
+      CHECK(line.rows() == 9);
+      CHECK(r.maxCoeff() - r.minCoeff() < 1e-14 * r.maxCoeff());
+    }
+  }
+  CHECK(segments == 3 * 4);  // the radial sides: 3 elements along u, at 4 angles
+  CHECK(arcs == 3 * 4);
 }
 
 TEST_CASE("A refined space that would not fit in memory is refused before it is built", "[thb][lr]") {
