@@ -166,7 +166,7 @@ void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
         right.knots[d][k] = w[k + 1];
       }
       const double weight = found->second;
-      if (recording_) splits_.try_emplace(f, std::array<std::pair<Function, double>, 2>{{{left, a}, {right, b}}});
+      if (recording_) splits_.push_back({f, d, x, a, b});
       functions_.erase(found);
       functions_[left] += weight * a;
       functions_[right] += weight * b;
@@ -184,31 +184,73 @@ void DyadicLrMesh::record_splits(bool on) {
 
 Eigen::SparseMatrix<double> DyadicLrMesh::prolongation_from(const DyadicLrMesh& coarse) const {
   if (!recording_) throw std::logic_error("LR prolongation: the refinement's splits were not recorded");
-  std::unordered_map<Function, int, FunctionHash> index;
-  const std::vector<Function>& fine_sorted = incidence().sorted;
-  for (int i = 0; i < static_cast<int>(fine_sorted.size()); ++i) index.emplace(fine_sorted[i], i);
-  const std::vector<Function>& coarse_sorted = coarse.incidence().sorted;
+  // Both meshes list their B-splines sorted by knots: one merge pairs the B-splines the
+  // refinement kept (most of them), and only the split ones are expanded. Their splits are
+  // found through the splits' hashes, sorted once (a hash map of the splits themselves cost as
+  // much as building the refined mesh), their pieces by binary search.
+  const auto less = [](const Function& a, const Function& b) { return a.knots < b.knots; };
+  const Incidence& fine = incidence();
+  const Incidence& rough = coarse.incidence();
+  const FunctionHash hash;
+  std::vector<std::pair<size_t, int>> by_hash(splits_.size());
+  for (int k = 0; k < static_cast<int>(by_hash.size()); ++k) by_hash[k] = {hash(splits_[k].from), k};
+  std::sort(by_hash.begin(), by_hash.end());
+  const auto split_of = [&](const Function& f) -> const Split* {
+    const size_t h = hash(f);
+    for (auto it = std::lower_bound(by_hash.begin(), by_hash.end(), std::pair<size_t, int>{h, -1});
+         it != by_hash.end() && it->first == h; ++it)
+      if (splits_[it->second].from == f) return &splits_[it->second];
+    return nullptr;
+  };
+  // The pieces of a split: its B-spline with the knot inserted, the first and last p + 2 knots.
+  const auto pieces = [&](const Split& s) {
+    const int d = s.direction, p = p_[d];
+    const auto& t = s.from.knots[d];
+    const int at = static_cast<int>(std::upper_bound(t.begin(), t.begin() + p + 2, s.at) - t.begin());
+    std::array<int64_t, kMaxDegree + 3> w{};
+    for (int k = 0; k <= p + 1; ++k) w[k < at ? k : k + 1] = t[k];
+    w[at] = s.at;
+    std::array<std::pair<Function, double>, 2> out{{{s.from, s.a}, {s.from, s.b}}};
+    for (int k = 0; k <= p + 1; ++k) {
+      out[0].first.knots[d][k] = w[k];
+      out[1].first.knots[d][k] = w[k + 1];
+    }
+    return out;
+  };
+  const auto fine_index = [&](const Function& f) {
+    const auto it = std::lower_bound(fine.sorted.begin(), fine.sorted.end(), f, less);
+    if (it == fine.sorted.end() || !(*it == f))
+      throw std::logic_error("LR prolongation: a B-spline of the coarse mesh is neither split nor kept");
+    return static_cast<int>(it - fine.sorted.begin());
+  };
+  const int nf = static_cast<int>(fine.sorted.size()), nc = static_cast<int>(rough.sorted.size());
   std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(coarse_sorted.size());
+  entries.reserve(rough.sorted.size());
   std::vector<std::pair<Function, double>> work;
-  for (int j = 0; j < static_cast<int>(coarse_sorted.size()); ++j) {
-    const double coarse_weight = coarse.functions_.at(coarse_sorted[j]);
+  int i = 0;
+  for (int j = 0; j < nc; ++j) {
+    const Function& g = rough.sorted[j];
+    const double coarse_weight = rough.weights[j];
+    while (i < nf && less(fine.sorted[i], g)) ++i;
+    if (i < nf && fine.sorted[i] == g) {  // kept (its weight may have grown by pieces of others)
+      entries.emplace_back(i, j, coarse_weight / fine.weights[i]);
+      continue;
+    }
     // (piece, its coefficient in the unweighted coarse B-spline), split as the refinement split it
-    work.assign(1, {coarse_sorted[j], 1.0});
+    work.assign(1, {g, 1.0});
     while (!work.empty()) {
       const auto [f, c] = work.back();
       work.pop_back();
-      if (const auto split = splits_.find(f); split != splits_.end()) {
-        for (const auto& [piece, a] : split->second) work.push_back({piece, c * a});
+      if (const Split* split = split_of(f)) {
+        for (const auto& [piece, a] : pieces(*split)) work.push_back({piece, c * a});
         continue;
       }
-      const auto it = index.find(f);
-      if (it == index.end()) throw std::logic_error("LR prolongation: a B-spline of the coarse mesh is neither split nor kept");
       // coarse function = w_c B[coarse] = sum w_c c B[piece] = sum (w_c c / w_piece) (w_piece B[piece])
-      entries.emplace_back(it->second, j, coarse_weight * c / functions_.at(f));
+      const int k = fine_index(f);
+      entries.emplace_back(k, j, coarse_weight * c / fine.weights[k]);
     }
   }
-  Eigen::SparseMatrix<double> P(static_cast<Eigen::Index>(fine_sorted.size()), static_cast<Eigen::Index>(coarse_sorted.size()));
+  Eigen::SparseMatrix<double> P(nf, nc);
   P.setFromTriplets(entries.begin(), entries.end());  // pieces reached twice are summed
   return P;
 }
@@ -392,8 +434,16 @@ const DyadicLrMesh::Incidence& DyadicLrMesh::incidence() const {
   if (incidence_) return *incidence_;
   auto result = std::make_shared<Incidence>();
   std::vector<Function>& sorted = result->sorted;
-  for (const auto& [f, w] : functions_) sorted.push_back(f);
-  std::sort(sorted.begin(), sorted.end(), [](const Function& a, const Function& b) { return a.knots < b.knots; });
+  std::vector<std::pair<const Function*, double>> listed;
+  listed.reserve(functions_.size());
+  for (const auto& [f, w] : functions_) listed.push_back({&f, w});
+  std::sort(listed.begin(), listed.end(), [](const auto& a, const auto& b) { return a.first->knots < b.first->knots; });
+  sorted.reserve(listed.size());
+  result->weights.reserve(listed.size());
+  for (const auto& [f, w] : listed) {
+    sorted.push_back(*f);
+    result->weights.push_back(w);
+  }
   // The elements in the one R-tree (integer boxes), queried with every support: the elements
   // inside it, each element's list in the functions' sorted order.
   const int n = static_cast<int>(elements_.size());
@@ -447,8 +497,7 @@ BezierMesh DyadicLrMesh::bezier_mesh() const {
     }
     return it->second;
   };
-  std::vector<double> weight(inc.sorted.size());
-  for (size_t f = 0; f < inc.sorted.size(); ++f) weight[f] = functions_.at(inc.sorted[f]);
+  const std::vector<double>& weight = inc.weights;
   BezierMesh mesh;
   mesh.set_num_functions(static_cast<int>(inc.sorted.size()));
   mesh.set_boundary_names({"bottom", "right", "top", "left"});

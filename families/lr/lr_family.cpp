@@ -154,9 +154,6 @@ class LrSpace final : public SplineSpace, public SpaceReport {
     return out;
   }
   bool keep_prolongations() override { return keep_prolongations_ = true; }
-  // By name only for now: on the L-shape at p = 3 recording and replaying the splits cost most
-  // of what CG saved against CHOLMOD (the loop 5-12% faster: docs/ADAPTIVITY.md).
-  bool multigrid_over_steps_is_automatic() const override { return false; }
   const Eigen::SparseMatrix<double>* prolongation_from_predecessor() const override {
     return prolongation_ ? &*prolongation_ : nullptr;
   }
