@@ -2,9 +2,11 @@
 #include "basis/core/pooled_extractions.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <stdexcept>
+#include <string_view>
 
 namespace knotwork {
 
@@ -16,14 +18,20 @@ int BezierMesh::add_extraction(Eigen::MatrixXd matrix) {
   return static_cast<int>(pool_.size()) - 1;
 }
 
-int PooledExtractions::add(Eigen::MatrixXd matrix) {
-  auto bytes = [](const Eigen::MatrixXd& m) {
-    return std::string_view(reinterpret_cast<const char*>(m.data()), sizeof(double) * m.size());
-  };
-  const auto found = ids_.find(bytes(matrix));
-  if (found != ids_.end() && mesh_.pooled_extraction(found->second).rows() == matrix.rows()) return found->second;
+size_t PooledExtractions::hash(const Eigen::MatrixXd& matrix) {
+  return std::hash<std::string_view>()(
+      std::string_view(reinterpret_cast<const char*>(matrix.data()), sizeof(double) * matrix.size()));
+}
+
+int PooledExtractions::add(Eigen::MatrixXd matrix, size_t hash) {
+  for (auto [it, end] = ids_.equal_range(hash); it != end; ++it) {
+    const Eigen::MatrixXd& kept = mesh_.pooled_extraction(it->second);
+    if (kept.rows() == matrix.rows() && kept.cols() == matrix.cols() &&
+        std::memcmp(kept.data(), matrix.data(), sizeof(double) * matrix.size()) == 0)
+      return it->second;
+  }
   const int id = mesh_.add_extraction(std::move(matrix));
-  ids_.try_emplace(bytes(mesh_.pooled_extraction(id)), id);
+  ids_.emplace(hash, id);
   return id;
 }
 
