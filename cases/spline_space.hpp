@@ -116,6 +116,10 @@ class SplineSpace {
   // j is sum_i P(i, j) times function i of this space. Null when not kept (not asked, or the
   // starting space).
   virtual const Eigen::SparseMatrix<double>* prolongation_from_predecessor() const { return nullptr; }
+  // Whether [solver] "auto" takes that multigrid in adapt (where keep_prolongations() can), or
+  // only the name "multigrid" does: false where measurements found a loop no faster with it
+  // than with CHOLMOD (docs/ADAPTIVITY.md, "Multigrid over the steps").
+  virtual bool multigrid_over_steps_is_automatic() const { return true; }
   // Preconditioners that know the space's structure, for the iterative solve: their names
   // ([solver] preconditioner; none when the family has none), the first the one "auto" takes,
   // and the one named for the free dofs of `layout` of `problem`'s operator (null when it

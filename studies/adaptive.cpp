@@ -46,12 +46,14 @@ std::vector<AdaptiveStep> adapt_case(const CaseDescription& c, Ordering ordering
   // Multigrid over the steps (docs/ADAPTIVITY.md): the family keeps each refinement's
   // prolongation, every step's matrix becomes a level, and CG starts from the last solution.
   // Asked for by name, or "auto" (measured faster than CHOLMOD and BoomerAMG on the loops of
-  // docs/ADAPTIVITY.md) where the family keeps prolongations and CG is allowed.
+  // docs/ADAPTIVITY.md, where the family says so) where the family keeps prolongations and CG
+  // is allowed.
   std::optional<AdaptiveSolve> over_steps;
   const std::vector<std::string> own = space->structured_preconditioners();
   if (std::find(own.begin(), own.end(), "multigrid") == own.end()) {
     const bool asked = c.solver.preconditioner == "multigrid";
-    const bool automatic = c.solver.preconditioner == "auto" && (method == "auto" || method == "iterative");
+    const bool automatic = c.solver.preconditioner == "auto" && (method == "auto" || method == "iterative") &&
+                           space->multigrid_over_steps_is_automatic();
     if ((asked || automatic) && space->keep_prolongations()) {
       over_steps.emplace();
       over_steps->multigrid = std::make_shared<NestedMultigrid>();

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <map>
 #include <functional>
 #include <numeric>
@@ -618,6 +619,7 @@ void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> start, 
       (vertical ? halves[0].x : halves[0].y).assign(refined.begin(), refined.end() - 1);
       (vertical ? halves[1].x : halves[1].y).assign(refined.begin() + 1, refined.end());
     }
+    if (recording_) change.splits.push_back({p.spline, vertical, at});
     if (change.added.erase(&*it) == 0) change.removed.push_back(std::move(p.spline));
     erase_spline(it);
     for (LocalBSpline& half : halves) {
@@ -755,6 +757,16 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
   // stays semi-regular. `where` gets the failing cell (NaN when nothing was split or the
   // changed region is not a partition into rectangles).
   Change applied;  // what the last successful attempt changed, until it is kept or reverted
+  // The kept attempt's splits join the record when insert returns (not when it throws).
+  struct KeepSplits {
+    SemiRegularCollection& self;
+    const Change& kept;
+    const int exceptions = std::uncaught_exceptions();
+    ~KeepSplits() {
+      if (self.recording_ && std::uncaught_exceptions() == exceptions)
+        self.splits_.insert(self.splits_.end(), kept.splits.begin(), kept.splits.end());
+    }
+  } keep_splits{*this, applied};
   auto revert = [&] {
     undo(applied);
     applied = Change{};
@@ -863,6 +875,62 @@ InsertionReport SemiRegularCollection::insert(const KnotInsertion& s) {
     }
   }
   throw std::runtime_error("a full knot line does not give a semi-regular collection here");
+}
+
+void SemiRegularCollection::record_splits(bool on) {
+  recording_ = on;
+  splits_.clear();
+}
+
+Eigen::SparseMatrix<double> SemiRegularCollection::prolongation_from(const SemiRegularCollection& coarse) const {
+  if (!recording_) throw std::logic_error("knot segments prolongation: the refinement's splits were not recorded");
+  const std::vector<LocalBSpline>& fine = splines();
+  const std::vector<LocalBSpline>& rough = coarse.splines();
+  // The splits by the B-spline split, sorted once (any one split of a B-spline will do: each
+  // is an identity B = a B_left + b B_right); both collections list their B-splines sorted.
+  std::vector<int> by_spline(splits_.size());
+  std::iota(by_spline.begin(), by_spline.end(), 0);
+  std::stable_sort(by_spline.begin(), by_spline.end(), [&](int a, int b) { return splits_[a].from < splits_[b].from; });
+  const auto split_of = [&](const LocalBSpline& f) -> const SplitRecord* {
+    const auto it = std::lower_bound(by_spline.begin(), by_spline.end(), f, [&](int k, const LocalBSpline& g) { return splits_[k].from < g; });
+    return it != by_spline.end() && splits_[*it].from == f ? &splits_[*it] : nullptr;
+  };
+  const auto fine_index = [&](const LocalBSpline& f) {
+    const auto it = std::lower_bound(fine.begin(), fine.end(), f);
+    return it != fine.end() && *it == f ? static_cast<int>(it - fine.begin()) : -1;
+  };
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(rough.size());
+  std::vector<std::pair<LocalBSpline, double>> work;
+  for (int j = 0; j < static_cast<int>(rough.size()); ++j) {
+    if (const int i = fine_index(rough[j]); i >= 0) {  // kept
+      entries.emplace_back(i, j, 1.0);
+      continue;
+    }
+    work.assign(1, {rough[j], 1.0});
+    while (!work.empty()) {
+      auto [f, c] = std::move(work.back());
+      work.pop_back();
+      if (const SplitRecord* split = split_of(f)) {
+        const std::vector<double>& t = split->vertical ? f.x : f.y;
+        const auto [a, b] = bspline_kernel::split_weights<double>(t, split->at);
+        std::vector<double> w = t;
+        w.insert(std::upper_bound(w.begin(), w.end(), split->at), split->at);
+        LocalBSpline left = f, right = f;
+        (split->vertical ? left.x : left.y).assign(w.begin(), w.end() - 1);
+        (split->vertical ? right.x : right.y).assign(w.begin() + 1, w.end());
+        work.push_back({std::move(left), c * a});
+        work.push_back({std::move(right), c * b});
+        continue;
+      }
+      const int i = fine_index(f);
+      if (i < 0) throw std::logic_error("knot segments prolongation: a B-spline of the coarse collection is neither split nor kept");
+      entries.emplace_back(i, j, c);
+    }
+  }
+  Eigen::SparseMatrix<double> P(static_cast<Eigen::Index>(fine.size()), static_cast<Eigen::Index>(rough.size()));
+  P.setFromTriplets(entries.begin(), entries.end());  // pieces reached twice are summed
+  return P;
 }
 
 RectangularPartition SemiRegularCollection::partition() const {

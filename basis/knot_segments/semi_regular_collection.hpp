@@ -1,4 +1,5 @@
 #pragma once
+#include <Eigen/SparseCore>
 #include <array>
 #include <map>
 #include <memory>
@@ -139,16 +140,37 @@ class SemiRegularCollection {
   // a patch (bottom, right, top, left).
   BezierMesh bezier_mesh() const;
 
+  // Keep (on) or not the splits the insertions make from now on (those of attempts that were
+  // undone are dropped), for prolongation_from.
+  void record_splits(bool on = true);
+  // The prolongation from `coarse` (this collection when record_splits was called) to this
+  // one: P (this collection's B-splines x coarse's, in splines() order) with coarse B-spline
+  // j = sum_i P(i, j) B-spline i. A coarse B-spline kept is itself; a split one is expanded by
+  // the knot insertions recorded (B = a B_left + b B_right per split) until its pieces are this
+  // collection's. std::logic_error when the splits were not recorded, or a piece is neither
+  // split nor kept.
+  Eigen::SparseMatrix<double> prolongation_from(const SemiRegularCollection& coarse) const;
+
  private:
   struct Piece {
     double from, to;
     int multiplicity;
   };
   // What one insertion attempt changed, to check it locally and to undo it.
+  // A B-spline split at `at` across x (vertical) or y, into the halves the knot inserted there
+  // makes (recorded for prolongation_from).
+  struct SplitRecord {
+    LocalBSpline from;
+    bool vertical;
+    double at;
+  };
   struct Change {
     std::vector<LocalBSpline> removed;
     std::set<const LocalBSpline*> added;  // elements of set_ (nodes do not move)
+    std::vector<SplitRecord> splits;      // when recording
   };
+  bool recording_ = false;
+  std::vector<SplitRecord> splits_;  // of the insertions kept since record_splits
   // The supports of set_'s B-splines in an R-tree, so that an insertion finds the B-splines a
   // line crosses and those near a changed region without scanning all of them. Built on the
   // first insertion, kept up to date by the splits and their undoing; a copy starts without
