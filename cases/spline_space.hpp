@@ -225,8 +225,9 @@ const SpaceFamily& space_family(const CaseDescription& c);
 std::vector<std::string> preconditioner_names();
 
 // The sides of a mesh's cells through its geometry, as KnotLines (each side once: bottom and
-// left sides, and top and right sides on the boundary; `samples` points per side): the knot
-// lines of a family whose cells tile one patch's parameter domain.
+// left sides, and top and right sides on the boundary): the knot lines of a family whose cells
+// tile one patch's parameter domain. Read off each cell's Bezier form (GeometryMap::bezier_cell,
+// exact for NURBS maps): a straight side as its two ends, a curved one at `samples` points.
 KnotLines knot_lines_of_cells(const BezierMesh& mesh, const GeometryMap& geometry, int samples = 9);
 
 // The largest cell diagonal of a mesh through its geometry (the default mesh_size).
