@@ -182,6 +182,12 @@ int main(int argc, char** argv) {
                       "Go on when a refined space fails its family's own check (B-splines found linearly "
                       "dependent: the matrix may be singular)");
   add_common(adapt_cmd, adapt);
+  // In adapt, "auto" and "multigrid" mean multigrid over the loop's steps (studies/adaptive.cpp).
+  adapt_cmd->get_option("--preconditioner")
+      ->description("Iterative solve in adapt: auto (the default) is CG with multigrid over the loop's steps where the "
+                    "family's refinement gives its prolongation and measurements chose it, CHOLMOD elsewhere "
+                    "(docs/ADAPTIVITY.md names the families); multigrid asks for it by name; jacobi or boomeramg; "
+                    "--solver direct forces CHOLMOD (overrides [solver] preconditioner)");
 
   knotwork::BenchOptions bench;
   CLI::App* bench_cmd = app.add_subcommand(
