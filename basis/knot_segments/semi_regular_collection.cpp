@@ -550,6 +550,22 @@ bool SemiRegularCollection::jumped_line(const LocalBSpline& b, bool vertical, do
   return false;
 }
 
+namespace {
+
+// B-spline b with the knot `at` inserted across x (vertical) or y: its first and its last
+// knots, the two B-splines univariate knot insertion splits it into (a split and its replay in
+// prolongation_from make them here).
+std::array<LocalBSpline, 2> halves_at(const LocalBSpline& b, bool vertical, double at) {
+  std::vector<double> refined = vertical ? b.x : b.y;
+  refined.insert(std::upper_bound(refined.begin(), refined.end(), at), at);
+  std::array<LocalBSpline, 2> out{b, b};
+  (vertical ? out[0].x : out[0].y).assign(refined.begin(), refined.end() - 1);
+  (vertical ? out[1].x : out[1].y).assign(refined.begin() + 1, refined.end());
+  return out;
+}
+
+}  // namespace
+
 void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> start, const KnotInsertion& inserted,
                                                Change& change) {
   // A B-spline whose support a mesh line crosses completely must use that knot with the
@@ -612,13 +628,7 @@ void SemiRegularCollection::split_until_stable(std::vector<LocalBSpline> start, 
     const auto it = set_.find(p.spline);
     if (it == set_.end()) continue;
     const bool vertical = dir == 0;
-    LocalBSpline halves[2] = {p.spline, p.spline};
-    {
-      std::vector<double> refined = vertical ? p.spline.x : p.spline.y;
-      refined.insert(std::upper_bound(refined.begin(), refined.end(), at), at);
-      (vertical ? halves[0].x : halves[0].y).assign(refined.begin(), refined.end() - 1);
-      (vertical ? halves[1].x : halves[1].y).assign(refined.begin() + 1, refined.end());
-    }
+    std::array<LocalBSpline, 2> halves = halves_at(p.spline, vertical, at);
     if (recording_) change.splits.push_back({p.spline, vertical, at});
     if (change.added.erase(&*it) == 0) change.removed.push_back(std::move(p.spline));
     erase_spline(it);
@@ -912,13 +922,8 @@ Eigen::SparseMatrix<double> SemiRegularCollection::prolongation_from(const SemiR
       auto [f, c] = std::move(work.back());
       work.pop_back();
       if (const SplitRecord* split = split_of(f)) {
-        const std::vector<double>& t = split->vertical ? f.x : f.y;
-        const auto [a, b] = bspline_kernel::split_weights<double>(t, split->at);
-        std::vector<double> w = t;
-        w.insert(std::upper_bound(w.begin(), w.end(), split->at), split->at);
-        LocalBSpline left = f, right = f;
-        (split->vertical ? left.x : left.y).assign(w.begin(), w.end() - 1);
-        (split->vertical ? right.x : right.y).assign(w.begin() + 1, w.end());
+        const auto [a, b] = bspline_kernel::split_weights<double>(split->vertical ? f.x : f.y, split->at);
+        auto [left, right] = halves_at(f, split->vertical, split->at);
         work.push_back({std::move(left), c * a});
         work.push_back({std::move(right), c * b});
         continue;

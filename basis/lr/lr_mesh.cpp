@@ -158,13 +158,7 @@ void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
       std::vector<double> T(p + 2);
       for (int k = 0; k <= p + 1; ++k) T[k] = parameter(d, t[k]);
       const auto [a, b] = bspline_kernel::split_weights<double>(T, parameter(d, x));
-      std::vector<int64_t> w(t.begin(), t.begin() + p + 2);
-      w.insert(std::upper_bound(w.begin(), w.end(), x), x);
-      Function left = f, right = f;
-      for (int k = 0; k <= p + 1; ++k) {
-        left.knots[d][k] = w[k];
-        right.knots[d][k] = w[k + 1];
-      }
+      const auto [left, right] = halves(f, d, x);
       const double weight = found->second;
       if (recording_) splits_.push_back({f, d, x, a, b});
       functions_.erase(found);
@@ -175,6 +169,21 @@ void DyadicLrMesh::split_functions(const std::vector<Segment>& added) {
       break;
     }
   }
+}
+
+std::array<DyadicLrMesh::Function, 2> DyadicLrMesh::halves(const Function& f, int d, int64_t x) const {
+  const int p = p_[d];
+  const auto& t = f.knots[d];
+  std::array<int64_t, kMaxDegree + 3> w{};
+  const int at = static_cast<int>(std::upper_bound(t.begin(), t.begin() + p + 2, x) - t.begin());
+  for (int k = 0; k <= p + 1; ++k) w[k < at ? k : k + 1] = t[k];
+  w[at] = x;
+  std::array<Function, 2> out{f, f};
+  for (int k = 0; k <= p + 1; ++k) {
+    out[0].knots[d][k] = w[k];
+    out[1].knots[d][k] = w[k + 1];
+  }
+  return out;
 }
 
 void DyadicLrMesh::record_splits(bool on) {
@@ -202,21 +211,6 @@ Eigen::SparseMatrix<double> DyadicLrMesh::prolongation_from(const DyadicLrMesh& 
       if (splits_[it->second].from == f) return &splits_[it->second];
     return nullptr;
   };
-  // The pieces of a split: its B-spline with the knot inserted, the first and last p + 2 knots.
-  const auto pieces = [&](const Split& s) {
-    const int d = s.direction, p = p_[d];
-    const auto& t = s.from.knots[d];
-    const int at = static_cast<int>(std::upper_bound(t.begin(), t.begin() + p + 2, s.at) - t.begin());
-    std::array<int64_t, kMaxDegree + 3> w{};
-    for (int k = 0; k <= p + 1; ++k) w[k < at ? k : k + 1] = t[k];
-    w[at] = s.at;
-    std::array<std::pair<Function, double>, 2> out{{{s.from, s.a}, {s.from, s.b}}};
-    for (int k = 0; k <= p + 1; ++k) {
-      out[0].first.knots[d][k] = w[k];
-      out[1].first.knots[d][k] = w[k + 1];
-    }
-    return out;
-  };
   const auto fine_index = [&](const Function& f) {
     const auto it = std::lower_bound(fine.sorted.begin(), fine.sorted.end(), f, less);
     if (it == fine.sorted.end() || !(*it == f))
@@ -242,7 +236,9 @@ Eigen::SparseMatrix<double> DyadicLrMesh::prolongation_from(const DyadicLrMesh& 
       const auto [f, c] = work.back();
       work.pop_back();
       if (const Split* split = split_of(f)) {
-        for (const auto& [piece, a] : pieces(*split)) work.push_back({piece, c * a});
+        const auto [left, right] = halves(split->from, split->direction, split->at);
+        work.push_back({left, c * split->a});
+        work.push_back({right, c * split->b});
         continue;
       }
       // coarse function = w_c B[coarse] = sum w_c c B[piece] = sum (w_c c / w_piece) (w_piece B[piece])

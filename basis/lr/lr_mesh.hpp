@@ -102,6 +102,9 @@ class DyadicLrMesh {
 
  private:
   void add_line(const Segment& s);
+  // B-spline f with the knot x inserted along direction d: its first and its last p + 2 knots
+  // (f = a left + b right, split_weights; the split and its replay make them here).
+  std::array<Function, 2> halves(const Function& f, int d, int64_t x) const;
   bool covers(int direction, int64_t at, int64_t from, int64_t to) const;
   // Splits the B-splines that the meshlines traverse, after `added` joined them: only a
   // B-spline whose support one of those meets can need it (the others were split against every
@@ -130,8 +133,7 @@ class DyadicLrMesh {
   int extended_ = 0;
   mutable std::shared_ptr<const Incidence> incidence_;  // null after a change
   bool recording_ = false;  // record_splits
-  // B[from] = a B[left] + b B[right], left and right `from` with the knot `at` inserted along
-  // `direction` (its first p + 2 knots, its last p + 2), in the order made: appending is all
+  // B[from] = a B[left] + b B[right], [left, right] = halves(from, direction, at), in the order made: appending is all
   // that splitting pays (a refinement of the L-shape at p = 3 makes 4e5 splits); the pieces are
   // made again when replayed, which keeps a split at 192 bytes instead of 480.
   struct Split {
