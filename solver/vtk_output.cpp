@@ -153,18 +153,19 @@ Eigen::VectorXd bernstein_coefficients(const BezierMesh& mesh, const Eigen::Vect
   return mesh.extraction(cell).transpose() * local;
 }
 
-// A rational Bezier hexahedron's equispaced nodes (i/p, j/q, k/r), node i + (p+1) (j + (q+1) k),
-// and the collocation of its Bernstein polynomials there: what turns values at the nodes into
-// the Bezier coefficients of the interpolant (as bernstein_interpolation_inverse does for quads).
 // The physical points at the nodes, from the cell's own (rational) Bezier form: the nodes'
 // Bernstein values (collocation) times the weighted control points, over W = collocation * w.
-// The form is exact, so this is the map at the nodes without evaluating the patch's B-splines
+// The form is exact (an analytic map's interpolates it at these very nodes), so this is the map
+// at the nodes without evaluating the patch's B-splines
 // and their derivatives again.
 Eigen::MatrixXd nodes_of(const Eigen::MatrixXd& collocation, const BezierGeometryCell& g, const Eigen::VectorXd& W) {
   const Eigen::MatrixXd weighted = g.points.array().colwise() * g.weights.array();
   return (collocation * weighted).array().colwise() / W.array();
 }
 
+// A rational Bezier hexahedron's equispaced nodes (i/p, j/q, k/r), node i + (p+1) (j + (q+1) k),
+// and the collocation of its Bernstein polynomials there: what turns values at the nodes into
+// the Bezier coefficients of the interpolant (as bernstein_interpolation_inverse does for quads).
 struct HexahedronNodes {
   int p = -1, q = -1, r = -1;
   Eigen::VectorXd u, v, w;
