@@ -156,8 +156,7 @@ Eigen::VectorXd bernstein_coefficients(const BezierMesh& mesh, const Eigen::Vect
 // The physical points at the nodes, from the cell's own (rational) Bezier form: the nodes'
 // Bernstein values (collocation) times the weighted control points, over W = collocation * w.
 // The form is exact (an analytic map's interpolates it at these very nodes), so this is the map
-// at the nodes without evaluating the patch's B-splines
-// and their derivatives again.
+// at the nodes without evaluating the patch's B-splines and their derivatives again.
 Eigen::MatrixXd nodes_of(const Eigen::MatrixXd& collocation, const BezierGeometryCell& g, const Eigen::VectorXd& W) {
   const Eigen::MatrixXd weighted = g.points.array().colwise() * g.weights.array();
   return (collocation * weighted).array().colwise() / W.array();
