@@ -68,34 +68,42 @@ MultiPatchTensorDiscretization build_multipatch_tensor(const MultiPatch& domain,
   return out;
 }
 
+MultiPatchNumbering number_multipatch_functions(const MultiPatch& domain, const TensorSpaceOptions& options) {
+  MultiPatchNumbering out;
+  std::vector<int>& first_function = out.first_function;
+  for (const NurbsPatch& p : domain.patches) {
+    out.bases.push_back(tensor_space_bases(p, options));
+    first_function.push_back(first_function.back() + out.bases.back()[0].num_functions() * out.bases.back()[1].num_functions());
+  }
+  check_interface_knots(domain, out.bases);
+  // A shared function where it first occurs, from the tensor numbering along the glued sides.
+  DisjointSets copies(first_function.back());
+  for (const PatchInterface& f : domain.interfaces) {
+    const auto& a_basis = out.bases[f.a.patch];
+    const auto& b_basis = out.bases[f.b.patch];
+    const std::vector<int> a = side_indices(a_basis[0].num_functions(), a_basis[1].num_functions(), f.a.side);
+    const std::vector<int> b = side_indices(b_basis[0].num_functions(), b_basis[1].num_functions(), f.b.side);
+    const size_t n = a.size();
+    for (size_t k = 0; k < n; ++k)
+      copies.unite(first_function[f.a.patch] + a[k], first_function[f.b.patch] + b[f.reversed ? n - 1 - k : k]);
+  }
+  out.number = copies.numbering(&out.count);
+  return out;
+}
+
 MultiPatchTensorPart build_multipatch_tensor_part(const MultiPatch& domain, const TensorSpaceOptions& options, int rank,
                                                   int ranks) {
   const int np = domain.num_patches();
   if (np < ranks)
     throw std::invalid_argument("the domain has " + std::to_string(np) + " patches, fewer than the " + std::to_string(ranks) +
                                 " processes that share them patch by patch");
-  // Every patch's univariate bases: enough to number all functions.
-  std::vector<std::array<BSplineBasis1D, 2>> bases;
-  std::vector<int> first_function{0};
+  const MultiPatchNumbering numbering = number_multipatch_functions(domain, options);
+  const std::vector<int>& first_function = numbering.first_function;
+  const std::vector<int>& number = numbering.number;
+  const int count = numbering.count;
   std::vector<long> cells{0};
-  for (const NurbsPatch& p : domain.patches) {
-    bases.push_back(tensor_space_bases(p, options));
-    first_function.push_back(first_function.back() + bases.back()[0].num_functions() * bases.back()[1].num_functions());
-    cells.push_back(cells.back() + long(bases.back()[0].num_elements()) * bases.back()[1].num_elements());
-  }
-  check_interface_knots(domain, bases);
-  // Numbered patch by patch, a shared function where it first occurs (as glue_patches does),
-  // from the tensor numbering along the glued sides.
-  DisjointSets copies(first_function.back());
-  for (const PatchInterface& f : domain.interfaces) {
-    const std::vector<int> a = side_indices(bases[f.a.patch][0].num_functions(), bases[f.a.patch][1].num_functions(), f.a.side);
-    const std::vector<int> b = side_indices(bases[f.b.patch][0].num_functions(), bases[f.b.patch][1].num_functions(), f.b.side);
-    const size_t n = a.size();
-    for (size_t k = 0; k < n; ++k)
-      copies.unite(first_function[f.a.patch] + a[k], first_function[f.b.patch] + b[f.reversed ? n - 1 - k : k]);
-  }
-  int count = 0;
-  const std::vector<int> number = copies.numbering(&count);
+  for (const std::array<BSplineBasis1D, 2>& b : numbering.bases)
+    cells.push_back(cells.back() + long(b[0].num_elements()) * b[1].num_elements());
   std::vector<int> first_number{0};  // functions first numbered in patch k: [first_number[k], first_number[k+1])
   for (int p = 0; p < np; ++p) {
     int last = first_number.back();

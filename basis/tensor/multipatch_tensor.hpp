@@ -43,4 +43,16 @@ struct MultiPatchTensorPart {
 MultiPatchTensorPart build_multipatch_tensor_part(const MultiPatch& domain, const TensorSpaceOptions& options, int rank,
                                                   int ranks);
 
+// The functions of the tensor space on every patch, numbered from the patches' univariate
+// bases alone (no cell built): patch k's function i + n_u j is number[first_function[k] + i +
+// n_u j], a shared one numbered where it first occurs, as glue_patches numbers them.
+// GeometryError as build_multipatch_tensor when an interface's two sides differ.
+struct MultiPatchNumbering {
+  std::vector<std::array<BSplineBasis1D, 2>> bases;  // per patch: u, v
+  std::vector<int> first_function{0};
+  std::vector<int> number;
+  int count = 0;
+};
+MultiPatchNumbering number_multipatch_functions(const MultiPatch& domain, const TensorSpaceOptions& options);
+
 }  // namespace knotwork
