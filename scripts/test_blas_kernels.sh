@@ -39,6 +39,7 @@ print(blas.openblas_get_corename().decode())'
 # adaptive loops' rates run once, in the full suite.
 numerical='^test_(poisson|g1_basis|g1_space|g1_poisson|g1_refine|pt_poisson|semi_regular|thb|lr|lr_and_hb|geometry|bspline|tensor_volume|volume_cases|volume_files|volume_estimator|thb_volume|volume_multipatch|fast_diagonalization_3d|affine_volume_operator|adaptive|multipatch|thb_multipatch|multigrid_3d|adaptive_multigrid):'
 numerical+='|^test_g1_cases:(Defaults on random|Analysis-suitable data, (pentagon|unit square|L-shape|valences 8))'
+numerical+='|^test_patchwise_multigrid:(The prolongation|CG . multigrid on several patches)'
 slow='H1 error ~ N|adaptive H1 rate|Random refinement sequences|Adaptive LR on the L-shape'
 
 # The kernel the full suite ran under: the machine's own choice, or the one the environment

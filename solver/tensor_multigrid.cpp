@@ -166,12 +166,7 @@ class TensorMultigrid final : public Preconditioner {
             R(i, j) = (b[d] - row_dot(L.A, d, x.data())) * L.scale[d];
           }
       }
-      T.noalias() = U.U.transpose() * R;
-      R.noalias() = T * V.U;
-      for (int j = 0; j < V.size; ++j)
-        for (int i = 0; i < U.size; ++i) R(i, j) /= U.lambda[i] + V.lambda[j];
-      T.noalias() = U.U * R;
-      R.noalias() = T * V.U.transpose();
+      solve_in_eigenbases(U, V, R, T);
       for (int j = 0; j < V.size; ++j)
         for (int i = 0; i < U.size; ++i) {
           const int d = U.begin + i + nu * (V.begin + j);

@@ -55,6 +55,11 @@ bool free_range(const std::vector<int>& free, int n, Direction& d);
 // The block side: as given (at least 2p + 2), else max(16, 5p + 2).
 int block_side(int asked, int p);
 
+// A block smoother's local solve on the functions of windows U x V: R (U.size x V.size, the
+// scaled residual) := (U.U (x) V.U) diag(1 / (lambda_u + lambda_v)) (U.U (x) V.U)^T R, the
+// inverse of the block's separable operator in its eigenbases; T is work space.
+void solve_in_eigenbases(const Window& U, const Window& V, Eigen::MatrixXd& R, Eigen::MatrixXd& T);
+
 inline double row_dot(const RowMatrix& A, long row, const double* x) {
   const int* col = A.innerIndexPtr();
   const double* val = A.valuePtr();
@@ -73,16 +78,18 @@ void whole_from_lower(const Eigen::SparseMatrix<double>& L, int n0, int n1, cons
 // accumulator over the columns). Each thread keeps a contiguous range of rows in its own
 // buffers, copied into B at its offset (one small vector per row cost more in allocation than
 // the products).
+// (`columns`: B's columns, when B is not square.)
 template <class Fill>
-void rows_by_accumulation(long nn, RowMatrix& B, Fill&& fill) {
-  B.resize(nn, nn);
+void rows_by_accumulation(long nn, RowMatrix& B, Fill&& fill, long columns = -1) {
+  const long nc = columns >= 0 ? columns : nn;
+  B.resize(nn, nc);
   std::vector<long> row_start(nn + 1, 0);
 #pragma omp parallel
   {
     const int threads = omp_get_num_threads(), t = omp_get_thread_num();
     const long first = nn * t / threads, last = nn * (t + 1) / threads;
-    std::vector<double> sum(nn, 0.0), my_vals;
-    std::vector<char> seen(nn, 0);
+    std::vector<double> sum(nc, 0.0), my_vals;
+    std::vector<char> seen(nc, 0);
     std::vector<int> touched, my_cols;
     my_cols.reserve(static_cast<size_t>(last - first) * 30);
     my_vals.reserve(my_cols.capacity());
