@@ -5,9 +5,11 @@ Runs `knotwork run CASE --degree P --elements E --solver iterative --preconditio
 --no-output --json` for multigrid, fast_diagonalization and boomeramg, and prints one
 markdown table: iterations, and preconditioner setup + iterations in seconds (the solve),
 "(no matrix)" where CG applied K without one ([solver] matrix = "auto" chooses).
+With --multipatch, the shipped cases of several patches (plus, ring, L-shape), elements per
+patch side, with a last column for CHOLMOD (`--solver direct`: analysis + factorization + solve).
 Timings are of one run on a shared machine: compare within one sitting (docs/SOLVERS.md).
 
-    scripts/preconditioner_table.py [--knotwork build/app/knotwork] [--quick]
+    scripts/preconditioner_table.py [--knotwork build/app/knotwork] [--quick] [--multipatch]
 """
 import argparse
 import json
@@ -18,13 +20,15 @@ PRECONDITIONERS = ["multigrid", "fast_diagonalization", "boomeramg"]
 
 
 def run(knotwork, case, p, e, pc):
-    cmd = [knotwork, "run", case, "--degree", str(p), "--elements", str(e), "--solver", "iterative",
-           "--preconditioner", pc, "--no-output", "--json", "-q"]
+    solver = ["--solver", "direct"] if pc == "direct" else ["--solver", "iterative", "--preconditioner", pc]
+    cmd = [knotwork, "run", case, "--degree", str(p), "--elements", str(e)] + solver + ["--no-output", "--json", "-q"]
     out = subprocess.run(cmd, capture_output=True, text=True)
     if out.returncode != 0:
         sys.exit(f"{' '.join(cmd)}: {out.stderr.strip()}")
     d = json.loads(out.stdout)
     t = d["timings"]
+    if pc == "direct":
+        return d["dofs"], "—", t["analysis"] + t["factorization"] + t["solve"], d["h1_error"], ""
     return d["dofs"], d["solver"]["iterations"], t["preconditioner"] + t["iterations"], d["h1_error"], d["solver"].get("matrix", "")
 
 
@@ -32,27 +36,44 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--knotwork", default="build/app/knotwork")
     ap.add_argument("--quick", action="store_true", help="small sizes only (a check that the script runs)")
+    ap.add_argument("--multipatch", action="store_true", help="the shipped cases of several patches, and CHOLMOD")
     a = ap.parse_args()
     rows = []
-    in_h = [64, 256] if a.quick else [64, 256, 1024, 2048, 4096]
-    in_p = [2, 3] if a.quick else [2, 3, 4, 5, 6]
-    for case in ["cases/square_sinsin.toml", "cases/quarter_annulus.toml", "cases/lshape.toml"]:
-        # (The L-shape has two spans: 4096 per span would be 33.6M dofs.)
-        sizes = [e for e in in_h if not (case.endswith("lshape.toml") and e > 2048)]
-        configs = [(2, e) for e in sizes] + [(p, 64 if a.quick else 256) for p in in_p if p != 2]
+    preconditioners = PRECONDITIONERS + (["direct"] if a.multipatch else [])
+    if a.multipatch:
+        in_h = [16, 64] if a.quick else [16, 32, 64, 128, 256, 512]
+        in_p = [2, 3] if a.quick else [2, 3, 4, 5, 6]
+        cases = ["cases/multipatch_plus.toml", "cases/multipatch_ring.toml", "cases/multipatch_lshape.toml"]
+        p_size = 16 if a.quick else 64
+    else:
+        in_h = [64, 256] if a.quick else [64, 256, 1024, 2048, 4096]
+        in_p = [2, 3] if a.quick else [2, 3, 4, 5, 6]
+        cases = ["cases/square_sinsin.toml", "cases/quarter_annulus.toml", "cases/lshape.toml"]
+        p_size = 64 if a.quick else 256
+    for case in cases:
+        # (The L-shape patch has two spans: 4096 per span would be 33.6M dofs.)
+        sizes = [e for e in in_h if not (case.endswith("/lshape.toml") and e > 2048)]
+        configs = [(2, e) for e in sizes] + [(p, p_size) for p in in_p if p != 2]
         for p, e in configs:
             cells = []
-            for pc in PRECONDITIONERS:
-                if pc == "boomeramg" and e > 1024:
+            for pc in preconditioners:
+                # BoomerAMG beyond 1M dofs takes minutes, and the per-patch fast diagonalization
+                # (no coarse space) needs more than CG's 1 000 iterations on the plus beyond 32
+                # elements per side: not run.
+                if (pc == "boomeramg" and e > (256 if a.multipatch else 1024)) or (
+                        a.multipatch and pc == "fast_diagonalization" and (e > 32 or p > 2)):
                     cells.append("—")
                     continue
                 dofs, it, sec, h1, matrix = run(a.knotwork, case, p, e, pc)
-                cells.append(f"{it}, {sec:.3g}" + (" (no matrix)" if matrix == "matrix_free" else ""))
-            rows.append(f"| `{case.split('/')[-1]}` | {p} | {e}² | {dofs:,} | " + " | ".join(cells) + " |")
+                cells.append(f"{it}, {sec:.3g}" if pc != "direct" else f"{sec:.3g}")
+                if matrix == "matrix_free":
+                    cells[-1] += " (no matrix)"
+            rows.append(f"| `{case.split('/')[-1]}` | {p} | {e}{'' if a.multipatch else '²'} | {dofs:,} | " + " | ".join(cells) + " |")
             print(rows[-1], flush=True)
     print()
-    print("| case | p | elements | dofs | " + " | ".join(f"{pc}: CG, s" for pc in PRECONDITIONERS) + " |")
-    print("|---|---|---|---|" + "---|" * len(PRECONDITIONERS))
+    print("| case | p | elements | dofs | " +
+          " | ".join(f"{pc}: CG, s" if pc != "direct" else "CHOLMOD, s" for pc in preconditioners) + " |")
+    print("|---|---|---|---|" + "---|" * len(preconditioners))
     print("\n".join(rows))
 
 
