@@ -155,20 +155,7 @@ class TensorMultigrid3d final : public Preconditioner {
             const long d = dof(i, j, l);
             R[at] = (x_is_zero ? b[d] : L.op ? b[d] - R[at] : b[d] - row_dot(L.A, d, x.data())) * L.scale[d];
           }
-      using Map = Eigen::Map<Eigen::MatrixXd>;
-      // T = (U_w (x) U_v (x) U_u)^T R, one mode at a time.
-      Map(T.data(), su, long(sv) * sw).noalias() = U.U.transpose() * Map(R.data(), su, long(sv) * sw);
-      for (int l = 0; l < sw; ++l)
-        Map(R.data() + long(su) * sv * l, su, sv).noalias() = Map(T.data() + long(su) * sv * l, su, sv) * V.U;
-      Map(T.data(), long(su) * sv, sw).noalias() = Map(R.data(), long(su) * sv, sw) * W.U;
-      for (int l = 0, at = 0; l < sw; ++l)
-        for (int j = 0; j < sv; ++j)
-          for (int i = 0; i < su; ++i, ++at) T[at] /= U.lambda[i] + V.lambda[j] + W.lambda[l];
-      // R = (U_w (x) U_v (x) U_u) T.
-      Map(R.data(), su, long(sv) * sw).noalias() = U.U * Map(T.data(), su, long(sv) * sw);
-      for (int l = 0; l < sw; ++l)
-        Map(T.data() + long(su) * sv * l, su, sv).noalias() = Map(R.data() + long(su) * sv * l, su, sv) * V.U.transpose();
-      Map(R.data(), long(su) * sv, sw).noalias() = Map(T.data(), long(su) * sv, sw) * W.U.transpose();
+      solve_in_eigenbases(U, V, W, R, T);
       for (int l = 0, at = 0; l < sw; ++l)
         for (int j = 0; j < sv; ++j)
           for (int i = 0; i < su; ++i, ++at) {

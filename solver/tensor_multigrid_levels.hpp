@@ -59,6 +59,9 @@ int block_side(int asked, int p);
 // scaled residual) := (U.U (x) V.U) diag(1 / (lambda_u + lambda_v)) (U.U (x) V.U)^T R, the
 // inverse of the block's separable operator in its eigenbases; T is work space.
 void solve_in_eigenbases(const Window& U, const Window& V, Eigen::MatrixXd& R, Eigen::MatrixXd& T);
+// The same on a volume's block U x V x W: R holds U.size x V.size x W.size values, the first
+// index fastest; T (as long) is work space.
+void solve_in_eigenbases(const Window& U, const Window& V, const Window& W, Eigen::VectorXd& R, Eigen::VectorXd& T);
 
 inline double row_dot(const RowMatrix& A, long row, const double* x) {
   const int* col = A.innerIndexPtr();

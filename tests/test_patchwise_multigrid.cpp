@@ -1,7 +1,8 @@
-// Multigrid on several patches (solver/patchwise_multigrid): the prolongation between two
-// uniform refinements of a glued space, checked by evaluating both spaces' functions; CG with
-// the V-cycle in iteration counts bounded in h and p over deep hierarchies; and the production
-// path ([solver] preconditioner = "multigrid", and "auto") leaving the direct solve's errors.
+// Multigrid on several patches and volumes (solver/patchwise_multigrid): the coarser level of a
+// glued space (its glued functions counted independently, its fixed ones found by their
+// indices, its prolongation checked by evaluating both spaces' functions); CG with the V-cycle
+// in iteration counts bounded in h and p over deep hierarchies; and the production path
+// ([solver] preconditioner = "multigrid", and "auto") leaving the direct solve's errors.
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <random>
 
 #include "basis/core/geometry_map.hpp"
+#include "basis/core/glue_patches.hpp"
 #include "basis/core/multipatch.hpp"
 #include "basis/tensor/multipatch_tensor.hpp"
 #include "cases/case_file.hpp"
@@ -17,6 +19,7 @@
 #include "cases/spline_space.hpp"
 #include "families/tensor/patch_separable_coefficients.hpp"
 #include "families/tensor/tensor_case.hpp"
+#include "basis/tensor/tensor_patch.hpp"
 #include "solver/patchwise_multigrid.hpp"
 #include "solver/poisson_solver.hpp"
 #include "studies/pipeline.hpp"
@@ -31,22 +34,27 @@ CaseDescription shipped(const std::string& name) {
   return load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name + ".toml");
 }
 
-// The level of `numbering` whose fixed functions are those on the domain's exterior sides (all
-// free when `dirichlet` is false); geometry left empty.
-PatchwiseLevel level_of(const MultiPatch& domain, const MultiPatchNumbering& numbering, bool dirichlet) {
-  PatchwiseLevel level;
-  std::vector<bool> fixed(numbering.count, false);
-  for (size_t k = 0; k < numbering.bases.size(); ++k) {
-    const auto& [u, v] = numbering.bases[k];
-    const auto first = numbering.number.begin() + numbering.first_function[k];
-    level.patches.push_back({u, v, {}, {}, std::vector<int>(first, first + u.num_functions() * v.num_functions())});
-  }
+// The functions on the domain's exterior sides (none when `dirichlet` is false), by their indices.
+std::vector<bool> exterior_functions(const MultiPatch& domain, const PatchwiseLevel& level, int count, bool dirichlet) {
+  std::vector<bool> fixed(count, false);
   if (dirichlet)
     for (const PatchSideRef& s : exterior_sides(domain)) {
       const MultigridPatch& p = level.patches[s.patch];
-      for (int i : side_indices(p.u.num_functions(), p.v.num_functions(), s.side)) fixed[p.function[i]] = true;
+      for (int i : side_indices(p.bases[0].num_functions(), p.bases[1].num_functions(), s.side)) fixed[p.function[i]] = true;
     }
-  level.layout = make_dof_layout(numbering.count, fixed);
+  return fixed;
+}
+
+// The planar level of `numbering` whose fixed functions are those on the domain's exterior
+// sides (all free when `dirichlet` is false), with no geometry fit.
+PatchwiseLevel level_of(const MultiPatch& domain, const MultiPatchNumbering& numbering, bool dirichlet) {
+  PatchwiseLevel level;
+  for (size_t k = 0; k < numbering.bases.size(); ++k) {
+    const auto& [u, v] = numbering.bases[k];
+    const auto first = numbering.number.begin() + numbering.first_function[k];
+    level.patches.push_back(planar_multigrid_patch(u, v, {}, {}, std::vector<int>(first, first + u.num_functions() * v.num_functions())));
+  }
+  level.layout = make_dof_layout(numbering.count, exterior_functions(domain, level, numbering.count, dirichlet));
   return level;
 }
 
@@ -54,11 +62,12 @@ PatchwiseLevel level_of(const MultiPatch& domain, const MultiPatchNumbering& num
 // from the bases' Cox-de Boor values.
 double evaluate(const PatchwiseLevel& level, size_t k, const Eigen::VectorXd& c, double u, double v) {
   const MultigridPatch& p = level.patches[k];
-  const int pu = p.u.degree(), pv = p.v.degree(), nu = p.u.num_functions();
-  const int su = p.u.find_span(u), sv = p.v.find_span(v);
+  const BSplineBasis1D &bu_basis = p.bases[0], &bv_basis = p.bases[1];
+  const int pu = bu_basis.degree(), pv = bv_basis.degree(), nu = bu_basis.num_functions();
+  const int su = bu_basis.find_span(u), sv = bv_basis.find_span(v);
   std::vector<double> bu(pu + 1), bv(pv + 1);
-  p.u.evaluate(su, u, bu.data());
-  p.v.evaluate(sv, v, bv.data());
+  bu_basis.evaluate(su, u, bu.data());
+  bv_basis.evaluate(sv, v, bv.data());
   double s = 0;
   for (int b = 0; b <= pv; ++b)
     for (int a = 0; a <= pu; ++a) s += c[p.function[(su - pu + a) + nu * (sv - pv + b)]] * bu[a] * bv[b];
@@ -77,35 +86,40 @@ void require_bounded_in_h_and_p(const std::string& name, const std::map<int, std
 
 }  // namespace
 
-TEST_CASE("The prolongation between two refinements of a glued space is the coarse function, on every patch",
+TEST_CASE("The coarser level of a glued space: its functions, its fixed ones, and the prolongation on every patch",
           "[multigrid][multipatch]") {
   // The plus (some patches stored transposed or reversed) and the ring (interfaces running both
-  // ways, a patch glued across the seam): a random coarse function's fine coefficients P c
-  // evaluate to it at random points of every patch, so the shared functions' rows agree with
-  // every patch that holds them. Both sums have (p + 1)^2 = 16 terms of size at most 1 (a
-  // partition of unity times coefficients in [-1, 1], and P's rows are convex weights): they
-  // agree to 64 eps. With the exterior sides' functions fixed, exactly the coarse functions on
-  // those sides become fixed (found by their indices, independently of link_coarser).
-  for (const char* name : {"plus_12patches.txt", "ring_4patches.txt"}) {
+  // ways, a patch glued across the seam), p = 3, from 4 to 2 elements per span:
+  // - coarser_level finds the glued functions by their traces; their number is that of the
+  //   space with 2 elements per span as basis/tensor glues it;
+  // - with the exterior sides' functions fixed, exactly the coarse functions on those sides
+  //   (found by their indices) are fixed;
+  // - a random coarse function's fine coefficients P c evaluate to it at random points of every
+  //   patch, so a glued function's coefficients agree with every patch that holds it. Both sums
+  //   have (p + 1)^2 = 16 terms of size at most 1 (a partition of unity times coefficients in
+  //   [-1, 1]; P's rows are convex weights): they agree to 64 eps.
+  for (const char* name : {"ring_4patches.txt", "plus_12patches.txt"}) {
     const MultiPatch domain = read_geometry_file(std::string(KNOTWORK_SOURCE_DIR) + "/cases/geometries/" + name);
     TensorSpaceOptions o;
     o.degree = {3, 3};
     o.elements_per_span = {4, 4};
     const MultiPatchNumbering fine_numbers = number_multipatch_functions(domain, o);
     o.elements_per_span = {2, 2};
-    const MultiPatchNumbering coarse_numbers = number_multipatch_functions(domain, o);
+    const int coarse_count = number_multipatch_functions(domain, o).count;
     for (bool dirichlet : {false, true}) {
       INFO(name << (dirichlet ? ", exterior sides fixed" : ", all free"));
-      PatchwiseLevel fine = level_of(domain, fine_numbers, dirichlet), coarse = level_of(domain, coarse_numbers, false);
-      const DofLayout expected = level_of(domain, coarse_numbers, dirichlet).layout;
-      link_coarser(fine, coarse);
-      REQUIRE(coarse.layout.dof == expected.dof);
+      PatchwiseLevel fine = level_of(domain, fine_numbers, dirichlet), coarse;
+      REQUIRE(coarser_level(fine, coarse));
+      const int nc = static_cast<int>(coarse.layout.dof.size());
+      REQUIRE(nc == coarse_count);
+      const std::vector<bool> fixed = exterior_functions(domain, coarse, nc, dirichlet);
+      for (int f = 0; f < nc; ++f) REQUIRE((coarse.layout.dof[f] < 0) == fixed[f]);
       REQUIRE(fine.prolongation.rows() == fine.layout.num_free());
       REQUIRE(fine.prolongation.cols() == coarse.layout.num_free());
       std::mt19937 random(7);
       std::uniform_real_distribution<double> uniform(-1, 1), unit(0, 1);
-      Eigen::VectorXd c = Eigen::VectorXd::Zero(coarse_numbers.count);
-      for (int f = 0; f < coarse_numbers.count; ++f)
+      Eigen::VectorXd c = Eigen::VectorXd::Zero(nc);
+      for (int f = 0; f < nc; ++f)
         if (coarse.layout.dof[f] >= 0) c[f] = uniform(random);
       Eigen::VectorXd free_c(coarse.layout.num_free());
       for (int d = 0; d < coarse.layout.num_free(); ++d) free_c[d] = c[coarse.layout.function_of_dof[d]];
@@ -114,10 +128,10 @@ TEST_CASE("The prolongation between two refinements of a glued space is the coar
       for (int d = 0; d < fine.layout.num_free(); ++d) f[fine.layout.function_of_dof[d]] = free_f[d];
       double worst = 0;
       for (size_t k = 0; k < fine.patches.size(); ++k) {
-        const MultigridPatch& p = fine.patches[k];
-        const double u0 = p.u.knots().front(), u1 = p.u.knots().back(), v0 = p.v.knots().front(), v1 = p.v.knots().back();
+        const std::vector<double> &ku = fine.patches[k].bases[0].knots(), &kv = fine.patches[k].bases[1].knots();
         for (int n = 0; n < 40; ++n) {
-          const double u = u0 + (u1 - u0) * unit(random), v = v0 + (v1 - v0) * unit(random);
+          const double u = ku.front() + (ku.back() - ku.front()) * unit(random);
+          const double v = kv.front() + (kv.back() - kv.front()) * unit(random);
           worst = std::max(worst, std::abs(evaluate(fine, k, f, u, v) - evaluate(coarse, k, c, u, v)));
         }
       }
@@ -146,31 +160,19 @@ TEST_CASE("Multigrid on several patches: CG iterations bounded in h and p", "[mu
         PoissonSolveOptions solve;
         solve.iterative = true;
         solve.preconditioner = [&](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
-          std::vector<PatchwiseLevel> levels(1);
+          PatchwiseLevel finest;
           for (size_t k = 0; k < d.patches.size(); ++k) {
             const TensorDiscretization& t = d.patches[k];
             const PatchGeometryMap map(t.mesh, t.patch,
                                        PatchGeometryMap::ElementGrid{t.space_u.breakpoints(), t.space_v.breakpoints(), 0});
-            levels[0].patches.push_back({t.space_u, t.space_v, patch_separable_coefficients(t, map), {}, d.global_function[k]});
+            finest.patches.push_back(
+                planar_multigrid_patch(t.space_u, t.space_v, patch_separable_coefficients(t, map), {}, d.global_function[k]));
           }
-          levels[0].layout = layout;
-          TensorSpaceOptions coarse = o;
-          while (coarse.elements_per_span[0] > 1) {
-            coarse.elements_per_span = {coarse.elements_per_span[0] / 2, coarse.elements_per_span[1] / 2};
-            const MultiPatchNumbering numbers = number_multipatch_functions(c.domain, coarse);
-            PatchwiseLevel next;
-            for (size_t k = 0; k < numbers.bases.size(); ++k) {
-              const auto& [u, v] = numbers.bases[k];
-              const auto first = numbers.number.begin() + numbers.first_function[k];
-              next.patches.push_back({u, v, coarser_fit(levels.back().patches[k], u, v), {},
-                                      std::vector<int>(first, first + u.num_functions() * v.num_functions())});
-            }
-            link_coarser(levels.back(), next);
-            levels.push_back(std::move(next));
-          }
+          finest.layout = layout;
           PatchwiseMultigridOptions options;
-          options.block = 8;  // (max(8, 2p + 2)) smaller than the finest patches: no block is a whole patch
-          return patchwise_multigrid(std::move(levels), lower, options, &report);
+          options.block = 8;               // (max(8, 2p + 2)) smaller than the finest patches: no block is a whole patch
+          options.coarsest_functions = 0;  // down to one element per span
+          return patchwise_multigrid(std::move(finest), lower, options, &report);
         };
         const PoissonSolution s = solve_poisson(space->mesh(), space->geometry(), c.problem, solve);
         INFO(name << ", p = " << p << ", n = " << n << ": " << s.iterative.iterations << " iterations, "
@@ -216,4 +218,80 @@ TEST_CASE("CG + multigrid on several patches: the direct solve's errors, and aut
         REQUIRE(report.method == "iterative");
         REQUIRE(report.preconditioner == "multigrid");
       }
+}
+
+// Seven cubes glued face to face, three of them turned (the Fichera corner): the same checks
+// in 3D, with the finest level built as the family builds it.
+TEST_CASE("Multigrid on glued volumes: the coarser level's functions, bounded iterations, the direct solve's errors",
+          "[multigrid][volume][multipatch][solver]") {
+  CaseDescription c = shipped("fichera_patches");
+  TensorVolumeOptions& o = family_section<VolumeSpaceSection>(c).space;
+  // The finest level of the space with `n` elements per cube side and its glued numbering.
+  auto finest_level = [&](int p, int n, GluedPatches& glued) {
+    o.degree = {p, p, p};
+    o.elements_per_span = {n, n, n};
+    std::vector<TensorVolumeDiscretization> cubes;
+    std::vector<const BezierMesh*> meshes;
+    for (const NurbsVolume& v : c.volume_domain.patches) cubes.push_back(build_tensor_volume(v, o));
+    for (const TensorVolumeDiscretization& d : cubes) meshes.push_back(&d.mesh);
+    glued = glue_volumes(c.volume_domain, meshes);
+    PatchwiseLevel level;
+    for (size_t k = 0; k < cubes.size(); ++k)
+      level.patches.push_back(volume_multigrid_patch(cubes[k].space, volume_separable_coefficients(cubes[k]), glued.global_function[k]));
+    return level;
+  };
+  {
+    // The glued functions coarser_level finds are those basis/core glues at half the elements.
+    GluedPatches fine_glue, coarse_glue;
+    PatchwiseLevel fine = finest_level(2, 8, fine_glue), coarse;
+    fine.layout = make_dof_layout(fine_glue.mesh.num_functions(), std::vector<bool>(fine_glue.mesh.num_functions(), false));
+    finest_level(2, 4, coarse_glue);
+    REQUIRE(coarser_level(fine, coarse));
+    REQUIRE(static_cast<int>(coarse.layout.dof.size()) == coarse_glue.mesh.num_functions());
+  }
+  std::map<int, std::vector<int>> iterations;
+  for (int p : {2, 3})
+    for (int n : {4, 8, 16}) {
+      GluedPatches glued;
+      PatchwiseLevel finest = finest_level(p, n, glued);
+      const auto space = build_space(c);
+      PatchwiseMultigridReport report;
+      PoissonSolveOptions solve;
+      solve.iterative = true;
+      solve.preconditioner = [&](const DofLayout& layout, const Eigen::SparseMatrix<double>& lower) {
+        finest.layout = layout;
+        PatchwiseMultigridOptions options;
+        options.block = 8;               // (max(8, 2p + 2)) smaller than the finest cubes
+        options.coarsest_functions = 0;  // down to one element per cube side
+        return patchwise_multigrid(finest, lower, options, &report);
+      };
+      const PoissonSolution s = solve_poisson(space->mesh(), space->geometry(), c.problem, solve);
+      INFO("p = " << p << ", n = " << n << ": " << s.iterative.iterations << " iterations, " << report.free_dofs.size()
+                  << " levels");
+      REQUIRE(s.iterative.converged);
+      REQUIRE(report.free_dofs.size() == static_cast<size_t>(std::log2(n)) + 1);
+      iterations[p].push_back(s.iterative.iterations);
+    }
+  // Measured: 6, 7, 7 (p = 2) and 5, 7, 10 (p = 3). At p = 3 the cubes of 4 and 8 elements are
+  // mostly band (3 functions beside each interface face), solved exactly; the production path
+  // takes 7, 7, 10 at 8, 16, 32 elements, and the one-volume multigrid 10 on the cube at p = 3
+  // (docs/SOLVERS.md): bounded in h at p = 2, and no count above 16.
+  require_bounded_in_h_and_p("fichera_patches", {{2, iterations[2]}});
+  REQUIRE(*std::max_element(iterations[3].begin(), iterations[3].end()) <= 16);
+  // The production path, and "auto" (38 000 functions at p = 2, 16 elements per cube side).
+  o.degree = {2, 2, 2};
+  o.elements_per_span = {16, 16, 16};
+  const auto space = build_space(c);
+  c.solver.method = "direct";
+  const PoissonSolution direct = solve_case(c, *space, Ordering::kAuto);
+  c.solver.method = "iterative";
+  c.solver.preconditioner = "multigrid";
+  const PoissonSolution cg = solve_case(c, *space, Ordering::kAuto);
+  require_direct_errors(cg, direct);
+  REQUIRE(cg.iterative.backward_error <= 1e-15);
+  c.solver.method = c.solver.preconditioner = "auto";
+  SolverReport chosen;
+  solve_case(c, *space, Ordering::kAuto, {}, &chosen);
+  REQUIRE(chosen.method == "iterative");
+  REQUIRE(chosen.preconditioner == "multigrid");
 }

@@ -16,8 +16,6 @@ namespace {
 
 constexpr const char* kPatchFastDiagonalization = "fast_diagonalization";
 constexpr const char* kPatchMultigrid = "multigrid";
-// The multigrid coarsens while a level has more free dofs than this (as on one patch).
-constexpr int kCoarsestFunctions = 3000;
 
 std::string describe_multipatch(const TensorSpaceOptions& o, int patches) {
   const int ru = o.continuity[0] < 0 ? o.degree[0] - 1 : o.continuity[0];
@@ -52,7 +50,7 @@ auto built(const CaseDescription& c, Build build) {
 class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
  public:
   MultiPatchTensorSpace(const CaseDescription& c, const TensorSpaceOptions& options)
-      : options_(options), domain_(c.domain), d_(built(c, [&] { return build_multipatch_tensor(c.domain, options); })) {
+      : options_(options), d_(built(c, [&] { return build_multipatch_tensor(c.domain, options); })) {
     std::vector<std::unique_ptr<GeometryMap>> maps;
     for (const TensorDiscretization& p : d_.patches) {
       auto map = patch_grid_map(p);
@@ -133,41 +131,21 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
     return additive_schwarz(std::move(blocks), layout.num_free());
   }
 
-  // Geometric multigrid over the space's uniform refinements (solver/patchwise_multigrid.hpp):
-  // the coarser levels are this case's spaces with half the elements per span, as long as the
-  // elements halve and a level has more than kCoarsestFunctions free dofs. A coarser level
-  // needs only its patches' bases and numbering (no cells), and its separable fits are the
-  // finer level's merged.
+  // Geometric multigrid over the space's uniform refinements (solver/patchwise_multigrid.hpp,
+  // which makes the coarser levels from this one).
   std::unique_ptr<Preconditioner> multigrid(const DofLayout& layout, const Eigen::SparseMatrix<double>& lower,
                                             const PoissonProblem& problem) const {
-    std::vector<PatchwiseLevel> levels(1);
+    PatchwiseLevel finest;
     for (size_t k = 0; k < d_.patches.size(); ++k) {
       const TensorDiscretization& t = d_.patches[k];
-      levels[0].patches.push_back({t.space_u, t.space_v, patch_separable_coefficients(t, *patch_maps_[k]),
-                                   nitsche_ends(static_cast<int>(k), problem), d_.global_function[k]});
+      finest.patches.push_back(planar_multigrid_patch(t.space_u, t.space_v, patch_separable_coefficients(t, *patch_maps_[k]),
+                                                      nitsche_ends(static_cast<int>(k), problem), d_.global_function[k]));
     }
-    levels[0].layout = layout;
-    TensorSpaceOptions coarse = options_;
-    while (levels.back().layout.num_free() > kCoarsestFunctions && coarse.elements_per_span[0] % 2 == 0 &&
-           coarse.elements_per_span[1] % 2 == 0) {
-      coarse.elements_per_span[0] /= 2;
-      coarse.elements_per_span[1] /= 2;
-      const MultiPatchNumbering numbering = number_multipatch_functions(domain_, coarse);
-      PatchwiseLevel next;
-      for (size_t k = 0; k < numbering.bases.size(); ++k) {
-        const auto& [u, v] = numbering.bases[k];
-        const auto first = numbering.number.begin() + numbering.first_function[k];
-        next.patches.push_back({u, v, coarser_fit(levels.back().patches[k], u, v), nitsche_ends(static_cast<int>(k), problem),
-                                std::vector<int>(first, first + u.num_functions() * v.num_functions())});
-      }
-      link_coarser(levels.back(), next);
-      levels.push_back(std::move(next));
-    }
-    return patchwise_multigrid(std::move(levels), lower);
+    finest.layout = layout;
+    return patchwise_multigrid(std::move(finest), lower);
   }
 
   TensorSpaceOptions options_;
-  MultiPatch domain_;  // the coarser levels of the multigrid are built from it
   MultiPatchTensorDiscretization d_;
   std::unique_ptr<GeometryMap> geometry_;
   std::vector<const PatchGeometryMap*> patch_maps_;  // owned by geometry_

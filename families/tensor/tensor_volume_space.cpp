@@ -14,6 +14,7 @@
 #include "solver/affine_volume_operator.hpp"
 #include "solver/amg_preconditioner.hpp"
 #include "solver/fast_diagonalization_3d.hpp"
+#include "solver/patchwise_multigrid.hpp"
 #include "solver/tensor_multigrid_3d.hpp"
 #include "families/tensor/patch_separable_coefficients.hpp"
 
@@ -173,8 +174,17 @@ void check_multivolume_memory(const CaseDescription& c, const TensorVolumeOption
     cells += patch_cells;
     functions += patch_functions;
   }
+  // The path the solve takes (resolve_solver): "auto" is CG with multigrid from
+  // kAutoIterativeFunctions functions (as on one volume), the direct solve below; "iterative"
+  // with "auto" or "multigrid" is CG with multigrid; other preconditioners as volume_solve_bytes.
   std::string method;
-  const double bytes = volume_solve_bytes(c, cells, functions, o.degree, &method);
+  double bytes = volume_solve_bytes(c, cells, functions, o.degree, &method);
+  const bool iterative = c.solver.method == "iterative" ||
+                         (c.solver.method == "auto" && functions >= CaseDescription::Solver::kAutoIterativeFunctions);
+  if (iterative && (c.solver.preconditioner == "auto" || c.solver.preconditioner == kMultigrid)) {
+    method = "CG + multigrid";
+    bytes = volume_structured_bytes(functions, o.degree, tensor_multigrid_3d_bytes(functions, o.degree, true));
+  }
   char what[200];
   std::snprintf(what, sizeof what, "%.3g hexahedra of degree %dx%dx%d on %d volumes (%.3g unknowns, %s)", cells, o.degree[0],
                 o.degree[1], o.degree[2], c.volume_domain.num_patches(), functions, method.c_str());
@@ -225,6 +235,23 @@ class MultiVolumeTensorSpace final : public SplineSpace, public SpaceReport {
   }
   std::vector<ReportField> report() const override {
     return {{.key = "elements", .value = long(options_.elements_per_span[0]), .column = true, .width = 9}};
+  }
+  // Multigrid over the volumes' uniform refinements, glued across their faces
+  // (solver/patchwise_multigrid.hpp): what "auto" takes from 10 000 functions (docs/VOLUMES.md,
+  // "Multigrid on several volumes": bounded iterations where BoomerAMG's grow with p, and faster
+  // than CHOLMOD).
+  std::vector<std::string> structured_preconditioners() const override { return {kMultigrid}; }
+  bool structured_preconditioner_needs_only_diagonal(const std::string&) const override { return false; }
+  std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& /*name: the one*/,
+                                                                 const DofLayout& layout,
+                                                                 const Eigen::SparseMatrix<double>& lower,
+                                                                 const PoissonProblem& /*problem*/) const override {
+    PatchwiseLevel finest;
+    for (size_t k = 0; k < patches_.size(); ++k)
+      finest.patches.push_back(
+          volume_multigrid_patch(patches_[k].space, volume_separable_coefficients(patches_[k]), glued_.global_function[k]));
+    finest.layout = layout;
+    return patchwise_multigrid(std::move(finest), lower);
   }
 
  private:
