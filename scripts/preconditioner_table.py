@@ -5,8 +5,9 @@ Runs `knotwork run CASE --degree P --elements E --solver iterative --preconditio
 --no-output --json` for multigrid, fast_diagonalization and boomeramg, and prints one
 markdown table: iterations, and preconditioner setup + iterations in seconds (the solve),
 "(no matrix)" where CG applied K without one ([solver] matrix = "auto" chooses).
-With --multipatch, the shipped cases of several patches (plus, ring, L-shape), elements per
-patch side, with a last column for CHOLMOD (`--solver direct`: analysis + factorization + solve).
+With --multipatch, the shipped cases of several patches (plus, ring, L-shape) and of seven glued
+cubes (Fichera), elements per patch side, with a last column for CHOLMOD (`--solver direct`:
+analysis + factorization + solve).
 Timings are of one run on a shared machine: compare within one sitting (docs/SOLVERS.md).
 
     scripts/preconditioner_table.py [--knotwork build/app/knotwork] [--quick] [--multipatch]
@@ -43,7 +44,8 @@ def main():
     if a.multipatch:
         in_h = [16, 64] if a.quick else [16, 32, 64, 128, 256, 512]
         in_p = [2, 3] if a.quick else [2, 3, 4, 5, 6]
-        cases = ["cases/multipatch_plus.toml", "cases/multipatch_ring.toml", "cases/multipatch_lshape.toml"]
+        cases = ["cases/multipatch_plus.toml", "cases/multipatch_ring.toml", "cases/multipatch_lshape.toml",
+                 "cases/fichera_patches.toml"]
         p_size = 16 if a.quick else 64
     else:
         in_h = [64, 256] if a.quick else [64, 256, 1024, 2048, 4096]
@@ -53,15 +55,19 @@ def main():
     for case in cases:
         # (The L-shape patch has two spans: 4096 per span would be 33.6M dofs.)
         sizes = [e for e in in_h if not (case.endswith("/lshape.toml") and e > 2048)]
-        configs = [(2, e) for e in sizes] + [(p, p_size) for p in in_p if p != 2]
+        degrees, size = in_p, p_size
+        if case.endswith("fichera_patches.toml"):  # seven glued cubes: elements per cube side
+            sizes, degrees, size = ([4, 8] if a.quick else [8, 16, 32]), ([2, 3] if a.quick else [2, 3, 4]), (8 if a.quick else 16)
+        configs = [(2, e) for e in sizes] + [(p, size) for p in degrees if p != 2]
         for p, e in configs:
             cells = []
             for pc in preconditioners:
                 # BoomerAMG beyond 1M dofs takes minutes, and the per-patch fast diagonalization
                 # (no coarse space) needs more than CG's 1 000 iterations on the plus beyond 32
                 # elements per side: not run.
+                volumes = case.endswith("fichera_patches.toml")  # (no per-volume fast diagonalization)
                 if (pc == "boomeramg" and e > (256 if a.multipatch else 1024)) or (
-                        a.multipatch and pc == "fast_diagonalization" and (e > 32 or p > 2)):
+                        a.multipatch and pc == "fast_diagonalization" and (e > 32 or p > 2 or volumes)):
                     cells.append("—")
                     continue
                 dofs, it, sec, h1, matrix = run(a.knotwork, case, p, e, pc)

@@ -62,12 +62,13 @@ MultigridPatch planar_multigrid_patch(const BSplineBasis1D& u, const BSplineBasi
 }
 
 MultigridPatch volume_multigrid_patch(const std::array<BSplineBasis1D, 3>& bases, const SeparableVolumeCoefficients& fit,
-                                      std::vector<int> function) {
+                                      std::vector<int> function, const std::array<bool, 6>& nitsche, double nitsche_factor) {
   MultigridPatch p;
   p.bases.assign(bases.begin(), bases.end());
   p.stiffness_weight.assign(fit.tau.begin(), fit.tau.end());
   p.mass_weight.assign(fit.mu.begin(), fit.mu.end());
-  p.nitsche.assign(3, {false, false});
+  for (int d = 0; d < 3; ++d) p.nitsche.push_back({nitsche[2 * d], nitsche[2 * d + 1]});
+  p.nitsche_factor = nitsche_factor;
   p.function = std::move(function);
   return p;
 }
@@ -93,10 +94,19 @@ bool coarser_level(PatchwiseLevel& fine, PatchwiseLevel& coarse) {
   }
   // Which patches hold each fine function (a patch twice across a seam); several: it is on an
   // interface.
+  // (In compressed rows: holders of g are holder[holder_start[g]] .. holder[holder_start[g + 1] - 1],
+  // ascending; one vector per function cost a second at 3.2M functions.)
   const int fine_functions = static_cast<int>(fine.layout.dof.size());
-  std::vector<std::vector<int>> holders(fine_functions);
-  for (size_t k = 0; k < np; ++k)
-    for (int g : fine.patches[k].function) holders[g].push_back(static_cast<int>(k));
+  std::vector<long> holder_start(fine_functions + 1, 0);
+  for (const MultigridPatch& f : fine.patches)
+    for (int g : f.function) ++holder_start[g + 1];
+  for (int g = 0; g < fine_functions; ++g) holder_start[g + 1] += holder_start[g];
+  std::vector<int> holder(holder_start.back());
+  {
+    std::vector<long> next(holder_start.begin(), holder_start.end() - 1);
+    for (size_t k = 0; k < np; ++k)
+      for (int g : fine.patches[k].function) holder[next[g]++] = static_cast<int>(k);
+  }
   // Patch k's knot insertion per direction, transposed (row: a coarse function's fine ones).
   using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
   std::vector<std::array<RowMatrix, 3>> insertion(np);
@@ -143,11 +153,12 @@ bool coarser_level(PatchwiseLevel& fine, PatchwiseLevel& coarse) {
       refined(k, local, column);
       std::map<int, std::pair<std::vector<int>, std::vector<double>>> with;  // partner patch -> its key
       for (const auto& [g, v] : column) {
-        const std::vector<int>& h = holders[g];
-        if (h.size() < 2) continue;
-        for (size_t i = 0; i < h.size(); ++i) {
+        const int* h = holder.data() + holder_start[g];
+        const long count = holder_start[g + 1] - holder_start[g];
+        if (count < 2) continue;
+        for (long i = 0; i < count; ++i) {
           // Held by this patch and h[i] (this patch itself only when it holds g twice).
-          if (h[i] == static_cast<int>(k) && std::count(h.begin(), h.end(), h[i]) < 2) continue;
+          if (h[i] == static_cast<int>(k) && std::count(h, h + count, h[i]) < 2) continue;
           if (i > 0 && h[i] == h[i - 1]) continue;
           auto& [ids, values] = with[h[i]];
           ids.push_back(g), values.push_back(v);
@@ -209,6 +220,7 @@ struct PatchBox {
   std::array<Direction, 3> d;
   std::vector<int> dof;   // a + n_u (b + n_v c) over the box -> the level's free dof
   Eigen::VectorXd scale;  // D^{-1/2}, D = diag(A) / diag(the separable operator)
+  double shift = 0;       // the separable operator's reaction term: shift M_u (x) M_v (x) M_w
   std::array<int, 3> counts() const { return {d[0].count, d[1].count, d[2].count}; }
 };
 
@@ -429,7 +441,7 @@ class PatchwiseMultigrid final : public Preconditioner {
             const int d = box.dof[a];
             R[at] = (x_is_zero ? b[d] : b[d] - row_dot(L.A, d, x.data())) * box.scale[a];
           }
-      solve_in_eigenbases(U, V, W, R, T);
+      solve_in_eigenbases(U, V, W, R, T, box.shift);
       at = 0;
       for (int l = 0; l < W.size; ++l)
         for (int j = 0; j < V.size; ++j)
@@ -490,23 +502,58 @@ std::unique_ptr<Preconditioner> patchwise_multigrid(PatchwiseLevel finest, const
       if (!make_box(level, k, holders, layers, block, options.tilings, box, in_strip)) return nullptr;
       if (box.dof.empty()) continue;  // no interior function: the band holds them all
       const std::array<int, 3> c = box.counts();
-      box.scale.resize(static_cast<long>(box.dof.size()));
+      // The separable operator's diagonal is stiffness[i] + shift mass[i]: stiffness the sum
+      // over directions of K_d (x) M_others, mass the product of the M_d. The shift stands for
+      // a reaction term c u, which the stiffness's fit leaves out (with c = 1000 on the plus CG
+      // did not converge without it). Stiffness matrices annihilate constants, so on rows whose
+      // couplings all lie in the box, A 1 is the reaction's part alone, whatever the diffusion;
+      // the shift makes the separable operator's (M_u 1) (x) (M_v 1) (x) (M_w 1) match it there.
+      const long nb = static_cast<long>(box.dof.size());
+      Eigen::VectorXd stiffness(nb), mass(nb);
+      std::array<Eigen::VectorXd, 3> mass_sum;  // M_d 1 over the box's functions
+      std::array<int, 3> reach{};                // the degree (how far a row couples), per direction
+      for (int e = 0; e < 3; ++e) {
+        const Direction& D = box.d[e];
+        if (D.basis.knots().empty()) {  // the trivial third direction of a planar patch
+          mass_sum[e] = Eigen::VectorXd::Ones(1);
+          continue;
+        }
+        const UnivariatePair pair =
+            univariate_pair(D.basis, D.mass_weight, D.stiffness_weight, D.nitsche_start, D.nitsche_end, D.nitsche_factor);
+        mass_sum[e] = (pair.mass * Eigen::VectorXd::Ones(pair.mass.cols())).segment(D.first, D.count);
+        reach[e] = D.basis.degree();
+      }
+      double reaction = 0, model = 0;
       long at = 0;
       for (int k2 = 0; k2 < c[2]; ++k2)
         for (int k1 = 0; k1 < c[1]; ++k1)
           for (int k0 = 0; k0 < c[0]; ++k0, ++at) {
-            const int d = box.dof[at];
-            in_box[d] = 1;
             const std::array<int, 3> i{k0, k1, k2};
-            double s = 0;  // the separable operator's diagonal: sum over directions of K_d (x) M_others
+            stiffness[at] = 0;
+            mass[at] = 1;
+            bool inside = true;
+            double sums = 1;
             for (int e = 0; e < 3; ++e) {
               double term = box.d[e].stiffness_diagonal[i[e]];
               for (int o = 0; o < 3; ++o)
                 if (o != e) term *= box.d[o].mass_diagonal[i[o]];
-              s += term;
+              stiffness[at] += term;
+              mass[at] *= box.d[e].mass_diagonal[i[e]];
+              sums *= mass_sum[e][i[e]];
+              inside = inside && i[e] >= reach[e] && i[e] < c[e] - reach[e];
             }
-            box.scale[at] = diagonal[d] > 0 && s > 0 ? std::sqrt(s / diagonal[d]) : 1.0;
+            if (!inside) continue;
+            for (RowMatrix::InnerIterator a(L.A, box.dof[at]); a; ++a) reaction += a.value();
+            model += sums;
           }
+      box.shift = model > 0 && reaction > 0 ? reaction / model : 0.0;
+      box.scale.resize(nb);
+      for (long j = 0; j < nb; ++j) {
+        const int d = box.dof[j];
+        in_box[d] = 1;
+        const double s = stiffness[j] + box.shift * mass[j];
+        box.scale[j] = diagonal[d] > 0 && s > 0 ? std::sqrt(s / diagonal[d]) : 1.0;
+      }
       // Blocks of one colour: windows an even number apart in each direction, in any patch.
       std::array<int, 3> offset{};
       for (int t = 0; t < options.tilings; ++t) {

@@ -61,9 +61,11 @@ struct MultigridPatch {
 // a2 as mass, v b2 and b1) and Nitsche sides (bottom, right, top, left).
 MultigridPatch planar_multigrid_patch(const BSplineBasis1D& u, const BSplineBasis1D& v, const SeparableCoefficients& fit,
                                       const NitscheEnds& nitsche, std::vector<int> function);
-// A volume with its separable fit (direction k: stiffness tau[k], mass mu[k]).
+// A volume with its separable fit (direction k: stiffness tau[k], mass mu[k]) and the faces
+// whose Dirichlet data Nitsche's method imposes (u = 0, u = 1, v = 0, v = 1, w = 0, w = 1).
 MultigridPatch volume_multigrid_patch(const std::array<BSplineBasis1D, 3>& bases, const SeparableVolumeCoefficients& fit,
-                                      std::vector<int> function);
+                                      std::vector<int> function, const std::array<bool, 6>& nitsche = {},
+                                      double nitsche_factor = 2);
 
 struct PatchwiseLevel {
   std::vector<MultigridPatch> patches;

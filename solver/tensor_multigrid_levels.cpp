@@ -101,7 +101,8 @@ void solve_in_eigenbases(const Window& U, const Window& V, Eigen::MatrixXd& R, E
   R.noalias() = T * V.U.transpose();
 }
 
-void solve_in_eigenbases(const Window& U, const Window& V, const Window& W, Eigen::VectorXd& R, Eigen::VectorXd& T) {
+void solve_in_eigenbases(const Window& U, const Window& V, const Window& W, Eigen::VectorXd& R, Eigen::VectorXd& T,
+                         double shift) {
   const int su = U.size, sv = V.size, sw = W.size;
   using Map = Eigen::Map<Eigen::MatrixXd>;
   // T = (U_w (x) U_v (x) U_u)^T R, one mode at a time.
@@ -111,7 +112,7 @@ void solve_in_eigenbases(const Window& U, const Window& V, const Window& W, Eige
   Map(T.data(), long(su) * sv, sw).noalias() = Map(R.data(), long(su) * sv, sw) * W.U;
   for (int l = 0, at = 0; l < sw; ++l)
     for (int j = 0; j < sv; ++j)
-      for (int i = 0; i < su; ++i, ++at) T[at] /= U.lambda[i] + V.lambda[j] + W.lambda[l];
+      for (int i = 0; i < su; ++i, ++at) T[at] /= U.lambda[i] + V.lambda[j] + W.lambda[l] + shift;
   // R = (U_w (x) U_v (x) U_u) T.
   Map(R.data(), su, long(sv) * sw).noalias() = U.U * Map(T.data(), su, long(sv) * sw);
   for (int l = 0; l < sw; ++l)

@@ -60,8 +60,10 @@ int block_side(int asked, int p);
 // inverse of the block's separable operator in its eigenbases; T is work space.
 void solve_in_eigenbases(const Window& U, const Window& V, Eigen::MatrixXd& R, Eigen::MatrixXd& T);
 // The same on a volume's block U x V x W: R holds U.size x V.size x W.size values, the first
-// index fastest; T (as long) is work space.
-void solve_in_eigenbases(const Window& U, const Window& V, const Window& W, Eigen::VectorXd& R, Eigen::VectorXd& T);
+// index fastest; T (as long) is work space. `shift` adds shift M_u (x) M_v (x) M_w to the
+// separable operator (the identity in the eigenbases): a reaction term.
+void solve_in_eigenbases(const Window& U, const Window& V, const Window& W, Eigen::VectorXd& R, Eigen::VectorXd& T,
+                         double shift = 0);
 
 inline double row_dot(const RowMatrix& A, long row, const double* x) {
   const int* col = A.innerIndexPtr();

@@ -342,7 +342,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     // CG needed many iterations with it, say which of the space's others keeps them bounded.
     const std::vector<std::string> structured = space.structured_preconditioners();
     if (report && chosen.method == "iterative" && structured.size() > 1 && chosen.preconditioner == structured[0] &&
-        solution.iterative.iterations > kManyStructuredIterations && report->note.empty())
+        structured[1] == kMultigridName && solution.iterative.iterations > kManyStructuredIterations && report->note.empty())
       report->note = "CG took " + std::to_string(solution.iterative.iterations) + " iterations with \"" + structured[0] +
                      "\" (the geometry or the coefficients do not separate); [solver] preconditioner = \"" +
                      structured[1] + "\" keeps them bounded in h and p (measured faster from about 10^6 dofs: docs/SOLVERS.md)";

@@ -221,6 +221,7 @@ class MultiVolumeTensorSpace final : public SplineSpace, public SpaceReport {
     for (const TensorVolumeDiscretization& d : patches_) meshes.push_back(&d.mesh);
     try {
       glued_ = glue_volumes(domain, meshes);
+      exterior_ = exterior_faces(domain);
       geometry_ = std::make_unique<VolumeGeometryMap>(glued_.mesh, domain.patches);
     } catch (const GeometryError& e) {
       throw InputError(c.path + ": [geometry] file: " + e.what());
@@ -245,11 +246,17 @@ class MultiVolumeTensorSpace final : public SplineSpace, public SpaceReport {
   std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& /*name: the one*/,
                                                                  const DofLayout& layout,
                                                                  const Eigen::SparseMatrix<double>& lower,
-                                                                 const PoissonProblem& /*problem*/) const override {
+                                                                 const PoissonProblem& problem) const override {
+    // Each volume's faces whose Dirichlet data Nitsche's method imposes (boundary id i is
+    // exterior_[i], face 1..6 of its volume: u = 0, u = 1, v = 0, ...).
+    std::vector<std::array<bool, 6>> nitsche(patches_.size(), std::array<bool, 6>{});
+    if (problem.dirichlet_method == DirichletMethod::kNitsche)
+      for (size_t i = 0; i < exterior_.size() && i < problem.boundary.size(); ++i)
+        nitsche[exterior_[i].patch][exterior_[i].side - 1] = problem.boundary[i].kind == BoundaryKind::kDirichlet;
     PatchwiseLevel finest;
     for (size_t k = 0; k < patches_.size(); ++k)
-      finest.patches.push_back(
-          volume_multigrid_patch(patches_[k].space, volume_separable_coefficients(patches_[k]), glued_.global_function[k]));
+      finest.patches.push_back(volume_multigrid_patch(patches_[k].space, volume_separable_coefficients(patches_[k]),
+                                                      glued_.global_function[k], nitsche[k], problem.nitsche_penalty));
     finest.layout = layout;
     return patchwise_multigrid(std::move(finest), lower);
   }
@@ -258,6 +265,7 @@ class MultiVolumeTensorSpace final : public SplineSpace, public SpaceReport {
   TensorVolumeOptions options_;
   std::vector<TensorVolumeDiscretization> patches_;
   GluedPatches glued_;
+  std::vector<PatchSideRef> exterior_;  // boundary id -> volume face
   std::unique_ptr<VolumeGeometryMap> geometry_;
 };
 
