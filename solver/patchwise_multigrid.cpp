@@ -93,9 +93,8 @@ bool coarser_level(PatchwiseLevel& fine, PatchwiseLevel& coarse) {
     c.nitsche_factor = f.nitsche_factor;
   }
   // Which patches hold each fine function (a patch twice across a seam); several: it is on an
-  // interface.
-  // (In compressed rows: holders of g are holder[holder_start[g]] .. holder[holder_start[g + 1] - 1],
-  // ascending; one vector per function cost a second at 3.2M functions.)
+  // interface. In compressed rows, without an allocation per function: the holders of g are
+  // holder[holder_start[g]] .. holder[holder_start[g + 1] - 1], ascending.
   const int fine_functions = static_cast<int>(fine.layout.dof.size());
   std::vector<long> holder_start(fine_functions + 1, 0);
   for (const MultigridPatch& f : fine.patches)
