@@ -483,6 +483,26 @@ TEST_CASE("The per-patch fast diagonalization solves multipatch cases to the dir
   }
 }
 
+TEST_CASE("On several patches the memory guard follows the path the solve takes, and refuses before allocating",
+          "[multipatch][solver]") {
+  // 4096 elements per side on the plus: 2e8 cells. "auto" would take CG + multigrid, whose
+  // estimate (calibrated on measured peaks, families/tensor/tensor_family.cpp) is named; the
+  // direct solve's is larger.
+  Sandbox box;
+  std::string local = slurp(std::string(KNOTWORK_SOURCE_DIR) + "/cases/multipatch_plus.toml");
+  for (size_t at = local.find("geometries/"); at != std::string::npos; at = local.find("geometries/", at + kGeometries.size()))
+    local.replace(at, std::string("geometries/").size(), kGeometries);
+  box.file("plus.toml", local);
+  const Result cg = box.run("run -q --no-output --elements 4096 plus.toml");
+  CHECK(cg.code != 0);
+  CHECK(cg.err.find("plus.toml: [space] elements: about ") != std::string::npos);
+  CHECK(cg.err.find(" with CG + multigrid, more than this machine's ") != std::string::npos);
+  const Result direct = box.run("run -q --no-output --elements 4096 --solver direct plus.toml");
+  CHECK(direct.code != 0);
+  CHECK(direct.err.find("plus.toml: [space] elements: about ") != std::string::npos);
+  CHECK(direct.err.find("CG") == std::string::npos);
+}
+
 TEST_CASE("Parts of a multipatch space hold whole patches and the halo their functions need, checked against the whole",
           "[multipatch][parts]") {
   // By brute force against the whole space: the owned cells of all ranks tile it (same patch,
