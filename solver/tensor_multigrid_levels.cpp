@@ -92,11 +92,11 @@ bool free_range(const std::vector<int>& free, int n, Direction& d) {
   return true;
 }
 
-void solve_in_eigenbases(const Window& U, const Window& V, Eigen::MatrixXd& R, Eigen::MatrixXd& T) {
+void solve_in_eigenbases(const Window& U, const Window& V, Eigen::MatrixXd& R, Eigen::MatrixXd& T, double shift) {
   T.noalias() = U.U.transpose() * R;
   R.noalias() = T * V.U;
   for (int j = 0; j < V.size; ++j)
-    for (int i = 0; i < U.size; ++i) R(i, j) /= U.lambda[i] + V.lambda[j];
+    for (int i = 0; i < U.size; ++i) R(i, j) /= U.lambda[i] + V.lambda[j] + shift;
   T.noalias() = U.U * R;
   R.noalias() = T * V.U.transpose();
 }

@@ -58,10 +58,10 @@ int block_side(int asked, int p);
 // A block smoother's local solve on the functions of windows U x V: R (U.size x V.size, the
 // scaled residual) := (U.U (x) V.U) diag(1 / (lambda_u + lambda_v)) (U.U (x) V.U)^T R, the
 // inverse of the block's separable operator in its eigenbases; T is work space.
-void solve_in_eigenbases(const Window& U, const Window& V, Eigen::MatrixXd& R, Eigen::MatrixXd& T);
+void solve_in_eigenbases(const Window& U, const Window& V, Eigen::MatrixXd& R, Eigen::MatrixXd& T, double shift = 0);
 // The same on a volume's block U x V x W: R holds U.size x V.size x W.size values, the first
-// index fastest; T (as long) is work space. `shift` adds shift M_u (x) M_v (x) M_w to the
-// separable operator (the identity in the eigenbases): a reaction term.
+// index fastest; T (as long) is work space. In both, `shift` adds shift M_u (x) M_v (x) M_w to
+// the separable operator (the identity in the eigenbases): a reaction term.
 void solve_in_eigenbases(const Window& U, const Window& V, const Window& W, Eigen::VectorXd& R, Eigen::VectorXd& T,
                          double shift = 0);
 
