@@ -39,6 +39,29 @@ std::vector<double> merged_weights(const BSplineBasis1D& fine, const BSplineBasi
   return out;
 }
 
+// Which patches hold each function of a level (a patch twice across a seam; several: the
+// function is on an interface), in compressed rows, without an allocation per function: the
+// holders of f are patch[start[f]] .. patch[start[f + 1] - 1], ascending.
+struct Holders {
+  std::vector<long> start;
+  std::vector<int> patch;
+  long count(int f) const { return start[f + 1] - start[f]; }
+};
+
+Holders holders_of(const PatchwiseLevel& level) {
+  const int n = static_cast<int>(level.layout.dof.size());
+  Holders h;
+  h.start.assign(n + 1, 0);
+  for (const MultigridPatch& p : level.patches)
+    for (int f : p.function) ++h.start[f + 1];
+  for (int f = 0; f < n; ++f) h.start[f + 1] += h.start[f];
+  h.patch.resize(h.start.back());
+  std::vector<long> next(h.start.begin(), h.start.end() - 1);
+  for (size_t k = 0; k < level.patches.size(); ++k)
+    for (int f : level.patches[k].function) h.patch[next[f]++] = static_cast<int>(k);
+  return h;
+}
+
 // The number of functions of a patch per direction (1 in a missing third direction).
 std::array<int, 3> counts_of(const MultigridPatch& p) {
   std::array<int, 3> n{1, 1, 1};
@@ -92,20 +115,7 @@ bool coarser_level(PatchwiseLevel& fine, PatchwiseLevel& coarse) {
     c.nitsche = f.nitsche;
     c.nitsche_factor = f.nitsche_factor;
   }
-  // Which patches hold each fine function (a patch twice across a seam); several: it is on an
-  // interface. In compressed rows, without an allocation per function: the holders of g are
-  // holder[holder_start[g]] .. holder[holder_start[g + 1] - 1], ascending.
-  const int fine_functions = static_cast<int>(fine.layout.dof.size());
-  std::vector<long> holder_start(fine_functions + 1, 0);
-  for (const MultigridPatch& f : fine.patches)
-    for (int g : f.function) ++holder_start[g + 1];
-  for (int g = 0; g < fine_functions; ++g) holder_start[g + 1] += holder_start[g];
-  std::vector<int> holder(holder_start.back());
-  {
-    std::vector<long> next(holder_start.begin(), holder_start.end() - 1);
-    for (size_t k = 0; k < np; ++k)
-      for (int g : fine.patches[k].function) holder[next[g]++] = static_cast<int>(k);
-  }
+  const Holders holders = holders_of(fine);
   // Patch k's knot insertion per direction, transposed (row: a coarse function's fine ones).
   using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
   std::vector<std::array<RowMatrix, 3>> insertion(np);
@@ -152,8 +162,8 @@ bool coarser_level(PatchwiseLevel& fine, PatchwiseLevel& coarse) {
       refined(k, local, column);
       std::map<int, std::pair<std::vector<int>, std::vector<double>>> with;  // partner patch -> its key
       for (const auto& [g, v] : column) {
-        const int* h = holder.data() + holder_start[g];
-        const long count = holder_start[g + 1] - holder_start[g];
+        const int* h = holders.patch.data() + holders.start[g];
+        const long count = holders.count(g);
         if (count < 2) continue;
         for (long i = 0; i < count; ++i) {
           // Held by this patch and h[i] (this patch itself only when it holds g twice).
@@ -243,6 +253,7 @@ Direction trivial_direction(int tilings) {
   d.first = 0, d.count = 1;
   d.mass_diagonal = Eigen::VectorXd::Ones(1);
   d.stiffness_diagonal = Eigen::VectorXd::Zero(1);
+  d.mass_row_sum = Eigen::VectorXd::Ones(1);
   Window w;
   w.begin = 0, w.size = 1;
   w.U = Eigen::MatrixXd::Ones(1, 1);
@@ -252,9 +263,8 @@ Direction trivial_direction(int tilings) {
 }
 
 // The box of patch `k`'s interior functions (box.dof empty when it has none), its band
-// functions marked in `in_strip`; false when they are not a box. holders[f]: how many patch
-// functions are f (two or more: f is on an interface).
-bool make_box(const PatchwiseLevel& level, size_t k, const std::vector<int>& holders, int layers, int block, int tilings,
+// functions marked in `in_strip`; false when they are not a box.
+bool make_box(const PatchwiseLevel& level, size_t k, const Holders& holders, int layers, int block, int tilings,
               PatchBox& box, std::vector<char>& in_strip) {
   const MultigridPatch& patch = level.patches[k];
   const int dim = static_cast<int>(patch.bases.size());
@@ -262,7 +272,7 @@ bool make_box(const PatchwiseLevel& level, size_t k, const std::vector<int>& hol
   auto function = [&](const std::array<int, 3>& i) { return patch.function[i[0] + n[0] * (i[1] + static_cast<long>(n[1]) * i[2])]; };
   auto own = [&](const std::array<int, 3>& i) {
     const int f = function(i);
-    return level.layout.dof[f] >= 0 && holders[f] == 1;
+    return level.layout.dof[f] >= 0 && holders.count(f) == 1;
   };
   // Per direction and end: whether the face's functions are out of the box (fixed or on an
   // interface), and whether it is an interface; judged on the face's functions off its edges,
@@ -277,7 +287,7 @@ bool make_box(const PatchwiseLevel& level, size_t k, const std::vector<int>& hol
       for (i[a] = a0; i[a] < a1; ++i[a])
         for (i[b] = b0; i[b] < b1; ++i[b]) {
           if (!own(i)) out[d][end] = true;
-          if (holders[function(i)] > 1) interface[d][end] = true;
+          if (holders.count(function(i)) > 1) interface[d][end] = true;
         }
     }
   std::array<int, 3> first{}, last{};
@@ -487,9 +497,7 @@ std::unique_ptr<Preconditioner> patchwise_multigrid(PatchwiseLevel finest, const
     L.P = level.prolongation;
     galerkin(L.A, L.P, built[l + 1].A);
     // The smoother: each patch's box of interior functions, and the band.
-    std::vector<int> holders(level.layout.dof.size(), 0);
-    for (const MultigridPatch& patch : level.patches)
-      for (int f : patch.function) ++holders[f];
+    const Holders holders = holders_of(level);
     const int n = level.layout.num_free();
     std::vector<char> in_box(n, 0), in_strip(n, 0);
     const Eigen::VectorXd diagonal = L.A.diagonal();
@@ -503,25 +511,14 @@ std::unique_ptr<Preconditioner> patchwise_multigrid(PatchwiseLevel finest, const
       const std::array<int, 3> c = box.counts();
       // The separable operator's diagonal is stiffness[i] + shift mass[i]: stiffness the sum
       // over directions of K_d (x) M_others, mass the product of the M_d. The shift stands for
-      // a reaction term c u, which the stiffness's fit leaves out (with c = 1000 on the plus CG
-      // did not converge without it). Stiffness matrices annihilate constants, so on rows whose
+      // a reaction term c u, which the stiffness's fit leaves out (with c = 1000 on 12 curved
+      // patches CG did not converge without it). Stiffness matrices annihilate constants, so on rows whose
       // couplings all lie in the box, A 1 is the reaction's part alone, whatever the diffusion;
       // the shift makes the separable operator's (M_u 1) (x) (M_v 1) (x) (M_w 1) match it there.
       const long nb = static_cast<long>(box.dof.size());
       Eigen::VectorXd stiffness(nb), mass(nb);
-      std::array<Eigen::VectorXd, 3> mass_sum;  // M_d 1 over the box's functions
-      std::array<int, 3> reach{};                // the degree (how far a row couples), per direction
-      for (int e = 0; e < 3; ++e) {
-        const Direction& D = box.d[e];
-        if (D.basis.knots().empty()) {  // the trivial third direction of a planar patch
-          mass_sum[e] = Eigen::VectorXd::Ones(1);
-          continue;
-        }
-        const UnivariatePair pair =
-            univariate_pair(D.basis, D.mass_weight, D.stiffness_weight, D.nitsche_start, D.nitsche_end, D.nitsche_factor);
-        mass_sum[e] = (pair.mass * Eigen::VectorXd::Ones(pair.mass.cols())).segment(D.first, D.count);
-        reach[e] = D.basis.degree();
-      }
+      std::array<int, 3> reach{};  // the degree (how far a row couples), per direction
+      for (int e = 0; e < (volume ? 3 : 2); ++e) reach[e] = box.d[e].basis.degree();
       double reaction = 0, model = 0;
       long at = 0;
       for (int k2 = 0; k2 < c[2]; ++k2)
@@ -538,7 +535,7 @@ std::unique_ptr<Preconditioner> patchwise_multigrid(PatchwiseLevel finest, const
                 if (o != e) term *= box.d[o].mass_diagonal[i[o]];
               stiffness[at] += term;
               mass[at] *= box.d[e].mass_diagonal[i[e]];
-              sums *= mass_sum[e][i[e]];
+              sums *= box.d[e].mass_row_sum[i[e]];
               inside = inside && i[e] >= reach[e] && i[e] < c[e] - reach[e];
             }
             if (!inside) continue;

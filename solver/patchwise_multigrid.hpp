@@ -34,7 +34,7 @@
 namespace knotwork {
 
 struct PatchwiseMultigridOptions {
-  int block = 0;                  // functions per block side (at least 2p + 2); 0: max(16, 5p + 2) (8p + 2 on volumes... see .cpp)
+  int block = 0;                  // functions per block side (at least 2p + 2); 0: max(16, 5p + 2)
   int tilings = 2;                // 1: the tiling at 0 only; 2: and the one shifted by block / 2
   int strip_layers = -1;          // interior functions per side beside the interface ones; -1: the degree
   int coarsest_functions = 3000;  // coarsen while a level has more free dofs than this

@@ -41,6 +41,7 @@ void build_windows(Direction& d, int block, int tilings) {
   const Eigen::VectorXd m = pair.mass.diagonal(), k = pair.stiffness.diagonal();
   d.mass_diagonal = m.segment(d.first, d.count);
   d.stiffness_diagonal = k.segment(d.first, d.count);
+  d.mass_row_sum = (pair.mass * Eigen::VectorXd::Ones(pair.mass.cols())).segment(d.first, d.count);
   d.tilings.assign(tilings, {});
   for (int t = 0; t < tilings; ++t)
     for (const auto& [begin, size] : tile(d.count, block, t == 0 ? 0 : block / 2)) {

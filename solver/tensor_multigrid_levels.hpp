@@ -37,11 +37,12 @@ struct Direction {
   bool nitsche_start = false, nitsche_end = false;
   double nitsche_factor = 2;
   Eigen::VectorXd mass_diagonal, stiffness_diagonal;  // over the free functions
+  Eigen::VectorXd mass_row_sum;  // M 1 over the free functions (a reaction's share of A 1)
   std::vector<std::vector<Window>> tilings;
 };
 
 // The windows of `tilings` tilings (the second shifted by block / 2) and the direction's
-// diagonals over its free functions.
+// diagonals and mass row sums over its free functions.
 void build_windows(Direction& d, int block, int tilings);
 
 // The coarser direction (halved when it can be: `halved` says) and its prolongation over the

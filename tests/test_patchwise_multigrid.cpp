@@ -232,7 +232,7 @@ TEST_CASE("Multigrid on several patches with a reaction and a varying diffusion:
     const auto space = build_space(c);
     INFO("variant " << variant);
     const PoissonSolution cg = multigrid_as_direct(c, *space);
-    // Measured: 6, 7 and 7 iterations.
+    // Measured: 5 to 7 iterations over the three variants.
     REQUIRE(cg.iterative.iterations <= 16);
   }
 }
@@ -289,7 +289,7 @@ TEST_CASE("Multigrid on glued volumes: the coarser level's functions, bounded it
       REQUIRE(report.free_dofs.size() == static_cast<size_t>(std::log2(n)) + 1);
       iterations[p].push_back(s.iterative.iterations);
     }
-  // Measured: 6, 7, 7 (p = 2) and 5, 7, 10 (p = 3). At p = 3 the cubes of 4 and 8 elements are
+  // Measured: 5, 7, 7 (p = 2) and 5, 7, 10 (p = 3). At p = 3 the cubes of 4 and 8 elements are
   // mostly band (3 functions beside each interface face), solved exactly; the production path
   // takes 7, 7, 10 at 8, 16, 32 elements, and the one-volume multigrid 10 on the cube at p = 3
   // (docs/SOLVERS.md): bounded in h at p = 2, and no count above 16.
