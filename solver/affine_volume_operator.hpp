@@ -75,6 +75,7 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
   // out = (K x) over all of `free`, threaded over slabs along w.
   void apply_within(const double* x, const FunctionBox& free, double* out) const;
   const std::array<BSplineBasis1D, 3>& spaces() const { return space_; }
+  double reaction() const { return reaction_; }
 
  private:
   // One direction: its rule's tables per element and its univariate matrices as bands (entry

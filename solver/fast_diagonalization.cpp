@@ -140,13 +140,13 @@ void gemm(bool ta, bool tb, const Eigen::MatrixXd& A, const Eigen::MatrixXd& B, 
 class FastDiagonalization final : public Preconditioner {
  public:
   FastDiagonalization(Eigen::MatrixXd Uu, Eigen::VectorXd lu, Eigen::MatrixXd Uv, Eigen::VectorXd lv,
-                      Eigen::VectorXd scale)
+                      Eigen::VectorXd scale, double shift)
       : Uu_(std::move(Uu)), Uv_(std::move(Uv)), scale_(std::move(scale)) {
     inverse_.resize(lu.size(), lv.size());
     for (Eigen::Index j = 0; j < lv.size(); ++j)
-      for (Eigen::Index i = 0; i < lu.size(); ++i) inverse_(i, j) = 1.0 / (lu[i] + lv[j]);
+      for (Eigen::Index i = 0; i < lu.size(); ++i) inverse_(i, j) = 1.0 / (lu[i] + lv[j] + shift);
   }
-  // z = D^{-1/2} (U_v (x) U_u) (Lambda_u (+) Lambda_v)^{-1} (U_v (x) U_u)^T D^{-1/2} r, with
+  // z = D^{-1/2} (U_v (x) U_u) (Lambda_u (+) Lambda_v + shift)^{-1} (U_v (x) U_u)^T D^{-1/2} r, with
   // vectors as n_u x n_v matrices (i fastest): (A (x) B) vec(X) = vec(B X A^T).
   void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override {
     const Eigen::Index nu = Uu_.rows(), nv = Uv_.rows();
@@ -232,18 +232,18 @@ std::unique_ptr<Preconditioner> fast_diagonalization(const BSplineBasis1D& space
   } else {
     diagonalize(pv, iv, Uv, lv);
   }
-  // D = diag(K) / diag(P): P_dd = (K_u)_ii (M_v)_jj + (M_u)_ii (K_v)_jj.
+  // D = diag(K) / diag(P): P_dd = (K_u)_ii (M_v)_jj + (M_u)_ii (K_v)_jj + shift (M_u)_ii (M_v)_jj.
   const Eigen::VectorXd ku = pu.stiffness.diagonal(), mu = pu.mass.diagonal();
   const Eigen::VectorXd kv = pv.stiffness.diagonal(), mv = pv.mass.diagonal();
   Eigen::VectorXd scale(layout.num_free());
   for (size_t b = 0; b < iv.size(); ++b)
     for (size_t a = 0; a < iu.size(); ++a) {
       const Eigen::Index d = static_cast<Eigen::Index>(a + iu.size() * b);
-      const double p = ku[iu[a]] * mv[iv[b]] + mu[iu[a]] * kv[iv[b]];
+      const double p = ku[iu[a]] * mv[iv[b]] + mu[iu[a]] * kv[iv[b]] + geometry.shift * mu[iu[a]] * mv[iv[b]];
       scale[d] = diag[d] > 0 && p > 0 ? std::sqrt(p / diag[d]) : 1.0;
     }
   return std::make_unique<FastDiagonalization>(std::move(Uu), std::move(lu), std::move(Uv), std::move(lv),
-                                               std::move(scale));
+                                               std::move(scale), geometry.shift);
 }
 
 }  // namespace knotwork

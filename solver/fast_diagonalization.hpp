@@ -34,8 +34,14 @@ UnivariatePair univariate_pair(const BSplineBasis1D& b, const std::vector<double
 // The geometry's stiffness coefficients as products of univariate factors, one value per
 // element and direction: c11(i, j) ~ a1[i] b1[j], c22(i, j) ~ a2[i] b2[j], fitted by least
 // squares on log c (exact when c separates). Empty: no geometry (weights 1).
+// P = M_v^b1 (x) K_u^a1 + K_v^b2 (x) M_u^a2 + shift M_v^b1 (x) M_u^a2.
 struct SeparableCoefficients {
   std::vector<double> a1, b1, a2, b2;
+  // A reaction term c u as shift (M_u^a2 (x) M_v^b1), the one mass product the eigenvectors
+  // diagonalize (the identity in the eigenbases): shift ~ c det J / (a2 b1), averaged
+  // (patch_separable_coefficients). 0: none. The fast diagonalization reads it; the multigrids
+  // read theirs off each level's operator instead.
+  double shift = 0;
   // From c11 and c22 at element (i, j), stored at i + n_u j. With `rows` I and `columns` J
   // (empty: all), only the cells (i, j in J) and (i in I, j) are read: a1[i] from row i's
   // cells in J, b1[j] from column j's cells in I (still exact for separable c).

@@ -92,7 +92,8 @@ namespace {
 
 class FastDiagonalization3d final : public Preconditioner {
  public:
-  FastDiagonalization3d(std::array<Eigen::MatrixXd, 3> U, const std::array<Eigen::VectorXd, 3>& lambda, Eigen::VectorXd scale)
+  FastDiagonalization3d(std::array<Eigen::MatrixXd, 3> U, const std::array<Eigen::VectorXd, 3>& lambda, Eigen::VectorXd scale,
+                        double shift)
       : U_(std::move(U)), scale_(std::move(scale)) {
     for (int d = 0; d < 3; ++d) n_[d] = static_cast<int>(lambda[d].size());
     inverse_.resize(scale_.size());
@@ -104,7 +105,7 @@ class FastDiagonalization3d final : public Preconditioner {
     for (int k = 0; k < n_[2]; ++k)
       for (int j = 0; j < n_[1]; ++j)
         for (int i = 0; i < n_[0]; ++i, ++at) {
-          const double sum = lambda[0][i] + lambda[1][j] + lambda[2][k];
+          const double sum = lambda[0][i] + lambda[1][j] + lambda[2][k] + shift;
           inverse_[at] = sum > 1e-14 * largest ? 1.0 / sum : 0.0;
         }
   }
@@ -185,11 +186,11 @@ std::unique_ptr<Preconditioner> fast_diagonalization_3d(const std::array<BSpline
     for (int b : free[1])
       for (int a : free[0]) {
         const double p = k_diag[0][a] * m_diag[1][b] * m_diag[2][c] + m_diag[0][a] * k_diag[1][b] * m_diag[2][c] +
-                         m_diag[0][a] * m_diag[1][b] * k_diag[2][c];
+                         m_diag[0][a] * m_diag[1][b] * k_diag[2][c] + geometry.shift * m_diag[0][a] * m_diag[1][b] * m_diag[2][c];
         scale[at] = diagonal[at] > 0 && p > 0 ? std::sqrt(p / diagonal[at]) : 1.0;
         ++at;
       }
-  return std::make_unique<FastDiagonalization3d>(std::move(U), lambda, std::move(scale));
+  return std::make_unique<FastDiagonalization3d>(std::move(U), lambda, std::move(scale), geometry.shift);
 }
 
 }  // namespace knotwork

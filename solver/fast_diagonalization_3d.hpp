@@ -1,10 +1,11 @@
 #pragma once
 // The fast diagonalization preconditioner of a trivariate tensor-product space (Sangalli and
-// Tani, 2016, in three directions): P = sum_d K_d^(tau_d) (x) prod_{k != d} M_k^(mu_k), the
-// parameter-domain operator with a separable part of the geometry folded in, inverted exactly
-// through the generalized eigenvectors of the three univariate pairs (K_d^tau_d, M_d^mu_d),
-// then scaled by D^{-1/2} on both sides, D = diag(K) / diag(P). One application costs three
-// mode products forward and three back: 6 N (n_u + n_v + n_w) flops, O(N^(4/3)).
+// Tani, 2016, in three directions): P = sum_d K_d^(tau_d) (x) prod_{k != d} M_k^(mu_k), plus
+// shift prod_k M_k^(mu_k) for a reaction term, the parameter-domain operator with a separable
+// part of the geometry folded in, inverted exactly through the generalized eigenvectors of the
+// three univariate pairs (K_d^tau_d, M_d^mu_d), then scaled by D^{-1/2} on both sides,
+// D = diag(K) / diag(P). One application costs three mode products forward and three back:
+// 6 N (n_u + n_v + n_w) flops, O(N^(4/3)).
 //
 // The geometry enters through the diagonal of the stiffness coefficients C = det(J) J^-1 J^-T
 // in parameter derivatives, c_dd = |x_e x x_f|^2 / det J ({d, e, f} = {u, v, w}), approximated
@@ -27,6 +28,11 @@ namespace knotwork {
 // tau[d] and mu[d]: one value per element of direction d; empty: weights 1 (no geometry).
 struct SeparableVolumeCoefficients {
   std::array<std::vector<double>, 3> tau, mu;
+  // A reaction term c u as shift (M_u^mu (x) M_v^mu (x) M_w^mu), the identity in the
+  // eigenbases: shift ~ c det J / (mu_u mu_v mu_w), averaged (volume_separable_coefficients).
+  // 0: none. The fast diagonalization reads it; the multigrids read theirs off each level's
+  // operator instead.
+  double shift = 0;
   // c(i, j, k) = {c_uu, c_vv, c_ww} at element (i, j, k) of an n[0] x n[1] x n[2] grid, fitted
   // on log c from the elements of up to 8 sampled lines in the other two directions for each
   // element of each direction (O(n) evaluations, not n^3). Exact for c of the form above.

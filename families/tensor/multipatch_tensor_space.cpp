@@ -123,7 +123,7 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
           diag.push_back(global >= 0 ? diagonal[global] : 0.0);
         }
       b.local = fast_diagonalization(t.space_u, t.space_v, hull, Eigen::Map<const Eigen::VectorXd>(diag.data(), diag.size()),
-                                     patch_separable_coefficients(t, *patch_maps_[k]),
+                                     patch_separable_coefficients(t, *patch_maps_[k], &problem),
                                      nitsche_ends(static_cast<int>(k), problem));
       if (!b.local) throw std::logic_error("fast diagonalization of a patch: its free functions' hull is not a tensor product");
       blocks.push_back(std::move(b));

@@ -4,17 +4,66 @@
 #include <Eigen/Geometry>
 
 #include "basis/core/nurbs_volume.hpp"
+#include "solver/expression.hpp"
 
 #include <algorithm>
+#include <optional>
 
 namespace knotwork {
+
+namespace {
+
+// The problem's reaction c at a point: its constant, or its expression.
+class ReactionAt {
+ public:
+  explicit ReactionAt(const PoissonProblem* problem) {
+    if (!problem) return;
+    if (!problem->coefficients.reaction.empty())
+      expression_.emplace(problem->coefficients.reaction);
+    else
+      constant_ = problem->reaction;
+  }
+  bool any() const { return expression_ || constant_ != 0; }
+  double operator()(double x, double y, double z) { return expression_ ? (*expression_)(x, y, z) : constant_; }
+
+ private:
+  std::optional<ExpressionEvaluator> expression_;
+  double constant_ = 0;
+};
+
+// The reaction's samples c det J |cell| at cells (one index per direction), and the shift
+// they give against the fitted masses: sum c det J |cell| / sum prod_d mass_d |cell|, the
+// ratio of A 1 to (M (x) M ...) 1 in the mean.
+template <int D>
+struct ReactionSamples {
+  std::vector<std::array<int, D>> cell;
+  std::vector<double> volume, value;
+  void add(const std::array<int, D>& at, double cell_volume, double c_det) {
+    cell.push_back(at);
+    volume.push_back(cell_volume);
+    value.push_back(c_det * cell_volume);
+  }
+  double shift(const std::array<const std::vector<double>*, D>& mass) const {
+    double reaction = 0, model = 0;
+    for (size_t s = 0; s < cell.size(); ++s) {
+      double m = volume[s];
+      for (int d = 0; d < D; ++d) m *= mass[d]->empty() ? 1.0 : (*mass[d])[cell[s][d]];
+      reaction += value[s];
+      model += m;
+    }
+    return model > 0 && reaction > 0 ? reaction / model : 0.0;
+  }
+};
+
+}  // namespace
 
 // The stiffness coefficients at element midpoints, in parameter derivatives
 // x_u = (dx/du_ref) / h_u: c11 = |x_v|^2 / det, c22 = |x_u|^2 / det; then their fit. Only
 // every row against 32 sampled columns and every column against 32 sampled rows are
 // evaluated: O(n) elements instead of n^2, and still exact for separable maps. From the
 // patch itself, so that a part of the space (which holds a few rows) gets the whole fit.
-SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& patch, const PatchGeometryMap& geometry) {
+SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& patch, const PatchGeometryMap& geometry,
+                                                   const PoissonProblem* problem) {
   const int nu = patch.space_u.num_elements(), nv = patch.space_v.num_elements();
   auto sample = [](int n) {
     std::vector<int> v;
@@ -32,6 +81,8 @@ SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& p
   std::vector<double> c11(static_cast<size_t>(nu) * nv, 1.0), c22(c11.size(), 1.0);
   GeometryAtPoints at;
   bool ok = true;
+  ReactionAt reaction(problem);
+  ReactionSamples<2> samples;
   auto measure = [&](int i, int j) {
     const size_t k = i + static_cast<size_t>(nu) * j;
     geometry.evaluate_element_at_rule(i, j, 1, 1, at);  // the one-point Gauss rule: the midpoint
@@ -42,30 +93,43 @@ SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& p
     if (!(det > 0)) return void(ok = false);  // assembly refuses such maps before this is built
     c11[k] = (xv * xv + yv * yv) / det;
     c22[k] = (xu * xu + yu * yu) / det;
+    if (reaction.any()) samples.add({i, j}, hu * hv, reaction(at.x(0, 0), at.x(0, 1), 0) * det);
   };
   for (int i = 0; i < nu; ++i)
     for (int j : columns) measure(i, j);
   for (int j = 0; j < nv; ++j)
     for (int i : rows) measure(i, j);
   if (!ok) return {};
-  return SeparableCoefficients::fit(nu, nv, c11, c22, rows, columns);
+  SeparableCoefficients fitted = SeparableCoefficients::fit(nu, nv, c11, c22, rows, columns);
+  fitted.shift = samples.shift({&fitted.a2, &fitted.b1});
+  return fitted;
 }
 
-SeparableVolumeCoefficients volume_separable_coefficients(const TensorVolumeDiscretization& d) {
-  std::array<std::vector<double>, 3> middle;
+SeparableVolumeCoefficients volume_separable_coefficients(const TensorVolumeDiscretization& d, const PoissonProblem* problem) {
+  std::array<std::vector<double>, 3> middle, length;
   std::array<int, 3> n;
   for (int k = 0; k < 3; ++k) {
     const auto& t = d.space[k].knots();
-    for (int s : d.space[k].element_spans()) middle[k].push_back((t[s] + t[s + 1]) / 2);
+    for (int s : d.space[k].element_spans()) {
+      middle[k].push_back((t[s] + t[s + 1]) / 2);
+      length[k].push_back(t[s + 1] - t[s]);
+    }
     n[k] = static_cast<int>(middle[k].size());
   }
-  return SeparableVolumeCoefficients::fit(n, [&](int i, int j, int k) {
-    const Eigen::Matrix3d J = volume_point_derivatives(d.volume, {middle[0][i], middle[1][j], middle[2][k]}).jacobian;
+  ReactionAt reaction(problem);
+  ReactionSamples<3> samples;
+  SeparableVolumeCoefficients fitted = SeparableVolumeCoefficients::fit(n, [&](int i, int j, int k) {
+    const VolumePointDerivatives at = volume_point_derivatives(d.volume, {middle[0][i], middle[1][j], middle[2][k]});
+    const Eigen::Matrix3d& J = at.jacobian;
     const double det = J.determinant();
     if (!(det > 0)) return std::array<double, 3>{1, 1, 1};
+    if (reaction.any())
+      samples.add({i, j, k}, length[0][i] * length[1][j] * length[2][k], reaction(at.x[0], at.x[1], at.x[2]) * det);
     return std::array<double, 3>{J.col(1).cross(J.col(2)).squaredNorm() / det, J.col(2).cross(J.col(0)).squaredNorm() / det,
                                  J.col(0).cross(J.col(1)).squaredNorm() / det};
   });
+  fitted.shift = samples.shift({&fitted.mu[0], &fitted.mu[1], &fitted.mu[2]});
+  return fitted;
 }
 
 }  // namespace knotwork

@@ -124,8 +124,8 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
       for (int s = 0; s < 4; ++s) ends.sides[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
     if (name == kMultigrid)
       return tensor_multigrid(d_.space_u, d_.space_v, layout, lower, patch_separable_coefficients(d_, *geometry_), ends);
-    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower.diagonal(), patch_separable_coefficients(d_, *geometry_),
-                                ends);
+    return fast_diagonalization(d_.space_u, d_.space_v, layout, lower.diagonal(),
+                                patch_separable_coefficients(d_, *geometry_, &problem), ends);
   }
   bool structured_preconditioner_without_matrix(const std::string&) const override { return true; }
   std::unique_ptr<Preconditioner> make_structured_preconditioner_without_matrix(

@@ -81,7 +81,7 @@ class TensorVolumeSpace final : public SplineSpace, public SpaceReport {
       for (int s = 0; s < 6; ++s) nitsche[s] = problem.boundary[s].kind == BoundaryKind::kDirichlet;
     if (name == kMultigrid)
       return tensor_multigrid_3d(d_.space, layout, lower, volume_separable_coefficients(d_), nitsche, problem.nitsche_penalty);
-    return fast_diagonalization_3d(d_.space, layout, lower.diagonal(), volume_separable_coefficients(d_), nitsche,
+    return fast_diagonalization_3d(d_.space, layout, lower.diagonal(), volume_separable_coefficients(d_, &problem), nitsche,
                                    problem.nitsche_penalty);
   }
   // Where the map is one affine map and the functions are B-splines, the operator that writes
