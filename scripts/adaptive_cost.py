@@ -12,18 +12,24 @@ Each pair runs back to back, so that ratios are of one sitting. Prints Markdown 
 --quick leaves PT-splines out; --family=thb (the case files' suffix, "" for knot segments) runs
 one family only.
 """
+import argparse
 import json
 import os
 import subprocess
-import sys
 import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
-KNOTWORK = ARGS[0] if ARGS else os.path.join(ROOT, "build", "app", "knotwork")
-QUICK = "--quick" in sys.argv
-ONLY = next((a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--family=")), None)
+_parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+_parser.add_argument("knotwork", nargs="?", default=os.path.join(ROOT, "build", "app", "knotwork"),
+                     help="the knotwork binary (default: build/app/knotwork)")
+_parser.add_argument("--quick", action="store_true", help="leave PT-splines out")
+_parser.add_argument("--family", default=None, metavar="SUFFIX",
+                     help='one family only, by its case files\' suffix: thb, lr, pt, or "" for knot segments')
+_args = _parser.parse_args()
+KNOTWORK = _args.knotwork
+QUICK = _args.quick
+ONLY = _args.family
 LSHAPE_U = "(x^2+y^2)^(1/3)*sin(2/3*(atan2(-y,-x)+pi))"
 LAYER_U = "atan(60*(sqrt((x+0.1)^2+(y+0.1)^2)-0.7))"
 # (problem, degree, max dofs, {family: case}, uniform geometry, exact solution)

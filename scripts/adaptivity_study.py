@@ -8,13 +8,13 @@ LR refinement strategy. Prints Markdown on stdout and writes docs/adaptivity_*.p
 
     scripts/adaptivity_study.py [KNOTWORK] > docs/records/adaptivity-$(date +%F).md   # about 30 minutes here
 """
+import argparse
 import json
 import math
 import os
 import platform
 import re
 import subprocess
-import sys
 import tempfile
 import time
 
@@ -24,7 +24,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-KNOTWORK = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "build", "app", "knotwork")
+_parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+_parser.add_argument("knotwork", nargs="?", default=os.path.join(ROOT, "build", "app", "knotwork"),
+                     help="the knotwork binary (default: build/app/knotwork)")
+KNOTWORK = _parser.parse_args().knotwork
 FAMILIES = ["knot_segments", "pt", "thb", "lr"]
 LABEL = {"knot_segments": "knot segments", "pt": "PT-splines", "thb": "THB-splines", "lr": "LR B-splines"}
 # (title, file stem, case per family, degree, max dofs per family, uniform geometry extent)

@@ -8,16 +8,19 @@ Markdown on stdout.
 
     scripts/g1_study.py [KNOTWORK]        # default build/app/knotwork; about 2 minutes here
 """
+import argparse
 import json
 import math
 import os
 import re
 import subprocess
-import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-KNOTWORK = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "build", "app", "knotwork")
+_parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+_parser.add_argument("knotwork", nargs="?", default=os.path.join(ROOT, "build", "app", "knotwork"),
+                     help="the knotwork binary (default: build/app/knotwork)")
+KNOTWORK = _parser.parse_args().knotwork
 PLANAR = ["g1_three_quads", "g1_pentagon", "g1_mixed_valences", "g1_valences_6_8", "g1_lshape"]
 SURFACES = ["g1_sphere_xy", "g1_sphere_harmonic", "g1_sphere_dodecahedron", "g1_sphere_prism", "g1_sphere_antiprism",
             "g1_torus"]

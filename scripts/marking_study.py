@@ -7,13 +7,15 @@ Prints Markdown on stdout.
 
     PYTHONPATH=build/python /usr/bin/python3 scripts/marking_study.py [MAX_DOFS] > table.md   # ~10 minutes at 20000
 """
+import argparse
 import math
-import sys
 import time
 
 import knotwork
 
-MAX_DOFS = int(sys.argv[1]) if len(sys.argv) > 1 else 20000
+_parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+_parser.add_argument("max_dofs", nargs="?", type=int, default=20000, help="each loop's --max-dofs (default 20000)")
+MAX_DOFS = _parser.parse_args().max_dofs
 CASES = {"knot segments": "cases/lshape_adaptive.toml", "PT-splines": "cases/lshape_adaptive_pt.toml",
          "THB-splines": "cases/lshape_adaptive_thb.toml", "LR B-splines": "cases/lshape_adaptive_lr.toml"}
 MARKINGS = [("dorfler", "cells"), ("dorfler", "functions"), ("maximum", "cells"), ("maximum", "functions")]

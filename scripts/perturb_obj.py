@@ -6,14 +6,18 @@ bounding box) stay, so the domain is unchanged. Deterministic for a given seed.
 
     scripts/perturb_obj.py cases/meshes/mixed_valences.obj 0.003 1 > cases/meshes/mixed_valences_17digit.obj
 """
+import argparse
 import random
 import sys
 
 
 def main():
-    if len(sys.argv) != 4:
-        sys.exit("usage: perturb_obj.py MESH.obj AMOUNT SEED  (writes the moved mesh on stdout)")
-    path, amount, seed = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("mesh", help="the quad mesh (.obj)")
+    parser.add_argument("amount", type=float, help="the largest move in x and y")
+    parser.add_argument("seed", type=int, help="the pseudo-random seed")
+    a = parser.parse_args()
+    path, amount, seed = a.mesh, a.amount, a.seed
     lines = open(path).read().splitlines()
     vertices = [[float(t) for t in l.split()[1:4]] for l in lines if l.startswith("v ")]
     if not vertices:

@@ -10,9 +10,9 @@ reversed or transposed on purpose, so that the files exercise the orientation of
 
 Usage: scripts/write_multipatch_geometries.py [OUTPUT_DIRECTORY]   (default cases/geometries)
 """
+import argparse
 import math
 import os
-import sys
 
 import numpy as np
 
@@ -288,7 +288,10 @@ def plus_domain():
 
 
 def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "cases", "geometries")
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("out", nargs="?", default=os.path.join(os.path.dirname(__file__), "..", "cases", "geometries"),
+                        help="the folder to write into (default: cases/geometries)")
+    out = parser.parse_args().out
     os.makedirs(out, exist_ok=True)
     for name, build in (("lshape_3patches", lshape), ("ring_4patches", ring), ("plate_with_hole", plate_with_hole),
                         ("plus_12patches", plus_domain), ("quarter_ring", quarter_ring)):

@@ -24,9 +24,9 @@ ndim = rdim = 3) and G+Smo's XML (cases/geometries/NAME.xml, TensorBSpline3/Tens
 
 Usage: scripts/write_volume_geometries.py [OUTPUT_DIRECTORY]   (default cases/geometries)
 """
+import argparse
 import math
 import os
-import sys
 
 
 def number(x):
@@ -283,7 +283,10 @@ def write_fichera(out):
 
 
 def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "cases", "geometries")
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("out", nargs="?", default=os.path.join(os.path.dirname(__file__), "..", "cases", "geometries"),
+                        help="the folder to write into (default: cases/geometries)")
+    out = parser.parse_args().out
     os.makedirs(out, exist_ok=True)
     for name, build in (("thick_quarter_ring", thick_quarter_ring), ("distorted_block", distorted_block)):
         v = build()
