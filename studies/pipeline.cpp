@@ -95,10 +95,8 @@ SolverReport resolve_solver(const CaseDescription& c, const SplineSpace& space, 
   } else if (asked == "jacobi" || asked == kBoomerAmgName) {
     r.preconditioner = asked;  // algebraic: they apply to every family
   } else if (std::find(structured.begin(), structured.end(), asked) != structured.end()) {
-    if (r.method == "petsc" && !space.structured_preconditioner_needs_only_diagonal(asked) &&
-        !space.structured_preconditioner_without_matrix(asked))
-      throw InputError(c.path + ": [solver] preconditioner: \"" + asked + "\" runs in knotwork's own CG only (method = "
-                       "\"iterative\"); with method = \"petsc\" use \"boomeramg\" (docs/SOLVERS.md)");
+    // (Under method = "petsc" every one is a PCShell, built from the whole matrix where it reads
+    // more than the diagonal and has no operator to read: below.)
     r.preconditioner = asked;
   } else {
     std::string names;

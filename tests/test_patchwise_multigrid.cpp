@@ -193,6 +193,39 @@ TEST_CASE("Multigrid on several patches: CG iterations bounded in h and p", "[mu
   }
 }
 
+// Under mpirun a process fits the patches it does not hold from their maps alone
+// (patch_separable_coefficients(NurbsPatch, ...)); the fit must be the one the patch's grid map
+// gives, and the reaction's shift too. The two evaluate the same Jacobians by different
+// arithmetic (the map's Bezier cells, de Boor on the NURBS): they differ by rounding, a few
+// ulps of each coefficient, which the log-least-squares fit averages; 1e-12 relative leaves two
+// orders of magnitude over that and is far below any difference of the map.
+TEST_CASE("A patch's separable fit from its map alone is the one its grid map gives", "[multigrid][multipatch]") {
+  for (const char* name : {"multipatch_plus", "multipatch_ring"}) {
+    CaseDescription c = shipped(name);
+    TensorSpaceOptions& o = patch_space(c);
+    o.degree = {3, 3};
+    o.elements_per_span = {6, 6};
+    c.problem.reaction = 10;
+    const MultiPatchTensorDiscretization d = build_multipatch_tensor(c.domain, o);
+    for (size_t k = 0; k < d.patches.size(); ++k) {
+      const TensorDiscretization& t = d.patches[k];
+      const PatchGeometryMap map(t.mesh, t.patch, PatchGeometryMap::ElementGrid{t.space_u.breakpoints(), t.space_v.breakpoints(), 0});
+      const SeparableCoefficients from_cells = patch_separable_coefficients(t, map, &c.problem);
+      const SeparableCoefficients from_map = patch_separable_coefficients(c.domain.patches[k], t.space_u, t.space_v, &c.problem);
+      INFO(name << ", patch " << k);
+      const std::vector<double>* pairs[4][2] = {{&from_cells.a1, &from_map.a1}, {&from_cells.b1, &from_map.b1},
+                                                {&from_cells.a2, &from_map.a2}, {&from_cells.b2, &from_map.b2}};
+      for (const auto& pair : pairs) {
+        REQUIRE(pair[0]->size() == pair[1]->size());
+        REQUIRE(!pair[0]->empty());
+        for (size_t i = 0; i < pair[0]->size(); ++i) REQUIRE((*pair[1])[i] == Approx((*pair[0])[i]).epsilon(1e-12));
+      }
+      REQUIRE(from_cells.shift > 0);
+      REQUIRE(from_map.shift == Approx(from_cells.shift).epsilon(1e-12));
+    }
+  }
+}
+
 // The production path: the family's levels (coarsest at most 3 000 free dofs) and separable
 // fits. CG to the default backward error 1e-15 leaves the direct solve's errors, with the
 // Dirichlet functions eliminated and with Nitsche's method.

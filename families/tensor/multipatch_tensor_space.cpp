@@ -35,6 +35,18 @@ std::unique_ptr<PatchGeometryMap> patch_grid_map(const TensorDiscretization& t) 
       t.mesh, t.patch, PatchGeometryMap::ElementGrid{t.space_u.breakpoints(), t.space_v.breakpoints(), 0});
 }
 
+// Patch k's sides whose Dirichlet data `problem` imposes by Nitsche's method (`exterior`:
+// boundary id -> patch side).
+NitscheEnds nitsche_ends(const std::vector<PatchSideRef>& exterior, int k, const PoissonProblem& problem) {
+  NitscheEnds ends;
+  ends.factor = problem.nitsche_penalty;
+  const std::array<int, 4> boundary_id = boundary_ids_of_patch(exterior, k);
+  for (int s = 0; s < 4; ++s)
+    ends.sides[s] = problem.dirichlet_method == DirichletMethod::kNitsche && boundary_id[s] >= 0 &&
+                    problem.boundary.at(boundary_id[s]).kind == BoundaryKind::kDirichlet;
+  return ends;
+}
+
 // What basis/tensor's builders throw, as the case's errors.
 template <class Build>
 auto built(const CaseDescription& c, Build build) {
@@ -84,17 +96,6 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
   std::vector<ReportField> report() const override { return multipatch_report(options_, static_cast<int>(d_.patches.size())); }
 
  private:
-  // Patch k's sides whose Dirichlet data `problem` imposes by Nitsche's method.
-  NitscheEnds nitsche_ends(int k, const PoissonProblem& problem) const {
-    NitscheEnds ends;
-    ends.factor = problem.nitsche_penalty;
-    const std::array<int, 4> boundary_id = boundary_ids_of_patch(exterior_, k);
-    for (int s = 0; s < 4; ++s)
-      ends.sides[s] = problem.dirichlet_method == DirichletMethod::kNitsche && boundary_id[s] >= 0 &&
-                      problem.boundary.at(boundary_id[s]).kind == BoundaryKind::kDirichlet;
-    return ends;
-  }
-
   // One fast diagonalization per patch, summed (additive Schwarz, no coarse space): each
   // patch's block is its free functions, interface functions included (so they overlap), the
   // tensor hull of them inverted and restricted to them.
@@ -124,7 +125,7 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
         }
       b.local = fast_diagonalization(t.space_u, t.space_v, hull, Eigen::Map<const Eigen::VectorXd>(diag.data(), diag.size()),
                                      patch_separable_coefficients(t, *patch_maps_[k], &problem),
-                                     nitsche_ends(static_cast<int>(k), problem));
+                                     nitsche_ends(exterior_, static_cast<int>(k), problem));
       if (!b.local) throw std::logic_error("fast diagonalization of a patch: its free functions' hull is not a tensor product");
       blocks.push_back(std::move(b));
     }
@@ -139,7 +140,7 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
     for (size_t k = 0; k < d_.patches.size(); ++k) {
       const TensorDiscretization& t = d_.patches[k];
       finest.patches.push_back(planar_multigrid_patch(t.space_u, t.space_v, patch_separable_coefficients(t, *patch_maps_[k]),
-                                                      nitsche_ends(static_cast<int>(k), problem), d_.global_function[k]));
+                                                      nitsche_ends(exterior_, static_cast<int>(k), problem), d_.global_function[k]));
     }
     finest.layout = layout;
     return patchwise_multigrid(std::move(finest), lower);
@@ -186,6 +187,8 @@ class MultiPatchTensorPartSpace final : public SplineSpace, public SpaceReport {
     }
     geometry_ = std::make_unique<PiecewiseGeometryMap>(std::move(maps), d_.first_cell);
     patches_ = c.domain.num_patches();
+    domain_ = c.domain;
+    exterior_ = exterior_sides(c.domain);
   }
   const SpaceReport& presentation() const override { return *this; }
   const BezierMesh& mesh() const override { return d_.mesh; }
@@ -194,9 +197,34 @@ class MultiPatchTensorPartSpace final : public SplineSpace, public SpaceReport {
   const MeshPart* part() const override { return &d_.part; }
   std::string description() const override { return describe_multipatch(options_, patches_); }
   std::vector<ReportField> report() const override { return multipatch_report(options_, patches_); }
+  // Multigrid on several patches as a PCShell (method = "petsc"): every process builds it over
+  // the whole space from the whole matrix, gathered (studies/pipeline.cpp), and from every
+  // patch's bases, fit and glued numbering, which need no cell (number_multipatch_functions).
+  // What "auto" takes: on 2 processes 1.3-8x faster than BoomerAMG at p = 2..6, for 1.5-1.7x
+  // the memory per process (docs/SOLVERS.md, "Multigrid under PETSc").
+  std::vector<std::string> structured_preconditioners() const override { return {kPatchMultigrid}; }
+  bool structured_preconditioner_needs_only_diagonal(const std::string&) const override { return false; }
+  std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& /*name: the one*/,
+                                                                 const DofLayout& layout,
+                                                                 const Eigen::SparseMatrix<double>& lower,
+                                                                 const PoissonProblem& problem) const override {
+    const MultiPatchNumbering numbering = number_multipatch_functions(domain_, options_);
+    PatchwiseLevel finest;
+    for (int k = 0; k < domain_.num_patches(); ++k) {
+      const BSplineBasis1D &u = numbering.bases[k][0], &v = numbering.bases[k][1];
+      std::vector<int> function(numbering.number.begin() + numbering.first_function[k],
+                                numbering.number.begin() + numbering.first_function[k + 1]);
+      finest.patches.push_back(planar_multigrid_patch(u, v, patch_separable_coefficients(domain_.patches[k], u, v),
+                                                      nitsche_ends(exterior_, k, problem), std::move(function)));
+    }
+    finest.layout = layout;
+    return patchwise_multigrid(std::move(finest), lower);
+  }
 
  private:
   TensorSpaceOptions options_;
+  MultiPatch domain_;                 // every patch: the multigrid's levels span them all
+  std::vector<PatchSideRef> exterior_;  // boundary id -> patch side
   MultiPatchTensorPart d_;
   std::vector<std::unique_ptr<PatchGeometryMap>> patch_maps_;  // over each piece's whole patch
   std::unique_ptr<GeometryMap> geometry_;

@@ -57,14 +57,22 @@ struct ReactionSamples {
 
 }  // namespace
 
-// The stiffness coefficients at element midpoints, in parameter derivatives
-// x_u = (dx/du_ref) / h_u: c11 = |x_v|^2 / det, c22 = |x_u|^2 / det; then their fit. Only
-// every row against 32 sampled columns and every column against 32 sampled rows are
-// evaluated: O(n) elements instead of n^2, and still exact for separable maps. From the
-// patch itself, so that a part of the space (which holds a few rows) gets the whole fit.
-SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& patch, const PatchGeometryMap& geometry,
-                                                   const PoissonProblem* problem) {
-  const int nu = patch.space_u.num_elements(), nv = patch.space_v.num_elements();
+namespace {
+
+// The parameter derivatives (x_u x_v; y_u y_v) and the point at an element's midpoint.
+struct MidpointGeometry {
+  Eigen::Matrix2d jacobian;
+  double x = 0, y = 0;
+};
+
+// The stiffness coefficients at element midpoints, in parameter derivatives:
+// c11 = |x_v|^2 / det, c22 = |x_u|^2 / det; then their fit. Only every row against 32 sampled
+// columns and every column against 32 sampled rows are evaluated: O(n) elements instead of n^2,
+// and still exact for separable maps. `at(i, j)` gives element (i, j)'s midpoint geometry.
+template <class Midpoint>
+SeparableCoefficients fit_at_midpoints(const BSplineBasis1D& space_u, const BSplineBasis1D& space_v, Midpoint at,
+                                       const PoissonProblem* problem) {
+  const int nu = space_u.num_elements(), nv = space_v.num_elements();
   auto sample = [](int n) {
     std::vector<int> v;
     const int m = std::min(n, 32);
@@ -76,24 +84,21 @@ SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& p
     for (int s : b.element_spans()) h.push_back(b.knots()[s + 1] - b.knots()[s]);
     return h;
   };
-  const std::vector<double> h_u = lengths(patch.space_u), h_v = lengths(patch.space_v);
+  const std::vector<double> h_u = lengths(space_u), h_v = lengths(space_v);
   const std::vector<int> rows = sample(nu), columns = sample(nv);
   std::vector<double> c11(static_cast<size_t>(nu) * nv, 1.0), c22(c11.size(), 1.0);
-  GeometryAtPoints at;
   bool ok = true;
   ReactionAt reaction(problem);
   ReactionSamples<2> samples;
   auto measure = [&](int i, int j) {
     const size_t k = i + static_cast<size_t>(nu) * j;
-    geometry.evaluate_element_at_rule(i, j, 1, 1, at);  // the one-point Gauss rule: the midpoint
-    const double hu = h_u[i], hv = h_v[j];
-    const double xu = at.jacobian(0, 0) / hu, xv = at.jacobian(0, 1) / hv;
-    const double yu = at.jacobian(0, 2) / hu, yv = at.jacobian(0, 3) / hv;
+    const MidpointGeometry g = at(i, j, h_u[i], h_v[j]);
+    const double xu = g.jacobian(0, 0), xv = g.jacobian(0, 1), yu = g.jacobian(1, 0), yv = g.jacobian(1, 1);
     const double det = xu * yv - xv * yu;
     if (!(det > 0)) return void(ok = false);  // assembly refuses such maps before this is built
     c11[k] = (xv * xv + yv * yv) / det;
     c22[k] = (xu * xu + yu * yu) / det;
-    if (reaction.any()) samples.add({i, j}, hu * hv, reaction(at.x(0, 0), at.x(0, 1), 0) * det);
+    if (reaction.any()) samples.add({i, j}, h_u[i] * h_v[j], reaction(g.x, g.y, 0) * det);
   };
   for (int i = 0; i < nu; ++i)
     for (int j : columns) measure(i, j);
@@ -103,6 +108,40 @@ SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& p
   SeparableCoefficients fitted = SeparableCoefficients::fit(nu, nv, c11, c22, rows, columns);
   fitted.shift = samples.shift({&fitted.a2, &fitted.b1});
   return fitted;
+}
+
+}  // namespace
+
+// From the patch's own grid map, so that a part of the space (which holds a few rows) gets the
+// whole fit: x_u = (dx/du_ref) / h_u at the one-point Gauss rule.
+SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& patch, const PatchGeometryMap& geometry,
+                                                   const PoissonProblem* problem) {
+  GeometryAtPoints at;
+  return fit_at_midpoints(
+      patch.space_u, patch.space_v,
+      [&](int i, int j, double hu, double hv) {
+        geometry.evaluate_element_at_rule(i, j, 1, 1, at);
+        MidpointGeometry g;
+        g.jacobian << at.jacobian(0, 0) / hu, at.jacobian(0, 1) / hv, at.jacobian(0, 2) / hu, at.jacobian(0, 3) / hv;
+        g.x = at.x(0, 0);
+        g.y = at.x(0, 1);
+        return g;
+      },
+      problem);
+}
+
+SeparableCoefficients patch_separable_coefficients(const NurbsPatch& patch, const BSplineBasis1D& space_u,
+                                                   const BSplineBasis1D& space_v, const PoissonProblem* problem) {
+  const std::vector<int> su = space_u.element_spans(), sv = space_v.element_spans();
+  const std::vector<double>&tu = space_u.knots(), &tv = space_v.knots();
+  return fit_at_midpoints(
+      space_u, space_v,
+      [&](int i, int j, double, double) {
+        const PatchPointDerivatives d =
+            patch_point_derivatives(patch, (tu[su[i]] + tu[su[i] + 1]) / 2, (tv[sv[j]] + tv[sv[j] + 1]) / 2);
+        return MidpointGeometry{d.jacobian, d.x[0], d.x[1]};
+      },
+      problem);
 }
 
 SeparableVolumeCoefficients volume_separable_coefficients(const TensorVolumeDiscretization& d, const PoissonProblem* problem) {

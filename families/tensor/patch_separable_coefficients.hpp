@@ -16,6 +16,10 @@ namespace knotwork {
 // fast diagonalization's, which sees no operator to read it off.
 SeparableCoefficients patch_separable_coefficients(const TensorDiscretization& patch, const PatchGeometryMap& geometry,
                                                    const PoissonProblem* problem = nullptr);
+// The same from the patch's map and its refined bases alone (no cell built: a process that does
+// not hold the patch's cells).
+SeparableCoefficients patch_separable_coefficients(const NurbsPatch& patch, const BSplineBasis1D& space_u,
+                                                   const BSplineBasis1D& space_v, const PoissonProblem* problem = nullptr);
 
 // The volume's c_dd = |x_e x x_f|^2 / det J (parameter derivatives) at the midpoints of the
 // space's elements, fitted (weights 1 where a Jacobian is not positive: the assembly refuses

@@ -6,7 +6,7 @@ BoomerAMG (the default) on 1, 2 and 3 ranks, run to a relative residual of 1e-12
 same L2 and H1-seminorm errors to 1e-6 relative (at PETSc's default of 1e-10 the G1 pentagon
 differs by 1.7e-6 after a change of basis that leaves the space alone), MUMPS's distributed Cholesky on 2 and 3 ranks
 to 1e-10 (and for tensor cases, whose default is their own preconditioner, BoomerAMG by
-options to 1e-6). Partition-dependent bugs (a cell on a rank boundary, a Dirichlet dof owned elsewhere)
+options to 1e-6: with --rows and --patches). Partition-dependent bugs (a cell on a rank boundary, a Dirichlet dof owned elsewhere)
 change the errors far beyond that.
 
 With --rows N (a tensor case with N rows of cells along v, or a volume with N slabs of cells
@@ -75,7 +75,7 @@ def main():
     reference = run(base + ["--solver", "direct"], env)
     failures = []
     runs = [(n, "", 1e-6) for n in (1, 2, 3)] + [(n, MUMPS, 1e-10) for n in (2, 3)]
-    if rows is not None:  # the default there is the space's PCShell: BoomerAMG on the parts too
+    if rows is not None or patches:  # the default there is the space's PCShell: BoomerAMG on the parts too
         runs += [(n, "-pc_type hypre", 1e-6) for n in (2, 3)]
     for ranks, options, tolerance in runs:
         command = [MPIRUN, "-n", str(ranks), "--oversubscribe"] + base + ["--solver", "petsc"]
