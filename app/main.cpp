@@ -46,8 +46,9 @@ void add_common(CLI::App* cmd, knotwork::CommonOptions& o) {
                   "one-patch tensor spaces and volumes that are one affine map, constant coefficients, no Nitsche), or auto (the default: without a matrix "
                   "where that applies and every element is affine, assembled otherwise) (overrides [solver] matrix)");
   cmd->add_option("--tolerance", o.tolerance,
-                  "Iterative solve: backward error to reach (default 1e-15), or with --solver petsc the relative "
-                  "residual (default 1e-10) (overrides [solver] tolerance)");
+                  "Iterative solve (CG, and PETSc's KSP with --solver petsc): backward error to reach, "
+                  "||b - Kx||/(||K|| ||x|| + ||b||) in the max norm (default 1e-15: the direct solve's errors) "
+                  "(overrides [solver] tolerance)");
   cmd->add_option_function<std::string>(
       "--petsc-options",
       [&o](const std::string& v) {

@@ -63,13 +63,18 @@ int run_command(const RunOptions& o) {
                 solver.preconditioner.c_str(), solver.matrix_free ? ", no matrix" : "", s.iterative.iterations,
                 solver.matrix_free ? "at most " : "", s.iterative.backward_error, c.solver.tolerance,
                 s.iterative.relative_residual);
+  char stop[80];
+  if (s.distributed.stop == "backward_error")
+    std::snprintf(stop, sizeof stop, " (tolerance %.0e)", c.solver.tolerance);
+  else
+    std::snprintf(stop, sizeof stop, " (PETSc's own test, from petsc_options)");
   if (solver.method == "petsc")
-    std::printf("  solver   PETSc %s + %s%s%s on %d process%s: %d iteration%s, relative residual %.2e (tolerance %.0e)\n",
+    std::printf("  solver   PETSc %s + %s%s%s on %d process%s: %d iteration%s, backward error %.2e%s, relative residual %.2e\n",
                 s.distributed.ksp.c_str(),
                 (s.distributed.pc == "shell" ? solver.preconditioner + shell_origin(solver.shell_built_from) : s.distributed.pc).c_str(), s.distributed.package.empty() ? "" : " ",
                 s.distributed.package.c_str(), s.distributed.ranks, s.distributed.ranks == 1 ? "" : "es",
-                s.iterative.iterations, s.iterative.iterations == 1 ? "" : "s", s.iterative.relative_residual,
-                c.solver.petsc_tolerance());
+                s.iterative.iterations, s.iterative.iterations == 1 ? "" : "s", s.iterative.backward_error, stop,
+                s.iterative.relative_residual);
   if (solver.method == "petsc" && s.distributed.ranks > 1)
     std::printf("  parts    the largest rank held %d of the %d cells%s; peak memory %.0f MB per rank\n",
                 s.distributed.cells_held, global_num_cells(*r.space),

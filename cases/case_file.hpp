@@ -95,11 +95,10 @@ struct CaseDescription {
     // PETSc options: for boomeramg, its own ("-pc_hypre_boomeramg_..."); for petsc, the KSP's
     // and PC's ("-ksp_type cg -pc_type hypre", "-pc_type cholesky -pc_factor_mat_solver_type mumps")
     std::string petsc_options;
-    double tolerance = 1e-15;  // CG: backward error of the solution (IterativeStats); petsc: see petsc_tolerance
+    // CG's, serial or PETSc's: the backward error of the solution (IterativeStats; under PETSc
+    // knotwork's convergence test, unless petsc_options give -ksp_rtol or -ksp_atol).
+    double tolerance = 1e-15;
     bool tolerance_given = false;  // by the case or --tolerance
-    // PETSc's relative residual: the tolerance given, else 1e-10 (1e-15 is below what a
-    // residual computed in double can reach on large systems).
-    double petsc_tolerance() const { return tolerance_given ? tolerance : 1e-10; }
     int max_iterations = 1000;
     // How CG gets K: "assembled" (a sparse matrix), "matrix_free" (the family's operator applied
     // without a matrix: docs/SOLVERS.md, "Without a matrix"; about 20% less memory) or "auto":

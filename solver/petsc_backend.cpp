@@ -174,6 +174,8 @@ void solve_with_petsc(RankRows&& rows, const Eigen::VectorXd& load, const DofLay
   sol.timings.iterations = r.solve_seconds;
   sol.iterative.iterations = r.iterations;
   sol.iterative.relative_residual = r.relative_residual;
+  sol.iterative.backward_error = r.backward_error;
+  sol.distributed.stop = r.tolerance_kind;
   sol.iterative.converged = r.converged;
   sol.distributed.ksp = r.ksp_type;
   sol.distributed.pc = r.pc_type;
@@ -181,9 +183,15 @@ void solve_with_petsc(RankRows&& rows, const Eigen::VectorXd& load, const DofLay
   sol.distributed.reason = r.reason;
   if (!r.converged) {
     char b[300];
-    std::snprintf(b, sizeof b, "PETSc's %s + %s stopped after %d iterations (%s) at relative residual %.3e, tolerance %.1e",
-                  r.ksp_type.c_str(), r.pc_type.c_str(), r.iterations, r.reason.c_str(), r.relative_residual,
-                  petsc.tolerance);
+    if (r.tolerance_kind == "backward_error")
+      std::snprintf(b, sizeof b, "PETSc's %s + %s stopped after %d iterations (%s) at backward error %.3e (relative residual "
+                    "%.3e), above the tolerance %.1e",
+                    r.ksp_type.c_str(), r.pc_type.c_str(), r.iterations, r.reason.c_str(), r.backward_error,
+                    r.relative_residual, petsc.tolerance);
+    else
+      std::snprintf(b, sizeof b, "PETSc's %s + %s stopped after %d iterations (%s) at relative residual %.3e (PETSc's test, "
+                    "from petsc_options)",
+                    r.ksp_type.c_str(), r.pc_type.c_str(), r.iterations, r.reason.c_str(), r.relative_residual);
     throw NotConverged(b);
   }
   for (int d = 0; d < layout.num_free(); ++d) sol.coefficients[layout.function_of_dof[d]] = r.solution[d];

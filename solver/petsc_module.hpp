@@ -51,7 +51,10 @@ struct DistributedSolveOptions {
   // PETSc options for the KSP and its PC, after the defaults (CG + BoomerAMG); refused when
   // PETSc does not use one (std::invalid_argument).
   std::string petsc_options;
-  double tolerance = 1e-10;  // relative, unpreconditioned residual (-ksp_rtol)
+  // The normwise backward error ||b - A x||_inf / (||A||_inf ||x||_inf + ||b||_inf) at which
+  // the KSP stops, as serial CG's (PETSc's own relative test where the options give -ksp_rtol
+  // or -ksp_atol).
+  double tolerance = 1e-15;
   int max_iterations = 1000;
   // The preconditioner: "boomeramg" (hypre), "jacobi" (PETSc's), or "shell": `shell`, one of
   // knotwork's, over all free dofs, applied on every rank to the gathered residual (each rank
@@ -69,6 +72,8 @@ struct DistributedSolveResult {
   Eigen::VectorXd solution;  // the wanted rows' values (DistributedSolveOptions), or every free dof
   int iterations = 0;
   double relative_residual = 0;  // ||b - A x|| / ||b||, computed after the solve
+  double backward_error = 0;     // ||b - A x||_inf / (||A||_inf ||x||_inf + ||b||_inf), after the solve
+  std::string tolerance_kind;    // "backward_error" (knotwork's stop) or "relative_residual" (PETSc's)
   bool converged = false;
   std::string reason;            // PETSc's KSPConvergedReason
   std::string ksp_type, pc_type, factor_package;  // what ran (after the user's options)

@@ -97,6 +97,9 @@ struct PoissonSolution {
     int cells_held = 0;  // the most cells one rank held (its part, or the whole mesh)
     double peak_memory_mb = 0;  // the largest peak resident size of a rank, after the solve
     std::string ksp, pc, package, reason;
+    // What stopped the KSP: "backward_error" (knotwork's test, as serial CG's) or
+    // "relative_residual" (PETSc's own, where the options give -ksp_rtol or -ksp_atol).
+    std::string stop;
   } distributed;
   // Closed surfaces with reaction = 0 (zero-mean solution): the surface's area, the mean
   // removed from f, and the exact solution's mean, removed before the errors are measured.

@@ -173,7 +173,7 @@ ConvergeOutcome converge_study(const CaseDescription& c, int num_levels, Orderin
   Json& root = out.json;
   Json sj = Json::object();
   sj.set("method", c.solver.method).set("iterative_levels", iterative_levels);
-  if (c.solver.method == "petsc") sj.set("ranks", launched_world().size).set("tolerance", c.solver.petsc_tolerance());
+  if (c.solver.method == "petsc") sj.set("ranks", launched_world().size).set("tolerance", c.solver.tolerance);
   if (iterative_levels > 0)
     sj.set("preconditioner", iterative_solver.preconditioner).set("summary", iterative_solvers_summary(levels))
         .set("tolerance", c.solver.tolerance);

@@ -329,7 +329,7 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
                                  ? chosen.preconditioner
                                  : "shell";
       petsc.shell_reads_matrix = shell_reads_matrix;
-      petsc.tolerance = c.solver.petsc_tolerance();
+      petsc.tolerance = c.solver.tolerance;
       petsc.max_iterations = c.solver.max_iterations;
       const Distribution distribution{space.part(), &petsc};
       return solve_poisson(space.mesh(), space.geometry(), c.problem, so, &distribution);

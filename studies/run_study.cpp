@@ -195,8 +195,8 @@ Json run_json(const CaseDescription& c, const RunOutcome& r) {
     const PoissonSolution::Distributed& d = s.distributed;
     sj.set("ksp", d.ksp).set("pc", d.pc).set("preconditioner", r.solver.preconditioner)
         .set("iterations", s.iterative.iterations)
-        .set("relative_residual", s.iterative.relative_residual).set("tolerance", c.solver.petsc_tolerance())
-        .set("converged_reason", d.reason);
+        .set("relative_residual", s.iterative.relative_residual).set("backward_error", s.iterative.backward_error)
+        .set("tolerance", c.solver.tolerance).set("stop", d.stop).set("converged_reason", d.reason);
     if (!d.package.empty()) sj.set("factor_package", d.package);
     if (d.pc == "shell") sj.set("shell_built_from", r.solver.shell_built_from);
     j.set("ranks", d.ranks).set("space_parts", r.space->part() != nullptr).set("largest_part_cells", d.cells_held).set("peak_memory_mb_per_rank", d.peak_memory_mb);

@@ -249,7 +249,7 @@ def run(case, *, degree=None, elements=None, solver=None, tolerance=None, orderi
     degree, elements: override [space] degree / elements (as --degree, --elements).
     solver: "direct", "iterative", "auto" or "petsc" (as --solver; "petsc" is PETSc's KSP in
     this one process, with [solver] petsc_options); tolerance: the iterative solve's backward
-    error, or PETSc's relative residual (as --tolerance). preconditioner: the iterative solve's
+    error, serial or PETSc's (as --tolerance). preconditioner: the iterative solve's
     ("auto", "jacobi", "boomeramg" or the family's own, e.g. "fast_diagonalization" or
     "multigrid" for tensor-product spaces; as --preconditioner). matrix: how CG gets K, "auto",
     "assembled" or "matrix_free" (as --matrix). ordering: CHOLMOD's

@@ -6,6 +6,8 @@
   parallel reader reads every cell of the serial output back from the .pvtu, with the
   Bezier cells' rational weights and degrees as active attributes. `converge` on 2 ranks
   writes a .pvd over the levels' .pvtu files, each with every cell of its level.
+- The KSP stops at the backward error (the default, 1e-15) unless the options give -ksp_rtol,
+  and the JSON says which.
 - A PETSc option nobody reads, a serial method under mpirun, and a command that does not run
   under mpirun each get exit code 2 and exactly one error line (rank 0's), not one per rank.
 
@@ -14,6 +16,7 @@ Usage: check_output_and_refusals.py KNOTWORK_BINARY CASE_FILE
 import os
 import subprocess
 import sys
+import json
 import re
 import tempfile
 
@@ -115,6 +118,24 @@ def main():
         lines = [l for l in done.stderr.splitlines() if l.startswith("knotwork: error:")]
         if done.returncode != 2 or len(lines) != 1 or "only `run` and `converge`" not in lines[0]:
             failures.append(f"bench under mpirun: exit {done.returncode}, error lines {lines}")
+        # The stop: the backward error by default (at most the tolerance, reported), PETSc's own
+        # relative test when the options give -ksp_rtol (a loose one: the backward error then
+        # stays above the default's).
+        stops = {}
+        for extra in ([], ["--petsc-options", "-ksp_rtol 1e-4"]):
+            done = subprocess.run([MPIRUN, "-n", "2", binary, "run", case, "--json", "-q", "--no-output", "--solver", "petsc"]
+                                  + extra, env=env, capture_output=True, text=True, timeout=300, cwd=scratch)
+            if done.returncode != 0:
+                failures.append(f"run {' '.join(extra)}: exit {done.returncode}: {done.stderr}")
+                continue
+            solver = json.loads(done.stdout)["solver"]
+            stops[bool(extra)] = (solver["stop"], solver["converged_reason"], solver["backward_error"], solver["tolerance"])
+        if stops.get(False) and not (stops[False][:2] == ("backward_error", "CONVERGED_BACKWARD_ERROR") and
+                                     stops[False][2] <= stops[False][3] == 1e-15):
+            failures.append(f"the default stop: {stops[False]}")
+        if stops.get(True) and not (stops[True][0] == "relative_residual" and stops[True][1].startswith("CONVERGED")
+                                    and stops[True][2] > 1e-15):
+            failures.append(f"-ksp_rtol 1e-4: {stops[True]}")
         expected_folders = {"parallel", "serial", "levels", "serial_level_0", "serial_level_1"}
         if not set(os.listdir(scratch)) <= expected_folders:
             failures.append(f"refused runs wrote {sorted(set(os.listdir(scratch)) - expected_folders)}")
