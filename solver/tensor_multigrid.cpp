@@ -181,13 +181,9 @@ class TensorMultigrid final : public Preconditioner {
   mutable std::vector<Work> work_;
 };
 
-// The separable operator P knows only the geometry. A reaction term c u is read off the level's
-// operator, as on several patches (solver/patchwise_multigrid.cpp): stiffness matrices
-// annihilate constants, so on the rows whose couplings all lie among the free functions, A 1 is
-// the reaction's part alone, whatever the diffusion; the shift makes P + shift M_u (x) M_v match
-// it there. (Without it, c = 1000 took 126-146 CG iterations at 64^2, p = 2.)
-double reaction_shift(const Level& L) {
-  const Eigen::VectorXd &mu = L.u.mass_row_sum, &mv = L.v.mass_row_sum;
+// A reaction term, read off the level's A 1 (multigrid_levels::reaction_shift; without it,
+// c = 1000 took 126-146 CG iterations at 64^2, p = 2).
+double level_reaction_shift(const Level& L) {
   Eigen::VectorXd a1(L.size());
   if (L.op) {
     if (L.op->reaction() == 0) return 0.0;  // (an operator application saved on the default path)
@@ -196,18 +192,11 @@ double reaction_shift(const Level& L) {
   } else {
     for (long d = 0; d < L.size(); ++d) a1[d] = L.A.row(d).sum();
   }
-  const int ru = L.u.basis.degree(), rv = L.v.basis.degree();
-  double reaction = 0, model = 0;
-  for (int j = rv; j < L.v.count - rv; ++j)
-    for (int i = ru; i < L.u.count - ru; ++i) {
-      reaction += a1[i + static_cast<long>(L.u.count) * j];
-      model += mu[i] * mv[j];
-    }
-  return model > 0 && reaction > 0 ? reaction / model : 0.0;
+  return reaction_shift(a1, L.u, L.v);
 }
 
 void set_scale(Level& L, const Eigen::VectorXd& diagonal) {
-  L.shift = reaction_shift(L);
+  L.shift = level_reaction_shift(L);
   L.scale.resize(L.size());
   for (int j = 0; j < L.v.count; ++j)
     for (int i = 0; i < L.u.count; ++i) {

@@ -171,12 +171,10 @@ class TensorMultigrid3d final : public Preconditioner {
   mutable std::vector<Work> work_;
 };
 
-// A reaction term, read off the level's operator as on the plane (solver/tensor_multigrid.cpp):
-// on the rows whose couplings all lie among the free functions, A 1 is the reaction's part
-// alone; the shift matches P + shift M_u (x) M_v (x) M_w to it there. (Without it, c = 1000
-// took 81 CG iterations on the cube at 16^3, p = 2, and on the thick quarter annulus CG did not
-// converge in 1 000.)
-double reaction_shift(const Level& L) {
+// A reaction term, read off the level's A 1 (multigrid_levels::reaction_shift; without it,
+// c = 1000 took 81 CG iterations on the cube at 16^3, p = 2, and on the thick quarter annulus
+// CG did not converge in 1 000).
+double level_reaction_shift(const Level& L) {
   Eigen::VectorXd a1(L.size());
   if (L.op) {
     if (L.op->reaction() == 0) return 0.0;  // (an operator application saved on the default path)
@@ -185,20 +183,11 @@ double reaction_shift(const Level& L) {
   } else {
     for (long d = 0; d < L.size(); ++d) a1[d] = L.A.row(d).sum();
   }
-  const Direction &u = L.d[0], &v = L.d[1], &w = L.d[2];
-  const int ru = u.basis.degree(), rv = v.basis.degree(), rw = w.basis.degree();
-  double reaction = 0, model = 0;
-  for (int c = rw; c < w.count - rw; ++c)
-    for (int b = rv; b < v.count - rv; ++b)
-      for (int a = ru; a < u.count - ru; ++a) {
-        reaction += a1[a + long(u.count) * (b + long(v.count) * c)];
-        model += u.mass_row_sum[a] * v.mass_row_sum[b] * w.mass_row_sum[c];
-      }
-  return model > 0 && reaction > 0 ? reaction / model : 0.0;
+  return reaction_shift(a1, L.d[0], L.d[1], &L.d[2]);
 }
 
 void set_scale(Level& L, const Eigen::VectorXd& diagonal) {
-  L.shift = reaction_shift(L);
+  L.shift = level_reaction_shift(L);
   L.scale.resize(L.size());
   const Direction &u = L.d[0], &v = L.d[1], &w = L.d[2];
   long at = 0;

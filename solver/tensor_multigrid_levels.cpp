@@ -35,6 +35,18 @@ std::vector<std::pair<int, int>> tile(int n, int block, int offset) {
 
 }  // namespace
 
+double reaction_shift(const Eigen::VectorXd& a1, const Direction& u, const Direction& v, const Direction* w) {
+  const int ru = u.basis.degree(), rv = v.basis.degree(), rw = w ? w->basis.degree() : 0, nw = w ? w->count : 1;
+  double reaction = 0, model = 0;
+  for (int c = rw; c < nw - rw; ++c)
+    for (int b = rv; b < v.count - rv; ++b)
+      for (int a = ru; a < u.count - ru; ++a) {
+        reaction += a1[a + long(u.count) * (b + long(v.count) * c)];
+        model += u.mass_row_sum[a] * v.mass_row_sum[b] * (w ? w->mass_row_sum[c] : 1.0);
+      }
+  return model > 0 && reaction > 0 ? reaction / model : 0.0;
+}
+
 void build_windows(Direction& d, int block, int tilings) {
   const UnivariatePair pair =
       univariate_pair(d.basis, d.mass_weight, d.stiffness_weight, d.nitsche_start, d.nitsche_end, d.nitsche_factor);

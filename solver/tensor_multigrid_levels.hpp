@@ -56,6 +56,14 @@ bool free_range(const std::vector<int>& free, int n, Direction& d);
 // The block side: as given (at least 2p + 2), else max(16, 5p + 2).
 int block_side(int asked, int p);
 
+// The shift that stands for a reaction term c u in a level's separable operator, which knows
+// only the geometry. Stiffness matrices annihilate constants, so on the rows whose couplings all
+// lie among the free functions (at least each direction's degree from its ends), A 1 is the
+// reaction's part alone, whatever the diffusion; the shift makes shift (M_u 1) (x) (M_v 1)
+// (x) (M_w 1) match it there in the mean. `a1` is A 1 over the level's free functions (u
+// fastest); `w` null on a plane. 0 where A 1 shows no reaction.
+double reaction_shift(const Eigen::VectorXd& a1, const Direction& u, const Direction& v, const Direction* w = nullptr);
+
 // A block smoother's local solve on the functions of windows U x V: R (U.size x V.size, the
 // scaled residual) := (U.U (x) V.U) diag(1 / (lambda_u + lambda_v)) (U.U (x) V.U)^T R, the
 // inverse of the block's separable operator in its eigenbases; T is work space.

@@ -75,13 +75,13 @@ double evaluate(const PatchwiseLevel& level, size_t k, const Eigen::VectorXd& c,
   return s;
 }
 
-// CG with "multigrid" to the default backward error 1e-15 leaves CHOLMOD's errors (with its
-// default ordering); returns the CG solution.
-PoissonSolution multigrid_as_direct(CaseDescription c, const SplineSpace& space) {
+// CG with `preconditioner` to the default backward error 1e-15 leaves CHOLMOD's errors (with
+// its default ordering); returns the CG solution.
+PoissonSolution cg_as_direct(CaseDescription c, const SplineSpace& space, const char* preconditioner = "multigrid") {
   c.solver.method = "direct";
   const PoissonSolution direct = solve_case(c, space, Ordering::kAuto);
   c.solver.method = "iterative";
-  c.solver.preconditioner = "multigrid";
+  c.solver.preconditioner = preconditioner;
   PoissonSolution cg = solve_case(c, space, Ordering::kAuto);
   INFO(cg.iterative.iterations << " iterations");
   require_direct_errors(cg, direct);
@@ -239,7 +239,7 @@ TEST_CASE("CG + multigrid on several patches: the direct solve's errors, and aut
         if (nitsche) c.problem.dirichlet_method = DirichletMethod::kNitsche;
         const auto space = build_space(c);
         INFO(name << (nitsche ? " (Nitsche)" : "") << ", p = " << p);
-        const PoissonSolution cg = multigrid_as_direct(c, *space);
+        const PoissonSolution cg = cg_as_direct(c, *space);
         REQUIRE(cg.iterative.iterations <= 16);
         // "auto" takes CG with it from 10 000 functions (these spaces have 13 000 to 18 000).
         if (nitsche) continue;
@@ -264,7 +264,7 @@ TEST_CASE("Multigrid on several patches with a reaction and a varying diffusion:
     if (variant == 1) c.problem.coefficients.diffusion = {Expression::parse("1 + 100*x^2", "test: coefficient")};
     const auto space = build_space(c);
     INFO("variant " << variant);
-    const PoissonSolution cg = multigrid_as_direct(c, *space);
+    const PoissonSolution cg = cg_as_direct(c, *space);
     // Measured: 5 to 7 iterations over the three variants.
     REQUIRE(cg.iterative.iterations <= 16);
   }
@@ -281,14 +281,7 @@ TEST_CASE("The per-patch fast diagonalization with a reaction term: bounded, the
   patch_space(c).elements_per_span = {32, 32};
   c.problem.reaction = 1000;
   const auto space = build_space(c);
-  c.solver.method = "direct";
-  const PoissonSolution direct = solve_case(c, *space, Ordering::kAuto);
-  c.solver.method = "iterative";
-  c.solver.preconditioner = "fast_diagonalization";
-  const PoissonSolution cg = solve_case(c, *space, Ordering::kAuto);
-  INFO(cg.iterative.iterations << " iterations");
-  require_direct_errors(cg, direct);
-  REQUIRE(cg.iterative.iterations <= 60);
+  REQUIRE(cg_as_direct(c, *space, "fast_diagonalization").iterative.iterations <= 60);
 }
 
 TEST_CASE("Multigrid on glued volumes: the coarser level's functions, bounded iterations, the direct solve's errors",
@@ -351,7 +344,7 @@ TEST_CASE("Multigrid on glued volumes: the coarser level's functions, bounded it
   o.degree = {2, 2, 2};
   o.elements_per_span = {16, 16, 16};
   const auto space = build_space(c);
-  multigrid_as_direct(c, *space);
+  cg_as_direct(c, *space);
   c.solver.method = c.solver.preconditioner = "auto";
   SolverReport chosen;
   solve_case(c, *space, Ordering::kAuto, {}, &chosen);
