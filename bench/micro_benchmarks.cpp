@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "studies/pipeline.hpp"
+#include "cases/case_file.hpp"
 #include "cases/geometries.hpp"
 #include "solver/assemble_poisson.hpp"
 #include "solver/error_norms.hpp"
@@ -63,6 +64,42 @@ void BM_KroneckerMatrix(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * s.space->mesh().num_cells());
 }
 BENCHMARK(BM_KroneckerMatrix)->Args({2, 128})->Args({4, 64})->Args({2, 512})->Args({4, 256})->Unit(benchmark::kMillisecond);
+
+// A curved patch's matrix (the quarter annulus, lower triangle over the free dofs, pattern
+// included, no load): the element loop (path 0: lower_pattern_matrix and assemble_poisson)
+// against the operator's sum factorization (path 1: solver/tensor_operator_sum_factorized.cpp),
+// on the NURBS space (rational 1) or on B-splines over the same exact map (rational 0).
+void BM_CurvedMatrix(benchmark::State& state) {
+  const int p = static_cast<int>(state.range(0)), n = static_cast<int>(state.range(1));
+  const std::string text = "[geometry]\ntype = \"quarter_annulus\"\n[space]\ndegree = " + std::to_string(p) +
+                           "\nelements = " + std::to_string(n) + "\nrational = " + (state.range(3) ? "true" : "false") +
+                           "\n[problem]\nexact = \"-(x^2+y^2-1)*(x^2+y^2-4)*x*y^2\"\n";
+  const CaseDescription c = load_case_text(text, "bench");
+  const std::unique_ptr<SplineSpace> space = build_space(c);
+  std::vector<bool> fixed;
+  const Eigen::VectorXd g = project_dirichlet_data(space->mesh(), space->geometry(), c.problem, c.quadrature, fixed);
+  const DofLayout layout = make_dof_layout(space->mesh().num_functions(), fixed);
+  if (state.range(2) == 0) {
+    PoissonForm form;
+    form.load = false;
+    Eigen::VectorXd rhs;
+    for (auto _ : state) {
+      Eigen::SparseMatrix<double> K = lower_pattern_matrix(space->mesh(), layout);
+      assemble_poisson(space->mesh(), space->geometry(), form, layout, g, c.quadrature, K, rhs);
+      benchmark::DoNotOptimize(K.valuePtr());
+    }
+  } else {
+    const std::unique_ptr<MatrixFreePoisson> op = space->matrix_free_operator(1.0, 0.0, c.quadrature);
+    for (auto _ : state) benchmark::DoNotOptimize(op->lower_matrix(layout));
+  }
+  state.SetItemsProcessed(state.iterations() * space->mesh().num_functions());
+}
+BENCHMARK(BM_CurvedMatrix)
+    ->ArgNames({"p", "n", "path", "rational"})
+    ->ArgsProduct({{2}, {512}, {0, 1}, {0, 1}})
+    ->ArgsProduct({{4}, {256}, {0, 1}, {0, 1}})
+    ->ArgsProduct({{6}, {128}, {0, 1}, {1}})
+    ->Unit(benchmark::kMillisecond);
 
 // What the Kronecker form's path still integrates: the load, f at every quadrature point of the
 // same square (the case's derived source, compiled), by the operator's sum factorization.

@@ -52,6 +52,7 @@ class AffineVolumeOperator final : public MatrixFreePoisson {
                       std::array<double, 2>& squares, Eigen::VectorXd* h1_per_cell, CellRange cells = {}) const override;
   bool all_elements_affine() const override { return true; }
   bool assembles_lower() const override { return true; }
+  bool writes_rows() const override { return true; }
   Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const override;
   void row_entries(int row, int count, const int* columns, double* values) const override;
   bool gives_pattern() const override { return true; }

@@ -45,18 +45,23 @@ class MatrixFreePoisson {
                               CellRange /*cells*/ = {}) const {
     return false;
   }
-  // Whether lower_matrix() can write K without an element loop (a tensor patch whose map is
-  // one affine map: K is a sum of Kronecker products of univariate band matrices, whose
-  // entries it adds up directly, O(1) work per entry: docs/SOLVERS.md, "The matrix from the
-  // Kronecker form").
+  // Whether lower_matrix() can write K without the element loop: a tensor patch, from its
+  // Kronecker form where the map is one affine map (O(1) work per entry) and by sum
+  // factorization elsewhere (O(p^4) per function in 2D, not the element loop's O(p^6) per
+  // cell): docs/SOLVERS.md, "The matrix from the Kronecker form" and "... by sum factorization".
   virtual bool assembles_lower() const { return false; }
+  // Whether row_entries() serves: any row alone, at O(1) per entry (a distributed solve's
+  // owned rows). A row by sum factorization would cost a whole band of element rows.
+  virtual bool writes_rows() const { return false; }
+  // How lower_matrix() writes K, as --json reports it (solver.assembly_method).
+  virtual const char* assembly_method() const { return "kronecker_form"; }
   // K's lower triangle over the free dofs of `layout` (dof order is function order), with the
   // pattern lower_pattern_matrix gives the space's mesh (functions that share a cell), in
   // CHOLMOD's layout. Only where assembles_lower(); throws std::logic_error elsewhere.
   virtual Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const;
   // K's entries (row, columns[k]) into values[k], functions numbered as the operator's, by the
   // same sums: a distributed solve's owned rows, each written whole by its process. Only where
-  // assembles_lower(); throws std::logic_error elsewhere.
+  // writes_rows(); throws std::logic_error elsewhere.
   virtual void row_entries(int row, int count, const int* columns, double* values) const;
   // Whether lower_pattern() gives that pattern (zero values) for any problem on the space, also
   // where the element loop must fill it (a curved or rational patch, variable coefficients):

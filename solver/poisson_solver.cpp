@@ -221,7 +221,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     });
     const bool writes = given && operator_problem && given->assembles_lower();
     if (distributed) {
-      double some_cannot = writes ? 0 : 1;
+      double some_cannot = writes && given->writes_rows() ? 0 : 1;
       max_over_ranks(&some_cannot, 1);
       if (some_cannot == 0) op = std::move(given);
       else if (given && given->gives_pattern()) pattern_from = std::move(given);
@@ -272,7 +272,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
   step([&] {
     // F over the free dofs, less K g for the Dirichlet values g; Neumann terms as assembled.
     // Distributed, the owned rows of F and K g (whole: the operator covers their elements).
-    sol.assembly = matrix_free ? "none" : "kronecker_form";
+    sol.assembly = matrix_free ? "none" : op->assembly_method();
     if (matrix_free) {
       op = options.matrix_free();
       if (!op || op->num_functions() != mesh.num_functions())

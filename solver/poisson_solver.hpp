@@ -87,8 +87,8 @@ struct PoissonSolution {
   std::optional<ErrorNorms> errors;
   Eigen::VectorXd cell_h1_squared;  // with cell_errors: where the error sits (sums to h1_semi^2)
   PoissonTimings timings;
-  // How K was made: "kronecker_form" (the operator wrote it), "element_loop", or "none" (CG
-  // applied K without a matrix).
+  // How K was made: "kronecker_form" or "sum_factorization" (the operator wrote it),
+  // "element_loop", or "none" (CG applied K without a matrix).
   std::string assembly = "element_loop";
   // method = "petsc" (solver/petsc_backend.hpp): the processes, and what PETSc ran
   // (the KSP, the PC, the factorization package when a direct one) and why it stopped.

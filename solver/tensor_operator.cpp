@@ -817,6 +817,44 @@ Eigen::VectorXd TensorPoissonOperator::diagonal() const {
   return diagonal;
 }
 
+void TensorPoissonOperator::row_coefficients(int ev, RowCoefficients& out) const {
+  const bool rational = weights_.size() > 0;
+  const int qu = u_.points, qv = v_.points;
+  const size_t along = size_t(u_.elements) * qu;
+  for (int k = 0; k < 6; ++k) out.d[k].assign(rational || (k != 2 && k != 4) ? along * qv : 0, 0.0);
+  out.element_row = ev;
+  out.min_det = std::numeric_limits<double>::infinity();
+  out.bad_element = -1;
+  const std::array<int, 4> row{0, u_.elements - 1, ev, ev};
+  const double cs = stiffness_, cr = reaction_;
+  dispatch(u_, v_, [&](auto n, auto q) {
+    for_each_element<decltype(n)::value, decltype(q)::value>(
+        [&](int eu, int, int, int, const double*, const double*, const double*, const double*, const Points& pts) {
+          if (pts.min_det < out.min_det) out.min_det = pts.min_det;
+          if (!(pts.min_det > 0) && out.bad_element < 0) out.bad_element = eu;
+          for (int j = 0; j < qv; ++j)
+            for (int i = 0; i < qu; ++i) {
+              const int k = i + qu * j;
+              const size_t at = size_t(j) * along + size_t(eu) * qu + i;
+              const double d11 = cs * pts.d11[k], d12 = cs * pts.d12[k], d22 = cs * pts.d22[k], m = cr * pts.measure[k];
+              if (!rational) {
+                out.d[0][at] = d11, out.d[1][at] = d12, out.d[3][at] = d22, out.d[5][at] = m;
+                continue;
+              }
+              // grad R_a = w_a P (N_u' N_v, N_u N_v', N_u N_v) with P = [1/W, 0, -W_u/W^2; 0, 1/W, -W_v/W^2].
+              const double a = 1 / pts.w.value[k], bu = -pts.w.du[k] * a * a, bv = -pts.w.dv[k] * a * a;
+              out.d[0][at] = a * a * d11;
+              out.d[1][at] = a * a * d12;
+              out.d[3][at] = a * a * d22;
+              out.d[2][at] = a * (d11 * bu + d12 * bv);
+              out.d[4][at] = a * (d12 * bu + d22 * bv);
+              out.d[5][at] = bu * (d11 * bu + d12 * bv) + bv * (d12 * bu + d22 * bv) + m * a * a;
+            }
+        },
+        nullptr, nullptr, &row);
+  });
+}
+
 Eigen::VectorXd TensorPoissonOperator::load(const Expression& source) const {
   if (net_->rows() == 0) throw std::logic_error("TensorPoissonOperator::load: an operator made without a geometry net");
   Eigen::VectorXd out = Eigen::VectorXd::Zero(num_functions());

@@ -64,10 +64,15 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   bool squared_errors(const Eigen::VectorXd& coefficients, const ExactSolution& exact, int points_u, int points_v,
                       std::array<double, 2>& squares, Eigen::VectorXd* h1_per_element, CellRange cells = {}) const override;
   bool all_elements_affine() const override { return affine_elements() == long(u_.elements) * v_.elements; }
-  // The matrix straight from the Kronecker form where the map is one affine map and the
-  // functions are B-splines (solver/tensor_operator_matrix.cpp): per entry four products of
-  // band entries, no quadrature and no scatter.
-  bool assembles_lower() const override { return uniform_ && weights_.size() == 0; }
+  // The matrix written in place, with no scatter: straight from the Kronecker form where the
+  // map is one affine map and the functions are B-splines (solver/tensor_operator_matrix.cpp,
+  // per entry four products of band entries); elsewhere (curved or piecewise-affine maps, NURBS
+  // spaces) by sum factorization, a column of element rows at a time
+  // (solver/tensor_operator_sum_factorized.cpp). Throws GeometryError, naming the lowest cell,
+  // where det J <= 0 at a point. Rows alone (row_entries) only from the Kronecker form.
+  bool assembles_lower() const override { return kronecker_writes() || net_->rows() > 0; }
+  bool writes_rows() const override { return kronecker_writes(); }
+  const char* assembly_method() const override { return kronecker_writes() ? "kronecker_form" : "sum_factorization"; }
   Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const override;
   void row_entries(int row, int count, const int* columns, double* values) const override;
   bool gives_pattern() const override { return true; }
@@ -207,6 +212,22 @@ class TensorPoissonOperator final : public MatrixFreePoisson {
   static Reach reach(const Direction& d, int functions);
   // K's lower triangle over the free dofs, with values (the Kronecker form) or zeros.
   Eigen::SparseMatrix<double> write_lower(const DofLayout& layout, bool values) const;
+  bool kronecker_writes() const { return uniform_ && weights_.size() == 0; }
+  // The coefficients of K at every point of element row ev, in the three kinds of product
+  // functions' parameter terms (N_u' N_v, N_u N_v', N_u N_v): the symmetric 3 x 3 matrix
+  // P^T (c_s D) P + c_r m / W^2 e3 e3^T, with P the rational functions' quotient rule (the
+  // identity's first two rows for B-splines), stored as d[k][j * (E_u q_u) + (eu q_u + i)] for
+  // k = 00, 01, 02, 11, 12, 22 (02 and 12 empty for B-splines). Also the row's smallest det J
+  // and its first element there (-1: none <= 0).
+  struct RowCoefficients {
+    int element_row = -1;
+    std::vector<double> d[6];
+    double min_det = 0;
+    int bad_element = -1;
+  };
+  void row_coefficients(int ev, RowCoefficients& out) const;
+  // K's lower triangle by sum factorization over the free dofs (any map, B-splines or NURBS).
+  Eigen::SparseMatrix<double> sum_factorized_lower(const DofLayout& layout) const;
   // y at `rows` from x on the padded box of rows +- the degrees (in, mu x mv) by the Kronecker
   // form of a patch whose elements share their factors.
   void kronecker_rows(const double* in, long mu, const FunctionBox& rows, double* y) const;

@@ -53,8 +53,8 @@ void TensorPoissonOperator::coupled_functions(int function, std::vector<int>& ou
 
 Eigen::SparseMatrix<double> TensorPoissonOperator::lower_matrix(const DofLayout& layout) const {
   if (!assembles_lower())
-    throw std::logic_error("TensorPoissonOperator::lower_matrix: the map is not one affine map, or the space is rational");
-  return write_lower(layout, true);
+    throw std::logic_error("TensorPoissonOperator::lower_matrix: an operator made without a geometry net");
+  return kronecker_writes() ? write_lower(layout, true) : sum_factorized_lower(layout);
 }
 
 TensorPoissonOperator::KroneckerEntries TensorPoissonOperator::kronecker_entries() const {
@@ -68,7 +68,7 @@ TensorPoissonOperator::KroneckerEntries TensorPoissonOperator::kronecker_entries
 }
 
 void TensorPoissonOperator::row_entries(int row, int count, const int* columns, double* values) const {
-  if (!assembles_lower())
+  if (!writes_rows())
     throw std::logic_error("TensorPoissonOperator::row_entries: the map is not one affine map, or the space is rational");
   const KroneckerEntries entry = kronecker_entries();
   const int i = row % n_u_, j = row / n_u_;

@@ -308,7 +308,8 @@ PoissonSolution solve_case(const CaseDescription& c, const SplineSpace& space, O
     } catch (const std::invalid_argument& e) {
       obstacle = e.what();
     }
-    double needs_matrix = !(obstacle.empty() && op->all_elements_affine());
+    double needs_matrix = !(obstacle.empty() && op->all_elements_affine() &&
+                            space.structured_preconditioner_without_matrix(chosen.preconditioner));
     max_over_ranks(&needs_matrix, 1);
     if (needs_matrix != 0) shell_reads_matrix = true;
     else *without_matrix = op;

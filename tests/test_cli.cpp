@@ -26,12 +26,16 @@ TEST_CASE("run --json reports errors, timings and the files it wrote", "[cli]") 
     REQUIRE(r.out.find(key) != std::string::npos);
   REQUIRE(r.out.find("\"dofs\": 36") != std::string::npos);  // (4 + 2)^2
   // How the matrix was made: the square is one affine map (its Kronecker form), the quarter
-  // annulus is curved (the element loop).
+  // annulus is curved (sum factorization), a variable coefficient needs the element loop.
   REQUIRE(r.out.find("\"assembly_method\": \"kronecker_form\"") != std::string::npos);
   const Result curved = box.run(std::string("run -q --no-output --json --solver direct ") + KNOTWORK_SOURCE_DIR +
                                 "/cases/quarter_annulus.toml");
   REQUIRE(curved.code == 0);
-  REQUIRE(curved.out.find("\"assembly_method\": \"element_loop\"") != std::string::npos);
+  REQUIRE(curved.out.find("\"assembly_method\": \"sum_factorization\"") != std::string::npos);
+  const Result variable = box.run(std::string("run -q --no-output --json --solver direct ") + KNOTWORK_SOURCE_DIR +
+                                  "/cases/square_variable_coefficient.toml");
+  REQUIRE(variable.code == 0);
+  REQUIRE(variable.out.find("\"assembly_method\": \"element_loop\"") != std::string::npos);
   REQUIRE(fs::exists(box.dir() / "res/solution.vtu"));
   REQUIRE(fs::exists(box.dir() / "res/solution_sampled.vtu"));
   REQUIRE(r.err.empty());  // --quiet

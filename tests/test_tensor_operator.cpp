@@ -10,6 +10,7 @@
 #include <map>
 #include <numeric>
 
+#include "basis/core/input_error.hpp"
 #include "basis/tensor/tensor_patch.hpp"
 #include "cases/case_file.hpp"
 #include "cases/spline_space.hpp"
@@ -85,9 +86,11 @@ TEST_CASE("Matrix-free tensor operator: products equal the assembled matrix's", 
       const long elements = long(s->d.elements_u) * s->d.elements_v;
       if (std::string(name) == "square_sinsin") REQUIRE(A.affine_elements() == elements);
       if (std::string(name) == "quarter_annulus") REQUIRE(A.affine_elements() == 0);
-      // Only the square's map is one affine map: only its operator writes the matrix itself.
-      REQUIRE(A.assembles_lower() == (std::string(name) == "square_sinsin"));
-      if (!A.assembles_lower()) REQUIRE_THROWS_AS(A.lower_matrix(DofLayout{}), std::logic_error);
+      // Every operator writes its matrix; only the square's map is one affine map, whose
+      // Kronecker form also gives any row alone.
+      REQUIRE(A.assembles_lower());
+      REQUIRE(A.writes_rows() == (std::string(name) == "square_sinsin"));
+      if (!A.writes_rows()) REQUIRE_THROWS_AS(A.row_entries(0, 0, nullptr, nullptr), std::logic_error);
       // Every tensor operator gives the pattern the mesh's cells give (some functions fixed).
       {
         std::vector<bool> fixed(K.rows(), false);
@@ -441,6 +444,75 @@ TEST_CASE("The matrix from the Kronecker form is the element loop's", "[tensor_o
     }
 }
 
+// The same comparison where the operator writes the matrix by sum factorization
+// (solver/tensor_operator_sum_factorized.cpp): curved maps with the NURBS space and with
+// B-splines on the same exact map, and a piecewise-affine map (the L-shape), against the
+// element loop, which integrates each cell's element matrix by itself.
+TEST_CASE("The matrix by sum factorization is the element loop's", "[tensor_operator][solver]") {
+  struct Variant {
+    const char* name;
+    bool rational;
+  };
+  for (const Variant variant : {Variant{"quarter_annulus", true}, Variant{"quarter_annulus", false}, Variant{"lshape", false}})
+    for (const int continuity : {-1, 0})
+      for (int p : {2, 3, 5}) {
+        auto s = setup(variant.name, p, 5);
+        if (continuity == 0 || !variant.rational) {
+          patch_space(s->c).continuity = {continuity, continuity};
+          patch_space(s->c).rational = variant.rational;
+          s->d = build_tensor_discretization(s->c.geometry, patch_space(s->c));
+          s->map = std::make_unique<PatchGeometryMap>(
+              s->d.mesh, s->d.patch, PatchGeometryMap::ElementGrid{s->d.space_u.breakpoints(), s->d.space_v.breakpoints(), 0});
+          s->weights = s->d.mesh.is_rational() ? s->d.mesh.weights() : Eigen::VectorXd();
+        }
+        REQUIRE(s->d.mesh.is_rational() == (variant.rational && std::string(variant.name) == "quarter_annulus"));
+        for (const double reaction : {0.0, 0.7}) {
+          const TensorPoissonOperator op(s->patch(), 1.0, reaction);
+          REQUIRE(op.assembles_lower());
+          REQUIRE_FALSE(op.writes_rows());  // (not the Kronecker form: no row alone)
+          const System loop = solved_system(*s, reaction, false), summed = solved_system(*s, reaction, true);
+          INFO(variant.name << (variant.rational ? " (NURBS)" : "") << ", p = " << p << ", continuity " << continuity
+                            << ", reaction " << reaction);
+          const Eigen::SparseMatrix<double>&A = loop.K, &B = summed.K;
+          REQUIRE(A.rows() == B.rows());
+          REQUIRE(A.nonZeros() == B.nonZeros());
+          REQUIRE(std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, B.outerIndexPtr()));
+          REQUIRE(std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), B.innerIndexPtr()));
+          // As above: each entry sums positive semi-definite integrands bounded by sqrt(K_aa K_bb).
+          const double m = 8.0 * std::pow(p + 1, 4) * 2.2e-16;
+          for (int k = 0; k < A.outerSize(); ++k)
+            for (Eigen::SparseMatrix<double>::InnerIterator a(A, k), b(B, k); a; ++a, ++b)
+              REQUIRE(std::abs(a.value() - b.value()) <= m * std::sqrt(A.coeff(a.row(), a.row()) * A.coeff(k, k)));
+          const Eigen::SparseMatrix<double> whole = A.selfadjointView<Eigen::Lower>();
+          const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(B);
+          REQUIRE(ldlt.info() == Eigen::Success);
+          const Eigen::VectorXd x = ldlt.solve(summed.F);
+          const double backward = (whole * x - loop.F).lpNorm<Eigen::Infinity>() /
+                                  (inf_norm(A) * x.lpNorm<Eigen::Infinity>() + loop.F.lpNorm<Eigen::Infinity>());
+          INFO("backward error " << backward);
+          REQUIRE(backward <= m * (2 * p + 1) * (2 * p + 1));
+        }
+      }
+}
+
+// A folded map is refused by the sum factorization in the element loop's words: the lowest
+// cell where det J <= 0.
+TEST_CASE("The sum-factorized matrix refuses a folded map, naming the cell", "[tensor_operator]") {
+  auto s = setup("quarter_annulus", 2, 4);
+  // Mirror the net in x: the map turns clockwise, det J < 0 everywhere (cell 0 is named).
+  s->d.geometry_homogeneous.col(0) *= -1;
+  const TensorPoissonOperator op(s->patch(), 1.0, 0.0);
+  const int n = op.num_functions();
+  const DofLayout all = make_dof_layout(n, std::vector<bool>(n, false));
+  REQUIRE_THROWS_AS(op.lower_matrix(all), GeometryError);
+  using Catch::Matchers::Contains;
+  using Catch::Matchers::EndsWith;
+  using Catch::Matchers::StartsWith;
+  REQUIRE_THROWS_WITH(op.lower_matrix(all), StartsWith("geometry has a non-positive Jacobian (det J = -") &&
+                                                Contains("at a quadrature point of cell 0 (u in [0, 0.25], v in [0, 0.2])") &&
+                                                EndsWith("the map folds over or is oriented clockwise"));
+}
+
 namespace {
 
 // check(ranks, rank, part) on every part of c's space on 2 and 3 processes
@@ -514,7 +586,7 @@ TEST_CASE("A part's operator writes its owned rows of the whole matrix", "[tenso
       const std::unique_ptr<MatrixFreePoisson> op = part->matrix_free_operator(1.0, c.problem.reaction, c.quadrature);
       REQUIRE(op);
       REQUIRE(op->num_functions() == part->mesh().num_functions());
-      REQUIRE(op->assembles_lower());
+      REQUIRE(op->writes_rows());
       const Eigen::VectorXd load = op->load(c.problem.source);
       std::vector<int> columns(part->mesh().num_functions());
       std::iota(columns.begin(), columns.end(), 0);
@@ -556,11 +628,14 @@ TEST_CASE("A part's operator writes rows only where its own rows are affine", "[
   const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/tests/mpi/tensor_half_affine.toml");
   const SpaceFamily& family = space_family(c);
   const auto writes = [&](int rank, int ranks) {
-    return family.build_part(c, 0, rank, ranks, {})->matrix_free_operator(1.0, 0.0, c.quadrature)->assembles_lower();
+    return family.build_part(c, 0, rank, ranks, {})->matrix_free_operator(1.0, 0.0, c.quadrature)->writes_rows();
   };
   REQUIRE(writes(0, 2));
   REQUIRE_FALSE(writes(1, 2));
-  REQUIRE_FALSE(family.build(c, 0, {})->matrix_free_operator(1.0, 0.0, c.quadrature)->assembles_lower());
+  // Serially the whole patch's matrix is written by sum factorization, rows alone are not.
+  const std::unique_ptr<MatrixFreePoisson> whole = family.build(c, 0, {})->matrix_free_operator(1.0, 0.0, c.quadrature);
+  REQUIRE(whole->assembles_lower());
+  REQUIRE_FALSE(whole->writes_rows());
 }
 
 // Refining a polynomial patch (equal weights) keeps it polynomial: by the partition of unity
@@ -579,7 +654,7 @@ TEST_CASE("A polynomial patch stays polynomial however finely it is refined", "[
     if (space->mesh().is_rational()) REQUIRE((space->mesh().weights().array() == 1.0).all());
     const std::unique_ptr<MatrixFreePoisson> op = space->matrix_free_operator(1.0, 0.0, c.quadrature);
     REQUIRE(op);
-    REQUIRE(op->assembles_lower());
+    REQUIRE(op->writes_rows());  // the Kronecker form's
   }
 }
 
@@ -594,7 +669,7 @@ TEST_CASE("A part's operator gives its owned rows' pattern on a curved patch", "
       const MeshPart& share = *part->part();
       const std::unique_ptr<MatrixFreePoisson> op = part->matrix_free_operator(1.0, 0.0, c.quadrature);
       REQUIRE(op);
-      REQUIRE_FALSE(op->assembles_lower());
+      REQUIRE_FALSE(op->writes_rows());
       REQUIRE(op->gives_pattern());
       const PartRows p = part_rows(share, part->mesh().num_functions(), 5, 1);
       const CoupledFunctions coupled = [&op](int f, std::vector<int>& out) { op->coupled_functions(f, out); };
@@ -650,4 +725,61 @@ TEST_CASE("A part's operator gives the errors of its own cells", "[tensor_operat
     });
     REQUIRE(with_halo == std::map<int, int>{{2, 1}, {3, 2}});
   }
+}
+
+// Several patches glued C0 (the multipatch tensor space's operator, solver/glued_operator):
+// its matrix, written patch by patch and added into the shared pattern, against the element
+// loop over the glued mesh (the Dirichlet functions left out); its products and diagonal
+// against that matrix, all functions free; its load against the element loop's. On the plus
+// (B-splines, affine patches: Kronecker forms), the ring and the plate with a hole (NURBS:
+// sum factorization).
+TEST_CASE("Glued patches: the operator's matrix, products and load are the element loop's", "[tensor_operator][multipatch]") {
+  for (const char* name : {"multipatch_plus", "multipatch_ring", "multipatch_plate_with_hole"})
+    for (const int p : {2, 3}) {
+      CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/cases/" + name + ".toml");
+      patch_space(c).degree = {p, p};
+      patch_space(c).elements_per_span = {3, 3};  // (patches meet in either direction)
+      const std::unique_ptr<SplineSpace> space = build_space(c);
+      const BezierMesh& mesh = space->mesh();
+      const int n = mesh.num_functions();
+      const double reaction = 0.7;
+      const std::unique_ptr<MatrixFreePoisson> op = space->matrix_free_operator(1.0, reaction, c.quadrature);
+      REQUIRE(op);
+      REQUIRE(op->num_functions() == n);
+      REQUIRE(op->assembles_lower());
+      INFO(name << ", p = " << p);
+      std::vector<bool> fixed;
+      const Eigen::VectorXd g = project_dirichlet_data(mesh, space->geometry(), c.problem, c.quadrature, fixed);
+      for (const bool all_free : {false, true}) {
+        const DofLayout layout = make_dof_layout(n, all_free ? std::vector<bool>(n, false) : fixed);
+        Eigen::SparseMatrix<double> A = lower_pattern_matrix(mesh, layout);
+        PoissonForm form;
+        form.reaction = reaction;
+        form.source = &c.problem.source;
+        Eigen::VectorXd F;
+        assemble_poisson(mesh, space->geometry(), form, layout, Eigen::VectorXd::Zero(n), c.quadrature, A, F);
+        const Eigen::SparseMatrix<double> B = op->lower_matrix(layout);
+        REQUIRE(A.nonZeros() == B.nonZeros());
+        REQUIRE(std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, B.outerIndexPtr()));
+        REQUIRE(std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), B.innerIndexPtr()));
+        // As for one patch, each entry a sum of at most 2 patches' positive semi-definite
+        // integrands (3 or 4 at a vertex), bounded by sqrt(K_aa K_bb).
+        const double m = 4 * 8.0 * std::pow(p + 1, 4) * 2.2e-16;
+        for (int k = 0; k < A.outerSize(); ++k)
+          for (Eigen::SparseMatrix<double>::InnerIterator a(A, k), b(B, k); a; ++a, ++b)
+            REQUIRE(std::abs(a.value() - b.value()) <= m * std::sqrt(A.coeff(a.row(), a.row()) * A.coeff(k, k)));
+        if (!all_free) continue;
+        // All functions free: dofs are functions. K x and the diagonal against A's.
+        const Eigen::SparseMatrix<double> whole = A.selfadjointView<Eigen::Lower>();
+        const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(n, -1, 2).array().sin();
+        Eigen::VectorXd y;
+        op->apply(x, y);
+        const double scale = inf_norm(A) * x.lpNorm<Eigen::Infinity>();
+        REQUIRE((y - whole * x).lpNorm<Eigen::Infinity>() <= m * (2 * p + 1) * (2 * p + 1) * scale);
+        REQUIRE((op->diagonal() - A.diagonal()).lpNorm<Eigen::Infinity>() <= m * A.diagonal().maxCoeff());
+        // The load, f R_a by the same rules: a sum of terms bounded by |f|_inf |R_a|_L1.
+        const Eigen::VectorXd load = op->load(c.problem.source);
+        REQUIRE((load - F).lpNorm<Eigen::Infinity>() <= m * (2 * p + 1) * (2 * p + 1) * F.lpNorm<Eigen::Infinity>() + 1e-300);
+      }
+    }
 }

@@ -8,7 +8,9 @@
 #include "families/tensor/patch_separable_coefficients.hpp"
 #include "solver/additive_schwarz.hpp"
 #include "solver/fast_diagonalization.hpp"
+#include "solver/glued_operator.hpp"
 #include "solver/patchwise_multigrid.hpp"
+#include "solver/tensor_operator.hpp"
 
 namespace knotwork {
 
@@ -94,6 +96,22 @@ class MultiPatchTensorSpace final : public SplineSpace, public SpaceReport {
     return patch_schwarz(layout, lower, problem);
   }
   std::vector<ReportField> report() const override { return multipatch_report(options_, static_cast<int>(d_.patches.size())); }
+  // Each patch's operator (as one patch's space makes it), glued by the shared numbering: its
+  // matrix written patch by patch (the Kronecker form or sum factorization) instead of the
+  // element loop, and CG without a matrix with "jacobi".
+  std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double stiffness, double reaction,
+                                                          const QuadratureOptions& quadrature) const override {
+    std::vector<std::unique_ptr<MatrixFreePoisson>> pieces;
+    for (const TensorDiscretization& p : d_.patches) {
+      const Eigen::VectorXd* weights = p.mesh.is_rational() ? &p.mesh.weights() : nullptr;
+      // (The operators live within a solve on this space: they may read the patches' nets in place.)
+      pieces.push_back(std::make_unique<TensorPoissonOperator>(
+          TensorPatch{&p.space_u, &p.space_v, weights, &p.geometry_u, &p.geometry_v, &p.geometry_homogeneous,
+                      /*geometry_outlives_operator=*/true},
+          stiffness, reaction, quadrature.points_u, quadrature.points_v));
+    }
+    return std::make_unique<GluedPoissonOperator>(d_.mesh.num_functions(), std::move(pieces), d_.global_function);
+  }
 
  private:
   // One fast diagonalization per patch, summed (additive Schwarz, no coarse space): each
