@@ -131,7 +131,8 @@ class SplineSpace {
   // Whether the named one is built from the matrix's diagonal alone (the fast diagonalization
   // is; a multigrid that reads the whole matrix is not). Under method = "petsc" every structured
   // one is a PCShell that each process applies to the whole residual: those built from the
-  // diagonal as they are, the others as they are built without a matrix (below).
+  // diagonal as they are, the others without a matrix (below) where every element is affine,
+  // and elsewhere from the whole matrix, gathered on every process (studies/pipeline.cpp).
   virtual bool structured_preconditioner_needs_only_diagonal(const std::string& /*name*/) const { return true; }
   virtual std::unique_ptr<Preconditioner> make_structured_preconditioner(const std::string& /*name*/,
                                                                          const DofLayout& /*layout*/,

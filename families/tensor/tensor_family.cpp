@@ -19,6 +19,12 @@ namespace knotwork {
 
 namespace {
 
+// On several patches the multigrid keeps the whole matrix, its Galerkin levels and the band's
+// factor: peak RSS 1.57x and 1.54x the one-patch formula at p = 2 (0.79M and 3.2M functions on
+// the plus) and 1.23x at p = 4 (0.81M), measured 2026-12-07 (the matrix then from the element
+// loop; now written patch by patch, one patch's matrix at a time besides it); 1.7x covers them.
+constexpr double kSeveralPatchesMultigrid = 1.7;
+
 // Refuses discretizations that cannot fit in memory before allocating anything (a rank's part:
 // its share of the cells).
 void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, int ranks = 1) {
@@ -59,11 +65,7 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
     const double pc = name == kFastDiagonalization ? fast_diagonalization_bytes(per_direction[0], per_direction[1])
                       : name == kMultigrid         ? tensor_multigrid_bytes(functions, p, q, c.solver.matrix != "matrix_free")
                                                    : algebraic_preconditioner_bytes(name, functions, p, q);
-    // On several patches the matrix comes from the element loop and the multigrid keeps the
-    // whole matrix, its Galerkin levels and the band's factor: peak RSS 1.57x and 1.54x the
-    // one-patch formula at p = 2 (0.79M and 3.2M functions on the plus) and 1.23x at p = 4
-    // (0.81M), measured 2026-12-07; 1.7x covers them.
-    const double several = c.multipatch() && name == kMultigrid ? 1.7 : 1.0;
+    const double several = c.multipatch() && name == kMultigrid ? kSeveralPatchesMultigrid : 1.0;
     check_memory(c.path + ": [space] elements",
                  several * iterative_bytes(cells, functions, p, q, pc, c.solver.matrix != "matrix_free"), what);
     return;
@@ -76,7 +78,7 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
   if (processes > 1 && method == "petsc") {
     const std::string& name = c.solver.preconditioner;
     if (c.multipatch()) {
-      if (name == kMultigrid || name == "auto") shell = 1.7 * tensor_multigrid_bytes(functions, p, q, true);
+      if (name == kMultigrid || name == "auto") shell = kSeveralPatchesMultigrid * tensor_multigrid_bytes(functions, p, q, true);
     } else if (name == kMultigrid) {
       shell = tensor_multigrid_bytes(functions, p, q, true);
     } else if (name == kFastDiagonalization || name == "auto") {
