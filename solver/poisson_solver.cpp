@@ -57,7 +57,9 @@ class FreeDofsOperator final : public SymmetricOperator {
 // mesh's functions (MatrixFreePoisson::row_entries): what the other processes' cells add to
 // those rows is in the operator's rows already, and their own rows are written by them. The
 // diagonal block's upper triangle is written and mirrored (half its entries), the other block whole.
-void write_owned_rows(const MatrixFreePoisson& op, const DofLayout& layout, RankRows& rows) {
+// `entries(row, count, columns, values)` as MatrixFreePoisson::row_entries.
+template <class Entries>
+void write_owned_rows(Entries entries, const DofLayout& layout, RankRows& rows) {
   OwnedRows& owned = rows.owned;
   const long diagonal_entries = owned.diagonal_nonzeros();
   if (rows.halo_start.back() != 0) throw std::logic_error("write_owned_rows: rows with a halo to send");
@@ -73,17 +75,42 @@ void write_owned_rows(const MatrixFreePoisson& op, const DofLayout& layout, Rank
       const int begin = diagonal[r], end = owned.diagonal_start[r + 1];
       columns.clear();
       for (int k = begin; k < end; ++k) columns.push_back(layout.function_of_dof[rows.first + owned.diagonal_cols[k]]);
-      op.row_entries(row, end - begin, columns.data(), owned.values.data() + begin);
+      entries(row, end - begin, columns.data(), owned.values.data() + begin);
       const int off_begin = owned.off_start[r], off_end = owned.off_start[r + 1];
       columns.clear();
       for (int k = off_begin; k < off_end; ++k) {
         const auto at = std::lower_bound(rows.global_row.begin(), rows.global_row.end(), owned.off_cols[k]);
         columns.push_back(layout.function_of_dof[at - rows.global_row.begin()]);
       }
-      op.row_entries(row, off_end - off_begin, columns.data(), owned.values.data() + diagonal_entries + off_begin);
+      entries(row, off_end - off_begin, columns.data(), owned.values.data() + diagonal_entries + off_begin);
     }
   }
   mirror_diagonal_block(owned, diagonal);
+}
+
+// The owned rows from the operator: row by row where it writes rows alone (the Kronecker form);
+// elsewhere looked up in its lower triangle over all its functions (sum factorization over
+// the process's element rows, which hold every element of an owned function: those rows are
+// whole), O(log) per entry.
+void write_owned_rows(const MatrixFreePoisson& op, const DofLayout& layout, RankRows& rows) {
+  if (op.writes_rows()) {
+    write_owned_rows([&op](int row, int count, const int* columns, double* values) {
+      op.row_entries(row, count, columns, values);
+    }, layout, rows);
+    return;
+  }
+  const int n = op.num_functions();
+  const Eigen::SparseMatrix<double> lower = op.lower_matrix(make_dof_layout(n, std::vector<bool>(n, false)));
+  const int* outer = lower.outerIndexPtr();
+  const int* inner = lower.innerIndexPtr();
+  const double* stored = lower.valuePtr();
+  write_owned_rows([&](int row, int count, const int* columns, double* values) {
+    for (int k = 0; k < count; ++k) {
+      const int column = std::min(row, columns[k]), r = std::max(row, columns[k]);
+      const int* at = std::lower_bound(inner + outer[column], inner + outer[column + 1], r);
+      values[k] = at != inner + outer[column + 1] && *at == r ? stored[at - inner] : 0.0;
+    }
+  }, layout, rows);
 }
 
 }  // namespace
@@ -221,7 +248,7 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     });
     const bool writes = given && operator_problem && given->assembles_lower();
     if (distributed) {
-      double some_cannot = writes && given->writes_rows() ? 0 : 1;
+      double some_cannot = writes ? 0 : 1;
       max_over_ranks(&some_cannot, 1);
       if (some_cannot == 0) op = std::move(given);
       else if (given && given->gives_pattern()) pattern_from = std::move(given);
@@ -273,6 +300,11 @@ PoissonSolution solve_poisson(const BezierMesh& mesh, const GeometryMap& geometr
     // F over the free dofs, less K g for the Dirichlet values g; Neumann terms as assembled.
     // Distributed, the owned rows of F and K g (whole: the operator covers their elements).
     sol.assembly = matrix_free ? "none" : op->assembly_method();
+    if (distributed && !matrix_free) {  // one word for all processes: sum factorization where any used it
+      double summed = sol.assembly == "sum_factorization" ? 1 : 0;
+      max_over_ranks(&summed, 1);
+      if (summed != 0) sol.assembly = "sum_factorization";
+    }
     if (matrix_free) {
       op = options.matrix_free();
       if (!op || op->num_functions() != mesh.num_functions())

@@ -621,9 +621,57 @@ TEST_CASE("A part's operator writes its owned rows of the whole matrix", "[tenso
     });
 }
 
-// Where the map is affine on some processes' rows only, those could write their rows from the
-// Kronecker form and the others could not: solve_poisson then has none do it
-// (tests/mpi/tensor_half_affine.toml checks the solve).
+// On a curved patch a process's owned rows come from its part's matrix by sum factorization
+// (over the part's element rows, which hold every element of an owned function): every owned
+// row of every part on 2 and 3 processes against the whole patch's element loop, on the
+// quarter annulus's NURBS space with a reaction, and on a patch with Dirichlet and Neumann sides,
+// a C^0 knot and an extra knot among the row boundaries.
+TEST_CASE("A part's matrix by sum factorization holds its owned rows whole", "[tensor_operator][solver]") {
+  for (const std::string path : {std::string(KNOTWORK_SOURCE_DIR) + "/cases/quarter_annulus.toml",
+                                 std::string(KNOTWORK_SOURCE_DIR) + "/tests/mpi/tensor_mixed_conditions.toml"}) {
+    CaseDescription c = load_case(path);
+    c.problem.reaction = 0.7;
+    const SpaceFamily& family = space_family(c);
+    const std::unique_ptr<SplineSpace> whole = family.build(c, 0, {});
+    const int n = whole->mesh().num_functions();
+    const DofLayout all_free = make_dof_layout(n, std::vector<bool>(n, false));
+    Eigen::SparseMatrix<double> lower = lower_pattern_matrix(whole->mesh(), all_free);
+    Eigen::VectorXd F;
+    PoissonForm form = poisson_form(c.problem);
+    form.load = false;
+    assemble_poisson(whole->mesh(), whole->geometry(), form, all_free, Eigen::VectorXd::Zero(n), c.quadrature, lower, F);
+    const Eigen::SparseMatrix<double, Eigen::RowMajor> K = lower.selfadjointView<Eigen::Lower>();
+    const int p = std::max(whole->degree()[0], whole->degree()[1]);
+    const double m = 8.0 * std::pow(p + 1, 4) * 2.2e-16;
+    for_each_part(c, [&](int ranks, int rank, const SplineSpace& space) {
+      const MeshPart& share = *space.part();
+      const std::unique_ptr<MatrixFreePoisson> op = space.matrix_free_operator(1.0, c.problem.reaction, c.quadrature);
+      REQUIRE(op);
+      REQUIRE(op->assembles_lower());
+      REQUIRE_FALSE(op->writes_rows());
+      const int local = space.mesh().num_functions();
+      const Eigen::SparseMatrix<double> part_lower = op->lower_matrix(make_dof_layout(local, std::vector<bool>(local, false)));
+      const Eigen::SparseMatrix<double, Eigen::RowMajor> Kp = part_lower.selfadjointView<Eigen::Lower>();
+      int owned = 0;
+      for (int f = 0; f < local; ++f) {
+        const int g = share.global(f);
+        if (g < share.first_owned_function || g >= share.last_owned_function) continue;
+        ++owned;
+        INFO(path << ": " << ranks << " processes, rank " << rank << ", row " << g);
+        REQUIRE(Kp.row(f).nonZeros() == K.row(g).nonZeros());
+        for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(Kp, f); it; ++it) {
+          const int h = share.global(int(it.col()));
+          REQUIRE(std::abs(it.value() - K.coeff(g, h)) <= m * std::sqrt(K.coeff(g, g) * K.coeff(h, h)));
+        }
+      }
+      REQUIRE(owned == share.last_owned_function - share.first_owned_function);
+    });
+  }
+}
+
+// Where the map is affine on some processes' rows only, those write their rows from the
+// Kronecker form and the others by sum factorization (tests/mpi/tensor_half_affine.toml checks
+// the solve).
 TEST_CASE("A part's operator writes rows only where its own rows are affine", "[tensor_operator]") {
   const CaseDescription c = load_case(std::string(KNOTWORK_SOURCE_DIR) + "/tests/mpi/tensor_half_affine.toml");
   const SpaceFamily& family = space_family(c);

@@ -17,10 +17,10 @@ run (serial and distributed) takes `--elements N`. With --patches (a multipatch 
 hold a part of whole patches and their halo: fewer cells than the whole space. Without either,
 the whole space (built on every rank).
 
-With --assembly METHOD (kronecker_form or element_loop), every distributed run must report
-that it made its matrix that way (`solver.assembly_method`): a patch with one affine map has
-each process write its owned rows from the Kronecker form; where only some processes' rows are
-affine, none may.
+With --assembly METHOD (kronecker_form, sum_factorization or element_loop), every distributed
+run must report that it made its matrix that way (`solver.assembly_method`): a patch with one
+affine map has each process write its owned rows from the Kronecker form; where only some
+processes' rows are affine, the others write theirs by sum factorization (reported so).
 
 Usage: check_distributed.py KNOTWORK_BINARY CASE_FILE [--rows N | --patches] [--assembly METHOD] [--elements N]
 Everything runs on this machine (OpenMPI's shared-memory transport only) and stops by itself.
