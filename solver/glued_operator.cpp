@@ -12,18 +12,26 @@ GluedPoissonOperator::GluedPoissonOperator(int num_functions, std::vector<std::u
                                            std::vector<std::vector<int>> global)
     : num_functions_(num_functions), pieces_(std::move(pieces)), global_(std::move(global)) {
   if (pieces_.size() != global_.size()) throw std::invalid_argument("GluedPoissonOperator: one numbering per piece expected");
-  std::vector<int> pieces_of(num_functions_, 0);
+  place_start_.assign(num_functions_ + 1, 0);
   int most = 0;
   for (size_t k = 0; k < pieces_.size(); ++k) {
     if (!pieces_[k] || pieces_[k]->num_functions() != int(global_[k].size()))
       throw std::invalid_argument("GluedPoissonOperator: a piece's numbering does not match its functions");
     for (int g : global_[k]) {
-      if (g < 0 || g >= num_functions_) throw std::invalid_argument("GluedPoissonOperator: a function number out of range");
-      ++pieces_of[g];
+      if (g < -1 || g >= num_functions_) throw std::invalid_argument("GluedPoissonOperator: a function number out of range");
+      if (g >= 0) ++place_start_[g + 1];
     }
     most = std::max(most, pieces_[k]->max_row_nonzeros());
   }
-  max_row_nonzeros_ = most * std::max(1, *std::max_element(pieces_of.begin(), pieces_of.end()));
+  int shared = 1;
+  for (int f = 0; f < num_functions_; ++f) shared = std::max(shared, place_start_[f + 1]);
+  max_row_nonzeros_ = most * shared;
+  for (int f = 0; f < num_functions_; ++f) place_start_[f + 1] += place_start_[f];
+  places_.resize(place_start_.back());
+  std::vector<int> next(place_start_.begin(), place_start_.end() - 1);
+  for (size_t k = 0; k < global_.size(); ++k)
+    for (size_t f = 0; f < global_[k].size(); ++f)
+      if (global_[k][f] >= 0) places_[next[global_[k][f]]++] = {int(k), int(f)};
 }
 
 void GluedPoissonOperator::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
@@ -33,9 +41,10 @@ void GluedPoissonOperator::apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) c
   for (size_t k = 0; k < pieces_.size(); ++k) {
     const std::vector<int>& g = global_[k];
     xk.resize(long(g.size()));
-    for (size_t f = 0; f < g.size(); ++f) xk[long(f)] = x[g[f]];
+    for (size_t f = 0; f < g.size(); ++f) xk[long(f)] = g[f] >= 0 ? x[g[f]] : 0.0;
     pieces_[k]->apply(xk, yk);
-    for (size_t f = 0; f < g.size(); ++f) y[g[f]] += yk[long(f)];
+    for (size_t f = 0; f < g.size(); ++f)
+      if (g[f] >= 0) y[g[f]] += yk[long(f)];
   }
 }
 
@@ -43,7 +52,8 @@ Eigen::VectorXd GluedPoissonOperator::diagonal() const {
   Eigen::VectorXd d = Eigen::VectorXd::Zero(num_functions_);
   for (size_t k = 0; k < pieces_.size(); ++k) {
     const Eigen::VectorXd dk = pieces_[k]->diagonal();
-    for (size_t f = 0; f < global_[k].size(); ++f) d[global_[k][f]] += dk[long(f)];
+    for (size_t f = 0; f < global_[k].size(); ++f)
+      if (global_[k][f] >= 0) d[global_[k][f]] += dk[long(f)];
   }
   return d;
 }
@@ -52,7 +62,8 @@ Eigen::VectorXd GluedPoissonOperator::load(const Expression& source) const {
   Eigen::VectorXd F = Eigen::VectorXd::Zero(num_functions_);
   for (size_t k = 0; k < pieces_.size(); ++k) {
     const Eigen::VectorXd Fk = pieces_[k]->load(source);
-    for (size_t f = 0; f < global_[k].size(); ++f) F[global_[k][f]] += Fk[long(f)];
+    for (size_t f = 0; f < global_[k].size(); ++f)
+      if (global_[k][f] >= 0) F[global_[k][f]] += Fk[long(f)];
   }
   return F;
 }
@@ -62,7 +73,25 @@ bool GluedPoissonOperator::all_elements_affine() const {
 }
 
 bool GluedPoissonOperator::assembles_lower() const {
-  return std::all_of(pieces_.begin(), pieces_.end(), [](const auto& p) { return p->assembles_lower() && p->gives_pattern(); });
+  return std::all_of(pieces_.begin(), pieces_.end(), [](const auto& p) { return p->assembles_lower(); }) && gives_pattern();
+}
+
+bool GluedPoissonOperator::gives_pattern() const {
+  return std::all_of(pieces_.begin(), pieces_.end(), [](const auto& p) { return p->gives_pattern(); });
+}
+
+void GluedPoissonOperator::coupled_functions(int function, std::vector<int>& out) const {
+  const size_t first = out.size();
+  std::vector<int> coupled;
+  for (int m = place_start_[function]; m < place_start_[function + 1]; ++m) {
+    const auto [k, f] = places_[m];
+    coupled.clear();
+    pieces_[k]->coupled_functions(f, coupled);
+    for (int h : coupled)
+      if (global_[k][h] >= 0) out.push_back(global_[k][h]);
+  }
+  std::sort(out.begin() + long(first), out.end());
+  out.erase(std::unique(out.begin() + long(first), out.end()), out.end());
 }
 
 const char* GluedPoissonOperator::assembly_method() const {
@@ -75,17 +104,6 @@ Eigen::SparseMatrix<double> GluedPoissonOperator::lower_matrix(const DofLayout& 
   if (!assembles_lower()) throw std::logic_error("GluedPoissonOperator::lower_matrix: a piece does not write its matrix");
   if (static_cast<int>(layout.dof.size()) != num_functions_)
     throw std::logic_error("GluedPoissonOperator::lower_matrix: a layout of another space");
-  // Every function's places: (piece, its function there), in CSR.
-  std::vector<int> start(num_functions_ + 1, 0);
-  for (const std::vector<int>& g : global_)
-    for (int f : g) ++start[f + 1];
-  for (int f = 0; f < num_functions_; ++f) start[f + 1] += start[f];
-  std::vector<std::pair<int, int>> places(start.back());
-  {
-    std::vector<int> next(start.begin(), start.end() - 1);
-    for (size_t k = 0; k < global_.size(); ++k)
-      for (size_t f = 0; f < global_[k].size(); ++f) places[next[global_[k][f]]++] = {int(k), int(f)};
-  }
   // The pattern: column d's free rows at or after it, from each of its pieces' couplings (the
   // functions that share an element there), sorted and merged. Counted, then written.
   const int n = layout.num_free();
@@ -93,18 +111,12 @@ Eigen::SparseMatrix<double> GluedPoissonOperator::lower_matrix(const DofLayout& 
   int* outer = K.outerIndexPtr();
   const auto rows_of = [&](int d, std::vector<int>& rows, std::vector<int>& coupled) {
     rows.clear();
-    const int g = layout.function_of_dof[d];
-    for (int m = start[g]; m < start[g + 1]; ++m) {
-      const auto [k, f] = places[m];
-      coupled.clear();
-      pieces_[k]->coupled_functions(f, coupled);
-      for (int h : coupled) {
-        const int a = layout.dof[global_[k][h]];
-        if (a >= d) rows.push_back(a);
-      }
+    coupled.clear();
+    coupled_functions(layout.function_of_dof[d], coupled);
+    for (int h : coupled) {
+      const int a = layout.dof[h];
+      if (a >= d) rows.push_back(a);
     }
-    std::sort(rows.begin(), rows.end());
-    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
   };
   outer[0] = 0;
 #pragma omp parallel
@@ -136,7 +148,7 @@ Eigen::SparseMatrix<double> GluedPoissonOperator::lower_matrix(const DofLayout& 
   for (size_t k = 0; k < pieces_.size(); ++k) {
     const std::vector<int>& g = global_[k];
     std::vector<bool> fixed(g.size());
-    for (size_t f = 0; f < g.size(); ++f) fixed[f] = layout.dof[g[f]] < 0;
+    for (size_t f = 0; f < g.size(); ++f) fixed[f] = g[f] < 0 || layout.dof[g[f]] < 0;  // (not held: left out too)
     const DofLayout local = make_dof_layout(int(g.size()), fixed);
     const Eigen::SparseMatrix<double> Kk = pieces_[k]->lower_matrix(local);
     bool missing = false;

@@ -15,8 +15,10 @@ namespace knotwork {
 class GluedPoissonOperator final : public MatrixFreePoisson {
  public:
   // pieces[k] acts on its own functions 0 .. n_k - 1; function f of piece k is global[k][f] of
-  // num_functions (one-to-one within a piece). Throws std::invalid_argument on sizes that do
-  // not match or numbers out of range.
+  // num_functions (one-to-one within a piece), or -1: a function the glued space does not hold
+  // (a process's part holds a neighbouring patch for the cells its own functions live on; the
+  // rows of those functions are whole, the others' are not). Throws std::invalid_argument on
+  // sizes that do not match or numbers out of range.
   GluedPoissonOperator(int num_functions, std::vector<std::unique_ptr<MatrixFreePoisson>> pieces,
                        std::vector<std::vector<int>> global);
   int num_functions() const override { return num_functions_; }
@@ -33,11 +35,18 @@ class GluedPoissonOperator final : public MatrixFreePoisson {
   // functions that share a cell: within one piece). Piece after piece; within a piece the
   // columns in parallel (the numbering is one-to-one there: no two entries meet).
   Eigen::SparseMatrix<double> lower_matrix(const DofLayout& layout) const override;
+  // The couplings: every piece's of the function, mapped and merged (where every piece gives
+  // its own).
+  bool gives_pattern() const override;
+  void coupled_functions(int function, std::vector<int>& out) const override;
 
  private:
   int num_functions_ = 0, max_row_nonzeros_ = 0;
   std::vector<std::unique_ptr<MatrixFreePoisson>> pieces_;
   std::vector<std::vector<int>> global_;
+  // Every function's places (piece, its function there), in CSR: place_start_[f] ..
+  std::vector<int> place_start_;
+  std::vector<std::pair<int, int>> places_;
 };
 
 }  // namespace knotwork

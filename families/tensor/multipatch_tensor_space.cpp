@@ -238,6 +238,40 @@ class MultiPatchTensorPartSpace final : public SplineSpace, public SpaceReport {
     finest.layout = layout;
     return patchwise_multigrid(std::move(finest), lower);
   }
+  // The operators of the patches this process holds (whole: a neighbour's patch too, where the
+  // halo takes cells of it), glued by the part's numbering; a neighbour's functions that the
+  // part does not hold are left out. The owned functions' rows are whole (their cells are all
+  // held), and the driver writes them from it (solver/poisson_solver.cpp).
+  std::unique_ptr<MatrixFreePoisson> matrix_free_operator(double stiffness, double reaction,
+                                                          const QuadratureOptions& quadrature) const override {
+    const MultiPatchNumbering numbering = number_multipatch_functions(domain_, options_);
+    const MeshPart& share = d_.part;
+    const int held = d_.mesh.num_functions();
+    const auto local_of = [&](int global) {
+      if (share.global_function.empty()) {
+        const int local = global - share.function_offset;
+        return local >= 0 && local < held ? local : -1;
+      }
+      const auto at = std::lower_bound(share.global_function.begin(), share.global_function.end(), global);
+      return at != share.global_function.end() && *at == global ? int(at - share.global_function.begin()) : -1;
+    };
+    std::vector<std::unique_ptr<MatrixFreePoisson>> pieces;
+    std::vector<std::vector<int>> local;
+    for (size_t k = 0; k < d_.built.size(); ++k) {
+      const TensorDiscretization& p = d_.built[k];
+      const int patch = d_.patch_of_piece[k];
+      const Eigen::VectorXd* weights = p.mesh.is_rational() ? &p.mesh.weights() : nullptr;
+      pieces.push_back(std::make_unique<TensorPoissonOperator>(
+          TensorPatch{&p.space_u, &p.space_v, weights, &p.geometry_u, &p.geometry_v, &p.geometry_homogeneous,
+                      /*geometry_outlives_operator=*/true},
+          stiffness, reaction, quadrature.points_u, quadrature.points_v));
+      std::vector<int> numbers(numbering.number.begin() + numbering.first_function[patch],
+                               numbering.number.begin() + numbering.first_function[patch + 1]);
+      for (int& n : numbers) n = local_of(n);
+      local.push_back(std::move(numbers));
+    }
+    return std::make_unique<GluedPoissonOperator>(held, std::move(pieces), std::move(local));
+  }
 
  private:
   TensorSpaceOptions options_;
