@@ -128,6 +128,12 @@ class SplineSpace {
   // Whether [solver] = "auto" may choose the first (CG with it from 10 000 functions on); false
   // where measurements found algebraic multigrid or CHOLMOD better (docs/SOLVERS.md).
   virtual bool structured_preconditioner_is_automatic() const { return true; }
+  // The one "auto" takes (where it takes a structured one): the first, unless the space
+  // measures another one better for itself; then `why` says so, for the run's note.
+  virtual std::string automatic_structured_preconditioner(std::string& /*why*/) const {
+    const std::vector<std::string> names = structured_preconditioners();
+    return names.empty() ? std::string() : names.front();
+  }
   // Whether the named one is built from the matrix's diagonal alone (the fast diagonalization
   // is; a multigrid that reads the whole matrix is not). Under method = "petsc" every structured
   // one is a PCShell that each process applies to the whole residual: those built from the

@@ -100,10 +100,10 @@ const char* GluedPoissonOperator::assembly_method() const {
   return "kronecker_form";
 }
 
-Eigen::SparseMatrix<double> GluedPoissonOperator::lower_matrix(const DofLayout& layout) const {
-  if (!assembles_lower()) throw std::logic_error("GluedPoissonOperator::lower_matrix: a piece does not write its matrix");
+Eigen::SparseMatrix<double> GluedPoissonOperator::lower_pattern(const DofLayout& layout) const {
+  if (!gives_pattern()) throw std::logic_error("GluedPoissonOperator::lower_pattern: a piece does not give its couplings");
   if (static_cast<int>(layout.dof.size()) != num_functions_)
-    throw std::logic_error("GluedPoissonOperator::lower_matrix: a layout of another space");
+    throw std::logic_error("GluedPoissonOperator::lower_pattern: a layout of another space");
   // The pattern: column d's free rows at or after it, from each of its pieces' couplings (the
   // functions that share an element there), sorted and merged. Counted, then written.
   const int n = layout.num_free();
@@ -142,6 +142,15 @@ Eigen::SparseMatrix<double> GluedPoissonOperator::lower_matrix(const DofLayout& 
       std::fill(values + outer[d], values + outer[d + 1], 0.0);
     }
   }
+  return K;
+}
+
+Eigen::SparseMatrix<double> GluedPoissonOperator::lower_matrix(const DofLayout& layout) const {
+  if (!assembles_lower()) throw std::logic_error("GluedPoissonOperator::lower_matrix: a piece does not write its matrix");
+  Eigen::SparseMatrix<double> K = lower_pattern(layout);
+  const int* outer = K.outerIndexPtr();
+  const int* inner = K.innerIndexPtr();
+  double* values = K.valuePtr();
   // The values: each piece's written matrix over its free functions, added in. Pieces one after
   // another; a piece's columns in parallel, since its numbering is one-to-one (two of its lower
   // entries never land on one shared entry).

@@ -38,6 +38,7 @@ class GluedPoissonOperator final : public MatrixFreePoisson {
   // The couplings: every piece's of the function, mapped and merged (where every piece gives
   // its own).
   bool gives_pattern() const override;
+  Eigen::SparseMatrix<double> lower_pattern(const DofLayout& layout) const override;
   void coupled_functions(int function, std::vector<int>& out) const override;
 
  private:

@@ -11,6 +11,7 @@
 
 #include "basis/tensor/tensor_patch.hpp"
 #include "cases/case_file.hpp"
+#include "cases/geometries.hpp"
 #include "cases/spline_space.hpp"
 #include "families/tensor/patch_separable_coefficients.hpp"
 #include "families/tensor/tensor_case.hpp"
@@ -401,6 +402,49 @@ TEST_CASE("auto: multigrid without a matrix from 2M functions on affine elements
     REQUIRE(report.matrix_free == (std::string(name) == "square_sinsin"));
     REQUIRE((report.note.find("multigrid, since CG runs without a matrix") != std::string::npos) ==
             (std::string(expected) == "multigrid"));
+    REQUIRE(s.iterative.converged);
+  }
+}
+
+// How far a map's (and A's) stiffness coefficients are from a product (separability_spread),
+// against closed forms: 1 for the rectangle and the annulus (their coefficients are products
+// of a function of u and one of v), and on the unit square with A = R diag(1, 100) R^T, R a
+// rotation by 45 degrees, the best product is A's diagonal (50.5 both) and P^-1/2 A P^-1/2 =
+// [1, b; b, 1] with b = 49.5 / 50.5, whose eigenvalues' ratio (1 + b) / (1 - b) is 100.
+TEST_CASE("separability_spread: 1 where the coefficients separate, the closed form where they do not", "[multigrid]") {
+  const double eps = 2.2e-16;
+  REQUIRE(std::abs(separability_spread(rectangle_patch(0, 0, 2, 3)) - 1) <= 64 * eps);
+  REQUIRE(std::abs(separability_spread(quarter_annulus_patch(1, 2)) - 1) <= 1e3 * eps);
+  const std::vector<Expression> rotated{Expression::parse("50.5", "test"), Expression::parse("49.5", "test"),
+                                        Expression::parse("50.5", "test")};
+  REQUIRE(std::abs(separability_spread(rectangle_patch(0, 0, 1, 1), rotated) / 100 - 1) <= 1e3 * eps);
+  // The scalar A = 1 + x on the square is a function of u alone: still separable.
+  REQUIRE(std::abs(separability_spread(rectangle_patch(0, 0, 1, 1), {Expression::parse("1 + x", "test")}) - 1) <= 1e3 * eps);
+  // A scalar A = 1 + 10 x y is not: (1 + 10 x y) against its best product over the grid.
+  REQUIRE(separability_spread(rectangle_patch(0, 0, 1, 1), {Expression::parse("1 + 10*x*y", "test")}) > 1.5);
+  // A map that folds, or an A that is not positive definite: no fit (the assembly refuses them).
+  REQUIRE(std::isinf(separability_spread(rectangle_patch(0, 0, 1, 1), {Expression::parse("x - 0.5", "test")})));
+}
+
+// "auto" takes multigrid instead of the fast diagonalization where the map does not separate,
+// from 200 000 functions (families/tensor/tensor_family.cpp, measured: docs/SOLVERS.md): the
+// L-shape just below and just above, the quarter annulus above.
+TEST_CASE("auto: multigrid where the map does not separate, from 200 000 functions", "[multigrid][solver]") {
+  for (const auto& [name, n, expected] : std::vector<std::tuple<const char*, int, const char*>>{
+           {"lshape", 300, "fast_diagonalization"},   // 182 710 functions
+           {"lshape", 320, "multigrid"},              // 207 690
+           {"quarter_annulus", 448, "fast_diagonalization"}}) {  // 202 500
+    CaseDescription c = shipped(name);
+    patch_space(c).elements_per_span = {n, n};
+    const auto space = build_space(c);
+    INFO(name << " at " << n << ": " << space->mesh().num_functions() << " functions");
+    REQUIRE((space->mesh().num_functions() >= 200000) == (n != 300));
+    SolverReport report;
+    const PoissonSolution s = solve_case(c, *space, Ordering::kAmd, {}, &report);
+    INFO(report.preconditioner << ", " << s.iterative.iterations << " iterations; " << report.note);
+    REQUIRE(report.method == "iterative");
+    REQUIRE(report.preconditioner == expected);
+    REQUIRE((report.note.find("since the map does not separate") != std::string::npos) == (std::string(expected) == "multigrid"));
     REQUIRE(s.iterative.converged);
   }
 }

@@ -827,6 +827,13 @@ TEST_CASE("Glued patches: the operator's matrix, products and load are the eleme
         REQUIRE(A.nonZeros() == B.nonZeros());
         REQUIRE(std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, B.outerIndexPtr()));
         REQUIRE(std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), B.innerIndexPtr()));
+        // The pattern alone (what the element loop fills where the operator cannot write the
+        // matrix: Nitsche's terms, variable coefficients), zeros.
+        REQUIRE(op->gives_pattern());
+        const Eigen::SparseMatrix<double> P = op->lower_pattern(layout);
+        REQUIRE(std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, P.outerIndexPtr()));
+        REQUIRE(std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), P.innerIndexPtr()));
+        REQUIRE(Eigen::Map<const Eigen::VectorXd>(P.valuePtr(), P.nonZeros()).isZero(0));
         // As for one patch, each entry a sum of at most 2 patches' positive semi-definite
         // integrands (3 or 4 at a vertex), bounded by sqrt(K_aa K_bb).
         const double m = 4 * 8.0 * std::pow(p + 1, 4) * 2.2e-16;

@@ -7,6 +7,8 @@
 #include "solver/expression.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <optional>
 
 namespace knotwork {
@@ -142,6 +144,52 @@ SeparableCoefficients patch_separable_coefficients(const NurbsPatch& patch, cons
         return MidpointGeometry{d.jacobian, d.x[0], d.x[1]};
       },
       problem);
+}
+
+double separability_spread(const NurbsPatch& patch, const std::vector<Expression>& diffusion, int k) {
+  const std::vector<double>&tu = patch.basis_u.knots(), &tv = patch.basis_v.knots();
+  const double u0 = tu.front(), u1 = tu.back(), v0 = tv.front(), v1 = tv.back();
+  const size_t n = size_t(k) * k;
+  std::vector<double> c11(n), c12(n), c22(n), x(n), y(n);
+  std::vector<Eigen::Matrix2d> jacobian(n);
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) {
+      const size_t m = i + size_t(k) * j;
+      const PatchPointDerivatives d = patch_point_derivatives(patch, u0 + (i + 0.5) * (u1 - u0) / k, v0 + (j + 0.5) * (v1 - v0) / k);
+      jacobian[m] = d.jacobian;
+      x[m] = d.x[0], y[m] = d.x[1];
+    }
+  std::optional<ExpressionBatch> a;
+  if (!diffusion.empty()) {
+    a.emplace(diffusion);
+    a->evaluate(x.data(), y.data(), nullptr, long(n));
+  }
+  for (size_t m = 0; m < n; ++m) {
+    const Eigen::Matrix2d& J = jacobian[m];
+    const double det = J.determinant();
+    Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+    if (a && diffusion.size() == 1) A *= a->result(0)[m];
+    if (a && diffusion.size() == 3) A << a->result(0)[m], a->result(1)[m], a->result(1)[m], a->result(2)[m];
+    if (!(det > 0) || !(A.determinant() > 0) || !(A(0, 0) > 0)) return std::numeric_limits<double>::infinity();
+    // |det J| J^-1 A J^-T = adj(J) A adj(J)^T / det J.
+    Eigen::Matrix2d adjugate;
+    adjugate << J(1, 1), -J(0, 1), -J(1, 0), J(0, 0);
+    const Eigen::Matrix2d C = adjugate * A * adjugate.transpose() / det;
+    c11[m] = C(0, 0), c12[m] = C(0, 1), c22[m] = C(1, 1);
+  }
+  const SeparableCoefficients fitted = SeparableCoefficients::fit(k, k, c11, c22);
+  double largest = 0, smallest = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) {
+      const size_t m = i + size_t(k) * j;
+      // P^-1/2 C P^-1/2 = [a, b; b, c]: its eigenvalues (a + c)/2 +- sqrt(((a - c)/2)^2 + b^2).
+      const double p1 = fitted.a1[i] * fitted.b1[j], p2 = fitted.a2[i] * fitted.b2[j];
+      const double a = c11[m] / p1, c = c22[m] / p2, b = c12[m] / std::sqrt(p1 * p2);
+      const double mean = (a + c) / 2, radius = std::hypot((a - c) / 2, b);
+      largest = std::max(largest, mean + radius);
+      smallest = std::min(smallest, mean - radius);
+    }
+  return smallest > 0 ? largest / smallest : std::numeric_limits<double>::infinity();
 }
 
 SeparableVolumeCoefficients volume_separable_coefficients(const TensorVolumeDiscretization& d, const PoissonProblem* problem) {

@@ -25,6 +25,24 @@ namespace {
 // loop; now written patch by patch, one patch's matrix at a time besides it); 1.7x covers them.
 constexpr double kSeveralPatchesMultigrid = 1.7;
 
+// "auto" on one patch: multigrid instead of the fast diagonalization where the map (with the
+// problem's A) does not separate (separability_spread above kSeparableEnough) and from
+// kAutoMultigridOnMaps functions (docs/SOLVERS.md, "Which one auto takes": on the L-shape and
+// the anisotropic annulus, spreads 5.8 and 6.3, the fast diagonalization took 33-35 CG
+// iterations and multigrid 11-13, and multigrid was as fast at 130 000-150 000 functions and
+// 8-23% faster from 260 000; separable maps and A = 1 give 1, the variable coefficient of
+// square_variable_coefficient 1.17). Measured from the map and A alone, so the memory check
+// below and the space decide alike.
+constexpr double kAutoMultigridOnMaps = 200000;
+constexpr double kSeparableEnough = 2.0;
+bool auto_takes_multigrid(const NurbsPatch& patch, const std::vector<Expression>& diffusion, double functions,
+                          double& spread) {
+  spread = 1;
+  if (functions < kAutoMultigridOnMaps) return false;
+  spread = separability_spread(patch, diffusion);
+  return spread > kSeparableEnough;
+}
+
 // Refuses discretizations that cannot fit in memory before allocating anything (a rank's part:
 // its share of the cells).
 void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, int ranks = 1) {
@@ -58,8 +76,10 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
     std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d", cells, s.degree[0], s.degree[1]);
   const int p = s.degree[0], q = s.degree[1];
   if (iterative) {
-    const std::string& name =
-        c.solver.preconditioner != "auto" ? c.solver.preconditioner : c.multipatch() ? kMultigrid : kFastDiagonalization;
+    double spread = 1;
+    const std::string& name = c.solver.preconditioner != "auto" ? c.solver.preconditioner
+                              : c.multipatch() || auto_takes_multigrid(c.geometry, c.problem.coefficients.diffusion, functions, spread) ? kMultigrid
+                                                                                                       : kFastDiagonalization;
     std::snprintf(what, sizeof what, "%.3g cells of degree %dx%d with CG + %s%s", cells, p, q, name.c_str(),
                   c.solver.matrix == "matrix_free" ? ", no matrix" : "");
     const double pc = name == kFastDiagonalization ? fast_diagonalization_bytes(per_direction[0], per_direction[1])
@@ -79,7 +99,9 @@ void check_tensor_memory(const CaseDescription& c, const TensorSpaceOptions& s, 
     const std::string& name = c.solver.preconditioner;
     if (c.multipatch()) {
       if (name == kMultigrid || name == "auto") shell = kSeveralPatchesMultigrid * tensor_multigrid_bytes(functions, p, q, true);
-    } else if (name == kMultigrid) {
+    } else if (double spread = 1;
+               name == kMultigrid ||
+               (name == "auto" && auto_takes_multigrid(c.geometry, c.problem.coefficients.diffusion, functions, spread))) {
       shell = tensor_multigrid_bytes(functions, p, q, true);
     } else if (name == kFastDiagonalization || name == "auto") {
       shell = fast_diagonalization_bytes(per_direction[0], per_direction[1]);
@@ -109,6 +131,7 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
   const SpaceReport& presentation() const override { return *this; }
   TensorSpace(const CaseDescription& c, const TensorSpaceOptions& options, RowShare share = {}) : options_(options) {
     check_tensor_memory(c, options, share.ranks);
+    diffusion_ = c.problem.coefficients.diffusion;
     try {
       d_ = build_tensor_discretization(c.geometry, options, share);
     } catch (const std::invalid_argument& e) {
@@ -121,6 +144,18 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
   }
   const BezierMesh& mesh() const override { return d_.mesh; }
   const GeometryMap& geometry() const override { return *geometry_; }
+  std::string automatic_structured_preconditioner(std::string& why) const override {
+    const double functions = d_.part ? d_.part->global_functions : d_.mesh.num_functions();
+    double spread = 1;
+    if (!auto_takes_multigrid(d_.patch, diffusion_, functions, spread)) return kFastDiagonalization;
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "since the map does not separate (the fast diagonalization's fit is off by a factor of %.3g over the "
+                  "patch, more than %.3g) and from %.0f functions: measured faster there (docs/SOLVERS.md)",
+                  spread, kSeparableEnough, kAutoMultigridOnMaps);
+    why = text;
+    return kMultigrid;
+  }
   std::string description() const override { return describe(options_); }
   std::vector<int> degree() const override { return as_list(options_.degree); }
   std::vector<std::string> structured_preconditioners() const override { return {kFastDiagonalization, kMultigrid}; }
@@ -188,6 +223,7 @@ class TensorSpace final : public SplineSpace, public SpaceReport {
 
  private:
   TensorSpaceOptions options_;
+  std::vector<Expression> diffusion_;  // the problem's A (empty: 1): what "auto" measures against the fit
   TensorDiscretization d_;
   std::unique_ptr<PatchGeometryMap> geometry_;
 };
