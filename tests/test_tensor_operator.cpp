@@ -386,6 +386,34 @@ System solved_system(const Setup& s, double reaction, bool from_operator) {
   return out;
 }
 
+// The element loop's system against one whose matrix the operator wrote: the same pattern
+// (functions that share a cell, Dirichlet functions left out); each entry within
+// m sqrt(K_aa K_bb), m = 8 (p+1)^4 eps (entry (a, b) sums, over at most (p+1)^2 cells of (p+1)^2
+// points, terms whose absolute sum is at most sqrt(K_aa K_bb) by Cauchy-Schwarz, the integrand
+// being positive semi-definite; a few roundings per term on either side); and the other
+// system's solution solving the element loop's to a backward error of rounding size (both by
+// Eigen's LDL^T, not the CHOLMOD of the runs). Returns m.
+double require_same_system(const System& loop, const System& other, int p) {
+  const Eigen::SparseMatrix<double>&A = loop.K, &B = other.K;
+  REQUIRE(A.rows() == B.rows());
+  REQUIRE(A.nonZeros() == B.nonZeros());
+  REQUIRE(std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, B.outerIndexPtr()));
+  REQUIRE(std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), B.innerIndexPtr()));
+  const double m = 8.0 * std::pow(p + 1, 4) * 2.2e-16;
+  for (int k = 0; k < A.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator a(A, k), b(B, k); a; ++a, ++b)
+      REQUIRE(std::abs(a.value() - b.value()) <= m * std::sqrt(A.coeff(a.row(), a.row()) * A.coeff(k, k)));
+  const Eigen::SparseMatrix<double> whole = A.selfadjointView<Eigen::Lower>();
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(B);
+  REQUIRE(ldlt.info() == Eigen::Success);
+  const Eigen::VectorXd x = ldlt.solve(other.F);
+  const double backward = (whole * x - loop.F).lpNorm<Eigen::Infinity>() /
+                          (inf_norm(A) * x.lpNorm<Eigen::Infinity>() + loop.F.lpNorm<Eigen::Infinity>());
+  INFO("backward error " << backward);
+  REQUIRE(backward <= m * (2 * p + 1) * (2 * p + 1));
+  return m;
+}
+
 }  // namespace
 
 // The matrix written from the Kronecker form (solver/tensor_operator_matrix.cpp) against the
@@ -413,33 +441,12 @@ TEST_CASE("The matrix from the Kronecker form is the element loop's", "[tensor_o
         REQUIRE(TensorPoissonOperator(s->patch(), 1.0, reaction).assembles_lower());
         const System loop = solved_system(*s, reaction, false), kron = solved_system(*s, reaction, true);
         INFO("p = " << p << ", continuity " << continuity << ", reaction " << reaction);
-        const Eigen::SparseMatrix<double>&A = loop.K, &B = kron.K;
-        REQUIRE(A.rows() == B.rows());
-        REQUIRE(A.nonZeros() == B.nonZeros());
-        REQUIRE(std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, B.outerIndexPtr()));
-        REQUIRE(std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), B.innerIndexPtr()));
-        // Entry (a, b) sums, over at most (p+1)^2 cells of (p+1)^2 points, terms whose absolute
-        // sum is at most sqrt(K_aa K_bb) (Cauchy-Schwarz, the integrand being positive
-        // semi-definite); a few roundings per term on either side.
-        const double m = 8.0 * std::pow(p + 1, 4) * 2.2e-16;
-        for (int k = 0; k < A.outerSize(); ++k)
-          for (Eigen::SparseMatrix<double>::InnerIterator a(A, k), b(B, k); a; ++a, ++b)
-            REQUIRE(std::abs(a.value() - b.value()) <= m * std::sqrt(A.coeff(a.row(), a.row()) * A.coeff(k, k)));
+        const double m = require_same_system(loop, kron, p);
         // The load: f R_a by the same rule, and the lifting K g of the Dirichlet values: sums of
         // at most (2p+1)^2 (p+1)^4 terms, each bounded by |F|_inf and |K|_inf |g|_inf.
         const double load_bound = m * (2 * p + 1) * (2 * p + 1) *
-                                  (loop.F.lpNorm<Eigen::Infinity>() + inf_norm(A) * loop.coefficients.lpNorm<Eigen::Infinity>());
+                                  (loop.F.lpNorm<Eigen::Infinity>() + inf_norm(loop.K) * loop.coefficients.lpNorm<Eigen::Infinity>());
         REQUIRE((loop.F - kron.F).lpNorm<Eigen::Infinity>() <= load_bound);
-        // The operator path's solution solves the element loop's system to a backward error of
-        // rounding size (both solved here by Eigen's LDL^T, not the CHOLMOD of the runs).
-        const Eigen::SparseMatrix<double> whole = A.selfadjointView<Eigen::Lower>();
-        const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(B);
-        REQUIRE(ldlt.info() == Eigen::Success);
-        const Eigen::VectorXd x = ldlt.solve(kron.F);
-        const double backward = (whole * x - loop.F).lpNorm<Eigen::Infinity>() /
-                                (inf_norm(A) * x.lpNorm<Eigen::Infinity>() + loop.F.lpNorm<Eigen::Infinity>());
-        INFO("backward error " << backward);
-        REQUIRE(backward <= m * (2 * p + 1) * (2 * p + 1));
       }
     }
 }
@@ -473,24 +480,11 @@ TEST_CASE("The matrix by sum factorization is the element loop's", "[tensor_oper
           const System loop = solved_system(*s, reaction, false), summed = solved_system(*s, reaction, true);
           INFO(variant.name << (variant.rational ? " (NURBS)" : "") << ", p = " << p << ", continuity " << continuity
                             << ", reaction " << reaction);
-          const Eigen::SparseMatrix<double>&A = loop.K, &B = summed.K;
-          REQUIRE(A.rows() == B.rows());
-          REQUIRE(A.nonZeros() == B.nonZeros());
-          REQUIRE(std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, B.outerIndexPtr()));
-          REQUIRE(std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), B.innerIndexPtr()));
-          // As above: each entry sums positive semi-definite integrands bounded by sqrt(K_aa K_bb).
-          const double m = 8.0 * std::pow(p + 1, 4) * 2.2e-16;
-          for (int k = 0; k < A.outerSize(); ++k)
-            for (Eigen::SparseMatrix<double>::InnerIterator a(A, k), b(B, k); a; ++a, ++b)
-              REQUIRE(std::abs(a.value() - b.value()) <= m * std::sqrt(A.coeff(a.row(), a.row()) * A.coeff(k, k)));
-          const Eigen::SparseMatrix<double> whole = A.selfadjointView<Eigen::Lower>();
-          const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(B);
-          REQUIRE(ldlt.info() == Eigen::Success);
-          const Eigen::VectorXd x = ldlt.solve(summed.F);
-          const double backward = (whole * x - loop.F).lpNorm<Eigen::Infinity>() /
-                                  (inf_norm(A) * x.lpNorm<Eigen::Infinity>() + loop.F.lpNorm<Eigen::Infinity>());
-          INFO("backward error " << backward);
-          REQUIRE(backward <= m * (2 * p + 1) * (2 * p + 1));
+          const double m = require_same_system(loop, summed, p);
+          // The operator's load and lifting against the element loop's, bounded as above.
+          REQUIRE((loop.F - summed.F).lpNorm<Eigen::Infinity>() <=
+                  m * (2 * p + 1) * (2 * p + 1) *
+                      (loop.F.lpNorm<Eigen::Infinity>() + inf_norm(loop.K) * loop.coefficients.lpNorm<Eigen::Infinity>()));
         }
       }
 }
